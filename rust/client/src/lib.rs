@@ -1,0 +1,2 @@
+//! SiTAR client.
+#![forbid(unsafe_code)]

@@ -1,0 +1,2 @@
+//! SiTAR core.
+#![forbid(unsafe_code)]

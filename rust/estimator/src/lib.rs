@@ -1,0 +1,2 @@
+//! SiTAR estimator.
+#![forbid(unsafe_code)]

@@ -1,0 +1,1 @@
+//! SiTAR native library.

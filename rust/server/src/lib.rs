@@ -1,0 +1,2 @@
+//! SiTAR server.
+#![forbid(unsafe_code)]

@@ -1,0 +1,2 @@
+//! SiTAR sim.
+#![forbid(unsafe_code)]
