@@ -1,2 +1,43 @@
-//! SiTAR client.
+//! Blocking HTTP client of the SiTAR backend (`sitar serve`).
+//!
+//! [`Client`] speaks the versioned API: create a session, stream the
+//! recording from disk, upload trials from an outside SLAM run, poll the
+//! status, download results as legacy CSV or JSON. Every call has a timeout;
+//! connection errors, timeouts and 5xx answers are retried with exponential
+//! backoff; `POST`s carry an [`IDEMPOTENCY_HEADER`] key that stays the same
+//! across retries, so a retry never creates a second session or trial.
+//!
+//! ```
+//! use sitar_client::{Client, Error, NewSession};
+//!
+//! // URLs are checked up front.
+//! assert!(matches!(Client::new("ftp://example"), Err(Error::InvalidUrl(_))));
+//! let client = Client::new("http://127.0.0.1:8000/")?;
+//! assert_eq!(client.base_url(), "http://127.0.0.1:8000");
+//!
+//! // A session id that is not server-made never reaches the network.
+//! assert!(matches!(client.status("../../etc"), Err(Error::InvalidArgument(_))));
+//!
+//! # fn flow(client: &Client, path: &std::path::Path) -> Result<(), Error> {
+//! let id = client.create_session(&NewSession {
+//!     trials: 5,
+//!     setting: "trim_mean_30".into(),
+//!     playback: "sim".into(),
+//! })?;
+//! client.upload_recording(&id, path, &mut |sent, total| eprintln!("{sent}/{total}"))?;
+//! let status = client.wait(&id, std::time::Duration::from_millis(200),
+//!                          std::time::Duration::from_secs(120), &mut |_| {})?;
+//! let csv = client.results_csv(&id)?;
+//! # let _ = (status, csv); Ok(()) }
+//! # Ok::<(), Error>(())
+//! ```
 #![forbid(unsafe_code)]
+#![deny(missing_docs)]
+
+mod client;
+mod error;
+mod types;
+
+pub use client::{Client, IDEMPOTENCY_HEADER};
+pub use error::Error;
+pub use types::{NewSession, SessionOptions, SessionState, SessionStatus};

@@ -1,0 +1,705 @@
+use std::fs::File;
+use std::hash::{BuildHasher, Hasher};
+use std::io::Read;
+use std::path::Path;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
+
+use ureq::Agent;
+
+use crate::{Error, NewSession, SessionOptions, SessionStatus};
+
+/// Header carrying the client-made key that makes `POST` requests safe to retry.
+pub const IDEMPOTENCY_HEADER: &str = "Idempotency-Key";
+
+/// Blocking client of the SiTAR backend.
+///
+/// Every call has a timeout; connection errors, timeouts and 5xx answers are
+/// retried with exponential backoff. `POST`s carry an idempotency key that is
+/// the same on every retry, so a retried create or trial upload never
+/// duplicates anything on the server.
+#[derive(Debug, Clone)]
+pub struct Client {
+    base: String,
+    agent: Agent,
+    upload_agent: Agent,
+    timeout: Duration,
+    retries: u32,
+    backoff: Duration,
+}
+
+enum Payload<'a> {
+    Empty,
+    Json(String),
+    Text(&'a str),
+    File(&'a Path, &'a mut dyn FnMut(u64, u64)),
+}
+
+impl Client {
+    /// A client of the server at `base_url` (e.g. `http://127.0.0.1:8000`), with a
+    /// 30 s timeout per call (uploads: per read/write), 3 retries and 200 ms initial backoff.
+    pub fn new(base_url: &str) -> Result<Client, Error> {
+        let base = base_url.trim_end_matches('/').to_string();
+        let rest = base
+            .strip_prefix("http://")
+            .or_else(|| base.strip_prefix("https://"))
+            .ok_or_else(|| Error::InvalidUrl(base_url.to_string()))?;
+        if rest.is_empty() || rest.contains(char::is_whitespace) {
+            return Err(Error::InvalidUrl(base_url.to_string()));
+        }
+        let timeout = Duration::from_secs(30);
+        Ok(Client {
+            agent: make_agent(timeout, false),
+            upload_agent: make_agent(timeout, true),
+            base,
+            timeout,
+            retries: 3,
+            backoff: Duration::from_millis(200),
+        })
+    }
+
+    /// The same client with another timeout. Plain calls must finish within it;
+    /// uploads may take longer but no single read or write may stall longer.
+    pub fn with_timeout(mut self, timeout: Duration) -> Client {
+        self.timeout = timeout;
+        self.agent = make_agent(timeout, false);
+        self.upload_agent = make_agent(timeout, true);
+        self
+    }
+
+    /// The same client with `retries` extra attempts and an initial `backoff`
+    /// that doubles after every failed attempt.
+    pub fn with_retries(mut self, retries: u32, backoff: Duration) -> Client {
+        self.retries = retries;
+        self.backoff = backoff;
+        self
+    }
+
+    /// The server's base URL, without a trailing slash.
+    pub fn base_url(&self) -> &str {
+        &self.base
+    }
+
+    /// `GET /healthz`: Ok when the server answers.
+    pub fn health(&self) -> Result<(), Error> {
+        self.request("GET", "/healthz", Payload::Empty, None)
+            .map(|_| ())
+    }
+
+    /// `POST /v1/sessions`: creates a session and returns its server-made id.
+    pub fn create_session(&self, req: &NewSession) -> Result<String, Error> {
+        self.create_session_with(req, &SessionOptions::default())
+    }
+
+    /// Like [`Client::create_session`], with adaptive stopping options.
+    pub fn create_session_with(
+        &self,
+        req: &NewSession,
+        options: &SessionOptions,
+    ) -> Result<String, Error> {
+        let mut body =
+            serde_json::to_value(req).map_err(|e| Error::InvalidArgument(e.to_string()))?;
+        if let Some(min) = options.adaptive_min_trials {
+            body["adaptive_min_trials"] = min.into();
+        }
+        if let Some(k) = options.adaptive_k {
+            body["adaptive_k"] = k.into();
+        }
+        let key = idempotency_key();
+        let text = self.request(
+            "POST",
+            "/v1/sessions",
+            Payload::Json(body.to_string()),
+            Some(&key),
+        )?;
+        let value: serde_json::Value = serde_json::from_str(&text)
+            .map_err(|e| Error::InvalidResponse(format!("create session: {e}: {text}")))?;
+        value["id"]
+            .as_str()
+            .map(str::to_string)
+            .ok_or_else(|| Error::InvalidResponse(format!("create session: no \"id\" in {text}")))
+    }
+
+    /// `PUT /v1/sessions/{id}/recording`: streams the file at `path` from disk
+    /// (never whole in memory). `progress(sent, total)` is called as bytes go
+    /// out; a retry starts over from byte 0 (the `PUT` replaces, so it is safe).
+    pub fn upload_recording(
+        &self,
+        id: &str,
+        path: &Path,
+        progress: &mut dyn FnMut(u64, u64),
+    ) -> Result<(), Error> {
+        let url = format!("/v1/sessions/{}/recording", check_id(id)?);
+        self.request("PUT", &url, Payload::File(path, progress), None)
+            .map(|_| ())
+    }
+
+    /// `POST /v1/sessions/{id}/trials`: one trial's TUM text (e.g. from an outside SLAM run).
+    pub fn upload_trial(&self, id: &str, tum_text: &str) -> Result<(), Error> {
+        let url = format!("/v1/sessions/{}/trials", check_id(id)?);
+        let key = idempotency_key();
+        self.request("POST", &url, Payload::Text(tum_text), Some(&key))
+            .map(|_| ())
+    }
+
+    /// `POST /v1/sessions/{id}/estimate`: asks for the estimate of the trials so far.
+    pub fn start_estimate(&self, id: &str) -> Result<(), Error> {
+        let url = format!("/v1/sessions/{}/estimate", check_id(id)?);
+        let key = idempotency_key();
+        self.request("POST", &url, Payload::Empty, Some(&key))
+            .map(|_| ())
+    }
+
+    /// `GET /v1/sessions/{id}`.
+    pub fn status(&self, id: &str) -> Result<SessionStatus, Error> {
+        let url = format!("/v1/sessions/{}", check_id(id)?);
+        let text = self.request("GET", &url, Payload::Empty, None)?;
+        serde_json::from_str(&text)
+            .map_err(|e| Error::InvalidResponse(format!("status: {e}: {text}")))
+    }
+
+    /// Polls [`Client::status`] every `interval` until the session is done or
+    /// failed, calling `on_status` with every answer. Gives up after `limit`.
+    pub fn wait(
+        &self,
+        id: &str,
+        interval: Duration,
+        limit: Duration,
+        on_status: &mut dyn FnMut(&SessionStatus),
+    ) -> Result<SessionStatus, Error> {
+        let started = Instant::now();
+        loop {
+            let status = self.status(id)?;
+            on_status(&status);
+            if status.state.is_finished() {
+                return Ok(status);
+            }
+            if started.elapsed() >= limit {
+                return Err(Error::Timeout {
+                    url: format!("{}/v1/sessions/{id}", self.base),
+                    attempts: 1,
+                });
+            }
+            std::thread::sleep(interval);
+        }
+    }
+
+    /// `GET /v1/sessions/{id}/results.csv` (legacy `start,error` form).
+    pub fn results_csv(&self, id: &str) -> Result<String, Error> {
+        let url = format!("/v1/sessions/{}/results.csv", check_id(id)?);
+        self.request("GET", &url, Payload::Empty, None)
+    }
+
+    /// `GET /v1/sessions/{id}/results.json`.
+    pub fn results_json(&self, id: &str) -> Result<String, Error> {
+        let url = format!("/v1/sessions/{}/results.json", check_id(id)?);
+        self.request("GET", &url, Payload::Empty, None)
+    }
+
+    /// `GET /v1/sessions/{id}/report`: the HTML report page.
+    pub fn report_html(&self, id: &str) -> Result<String, Error> {
+        let url = format!("/v1/sessions/{}/report", check_id(id)?);
+        self.request("GET", &url, Payload::Empty, None)
+    }
+
+    /// `GET /v1/devices`: the playback devices as JSON text.
+    pub fn devices_json(&self) -> Result<String, Error> {
+        self.request("GET", "/v1/devices", Payload::Empty, None)
+    }
+
+    fn request(
+        &self,
+        method: &str,
+        path: &str,
+        mut payload: Payload<'_>,
+        idempotency: Option<&str>,
+    ) -> Result<String, Error> {
+        let url = format!("{}{}", self.base, path);
+        let mut delay = self.backoff;
+        let mut attempt = 0;
+        loop {
+            attempt += 1;
+            let outcome = self.attempt(method, &url, &mut payload, idempotency);
+            let retryable = match &outcome {
+                Ok(_) => false,
+                Err(Error::Server { status, .. }) => *status >= 500,
+                Err(Error::Network { .. } | Error::Timeout { .. }) => true,
+                Err(_) => false,
+            };
+            if !retryable || attempt > self.retries {
+                return outcome.map_err(|e| match e {
+                    Error::Network { url, message, .. } => Error::Network {
+                        url,
+                        attempts: attempt,
+                        message,
+                    },
+                    Error::Timeout { url, .. } => Error::Timeout {
+                        url,
+                        attempts: attempt,
+                    },
+                    other => other,
+                });
+            }
+            std::thread::sleep(delay);
+            delay = delay.saturating_mul(2);
+        }
+    }
+
+    fn attempt(
+        &self,
+        method: &str,
+        url: &str,
+        payload: &mut Payload<'_>,
+        idempotency: Option<&str>,
+    ) -> Result<String, Error> {
+        let agent = if matches!(payload, Payload::File(..)) {
+            &self.upload_agent
+        } else {
+            &self.agent
+        };
+        let with_key = |b: ureq::RequestBuilder<ureq::typestate::WithBody>| match idempotency {
+            Some(key) => b.header(IDEMPOTENCY_HEADER, key),
+            None => b,
+        };
+        let result = match (method, payload) {
+            ("GET", _) => agent.get(url).call(),
+            (m, Payload::Empty) => with_key(body_builder(agent, m, url)).send_empty(),
+            (m, Payload::Json(text)) => with_key(body_builder(agent, m, url))
+                .header("content-type", "application/json")
+                .send(text.as_str()),
+            (m, Payload::Text(text)) => with_key(body_builder(agent, m, url))
+                .header("content-type", "text/plain; charset=utf-8")
+                .send(*text),
+            (m, Payload::File(path, progress)) => {
+                let path: &Path = path;
+                let file = File::open(path).map_err(|source| Error::Io {
+                    path: path.to_path_buf(),
+                    source,
+                })?;
+                let total = file
+                    .metadata()
+                    .map_err(|source| Error::Io {
+                        path: path.to_path_buf(),
+                        source,
+                    })?
+                    .len();
+                progress(0, total);
+                let mut reader = ProgressReader {
+                    inner: file,
+                    sent: 0,
+                    reported: 0,
+                    total,
+                    progress: &mut **progress,
+                };
+                with_key(body_builder(agent, m, url))
+                    .header("content-type", "application/octet-stream")
+                    .header("content-length", total.to_string())
+                    .send(ureq::SendBody::from_reader(&mut reader))
+            }
+        };
+        let mut response = result.map_err(|e| transport_error(url, e))?;
+        let status = response.status().as_u16();
+        let text = response
+            .body_mut()
+            .with_config()
+            .limit(1 << 30)
+            .read_to_string()
+            .map_err(|e| transport_error(url, e))?;
+        if status >= 400 {
+            return Err(server_error(status, &text));
+        }
+        Ok(text)
+    }
+}
+
+fn make_agent(timeout: Duration, streaming: bool) -> Agent {
+    let builder = Agent::config_builder()
+        .http_status_as_error(false)
+        .timeout_connect(Some(timeout.min(Duration::from_secs(10))));
+    let builder = if streaming {
+        builder
+            .timeout_per_read(Some(timeout))
+            .timeout_per_write(Some(timeout))
+    } else {
+        builder.timeout_global(Some(timeout))
+    };
+    builder.build().into()
+}
+
+fn body_builder(
+    agent: &Agent,
+    method: &str,
+    url: &str,
+) -> ureq::RequestBuilder<ureq::typestate::WithBody> {
+    if method == "PUT" {
+        agent.put(url)
+    } else {
+        agent.post(url)
+    }
+}
+
+fn transport_error(url: &str, e: ureq::Error) -> Error {
+    match e {
+        ureq::Error::Timeout(_) => Error::Timeout {
+            url: url.to_string(),
+            attempts: 1,
+        },
+        ureq::Error::Io(io) if io.kind() == std::io::ErrorKind::TimedOut => Error::Timeout {
+            url: url.to_string(),
+            attempts: 1,
+        },
+        ureq::Error::BadUri(u) => Error::InvalidUrl(u),
+        other => Error::Network {
+            url: url.to_string(),
+            attempts: 1,
+            message: other.to_string(),
+        },
+    }
+}
+
+fn server_error(status: u16, body: &str) -> Error {
+    let parsed: Option<serde_json::Value> = serde_json::from_str(body).ok();
+    let field = |name: &str| {
+        parsed
+            .as_ref()
+            .and_then(|v| v["error"][name].as_str())
+            .map(str::to_string)
+    };
+    Error::Server {
+        status,
+        code: field("code").unwrap_or_else(|| "http".to_string()),
+        message: field("message").unwrap_or_else(|| body.chars().take(200).collect()),
+    }
+}
+
+/// Session ids are server-made `[A-Za-z0-9_-]`; anything else could change the URL path.
+fn check_id(id: &str) -> Result<&str, Error> {
+    if !id.is_empty()
+        && id.len() <= 64
+        && id
+            .bytes()
+            .all(|b| b.is_ascii_alphanumeric() || b == b'-' || b == b'_')
+    {
+        Ok(id)
+    } else {
+        Err(Error::InvalidArgument(format!(
+            "session id {id:?} is not a server-made id"
+        )))
+    }
+}
+
+/// 128 random-enough bits: a per-process random hasher seed, the clock and a counter.
+pub(crate) fn idempotency_key() -> String {
+    static COUNTER: AtomicU64 = AtomicU64::new(0);
+    let n = COUNTER.fetch_add(1, Ordering::Relaxed);
+    let now = SystemTime::now()
+        .duration_since(UNIX_EPOCH)
+        .map(|d| d.as_nanos())
+        .unwrap_or(0);
+    let mut words = [0u64; 2];
+    for (i, word) in words.iter_mut().enumerate() {
+        let mut h = std::collections::hash_map::RandomState::new().build_hasher();
+        h.write_u128(now);
+        h.write_u64(n);
+        h.write_usize(i);
+        h.write_u32(std::process::id());
+        *word = h.finish();
+    }
+    format!("{:016x}{:016x}", words[0], words[1])
+}
+
+struct ProgressReader<'a> {
+    inner: File,
+    sent: u64,
+    reported: u64,
+    total: u64,
+    progress: &'a mut dyn FnMut(u64, u64),
+}
+
+impl Read for ProgressReader<'_> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        self.sent += n as u64;
+        // Report every MiB and at the end: cheap even for multi-GiB files.
+        if n > 0 && (self.sent - self.reported >= 1 << 20 || self.sent == self.total) {
+            self.reported = self.sent;
+            (self.progress)(self.sent, self.total);
+        }
+        Ok(n)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::SessionState;
+    use std::io::{BufRead, BufReader, Write};
+    use std::net::{TcpListener, TcpStream};
+    use std::sync::{Arc, Mutex};
+
+    /// One request as the tiny test server saw it.
+    #[derive(Debug, Clone)]
+    struct Seen {
+        method: String,
+        path: String,
+        headers: Vec<(String, String)>,
+        body: Vec<u8>,
+    }
+
+    impl Seen {
+        fn header(&self, name: &str) -> Option<&str> {
+            self.headers
+                .iter()
+                .find(|(k, _)| k.eq_ignore_ascii_case(name))
+                .map(|(_, v)| v.as_str())
+        }
+    }
+
+    enum Reply {
+        Answer(u16, &'static str),
+        Hang,
+    }
+
+    /// A loopback HTTP/1.1 server answering each connection with the next scripted reply.
+    fn serve(replies: Vec<Reply>) -> (String, Arc<Mutex<Vec<Seen>>>) {
+        let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+        let addr = listener.local_addr().unwrap();
+        let seen = Arc::new(Mutex::new(Vec::new()));
+        let log = seen.clone();
+        std::thread::spawn(move || {
+            for reply in replies {
+                let Ok((stream, _)) = listener.accept() else {
+                    return;
+                };
+                let request = read_request(&stream);
+                log.lock().unwrap().push(request);
+                match reply {
+                    Reply::Answer(status, body) => {
+                        let mut s = stream;
+                        let _ = write!(
+                            s,
+                            "HTTP/1.1 {status} X\r\ncontent-type: application/json\r\ncontent-length: {}\r\nconnection: close\r\n\r\n{body}",
+                            body.len()
+                        );
+                    }
+                    Reply::Hang => {
+                        std::thread::sleep(Duration::from_millis(1500));
+                    }
+                }
+            }
+        });
+        (format!("http://{addr}"), seen)
+    }
+
+    fn read_request(stream: &TcpStream) -> Seen {
+        let mut reader = BufReader::new(stream);
+        let mut line = String::new();
+        reader.read_line(&mut line).unwrap();
+        let mut parts = line.split_whitespace();
+        let method = parts.next().unwrap_or_default().to_string();
+        let path = parts.next().unwrap_or_default().to_string();
+        let mut headers = Vec::new();
+        loop {
+            let mut h = String::new();
+            reader.read_line(&mut h).unwrap();
+            let h = h.trim_end();
+            if h.is_empty() {
+                break;
+            }
+            let (k, v) = h.split_once(':').unwrap();
+            headers.push((k.trim().to_string(), v.trim().to_string()));
+        }
+        let len: usize = headers
+            .iter()
+            .find(|(k, _)| k.eq_ignore_ascii_case("content-length"))
+            .map(|(_, v)| v.parse().unwrap())
+            .unwrap_or(0);
+        let mut body = vec![0; len];
+        reader.read_exact(&mut body).unwrap();
+        Seen {
+            method,
+            path,
+            headers,
+            body,
+        }
+    }
+
+    fn fast(base: &str) -> Client {
+        Client::new(base)
+            .unwrap()
+            .with_retries(3, Duration::from_millis(10))
+    }
+
+    fn new_session() -> NewSession {
+        NewSession {
+            trials: 4,
+            setting: "median".into(),
+            playback: "upload".into(),
+        }
+    }
+
+    #[test]
+    fn create_session_posts_json_with_an_idempotency_key() {
+        let (base, seen) = serve(vec![Reply::Answer(201, r#"{"id":"s-abc"}"#)]);
+        let id = fast(&base).create_session(&new_session()).unwrap();
+        assert_eq!(id, "s-abc");
+        let seen = seen.lock().unwrap();
+        assert_eq!(seen[0].method, "POST");
+        assert_eq!(seen[0].path, "/v1/sessions");
+        assert_eq!(seen[0].header("content-type"), Some("application/json"));
+        assert_eq!(seen[0].header(IDEMPOTENCY_HEADER).map(str::len), Some(32));
+        let body: serde_json::Value = serde_json::from_slice(&seen[0].body).unwrap();
+        assert_eq!(
+            body,
+            serde_json::json!({"trials":4,"setting":"median","playback":"upload"})
+        );
+    }
+
+    #[test]
+    fn a_5xx_is_retried_with_the_same_idempotency_key() {
+        let (base, seen) = serve(vec![
+            Reply::Answer(503, r#"{"error":{"code":"busy","message":"try later"}}"#),
+            Reply::Answer(500, "oops"),
+            Reply::Answer(201, r#"{"id":"s1"}"#),
+        ]);
+        let id = fast(&base).create_session(&new_session()).unwrap();
+        assert_eq!(id, "s1");
+        let seen = seen.lock().unwrap();
+        assert_eq!(seen.len(), 3);
+        let key = seen[0].header(IDEMPOTENCY_HEADER).unwrap();
+        assert!(
+            seen.iter()
+                .all(|s| s.header(IDEMPOTENCY_HEADER) == Some(key))
+        );
+    }
+
+    #[test]
+    fn a_4xx_is_not_retried_and_carries_the_json_error() {
+        let (base, seen) = serve(vec![
+            Reply::Answer(
+                404,
+                r#"{"error":{"code":"not_found","message":"no session s9"}}"#,
+            ),
+            Reply::Answer(200, "{}"),
+        ]);
+        let err = fast(&base).status("s9").unwrap_err();
+        match err {
+            Error::Server {
+                status,
+                code,
+                message,
+            } => {
+                assert_eq!(
+                    (status, code.as_str(), message.as_str()),
+                    (404, "not_found", "no session s9")
+                );
+            }
+            other => panic!("unexpected {other:?}"),
+        }
+        assert_eq!(seen.lock().unwrap().len(), 1);
+    }
+
+    #[test]
+    fn persistent_5xx_gives_up_after_the_retries() {
+        let (base, seen) = serve((0..4).map(|_| Reply::Answer(502, "bad gateway")).collect());
+        let err = fast(&base).health().unwrap_err();
+        assert_eq!(err.status(), Some(502));
+        assert_eq!(seen.lock().unwrap().len(), 4);
+    }
+
+    #[test]
+    fn connection_refused_is_a_network_error_after_every_attempt() {
+        let port = TcpListener::bind("127.0.0.1:0")
+            .unwrap()
+            .local_addr()
+            .unwrap()
+            .port();
+        let err = fast(&format!("http://127.0.0.1:{port}"))
+            .health()
+            .unwrap_err();
+        assert!(matches!(err, Error::Network { attempts: 4, .. }), "{err:?}");
+    }
+
+    #[test]
+    fn a_silent_server_times_out() {
+        let (base, _seen) = serve(vec![Reply::Hang, Reply::Hang]);
+        let client = Client::new(&base)
+            .unwrap()
+            .with_timeout(Duration::from_millis(300))
+            .with_retries(1, Duration::from_millis(10));
+        let started = Instant::now();
+        let err = client.health().unwrap_err();
+        assert!(matches!(err, Error::Timeout { attempts: 2, .. }), "{err:?}");
+        assert!(started.elapsed() < Duration::from_millis(1400));
+    }
+
+    #[test]
+    fn upload_streams_the_file_with_its_length_and_reports_progress() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("rec.mp4");
+        let data: Vec<u8> = (0..3_000_000u32).map(|i| (i * 7 % 251) as u8).collect();
+        std::fs::write(&path, &data).unwrap();
+        let (base, seen) = serve(vec![Reply::Answer(202, "{}")]);
+        let mut calls = Vec::new();
+        fast(&base)
+            .upload_recording("s1", &path, &mut |sent, total| calls.push((sent, total)))
+            .unwrap();
+        let seen = seen.lock().unwrap();
+        assert_eq!(seen[0].method, "PUT");
+        assert_eq!(seen[0].path, "/v1/sessions/s1/recording");
+        assert_eq!(seen[0].header("content-length"), Some("3000000"));
+        assert!(seen[0].body == data);
+        assert_eq!(calls.first(), Some(&(0, 3_000_000)));
+        assert_eq!(calls.last(), Some(&(3_000_000, 3_000_000)));
+        assert!(calls.windows(2).all(|w| w[0].0 <= w[1].0));
+    }
+
+    #[test]
+    fn upload_of_a_missing_file_names_it() {
+        let client = fast("http://127.0.0.1:9");
+        let err = client
+            .upload_recording("s1", Path::new("/no/such/rec.mp4"), &mut |_, _| {})
+            .unwrap_err();
+        assert!(err.to_string().contains("/no/such/rec.mp4"), "{err}");
+    }
+
+    #[test]
+    fn status_parses_and_trial_upload_is_plain_text() {
+        let (base, seen) = serve(vec![
+            Reply::Answer(
+                200,
+                r#"{"id":"s1","state":"playing","progress":0.5,"eta_s":3.5,"trials_done":2,"trials_total":4,"error":null}"#,
+            ),
+            Reply::Answer(201, "{}"),
+        ]);
+        let client = fast(&base);
+        let status = client.status("s1").unwrap();
+        assert_eq!(status.state, SessionState::Playing);
+        assert_eq!(
+            (status.trials_done, status.trials_total, status.eta_s),
+            (2, 4, Some(3.5))
+        );
+        assert_eq!(status.results_trials, 0);
+        client.upload_trial("s1", "1 0 0 0 0 0 0 1\n").unwrap();
+        let seen = seen.lock().unwrap();
+        assert_eq!(seen[1].path, "/v1/sessions/s1/trials");
+        assert_eq!(seen[1].body, b"1 0 0 0 0 0 0 1\n");
+        assert!(
+            seen[1]
+                .header("content-type")
+                .unwrap()
+                .starts_with("text/plain")
+        );
+    }
+
+    #[test]
+    fn ids_and_keys_are_checked_and_unique() {
+        assert!(check_id("a-B_9").is_ok());
+        for bad in ["", "../x", "a/b", "a b", "a%2e"] {
+            assert!(check_id(bad).is_err(), "{bad}");
+        }
+        let keys: std::collections::HashSet<String> =
+            (0..1000).map(|_| idempotency_key()).collect();
+        assert_eq!(keys.len(), 1000);
+    }
+}

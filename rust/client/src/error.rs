@@ -1,0 +1,62 @@
+use std::path::PathBuf;
+
+/// Everything that can go wrong when talking to the SiTAR backend.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// The base URL is not an `http://` or `https://` URL.
+    #[error("invalid server URL {0:?}: expected http://host:port or https://host:port")]
+    InvalidUrl(String),
+    /// An argument was rejected before anything was sent (e.g. a session id with path characters).
+    #[error("invalid argument: {0}")]
+    InvalidArgument(String),
+    /// The server could not be reached, or the connection broke, on every attempt.
+    #[error("cannot reach {url} after {attempts} attempt(s): {message}")]
+    Network {
+        /// The URL that was called.
+        url: String,
+        /// How many attempts were made.
+        attempts: u32,
+        /// The last transport error.
+        message: String,
+    },
+    /// A call did not finish within its timeout on every attempt.
+    #[error("{url} timed out after {attempts} attempt(s)")]
+    Timeout {
+        /// The URL that was called.
+        url: String,
+        /// How many attempts were made.
+        attempts: u32,
+    },
+    /// The server answered with an error status (4xx, or 5xx on every attempt).
+    #[error("server answered {status} {code}: {message}")]
+    Server {
+        /// The HTTP status code.
+        status: u16,
+        /// The machine-readable error code from the JSON body (`"http"` if the body had none).
+        code: String,
+        /// The human-readable message from the JSON body.
+        message: String,
+    },
+    /// A local file could not be read.
+    #[error("cannot read {path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The underlying error.
+        source: std::io::Error,
+    },
+    /// The server's answer was not what the API promises.
+    #[error("unexpected answer from the server: {0}")]
+    InvalidResponse(String),
+}
+
+impl Error {
+    /// The HTTP status if the server answered with an error status.
+    pub fn status(&self) -> Option<u16> {
+        match self {
+            Error::Server { status, .. } => Some(*status),
+            _ => None,
+        }
+    }
+}

@@ -1,0 +1,91 @@
+use serde::{Deserialize, Serialize};
+
+/// What `POST /v1/sessions` takes: how many trials, which statistic, which playback backend.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct NewSession {
+    /// Number of playback trials (≥ 2 for an estimate).
+    pub trials: u32,
+    /// Statistic: `mean`, `median`, `trim_mean_10|20|30|40`, `mean_inliers`.
+    pub setting: String,
+    /// Playback backend: `adb`, `sim` or `upload`.
+    pub playback: String,
+}
+
+/// Optional per-session extras beyond [`NewSession`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub struct SessionOptions {
+    /// Adaptive stopping: finish early once no window's class changed over the
+    /// last `adaptive_k` finished trials, but never before this many trials.
+    /// `None` runs every trial.
+    pub adaptive_min_trials: Option<u32>,
+    /// Window of finished trials over which classes must be stable (server default 3).
+    pub adaptive_k: Option<u32>,
+}
+
+/// Life cycle of a session on the server.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SessionState {
+    /// Created, nothing uploaded yet.
+    Created,
+    /// Recording uploaded, playback not started.
+    Uploaded,
+    /// Playback trials running.
+    Playing,
+    /// Final estimation running.
+    Estimating,
+    /// Results available.
+    Done,
+    /// Failed; `error` says why.
+    Failed,
+}
+
+impl SessionState {
+    /// The wire name (`"created"`, …, `"failed"`).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            SessionState::Created => "created",
+            SessionState::Uploaded => "uploaded",
+            SessionState::Playing => "playing",
+            SessionState::Estimating => "estimating",
+            SessionState::Done => "done",
+            SessionState::Failed => "failed",
+        }
+    }
+
+    /// Whether the session will not change any more.
+    pub fn is_finished(self) -> bool {
+        matches!(self, SessionState::Done | SessionState::Failed)
+    }
+}
+
+impl std::fmt::Display for SessionState {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+/// `GET /v1/sessions/{id}`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SessionStatus {
+    /// Server-made session id.
+    pub id: String,
+    /// Where the session is in its life cycle.
+    pub state: SessionState,
+    /// 0.0 … 1.0.
+    pub progress: f64,
+    /// Estimated seconds until done, when known.
+    pub eta_s: Option<f64>,
+    /// Trials finished so far.
+    pub trials_done: u32,
+    /// Trials planned.
+    pub trials_total: u32,
+    /// Why the session failed, if it did.
+    pub error: Option<String>,
+    /// Number of trials behind the latest published (possibly progressive) results; 0 = none yet.
+    #[serde(default)]
+    pub results_trials: u32,
+    /// Why playback stopped before `trials_total` (adaptive stopping), if it did.
+    #[serde(default)]
+    pub stop_reason: Option<String>,
+}
