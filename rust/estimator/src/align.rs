@@ -1,0 +1,219 @@
+//! Trajectory alignment: Umeyama SE(3)/Sim(3), scale only, origin (evo `geometry.py`,
+//! `trajectory.py`).
+
+use glam::{DMat3, DQuat, DVec3};
+use nalgebra::Matrix3;
+
+use crate::{Error, Trajectory};
+
+/// A similarity transform `x ↦ scale·rotation·x + translation`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Similarity {
+    /// Rotation matrix (proper: determinant +1).
+    pub rotation: DMat3,
+    /// Translation.
+    pub translation: DVec3,
+    /// Scale (1 without scale correction).
+    pub scale: f64,
+}
+
+impl Similarity {
+    /// Applies the transform to a point.
+    pub fn apply(&self, x: DVec3) -> DVec3 {
+        self.scale * (self.rotation * x) + self.translation
+    }
+}
+
+/// How to align an estimate onto a reference.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum Alignment {
+    /// No alignment.
+    #[default]
+    None,
+    /// Umeyama rigid (SE(3)) alignment (evo `--align`).
+    Se3,
+    /// Umeyama similarity (Sim(3)) alignment (evo `--align --correct_scale`).
+    Sim3,
+    /// Scale correction only (evo `--correct_scale`).
+    ScaleOnly,
+    /// Move the estimate's first pose onto the reference's first pose (evo `--align_origin`).
+    Origin,
+}
+
+/// Umeyama's least-squares `y ≈ c·R·x + t` as evo's `umeyama_alignment(x, y, with_scale)`,
+/// including the reflection fix; rank-deficient covariance (e.g. collinear points) is an error.
+pub fn umeyama(x: &[DVec3], y: &[DVec3], with_scale: bool) -> Result<Similarity, Error> {
+    if x.len() != y.len() {
+        return Err(Error::InvalidArgument(format!(
+            "point sets differ in size: {} vs {}",
+            x.len(),
+            y.len()
+        )));
+    }
+    if x.is_empty() {
+        return Err(Error::DegenerateAlignment("no points".into()));
+    }
+    let n = x.len() as f64;
+    let mean_x = x.iter().copied().sum::<DVec3>() / n;
+    let mean_y = y.iter().copied().sum::<DVec3>() / n;
+    let sigma_x = x
+        .iter()
+        .map(|p| (*p - mean_x).length_squared())
+        .sum::<f64>()
+        / n;
+    let mut cov = Matrix3::<f64>::zeros();
+    for (p, q) in x.iter().zip(y) {
+        let (dx, dy) = (*p - mean_x, *q - mean_y);
+        cov += nalgebra::Vector3::new(dy.x, dy.y, dy.z)
+            * nalgebra::Vector3::new(dx.x, dx.y, dx.z).transpose();
+    }
+    cov /= n;
+    let svd = cov.svd(true, true);
+    let (Some(u), Some(v_t)) = (svd.u, svd.v_t) else {
+        return Err(Error::DegenerateAlignment("SVD did not converge".into()));
+    };
+    let d = svd.singular_values;
+    if d.iter().filter(|&&s| s > f64::EPSILON).count() < 2 {
+        return Err(Error::DegenerateAlignment(
+            "degenerate covariance rank, Umeyama alignment is not possible (are the points collinear?)".into(),
+        ));
+    }
+    let mut s = Matrix3::<f64>::identity();
+    if u.determinant() * v_t.determinant() < 0.0 {
+        s[(2, 2)] = -1.0;
+    }
+    let r = u * s * v_t;
+    let c = if with_scale {
+        (Matrix3::from_diagonal(&d) * s).trace() / sigma_x
+    } else {
+        1.0
+    };
+    let rotation = DMat3::from_cols_array(&[
+        r[(0, 0)],
+        r[(1, 0)],
+        r[(2, 0)],
+        r[(0, 1)],
+        r[(1, 1)],
+        r[(2, 1)],
+        r[(0, 2)],
+        r[(1, 2)],
+        r[(2, 2)],
+    ]);
+    let translation = mean_y - c * (rotation * mean_x);
+    Ok(Similarity {
+        rotation,
+        translation,
+        scale: c,
+    })
+}
+
+/// Aligns `estimate` onto `reference` in place (both associated, same length), as evo's
+/// `PosePath3D.align` / `align_origin`; returns the transform applied.
+pub fn align(
+    estimate: &mut Trajectory,
+    reference: &Trajectory,
+    alignment: Alignment,
+) -> Result<Similarity, Error> {
+    if estimate.len() != reference.len() {
+        return Err(Error::InvalidArgument(format!(
+            "trajectories must be associated (same number of poses): {} vs {}",
+            reference.len(),
+            estimate.len()
+        )));
+    }
+    let identity = Similarity {
+        rotation: DMat3::IDENTITY,
+        translation: DVec3::ZERO,
+        scale: 1.0,
+    };
+    let transform = match alignment {
+        Alignment::None => return Ok(identity),
+        Alignment::Se3 | Alignment::Sim3 | Alignment::ScaleOnly => {
+            let with_scale = alignment != Alignment::Se3;
+            let found = umeyama(&estimate.positions, &reference.positions, with_scale)?;
+            if alignment == Alignment::ScaleOnly {
+                Similarity {
+                    scale: found.scale,
+                    ..identity
+                }
+            } else {
+                found
+            }
+        }
+        Alignment::Origin => {
+            if estimate.is_empty() {
+                return Err(Error::DegenerateAlignment("no poses".into()));
+            }
+            // to_ref_origin = T_ref0 · T_est0⁻¹
+            let rotation = reference.orientations[0] * estimate.orientations[0].conjugate();
+            let translation = reference.positions[0] - rotation * estimate.positions[0];
+            Similarity {
+                rotation: DMat3::from_quat(rotation),
+                translation,
+                scale: 1.0,
+            }
+        }
+    };
+    let rotation = DQuat::from_mat3(&transform.rotation).normalize();
+    estimate.transform(rotation, transform.translation, transform.scale);
+    Ok(transform)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn points(seed: &[f64]) -> Vec<DVec3> {
+        seed.chunks(3)
+            .map(|c| DVec3::new(c[0], c[1], c[2]))
+            .collect()
+    }
+
+    #[test]
+    fn collinear_points_are_degenerate() {
+        let x: Vec<DVec3> = (0..10)
+            .map(|i| DVec3::new(f64::from(i), 0.0, 0.0))
+            .collect();
+        assert!(matches!(
+            umeyama(&x, &x, false),
+            Err(Error::DegenerateAlignment(_))
+        ));
+        assert!(matches!(
+            umeyama(&[], &[], false),
+            Err(Error::DegenerateAlignment(_))
+        ));
+    }
+
+    #[test]
+    fn reflection_is_not_returned() {
+        // y is a mirror image of x: the best proper rotation is returned, det = +1.
+        let x = points(&[0., 0., 0., 1., 0., 0., 0., 1., 0., 0., 0., 1., 1., 1., 1.]);
+        let y: Vec<DVec3> = x.iter().map(|p| DVec3::new(-p.x, p.y, p.z)).collect();
+        let t = umeyama(&x, &y, false).unwrap();
+        assert!((t.rotation.determinant() - 1.0).abs() < 1e-12);
+    }
+
+    proptest! {
+        #[test]
+        fn recovers_a_known_similarity(coords in prop::collection::vec(-5.0f64..5.0, 30..60),
+                                       axis in (-1.0f64..1.0, -1.0f64..1.0, 0.1f64..1.0),
+                                       angle in -3.0f64..3.0, shift in (-9.0f64..9.0, -9.0f64..9.0, -9.0f64..9.0),
+                                       scale in 0.2f64..5.0) {
+            let x = points(&coords[..coords.len() / 3 * 3]);
+            let rotation = DMat3::from_axis_angle(DVec3::new(axis.0, axis.1, axis.2).normalize(), angle);
+            let truth = Similarity { rotation, translation: DVec3::new(shift.0, shift.1, shift.2), scale };
+            let y: Vec<DVec3> = x.iter().map(|p| truth.apply(*p)).collect();
+            // Random points in a box are never (numerically) collinear for ≥ 10 points.
+            let found = umeyama(&x, &y, true).unwrap();
+            prop_assert!((found.scale - scale).abs() < 1e-9);
+            prop_assert!(found.rotation.abs_diff_eq(rotation, 1e-9));
+            prop_assert!(found.translation.abs_diff_eq(truth.translation, 1e-8));
+            let rigid = Similarity { scale: 1.0, ..truth };
+            let y: Vec<DVec3> = x.iter().map(|p| rigid.apply(*p)).collect();
+            let found = umeyama(&x, &y, false).unwrap();
+            prop_assert!(found.rotation.abs_diff_eq(rotation, 1e-9));
+            prop_assert!((found.scale - 1.0).abs() == 0.0);
+        }
+    }
+}

@@ -1,0 +1,417 @@
+//! Pairwise uncertainty-based pose error estimation (the paper's section 3).
+//!
+//! Trials are ordered as given; for every pair `i < j` trial `i` is the reference, the two are
+//! associated as evo does, and an all-pairs RPE with a delta of `delta` frames is computed on the
+//! associated poses. Every value is keyed by the reference's start stamp; per key a robust
+//! statistic over all pairs with that key is the window's error estimate.
+//!
+//! Speed: an RPE value only needs the two trials' *relative* poses over the window, so they are
+//! computed once per trial (`rel[k] = pose_k⁻¹ pose_{k+delta}`) and reused by every pair whose
+//! association keeps the window contiguous; only windows broken by a dropped frame are
+//! recomputed from the poses. Pairs and windows run in parallel (rayon).
+
+use rayon::prelude::*;
+
+use crate::metrics::RigidPose;
+use crate::sync::associate_named;
+use crate::{Error, PoseRelation, Setting, TimeUnit, Trajectory, statistics};
+
+/// Options of [`estimate`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EstimateOptions {
+    /// Per-window statistic over the pair values (default `trim_mean_30`).
+    pub setting: Setting,
+    /// RPE delta in frames (default 10).
+    pub delta: usize,
+    /// Association tolerance in seconds (default 0.01).
+    pub t_max_diff_s: f64,
+    /// Pose relation of the RPE (default translation part; `RotationAngleDeg` gives the
+    /// rotational estimate, in degrees).
+    pub pose_relation: PoseRelation,
+}
+
+impl Default for EstimateOptions {
+    fn default() -> Self {
+        Self {
+            setting: Setting::default(),
+            delta: 10,
+            t_max_diff_s: 0.01,
+            pose_relation: PoseRelation::TranslationPart,
+        }
+    }
+}
+
+/// Class boundaries of the JSON output.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Thresholds {
+    /// Errors at or above this are "medium" (default 0.05 m).
+    pub medium_m: f64,
+    /// Errors at or above this are "high" (default 0.10 m).
+    pub high_m: f64,
+}
+
+impl Default for Thresholds {
+    fn default() -> Self {
+        Self {
+            medium_m: 0.05,
+            high_m: 0.10,
+        }
+    }
+}
+
+impl Thresholds {
+    /// "low", "medium" or "high" for an error.
+    pub fn class(&self, error: f64) -> &'static str {
+        if error >= self.high_m {
+            "high"
+        } else if error >= self.medium_m {
+            "medium"
+        } else {
+            "low"
+        }
+    }
+}
+
+/// One estimated window.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WindowEstimate {
+    /// Start stamp (ns): the reference trials' stamp where the window starts.
+    pub start: i64,
+    /// End stamp (ns): `delta` frames after `start` in the first trial that has `start`.
+    pub end: i64,
+    /// The statistic over the pair values (metres; degrees/radians for rotational relations).
+    pub error_m: f64,
+    /// Number of pair values aggregated.
+    pub pairs: usize,
+    /// Interquartile range (numpy linear quartiles) of the pair values.
+    pub spread_m: f64,
+}
+
+/// The result of [`estimate`]: windows sorted by start.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Estimate {
+    /// The statistic used.
+    pub setting: Setting,
+    /// Number of trials.
+    pub trials: usize,
+    /// Time unit of the trials (the first trial's), used for the CSV.
+    pub time_unit: TimeUnit,
+    /// The pose relation of the RPE.
+    pub pose_relation: PoseRelation,
+    /// Windows, sorted by start.
+    pub windows: Vec<WindowEstimate>,
+}
+
+impl Estimate {
+    /// Legacy CSV: `start,error` header, one row per window, start in the trials' time unit,
+    /// error with full round-trip precision.
+    pub fn to_legacy_csv(&self) -> String {
+        let mut out = String::with_capacity(32 * (self.windows.len() + 1));
+        out.push_str("start,error\n");
+        for w in &self.windows {
+            out.push_str(&self.time_unit.format_stamp(w.start));
+            out.push(',');
+            out.push_str(&w.error_m.to_string());
+            out.push('\n');
+        }
+        out
+    }
+
+    /// JSON: `{"version":1,"setting":…,"trials":n,"time_unit":"ns"|"s","pose_relation":…,
+    /// "windows":[{"start","end","error_m","pairs","spread_m","class"}]}`; `start`/`end` are
+    /// integer nanoseconds. For rotational relations the error keys are `error_deg`/`error_rad`
+    /// (`spread_deg`/`spread_rad`) and `class` is omitted.
+    pub fn to_json(&self, thresholds: Thresholds) -> String {
+        let (error_key, spread_key) = match self.pose_relation {
+            PoseRelation::TranslationPart => ("error_m", "spread_m"),
+            PoseRelation::RotationAngleDeg => ("error_deg", "spread_deg"),
+            PoseRelation::RotationAngleRad => ("error_rad", "spread_rad"),
+            PoseRelation::FullTransformation => ("error", "spread"),
+        };
+        let translation = self.pose_relation == PoseRelation::TranslationPart;
+        let windows: Vec<serde_json::Value> = self
+            .windows
+            .iter()
+            .map(|w| {
+                let mut o = serde_json::Map::new();
+                o.insert("start".into(), w.start.into());
+                o.insert("end".into(), w.end.into());
+                o.insert(error_key.into(), json_number(w.error_m));
+                o.insert("pairs".into(), w.pairs.into());
+                o.insert(spread_key.into(), json_number(w.spread_m));
+                if translation {
+                    o.insert("class".into(), thresholds.class(w.error_m).into());
+                }
+                serde_json::Value::Object(o)
+            })
+            .collect();
+        let document = serde_json::json!({
+            "version": 1,
+            "setting": self.setting.to_string(),
+            "trials": self.trials,
+            "time_unit": match self.time_unit { TimeUnit::Nanoseconds => "ns", TimeUnit::Seconds => "s" },
+            "pose_relation": self.pose_relation.to_string(),
+            "windows": windows,
+        });
+        document.to_string()
+    }
+}
+
+fn json_number(v: f64) -> serde_json::Value {
+    serde_json::Number::from_f64(v).map_or(serde_json::Value::Null, serde_json::Value::Number)
+}
+
+/// Estimates the per-window pose error of `trials` (at least 2) without ground truth.
+pub fn estimate(trials: &[Trajectory], opts: &EstimateOptions) -> Result<Estimate, Error> {
+    Ok(PairwiseValues::compute(trials, opts)?.estimate(opts.setting))
+}
+
+/// All pairwise RPE values of a set of trials, grouped by window key, from which an
+/// [`Estimate`] for any [`Setting`] is cheap to derive.
+#[derive(Debug, Clone)]
+pub struct PairwiseValues {
+    trials: usize,
+    time_unit: TimeUnit,
+    pose_relation: PoseRelation,
+    /// Sorted, distinct window start stamps (ns).
+    keys: Vec<i64>,
+    /// End stamp per key.
+    ends: Vec<i64>,
+    /// Per pair: key indices (non-decreasing) and values.
+    pairs: Vec<PairValues>,
+}
+
+#[derive(Debug, Clone, Default)]
+struct PairValues {
+    keys: Vec<u32>,
+    values: Vec<f64>,
+}
+
+/// Per-trial precomputation: relative poses over `delta` frames.
+struct TrialWindows<'a> {
+    trial: &'a Trajectory,
+    relative: Vec<RigidPose>,
+}
+
+impl<'a> TrialWindows<'a> {
+    fn new(trial: &'a Trajectory, delta: usize) -> Self {
+        let relative = (0..trial.len().saturating_sub(delta))
+            .map(|k| RigidPose::relative(trial.pose(k), trial.pose(k + delta)))
+            .collect();
+        Self { trial, relative }
+    }
+
+    #[inline]
+    fn relative(&self, a: usize, b: usize, delta: usize) -> RigidPose {
+        if b == a + delta {
+            self.relative[a]
+        } else {
+            RigidPose::relative(self.trial.pose(a), self.trial.pose(b))
+        }
+    }
+}
+
+impl PairwiseValues {
+    /// Runs all n(n−1)/2 pairwise RPEs (`opts.setting` is not used here).
+    pub fn compute(trials: &[Trajectory], opts: &EstimateOptions) -> Result<Self, Error> {
+        if trials.len() < 2 {
+            return Err(Error::InvalidArgument(format!(
+                "need at least 2 trials, got {}",
+                trials.len()
+            )));
+        }
+        if opts.delta == 0 {
+            return Err(Error::InvalidArgument(
+                "delta must be at least 1 frame".into(),
+            ));
+        }
+        if let Some(i) = trials.iter().position(|t| t.is_empty()) {
+            return Err(Error::InvalidArgument(format!("trial {i} has no poses")));
+        }
+        let delta = opts.delta;
+        let windows: Vec<TrialWindows<'_>> = trials
+            .par_iter()
+            .map(|t| TrialWindows::new(t, delta))
+            .collect();
+
+        // Keys: the distinct stamps of every trial that is a reference somewhere (all but the last).
+        let references = &trials[..trials.len() - 1];
+        let mut keys: Vec<i64> = references
+            .iter()
+            .flat_map(|t| t.stamps.iter().copied())
+            .collect();
+        keys.par_sort_unstable();
+        keys.dedup();
+        if keys.len() > u32::MAX as usize {
+            return Err(Error::InvalidArgument("too many distinct stamps".into()));
+        }
+        let key_of: Vec<Vec<u32>> = references
+            .par_iter()
+            .map(|t| {
+                let mut cursor = 0usize;
+                t.stamps
+                    .iter()
+                    .map(|&s| {
+                        cursor += keys[cursor..].partition_point(|&k| k < s);
+                        cursor as u32
+                    })
+                    .collect()
+            })
+            .collect();
+        let mut ends = vec![i64::MIN; keys.len()];
+        for (t, ids) in references.iter().zip(&key_of) {
+            for (k, &key) in ids.iter().enumerate() {
+                let end = &mut ends[key as usize];
+                if *end == i64::MIN {
+                    *end = t.stamps[(k + delta).min(t.len() - 1)];
+                }
+            }
+        }
+
+        let n = trials.len();
+        let pair_ids: Vec<(usize, usize)> = (0..n)
+            .flat_map(|i| (i + 1..n).map(move |j| (i, j)))
+            .collect();
+        let relation = opts.pose_relation;
+        let pairs = pair_ids
+            .par_iter()
+            .map(|&(i, j)| {
+                let names = (format!("trial {i}"), format!("trial {j}"));
+                let (ids_ref, ids_est) = associate_named(
+                    &trials[i],
+                    &trials[j],
+                    opts.t_max_diff_s,
+                    0.0,
+                    (&names.0, &names.1),
+                )?;
+                let count = ids_ref.len().saturating_sub(delta);
+                let mut out = PairValues {
+                    keys: Vec::with_capacity(count),
+                    values: Vec::with_capacity(count),
+                };
+                let (reference, estimate) = (&windows[i], &windows[j]);
+                for k in 0..count {
+                    let (a0, a1) = (ids_ref[k], ids_ref[k + delta]);
+                    let (b0, b1) = (ids_est[k], ids_est[k + delta]);
+                    let q = reference.relative(a0, a1, delta);
+                    let p = estimate.relative(b0, b1, delta);
+                    let value = match relation {
+                        // ‖Q_rel⁻¹P_rel‖ translation = ‖p_rel.t − q_rel.t‖ (rotation keeps norms).
+                        PoseRelation::TranslationPart => (p.translation - q.translation).length(),
+                        _ => RigidPose::relative(q, p).error(relation),
+                    };
+                    out.keys.push(key_of[i][a0]);
+                    out.values.push(value);
+                }
+                Ok(out)
+            })
+            .collect::<Result<Vec<_>, Error>>()?;
+
+        Ok(Self {
+            trials: n,
+            time_unit: trials[0].time_unit,
+            pose_relation: relation,
+            keys,
+            ends,
+            pairs,
+        })
+    }
+
+    /// Aggregates the pair values per window with `setting`.
+    pub fn estimate(&self, setting: Setting) -> Estimate {
+        const BLOCK: usize = 64;
+        let blocks: Vec<usize> = (0..self.keys.len()).step_by(BLOCK).collect();
+        let windows = blocks
+            .par_iter()
+            .flat_map_iter(|&block_start| {
+                let block_end = (block_start + BLOCK).min(self.keys.len());
+                let mut buckets: Vec<Vec<f64>> = vec![Vec::new(); block_end - block_start];
+                for pair in &self.pairs {
+                    let from = pair.keys.partition_point(|&k| (k as usize) < block_start);
+                    for (&key, &value) in pair.keys[from..].iter().zip(&pair.values[from..]) {
+                        let key = key as usize;
+                        if key >= block_end {
+                            break;
+                        }
+                        buckets[key - block_start].push(value);
+                    }
+                }
+                buckets
+                    .into_iter()
+                    .enumerate()
+                    .filter(|(_, values)| !values.is_empty())
+                    .map(|(offset, mut values)| {
+                        let key = block_start + offset;
+                        let error = setting.apply(&mut values);
+                        let spread = statistics::interquartile_range(&mut values);
+                        WindowEstimate {
+                            start: self.keys[key],
+                            end: self.ends[key],
+                            error_m: error,
+                            pairs: values.len(),
+                            spread_m: spread,
+                        }
+                    })
+                    .collect::<Vec<_>>()
+            })
+            .collect();
+        Estimate {
+            setting,
+            trials: self.trials,
+            time_unit: self.time_unit,
+            pose_relation: self.pose_relation,
+            windows,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::{DQuat, DVec3};
+
+    fn trial(n: usize, wobble: f64) -> Trajectory {
+        Trajectory {
+            stamps: (0..n as i64)
+                .map(|i| 1_000_000_000 + i * 33_333_333)
+                .collect(),
+            positions: (0..n)
+                .map(|i| DVec3::new(i as f64 * 0.01, (i as f64 * wobble).sin() * wobble, 0.0))
+                .collect(),
+            orientations: (0..n)
+                .map(|i| DQuat::from_rotation_y(i as f64 * 0.01))
+                .collect(),
+            time_unit: TimeUnit::Nanoseconds,
+        }
+    }
+
+    #[test]
+    fn identical_trials_have_zero_error() {
+        let t = trial(30, 0.0);
+        let e = estimate(&[t.clone(), t.clone(), t], &EstimateOptions::default()).unwrap();
+        assert_eq!(e.windows.len(), 20);
+        assert!(
+            e.windows
+                .iter()
+                .all(|w| w.error_m.abs() < 1e-15 && w.pairs == 3)
+        );
+        assert_eq!(e.windows[0].end, 1_000_000_000 + 10 * 33_333_333);
+        assert!(e.to_legacy_csv().starts_with("start,error\n1000000000,0"));
+    }
+
+    #[test]
+    fn single_pair_equals_rpe() {
+        let (a, b) = (trial(40, 0.0), trial(40, 0.3));
+        let e = estimate(&[a.clone(), b.clone()], &EstimateOptions::default()).unwrap();
+        let r = crate::rpe(&a, &b, &crate::RpeOptions::default()).unwrap();
+        assert_eq!(e.windows.len(), r.errors.len());
+        for (w, v) in e.windows.iter().zip(&r.errors) {
+            assert!((w.error_m - v).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn rejects_too_few_trials() {
+        assert!(estimate(&[trial(20, 0.0)], &EstimateOptions::default()).is_err());
+    }
+}

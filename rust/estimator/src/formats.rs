@@ -1,0 +1,515 @@
+//! Trajectory file formats: TUM, EuRoC ground-truth CSV and KITTI poses.
+
+use std::io::Write;
+use std::path::Path;
+
+use glam::{DMat3, DQuat, DVec3};
+
+use crate::{Error, TimeUnit, Trajectory};
+
+/// Reads a TUM trajectory file (`t x y z qx qy qz qw`); see [`parse_tum`].
+pub fn read_tum(path: &Path) -> Result<Trajectory, Error> {
+    parse_tum(&read_text(path)?, &path.display().to_string())
+}
+
+/// Parses TUM text. `#` starts a comment; blank lines are skipped. Timestamps that are all
+/// integer tokens are nanoseconds, otherwise decimal seconds (scientific notation accepted).
+/// Errors name `source`, the line and the column of the offending token.
+pub fn parse_tum(text: &str, source: &str) -> Result<Trajectory, Error> {
+    let mut rows = Rows::with_capacity(text.len() / 64);
+    let mut all_integer = true;
+    for (line_index, raw) in text.lines().enumerate() {
+        let line = raw.split('#').next().unwrap_or("");
+        let mut tokens = Tokens::new(line, source, line_index + 1);
+        let Some(first) = tokens.next_token() else {
+            continue;
+        };
+        let stamp = parse_stamp(first, &tokens)?;
+        all_integer &= matches!(stamp, Stamp::Integer(_));
+        let mut values = [0.0; 7];
+        for value in &mut values {
+            *value = tokens.expect_f64(8)?;
+        }
+        tokens.expect_end(8)?;
+        let [x, y, z, qx, qy, qz, qw] = values;
+        rows.push(
+            stamp,
+            DVec3::new(x, y, z),
+            DQuat::from_xyzw(qx, qy, qz, qw),
+            &tokens,
+        )?;
+    }
+    let unit = if all_integer {
+        TimeUnit::Nanoseconds
+    } else {
+        TimeUnit::Seconds
+    };
+    let mut stamps = Vec::with_capacity(rows.stamps.len());
+    for (stamp, line) in rows.stamps.iter().zip(&rows.lines) {
+        let ns = match (*stamp, unit) {
+            (Stamp::Integer(v), TimeUnit::Nanoseconds) => Some(v),
+            (Stamp::Integer(v), TimeUnit::Seconds) => v.checked_mul(1_000_000_000),
+            (Stamp::Seconds(ns), _) => Some(ns),
+        };
+        let ns = ns.ok_or_else(|| parse_error(source, *line, 1, "timestamp out of range"))?;
+        stamps.push(ns);
+    }
+    rows.finish(stamps, unit, source)
+}
+
+/// Writes TUM text, keeping the time unit (integers for ns, 9 decimals for seconds) and
+/// full round-trip precision for the pose values.
+pub fn write_tum(traj: &Trajectory, out: &mut impl Write) -> std::io::Result<()> {
+    let mut buffer = String::with_capacity(64 * 1024);
+    for i in 0..traj.len() {
+        let (p, q) = (traj.positions[i], traj.orientations[i]);
+        use std::fmt::Write as _;
+        let stamp = traj.time_unit.format_stamp(traj.stamps[i]);
+        // Writing to a String cannot fail.
+        let _ = writeln!(
+            buffer,
+            "{stamp} {} {} {} {} {} {} {}",
+            p.x, p.y, p.z, q.x, q.y, q.z, q.w
+        );
+        if buffer.len() > 60 * 1024 {
+            out.write_all(buffer.as_bytes())?;
+            buffer.clear();
+        }
+    }
+    out.write_all(buffer.as_bytes())
+}
+
+/// Reads a EuRoC ground-truth CSV (`#timestamp [ns], px, py, pz, qw, qx, qy, qz, ...`).
+pub fn read_euroc_csv(path: &Path) -> Result<Trajectory, Error> {
+    parse_euroc_csv(&read_text(path)?, &path.display().to_string())
+}
+
+/// Parses EuRoC ground-truth CSV text: integer-ns stamps, position, quaternion `w x y z`;
+/// further columns (velocities, biases) are ignored. Lines starting with `#` are comments.
+pub fn parse_euroc_csv(text: &str, source: &str) -> Result<Trajectory, Error> {
+    let mut rows = Rows::with_capacity(text.len() / 128);
+    for (line_index, raw) in text.lines().enumerate() {
+        let line_no = line_index + 1;
+        if raw.trim_start().starts_with('#') || raw.trim().is_empty() {
+            continue;
+        }
+        let mut fields = Vec::with_capacity(17);
+        let mut offset = 0;
+        for field in raw.split(',') {
+            fields.push((
+                field.trim(),
+                offset + field.len() - field.trim_start().len() + 1,
+            ));
+            offset += field.len() + 1;
+        }
+        if fields.len() < 8 {
+            return Err(parse_error(
+                source,
+                line_no,
+                raw.len() + 1,
+                &format!(
+                    "expected at least 8 comma-separated fields, found {}",
+                    fields.len()
+                ),
+            ));
+        }
+        let (token, column) = fields[0];
+        let stamp = token.parse::<i64>().map_err(|_| {
+            parse_error(
+                source,
+                line_no,
+                column,
+                &format!("timestamp '{token}' is not integer nanoseconds"),
+            )
+        })?;
+        let mut values = [0.0; 7];
+        for (k, value) in values.iter_mut().enumerate() {
+            let (token, column) = fields[k + 1];
+            *value = parse_finite(token, source, line_no, column)?;
+        }
+        let [x, y, z, qw, qx, qy, qz] = values;
+        let tokens = Tokens::new("", source, line_no);
+        rows.push(
+            Stamp::Integer(stamp),
+            DVec3::new(x, y, z),
+            DQuat::from_xyzw(qx, qy, qz, qw),
+            &tokens,
+        )?;
+    }
+    let stamps = rows.stamps.iter().map(|s| match s {
+        Stamp::Integer(v) | Stamp::Seconds(v) => *v,
+    });
+    let stamps = stamps.collect();
+    rows.finish(stamps, TimeUnit::Nanoseconds, source)
+}
+
+/// Reads a KITTI pose file (12 numbers per line: the row-major 3×4 world-from-camera matrix).
+pub fn read_kitti(path: &Path) -> Result<Trajectory, Error> {
+    parse_kitti(&read_text(path)?, &path.display().to_string())
+}
+
+/// Parses KITTI poses. KITTI has no time: stamp `i` is the line's pose index (as nanoseconds),
+/// so two KITTI paths associate index by index.
+pub fn parse_kitti(text: &str, source: &str) -> Result<Trajectory, Error> {
+    let mut rows = Rows::with_capacity(text.len() / 128);
+    for (line_index, raw) in text.lines().enumerate() {
+        let line = raw.split('#').next().unwrap_or("");
+        let mut tokens = Tokens::new(line, source, line_index + 1);
+        if line.trim().is_empty() {
+            continue;
+        }
+        let mut m = [0.0; 12];
+        for value in &mut m {
+            *value = tokens.expect_f64(12)?;
+        }
+        tokens.expect_end(12)?;
+        let rotation = DMat3::from_cols(
+            DVec3::new(m[0], m[4], m[8]),
+            DVec3::new(m[1], m[5], m[9]),
+            DVec3::new(m[2], m[6], m[10]),
+        );
+        let orthonormality = (rotation * rotation.transpose() - DMat3::IDENTITY)
+            .abs()
+            .to_cols_array();
+        if orthonormality.iter().any(|&e| e > 1e-3) || rotation.determinant() <= 0.0 {
+            return Err(parse_error(
+                source,
+                line_index + 1,
+                1,
+                "rotation part is not a rotation matrix",
+            ));
+        }
+        let q = DQuat::from_mat3(&rotation).normalize();
+        let stamp = Stamp::Integer(rows.stamps.len() as i64);
+        rows.push(stamp, DVec3::new(m[3], m[7], m[11]), q, &tokens)?;
+    }
+    let stamps = (0..rows.stamps.len() as i64).collect();
+    rows.finish(stamps, TimeUnit::Nanoseconds, source)
+}
+
+fn read_text(path: &Path) -> Result<String, Error> {
+    std::fs::read_to_string(path).map_err(|source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
+fn parse_error(file: &str, line: usize, column: usize, message: &str) -> Error {
+    Error::Parse {
+        file: file.to_owned(),
+        line,
+        column,
+        message: message.to_owned(),
+    }
+}
+
+fn parse_finite(token: &str, file: &str, line: usize, column: usize) -> Result<f64, Error> {
+    match token.parse::<f64>() {
+        Ok(v) if v.is_finite() => Ok(v),
+        Ok(_) => Err(parse_error(
+            file,
+            line,
+            column,
+            &format!("'{token}' is not a finite number"),
+        )),
+        Err(_) => Err(parse_error(
+            file,
+            line,
+            column,
+            &format!("'{token}' is not a number"),
+        )),
+    }
+}
+
+#[derive(Debug, Clone, Copy)]
+enum Stamp {
+    /// An integer token (nanoseconds if all stamps are integers, else whole seconds).
+    Integer(i64),
+    /// A decimal-seconds token, already converted to nanoseconds.
+    Seconds(i64),
+}
+
+/// Parses a timestamp token: an integer, or decimal seconds converted exactly to ns
+/// (rounded half away from zero at the 9th decimal), or scientific notation via f64.
+fn parse_stamp(token: &str, tokens: &Tokens<'_>) -> Result<Stamp, Error> {
+    let column = tokens.column_of(token);
+    let fail = |msg: String| parse_error(tokens.file, tokens.line, column, &msg);
+    let (negative, body) = match token.as_bytes().first() {
+        Some(b'-') => (true, &token[1..]),
+        Some(b'+') => (false, &token[1..]),
+        _ => (false, token),
+    };
+    if !body.is_empty() && body.bytes().all(|b| b.is_ascii_digit()) {
+        let v: i64 = body
+            .parse()
+            .map_err(|_| fail(format!("timestamp '{token}' out of range")))?;
+        return Ok(Stamp::Integer(if negative { -v } else { v }));
+    }
+    let (whole, frac) = body.split_once('.').unwrap_or((body, ""));
+    let plain = |s: &str| s.bytes().all(|b| b.is_ascii_digit());
+    if !(whole.is_empty() && frac.is_empty()) && plain(whole) && plain(frac) {
+        let seconds: i64 = if whole.is_empty() {
+            0
+        } else {
+            whole
+                .parse()
+                .map_err(|_| fail(format!("timestamp '{token}' out of range")))?
+        };
+        let mut frac_ns: i64 = 0;
+        for (k, b) in frac.bytes().take(9).enumerate() {
+            frac_ns += i64::from(b - b'0') * 10_i64.pow(8 - k as u32);
+        }
+        if frac.len() > 9 && frac.as_bytes()[9] >= b'5' {
+            frac_ns += 1;
+        }
+        let ns = seconds
+            .checked_mul(1_000_000_000)
+            .and_then(|s| s.checked_add(frac_ns))
+            .ok_or_else(|| fail(format!("timestamp '{token}' out of range")))?;
+        return Ok(Stamp::Seconds(if negative { -ns } else { ns }));
+    }
+    let seconds = match token.parse::<f64>() {
+        Ok(v) if v.is_finite() => v,
+        Ok(_) => return Err(fail(format!("timestamp '{token}' is not finite"))),
+        Err(_) => return Err(fail(format!("timestamp '{token}' is not a number"))),
+    };
+    let ns = (seconds * 1e9).round();
+    if ns.abs() >= 9.2e18 {
+        return Err(fail(format!("timestamp '{token}' out of range")));
+    }
+    Ok(Stamp::Seconds(ns as i64))
+}
+
+/// Whitespace tokens of one line, remembering where each starts for error columns.
+struct Tokens<'a> {
+    line_text: &'a str,
+    rest: std::str::SplitAsciiWhitespace<'a>,
+    file: &'a str,
+    line: usize,
+    count: usize,
+}
+
+impl<'a> Tokens<'a> {
+    fn new(line_text: &'a str, file: &'a str, line: usize) -> Self {
+        Self {
+            line_text,
+            rest: line_text.split_ascii_whitespace(),
+            file,
+            line,
+            count: 0,
+        }
+    }
+
+    fn next_token(&mut self) -> Option<&'a str> {
+        let t = self.rest.next();
+        self.count += usize::from(t.is_some());
+        t
+    }
+
+    fn column_of(&self, token: &str) -> usize {
+        let offset = token.as_ptr() as usize - self.line_text.as_ptr() as usize;
+        self.line_text[..offset].chars().count() + 1
+    }
+
+    fn expect_f64(&mut self, expected: usize) -> Result<f64, Error> {
+        match self.next_token() {
+            Some(token) => parse_finite(token, self.file, self.line, self.column_of(token)),
+            None => Err(parse_error(
+                self.file,
+                self.line,
+                self.line_text.trim_end().chars().count() + 1,
+                &format!("expected {expected} values, found {}", self.count),
+            )),
+        }
+    }
+
+    fn expect_end(&mut self, expected: usize) -> Result<(), Error> {
+        match self.next_token() {
+            Some(token) => Err(parse_error(
+                self.file,
+                self.line,
+                self.column_of(token),
+                &format!("expected {expected} values, found more"),
+            )),
+            None => Ok(()),
+        }
+    }
+}
+
+/// Accumulated rows with per-row line numbers, so late checks can still name the line.
+struct Rows {
+    stamps: Vec<Stamp>,
+    positions: Vec<DVec3>,
+    orientations: Vec<DQuat>,
+    lines: Vec<usize>,
+}
+
+impl Rows {
+    fn with_capacity(n: usize) -> Self {
+        Self {
+            stamps: Vec::with_capacity(n),
+            positions: Vec::with_capacity(n),
+            orientations: Vec::with_capacity(n),
+            lines: Vec::with_capacity(n),
+        }
+    }
+
+    fn push(&mut self, stamp: Stamp, p: DVec3, q: DQuat, tokens: &Tokens<'_>) -> Result<(), Error> {
+        let norm = q.length();
+        if (norm - 1.0).abs() > crate::trajectory::QUATERNION_NORM_TOLERANCE {
+            return Err(parse_error(
+                tokens.file,
+                tokens.line,
+                1,
+                &format!(
+                    "quaternion norm {norm} is not 1 (tolerance {})",
+                    crate::trajectory::QUATERNION_NORM_TOLERANCE
+                ),
+            ));
+        }
+        self.stamps.push(stamp);
+        self.positions.push(p);
+        self.orientations.push(q / norm);
+        self.lines.push(tokens.line);
+        Ok(())
+    }
+
+    fn finish(self, stamps: Vec<i64>, unit: TimeUnit, source: &str) -> Result<Trajectory, Error> {
+        if let Some(i) = stamps.windows(2).position(|w| w[1] <= w[0]) {
+            let what = if stamps[i + 1] == stamps[i] {
+                "duplicate"
+            } else {
+                "decreasing"
+            };
+            return Err(parse_error(
+                source,
+                self.lines[i + 1],
+                1,
+                &format!("{what} timestamp (previous pose on line {})", self.lines[i]),
+            ));
+        }
+        Ok(Trajectory {
+            stamps,
+            positions: self.positions,
+            orientations: self.orientations,
+            time_unit: unit,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse_err(text: &str) -> (usize, usize, String) {
+        match parse_tum(text, "t.txt") {
+            Err(Error::Parse {
+                file,
+                line,
+                column,
+                message,
+            }) => {
+                assert_eq!(file, "t.txt");
+                (line, column, message)
+            }
+            other => panic!("expected a parse error, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn integer_stamps_are_nanoseconds() {
+        let t = parse_tum("# hdr\n100 0 0 0 0 0 0 1\n\n200 1 2 3 0 0 0 1 # c\n", "x").unwrap();
+        assert_eq!(t.time_unit, TimeUnit::Nanoseconds);
+        assert_eq!(t.stamps, vec![100, 200]);
+        assert_eq!(t.positions[1], DVec3::new(1.0, 2.0, 3.0));
+    }
+
+    #[test]
+    fn decimal_stamps_are_seconds_exactly() {
+        let t = parse_tum("1403636579.763555527 0 0 0 0 0 0 1\n1403636580 0 0 0 0 0 0 1\n1.4036365805e9 0 0 0 0 0 0 1\n", "x").unwrap();
+        assert_eq!(t.time_unit, TimeUnit::Seconds);
+        assert_eq!(
+            t.stamps,
+            vec![
+                1_403_636_579_763_555_527,
+                1_403_636_580_000_000_000,
+                1_403_636_580_500_000_000
+            ]
+        );
+        let t = parse_tum(".5 0 0 0 0 0 0 1\n0.6000000005 0 0 0 0 0 0 1\n", "x").unwrap();
+        assert_eq!(t.stamps, vec![500_000_000, 600_000_001]);
+    }
+
+    #[test]
+    fn errors_name_line_and_column() {
+        assert_eq!(parse_err("1 0 0 0 0 0 0 1\n2 0 x 0 0 0 0 1\n").0, 2);
+        assert_eq!(parse_err("1 0 0 0 0 0 0 1\n2 0 x 0 0 0 0 1\n").1, 5);
+        let (line, column, msg) = parse_err("1 0 0 nan 0 0 0 1\n");
+        assert_eq!((line, column), (1, 7));
+        assert!(msg.contains("finite"), "{msg}");
+        assert_eq!(parse_err("1 0 0 inf 0 0 0 1\n").1, 7);
+        let (_, column, msg) = parse_err("1 0 0 0 0 0 0\n");
+        assert_eq!(column, 14);
+        assert!(msg.contains("expected 8"), "{msg}");
+        assert_eq!(parse_err("1 0 0 0 0 0 0 1 9\n").1, 17);
+        assert!(parse_err("1 0 0 0 0 0 0 1.1\n").2.contains("quaternion"));
+        let (line, _, msg) = parse_err("5 0 0 0 0 0 0 1\n5 0 0 0 0 0 0 1\n");
+        assert_eq!(line, 2);
+        assert!(msg.contains("duplicate"));
+        assert!(
+            parse_err("5 0 0 0 0 0 0 1\n4 0 0 0 0 0 0 1\n")
+                .2
+                .contains("decreasing")
+        );
+        assert_eq!(parse_err("abc 0 0 0 0 0 0 1\n").1, 1);
+    }
+
+    #[test]
+    fn normalises_quaternions_within_tolerance() {
+        let t = parse_tum("1 0 0 0 0 0 0 1.0004\n", "x").unwrap();
+        assert!((t.orientations[0].length() - 1.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn write_round_trips() {
+        for text in [
+            "1403636579.763555527 0.1 -2 3e-7 0 0 0.6 0.8\n",
+            "17 0.1 -2 3e-7 0 0.6 0 0.8\n",
+        ] {
+            let t = parse_tum(text, "x").unwrap();
+            let mut out = Vec::new();
+            write_tum(&t, &mut out).unwrap();
+            let back = parse_tum(std::str::from_utf8(&out).unwrap(), "y").unwrap();
+            assert_eq!(back, t);
+        }
+        let mut out = Vec::new();
+        write_tum(&parse_tum("2.5 1 2 3 0 0 0 1\n", "x").unwrap(), &mut out).unwrap();
+        assert_eq!(
+            String::from_utf8(out).unwrap(),
+            "2.500000000 1 2 3 0 0 0 1\n"
+        );
+    }
+
+    #[test]
+    fn euroc_and_kitti() {
+        let csv = "#timestamp, p_x, p_y, p_z, q_w, q_x, q_y, q_z, v\n10, 1, 2, 3, 1, 0, 0, 0, 9\n20,1,2,3,0,1,0,0,9\n";
+        let t = parse_euroc_csv(csv, "gt.csv").unwrap();
+        assert_eq!(t.stamps, vec![10, 20]);
+        assert_eq!(t.orientations[1], DQuat::from_xyzw(1.0, 0.0, 0.0, 0.0));
+        match parse_euroc_csv("10, 1, 2, x, 1, 0, 0, 0\n", "gt.csv") {
+            Err(Error::Parse {
+                line: 1,
+                column: 11,
+                ..
+            }) => {}
+            other => panic!("{other:?}"),
+        }
+        let kitti = "1 0 0 5 0 1 0 6 0 0 1 7\n0 -1 0 1 1 0 0 2 0 0 1 3\n";
+        let t = parse_kitti(kitti, "k.txt").unwrap();
+        assert_eq!(t.stamps, vec![0, 1]);
+        assert_eq!(t.positions[0], DVec3::new(5.0, 6.0, 7.0));
+        let expected = DQuat::from_rotation_z(std::f64::consts::FRAC_PI_2);
+        assert!(t.orientations[1].angle_between(expected) < 1e-12);
+        assert!(parse_kitti("2 0 0 5 0 1 0 6 0 0 1 7\n", "k").is_err());
+    }
+}
