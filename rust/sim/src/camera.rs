@@ -1,0 +1,256 @@
+//! Camera models: the phone's depth camera and what the tracking camera sees.
+
+use glam::{DQuat, DVec3};
+use serde::{Deserialize, Serialize};
+
+use crate::{Room, SurfaceKind};
+
+/// Pinhole intrinsics in pixels. Pixel `(u, v)` (column, row, integer indices from the
+/// top-left) looks along optical ray `((u − cx)/fx, (v − cy)/fy, 1)`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Intrinsics {
+    /// Focal length along x (pixels).
+    pub fx: f64,
+    /// Focal length along y (pixels).
+    pub fy: f64,
+    /// Principal point x (pixels).
+    pub cx: f64,
+    /// Principal point y (pixels).
+    pub cy: f64,
+}
+
+/// A depth camera like ARCore's Depth API: 16-bit millimetres, 0 = no depth.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct DepthCamera {
+    /// Intrinsics of the depth image.
+    pub intrinsics: Intrinsics,
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+    /// Depths beyond this are reported as 0 (no depth), like ARCore's 8 m limit.
+    pub max_range_m: f64,
+}
+
+impl DepthCamera {
+    /// A phone-like 160 × 120 depth image with a 64° horizontal field of view, principal
+    /// point at the centre pixel (80, 60), 8 m range.
+    pub fn phone() -> Self {
+        let (width, height) = (160u32, 120u32);
+        let f = f64::from(width) / 2.0 / (32f64.to_radians()).tan();
+        Self {
+            intrinsics: Intrinsics {
+                fx: f,
+                fy: f,
+                cx: f64::from(width / 2),
+                cy: f64::from(height / 2),
+            },
+            width,
+            height,
+            max_range_m: 8.0,
+        }
+    }
+}
+
+/// Direction, in the ARCore camera frame (x right, y up, looking along −z), of the optical ray
+/// through image point `(u, v)`; its z component is −1 so that `t` along it is the z-depth.
+fn camera_ray(k: &Intrinsics, u: f64, v: f64) -> DVec3 {
+    DVec3::new((u - k.cx) / k.fx, -(v - k.cy) / k.fy, -1.0)
+}
+
+impl Room {
+    /// Renders the depth image a phone at `position`/`rotation` would see.
+    ///
+    /// The pose is world-from-camera in the ARCore convention (right-handed, +Y up, camera
+    /// looks along −Z, +X right) and the display rotation is 0, so the returned sensor image is
+    /// row-major, `width × height`, row 0 at the top. Each pixel holds the depth along the
+    /// optical axis (z-depth, as ARCore reports it) in millimetres, rounded to nearest; 0 where
+    /// the ray hits nothing or the depth exceeds `max_range_m` or 65.535 m.
+    pub fn render_depth_mm(
+        &self,
+        position: DVec3,
+        rotation: DQuat,
+        camera: &DepthCamera,
+    ) -> Vec<u16> {
+        let k = &camera.intrinsics;
+        let mut image = Vec::with_capacity(camera.width as usize * camera.height as usize);
+        for v in 0..camera.height {
+            for u in 0..camera.width {
+                let ray = camera_ray(k, f64::from(u), f64::from(v));
+                let world_dir = rotation * ray;
+                let depth_m = self
+                    .raycast(position, world_dir)
+                    // Distance along the unit ray / |ray| = z-depth (the ray has z = −1).
+                    .map(|hit| hit.distance / ray.length())
+                    .filter(|&d| d.is_finite() && d <= camera.max_range_m);
+                image.push(match depth_m {
+                    Some(d) => {
+                        let mm = (d * 1000.0).round();
+                        if mm >= 1.0 && mm <= f64::from(u16::MAX) {
+                            mm as u16
+                        } else {
+                            0
+                        }
+                    }
+                    None => 0,
+                });
+            }
+        }
+        image
+    }
+
+    /// What the tracking camera at `position`/`rotation` (ARCore convention) sees, sampled on a
+    /// 9 × 7 grid over a 64° × 50° field of view.
+    pub fn view(&self, position: DVec3, rotation: DQuat) -> View {
+        const COLS: u32 = 9;
+        const ROWS: u32 = 7;
+        let half_h = (32f64).to_radians().tan();
+        let half_v = (25f64).to_radians().tan();
+        let (mut poverty, mut reflect, mut hits) = (0.0, 0.0, 0u32);
+        for r in 0..ROWS {
+            for c in 0..COLS {
+                let x = (2.0 * f64::from(c) / f64::from(COLS - 1) - 1.0) * half_h;
+                let y = (2.0 * f64::from(r) / f64::from(ROWS - 1) - 1.0) * half_v;
+                if let Some(hit) = self.raycast(position, rotation * DVec3::new(x, y, -1.0)) {
+                    poverty += hit.surface.feature_poverty();
+                    reflect += hit.surface.reflectivity();
+                    hits += 1;
+                }
+            }
+        }
+        let centre = self.raycast(position, rotation * -DVec3::Z);
+        if hits == 0 {
+            // Looking into nothing: nothing to track.
+            return View {
+                difficulty: 1.0,
+                reflectivity: 0.0,
+                facing: None,
+                facing_kind: None,
+            };
+        }
+        View {
+            difficulty: poverty / f64::from(hits),
+            reflectivity: reflect / f64::from(hits),
+            facing_kind: centre.as_ref().map(|h| h.surface),
+            facing: centre.map(|h| h.surface_name),
+        }
+    }
+}
+
+/// A summary of one camera view, as it matters to tracking.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct View {
+    /// Mean feature poverty over the view, 0 (rich) … 1 (nothing to track).
+    pub difficulty: f64,
+    /// Share of the view that reflects (glass), 0 … 1.
+    pub reflectivity: f64,
+    /// The surface at the image centre.
+    pub facing: Option<String>,
+    /// Its kind.
+    pub facing_kind: Option<SurfaceKind>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// ARCore-convention rotation looking along `forward` with +Y up.
+    fn look(forward: DVec3) -> DQuat {
+        crate::walk::look_rotation(forward.normalize(), 0.0)
+    }
+
+    #[test]
+    fn depth_of_a_fronto_parallel_wall_is_constant() {
+        let room = Room::demo();
+        let cam = DepthCamera::phone();
+        // 1.5 m in front of the blank wall, looking straight at it; the view stays on the wall.
+        let pos = DVec3::new(1.0, 1.35, 0.0);
+        let img = room.render_depth_mm(pos, look(DVec3::X), &cam);
+        assert_eq!(img.len(), 160 * 120);
+        assert!(img.iter().all(|&d| d == 1500), "{:?}", &img[..10]);
+    }
+
+    #[test]
+    fn depth_of_a_tilted_view_matches_the_analytic_plane_depth() {
+        let room = Room::demo();
+        let cam = DepthCamera::phone();
+        let k = cam.intrinsics;
+        // Looking down at the floor at 45 degrees from 1.2 m height.
+        let pos = DVec3::new(0.0, 1.2, 0.0);
+        let rot = look(DVec3::new(0.0, -1.0, -1.0));
+        let img = room.render_depth_mm(pos, rot, &cam);
+        for (u, v) in [(80u32, 60u32), (0, 0), (159, 119), (40, 100), (120, 10)] {
+            let ray = rot * camera_ray(&k, f64::from(u), f64::from(v));
+            // Floor y = 0: pos.y + t * ray.y = 0, and t is the z-depth.
+            let z_depth = -pos.y / ray.y;
+            let hit = pos + ray * z_depth;
+            let expected = if hit.x.abs() <= 2.5 && hit.z.abs() <= 2.0 && ray.y < 0.0 {
+                (z_depth * 1000.0).round() as u16
+            } else {
+                continue;
+            };
+            assert_eq!(img[(v * 160 + u) as usize], expected, "pixel ({u}, {v})");
+        }
+        // Image centre: 1.2 * sqrt(2) m along the optical axis.
+        assert_eq!(img[60 * 160 + 80], (1200.0 * 2f64.sqrt()).round() as u16);
+    }
+
+    #[test]
+    fn far_and_missing_depth_is_zero() {
+        let room = Room::demo();
+        let mut cam = DepthCamera::phone();
+        cam.max_range_m = 1.0;
+        let img = room.render_depth_mm(DVec3::new(1.0, 1.35, 0.0), look(DVec3::X), &cam);
+        assert!(img.iter().all(|&d| d == 0));
+        // Outside the room looking away: no hits at all.
+        let img = room.render_depth_mm(
+            DVec3::new(9.0, 1.0, 0.0),
+            look(DVec3::X),
+            &DepthCamera::phone(),
+        );
+        assert!(img.iter().all(|&d| d == 0));
+    }
+
+    #[test]
+    fn views_of_hard_surfaces_are_difficult() {
+        let room = Room::demo();
+        let eye = |x, z| DVec3::new(x, 1.4, z);
+        let blank = room.view(eye(1.0, 0.0), look(DVec3::X));
+        let glass = room.view(eye(0.2, 0.6), look(DVec3::Z));
+        let shelf = room.view(eye(-1.1, 0.3), look(-DVec3::X));
+        assert_eq!(blank.facing.as_deref(), Some("blank wall"));
+        assert_eq!(glass.facing.as_deref(), Some("glass pane"));
+        assert_eq!(shelf.facing.as_deref(), Some("bookshelf"));
+        assert!(blank.difficulty > 0.8, "{blank:?}");
+        assert!(
+            glass.difficulty > 0.6 && glass.reflectivity > 0.6,
+            "{glass:?}"
+        );
+        assert!(shelf.difficulty < 0.2, "{shelf:?}");
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(48))]
+
+        /// From anywhere inside the room, a rendered pixel equals the raycast's z-depth.
+        #[test]
+        fn depth_pixels_agree_with_raycast(
+            x in -2.3f64..2.3, y in 0.2f64..2.5, z in -1.8f64..1.8,
+            yaw in -3.1f64..3.1, pitch in -1.2f64..1.2, u in 0u32..160, v in 0u32..120,
+        ) {
+            let room = Room::demo();
+            let cam = DepthCamera::phone();
+            let pos = DVec3::new(x, y, z);
+            let rot = DQuat::from_rotation_y(yaw) * DQuat::from_rotation_x(pitch);
+            let img = room.render_depth_mm(pos, rot, &cam);
+            let ray_cam = camera_ray(&cam.intrinsics, f64::from(u), f64::from(v));
+            let hit = room.raycast(pos, rot * ray_cam).unwrap();
+            // z-depth is the hit point's distance along the optical axis.
+            let z_depth = (hit.point - pos).dot(rot * -DVec3::Z);
+            prop_assert!(hit.distance > 0.0);
+            let expected = (z_depth * 1000.0).round() as u16;
+            prop_assert_eq!(img[(v * 160 + u) as usize], expected);
+        }
+    }
+}

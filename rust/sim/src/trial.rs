@@ -1,0 +1,479 @@
+//! Repeated SLAM-like trials: ground truth plus locally accumulated, surface-dependent drift.
+
+use std::f64::consts::TAU;
+
+use glam::{DQuat, DVec3};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, LogNormal, Pareto, StudentT};
+use serde::{Deserialize, Serialize};
+use sitar_estimator::Trajectory;
+
+use crate::Recording;
+
+/// RNG stream of the error all trials share (the recording's own systematic error).
+const SHARED_STREAM: u64 = 2;
+/// RNG stream of trial `i` is `TRIAL_STREAM_BASE + i`.
+const TRIAL_STREAM_BASE: u64 = 1 << 32;
+
+/// How a simulated SLAM system errs. All magnitudes grow with the *difficulty* of the view
+/// (0 = feature-rich, 1 = nothing to track; see [`crate::View`]), smoothed over
+/// `difficulty_time_constant_s` because tracked features outlive the view they came from.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DriftModel {
+    /// RMS translation error (m) a trial accumulates over `calibration_frames` frames while
+    /// the camera sees a feature-rich view.
+    pub window_error_m: f64,
+    /// The window length `window_error_m` refers to (frames).
+    pub calibration_frames: u32,
+    /// Error gain at difficulty `d` is `1 + hard_gain·d²` (17× on a blank wall by default).
+    pub hard_gain: f64,
+    /// Frame-to-frame correlation of the translation error (AR(1) coefficient).
+    pub correlation: f64,
+    /// Degrees of freedom of the Student-t innovations (heavy tails; must exceed 2).
+    pub tail_dof: f64,
+    /// Per-frame rotation noise (degrees, per axis) on a feature-rich view.
+    pub rotation_noise_deg: f64,
+    /// Share (0–1, of standard deviation) of the error that every trial makes alike.
+    pub shared_share: f64,
+    /// Log-normal sigma of a per-trial quality factor: some runs are better than others.
+    pub trial_quality_sigma: f64,
+    /// Per-frame probability of a sudden jump (bad RANSAC hypothesis, relocalisation).
+    pub jump_rate: f64,
+    /// Additional jump probability per frame at difficulty 1 (scaled by `d²`).
+    pub jump_rate_hard: f64,
+    /// Additional jump probability per frame when the view is all glass (reflections).
+    pub jump_rate_reflective: f64,
+    /// Scale (m) of the Pareto-distributed jump size (shape 2, capped at 0.5 m).
+    pub jump_scale_m: f64,
+    /// Smoothing time constant of the difficulty seen by the tracker (s).
+    pub difficulty_time_constant_s: f64,
+    /// Give each trial its own random world frame (yaw and offset), as separate SLAM runs have.
+    pub world_offset: bool,
+}
+
+impl Default for DriftModel {
+    fn default() -> Self {
+        Self {
+            window_error_m: 0.006,
+            calibration_frames: 10,
+            hard_gain: 16.0,
+            correlation: 0.8,
+            tail_dof: 3.0,
+            rotation_noise_deg: 0.02,
+            shared_share: 0.3,
+            trial_quality_sigma: 0.2,
+            jump_rate: 0.0003,
+            jump_rate_hard: 0.004,
+            jump_rate_reflective: 0.006,
+            jump_scale_m: 0.03,
+            difficulty_time_constant_s: 0.25,
+            world_offset: true,
+        }
+    }
+}
+
+impl DriftModel {
+    /// Checks every parameter; the error names the field.
+    pub fn validate(&self) -> Result<(), (String, String)> {
+        let positive = [
+            ("window_error_m", self.window_error_m),
+            ("jump_scale_m", self.jump_scale_m),
+            (
+                "difficulty_time_constant_s",
+                self.difficulty_time_constant_s,
+            ),
+        ];
+        for (name, v) in positive {
+            if !(v.is_finite() && v > 0.0) {
+                return Err((name.into(), format!("must be a positive number, got {v}")));
+            }
+        }
+        let non_negative = [
+            ("hard_gain", self.hard_gain),
+            ("rotation_noise_deg", self.rotation_noise_deg),
+            ("trial_quality_sigma", self.trial_quality_sigma),
+        ];
+        for (name, v) in non_negative {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err((
+                    name.into(),
+                    format!("must be a non-negative number, got {v}"),
+                ));
+            }
+        }
+        let unit = [
+            ("correlation", self.correlation, 0.999),
+            ("shared_share", self.shared_share, 1.0),
+            ("jump_rate", self.jump_rate, 1.0),
+            ("jump_rate_hard", self.jump_rate_hard, 1.0),
+            ("jump_rate_reflective", self.jump_rate_reflective, 1.0),
+        ];
+        for (name, v, max) in unit {
+            if !(v.is_finite() && (0.0..=max).contains(&v)) {
+                return Err((name.into(), format!("must be in [0, {max}], got {v}")));
+            }
+        }
+        if !(self.tail_dof.is_finite() && self.tail_dof > 2.0) {
+            return Err((
+                "tail_dof".into(),
+                format!("must exceed 2, got {}", self.tail_dof),
+            ));
+        }
+        if self.calibration_frames == 0 {
+            return Err(("calibration_frames".into(), "must be at least 1".into()));
+        }
+        Ok(())
+    }
+
+    /// Per-frame translation innovation scale (m) that makes an AR(1) error sum to an RMS 3D
+    /// error of `window_error_m` over `calibration_frames` frames.
+    fn frame_sigma(&self) -> f64 {
+        let n = f64::from(self.calibration_frames);
+        let rho = self.correlation;
+        // Variance of a sum of n stationary AR(1) values with unit variance.
+        let var_sum: f64 = n + 2.0
+            * (1..self.calibration_frames)
+                .map(|k| (n - f64::from(k)) * rho.powi(k as i32))
+                .sum::<f64>();
+        self.window_error_m / (3.0 * var_sum).sqrt()
+    }
+
+    /// Error gain at (smoothed) difficulty `d`.
+    pub fn gain(&self, difficulty: f64) -> f64 {
+        1.0 + self.hard_gain * difficulty * difficulty
+    }
+
+    /// Probability of a jump in one frame at difficulty `d` and reflectivity `r`.
+    pub fn jump_probability(&self, difficulty: f64, reflectivity: f64) -> f64 {
+        (self.jump_rate
+            + self.jump_rate_hard * difficulty * difficulty
+            + self.jump_rate_reflective * reflectivity)
+            .min(1.0)
+    }
+}
+
+/// Options of one trial beyond the recording.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct TrialOptions {
+    /// Probability that a frame's pose is missing from the output (never the first or last
+    /// frame); 0 by default. Drift still accumulates through dropped frames.
+    pub drop_probability: f64,
+}
+
+/// A correlated 3-vector noise process (AR(1) with Student-t innovations of unit variance).
+struct Ar1 {
+    state: DVec3,
+    rho: f64,
+    innovation_scale: f64,
+    t: StudentT<f64>,
+    t_std: f64,
+}
+
+impl Ar1 {
+    fn new(model: &DriftModel) -> Self {
+        let dof = model.tail_dof;
+        Self {
+            state: DVec3::ZERO,
+            rho: model.correlation,
+            innovation_scale: (1.0 - model.correlation * model.correlation).sqrt(),
+            // dof > 2 is validated, so this never fails; fall back to near-Gaussian anyway.
+            t: StudentT::new(dof).unwrap_or_else(|_| StudentT::new(1e6).expect("valid dof")),
+            t_std: (dof / (dof - 2.0)).sqrt(),
+        }
+    }
+
+    /// Next value with stationary standard deviation `sigma` per axis.
+    fn next(&mut self, sigma: f64, rng: &mut ChaCha8Rng) -> DVec3 {
+        let mut draw = || self.t.sample(rng) / self.t_std;
+        let innovation = DVec3::new(draw(), draw(), draw());
+        self.state = self.state * self.rho + innovation * (self.innovation_scale * sigma);
+        self.state
+    }
+}
+
+fn rng_for(seed: u64, stream: u64) -> ChaCha8Rng {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    rng.set_stream(stream);
+    rng
+}
+
+fn gaussian3(rng: &mut ChaCha8Rng, sigma: f64) -> DVec3 {
+    let normal = rand_distr::StandardNormal;
+    let mut g = || -> f64 { normal.sample(rng) };
+    DVec3::new(g(), g(), g()) * sigma
+}
+
+fn uniform_direction(rng: &mut ChaCha8Rng) -> DVec3 {
+    let z: f64 = rng.random_range(-1.0..1.0);
+    let phi: f64 = rng.random_range(0.0..TAU);
+    let r = (1.0 - z * z).sqrt();
+    DVec3::new(r * phi.cos(), r * phi.sin(), z)
+}
+
+/// Replays `rec` as one SLAM trial (no dropped frames); see [`play_trial_with`].
+pub fn play_trial(rec: &Recording, trial_index: u32) -> Trajectory {
+    play_trial_with(rec, trial_index, &TrialOptions::default())
+}
+
+/// Replays `rec` as trial `trial_index`: deterministic per (recording seed, trial index).
+///
+/// The trial integrates the ground-truth frame-to-frame motion with an error in each step
+/// (in the camera frame): a correlated translation error and a rotation noise, both scaled by
+/// [`DriftModel::gain`] of the smoothed view difficulty, a part of which every trial shares
+/// (the recording's own systematic error) and the rest independent and scaled by a per-trial
+/// quality factor; plus rare heavy-tailed jumps, likelier on hard and reflective views. So
+/// trials drift more, and disagree more, where the camera faces blank walls and glass. The
+/// trial starts in its own world frame (random yaw and offset) when
+/// [`DriftModel::world_offset`] is set. Timestamps equal the recording's.
+pub fn play_trial_with(rec: &Recording, trial_index: u32, options: &TrialOptions) -> Trajectory {
+    let model = rec.drift();
+    let gt = &rec.walk().ground_truth;
+    let n = gt.len();
+    let sigma0 = model.frame_sigma();
+    let rot0 = model.rotation_noise_deg.to_radians();
+    let shared_w = model.shared_share;
+    let own_w = (1.0 - shared_w * shared_w).sqrt();
+
+    let mut shared_rng = rng_for(rec.seed(), SHARED_STREAM);
+    let mut rng = rng_for(rec.seed(), TRIAL_STREAM_BASE + u64::from(trial_index));
+    let quality = LogNormal::new(0.0, model.trial_quality_sigma)
+        .map(|d| d.sample(&mut rng))
+        .unwrap_or(1.0);
+    let (world_rot, world_offset) = if model.world_offset {
+        let yaw: f64 = rng.random_range(-std::f64::consts::PI..std::f64::consts::PI);
+        let offset = DVec3::new(
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-0.2..0.2),
+            rng.random_range(-1.0..1.0),
+        );
+        (DQuat::from_rotation_y(yaw), offset)
+    } else {
+        (DQuat::IDENTITY, DVec3::ZERO)
+    };
+    let jump_size = Pareto::new(model.jump_scale_m, 2.0).ok();
+
+    let mut shared = Ar1::new(model);
+    let mut own = Ar1::new(model);
+    let mut positions = Vec::with_capacity(n);
+    let mut orientations = Vec::with_capacity(n);
+    let (difficulty, reflectivity) = (rec.difficulty(), rec.reflectivity());
+    let mut position = world_rot * gt.positions[0] + world_offset;
+    let mut rotation = (world_rot * gt.orientations[0]).normalize();
+    positions.push(position);
+    orientations.push(rotation);
+    for f in 1..n {
+        let gain = model.gain(difficulty[f]);
+        // Both random streams advance identically every frame, whatever the options.
+        let shared_t = shared.next(shared_w * sigma0 * gain, &mut shared_rng);
+        let shared_r = gaussian3(&mut shared_rng, shared_w * rot0 * gain);
+        let mut error_t = shared_t + own.next(own_w * sigma0 * gain * quality, &mut rng);
+        let error_r = shared_r + gaussian3(&mut rng, own_w * rot0 * gain * quality);
+        let jump_p = model.jump_probability(difficulty[f], reflectivity[f]);
+        let jumps: bool = rng.random_bool(jump_p);
+        let direction = uniform_direction(&mut rng);
+        let size = jump_size.map_or(0.0, |d| d.sample(&mut rng).min(0.5));
+        if jumps {
+            error_t += direction * size;
+        }
+        let step_t = gt.orientations[f - 1].inverse() * (gt.positions[f] - gt.positions[f - 1]);
+        let step_r = gt.orientations[f - 1].inverse() * gt.orientations[f];
+        position += rotation * (step_t + step_r * error_t);
+        rotation = (rotation * step_r * DQuat::from_scaled_axis(error_r)).normalize();
+        positions.push(position);
+        orientations.push(rotation);
+    }
+    let mut trial = Trajectory {
+        stamps: gt.stamps.clone(),
+        positions,
+        orientations,
+        time_unit: gt.time_unit,
+    };
+    if options.drop_probability > 0.0 && n > 2 {
+        let p = options.drop_probability.clamp(0.0, 1.0);
+        let mut drop_rng = rng_for(
+            rec.seed(),
+            TRIAL_STREAM_BASE + u64::from(trial_index) + (1 << 31),
+        );
+        let keep: Vec<usize> = (0..n)
+            .filter(|&i| i == 0 || i == n - 1 || !drop_rng.random_bool(p))
+            .collect();
+        trial = trial.reduce_to_ids(&keep);
+    }
+    trial
+}
+
+/// Trials `0..n` of `rec` (no dropped frames).
+pub fn simulate_trials(rec: &Recording, n: u32) -> Vec<Trajectory> {
+    (0..n).map(|i| play_trial(rec, i)).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{Room, Walk};
+
+    fn recording(seed: u64) -> Recording {
+        let room = Room::demo();
+        let walk = Walk::handheld(&room, 15.0, 30.0, seed).unwrap();
+        Recording::new(room, walk, seed)
+    }
+
+    /// Translation RPE of `est` against `reference` over `delta` frames, per start frame
+    /// (both with the same stamps, no alignment needed: RPE is frame-invariant).
+    fn rpe(reference: &Trajectory, est: &Trajectory, delta: usize) -> Vec<f64> {
+        (0..reference.len() - delta)
+            .map(|i| {
+                let j = i + delta;
+                let rel = |t: &Trajectory| {
+                    (
+                        t.orientations[i].inverse() * (t.positions[j] - t.positions[i]),
+                        t.orientations[i].inverse() * t.orientations[j],
+                    )
+                };
+                let (rt, rr) = rel(reference);
+                let (et, _) = rel(est);
+                // (ref_rel)^-1 * est_rel, translation part.
+                (rr.inverse() * (et - rt)).length()
+            })
+            .collect()
+    }
+
+    #[test]
+    fn trials_are_deterministic_and_distinct() {
+        let rec = recording(3);
+        let a = play_trial(&rec, 0);
+        assert_eq!(a, play_trial(&rec, 0));
+        assert_eq!(a, play_trial(&recording(3), 0));
+        assert_ne!(a.positions, play_trial(&rec, 1).positions);
+        assert_ne!(a.positions, play_trial(&recording(4), 0).positions);
+        assert_eq!(a.stamps, rec.walk().ground_truth.stamps);
+        assert_eq!(simulate_trials(&rec, 3)[2], play_trial(&rec, 2));
+    }
+
+    #[test]
+    fn without_noise_a_trial_is_the_ground_truth_in_its_own_frame() {
+        let room = Room::demo();
+        let walk = Walk::handheld(&room, 5.0, 30.0, 1).unwrap();
+        let model = DriftModel {
+            window_error_m: 1e-300,
+            rotation_noise_deg: 0.0,
+            jump_rate: 0.0,
+            jump_rate_hard: 0.0,
+            jump_rate_reflective: 0.0,
+            ..DriftModel::default()
+        };
+        let rec = Recording::new(room, walk, 1).with_drift(model).unwrap();
+        let trial = play_trial(&rec, 5);
+        let gt = &rec.walk().ground_truth;
+        let e = rpe(gt, &trial, 10);
+        assert!(
+            e.iter().all(|&x| x < 1e-9),
+            "{:?}",
+            e.iter().cloned().fold(0.0, f64::max)
+        );
+        // But in another world frame.
+        assert!((trial.positions[0] - gt.positions[0]).length() > 1e-3);
+    }
+
+    #[test]
+    fn dropped_frames_keep_first_and_last_and_the_rest_of_the_poses() {
+        let rec = recording(5);
+        let full = play_trial(&rec, 2);
+        let dropped = play_trial_with(
+            &rec,
+            2,
+            &TrialOptions {
+                drop_probability: 0.1,
+            },
+        );
+        assert!(dropped.len() < full.len() && dropped.len() > full.len() * 8 / 10);
+        assert_eq!(dropped.stamps[0], full.stamps[0]);
+        assert_eq!(dropped.stamps.last(), full.stamps.last());
+        for (t, p) in dropped.stamps.iter().zip(&dropped.positions) {
+            let i = full.stamps.iter().position(|s| s == t).unwrap();
+            assert_eq!(*p, full.positions[i]);
+        }
+    }
+
+    #[test]
+    fn hard_surfaces_cause_larger_drift_and_spread() {
+        // Over several recordings, windows with a hard view versus feature-rich ones.
+        let (mut easy_err, mut hard_err, mut easy_spread, mut hard_spread) =
+            (vec![], vec![], vec![], vec![]);
+        for seed in 0..4 {
+            let rec = recording(seed);
+            let gt = &rec.walk().ground_truth;
+            let trials = simulate_trials(&rec, 8);
+            let errors: Vec<Vec<f64>> = trials.iter().map(|t| rpe(gt, t, 10)).collect();
+            let pair = rpe(&trials[0], &trials[1], 10);
+            for w in 0..errors[0].len() {
+                let d = rec.difficulty()[w..w + 10].iter().sum::<f64>() / 10.0;
+                let mean = errors.iter().map(|e| e[w]).sum::<f64>() / errors.len() as f64;
+                let (err, spread) = if d > 0.6 {
+                    (&mut hard_err, &mut hard_spread)
+                } else if d < 0.2 {
+                    (&mut easy_err, &mut easy_spread)
+                } else {
+                    continue;
+                };
+                err.push(mean);
+                spread.push(pair[w]);
+            }
+        }
+        let median = |v: &mut Vec<f64>| {
+            v.sort_by(f64::total_cmp);
+            v[v.len() / 2]
+        };
+        assert!(
+            easy_err.len() > 100 && hard_err.len() > 100,
+            "{} {}",
+            easy_err.len(),
+            hard_err.len()
+        );
+        let (e, h) = (median(&mut easy_err), median(&mut hard_err));
+        let (es, hs) = (median(&mut easy_spread), median(&mut hard_spread));
+        assert!(h > 4.0 * e, "error: easy {e} hard {h}");
+        assert!(hs > 4.0 * es, "spread: easy {es} hard {hs}");
+        // Magnitudes as the paper's classes expect: feature-rich low (< 2 cm), hard ≥ 5 cm.
+        assert!(e < 0.02 && h > 0.04, "easy {e} hard {h}");
+    }
+
+    #[test]
+    fn drift_model_validation_names_the_field() {
+        let m = DriftModel {
+            correlation: 1.5,
+            ..DriftModel::default()
+        };
+        assert_eq!(m.validate().unwrap_err().0, "correlation");
+        let m = DriftModel {
+            tail_dof: 2.0,
+            ..DriftModel::default()
+        };
+        assert_eq!(m.validate().unwrap_err().0, "tail_dof");
+        assert!(DriftModel::default().validate().is_ok());
+    }
+
+    #[test]
+    fn frame_sigma_gives_the_calibrated_window_error() {
+        // Monte Carlo over the AR(1) process alone, Gaussian-free check of the variance sum.
+        let model = DriftModel {
+            tail_dof: 1e6,
+            ..DriftModel::default()
+        };
+        let mut ar = Ar1::new(&model);
+        let mut rng = rng_for(9, 0);
+        let sigma = model.frame_sigma();
+        for _ in 0..200 {
+            ar.next(sigma, &mut rng);
+        }
+        let values: Vec<DVec3> = (0..200_000).map(|_| ar.next(sigma, &mut rng)).collect();
+        let sums: Vec<f64> = values
+            .chunks(10)
+            .map(|c| c.iter().copied().sum::<DVec3>().length_squared())
+            .collect();
+        let rms = (sums.iter().sum::<f64>() / sums.len() as f64).sqrt();
+        assert!((rms / model.window_error_m - 1.0).abs() < 0.03, "rms {rms}");
+    }
+}
