@@ -1,2 +1,100 @@
-//! SiTAR core.
+//! # sitar-core: what the phone does in SiTAR, as pure Rust
+//!
+//! SiTAR finds where AR pose tracking goes wrong. On the user's phone a session
+//! records the device pose every fifth camera frame, samples the depth image at each
+//! sub-trajectory midpoint, and — once the backend has estimated the error of each
+//! 10-frame window — colours the trajectory and places markers on the surfaces the camera
+//! faced where the error was high. This crate is that logic with no I/O besides the
+//! explicit session-folder [`Session::save`]/[`Session::load`]; the C ABI / JNI bridge
+//! (`sitar-ffi`) wraps [`Session`] one-to-one.
+//!
+//! ## A session
+//!
+//! ```
+//! use sitar_core::{DepthImage, DisplayRotation, Intrinsics, Pose, Session, SessionConfig};
+//! use glam::{DQuat, DVec3};
+//!
+//! let config = SessionConfig::from_json(r#"{"convention": "unity"}"#)?;
+//! let mut session = Session::new(config);
+//! let pose = |i: i64| Pose::new(DVec3::new(0.02 * i as f64, 1.5, 0.0), DQuat::IDENTITY);
+//! let dt = 33_333_333; // 30 fps, in nanoseconds
+//!
+//! // A wall 2 m in front of the camera, as a 256×192 ARCore depth image (mm).
+//! let wall = vec![2000u16; 256 * 192];
+//! let image = DepthImage::new(&wall, 256, 192, 512)?;
+//! let k = Intrinsics { fx: 211.0, fy: 211.0, cx: 128.0, cy: 96.0 };
+//!
+//! session.start(0, pose(0))?;
+//! for i in 1..=40 {
+//!     let flags = session.frame(i * dt, pose(i))?;
+//!     if flags.is_midpoint() {
+//!         session.depth(&image, &k, DisplayRotation::Deg0)?;
+//!     }
+//! }
+//! let summary = session.stop(41 * dt, pose(41))?;
+//! assert_eq!((summary.frames, summary.midpoints, summary.subtrajectories), (40, 4, 4));
+//! assert_eq!(summary.mean_depth_m, 2.0);
+//!
+//! // The backend's answer, keyed by window start (legacy CSV, nanoseconds).
+//! session.load_results("start,error\n0,0.02\n333333330,0.15\n666666660,0.01\n999999990,0.12\n")?;
+//! let markers = session.markers()?;
+//! assert_eq!(markers.len(), 1); // sub-trajectory 3 is within 0.5 m of 1: deduplicated
+//! assert_eq!(markers[0].subtrajectory, 1);
+//! assert!((markers[0].position - DVec3::new(0.3, 1.5, 2.0)).length() < 1e-9);
+//! assert_eq!(session.render_plan().segments.len(), 8);
+//! # Ok::<(), sitar_core::Error>(())
+//! ```
+//!
+//! ## Conventions
+//!
+//! Time is `i64` nanoseconds. Poses are world-from-camera in the session's [`Convention`]
+//! (`unity`: left-handed, camera looks +Z; `arcore`: right-handed, camera looks −Z; both +Y
+//! up, +X right). [`Convention::to_optical`] gives the optical camera frame (x right, y down,
+//! z forward). Depth images are ARCore's 16-bit millimetres in sensor orientation;
+//! [`DisplayRotation`] is the clockwise turn from sensor image to display.
+//!
+//! ## Recorder cadence
+//!
+//! With `n = subtrajectory_frames` (10): [`Session::start`] is frame 0; [`Session::frame`]
+//! returns [`FrameFlags::MIDPOINT`] at frames `k·n + n/2` (call [`Session::depth`]) and
+//! [`FrameFlags::ENDPOINT`] at `k·n + n`, closing sub-trajectory `k`. A midpoint without a
+//! usable depth sample keeps its slot, so indices never shift. Wrong-state calls return
+//! [`Error::InvalidState`].
+//!
+//! ## Depth, markers, results, render plan
+//!
+//! * [`sample_surface`]: point at the sample pixel (default centre) and normal from the
+//!   weighted mean depth gradient over a 5×5 window, neighbours more than 20 % off skipped.
+//! * [`select_markers`]: thresholds cascade (10, 5, 2, 1 cm), time order, at most
+//!   `max_regions`, never within `dedup_radius_m`; spatial hash for neighbour queries.
+//! * [`Results::parse`]: legacy CSV `start,error` or JSON; [`Session::error_at`] finds the
+//!   nearest window start within half the median frame interval.
+//! * [`RenderPlan`]: cylinders, joints, frustums every `frustum_spacing_m`, start/stop.
+//! * [`PlaybackLogger`]: the playback device's per-frame TUM log.
 #![forbid(unsafe_code)]
+#![deny(missing_docs)]
+
+mod config;
+mod convention;
+mod depth;
+mod error;
+mod markers;
+mod persist;
+mod playback;
+mod render;
+mod results;
+mod session;
+mod tum;
+
+pub use config::SessionConfig;
+pub use convention::{Convention, DisplayRotation, Pose};
+pub use depth::{DepthImage, DepthSample, Intrinsics, sample_surface};
+pub use error::{Error, InvalidDepth};
+pub use markers::{Marker, MarkerCandidate, select_markers, warning_sign_rotation};
+pub use playback::PlaybackLogger;
+pub use render::{Frustum, Joint, RenderPlan, Segment};
+pub use results::{ErrorClass, ResultWindow, Results};
+pub use session::{
+    DepthStatus, FrameFlags, LoggedPose, Session, SessionState, SubTrajectory, Summary,
+};
+pub use tum::{parse_tum_ns, to_tum};

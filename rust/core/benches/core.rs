@@ -1,0 +1,177 @@
+//! Criterion benches of the on-device hot paths (targets in README.md).
+#![allow(missing_docs)]
+
+use std::hint::black_box;
+use std::time::{Duration, Instant};
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use glam::{DQuat, DVec3};
+use sitar_core::{
+    Convention, DepthImage, DisplayRotation, Intrinsics, MarkerCandidate, Pose, Session,
+    SessionConfig, sample_surface, select_markers,
+};
+
+/// Deterministic pseudo-random numbers in [0, 1) (no dependency needed for benches).
+struct Lcg(u64);
+impl Lcg {
+    fn next(&mut self) -> f64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+fn pose_at(i: i64) -> Pose {
+    let t = i as f64 / 30.0;
+    Pose::new(
+        DVec3::new(
+            3.0 * (0.1 * t).cos(),
+            1.5 + 0.02 * t.sin(),
+            3.0 * (0.1 * t).sin(),
+        ),
+        DQuat::from_rotation_y(0.1 * t),
+    )
+}
+
+/// Times `iters` frame calls in chunks of fresh sessions (so memory stays bounded).
+fn time_frames(iters: u64, subtrajectory_frames: u32) -> Duration {
+    const CHUNK: u64 = 100_000;
+    let poses: Vec<Pose> = (0..CHUNK as i64 + 1).map(pose_at).collect();
+    let mut total = Duration::ZERO;
+    let mut left = iters;
+    while left > 0 {
+        let n = left.min(CHUNK);
+        let config = SessionConfig {
+            subtrajectory_frames,
+            ..SessionConfig::default()
+        };
+        let mut session = Session::new(config);
+        session.start(0, poses[0]).unwrap();
+        let start = Instant::now();
+        for (i, pose) in poses.iter().enumerate().skip(1).take(n as usize) {
+            black_box(
+                session
+                    .frame(i as i64 * 33_333_333, black_box(*pose))
+                    .unwrap(),
+            );
+        }
+        total += start.elapsed();
+        left -= n;
+    }
+    total
+}
+
+fn bench_frame(c: &mut Criterion) {
+    // A cadence that never logs isolates the non-logging path exactly.
+    c.bench_function("frame/non_logging", |b| {
+        b.iter_custom(|iters| time_frames(iters, 1 << 30))
+    });
+    c.bench_function("frame/mixed_10", |b| {
+        b.iter_custom(|iters| time_frames(iters, 10))
+    });
+}
+
+fn tilted_plane(width: u32, height: u32, k: &Intrinsics) -> Vec<u16> {
+    let n = DQuat::from_rotation_y(30f64.to_radians()) * DVec3::NEG_Z;
+    let mut out = Vec::with_capacity((width * height) as usize);
+    for v in 0..height {
+        for u in 0..width {
+            let ray = k.ray(f64::from(u), f64::from(v));
+            out.push((-2.0 / n.dot(ray) * 1000.0).round() as u16);
+        }
+    }
+    out
+}
+
+fn bench_depth(c: &mut Criterion) {
+    let k = Intrinsics {
+        fx: 211.0,
+        fy: 211.0,
+        cx: 127.5,
+        cy: 95.5,
+    };
+    let data = tilted_plane(256, 192, &k);
+    let pose = pose_at(100);
+    c.bench_function("depth/sample_with_normal_256x192", |b| {
+        b.iter(|| {
+            let image = DepthImage::new(black_box(&data), 256, 192, 512).unwrap();
+            black_box(
+                sample_surface(
+                    &image,
+                    &k,
+                    DisplayRotation::Deg90,
+                    Convention::Unity,
+                    &pose,
+                    None,
+                )
+                .unwrap(),
+            )
+        })
+    });
+}
+
+fn bench_markers(c: &mut Criterion) {
+    // 10 000 sub-trajectories of a walk through a room, every midpoint with depth.
+    let subs = 10_000i64;
+    let mut session = Session::new(SessionConfig::default());
+    let k = Intrinsics {
+        fx: 211.0,
+        fy: 211.0,
+        cx: 127.5,
+        cy: 95.5,
+    };
+    let wall = vec![2000u16; 256 * 192];
+    let image = DepthImage::new(&wall, 256, 192, 512).unwrap();
+    session.start(0, pose_at(0)).unwrap();
+    for i in 1..=subs * 10 {
+        if session
+            .frame(i * 33_333_333, pose_at(i))
+            .unwrap()
+            .is_midpoint()
+        {
+            session.depth(&image, &k, DisplayRotation::Deg0).unwrap();
+        }
+    }
+    session
+        .stop((subs * 10 + 1) * 33_333_333, pose_at(subs * 10 + 1))
+        .unwrap();
+    let mut rng = Lcg(7);
+    let mut csv = String::from("start,error\n");
+    for s in 0..subs {
+        csv.push_str(&format!("{},{}\n", s * 10 * 33_333_333, 0.15 * rng.next()));
+    }
+    session.load_results(&csv).unwrap();
+    assert_eq!(session.markers().unwrap().len(), 3);
+    c.bench_function("markers/session_10000_subtrajectories", |b| {
+        b.iter(|| black_box(session.markers().unwrap()))
+    });
+
+    let candidates: Vec<MarkerCandidate> = (0..subs as u32)
+        .map(|i| MarkerCandidate {
+            subtrajectory: i,
+            position: DVec3::new(10.0 * rng.next(), 3.0 * rng.next(), 10.0 * rng.next()),
+            normal: DVec3::NEG_Z,
+            error_m: 0.15 * rng.next(),
+        })
+        .collect();
+    let config = SessionConfig::default();
+    c.bench_function("markers/select_10000_candidates", |b| {
+        b.iter(|| black_box(select_markers(&candidates, &config)))
+    });
+    let many = SessionConfig {
+        max_regions: 1000,
+        ..SessionConfig::default()
+    };
+    c.bench_function("markers/select_10000_candidates_max_1000", |b| {
+        b.iter(|| black_box(select_markers(&candidates, &many)))
+    });
+}
+
+criterion_group! {
+    name = benches;
+    config = Criterion::default().warm_up_time(Duration::from_millis(500)).measurement_time(Duration::from_secs(2)).sample_size(30);
+    targets = bench_frame, bench_depth, bench_markers
+}
+criterion_main!(benches);

@@ -1,0 +1,265 @@
+//! The session configuration (JSON, every key optional).
+
+use std::path::PathBuf;
+
+use serde::{Deserialize, Serialize};
+use serde_json::Value;
+
+use crate::{Convention, Error};
+
+/// Settings of one session. Parse with [`SessionConfig::from_json`]; see the field docs for
+/// the defaults (those of ARCHITECTURE.md).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SessionConfig {
+    /// Convention of poses in and out (`"unity"`, default, or `"arcore"`).
+    pub convention: Convention,
+    /// Base URL of the SiTAR backend, if any (default none).
+    pub server_url: Option<String>,
+    /// Frames per sub-trajectory (default 10); even, ≥ 2. The pose is logged every half of it.
+    pub subtrajectory_frames: u32,
+    /// Markers are never placed within this distance of each other (default 0.5 m).
+    pub dedup_radius_m: f64,
+    /// Most markers to place (default 3).
+    pub max_regions: usize,
+    /// Error thresholds searched in order for markers (default `[0.10, 0.05, 0.02, 0.01]` m).
+    pub thresholds_m: Vec<f64>,
+    /// Errors at or above this are class high (default 0.10 m).
+    pub high_threshold_m: f64,
+    /// Errors at or above this (and below high) are class medium (default 0.05 m).
+    pub medium_threshold_m: f64,
+    /// A camera frustum is drawn at the first midpoint after every this much path (default 0.5 m).
+    pub frustum_spacing_m: f64,
+    /// Mean error at or above which results "may be unreliable" (default 0.20 m).
+    pub unreliable_mean_error_m: f64,
+    /// Folder where the app keeps session folders, if any (default none).
+    pub data_dir: Option<PathBuf>,
+}
+
+impl Default for SessionConfig {
+    fn default() -> Self {
+        Self {
+            convention: Convention::Unity,
+            server_url: None,
+            subtrajectory_frames: 10,
+            dedup_radius_m: 0.5,
+            max_regions: 3,
+            thresholds_m: vec![0.10, 0.05, 0.02, 0.01],
+            high_threshold_m: 0.10,
+            medium_threshold_m: 0.05,
+            frustum_spacing_m: 0.5,
+            unreliable_mean_error_m: 0.20,
+            data_dir: None,
+        }
+    }
+}
+
+const KEYS: &[&str] = &[
+    "convention",
+    "server_url",
+    "subtrajectory_frames",
+    "dedup_radius_m",
+    "max_regions",
+    "thresholds_m",
+    "high_threshold_m",
+    "medium_threshold_m",
+    "frustum_spacing_m",
+    "unreliable_mean_error_m",
+    "data_dir",
+];
+
+fn config_err(key: &str, message: impl Into<String>) -> Error {
+    Error::Config {
+        key: key.to_owned(),
+        message: message.into(),
+    }
+}
+
+/// Deserialises one key's value, naming the key on failure.
+fn field<T: serde::de::DeserializeOwned>(key: &str, value: Value) -> Result<T, Error> {
+    serde_json::from_value(value).map_err(|e| config_err(key, e.to_string()))
+}
+
+impl SessionConfig {
+    /// Parses the config JSON. An empty text or `{}` gives the defaults; an unknown key, a
+    /// wrong type or an invalid value is an [`Error::Config`] naming the key.
+    pub fn from_json(text: &str) -> Result<Self, Error> {
+        let mut config = SessionConfig::default();
+        if text.trim().is_empty() {
+            return Ok(config);
+        }
+        let value: Value =
+            serde_json::from_str(text).map_err(|e| config_err("(document)", e.to_string()))?;
+        let Value::Object(map) = value else {
+            return Err(config_err("(document)", "expected a JSON object"));
+        };
+        for (key, value) in map {
+            let k = key.as_str();
+            match k {
+                "convention" => config.convention = field(k, value)?,
+                "server_url" => config.server_url = field(k, value)?,
+                "subtrajectory_frames" => config.subtrajectory_frames = field(k, value)?,
+                "dedup_radius_m" => config.dedup_radius_m = field(k, value)?,
+                "max_regions" => config.max_regions = field(k, value)?,
+                "thresholds_m" => config.thresholds_m = field(k, value)?,
+                "high_threshold_m" => config.high_threshold_m = field(k, value)?,
+                "medium_threshold_m" => config.medium_threshold_m = field(k, value)?,
+                "frustum_spacing_m" => config.frustum_spacing_m = field(k, value)?,
+                "unreliable_mean_error_m" => config.unreliable_mean_error_m = field(k, value)?,
+                "data_dir" => config.data_dir = field(k, value)?,
+                _ => {
+                    return Err(config_err(
+                        k,
+                        format!("unknown key; known keys are {}", KEYS.join(", ")),
+                    ));
+                }
+            }
+        }
+        config.validate()?;
+        Ok(config)
+    }
+
+    /// The config as pretty JSON (every key, `null` for absent options); parses back equal.
+    pub fn to_json(&self) -> String {
+        serde_json::to_string_pretty(self).unwrap_or_default()
+    }
+
+    /// Checks value ranges; the error names the offending key.
+    pub fn validate(&self) -> Result<(), Error> {
+        let n = self.subtrajectory_frames;
+        if n < 2 || !n.is_multiple_of(2) {
+            return Err(config_err(
+                "subtrajectory_frames",
+                format!("{n} is not an even number ≥ 2"),
+            ));
+        }
+        let non_negative = |key: &str, v: f64| {
+            if v.is_finite() && v >= 0.0 {
+                Ok(())
+            } else {
+                Err(config_err(key, format!("{v} is not a finite number ≥ 0")))
+            }
+        };
+        non_negative("dedup_radius_m", self.dedup_radius_m)?;
+        non_negative("high_threshold_m", self.high_threshold_m)?;
+        non_negative("medium_threshold_m", self.medium_threshold_m)?;
+        non_negative("unreliable_mean_error_m", self.unreliable_mean_error_m)?;
+        if !(self.frustum_spacing_m.is_finite() && self.frustum_spacing_m > 0.0) {
+            return Err(config_err(
+                "frustum_spacing_m",
+                format!("{} is not a finite number > 0", self.frustum_spacing_m),
+            ));
+        }
+        for (i, t) in self.thresholds_m.iter().enumerate() {
+            if !(t.is_finite() && *t >= 0.0) {
+                return Err(config_err(
+                    "thresholds_m",
+                    format!("element {i} ({t}) is not a finite number ≥ 0"),
+                ));
+            }
+        }
+        if self.medium_threshold_m > self.high_threshold_m {
+            return Err(config_err(
+                "medium_threshold_m",
+                format!(
+                    "{} is above high_threshold_m ({})",
+                    self.medium_threshold_m, self.high_threshold_m
+                ),
+            ));
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn key_of(err: Error) -> String {
+        match err {
+            Error::Config { key, .. } => key,
+            other => panic!("expected a config error, got {other}"),
+        }
+    }
+
+    #[test]
+    fn empty_and_braces_give_defaults() {
+        assert_eq!(
+            SessionConfig::from_json("").unwrap(),
+            SessionConfig::default()
+        );
+        assert_eq!(
+            SessionConfig::from_json(" {} ").unwrap(),
+            SessionConfig::default()
+        );
+        let d = SessionConfig::default();
+        assert_eq!(d.subtrajectory_frames, 10);
+        assert_eq!(d.thresholds_m, vec![0.10, 0.05, 0.02, 0.01]);
+        assert_eq!(
+            (d.dedup_radius_m, d.max_regions, d.frustum_spacing_m),
+            (0.5, 3, 0.5)
+        );
+        assert_eq!(
+            (
+                d.high_threshold_m,
+                d.medium_threshold_m,
+                d.unreliable_mean_error_m
+            ),
+            (0.10, 0.05, 0.20)
+        );
+    }
+
+    #[test]
+    fn every_key_parses() {
+        let c = SessionConfig::from_json(
+            r#"{"convention":"arcore","server_url":"http://127.0.0.1:8000","subtrajectory_frames":20,
+            "dedup_radius_m":1.0,"max_regions":5,"thresholds_m":[0.2,0.1],"high_threshold_m":0.2,
+            "medium_threshold_m":0.1,"frustum_spacing_m":0.25,"unreliable_mean_error_m":0.3,"data_dir":"/tmp/x"}"#,
+        )
+        .unwrap();
+        assert_eq!(c.convention, Convention::Arcore);
+        assert_eq!(c.server_url.as_deref(), Some("http://127.0.0.1:8000"));
+        assert_eq!(c.subtrajectory_frames, 20);
+        assert_eq!(c.max_regions, 5);
+        assert_eq!(c.thresholds_m, vec![0.2, 0.1]);
+        assert_eq!(c.data_dir, Some(PathBuf::from("/tmp/x")));
+        assert_eq!(SessionConfig::from_json(&c.to_json()).unwrap(), c);
+    }
+
+    #[test]
+    fn errors_name_the_key() {
+        assert_eq!(
+            key_of(SessionConfig::from_json(r#"{"convention":"opengl"}"#).unwrap_err()),
+            "convention"
+        );
+        assert_eq!(
+            key_of(SessionConfig::from_json(r#"{"max_regions":"3"}"#).unwrap_err()),
+            "max_regions"
+        );
+        assert_eq!(
+            key_of(SessionConfig::from_json(r#"{"thresholds_m":[0.1,"x"]}"#).unwrap_err()),
+            "thresholds_m"
+        );
+        assert_eq!(
+            key_of(SessionConfig::from_json(r#"{"dedup_radius":0.5}"#).unwrap_err()),
+            "dedup_radius"
+        );
+        assert_eq!(
+            key_of(SessionConfig::from_json(r#"{"subtrajectory_frames":7}"#).unwrap_err()),
+            "subtrajectory_frames"
+        );
+        assert_eq!(
+            key_of(SessionConfig::from_json(r#"{"frustum_spacing_m":0}"#).unwrap_err()),
+            "frustum_spacing_m"
+        );
+        assert_eq!(
+            key_of(SessionConfig::from_json(r#"{"dedup_radius_m":null}"#).unwrap_err()),
+            "dedup_radius_m"
+        );
+        let msg = SessionConfig::from_json(r#"{"max_regions":-1}"#)
+            .unwrap_err()
+            .to_string();
+        assert!(msg.contains("max_regions"), "{msg}");
+        assert!(SessionConfig::from_json("[1]").is_err());
+        assert!(SessionConfig::from_json("{").is_err());
+    }
+}

@@ -1,0 +1,302 @@
+//! The session folder: what the phone keeps of a session.
+//!
+//! | file | format |
+//! |---|---|
+//! | `config.json` | the [`SessionConfig`] JSON (every key) |
+//! | `trajectory.txt` | TUM `t x y z qx qy qz qw`, `t` integer ns: start, midpoints, endpoints |
+//! | `subtrajectories.csv` | one row per sub-trajectory, columns below |
+//! | `results.json` | the results in their JSON form (only once results were loaded) |
+//! | `session.json` | recorder state: `version`, `state`, `frames`, `start`/`stop` (`{t_ns, pose}`), `last_t_ns`, `last_position`, `length_m`, `sub_start_ns`, `frame_intervals_ns`, `path_m` (per logged pose) |
+//!
+//! `subtrajectories.csv` columns: `index,start_ns,mid_ns,end_ns,depth,pixel_x,pixel_y,
+//! depth_m,distance_m,cam_x,cam_y,cam_z,cam_nx,cam_ny,cam_nz,x,y,z,nx,ny,nz,error_m,class`;
+//! `depth` is `valid`, `missing`, `no_depth`, `out_of_bounds` or `no_valid_neighbours`;
+//! empty cells where a value does not apply; `x…nz` are the world point and normal, `cam_*`
+//! the display-oriented camera frame; `error_m`/`class` are informational (recomputed from
+//! the results on load). Numbers are written in Rust's shortest round-trip form, so a
+//! save/load round trip is exact.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+
+use crate::session::{DepthStatus, LoggedPose, SessionState, SubTrajectory};
+use crate::{DepthSample, Error, InvalidDepth, Pose, Results, Session, SessionConfig};
+
+#[derive(Debug, Clone, Copy, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Stamped {
+    t_ns: i64,
+    pose: Pose,
+}
+
+#[derive(Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SessionFile {
+    version: u32,
+    state: SessionState,
+    frames: u32,
+    start: Option<Stamped>,
+    stop: Option<Stamped>,
+    last_t_ns: i64,
+    last_position: DVec3,
+    length_m: f64,
+    sub_start_ns: i64,
+    frame_intervals_ns: Vec<i64>,
+    path_m: Vec<f64>,
+}
+
+const HEADER: &str = "index,start_ns,mid_ns,end_ns,depth,pixel_x,pixel_y,depth_m,distance_m,cam_x,cam_y,cam_z,cam_nx,cam_ny,cam_nz,x,y,z,nx,ny,nz,error_m,class";
+
+fn write_file(path: &Path, text: &str) -> Result<(), Error> {
+    std::fs::write(path, text).map_err(|e| Error::io(path, e))
+}
+
+fn read_file(path: &Path) -> Result<String, Error> {
+    std::fs::read_to_string(path).map_err(|e| Error::io(path, e))
+}
+
+fn opt<T: std::fmt::Display>(v: Option<T>) -> String {
+    v.map(|x| x.to_string()).unwrap_or_default()
+}
+
+impl Session {
+    /// Writes the session folder `dir` (created if needed); see the module table for formats.
+    pub fn save(&self, dir: &Path) -> Result<(), Error> {
+        std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+        write_file(&dir.join("config.json"), &self.config.to_json())?;
+        write_file(&dir.join("trajectory.txt"), &self.trajectory_tum())?;
+        let file = SessionFile {
+            version: 1,
+            state: self.state,
+            frames: self.frames,
+            start: self.start.map(|(t_ns, pose)| Stamped { t_ns, pose }),
+            stop: self.stop.map(|(t_ns, pose)| Stamped { t_ns, pose }),
+            last_t_ns: self.last_t_ns,
+            last_position: self.last_position,
+            length_m: self.length_m,
+            sub_start_ns: self.sub_start_ns,
+            frame_intervals_ns: self.frame_intervals_ns.clone(),
+            path_m: self.logged.iter().map(|l| l.path_m).collect(),
+        };
+        let json = serde_json::to_string_pretty(&file)
+            .map_err(|e| Error::io(dir, std::io::Error::other(e)))?;
+        write_file(&dir.join("session.json"), &json)?;
+
+        let errors = self.subtrajectory_errors();
+        let mut csv = String::from(HEADER);
+        csv.push('\n');
+        for (s, e) in self.subs.iter().zip(errors) {
+            let _ = write!(
+                csv,
+                "{},{},{},{},",
+                s.index,
+                s.start_ns,
+                s.mid_ns,
+                opt(s.end_ns)
+            );
+            match &s.depth {
+                DepthStatus::Missing => csv.push_str("missing,,,,,,,,,,,,,,,,"),
+                DepthStatus::Invalid(why) => {
+                    let (x, y) = why.pixel();
+                    let _ = write!(csv, "{},{x},{y},,,,,,,,,,,,,", why.code());
+                }
+                DepthStatus::Valid(d) => {
+                    let _ = write!(
+                        csv,
+                        "valid,{},{},{},{}",
+                        d.pixel[0], d.pixel[1], d.depth_m, d.distance_m
+                    );
+                    for v in [d.camera_point, d.camera_normal, d.point, d.normal] {
+                        let _ = write!(csv, ",{},{},{}", v.x, v.y, v.z);
+                    }
+                }
+            }
+            let class = if e.is_some() {
+                self.subtrajectory_class(s.index).name()
+            } else {
+                ""
+            };
+            let _ = writeln!(csv, ",{},{class}", opt(e));
+        }
+        write_file(&dir.join("subtrajectories.csv"), &csv)?;
+
+        let results_path = dir.join("results.json");
+        match &self.results {
+            Some(r) => write_file(
+                &results_path,
+                &r.to_json(self.config.medium_threshold_m, self.config.high_threshold_m),
+            )?,
+            None => {
+                if results_path.exists() {
+                    std::fs::remove_file(&results_path).map_err(|e| Error::io(&results_path, e))?;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Reads a session folder written by [`Session::save`].
+    pub fn load(dir: &Path) -> Result<Session, Error> {
+        let config = SessionConfig::from_json(&read_file(&dir.join("config.json"))?)?;
+        let session_path = dir.join("session.json");
+        let file: SessionFile = serde_json::from_str(&read_file(&session_path)?)
+            .map_err(|e| Error::parse("session.json", e.line(), "(document)", e.to_string()))?;
+        if file.version != 1 {
+            return Err(Error::parse(
+                "session.json",
+                0,
+                "version",
+                format!("unsupported version {}", file.version),
+            ));
+        }
+        let poses =
+            crate::tum::parse_tum_ns(&read_file(&dir.join("trajectory.txt"))?, "trajectory.txt")?;
+        if poses.len() != file.path_m.len() {
+            return Err(Error::parse(
+                "session.json",
+                0,
+                "path_m",
+                format!(
+                    "{} entries for {} logged poses in trajectory.txt",
+                    file.path_m.len(),
+                    poses.len()
+                ),
+            ));
+        }
+        let half = config.subtrajectory_frames / 2;
+        let logged = poses
+            .into_iter()
+            .zip(&file.path_m)
+            .enumerate()
+            .map(|(i, ((t_ns, pose), &path_m))| LoggedPose {
+                t_ns,
+                frame: i as u32 * half,
+                pose,
+                path_m,
+            })
+            .collect();
+        let subs = parse_table(&read_file(&dir.join("subtrajectories.csv"))?)?;
+        let results_path = dir.join("results.json");
+        let results = if results_path.exists() {
+            Some(Results::parse(&read_file(&results_path)?)?)
+        } else {
+            None
+        };
+
+        let mut session = Session::new(config);
+        session.state = file.state;
+        session.frames = file.frames;
+        session.start = file.start.map(|s| (s.t_ns, s.pose));
+        session.stop = file.stop.map(|s| (s.t_ns, s.pose));
+        session.last_t_ns = file.last_t_ns;
+        session.last_position = file.last_position;
+        session.length_m = file.length_m;
+        session.sub_start_ns = file.sub_start_ns;
+        session.frame_intervals_ns = file.frame_intervals_ns;
+        session.logged = logged;
+        session.subs = subs;
+        session.results = results;
+        session.tolerance_ns = None;
+        if session.state == SessionState::Stopped {
+            session.tolerance_ns = Some(session.lookup_tolerance_ns());
+        }
+        Ok(session)
+    }
+}
+
+fn parse_table(text: &str) -> Result<Vec<SubTrajectory>, Error> {
+    const SRC: &str = "subtrajectories.csv";
+    let columns: Vec<&str> = HEADER.split(',').collect();
+    let mut lines = text.lines().enumerate();
+    match lines.next() {
+        Some((_, h)) if h.trim() == HEADER => {}
+        _ => {
+            return Err(Error::parse(
+                SRC,
+                1,
+                "header",
+                format!("expected `{HEADER}`"),
+            ));
+        }
+    }
+    let mut subs = Vec::new();
+    for (i, line) in lines {
+        let line_no = i + 1;
+        if line.trim().is_empty() {
+            continue;
+        }
+        let cells: Vec<&str> = line.split(',').collect();
+        if cells.len() != columns.len() {
+            return Err(Error::parse(
+                SRC,
+                line_no,
+                "row",
+                format!("expected {} fields, found {}", columns.len(), cells.len()),
+            ));
+        }
+        let cell =
+            |name: &str| -> &str { cells[columns.iter().position(|c| *c == name).unwrap_or(0)] };
+        fn num<T: std::str::FromStr>(line: usize, name: &str, s: &str) -> Result<T, Error> {
+            s.parse::<T>()
+                .map_err(|_| Error::parse(SRC, line, name, format!("`{s}` is not a valid number")))
+        }
+        let vec3 = |a: &str, b: &str, c: &str| -> Result<DVec3, Error> {
+            Ok(DVec3::new(
+                num(line_no, a, cell(a))?,
+                num(line_no, b, cell(b))?,
+                num(line_no, c, cell(c))?,
+            ))
+        };
+        let index: u32 = num(line_no, "index", cell("index"))?;
+        if index as usize != subs.len() {
+            return Err(Error::parse(
+                SRC,
+                line_no,
+                "index",
+                format!("expected {}, found {index}", subs.len()),
+            ));
+        }
+        let end_ns = match cell("end_ns") {
+            "" => None,
+            s => Some(num(line_no, "end_ns", s)?),
+        };
+        let depth = match cell("depth") {
+            "missing" => DepthStatus::Missing,
+            "valid" => DepthStatus::Valid(DepthSample {
+                pixel: [
+                    num(line_no, "pixel_x", cell("pixel_x"))?,
+                    num(line_no, "pixel_y", cell("pixel_y"))?,
+                ],
+                depth_m: num(line_no, "depth_m", cell("depth_m"))?,
+                distance_m: num(line_no, "distance_m", cell("distance_m"))?,
+                camera_point: vec3("cam_x", "cam_y", "cam_z")?,
+                camera_normal: vec3("cam_nx", "cam_ny", "cam_nz")?,
+                point: vec3("x", "y", "z")?,
+                normal: vec3("nx", "ny", "nz")?,
+            }),
+            code => {
+                let x = num(line_no, "pixel_x", cell("pixel_x"))?;
+                let y = num(line_no, "pixel_y", cell("pixel_y"))?;
+                DepthStatus::Invalid(InvalidDepth::from_code(code, x, y).ok_or_else(|| {
+                    Error::parse(
+                        SRC,
+                        line_no,
+                        "depth",
+                        format!("unknown depth status `{code}`"),
+                    )
+                })?)
+            }
+        };
+        subs.push(SubTrajectory {
+            index,
+            start_ns: num(line_no, "start_ns", cell("start_ns"))?,
+            mid_ns: num(line_no, "mid_ns", cell("mid_ns"))?,
+            end_ns,
+            depth,
+        });
+    }
+    Ok(subs)
+}

@@ -1,0 +1,512 @@
+//! Error-estimation results: parsing (legacy CSV or JSON), lookup and classes.
+
+use serde::{Deserialize, Serialize};
+use serde_json::Value;
+
+use crate::Error;
+
+/// The error class of a sub-trajectory (numbers as in the C ABI).
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Default, Serialize, Deserialize,
+)]
+#[serde(rename_all = "lowercase")]
+#[repr(i32)]
+pub enum ErrorClass {
+    /// No result within the lookup tolerance.
+    #[default]
+    Unknown = 0,
+    /// Below the medium threshold.
+    Low = 1,
+    /// At or above the medium threshold, below high.
+    Medium = 2,
+    /// At or above the high threshold.
+    High = 3,
+}
+
+impl ErrorClass {
+    /// Classifies an error: high ≥ `high_m`, medium ≥ `medium_m`, else low.
+    pub fn classify(error_m: f64, medium_m: f64, high_m: f64) -> Self {
+        if error_m >= high_m {
+            Self::High
+        } else if error_m >= medium_m {
+            Self::Medium
+        } else {
+            Self::Low
+        }
+    }
+
+    /// `"unknown"`, `"low"`, `"medium"` or `"high"`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::Unknown => "unknown",
+            Self::Low => "low",
+            Self::Medium => "medium",
+            Self::High => "high",
+        }
+    }
+
+    /// The inverse of [`ErrorClass::name`].
+    pub fn from_name(name: &str) -> Option<Self> {
+        match name {
+            "unknown" => Some(Self::Unknown),
+            "low" => Some(Self::Low),
+            "medium" => Some(Self::Medium),
+            "high" => Some(Self::High),
+            _ => None,
+        }
+    }
+}
+
+/// One RPE window: the estimated error of the 10 frames starting at `start`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ResultWindow {
+    /// Start timestamp (ns).
+    pub start: i64,
+    /// End timestamp (ns), when known (JSON form only).
+    pub end: Option<i64>,
+    /// Estimated error (metres), finite and ≥ 0.
+    pub error_m: f64,
+    /// Number of trial pairs that had this window, when known (JSON form only).
+    pub pairs: Option<u32>,
+}
+
+/// Parsed results, windows sorted by start timestamp.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Results {
+    /// The windows, sorted by `start`.
+    pub windows: Vec<ResultWindow>,
+    /// The statistic used (`"trim_mean_30"` …), when the JSON form names it.
+    pub setting: Option<String>,
+    /// Number of trials, when the JSON form gives it.
+    pub trials: Option<u32>,
+}
+
+/// Parses a decimal-seconds token exactly into nanoseconds (no f64 rounding of large stamps).
+fn seconds_to_ns(token: &str) -> Option<i64> {
+    let (neg, body) = match token.strip_prefix('-') {
+        Some(rest) => (true, rest),
+        None => (false, token.strip_prefix('+').unwrap_or(token)),
+    };
+    if body.contains(['e', 'E']) {
+        let s: f64 = token.parse().ok()?;
+        let ns = (s * 1e9).round();
+        return (ns.is_finite() && ns.abs() < 9.2e18).then_some(ns as i64);
+    }
+    let (int, frac) = body.split_once('.').unwrap_or((body, ""));
+    if (int.is_empty() && frac.is_empty())
+        || !int.bytes().all(|b| b.is_ascii_digit())
+        || !frac.bytes().all(|b| b.is_ascii_digit())
+    {
+        return None;
+    }
+    let whole: i64 = if int.is_empty() { 0 } else { int.parse().ok()? };
+    let mut nanos: i64 = 0;
+    for b in frac.bytes().chain(std::iter::repeat(b'0')).take(9) {
+        nanos = nanos * 10 + i64::from(b - b'0');
+    }
+    // Round half up on the tenth digit onwards.
+    if frac.len() > 9 && frac.as_bytes()[9] >= b'5' {
+        nanos += 1;
+    }
+    let total = whole.checked_mul(1_000_000_000)?.checked_add(nanos)?;
+    Some(if neg { -total } else { total })
+}
+
+fn is_integer_token(token: &str) -> bool {
+    let body = token.strip_prefix(['-', '+']).unwrap_or(token);
+    !body.is_empty() && body.bytes().all(|b| b.is_ascii_digit())
+}
+
+fn check_error(source: &str, line: usize, field: &str, e: f64) -> Result<f64, Error> {
+    if e.is_nan() {
+        Err(Error::parse(source, line, field, "error is NaN"))
+    } else if !e.is_finite() {
+        Err(Error::parse(source, line, field, "error is not finite"))
+    } else if e < 0.0 {
+        Err(Error::parse(
+            source,
+            line,
+            field,
+            format!("error {e} is negative"),
+        ))
+    } else {
+        Ok(e)
+    }
+}
+
+impl Results {
+    /// Parses the legacy CSV (`start,error`) or the JSON form, whichever `text` is
+    /// (JSON when it starts with `{`).
+    pub fn parse(text: &str) -> Result<Self, Error> {
+        if text.trim_start().starts_with('{') {
+            Self::parse_json(text)
+        } else {
+            Self::parse_csv(text)
+        }
+    }
+
+    /// Parses the legacy CSV: an optional header `start,error`, then `start,error` rows.
+    /// Starts that are all integers are nanoseconds; otherwise all are decimal seconds.
+    pub fn parse_csv(text: &str) -> Result<Self, Error> {
+        const SRC: &str = "results.csv";
+        let mut rows: Vec<(usize, &str, f64)> = Vec::new();
+        for (i, raw) in text.lines().enumerate() {
+            let line_no = i + 1;
+            let line = raw.trim();
+            if line.is_empty() {
+                continue;
+            }
+            let fields: Vec<&str> = line.split(',').map(str::trim).collect();
+            if rows.is_empty() && fields.len() == 2 && fields[0].eq_ignore_ascii_case("start") {
+                if !fields[1].eq_ignore_ascii_case("error") {
+                    return Err(Error::parse(
+                        SRC,
+                        line_no,
+                        fields[1],
+                        "header must be `start,error`",
+                    ));
+                }
+                continue;
+            }
+            if fields.len() != 2 {
+                return Err(Error::parse(
+                    SRC,
+                    line_no,
+                    "row",
+                    format!("expected 2 fields (start,error), found {}", fields.len()),
+                ));
+            }
+            let error = fields[1].parse::<f64>().map_err(|_| {
+                Error::parse(
+                    SRC,
+                    line_no,
+                    "error",
+                    format!("`{}` is not a number", fields[1]),
+                )
+            })?;
+            let error = check_error(SRC, line_no, "error", error)?;
+            rows.push((line_no, fields[0], error));
+        }
+        let all_integer = rows.iter().all(|(_, s, _)| is_integer_token(s));
+        let mut windows = Vec::with_capacity(rows.len());
+        for (line_no, start, error_m) in rows {
+            let start_ns = if all_integer {
+                start.parse::<i64>().ok()
+            } else {
+                seconds_to_ns(start)
+            };
+            let start_ns = start_ns.ok_or_else(|| {
+                Error::parse(
+                    SRC,
+                    line_no,
+                    "start",
+                    format!("`{start}` is not a timestamp"),
+                )
+            })?;
+            windows.push(ResultWindow {
+                start: start_ns,
+                end: None,
+                error_m,
+                pairs: None,
+            });
+        }
+        Ok(Self::sorted(windows, None, None))
+    }
+
+    /// Parses the JSON form `{"version":1,"setting":…,"trials":n,"windows":[{"start":…,
+    /// "end":…,"error_m":…,"pairs":…,"class":…}]}`. `start`/`end` integers are nanoseconds;
+    /// numbers with a fraction (or strings) are decimal seconds. `class` is ignored
+    /// (recomputed from the session's thresholds).
+    pub fn parse_json(text: &str) -> Result<Self, Error> {
+        const SRC: &str = "results.json";
+        let value: Value = serde_json::from_str(text)
+            .map_err(|e| Error::parse(SRC, e.line(), "(document)", e.to_string()))?;
+        let obj = value
+            .as_object()
+            .ok_or_else(|| Error::parse(SRC, 1, "(document)", "expected an object"))?;
+        if let Some(v) = obj.get("version")
+            && v.as_u64() != Some(1)
+        {
+            return Err(Error::parse(
+                SRC,
+                0,
+                "version",
+                format!("unsupported version {v}"),
+            ));
+        }
+        let setting = match obj.get("setting") {
+            None | Some(Value::Null) => None,
+            Some(Value::String(s)) => Some(s.clone()),
+            Some(other) => {
+                return Err(Error::parse(
+                    SRC,
+                    0,
+                    "setting",
+                    format!("expected a string, found {other}"),
+                ));
+            }
+        };
+        let trials =
+            match obj.get("trials") {
+                None | Some(Value::Null) => None,
+                Some(v) => Some(v.as_u64().and_then(|t| u32::try_from(t).ok()).ok_or_else(
+                    || Error::parse(SRC, 0, "trials", format!("expected a count, found {v}")),
+                )?),
+            };
+        let list = obj
+            .get("windows")
+            .and_then(Value::as_array)
+            .ok_or_else(|| Error::parse(SRC, 0, "windows", "missing or not an array"))?;
+        let mut windows = Vec::with_capacity(list.len());
+        for (i, w) in list.iter().enumerate() {
+            let path = |f: &str| format!("windows[{i}].{f}");
+            let stamp = |f: &str, required: bool| -> Result<Option<i64>, Error> {
+                match w.get(f) {
+                    None | Some(Value::Null) if !required => Ok(None),
+                    None | Some(Value::Null) => Err(Error::parse(SRC, 0, path(f), "missing")),
+                    Some(Value::Number(n)) => {
+                        let parsed = match n.as_i64() {
+                            Some(ns) => Some(ns),
+                            None => seconds_to_ns(&n.to_string()),
+                        };
+                        parsed.map(Some).ok_or_else(|| {
+                            Error::parse(SRC, 0, path(f), format!("`{n}` is not a timestamp"))
+                        })
+                    }
+                    Some(Value::String(s)) => seconds_to_ns(s).map(Some).ok_or_else(|| {
+                        Error::parse(SRC, 0, path(f), format!("`{s}` is not a timestamp"))
+                    }),
+                    Some(other) => Err(Error::parse(
+                        SRC,
+                        0,
+                        path(f),
+                        format!("expected a number, found {other}"),
+                    )),
+                }
+            };
+            let start = stamp("start", true)?.unwrap_or_default();
+            let end = stamp("end", false)?;
+            let error_m = w
+                .get("error_m")
+                .and_then(Value::as_f64)
+                .ok_or_else(|| Error::parse(SRC, 0, path("error_m"), "missing or not a number"))?;
+            let error_m = check_error(SRC, 0, &path("error_m"), error_m)?;
+            let pairs = match w.get("pairs") {
+                None | Some(Value::Null) => None,
+                Some(v) => Some(v.as_u64().and_then(|p| u32::try_from(p).ok()).ok_or_else(
+                    || {
+                        Error::parse(
+                            SRC,
+                            0,
+                            path("pairs"),
+                            format!("expected a count, found {v}"),
+                        )
+                    },
+                )?),
+            };
+            windows.push(ResultWindow {
+                start,
+                end,
+                error_m,
+                pairs,
+            });
+        }
+        Ok(Self::sorted(windows, setting, trials))
+    }
+
+    fn sorted(
+        mut windows: Vec<ResultWindow>,
+        setting: Option<String>,
+        trials: Option<u32>,
+    ) -> Self {
+        // Stable: among equal starts the first row wins the lookup.
+        windows.sort_by_key(|w| w.start);
+        Self {
+            windows,
+            setting,
+            trials,
+        }
+    }
+
+    /// Writes the JSON form (starts and ends in integer nanoseconds), classes from the thresholds.
+    pub fn to_json(&self, medium_m: f64, high_m: f64) -> String {
+        let windows: Vec<Value> = self
+            .windows
+            .iter()
+            .map(|w| {
+                serde_json::json!({
+                    "start": w.start,
+                    "end": w.end,
+                    "error_m": w.error_m,
+                    "pairs": w.pairs,
+                    "class": ErrorClass::classify(w.error_m, medium_m, high_m).name(),
+                })
+            })
+            .collect();
+        let doc = serde_json::json!({
+            "version": 1,
+            "setting": self.setting,
+            "trials": self.trials,
+            "windows": windows,
+        });
+        serde_json::to_string_pretty(&doc).unwrap_or_default()
+    }
+
+    /// The window whose start is nearest to `t_ns`, if within `tolerance_ns` (inclusive).
+    /// Ties go to the earlier start. O(log n).
+    pub fn lookup(&self, t_ns: i64, tolerance_ns: i64) -> Option<&ResultWindow> {
+        let i = self.windows.partition_point(|w| w.start < t_ns);
+        let after = self.windows.get(i);
+        let before = i.checked_sub(1).and_then(|j| self.windows.get(j));
+        let best = match (before, after) {
+            (Some(b), Some(a)) => {
+                if t_ns.abs_diff(b.start) <= a.start.abs_diff(t_ns) {
+                    b
+                } else {
+                    a
+                }
+            }
+            (Some(b), None) => b,
+            (None, Some(a)) => a,
+            (None, None) => return None,
+        };
+        (best.start.abs_diff(t_ns) <= tolerance_ns.max(0) as u64).then_some(best)
+    }
+
+    /// Mean error over all windows, `None` without windows.
+    pub fn mean_error_m(&self) -> Option<f64> {
+        (!self.windows.is_empty()).then(|| {
+            self.windows.iter().map(|w| w.error_m).sum::<f64>() / self.windows.len() as f64
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    #[test]
+    fn legacy_csv_in_nanoseconds() {
+        let r = Results::parse("start,error\n1700000000200000000,0.12\n1700000000100000000,0.03\n")
+            .unwrap();
+        assert_eq!(r.windows.len(), 2);
+        assert_eq!(r.windows[0].start, 1_700_000_000_100_000_000);
+        assert_eq!(r.windows[0].error_m, 0.03);
+        assert_eq!(r.windows[1].error_m, 0.12);
+    }
+
+    #[test]
+    fn legacy_csv_in_seconds_is_exact() {
+        let r = Results::parse("start,error\n1700000000.123456789,0.5\n1700000001,0.25\n").unwrap();
+        assert_eq!(r.windows[0].start, 1_700_000_000_123_456_789);
+        assert_eq!(r.windows[1].start, 1_700_000_001_000_000_000);
+        assert_eq!(seconds_to_ns("0.5"), Some(500_000_000));
+        assert_eq!(seconds_to_ns("-1.25"), Some(-1_250_000_000));
+        assert_eq!(seconds_to_ns("1.0000000005"), Some(1_000_000_001));
+        assert_eq!(seconds_to_ns("1.5e0"), Some(1_500_000_000));
+        assert_eq!(seconds_to_ns("abc"), None);
+        assert_eq!(seconds_to_ns("."), None);
+    }
+
+    #[test]
+    fn malformed_csv_names_line_and_field() {
+        let cases = [
+            ("start,error\n1,0.1\n2,abc\n", 3, "error"),
+            ("start,error\n1,0.1\n2,NaN\n", 3, "error"),
+            ("start,error\n1,-0.1\n", 2, "error"),
+            ("start,error\n1,0.1,7\n", 2, "row"),
+            ("start,error\n1.5,0.1\nx,0.2\n", 3, "start"),
+            ("start,err\n", 1, "err"),
+        ];
+        for (text, want_line, want_field) in cases {
+            match Results::parse(text) {
+                Err(Error::Parse { line, field, .. }) => {
+                    assert_eq!((line, field.as_str()), (want_line, want_field), "{text:?}")
+                }
+                other => panic!("{text:?}: {other:?}"),
+            }
+        }
+    }
+
+    #[test]
+    fn json_form() {
+        let text = r#"{"version":1,"setting":"trim_mean_30","trials":5,"windows":[
+            {"start":2000,"end":3000,"error_m":0.2,"pairs":10,"class":"high"},
+            {"start":1000,"end":2000,"error_m":0.01,"pairs":9,"class":"low"}]}"#;
+        let r = Results::parse(text).unwrap();
+        assert_eq!(r.setting.as_deref(), Some("trim_mean_30"));
+        assert_eq!(r.trials, Some(5));
+        assert_eq!(
+            r.windows[0],
+            ResultWindow {
+                start: 1000,
+                end: Some(2000),
+                error_m: 0.01,
+                pairs: Some(9)
+            }
+        );
+        assert_eq!(Results::parse(&r.to_json(0.05, 0.1)).unwrap(), r);
+        assert!(r.to_json(0.05, 0.1).contains("\"class\": \"high\""));
+        let bad = r#"{"windows":[{"start":1,"error_m":-1}]}"#;
+        match Results::parse(bad) {
+            Err(Error::Parse { field, .. }) => assert_eq!(field, "windows[0].error_m"),
+            other => panic!("{other:?}"),
+        }
+        match Results::parse("{\"windows\":[\n{\"start\":1,}]}") {
+            Err(Error::Parse { line, .. }) => assert_eq!(line, 2),
+            other => panic!("{other:?}"),
+        }
+        let secs = Results::parse(r#"{"windows":[{"start":1.5,"error_m":0.1}]}"#).unwrap();
+        assert_eq!(secs.windows[0].start, 1_500_000_000);
+    }
+
+    #[test]
+    fn classes_and_mean() {
+        assert_eq!(ErrorClass::classify(0.10, 0.05, 0.10), ErrorClass::High);
+        assert_eq!(ErrorClass::classify(0.0999, 0.05, 0.10), ErrorClass::Medium);
+        assert_eq!(ErrorClass::classify(0.05, 0.05, 0.10), ErrorClass::Medium);
+        assert_eq!(ErrorClass::classify(0.049, 0.05, 0.10), ErrorClass::Low);
+        assert_eq!(ErrorClass::classify(0.3, 0.2, 0.5), ErrorClass::Medium);
+        let r = Results::parse("start,error\n1,0.1\n2,0.3\n").unwrap();
+        assert!((r.mean_error_m().unwrap() - 0.2).abs() < 1e-15);
+        assert_eq!(Results::default().mean_error_m(), None);
+    }
+
+    #[test]
+    fn lookup_tolerance_is_inclusive() {
+        let r = Results::parse("start,error\n100,0.1\n200,0.2\n").unwrap();
+        assert_eq!(r.lookup(110, 10).map(|w| w.start), Some(100));
+        assert_eq!(r.lookup(111, 10), None);
+        assert_eq!(r.lookup(150, 50).map(|w| w.start), Some(100)); // tie → earlier
+        assert_eq!(r.lookup(151, 50).map(|w| w.start), Some(200));
+        assert_eq!(Results::default().lookup(0, 1000), None);
+    }
+
+    proptest! {
+        #[test]
+        fn lookup_returns_the_nearest_start(
+            mut starts in prop::collection::vec(-1_000_000i64..1_000_000, 1..60),
+            t in -1_100_000i64..1_100_000,
+            tol in 0i64..200_000,
+        ) {
+            starts.sort_unstable();
+            starts.dedup();
+            let r = Results { windows: starts.iter().map(|&s| ResultWindow { start: s, end: None, error_m: 0.0, pairs: None }).collect(), ..Default::default() };
+            let best = starts.iter().map(|s| s.abs_diff(t)).min().unwrap();
+            match r.lookup(t, tol) {
+                Some(w) => {
+                    prop_assert_eq!(w.start.abs_diff(t), best);
+                    prop_assert!(best <= tol as u64);
+                }
+                None => prop_assert!(best > tol as u64),
+            }
+        }
+
+        #[test]
+        fn seconds_parse_exactly(secs in 0i64..4_000_000_000, nanos in 0i64..1_000_000_000) {
+            let token = format!("{secs}.{nanos:09}");
+            prop_assert_eq!(seconds_to_ns(&token), Some(secs * 1_000_000_000 + nanos));
+        }
+    }
+}
