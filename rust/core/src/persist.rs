@@ -98,10 +98,14 @@ impl Session {
                 opt(s.end_ns)
             );
             match &s.depth {
-                DepthStatus::Missing => csv.push_str("missing,,,,,,,,,,,,,,,,"),
+                DepthStatus::Missing => {
+                    csv.push_str("missing");
+                    csv.push_str(&",".repeat(16));
+                }
                 DepthStatus::Invalid(why) => {
                     let (x, y) = why.pixel();
-                    let _ = write!(csv, "{},{x},{y},,,,,,,,,,,,,", why.code());
+                    let _ = write!(csv, "{},{x},{y}", why.code());
+                    csv.push_str(&",".repeat(14));
                 }
                 DepthStatus::Valid(d) => {
                     let _ = write!(
@@ -299,4 +303,125 @@ fn parse_table(text: &str) -> Result<Vec<SubTrajectory>, Error> {
         });
     }
     Ok(subs)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{DepthImage, DisplayRotation, Intrinsics};
+    use glam::DQuat;
+
+    fn recorded(convention: &str) -> Session {
+        let config = SessionConfig::from_json(&format!(
+            r#"{{"convention":"{convention}","server_url":"http://x:1"}}"#
+        ))
+        .unwrap();
+        let mut s = Session::new(config);
+        let n = DQuat::from_rotation_y(0.4) * DVec3::NEG_Z;
+        let k = Intrinsics {
+            fx: 211.0,
+            fy: 210.0,
+            cx: 127.3,
+            cy: 95.9,
+        };
+        let data = crate::depth::testing::render_plane(256, 192, &k, n, -1.7);
+        let mut holey = data.clone();
+        holey[96 * 256 + 128] = 0;
+        let dt = 33_333_334;
+        let pose = |i: i64| {
+            Pose::new(
+                DVec3::new(0.013 * i as f64, 1.5, -0.007 * i as f64),
+                DQuat::from_rotation_y(0.01 * i as f64),
+            )
+        };
+        s.start(1_700_000_000_000_000_000, pose(0)).unwrap();
+        for i in 1..=47 {
+            let t = 1_700_000_000_000_000_000 + i * dt + (i % 3);
+            if s.frame(t, pose(i)).unwrap().is_midpoint() && i != 25 {
+                let img =
+                    DepthImage::new(if i == 15 { &holey } else { &data }, 256, 192, 512).unwrap();
+                let _ = s.depth(&img, &k, DisplayRotation::Deg90);
+            }
+        }
+        s
+    }
+
+    #[test]
+    fn save_and_load_round_trip_exactly() {
+        let dir = tempfile::tempdir().unwrap();
+        for convention in ["unity", "arcore"] {
+            let mut s = recorded(convention);
+            // Mid-recording state round-trips too.
+            let path = dir.path().join(format!("{convention}-recording"));
+            s.save(&path).unwrap();
+            assert_eq!(Session::load(&path).unwrap(), s);
+
+            s.stop(1_700_000_000_000_000_000 + 48 * 33_333_334, Pose::IDENTITY)
+                .unwrap();
+            let starts: Vec<i64> = s.subtrajectories().iter().map(|x| x.start_ns).collect();
+            let csv: String = std::iter::once("start,error\n".to_owned())
+                .chain(
+                    starts
+                        .iter()
+                        .enumerate()
+                        .map(|(i, t)| format!("{t},{}\n", 0.04 * i as f64)),
+                )
+                .collect();
+            s.load_results(&csv).unwrap();
+            let path = dir.path().join(convention);
+            s.save(&path).unwrap();
+            let back = Session::load(&path).unwrap();
+            assert_eq!(back, s);
+            assert_eq!(back.markers().unwrap(), s.markers().unwrap());
+            assert_eq!(back.render_plan(), s.render_plan());
+            let table = std::fs::read_to_string(path.join("subtrajectories.csv")).unwrap();
+            let rows: Vec<&str> = table.lines().collect();
+            assert_eq!(rows.len(), 6);
+            assert!(
+                rows[2].starts_with("1,") && rows[2].contains(",no_depth,128,96,"),
+                "{}",
+                rows[2]
+            );
+            assert!(rows[3].contains(",missing,"));
+            assert!(
+                rows[5].starts_with("4,") && rows[5].ends_with(",0.16,high"),
+                "{}",
+                rows[5]
+            );
+        }
+    }
+
+    #[test]
+    fn load_errors_name_file_and_line() {
+        let dir = tempfile::tempdir().unwrap();
+        let s = recorded("unity");
+        s.save(dir.path()).unwrap();
+        let table = dir.path().join("subtrajectories.csv");
+        let text = std::fs::read_to_string(&table).unwrap();
+        let broken = text.replacen(",valid,", ",valid,x", 1);
+        std::fs::write(&table, broken).unwrap();
+        match Session::load(dir.path()) {
+            Err(Error::Parse {
+                source_name,
+                line,
+                field,
+                ..
+            }) => {
+                assert_eq!(
+                    (source_name.as_str(), line, field.as_str()),
+                    ("subtrajectories.csv", 2, "pixel_x")
+                )
+            }
+            other => panic!("{other:?}"),
+        }
+        std::fs::write(&table, text).unwrap();
+        std::fs::write(dir.path().join("config.json"), r#"{"colour":"red"}"#).unwrap();
+        assert!(
+            matches!(Session::load(dir.path()), Err(Error::Config { key, .. }) if key == "colour")
+        );
+        assert!(matches!(
+            Session::load(&dir.path().join("nope")),
+            Err(Error::Io { .. })
+        ));
+    }
 }

@@ -501,3 +501,275 @@ impl Session {
         crate::tum::to_tum(self.logged.iter().map(|l| (l.t_ns, &l.pose)))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::depth::testing::phone_k;
+    use glam::DQuat;
+
+    const DT: i64 = 33_333_333;
+
+    fn pose(i: i64) -> Pose {
+        Pose::new(DVec3::new(0.1 * i as f64, 1.5, 0.0), DQuat::IDENTITY)
+    }
+
+    /// Runs `frames` frames; midpoints get depth unless `skip_depth(k)`.
+    fn record(frames: i64, skip_depth: impl Fn(u32) -> bool) -> (Session, Vec<FrameFlags>) {
+        let wall = vec![2000u16; 256 * 192];
+        let image = DepthImage::new(&wall, 256, 192, 512).unwrap();
+        let k = Intrinsics {
+            cx: 128.0,
+            cy: 96.0,
+            ..phone_k()
+        };
+        let mut s = Session::new(SessionConfig::default());
+        s.start(1_000, pose(0)).unwrap();
+        let mut flags = Vec::new();
+        for i in 1..=frames {
+            let f = s.frame(1_000 + i * DT, pose(i)).unwrap();
+            if f.is_midpoint() {
+                let sub = s.subtrajectories().len() as u32 - 1;
+                if !skip_depth(sub) {
+                    s.depth(&image, &k, DisplayRotation::Deg0).unwrap();
+                }
+            }
+            flags.push(f);
+        }
+        (s, flags)
+    }
+
+    #[test]
+    fn cadence_midpoints_and_endpoints() {
+        let (s, flags) = record(35, |_| false);
+        let mids: Vec<usize> = (0..35)
+            .filter(|&i| flags[i].is_midpoint())
+            .map(|i| i + 1)
+            .collect();
+        let ends: Vec<usize> = (0..35)
+            .filter(|&i| flags[i].is_endpoint())
+            .map(|i| i + 1)
+            .collect();
+        assert_eq!(mids, vec![5, 15, 25, 35]);
+        assert_eq!(ends, vec![10, 20, 30]);
+        let frames: Vec<u32> = s.logged().iter().map(|l| l.frame).collect();
+        assert_eq!(frames, vec![0, 5, 10, 15, 20, 25, 30, 35]);
+        let sub1 = s.subtrajectories()[1];
+        assert_eq!(
+            (sub1.index, sub1.start_ns, sub1.mid_ns, sub1.end_ns),
+            (1, 1_000 + 10 * DT, 1_000 + 15 * DT, Some(1_000 + 20 * DT))
+        );
+        assert_eq!(s.subtrajectories()[3].end_ns, None);
+    }
+
+    #[test]
+    fn summary_counts() {
+        let (mut s, _) = record(42, |k| k == 1);
+        assert_eq!(s.summary(), None);
+        let summary = s.stop(1_000 + 43 * DT, pose(45)).unwrap();
+        assert_eq!(summary.frames, 42);
+        assert_eq!(summary.midpoints, 4); // 5, 15, 25, 35
+        assert_eq!(summary.subtrajectories, 4); // ends 10, 20, 30, 40
+        assert_eq!(summary.depth_samples, 3);
+        assert_eq!(summary.duration_s, (43 * DT) as f64 / 1e9);
+        assert!((summary.length_m - 4.5).abs() < 1e-12); // 0 → 42 by 0.1, then 4.2 → 4.5
+        // Centre pixel on the principal point: distance = depth.
+        assert_eq!(summary.mean_depth_m, 2.0);
+        assert_eq!(s.summary(), Some(summary));
+    }
+
+    #[test]
+    fn wrong_state_calls_are_errors() {
+        let mut s = Session::new(SessionConfig::default());
+        let data = vec![1000u16; 16];
+        let image = DepthImage::new(&data, 4, 4, 8).unwrap();
+        assert!(matches!(
+            s.frame(1, Pose::IDENTITY),
+            Err(Error::InvalidState(_))
+        ));
+        assert!(matches!(
+            s.stop(1, Pose::IDENTITY),
+            Err(Error::InvalidState(_))
+        ));
+        assert!(matches!(
+            s.depth(&image, &phone_k(), DisplayRotation::Deg0),
+            Err(Error::InvalidState(_))
+        ));
+        s.start(0, Pose::IDENTITY).unwrap();
+        assert!(matches!(
+            s.start(0, Pose::IDENTITY),
+            Err(Error::InvalidState(_))
+        ));
+        // Depth before any midpoint.
+        assert!(matches!(
+            s.depth(&image, &phone_k(), DisplayRotation::Deg0),
+            Err(Error::InvalidState(_))
+        ));
+        // Time must move forward; bad poses are rejected; neither counts as a frame.
+        assert!(matches!(
+            s.frame(0, Pose::IDENTITY),
+            Err(Error::InvalidArgument { name: "t_ns", .. })
+        ));
+        let nan = Pose::new(DVec3::new(f64::NAN, 0.0, 0.0), DQuat::IDENTITY);
+        assert!(matches!(
+            s.frame(5, nan),
+            Err(Error::InvalidArgument { name: "pose", .. })
+        ));
+        s.frame(5, Pose::IDENTITY).unwrap();
+        s.stop(6, Pose::IDENTITY).unwrap();
+        assert!(matches!(
+            s.frame(7, Pose::IDENTITY),
+            Err(Error::InvalidState(_))
+        ));
+        assert!(matches!(
+            s.stop(8, Pose::IDENTITY),
+            Err(Error::InvalidState(_))
+        ));
+        assert!(matches!(
+            s.start(9, Pose::IDENTITY),
+            Err(Error::InvalidState(_))
+        ));
+        assert!(matches!(s.markers(), Err(Error::InvalidState(_))));
+        assert_eq!(s.summary().unwrap().frames, 1);
+    }
+
+    #[test]
+    fn invalid_depth_keeps_the_midpoint_slot() {
+        let mut s = Session::new(SessionConfig::default());
+        let good = vec![2000u16; 256 * 192];
+        let mut holey = good.clone();
+        holey[96 * 256 + 128] = 0;
+        let k = phone_k();
+        s.start(0, pose(0)).unwrap();
+        for i in 1..=30 {
+            if s.frame(i * DT, pose(i)).unwrap().is_midpoint() {
+                let data = if i == 15 { &holey } else { &good };
+                let image = DepthImage::new(data, 256, 192, 512).unwrap();
+                let r = s.depth(&image, &k, DisplayRotation::Deg0);
+                if i == 15 {
+                    assert!(matches!(
+                        r,
+                        Err(Error::InvalidDepth(InvalidDepth::NoDepth { x: 128, y: 96 }))
+                    ));
+                } else {
+                    r.unwrap();
+                }
+            }
+        }
+        let subs = s.subtrajectories();
+        assert_eq!(subs.len(), 3);
+        assert!(matches!(
+            subs[1].depth,
+            DepthStatus::Invalid(InvalidDepth::NoDepth { .. })
+        ));
+        // Sub-trajectory 2's sample belongs to its own midpoint (frame 25, x = 2.5).
+        let p2 = subs[2].depth.sample().unwrap().point;
+        assert!((p2.x - (2.5 + 2.0 * (128.0 - 127.5) / 211.0)).abs() < 1e-12);
+        assert_eq!(
+            subs.iter().map(|s| s.index).collect::<Vec<_>>(),
+            vec![0, 1, 2]
+        );
+        // A second sample for a midpoint that has one is refused.
+        let image = DepthImage::new(&good, 256, 192, 512).unwrap();
+        assert!(matches!(
+            s.depth(&image, &k, DisplayRotation::Deg0),
+            Err(Error::InvalidState(_))
+        ));
+        assert_eq!(s.stop(31 * DT, pose(31)).unwrap().depth_samples, 2);
+    }
+
+    #[test]
+    fn error_lookup_by_subtrajectory_start() {
+        let (mut s, _) = record(40, |_| false);
+        s.stop(1_000 + 41 * DT, pose(41)).unwrap();
+        assert_eq!(s.lookup_tolerance_ns(), DT / 2);
+        // Window starts jittered by less than half a frame; an extra window one frame late.
+        let csv = format!(
+            "start,error\n{},0.02\n{},0.07\n{},0.2\n{},0.5\n",
+            1_000 + 3,
+            1_000 + 10 * DT - DT / 2 + 1,
+            1_000 + 20 * DT + DT / 2,
+            1_000 + 31 * DT,
+        );
+        s.load_results(&csv).unwrap();
+        assert_eq!(s.subtrajectory_class(0), ErrorClass::Low);
+        assert_eq!(s.subtrajectory_class(1), ErrorClass::Medium);
+        assert_eq!(s.subtrajectory_class(2), ErrorClass::High);
+        // Sub 3 starts at frame 30; the nearest window is a whole frame away.
+        assert_eq!(s.subtrajectory_class(3), ErrorClass::Unknown);
+        assert_eq!(s.subtrajectory_class(99), ErrorClass::Unknown);
+        assert_eq!(s.error_at(1_000 + 20 * DT), (ErrorClass::High, Some(0.2)));
+        assert_eq!(
+            s.subtrajectory_errors(),
+            vec![Some(0.02), Some(0.07), Some(0.2), None]
+        );
+        // Mean 0.1975 < 0.20; adding a bad window tips it.
+        assert!(!s.results_unreliable());
+        s.load_results(&format!("{csv}{},0.21\n", 1_000 + 50 * DT))
+            .unwrap();
+        assert!(s.results_unreliable());
+        assert!(s.load_results("start,error\n1,x\n").is_err());
+    }
+
+    #[test]
+    fn markers_render_plan_and_tum() {
+        let (mut s, _) = record(60, |k| k == 2);
+        s.stop(1_000 + 61 * DT, pose(61)).unwrap();
+        let starts: Vec<i64> = s.subtrajectories().iter().map(|x| x.start_ns).collect();
+        // Sub 2 (no depth) has the worst error but cannot get a marker.
+        let errors = [0.12, 0.03, 0.3, 0.11, 0.02, 0.06];
+        let csv: String = std::iter::once("start,error\n".to_owned())
+            .chain(starts.iter().zip(errors).map(|(t, e)| format!("{t},{e}\n")))
+            .collect();
+        s.load_results(&csv).unwrap();
+        let m = s.markers().unwrap();
+        // Points at x = 0.5 + 1.0·k: 0 (0.12), 3 (0.11) at ≥10 cm; 5 (0.06) at ≥5 cm.
+        assert_eq!(
+            m.iter().map(|m| m.subtrajectory).collect::<Vec<_>>(),
+            vec![0, 3, 5]
+        );
+        assert_eq!(
+            m.iter().map(|m| m.class).collect::<Vec<_>>(),
+            vec![ErrorClass::High, ErrorClass::High, ErrorClass::Medium]
+        );
+        assert!((m[0].normal - DVec3::NEG_Z).length() < 1e-9); // Unity wall ahead faces −Z
+        let plan = s.render_plan();
+        assert_eq!(plan.joints.len(), 13);
+        assert_eq!(plan.segments.len(), 12);
+        assert_eq!(plan.stop, Some(pose(61)));
+        // 0.1 m per frame: first midpoint at or after 0.5 m of path is frame 5 (sub 0), then
+        // one per sub-trajectory (1 m apart).
+        assert_eq!(
+            plan.frustums
+                .iter()
+                .map(|f| f.subtrajectory)
+                .collect::<Vec<_>>(),
+            vec![0, 1, 2, 3, 4, 5]
+        );
+        let tum = s.trajectory_tum();
+        assert_eq!(tum.lines().count(), 13);
+        assert!(tum.starts_with("1000 0 1.5 0 0 0 0 1\n"), "{tum}");
+    }
+
+    #[test]
+    fn frame_does_not_reallocate_within_the_reserve() {
+        let mut s = Session::new(SessionConfig::default());
+        s.start(0, pose(0)).unwrap();
+        let caps = (
+            s.frame_intervals_ns.capacity(),
+            s.logged.capacity(),
+            s.subs.capacity(),
+        );
+        for i in 1..=RESERVE_FRAMES as i64 {
+            s.frame(i * DT, pose(i)).unwrap();
+        }
+        assert_eq!(
+            caps,
+            (
+                s.frame_intervals_ns.capacity(),
+                s.logged.capacity(),
+                s.subs.capacity()
+            )
+        );
+    }
+}

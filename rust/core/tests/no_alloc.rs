@@ -1,0 +1,61 @@
+//! The frame path must not allocate: counted with a wrapping global allocator.
+#![allow(missing_docs)]
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use glam::{DQuat, DVec3};
+use sitar_core::{Pose, Session, SessionConfig};
+
+struct Counting;
+
+static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+
+// SAFETY: forwards every call to the system allocator unchanged; only counts.
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+        // SAFETY: same contract as our caller's.
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: same contract as our caller's.
+        unsafe { System.dealloc(ptr, layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+        // SAFETY: same contract as our caller's.
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+#[test]
+fn ten_minutes_of_frames_allocate_nothing() {
+    let poses: Vec<Pose> = (0..18_001)
+        .map(|i| {
+            Pose::new(
+                DVec3::new(0.01 * i as f64, 1.5, 0.0),
+                DQuat::from_rotation_y(0.001 * i as f64),
+            )
+        })
+        .collect();
+    let mut session = Session::new(SessionConfig::default());
+    session.start(0, poses[0]).unwrap();
+    let before = ALLOCATIONS.load(Ordering::Relaxed);
+    let mut midpoints = 0;
+    for (i, pose) in poses.iter().enumerate().skip(1) {
+        if session
+            .frame(i as i64 * 33_333_333, *pose)
+            .unwrap()
+            .is_midpoint()
+        {
+            midpoints += 1;
+        }
+    }
+    let after = ALLOCATIONS.load(Ordering::Relaxed);
+    assert_eq!(midpoints, 1_800);
+    assert_eq!(after - before, 0, "frame() allocated");
+}
