@@ -1,0 +1,331 @@
+//! The one safe API of the library. The C ABI and JNI entry points are thin
+//! wrappers around these functions.
+
+use std::path::{Path, PathBuf};
+use std::sync::{LazyLock, Mutex, MutexGuard};
+
+use sitar_core::{DepthImage, DisplayRotation, PlaybackLogger, Session, SessionConfig};
+
+use crate::error::Error;
+use crate::registry::{Registry, SitarHandle};
+use crate::types::{
+    SitarFrustum, SitarIntrinsics, SitarJobProgress, SitarJoint, SitarMarker, SitarPose,
+    SitarSegment, SitarSummary,
+};
+use crate::upload::UploadJob;
+
+static SESSIONS: LazyLock<Registry<Mutex<Session>>> = LazyLock::new(|| Registry::new("session"));
+static PLAYBACKS: LazyLock<Registry<Mutex<PlaybackLogger>>> =
+    LazyLock::new(|| Registry::new("playback"));
+static UPLOADS: LazyLock<Registry<UploadJob>> = LazyLock::new(|| Registry::new("upload"));
+
+/// The render plan as flat C structs, each item tagged with its class.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct RenderPlanC {
+    /// Path segments.
+    pub segments: Vec<SitarSegment>,
+    /// Spheres between segments.
+    pub joints: Vec<SitarJoint>,
+    /// Camera frustums.
+    pub frustums: Vec<SitarFrustum>,
+    /// Start pose, if recorded.
+    pub start: Option<SitarPose>,
+    /// Stop pose, if recorded.
+    pub stop: Option<SitarPose>,
+}
+
+/// The library version (`CARGO_PKG_VERSION`).
+pub fn version() -> &'static str {
+    env!("CARGO_PKG_VERSION")
+}
+
+fn lock<T>(m: &Mutex<T>) -> Result<MutexGuard<'_, T>, Error> {
+    m.lock()
+        .map_err(|_| Error::Panic("an earlier panic left this object unusable; free it".to_owned()))
+}
+
+fn with_session<R>(
+    h: SitarHandle,
+    f: impl FnOnce(&mut Session) -> Result<R, Error>,
+) -> Result<R, Error> {
+    let shared = SESSIONS.get(h)?;
+    let mut session = lock(&shared)?;
+    f(&mut session)
+}
+
+/// Creates a session from its JSON config ("" or "{}" = defaults).
+pub fn session_new(config_json: &str) -> Result<SitarHandle, Error> {
+    crate::logging::init();
+    let config = SessionConfig::from_json(config_json)?;
+    let h = SESSIONS.insert(Mutex::new(Session::new(config)));
+    log::info!("session {h:#x} created");
+    Ok(h)
+}
+
+/// Frees a session; the handle is invalid afterwards. A running upload keeps
+/// its own reference and finishes or can be cancelled.
+pub fn session_free(h: SitarHandle) -> Result<(), Error> {
+    SESSIONS.remove(h).map(drop)
+}
+
+/// Starts recording (frame 0).
+pub fn session_start(h: SitarHandle, t_ns: i64, pose: &SitarPose) -> Result<(), Error> {
+    let pose = pose.to_core("pose")?;
+    with_session(h, |s| Ok(s.start(t_ns, pose)?))
+}
+
+/// One camera frame; returns flags (1 = midpoint: give depth, 2 = endpoint).
+pub fn session_frame(h: SitarHandle, t_ns: i64, pose: &SitarPose) -> Result<u32, Error> {
+    let pose = pose.to_core("pose")?;
+    with_session(h, |s| Ok(s.frame(t_ns, pose)?.0))
+}
+
+/// The depth image for the last midpoint.
+#[allow(clippy::too_many_arguments)]
+pub fn session_depth(
+    h: SitarHandle,
+    depth_mm: &[u16],
+    width: u32,
+    height: u32,
+    row_stride_bytes: u32,
+    k: &SitarIntrinsics,
+    display_rotation_deg: i32,
+) -> Result<(), Error> {
+    let image = DepthImage::new(depth_mm, width, height, row_stride_bytes)?;
+    let rotation = DisplayRotation::from_degrees(display_rotation_deg)?;
+    let k = k.to_core();
+    with_session(h, |s| Ok(s.depth(&image, &k, rotation)?))
+}
+
+/// Number of `u16` elements a depth image of this geometry occupies.
+pub fn depth_len(width: i32, height: i32, row_stride_bytes: i32) -> Result<usize, Error> {
+    if width <= 0 || height <= 0 {
+        return Err(Error::invalid(
+            "width/height",
+            format!("depth image is {width}x{height}; both must be positive"),
+        ));
+    }
+    if row_stride_bytes % 2 != 0 {
+        return Err(Error::invalid(
+            "row_stride_bytes",
+            format!("{row_stride_bytes} is odd; rows of 16-bit samples need an even stride"),
+        ));
+    }
+    if row_stride_bytes < width.saturating_mul(2) {
+        return Err(Error::invalid(
+            "row_stride_bytes",
+            format!(
+                "{row_stride_bytes} is less than width*2 = {}",
+                i64::from(width) * 2
+            ),
+        ));
+    }
+    let bytes = (height as usize - 1) * row_stride_bytes as usize + width as usize * 2;
+    Ok(bytes / 2)
+}
+
+/// Stops recording and returns the summary.
+pub fn session_stop(h: SitarHandle, t_ns: i64, pose: &SitarPose) -> Result<SitarSummary, Error> {
+    let pose = pose.to_core("pose")?;
+    with_session(h, |s| Ok(SitarSummary::from(&s.stop(t_ns, pose)?)))
+}
+
+/// The summary of a stopped recording.
+pub fn session_summary(h: SitarHandle) -> Result<SitarSummary, Error> {
+    with_session(h, |s| {
+        s.summary()
+            .map(|sum| SitarSummary::from(&sum))
+            .ok_or_else(|| Error::InvalidState("no summary: the recording is not stopped".into()))
+    })
+}
+
+/// Loads results (legacy CSV or JSON) into the session.
+pub fn session_load_results(h: SitarHandle, csv_or_json: &str) -> Result<(), Error> {
+    with_session(h, |s| Ok(s.load_results(csv_or_json)?))
+}
+
+/// Class (0 unknown … 3 high) and error (NaN when unknown) at a timestamp.
+pub fn session_error_at(h: SitarHandle, t_ns: i64) -> Result<(i32, f64), Error> {
+    with_session(h, |s| {
+        let (class, error) = s.error_at(t_ns);
+        Ok((class as i32, error.unwrap_or(f64::NAN)))
+    })
+}
+
+/// The markers (needs results).
+pub fn session_markers(h: SitarHandle) -> Result<Vec<SitarMarker>, Error> {
+    with_session(h, |s| {
+        Ok(s.markers()?.iter().map(SitarMarker::from).collect())
+    })
+}
+
+/// Whether the loaded results are too noisy to trust.
+pub fn session_results_unreliable(h: SitarHandle) -> Result<bool, Error> {
+    with_session(h, |s| Ok(s.results_unreliable()))
+}
+
+/// The class of sub-trajectory `k`.
+pub fn session_subtrajectory_class(h: SitarHandle, k: u32) -> Result<i32, Error> {
+    with_session(h, |s| Ok(s.subtrajectory_class(k) as i32))
+}
+
+/// The render plan with each item's class.
+pub fn session_render_plan(h: SitarHandle) -> Result<RenderPlanC, Error> {
+    with_session(h, |s| {
+        let plan = s.render_plan();
+        let class = |k: u32| s.subtrajectory_class(k) as i32;
+        Ok(RenderPlanC {
+            segments: plan
+                .segments
+                .iter()
+                .map(|g| SitarSegment {
+                    cx: g.centre.x,
+                    cy: g.centre.y,
+                    cz: g.centre.z,
+                    qx: g.rotation.x,
+                    qy: g.rotation.y,
+                    qz: g.rotation.z,
+                    qw: g.rotation.w,
+                    length: g.length,
+                    subtrajectory: g.subtrajectory,
+                    error_class: class(g.subtrajectory),
+                })
+                .collect(),
+            joints: plan
+                .joints
+                .iter()
+                .map(|j| SitarJoint {
+                    px: j.position.x,
+                    py: j.position.y,
+                    pz: j.position.z,
+                    subtrajectory: j.subtrajectory,
+                    error_class: class(j.subtrajectory),
+                })
+                .collect(),
+            frustums: plan
+                .frustums
+                .iter()
+                .map(|f| SitarFrustum {
+                    pose: SitarPose::from_core(&f.pose),
+                    subtrajectory: f.subtrajectory,
+                    error_class: class(f.subtrajectory),
+                })
+                .collect(),
+            start: plan.start.as_ref().map(SitarPose::from_core),
+            stop: plan.stop.as_ref().map(SitarPose::from_core),
+        })
+    })
+}
+
+/// The logged poses as TUM text (integer nanoseconds).
+pub fn session_trajectory_tum(h: SitarHandle) -> Result<String, Error> {
+    with_session(h, |s| Ok(s.trajectory_tum()))
+}
+
+/// Saves the session folder.
+pub fn session_save(h: SitarHandle, dir: &Path) -> Result<(), Error> {
+    with_session(h, |s| Ok(s.save(dir)?))
+}
+
+/// Loads a saved session folder as a new session.
+pub fn session_load(dir: &Path) -> Result<SitarHandle, Error> {
+    crate::logging::init();
+    let session = Session::load(dir)?;
+    Ok(SESSIONS.insert(Mutex::new(session)))
+}
+
+/// Creates a playback logger; only `convention` of the config matters.
+pub fn playback_new(config_json: &str) -> Result<SitarHandle, Error> {
+    crate::logging::init();
+    let config = SessionConfig::from_json(config_json)?;
+    Ok(PLAYBACKS.insert(Mutex::new(PlaybackLogger::new(config.convention))))
+}
+
+/// Logs one playback frame.
+pub fn playback_log(h: SitarHandle, t_ns: i64, pose: &SitarPose) -> Result<(), Error> {
+    let pose = pose.to_core("pose")?;
+    let shared = PLAYBACKS.get(h)?;
+    let mut p = lock(&shared)?;
+    Ok(p.log(t_ns, pose)?)
+}
+
+/// Number of poses logged.
+pub fn playback_len(h: SitarHandle) -> Result<usize, Error> {
+    let shared = PLAYBACKS.get(h)?;
+    let p = lock(&shared)?;
+    Ok(p.len())
+}
+
+/// The logged poses as TUM text.
+pub fn playback_tum(h: SitarHandle) -> Result<String, Error> {
+    let shared = PLAYBACKS.get(h)?;
+    let p = lock(&shared)?;
+    Ok(p.to_tum())
+}
+
+/// Writes `<dir>/trajectory_<index>.txt` (creating `dir`) and returns the path.
+pub fn playback_write(h: SitarHandle, dir: &Path, index: u32) -> Result<PathBuf, Error> {
+    let shared = PLAYBACKS.get(h)?;
+    let p = lock(&shared)?;
+    std::fs::create_dir_all(dir).map_err(|source| Error::Io {
+        context: format!("cannot create {}", dir.display()),
+        source,
+    })?;
+    let path = dir.join(format!("trajectory_{index}.txt"));
+    p.write(&path)?;
+    Ok(path)
+}
+
+/// Frees a playback logger.
+pub fn playback_free(h: SitarHandle) -> Result<(), Error> {
+    PLAYBACKS.remove(h).map(drop)
+}
+
+/// Starts the background upload of `recording` and download of the results
+/// into session `h`. `options_json` keys (all optional): `server_url` (else
+/// the session config's), `trials` (10), `setting` ("trim_mean_30"),
+/// `playback` ("adb"), `poll_interval_ms` (500).
+pub fn upload_start(
+    h: SitarHandle,
+    recording: &Path,
+    options_json: &str,
+) -> Result<SitarHandle, Error> {
+    let session = SESSIONS.get(h)?;
+    let default_url = lock(&session)?.config().server_url.clone();
+    let job = UploadJob::start(session, recording, options_json, default_url)?;
+    Ok(UPLOADS.insert(job))
+}
+
+/// A snapshot of an upload job.
+pub fn upload_progress(job: SitarHandle) -> Result<SitarJobProgress, Error> {
+    Ok(UPLOADS.get(job)?.progress())
+}
+
+/// Why the job failed ("" otherwise).
+pub fn upload_message(job: SitarHandle) -> Result<String, Error> {
+    Ok(UPLOADS.get(job)?.message())
+}
+
+/// The server's session id ("" until created).
+pub fn upload_server_id(job: SitarHandle) -> Result<String, Error> {
+    Ok(UPLOADS.get(job)?.server_id())
+}
+
+/// Cancels the job: its state becomes cancelled at once and no more results
+/// are loaded into the session.
+pub fn upload_cancel(job: SitarHandle) -> Result<(), Error> {
+    UPLOADS.get(job)?.cancel();
+    Ok(())
+}
+
+/// Frees a job handle (cancelling it if still running).
+pub fn upload_free(job: SitarHandle) -> Result<(), Error> {
+    UPLOADS.remove(job)?.cancel();
+    Ok(())
+}
+
+/// Panics on purpose (feature `testing`): proves panics become errors.
+#[cfg(feature = "testing")]
+pub fn testing_panic() -> Result<(), Error> {
+    panic!("sitar_testing_panic: panicking on purpose")
+}

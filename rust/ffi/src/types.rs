@@ -1,0 +1,275 @@
+//! Plain `#[repr(C)]` structs that cross the C ABI (glam never does).
+
+/// A pose: world-from-camera position (metres) and unit quaternion, in the
+/// session's convention.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct SitarPose {
+    /// Position x.
+    pub px: f64,
+    /// Position y.
+    pub py: f64,
+    /// Position z.
+    pub pz: f64,
+    /// Quaternion x.
+    pub qx: f64,
+    /// Quaternion y.
+    pub qy: f64,
+    /// Quaternion z.
+    pub qz: f64,
+    /// Quaternion w.
+    pub qw: f64,
+}
+
+/// Pinhole intrinsics of the depth image, in its pixels.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct SitarIntrinsics {
+    /// Focal length x.
+    pub fx: f64,
+    /// Focal length y.
+    pub fy: f64,
+    /// Principal point x.
+    pub cx: f64,
+    /// Principal point y.
+    pub cy: f64,
+}
+
+/// What `stop` reports about the recording.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct SitarSummary {
+    /// Number of `frame` calls (start and stop are not frames).
+    pub frames: u32,
+    /// Midpoints reached.
+    pub midpoints: u32,
+    /// Completed sub-trajectories (endpoint reached).
+    pub subtrajectories: u32,
+    /// Midpoints with a valid depth sample.
+    pub depth_samples: u32,
+    /// Seconds from the start to the stop timestamp.
+    pub duration_s: f64,
+    /// Path length through start, every frame and stop pose (metres).
+    pub length_m: f64,
+    /// Mean distance along the ray of the valid depth samples (metres).
+    pub mean_depth_m: f64,
+}
+
+/// A marker on a surface the camera faced in a bad sub-trajectory.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct SitarMarker {
+    /// Position x.
+    pub px: f64,
+    /// Position y.
+    pub py: f64,
+    /// Position z.
+    pub pz: f64,
+    /// Warning-sign rotation x (local +Y along the normal).
+    pub qx: f64,
+    /// Warning-sign rotation y.
+    pub qy: f64,
+    /// Warning-sign rotation z.
+    pub qz: f64,
+    /// Warning-sign rotation w.
+    pub qw: f64,
+    /// Surface normal x (towards the camera).
+    pub nx: f64,
+    /// Surface normal y.
+    pub ny: f64,
+    /// Surface normal z.
+    pub nz: f64,
+    /// 2 medium or 3 high.
+    pub error_class: i32,
+    /// Sub-trajectory number (from 0).
+    pub subtrajectory: u32,
+    /// Estimated error (metres).
+    pub error_m: f64,
+}
+
+/// A render-plan segment: a cylinder of `length` centred at `c`, local +Y along the path.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct SitarSegment {
+    /// Centre x.
+    pub cx: f64,
+    /// Centre y.
+    pub cy: f64,
+    /// Centre z.
+    pub cz: f64,
+    /// Rotation x.
+    pub qx: f64,
+    /// Rotation y.
+    pub qy: f64,
+    /// Rotation z.
+    pub qz: f64,
+    /// Rotation w.
+    pub qw: f64,
+    /// Length (metres).
+    pub length: f64,
+    /// Sub-trajectory number.
+    pub subtrajectory: u32,
+    /// Class of that sub-trajectory: 0 unknown, 1 low, 2 medium, 3 high.
+    pub error_class: i32,
+}
+
+/// A render-plan joint (a sphere between segments).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct SitarJoint {
+    /// Position x.
+    pub px: f64,
+    /// Position y.
+    pub py: f64,
+    /// Position z.
+    pub pz: f64,
+    /// Sub-trajectory number.
+    pub subtrajectory: u32,
+    /// Class of that sub-trajectory: 0 unknown, 1 low, 2 medium, 3 high.
+    pub error_class: i32,
+}
+
+/// A render-plan camera frustum (one per `frustum_spacing_m` of path).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct SitarFrustum {
+    /// Camera pose.
+    pub pose: SitarPose,
+    /// Sub-trajectory number.
+    pub subtrajectory: u32,
+    /// Class of that sub-trajectory: 0 unknown, 1 low, 2 medium, 3 high.
+    pub error_class: i32,
+}
+
+/// States of a background upload job (`SitarJobProgress.state`).
+#[repr(i32)]
+#[allow(non_camel_case_types)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SitarJobState {
+    /// Creating the server session.
+    SITAR_JOB_STARTING = 0,
+    /// Sending the recording.
+    SITAR_JOB_UPLOADING = 1,
+    /// Playback trials running on the server.
+    SITAR_JOB_PLAYING = 2,
+    /// The server computes the final estimate.
+    SITAR_JOB_ESTIMATING = 3,
+    /// Fetching the final results.
+    SITAR_JOB_DOWNLOADING = 4,
+    /// Final results are loaded into the session.
+    SITAR_JOB_DONE = 5,
+    /// Failed: see `error_code` and `sitar_upload_message`.
+    SITAR_JOB_FAILED = 6,
+    /// Cancelled by `sitar_upload_cancel`.
+    SITAR_JOB_CANCELLED = 7,
+}
+
+/// A snapshot of a background upload job.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct SitarJobProgress {
+    /// A `SitarJobState` value.
+    pub state: i32,
+    /// 0, or the status code the job failed with.
+    pub error_code: i32,
+    /// Overall progress 0 … 1 (upload 20 %, server work 80 %).
+    pub progress: f64,
+    /// Seconds until done as the server estimates them; negative if unknown.
+    pub eta_s: f64,
+    /// Recording bytes sent so far.
+    pub bytes_sent: u64,
+    /// Recording size in bytes.
+    pub bytes_total: u64,
+    /// Playback trials finished on the server.
+    pub trials_done: u32,
+    /// Playback trials planned.
+    pub trials_total: u32,
+    /// Incremented each time (progressive or final) results are loaded into the session.
+    pub results_revision: u32,
+    /// Trials behind the results loaded last (0 = none yet).
+    pub results_trials: u32,
+}
+
+impl SitarPose {
+    /// Builds a core pose; rejects non-finite numbers and a zero quaternion.
+    pub fn to_core(&self, name: &'static str) -> Result<sitar_core::Pose, crate::Error> {
+        let v = [
+            self.px, self.py, self.pz, self.qx, self.qy, self.qz, self.qw,
+        ];
+        if !v.iter().all(|x| x.is_finite()) {
+            return Err(crate::Error::invalid(name, "pose has a non-finite number"));
+        }
+        let q = glam_quat(self.qx, self.qy, self.qz, self.qw);
+        let n = q.length();
+        if n < 1e-9 {
+            return Err(crate::Error::invalid(name, "pose quaternion is zero"));
+        }
+        Ok(sitar_core::Pose {
+            position: glam::DVec3::new(self.px, self.py, self.pz),
+            rotation: q / n,
+        })
+    }
+
+    /// The C struct of a core pose.
+    pub fn from_core(p: &sitar_core::Pose) -> Self {
+        SitarPose {
+            px: p.position.x,
+            py: p.position.y,
+            pz: p.position.z,
+            qx: p.rotation.x,
+            qy: p.rotation.y,
+            qz: p.rotation.z,
+            qw: p.rotation.w,
+        }
+    }
+}
+
+fn glam_quat(x: f64, y: f64, z: f64, w: f64) -> glam::DQuat {
+    glam::DQuat::from_xyzw(x, y, z, w)
+}
+
+impl From<&sitar_core::Summary> for SitarSummary {
+    fn from(s: &sitar_core::Summary) -> Self {
+        SitarSummary {
+            frames: s.frames,
+            midpoints: s.midpoints,
+            subtrajectories: s.subtrajectories,
+            depth_samples: s.depth_samples,
+            duration_s: s.duration_s,
+            length_m: s.length_m,
+            mean_depth_m: s.mean_depth_m,
+        }
+    }
+}
+
+impl From<&sitar_core::Marker> for SitarMarker {
+    fn from(m: &sitar_core::Marker) -> Self {
+        SitarMarker {
+            px: m.position.x,
+            py: m.position.y,
+            pz: m.position.z,
+            qx: m.rotation.x,
+            qy: m.rotation.y,
+            qz: m.rotation.z,
+            qw: m.rotation.w,
+            nx: m.normal.x,
+            ny: m.normal.y,
+            nz: m.normal.z,
+            error_class: m.class as i32,
+            subtrajectory: m.subtrajectory,
+            error_m: m.error_m,
+        }
+    }
+}
+
+impl SitarIntrinsics {
+    /// The core intrinsics.
+    pub fn to_core(&self) -> sitar_core::Intrinsics {
+        sitar_core::Intrinsics {
+            fx: self.fx,
+            fy: self.fy,
+            cx: self.cx,
+            cy: self.cy,
+        }
+    }
+}
