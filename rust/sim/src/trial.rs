@@ -281,6 +281,10 @@ pub fn play_trial_with(rec: &Recording, trial_index: u32, options: &TrialOptions
         let step_r = gt.orientations[f - 1].inverse() * gt.orientations[f];
         position += rotation * (step_t + step_r * error_t);
         rotation = (rotation * step_r * DQuat::from_scaled_axis(error_r)).normalize();
+        // Keep the quaternion sign continuous (q and −q are the same rotation).
+        if rotation.dot(orientations[f - 1]) < 0.0 {
+            rotation = -rotation;
+        }
         positions.push(position);
         orientations.push(rotation);
     }
@@ -349,6 +353,10 @@ mod tests {
         assert_ne!(a.positions, play_trial(&rec, 1).positions);
         assert_ne!(a.positions, play_trial(&recording(4), 0).positions);
         assert_eq!(a.stamps, rec.walk().ground_truth.stamps);
+        assert!(
+            a.orientations.windows(2).all(|w| w[0].dot(w[1]) > 0.0),
+            "sign flips"
+        );
         assert_eq!(simulate_trials(&rec, 3)[2], play_trial(&rec, 2));
     }
 

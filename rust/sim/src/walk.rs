@@ -238,12 +238,18 @@ impl Walk {
             let bob = 0.01 * (speed / 0.8).min(1.0) * (TAU * 1.8 * t).sin();
             let [sx, sy, sz, syaw, spitch, sroll] = shake.eval(t);
             positions.push(p + DVec3::new(sx, sy + bob, sz));
-            orientations.push(
-                (DQuat::from_rotation_y(yaw + syaw)
-                    * DQuat::from_rotation_x(pitch + spitch)
-                    * DQuat::from_rotation_z(sroll))
-                .normalize(),
-            );
+            let mut q = (DQuat::from_rotation_y(yaw + syaw)
+                * DQuat::from_rotation_x(pitch + spitch)
+                * DQuat::from_rotation_z(sroll))
+            .normalize();
+            // Keep the quaternion sign continuous (q and −q are the same rotation).
+            if orientations
+                .last()
+                .is_some_and(|prev: &DQuat| q.dot(*prev) < 0.0)
+            {
+                q = -q;
+            }
+            orientations.push(q);
             stamps.push(FIRST_STAMP_NS + (f as f64 * 1e9 / fps).round() as i64);
         }
         let ground_truth = Trajectory {
@@ -311,6 +317,7 @@ mod tests {
                 assert!((w[1] - w[0]).length() * 30.0 < 1.7, "seed {seed}");
             }
             for w in gt.orientations.windows(2) {
+                assert!(w[0].dot(w[1]) > 0.0, "quaternion sign flips");
                 // Nor turn faster than 120 degrees per second.
                 assert!(w[0].angle_between(w[1]).to_degrees() * 30.0 < 120.0);
             }

@@ -1,0 +1,142 @@
+//! Reading trajectories and trial sets from files.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, bail};
+use clap::ValueEnum;
+use indicatif::{ProgressBar, ProgressStyle};
+use rayon::prelude::*;
+use sitar_estimator::{Trajectory, read_euroc_csv, read_kitti, read_tum};
+
+/// Trajectory file format (evo's format subcommands).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, ValueEnum)]
+pub enum Format {
+    /// `t x y z qx qy qz qw`, stamps in seconds or integer nanoseconds.
+    #[default]
+    Tum,
+    /// EuRoC ground-truth CSV (`#timestamp [ns], px, py, pz, qw, qx, qy, qz, …`).
+    Euroc,
+    /// KITTI poses (3×4 matrices, no time: stamps are pose indices).
+    Kitti,
+}
+
+/// Reads one trajectory; errors name the file (and line and column for bad content).
+pub fn read(path: &Path, format: Format) -> Result<Trajectory> {
+    let trajectory = match format {
+        Format::Tum => read_tum(path),
+        Format::Euroc => read_euroc_csv(path),
+        Format::Kitti => read_kitti(path),
+    }?;
+    if trajectory.is_empty() {
+        bail!("{}: no poses", path.display());
+    }
+    Ok(trajectory)
+}
+
+/// Expands the trial arguments: files stay in the order given; a directory contributes its
+/// `*.txt` files in natural order (`trajectory_2.txt` before `trajectory_10.txt`).
+pub fn expand_trials(args: &[PathBuf]) -> Result<Vec<PathBuf>> {
+    let mut files = Vec::new();
+    for arg in args {
+        if arg.is_dir() {
+            files.extend(trial_files(arg)?);
+        } else {
+            files.push(arg.clone());
+        }
+    }
+    Ok(files)
+}
+
+/// The `*.txt` files of a directory in natural order.
+pub fn trial_files(dir: &Path) -> Result<Vec<PathBuf>> {
+    let entries =
+        std::fs::read_dir(dir).with_context(|| format!("{}: cannot list", dir.display()))?;
+    let mut files = Vec::new();
+    for entry in entries {
+        let path = entry
+            .with_context(|| format!("{}: cannot list", dir.display()))?
+            .path();
+        if path.is_file() && path.extension().is_some_and(|e| e == "txt") {
+            files.push(path);
+        }
+    }
+    files.sort_by_cached_key(|p| natural_key(p));
+    if files.is_empty() {
+        bail!("{}: no trial files (*.txt)", dir.display());
+    }
+    Ok(files)
+}
+
+/// Sort key splitting a file name into text and number runs.
+fn natural_key(path: &Path) -> Vec<(String, u128)> {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let mut key = Vec::new();
+    let mut chars = name.chars().peekable();
+    while chars.peek().is_some() {
+        let text: String = std::iter::from_fn(|| chars.next_if(|c| !c.is_ascii_digit())).collect();
+        let digits: String = std::iter::from_fn(|| chars.next_if(char::is_ascii_digit)).collect();
+        key.push((text, digits.parse().unwrap_or(0)));
+    }
+    key
+}
+
+/// Reads many trajectories in parallel, keeping their order; stops at the first error.
+pub fn read_all(
+    paths: &[PathBuf],
+    format: Format,
+    progress: &ProgressBar,
+) -> Result<Vec<Trajectory>> {
+    paths
+        .par_iter()
+        .map(|p| {
+            let t = read(p, format);
+            progress.inc(1);
+            t
+        })
+        .collect()
+}
+
+/// A progress bar on stderr, only when stderr is a terminal.
+pub fn progress_bar(len: u64, message: &str) -> ProgressBar {
+    use std::io::IsTerminal;
+    if !std::io::stderr().is_terminal() {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::new(len).with_message(message.to_owned());
+    if let Ok(style) = ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} {elapsed}") {
+        bar.set_style(style.progress_chars("=> "));
+    }
+    bar
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn natural_order_sorts_numbers_by_value() {
+        let mut v: Vec<PathBuf> = [
+            "trajectory_10.txt",
+            "trajectory_2.txt",
+            "trajectory_1.txt",
+            "a.txt",
+        ]
+        .iter()
+        .map(PathBuf::from)
+        .collect();
+        v.sort_by_cached_key(|p| natural_key(p));
+        let names: Vec<_> = v.iter().map(|p| p.to_string_lossy().into_owned()).collect();
+        assert_eq!(
+            names,
+            [
+                "a.txt",
+                "trajectory_1.txt",
+                "trajectory_2.txt",
+                "trajectory_10.txt"
+            ]
+        );
+    }
+}

@@ -1,0 +1,344 @@
+//! Runs the built `sitar` binary on files made by `sitar simulate` and on evo goldens.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use sitar_estimator::{EstimateOptions, RpeOptions, Setting, estimate, read_tum, rpe};
+
+fn sitar(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_sitar"))
+        .args(args)
+        .output()
+        .expect("run sitar")
+}
+
+/// Runs sitar, asserts success, returns stdout.
+fn ok(args: &[&str]) -> String {
+    let out = sitar(args);
+    assert!(
+        out.status.success(),
+        "sitar {args:?} failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout).unwrap()
+}
+
+/// Runs sitar, asserts failure with exit code 1 and a one-line message; returns it.
+fn fails(args: &[&str]) -> String {
+    let out = sitar(args);
+    assert_eq!(out.status.code(), Some(1), "sitar {args:?} should fail");
+    assert!(out.stdout.is_empty());
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert_eq!(stderr.lines().count(), 1, "one line expected: {stderr}");
+    assert!(stderr.starts_with("sitar: error: "), "{stderr}");
+    stderr
+}
+
+fn p(path: &Path) -> &str {
+    path.to_str().unwrap()
+}
+
+/// `sitar simulate` into a fresh temporary directory.
+fn simulate(extra: &[&str]) -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    let mut args = vec![
+        "simulate",
+        "--out",
+        p(dir.path()),
+        "--seconds",
+        "5",
+        "--trials",
+        "4",
+    ];
+    args.extend_from_slice(extra);
+    ok(&args);
+    dir
+}
+
+fn csv_rows(text: &str) -> Vec<Vec<String>> {
+    text.lines()
+        .skip(1)
+        .map(|l| l.split(',').map(str::to_owned).collect())
+        .collect()
+}
+
+#[test]
+fn simulate_writes_trials_ground_truth_scene_and_recording() {
+    let dir = simulate(&["--seed", "3", "--second-set"]);
+    let d = dir.path();
+    let gt = read_tum(&d.join("ground_truth.txt")).unwrap();
+    assert_eq!(gt.len(), 150);
+    assert_eq!(gt.stamps[0], 1_000_000_000_000);
+    for set in ["trials", "trials-b"] {
+        for k in 0..4 {
+            let t = read_tum(&d.join(format!("{set}/trajectory_{k}.txt"))).unwrap();
+            assert_eq!(t.stamps, gt.stamps);
+        }
+    }
+    // Set B is disjoint from set A (other trial indices).
+    let a = std::fs::read_to_string(d.join("trials/trajectory_0.txt")).unwrap();
+    let b = std::fs::read_to_string(d.join("trials-b/trajectory_0.txt")).unwrap();
+    assert_ne!(a, b);
+    let scene: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d.join("scene.json")).unwrap()).unwrap();
+    assert_eq!(
+        scene["hard_surfaces"],
+        serde_json::json!(["blank wall", "glass pane"])
+    );
+    assert_eq!(scene["frames"], 150);
+    let rec =
+        sitar_sim::Recording::from_bytes(&std::fs::read(d.join("recording.sitarsim")).unwrap())
+            .unwrap();
+    assert_eq!(rec.frames(), 150);
+    // The trial file is play_trial's output (quaternions re-normalised on reading).
+    let (played, read) = (
+        sitar_sim::play_trial(&rec, 2),
+        read_tum(&d.join("trials/trajectory_2.txt")).unwrap(),
+    );
+    assert_eq!(played.positions, read.positions);
+    for (a, b) in played.orientations.iter().zip(&read.orientations) {
+        assert!((*a - *b).length() < 1e-15);
+    }
+    // Deterministic: the same seed gives the same files.
+    let again = simulate(&["--seed", "3"]);
+    assert_eq!(
+        std::fs::read_to_string(again.path().join("trials/trajectory_0.txt")).unwrap(),
+        a
+    );
+}
+
+#[test]
+fn simulate_seconds_and_dropped_frames() {
+    let dir = simulate(&["--time-unit", "s", "--drop-frames", "0.2"]);
+    let text = std::fs::read_to_string(dir.path().join("trials/trajectory_1.txt")).unwrap();
+    assert!(text.starts_with("1000.000000000 "), "{}", &text[..40]);
+    let t = read_tum(&dir.path().join("trials/trajectory_1.txt")).unwrap();
+    assert!(t.len() < 140 && t.len() > 90, "{}", t.len());
+    // RPE rows keep the input's unit.
+    let gt = dir.path().join("ground_truth.txt");
+    let out = ok(&[
+        "rpe",
+        p(&gt),
+        p(&dir.path().join("trials/trajectory_1.txt")),
+    ]);
+    assert!(
+        out.lines()
+            .nth(1)
+            .unwrap()
+            .starts_with("1000.000000000,1000."),
+        "{out}"
+    );
+}
+
+#[test]
+fn rpe_and_ape_match_the_library() {
+    let dir = simulate(&[]);
+    let gt = dir.path().join("ground_truth.txt");
+    let est = dir.path().join("trials/trajectory_0.txt");
+    let out = ok(&["rpe", p(&gt), p(&est)]);
+    assert!(out.starts_with("start,end,error\n"));
+    let rows = csv_rows(&out);
+    // 150 poses, delta 10 without --all-pairs: starts 0, 10, …, 130.
+    assert_eq!(rows.len(), 14);
+    assert_eq!(rows[1][0], "1000333333333");
+    assert_eq!(rows[1][1], "1000666666667");
+    let (r, e) = (read_tum(&gt).unwrap(), read_tum(&est).unwrap());
+    let lib = rpe(
+        &r,
+        &e,
+        &RpeOptions {
+            all_pairs: false,
+            ..RpeOptions::default()
+        },
+    )
+    .unwrap();
+    for (row, value) in rows.iter().zip(&lib.errors) {
+        assert_eq!(row[2].parse::<f64>().unwrap(), *value);
+    }
+    let all = csv_rows(&ok(&["rpe", p(&gt), p(&est), "--all-pairs"]));
+    assert_eq!(all.len(), 140);
+
+    let json: serde_json::Value = serde_json::from_str(&ok(&[
+        "ape",
+        p(&gt),
+        p(&est),
+        "--align",
+        "--format",
+        "json",
+    ]))
+    .unwrap();
+    assert_eq!(json["metric"], "ape");
+    assert_eq!(json["alignment"], "se3");
+    assert_eq!(json["errors"].as_array().unwrap().len(), 150);
+    let rmse = json["statistics"]["rmse"].as_f64().unwrap();
+    // Aligned, the simulated drift over 5 s is centimetres, not the metre-scale frame offset.
+    assert!(rmse > 1e-3 && rmse < 0.2, "{rmse}");
+    let unaligned: serde_json::Value =
+        serde_json::from_str(&ok(&["ape", p(&gt), p(&est), "--format", "json"])).unwrap();
+    assert!(unaligned["statistics"]["rmse"].as_f64().unwrap() > 2.0 * rmse);
+    let csv = ok(&["ape", p(&gt), p(&est), "-a"]);
+    assert!(csv.starts_with("t,error\n1000000000000,"));
+}
+
+#[test]
+fn estimate_matches_the_library_and_writes_files() {
+    let dir = simulate(&["--seed", "5"]);
+    let trials: Vec<PathBuf> = (0..4)
+        .map(|k| dir.path().join(format!("trials/trajectory_{k}.txt")))
+        .collect();
+    let names: Vec<&str> = trials.iter().map(|t| p(t)).collect();
+    let mut args = vec!["estimate"];
+    args.extend(&names);
+    let csv = ok(&args);
+    let loaded: Vec<_> = trials.iter().map(|t| read_tum(t).unwrap()).collect();
+    let lib = estimate(&loaded, &EstimateOptions::default()).unwrap();
+    assert_eq!(csv, lib.to_legacy_csv());
+    assert_eq!(csv.lines().count(), 141);
+    // A directory stands for its trials in natural order; same result.
+    let trials_dir = dir.path().join("trials");
+    assert_eq!(ok(&["estimate", p(&trials_dir)]), csv);
+    // Order matters (trial i is the reference of pair i < j) but only through association:
+    // reversed trials give the same windows here.
+    let out_file = dir.path().join("est.json");
+    ok(&[
+        "estimate",
+        p(&trials_dir),
+        "--setting",
+        "median",
+        "--format",
+        "json",
+        "-o",
+        p(&out_file),
+    ]);
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&out_file).unwrap()).unwrap();
+    assert_eq!(json["setting"], "median");
+    assert_eq!(json["trials"], 4);
+    let windows = json["windows"].as_array().unwrap();
+    assert_eq!(windows.len(), 140);
+    assert_eq!(windows[0]["pairs"], 6);
+    let median = estimate(
+        &loaded,
+        &EstimateOptions {
+            setting: Setting::Median,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(
+        windows[7]["error_m"].as_f64().unwrap(),
+        median.windows[7].error_m
+    );
+}
+
+#[test]
+fn bad_input_gives_one_clear_line() {
+    let dir = simulate(&[]);
+    let gt = dir.path().join("ground_truth.txt");
+    let bad = dir.path().join("bad.txt");
+    std::fs::write(&bad, "# comment\n1 0 0 0 0 0 0 1\n2 0 0 zero 0 0 0 1\n").unwrap();
+    let err = fails(&["rpe", p(&gt), p(&bad)]);
+    assert!(err.contains(&format!("{}:3:", bad.display())), "{err}");
+    let err = fails(&["estimate", p(&gt), p(&bad)]);
+    assert!(err.contains("bad.txt:3:"), "{err}");
+    let missing = dir.path().join("missing.txt");
+    let err = fails(&["ape", p(&gt), p(&missing)]);
+    assert!(err.contains("missing.txt"), "{err}");
+    let err = fails(&["estimate", p(&gt)]);
+    assert!(err.contains("at least 2 trials"), "{err}");
+    // Stamps that never match.
+    let far = dir.path().join("far.txt");
+    std::fs::write(&far, "5 0 0 0 0 0 0 1\n6 1 0 0 0 0 0 1\n").unwrap();
+    let err = fails(&["rpe", p(&gt), p(&far)]);
+    assert!(err.contains("no matching timestamps"), "{err}");
+    let err = fails(&[
+        "simulate",
+        "--out",
+        p(&dir.path().join("x")),
+        "--seconds",
+        "0",
+    ]);
+    assert!(err.contains("duration"), "{err}");
+    // clap rejects unknown values with its usage message and exit code 2.
+    let out = sitar(&["estimate", p(&gt), p(&gt), "--setting", "trim_mean_33"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("unknown setting 'trim_mean_33'"));
+}
+
+#[test]
+fn every_subcommand_has_help() {
+    for (cmd, flag) in [
+        ("rpe", "--delta-unit"),
+        ("ape", "--align-origin"),
+        ("estimate", "--setting"),
+        ("simulate", "--trials"),
+    ] {
+        let help = ok(&[cmd, "--help"]);
+        assert!(help.contains(flag), "{cmd}: {help}");
+    }
+    let top = ok(&["--help"]);
+    for cmd in ["rpe", "ape", "estimate", "simulate"] {
+        assert!(top.contains(cmd));
+    }
+}
+
+#[derive(serde::Deserialize)]
+struct Golden {
+    name: String,
+    tool: String,
+    reference: String,
+    estimate: String,
+    args: Vec<String>,
+    errors: Vec<f64>,
+    stamps_s: Vec<f64>,
+    stats: std::collections::HashMap<String, f64>,
+}
+
+/// `sitar rpe`/`ape` with evo's own arguments equal `evo_rpe`/`evo_ape` to 1e-9.
+#[test]
+fn rpe_and_ape_equal_evo() {
+    let here = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/golden");
+    let goldens: Vec<Golden> =
+        serde_json::from_str(&std::fs::read_to_string(here.join("expected.json")).unwrap())
+            .unwrap();
+    assert!(goldens.len() >= 14);
+    for g in &goldens {
+        let (r, e) = (
+            here.join("data").join(&g.reference),
+            here.join("data").join(&g.estimate),
+        );
+        let mut args = vec![g.tool.as_str(), p(&r), p(&e), "--format", "json"];
+        args.extend(g.args.iter().map(String::as_str));
+        let json: serde_json::Value = serde_json::from_str(&ok(&args)).unwrap();
+        let rows = json["errors"].as_array().unwrap();
+        assert_eq!(rows.len(), g.errors.len(), "{}", g.name);
+        let tolerance = |v: f64| 1e-9 * v.abs().max(1.0);
+        for (k, (row, want)) in rows.iter().zip(&g.errors).enumerate() {
+            let got = row["error"].as_f64().unwrap();
+            assert!(
+                (got - want).abs() <= tolerance(*want),
+                "{} row {k}: {got} vs evo {want}",
+                g.name
+            );
+            let stamp_ns = if g.tool == "rpe" {
+                &row["end"]
+            } else {
+                &row["t"]
+            };
+            let stamp_s = stamp_ns.as_i64().unwrap() as f64 * 1e-9;
+            assert!(
+                (stamp_s - g.stamps_s[k]).abs() < 0.011,
+                "{} row {k}: stamp",
+                g.name
+            );
+        }
+        for (key, want) in &g.stats {
+            let got = json["statistics"][key].as_f64().unwrap();
+            assert!(
+                (got - want).abs() <= tolerance(*want),
+                "{} {key}: {got} vs evo {want}",
+                g.name
+            );
+        }
+    }
+}
