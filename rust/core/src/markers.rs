@@ -70,7 +70,7 @@ pub fn warning_sign_rotation(normal: DVec3, convention: Convention) -> DQuat {
 /// looks at the 2×2×2 cells that can hold a point within the radius.
 struct SpatialHash {
     cell: f64,
-    cells: HashMap<[i64; 3], Vec<DVec3>, BuildHasherDefault<CellHasher>>,
+    cells: HashMap<(i64, i64, i64), Vec<DVec3>, BuildHasherDefault<CellHasher>>,
 }
 
 /// A small multiplicative hasher for integer cell keys (std's SipHash is ~5× slower here).
@@ -82,8 +82,11 @@ impl Hasher for CellHasher {
         self.0
     }
     fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.write_u64(u64::from(b));
+        // Only reached for non-integer keys; cell keys use write_i64.
+        for chunk in bytes.chunks(8) {
+            let mut word = [0u8; 8];
+            word[..chunk.len()].copy_from_slice(chunk);
+            self.write_u64(u64::from_le_bytes(word));
         }
     }
     fn write_i64(&mut self, v: i64) {
@@ -107,9 +110,9 @@ impl SpatialHash {
         }
     }
 
-    fn key(&self, p: DVec3) -> [i64; 3] {
+    fn key(&self, p: DVec3) -> (i64, i64, i64) {
         let c = (p / self.cell).floor();
-        [c.x as i64, c.y as i64, c.z as i64]
+        (c.x as i64, c.y as i64, c.z as i64)
     }
 
     fn insert(&mut self, p: DVec3) {
@@ -135,7 +138,7 @@ impl SpatialHash {
         for dx in [0, sx] {
             for dy in [0, sy] {
                 for dz in [0, sz] {
-                    if let Some(points) = self.cells.get(&[bx + dx, by + dy, bz + dz])
+                    if let Some(points) = self.cells.get(&(bx + dx, by + dy, bz + dz))
                         && points.iter().any(|q| q.distance_squared(p) <= r2)
                     {
                         return true;

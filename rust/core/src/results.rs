@@ -373,6 +373,39 @@ impl Results {
         (best.start.abs_diff(t_ns) <= tolerance_ns.max(0) as u64).then_some(best)
     }
 
+    /// [`Results::lookup`] for many timestamps at once: O(n + m) when `times` ascend
+    /// (a merge walk), falling back to binary search for any that do not.
+    pub fn lookup_many(&self, times: &[i64], tolerance_ns: i64) -> Vec<Option<&ResultWindow>> {
+        let tol = tolerance_ns.max(0) as u64;
+        let w = &self.windows;
+        let mut out = Vec::with_capacity(times.len());
+        let mut i = 0; // first window with start >= t, for ascending t
+        let mut last = i64::MIN;
+        for &t in times {
+            if t < last {
+                out.push(self.lookup(t, tolerance_ns));
+                continue;
+            }
+            last = t;
+            while i < w.len() && w[i].start < t {
+                i += 1;
+            }
+            let before = i.checked_sub(1).map(|j| &w[j]);
+            let best = match (before, w.get(i)) {
+                (Some(b), Some(a)) => {
+                    if t.abs_diff(b.start) <= a.start.abs_diff(t) {
+                        Some(b)
+                    } else {
+                        Some(a)
+                    }
+                }
+                (b, a) => b.or(a),
+            };
+            out.push(best.filter(|x| x.start.abs_diff(t) <= tol));
+        }
+        out
+    }
+
     /// Mean error over all windows, `None` without windows.
     pub fn mean_error_m(&self) -> Option<f64> {
         (!self.windows.is_empty()).then(|| {
@@ -500,6 +533,22 @@ mod tests {
                     prop_assert!(best <= tol as u64);
                 }
                 None => prop_assert!(best > tol as u64),
+            }
+        }
+
+        #[test]
+        fn lookup_many_equals_lookup(
+            mut starts in prop::collection::vec(-1_000i64..1_000, 0..60),
+            mut times in prop::collection::vec(-1_100i64..1_100, 0..60),
+            sort_times in any::<bool>(),
+            tol in 0i64..200,
+        ) {
+            starts.sort_unstable();
+            if sort_times { times.sort_unstable(); }
+            let r = Results { windows: starts.iter().map(|&s| ResultWindow { start: s, end: None, error_m: 0.0, pairs: None }).collect(), ..Default::default() };
+            let many = r.lookup_many(&times, tol);
+            for (t, got) in times.iter().zip(many) {
+                prop_assert_eq!(got.map(|w| w.start), r.lookup(*t, tol).map(|w| w.start));
             }
         }
 

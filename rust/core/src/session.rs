@@ -444,12 +444,16 @@ impl Session {
             .map_or(ErrorClass::Unknown, |s| self.error_at(s.start_ns).0)
     }
 
-    /// Errors of all sub-trajectories, in order (one tolerance computation, O(n log m)).
+    /// Errors of all sub-trajectories, in order (one merge walk, O(n + m)).
     pub fn subtrajectory_errors(&self) -> Vec<Option<f64>> {
-        let tol = self.lookup_tolerance_ns();
-        self.subs
-            .iter()
-            .map(|s| self.error_at_with(s.start_ns, tol).1)
+        let Some(results) = &self.results else {
+            return vec![None; self.subs.len()];
+        };
+        let starts: Vec<i64> = self.subs.iter().map(|s| s.start_ns).collect();
+        results
+            .lookup_many(&starts, self.lookup_tolerance_ns())
+            .into_iter()
+            .map(|w| w.map(|w| w.error_m))
             .collect()
     }
 
