@@ -37,7 +37,8 @@ fn pose_at(i: i64) -> Pose {
 
 /// Times `iters` frame calls in chunks of fresh sessions (so memory stays bounded).
 fn time_frames(iters: u64, subtrajectory_frames: u32) -> Duration {
-    const CHUNK: u64 = 100_000;
+    // Ten minutes at 30 fps: the session's pre-reserved capacity.
+    const CHUNK: u64 = 18_000;
     let poses: Vec<Pose> = (0..CHUNK as i64 + 1).map(pose_at).collect();
     let mut total = Duration::ZERO;
     let mut left = iters;

@@ -1,20 +1,4 @@
-//! The session folder: what the phone keeps of a session.
-//!
-//! | file | format |
-//! |---|---|
-//! | `config.json` | the [`SessionConfig`] JSON (every key) |
-//! | `trajectory.txt` | TUM `t x y z qx qy qz qw`, `t` integer ns: start, midpoints, endpoints |
-//! | `subtrajectories.csv` | one row per sub-trajectory, columns below |
-//! | `results.json` | the results in their JSON form (only once results were loaded) |
-//! | `session.json` | recorder state: `version`, `state`, `frames`, `start`/`stop` (`{t_ns, pose}`), `last_t_ns`, `last_position`, `length_m`, `sub_start_ns`, `frame_intervals_ns`, `path_m` (per logged pose) |
-//!
-//! `subtrajectories.csv` columns: `index,start_ns,mid_ns,end_ns,depth,pixel_x,pixel_y,
-//! depth_m,distance_m,cam_x,cam_y,cam_z,cam_nx,cam_ny,cam_nz,x,y,z,nx,ny,nz,error_m,class`;
-//! `depth` is `valid`, `missing`, `no_depth`, `out_of_bounds` or `no_valid_neighbours`;
-//! empty cells where a value does not apply; `x…nz` are the world point and normal, `cam_*`
-//! the display-oriented camera frame; `error_m`/`class` are informational (recomputed from
-//! the results on load). Numbers are written in Rust's shortest round-trip form, so a
-//! save/load round trip is exact.
+//! The session folder: what the phone keeps of a session (formats on [`Session::save`]).
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -63,7 +47,23 @@ fn opt<T: std::fmt::Display>(v: Option<T>) -> String {
 }
 
 impl Session {
-    /// Writes the session folder `dir` (created if needed); see the module table for formats.
+    /// Writes the session folder `dir` (created if needed):
+    ///
+    /// | file | format |
+    /// |---|---|
+    /// | `config.json` | the [`SessionConfig`] JSON (every key) |
+    /// | `trajectory.txt` | TUM `t x y z qx qy qz qw`, `t` integer ns: start, midpoints, endpoints |
+    /// | `subtrajectories.csv` | one row per sub-trajectory, columns below |
+    /// | `results.json` | the results in their JSON form (only once results were loaded) |
+    /// | `session.json` | recorder state: `version`, `state`, `frames`, `start`/`stop` (`{t_ns, pose}`), `last_t_ns`, `last_position`, `length_m`, `sub_start_ns`, `frame_intervals_ns`, `path_m` (per logged pose) |
+    ///
+    /// `subtrajectories.csv` columns: `index,start_ns,mid_ns,end_ns,depth,pixel_x,pixel_y,
+    /// depth_m,distance_m,cam_x,cam_y,cam_z,cam_nx,cam_ny,cam_nz,x,y,z,nx,ny,nz,error_m,class`;
+    /// `depth` is `valid`, `missing`, `no_depth`, `out_of_bounds` or `no_valid_neighbours`;
+    /// empty cells where a value does not apply; `x…nz` are the world point and normal, `cam_*`
+    /// the display-oriented camera frame; `error_m`/`class` are informational (recomputed from
+    /// the results on load). Numbers are written in Rust's shortest round-trip form, so a
+    /// save/load round trip is exact.
     pub fn save(&self, dir: &Path) -> Result<(), Error> {
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
         write_file(&dir.join("config.json"), &self.config.to_json())?;
