@@ -6,7 +6,7 @@
 
 mod bindings_support;
 
-use std::ffi::{c_char, CStr};
+use std::ffi::{CStr, c_char};
 use std::net::TcpListener;
 use std::sync::OnceLock;
 use std::time::{Duration, Instant};
@@ -149,8 +149,9 @@ fn api() -> &'static Api {
     static API: OnceLock<Api> = OnceLock::new();
     API.get_or_init(|| {
         // SAFETY: loading our own library; it has no unsound initialisers.
-        let lib: &'static libloading::Library =
-            Box::leak(Box::new(unsafe { libloading::Library::new(host_library()) }.expect("dlopen libsitar")));
+        let lib: &'static libloading::Library = Box::leak(Box::new(
+            unsafe { libloading::Library::new(host_library()) }.expect("dlopen libsitar"),
+        ));
         macro_rules! sym {
             ($name:literal) => {
                 // SAFETY: the declared type matches the header's prototype.
@@ -202,7 +203,10 @@ fn last_error() -> String {
     let a = api();
     let mut len = 0usize;
     let mut buf = vec![0u8; 1024];
-    assert_eq!((a.last_error)(buf.as_mut_ptr().cast(), buf.len(), &mut len), OK);
+    assert_eq!(
+        (a.last_error)(buf.as_mut_ptr().cast(), buf.len(), &mut len),
+        OK
+    );
     String::from_utf8(buf[..len].to_vec()).unwrap()
 }
 
@@ -210,23 +214,41 @@ fn last_error() -> String {
 fn expect_err(status: i32, code: i32, needle: &str) {
     let message = last_error();
     assert_eq!(status, code, "message: {message}");
-    assert!(message.contains(needle), "{message:?} should mention {needle:?}");
+    assert!(
+        message.contains(needle),
+        "{message:?} should mention {needle:?}"
+    );
 }
 
 fn pose_at(frame: i64) -> Pose {
-    Pose { px: frame as f64 * STEP_M, py: 1.5, qw: 1.0, ..Pose::default() }
+    Pose {
+        px: frame as f64 * STEP_M,
+        py: 1.5,
+        qw: 1.0,
+        ..Pose::default()
+    }
 }
 
 fn new_session(config: &str) -> H {
     let mut h = 0;
-    assert_eq!((api().session_new)(c(config).as_ptr().cast(), &mut h), OK, "{}", last_error());
+    assert_eq!(
+        (api().session_new)(c(config).as_ptr().cast(), &mut h),
+        OK,
+        "{}",
+        last_error()
+    );
     assert_ne!(h, 0);
     h
 }
 
 const W: i32 = 160;
 const HGT: i32 = 120;
-const K: Intrinsics = Intrinsics { fx: 150.0, fy: 150.0, cx: 80.0, cy: 60.0 };
+const K: Intrinsics = Intrinsics {
+    fx: 150.0,
+    fy: 150.0,
+    cx: 80.0,
+    cy: 60.0,
+};
 
 /// Records 60 frames along +x with a wall 2 m ahead; returns the summary.
 fn record(h: H) -> Summary {
@@ -235,7 +257,12 @@ fn record(h: H) -> Summary {
     assert_eq!((a.start)(h, 0, &pose_at(0)), OK);
     for i in 1..=60 {
         let mut flags = 99;
-        assert_eq!((a.frame)(h, i * FRAME_NS, &pose_at(i), &mut flags), OK, "{}", last_error());
+        assert_eq!(
+            (a.frame)(h, i * FRAME_NS, &pose_at(i), &mut flags),
+            OK,
+            "{}",
+            last_error()
+        );
         let expected = match i % 10 {
             5 => 1,
             0 => 2,
@@ -243,11 +270,21 @@ fn record(h: H) -> Summary {
         };
         assert_eq!(flags, expected, "flags of frame {i}");
         if flags == 1 {
-            assert_eq!((a.depth)(h, depth.as_ptr(), W, HGT, W * 2, &K, 0), OK, "{}", last_error());
+            assert_eq!(
+                (a.depth)(h, depth.as_ptr(), W, HGT, W * 2, &K, 0),
+                OK,
+                "{}",
+                last_error()
+            );
         }
     }
     let mut summary = Summary::default();
-    assert_eq!((a.stop)(h, 61 * FRAME_NS, &pose_at(61), &mut summary), OK, "{}", last_error());
+    assert_eq!(
+        (a.stop)(h, 61 * FRAME_NS, &pose_at(61), &mut summary),
+        OK,
+        "{}",
+        last_error()
+    );
     summary
 }
 
@@ -277,23 +314,45 @@ fn whole_session_through_the_c_abi() {
             mean_depth_m: 2.0,
         }
     );
-    assert!((summary.length_m - 6.1).abs() < 1e-12, "{}", summary.length_m);
+    assert!(
+        (summary.length_m - 6.1).abs() < 1e-12,
+        "{}",
+        summary.length_m
+    );
     let mut again = Summary::default();
     assert_eq!((a.summary)(h, &mut again), OK);
     assert_eq!(again, summary);
 
     // Before results: markers are an invalid state, error_at is unknown.
     let mut len = 0;
-    expect_err((a.markers)(h, std::ptr::null_mut(), 0, &mut len), ERR_INVALID_STATE, "");
+    expect_err(
+        (a.markers)(h, std::ptr::null_mut(), 0, &mut len),
+        ERR_INVALID_STATE,
+        "",
+    );
     let (mut class, mut err) = (-1, 0.0);
     assert_eq!((a.error_at)(h, 10 * FRAME_NS, &mut class, &mut err), OK);
     assert_eq!(class, 0);
     assert!(err.is_nan());
 
-    assert_eq!((a.load_results)(h, c(&results_csv(FRAME_NS, &ERRORS)).as_ptr().cast()), OK, "{}", last_error());
+    assert_eq!(
+        (a.load_results)(h, c(&results_csv(FRAME_NS, &ERRORS)).as_ptr().cast()),
+        OK,
+        "{}",
+        last_error()
+    );
     for (k, e) in ERRORS.iter().enumerate() {
-        assert_eq!((a.error_at)(h, 10 * k as i64 * FRAME_NS, &mut class, &mut err), OK);
-        let expected = if *e >= 0.10 { 3 } else if *e >= 0.05 { 2 } else { 1 };
+        assert_eq!(
+            (a.error_at)(h, 10 * k as i64 * FRAME_NS, &mut class, &mut err),
+            OK
+        );
+        let expected = if *e >= 0.10 {
+            3
+        } else if *e >= 0.05 {
+            2
+        } else {
+            1
+        };
         assert_eq!((class, err), (expected, *e), "sub-trajectory {k}");
         let mut sub = -1;
         assert_eq!((a.sub_class)(h, k as u32, &mut sub), OK);
@@ -307,12 +366,22 @@ fn whole_session_through_the_c_abi() {
     assert_eq!(unreliable, 0);
 
     // Markers: size query, too small (untouched, needed length), exact.
-    assert_eq!((a.markers)(h, std::ptr::null_mut(), 0, &mut len), ERR_BUFFER_TOO_SMALL);
+    assert_eq!(
+        (a.markers)(h, std::ptr::null_mut(), 0, &mut len),
+        ERR_BUFFER_TOO_SMALL
+    );
     assert_eq!(len, 3);
-    let sentinel = Marker { error_m: -7.0, ..Marker::default() };
+    let sentinel = Marker {
+        error_m: -7.0,
+        ..Marker::default()
+    };
     let mut small = [sentinel; 2];
     len = 0;
-    expect_err((a.markers)(h, small.as_mut_ptr(), 2, &mut len), ERR_BUFFER_TOO_SMALL, "buffer too small");
+    expect_err(
+        (a.markers)(h, small.as_mut_ptr(), 2, &mut len),
+        ERR_BUFFER_TOO_SMALL,
+        "buffer too small",
+    );
     assert_eq!(len, 3);
     assert_eq!(small, [sentinel; 2]);
     let mut markers = [Marker::default(); 8];
@@ -328,20 +397,41 @@ fn whole_session_through_the_c_abi() {
         assert_eq!(m.error_class, if ERRORS[k] >= 0.10 { 3 } else { 2 });
         // The wall point straight ahead of the sub-trajectory's midpoint (frame 10k+5).
         let mid_x = (10 * k + 5) as f64 * STEP_M;
-        assert!((m.px - mid_x).abs() < 1e-9 && (m.py - 1.5).abs() < 1e-9 && (m.pz - 2.0).abs() < 1e-9, "{m:?}");
-        assert!((m.nx.abs() + m.ny.abs() + (m.nz + 1.0).abs()) < 1e-9, "normal faces the camera: {m:?}");
+        assert!(
+            (m.px - mid_x).abs() < 1e-9 && (m.py - 1.5).abs() < 1e-9 && (m.pz - 2.0).abs() < 1e-9,
+            "{m:?}"
+        );
+        assert!(
+            (m.nx.abs() + m.ny.abs() + (m.nz + 1.0).abs()) < 1e-9,
+            "normal faces the camera: {m:?}"
+        );
         let qn = (m.qx * m.qx + m.qy * m.qy + m.qz * m.qz + m.qw * m.qw).sqrt();
         assert!((qn - 1.0).abs() < 1e-9);
     }
 
     // Render plan: segments carry their sub-trajectory's class.
-    assert_eq!((a.segments)(h, std::ptr::null_mut(), 0, &mut len), ERR_BUFFER_TOO_SMALL);
+    assert_eq!(
+        (a.segments)(h, std::ptr::null_mut(), 0, &mut len),
+        ERR_BUFFER_TOO_SMALL
+    );
     assert!(len > 0);
     let mut segments = vec![Segment::default(); len];
-    assert_eq!((a.segments)(h, segments.as_mut_ptr(), segments.len(), &mut len), OK);
+    assert_eq!(
+        (a.segments)(h, segments.as_mut_ptr(), segments.len(), &mut len),
+        OK
+    );
     for s in &segments {
         let e = ERRORS[s.subtrajectory as usize];
-        assert_eq!(s.error_class, if e >= 0.10 { 3 } else if e >= 0.05 { 2 } else { 1 });
+        assert_eq!(
+            s.error_class,
+            if e >= 0.10 {
+                3
+            } else if e >= 0.05 {
+                2
+            } else {
+                1
+            }
+        );
         assert!(s.length > 0.0 && (s.cy - 1.5).abs() < 1e-9);
     }
     let (mut start, mut stop, mut mask) = (Pose::default(), Pose::default(), 0u32);
@@ -351,28 +441,54 @@ fn whole_session_through_the_c_abi() {
     assert_eq!(stop, pose_at(61));
 
     // Trajectory text: exact size works, one byte less is too small and truncates.
-    assert_eq!((a.trajectory_tum)(h, std::ptr::null_mut(), 0, &mut len), ERR_BUFFER_TOO_SMALL);
+    assert_eq!(
+        (a.trajectory_tum)(h, std::ptr::null_mut(), 0, &mut len),
+        ERR_BUFFER_TOO_SMALL
+    );
     let mut buf = vec![0u8; len + 1];
-    assert_eq!((a.trajectory_tum)(h, buf.as_mut_ptr().cast(), buf.len(), &mut len), OK);
+    assert_eq!(
+        (a.trajectory_tum)(h, buf.as_mut_ptr().cast(), buf.len(), &mut len),
+        OK
+    );
     let tum = String::from_utf8(buf[..len].to_vec()).unwrap();
     assert_eq!(buf[len], 0);
-    assert_eq!(tum.lines().count(), 1 + 6 + 6, "start, midpoints and endpoints are logged");
+    assert_eq!(
+        tum.lines().count(),
+        1 + 6 + 6,
+        "start, midpoints and endpoints are logged"
+    );
     assert!(tum.lines().next().unwrap().starts_with("0 0"), "{tum}");
     let mut short = vec![0xAAu8; len];
-    assert_eq!((a.trajectory_tum)(h, short.as_mut_ptr().cast(), short.len(), &mut len), ERR_BUFFER_TOO_SMALL);
+    assert_eq!(
+        (a.trajectory_tum)(h, short.as_mut_ptr().cast(), short.len(), &mut len),
+        ERR_BUFFER_TOO_SMALL
+    );
     assert_eq!(&short[..len - 1], &tum.as_bytes()[..len - 1]);
     assert_eq!(short[len - 1], 0);
 
     // Save and load the session folder: same summary and results.
     let dir = tempfile::tempdir().unwrap();
     let folder = dir.path().join("session");
-    assert_eq!((a.save)(h, c(folder.to_str().unwrap()).as_ptr().cast()), OK, "{}", last_error());
+    assert_eq!(
+        (a.save)(h, c(folder.to_str().unwrap()).as_ptr().cast()),
+        OK,
+        "{}",
+        last_error()
+    );
     let mut loaded = 0;
-    assert_eq!((a.load)(c(folder.to_str().unwrap()).as_ptr().cast(), &mut loaded), OK, "{}", last_error());
+    assert_eq!(
+        (a.load)(c(folder.to_str().unwrap()).as_ptr().cast(), &mut loaded),
+        OK,
+        "{}",
+        last_error()
+    );
     assert_ne!(loaded, h);
     assert_eq!((a.summary)(loaded, &mut again), OK);
     assert_eq!(again, summary);
-    assert_eq!((a.error_at)(loaded, 40 * FRAME_NS, &mut class, &mut err), OK);
+    assert_eq!(
+        (a.error_at)(loaded, 40 * FRAME_NS, &mut class, &mut err),
+        OK
+    );
     assert_eq!((class, err), (3, 0.2));
 
     assert_eq!((a.session_free)(loaded), OK);
@@ -383,25 +499,69 @@ fn whole_session_through_the_c_abi() {
 fn null_arguments_are_errors() {
     let a = api();
     let mut h = 0;
-    expect_err((a.session_new)(std::ptr::null(), &mut h), ERR_NULL, "config_json");
-    expect_err((a.session_new)(c("{}").as_ptr().cast(), std::ptr::null_mut()), ERR_NULL, "`out`");
+    expect_err(
+        (a.session_new)(std::ptr::null(), &mut h),
+        ERR_NULL,
+        "config_json",
+    );
+    expect_err(
+        (a.session_new)(c("{}").as_ptr().cast(), std::ptr::null_mut()),
+        ERR_NULL,
+        "`out`",
+    );
     let h = new_session("");
     expect_err((a.start)(h, 0, std::ptr::null()), ERR_NULL, "pose");
     assert_eq!((a.start)(h, 0, &pose_at(0)), OK);
     let mut flags = 0;
-    expect_err((a.frame)(h, FRAME_NS, std::ptr::null(), &mut flags), ERR_NULL, "pose");
-    expect_err((a.frame)(h, FRAME_NS, &pose_at(1), std::ptr::null_mut()), ERR_NULL, "out_flags");
-    expect_err((a.depth)(h, std::ptr::null(), W, HGT, W * 2, &K, 0), ERR_NULL, "depth_mm");
+    expect_err(
+        (a.frame)(h, FRAME_NS, std::ptr::null(), &mut flags),
+        ERR_NULL,
+        "pose",
+    );
+    expect_err(
+        (a.frame)(h, FRAME_NS, &pose_at(1), std::ptr::null_mut()),
+        ERR_NULL,
+        "out_flags",
+    );
+    expect_err(
+        (a.depth)(h, std::ptr::null(), W, HGT, W * 2, &K, 0),
+        ERR_NULL,
+        "depth_mm",
+    );
     let depth = vec![2000u16; (W * HGT) as usize];
-    expect_err((a.depth)(h, depth.as_ptr(), W, HGT, W * 2, std::ptr::null(), 0), ERR_NULL, "`k`");
+    expect_err(
+        (a.depth)(h, depth.as_ptr(), W, HGT, W * 2, std::ptr::null(), 0),
+        ERR_NULL,
+        "`k`",
+    );
     let mut len = 0;
-    expect_err((a.markers)(h, std::ptr::null_mut(), 4, &mut len), ERR_NULL, "`out`");
-    expect_err((a.markers)(h, std::ptr::null_mut(), 0, std::ptr::null_mut()), ERR_NULL, "out_len");
-    expect_err((a.load_results)(h, std::ptr::null()), ERR_NULL, "csv_or_json");
+    expect_err(
+        (a.markers)(h, std::ptr::null_mut(), 4, &mut len),
+        ERR_NULL,
+        "`out`",
+    );
+    expect_err(
+        (a.markers)(h, std::ptr::null_mut(), 0, std::ptr::null_mut()),
+        ERR_NULL,
+        "out_len",
+    );
+    expect_err(
+        (a.load_results)(h, std::ptr::null()),
+        ERR_NULL,
+        "csv_or_json",
+    );
     let mut class = 0;
-    expect_err((a.error_at)(h, 0, &mut class, std::ptr::null_mut()), ERR_NULL, "out_error_m");
+    expect_err(
+        (a.error_at)(h, 0, &mut class, std::ptr::null_mut()),
+        ERR_NULL,
+        "out_error_m",
+    );
     // sitar_last_error reports its own NULL but keeps the stored message.
-    expect_err((a.last_error)(std::ptr::null_mut(), 0, std::ptr::null_mut()), ERR_NULL, "out_error_m");
+    expect_err(
+        (a.last_error)(std::ptr::null_mut(), 0, std::ptr::null_mut()),
+        ERR_NULL,
+        "out_error_m",
+    );
     assert_eq!((a.session_free)(h), OK);
 }
 
@@ -411,17 +571,33 @@ fn freed_zero_garbage_and_wrong_kind_handles_are_invalid() {
     let h = new_session("{}");
     assert_eq!((a.session_free)(h), OK);
     let mut flags = 0;
-    expect_err((a.frame)(h, 1, &pose_at(1), &mut flags), ERR_INVALID_HANDLE, &format!("handle {h}"));
-    expect_err((a.start)(h, 0, &pose_at(0)), ERR_INVALID_HANDLE, "session handle");
+    expect_err(
+        (a.frame)(h, 1, &pose_at(1), &mut flags),
+        ERR_INVALID_HANDLE,
+        &format!("handle {h}"),
+    );
+    expect_err(
+        (a.start)(h, 0, &pose_at(0)),
+        ERR_INVALID_HANDLE,
+        "session handle",
+    );
     expect_err((a.session_free)(h), ERR_INVALID_HANDLE, "already freed");
     for garbage in [0u64, 1, 2, 12_345, u64::MAX, h ^ 1] {
-        expect_err((a.session_free)(garbage), ERR_INVALID_HANDLE, &format!("handle {garbage}"));
+        expect_err(
+            (a.session_free)(garbage),
+            ERR_INVALID_HANDLE,
+            &format!("handle {garbage}"),
+        );
         let mut s = Summary::default();
         expect_err((a.summary)(garbage, &mut s), ERR_INVALID_HANDLE, "session");
     }
     // A live session handle is not a playback logger.
     let live = new_session("{}");
-    expect_err((a.playback_log)(live, 0, &pose_at(0)), ERR_INVALID_HANDLE, "playback handle");
+    expect_err(
+        (a.playback_log)(live, 0, &pose_at(0)),
+        ERR_INVALID_HANDLE,
+        "playback handle",
+    );
     assert_eq!((a.session_free)(live), OK);
 }
 
@@ -430,26 +606,73 @@ fn bad_text_and_bad_arguments_are_errors() {
     let a = api();
     let mut h = 0;
     let invalid_utf8 = [b'{', 0xFF, b'}', 0];
-    expect_err((a.session_new)(invalid_utf8.as_ptr().cast(), &mut h), ERR_INVALID_ARGUMENT, "UTF-8");
-    expect_err((a.session_new)(c("{").as_ptr().cast(), &mut h), ERR_PARSE, "");
-    expect_err((a.session_new)(c(r#"{"bogus": 1}"#).as_ptr().cast(), &mut h), ERR_PARSE, "bogus");
-    expect_err((a.session_new)(c(r#"{"max_regions": "three"}"#).as_ptr().cast(), &mut h), ERR_PARSE, "max_regions");
+    expect_err(
+        (a.session_new)(invalid_utf8.as_ptr().cast(), &mut h),
+        ERR_INVALID_ARGUMENT,
+        "UTF-8",
+    );
+    expect_err(
+        (a.session_new)(c("{").as_ptr().cast(), &mut h),
+        ERR_PARSE,
+        "",
+    );
+    expect_err(
+        (a.session_new)(c(r#"{"bogus": 1}"#).as_ptr().cast(), &mut h),
+        ERR_PARSE,
+        "bogus",
+    );
+    expect_err(
+        (a.session_new)(c(r#"{"max_regions": "three"}"#).as_ptr().cast(), &mut h),
+        ERR_PARSE,
+        "max_regions",
+    );
 
     let h = new_session("{}");
     let mut flags = 0;
-    expect_err((a.frame)(h, FRAME_NS, &pose_at(1), &mut flags), ERR_INVALID_STATE, "start");
+    expect_err(
+        (a.frame)(h, FRAME_NS, &pose_at(1), &mut flags),
+        ERR_INVALID_STATE,
+        "start",
+    );
     assert_eq!((a.start)(h, 0, &pose_at(0)), OK);
-    let nan = Pose { px: f64::NAN, ..pose_at(1) };
-    expect_err((a.frame)(h, FRAME_NS, &nan, &mut flags), ERR_INVALID_ARGUMENT, "pose");
+    let nan = Pose {
+        px: f64::NAN,
+        ..pose_at(1)
+    };
+    expect_err(
+        (a.frame)(h, FRAME_NS, &nan, &mut flags),
+        ERR_INVALID_ARGUMENT,
+        "pose",
+    );
     for i in 1..=5 {
         assert_eq!((a.frame)(h, i * FRAME_NS, &pose_at(i), &mut flags), OK);
     }
     let depth = vec![2000u16; (W * HGT) as usize];
-    expect_err((a.depth)(h, depth.as_ptr(), W, HGT, W, &K, 0), ERR_INVALID_ARGUMENT, "row_stride_bytes");
-    expect_err((a.depth)(h, depth.as_ptr(), W, -1, W * 2, &K, 0), ERR_INVALID_ARGUMENT, "width/height");
-    expect_err((a.depth)(h, depth.as_ptr(), W, HGT, W * 2, &K, 45), ERR_INVALID_ARGUMENT, "45");
-    expect_err((a.load_results)(h, c("start,error\n12,abc\n").as_ptr().cast()), ERR_PARSE, "line 2");
-    expect_err((a.load_results)(h, invalid_utf8.as_ptr().cast()), ERR_INVALID_ARGUMENT, "csv_or_json");
+    expect_err(
+        (a.depth)(h, depth.as_ptr(), W, HGT, W, &K, 0),
+        ERR_INVALID_ARGUMENT,
+        "row_stride_bytes",
+    );
+    expect_err(
+        (a.depth)(h, depth.as_ptr(), W, -1, W * 2, &K, 0),
+        ERR_INVALID_ARGUMENT,
+        "width/height",
+    );
+    expect_err(
+        (a.depth)(h, depth.as_ptr(), W, HGT, W * 2, &K, 45),
+        ERR_INVALID_ARGUMENT,
+        "45",
+    );
+    expect_err(
+        (a.load_results)(h, c("start,error\n12,abc\n").as_ptr().cast()),
+        ERR_PARSE,
+        "line 2",
+    );
+    expect_err(
+        (a.load_results)(h, invalid_utf8.as_ptr().cast()),
+        ERR_INVALID_ARGUMENT,
+        "csv_or_json",
+    );
     assert_eq!((a.session_free)(h), OK);
 }
 
@@ -459,10 +682,16 @@ fn last_error_reports_size_and_truncates() {
     expect_err((a.session_free)(0), ERR_INVALID_HANDLE, "session handle 0");
     let full = last_error();
     let mut len = 0;
-    assert_eq!((a.last_error)(std::ptr::null_mut(), 0, &mut len), ERR_BUFFER_TOO_SMALL);
+    assert_eq!(
+        (a.last_error)(std::ptr::null_mut(), 0, &mut len),
+        ERR_BUFFER_TOO_SMALL
+    );
     assert_eq!(len, full.len());
     let mut buf = [0x55u8; 8];
-    assert_eq!((a.last_error)(buf.as_mut_ptr().cast(), buf.len(), &mut len), ERR_BUFFER_TOO_SMALL);
+    assert_eq!(
+        (a.last_error)(buf.as_mut_ptr().cast(), buf.len(), &mut len),
+        ERR_BUFFER_TOO_SMALL
+    );
     assert_eq!(&buf[..7], &full.as_bytes()[..7]);
     assert_eq!(buf[7], 0);
     // Reading the message does not change it.
@@ -483,7 +712,10 @@ fn a_session_is_shared_safely_between_threads() {
     let a = api();
     let h = new_session("{}");
     record(h);
-    assert_eq!((a.load_results)(h, c(&results_csv(FRAME_NS, &ERRORS)).as_ptr().cast()), OK);
+    assert_eq!(
+        (a.load_results)(h, c(&results_csv(FRAME_NS, &ERRORS)).as_ptr().cast()),
+        OK
+    );
     let threads: Vec<_> = (0..4)
         .map(|t| {
             std::thread::spawn(move || {
@@ -491,7 +723,10 @@ fn a_session_is_shared_safely_between_threads() {
                 for i in 0..2_000 {
                     let k = (i + t) % 6;
                     let (mut class, mut err) = (0, 0.0);
-                    assert_eq!((a.error_at)(h, 10 * k as i64 * FRAME_NS, &mut class, &mut err), OK);
+                    assert_eq!(
+                        (a.error_at)(h, 10 * k as i64 * FRAME_NS, &mut class, &mut err),
+                        OK
+                    );
                     assert_eq!(err, ERRORS[k]);
                 }
             })
@@ -526,20 +761,38 @@ fn a_session_is_shared_safely_between_threads() {
 fn playback_logger_writes_trajectory_n() {
     let a = api();
     let mut p = 0;
-    assert_eq!((a.playback_new)(c(r#"{"convention":"arcore"}"#).as_ptr().cast(), &mut p), OK, "{}", last_error());
+    assert_eq!(
+        (a.playback_new)(c(r#"{"convention":"arcore"}"#).as_ptr().cast(), &mut p),
+        OK,
+        "{}",
+        last_error()
+    );
     for i in 0..3 {
-        assert_eq!((a.playback_log)(p, 1_000 + i * FRAME_NS, &pose_at(i)), OK, "{}", last_error());
+        assert_eq!(
+            (a.playback_log)(p, 1_000 + i * FRAME_NS, &pose_at(i)),
+            OK,
+            "{}",
+            last_error()
+        );
     }
     let mut len = 0;
     assert_eq!((a.playback_len)(p, &mut len), OK);
     assert_eq!(len, 3);
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("logs");
-    assert_eq!((a.playback_write)(p, c(out.to_str().unwrap()).as_ptr().cast(), 2), OK, "{}", last_error());
+    assert_eq!(
+        (a.playback_write)(p, c(out.to_str().unwrap()).as_ptr().cast(), 2),
+        OK,
+        "{}",
+        last_error()
+    );
     let text = std::fs::read_to_string(out.join("trajectory_2.txt")).unwrap();
     let lines: Vec<&str> = text.lines().collect();
     assert_eq!(lines.len(), 3, "{text}");
-    assert!(lines[1].starts_with(&format!("{} ", 1_000 + FRAME_NS)), "{text}");
+    assert!(
+        lines[1].starts_with(&format!("{} ", 1_000 + FRAME_NS)),
+        "{text}"
+    );
     assert_eq!((a.playback_free)(p), OK);
     expect_err((a.playback_free)(p), ERR_INVALID_HANDLE, "playback handle");
 }
@@ -566,22 +819,49 @@ fn upload_needs_a_server_and_reports_failure_and_cancel() {
     std::fs::write(&rec, b"not really an mp4").unwrap();
     let rec_c = c(rec.to_str().unwrap());
     let mut job = 0;
-    expect_err((a.upload_start)(h, rec_c.as_ptr().cast(), std::ptr::null(), &mut job), ERR_INVALID_ARGUMENT, "server_url");
-    expect_err((a.upload_start)(h, rec_c.as_ptr().cast(), c(r#"{"trials": "ten"}"#).as_ptr().cast(), &mut job), ERR_PARSE, "upload options");
-    expect_err((a.upload_start)(h, std::ptr::null(), std::ptr::null(), &mut job), ERR_NULL, "recording_path");
+    expect_err(
+        (a.upload_start)(h, rec_c.as_ptr().cast(), std::ptr::null(), &mut job),
+        ERR_INVALID_ARGUMENT,
+        "server_url",
+    );
+    expect_err(
+        (a.upload_start)(
+            h,
+            rec_c.as_ptr().cast(),
+            c(r#"{"trials": "ten"}"#).as_ptr().cast(),
+            &mut job,
+        ),
+        ERR_PARSE,
+        "upload options",
+    );
+    expect_err(
+        (a.upload_start)(h, std::ptr::null(), std::ptr::null(), &mut job),
+        ERR_NULL,
+        "recording_path",
+    );
 
     // A port nobody listens on: the job fails with a network error and says why.
     let closed = TcpListener::bind("127.0.0.1:0").unwrap();
     let url = format!("http://{}", closed.local_addr().unwrap());
     drop(closed);
-    let options = c(&format!(r#"{{"server_url":"{url}","trials":3,"playback":"sim"}}"#));
-    assert_eq!((a.upload_start)(h, rec_c.as_ptr().cast(), options.as_ptr().cast(), &mut job), OK, "{}", last_error());
+    let options = c(&format!(
+        r#"{{"server_url":"{url}","trials":3,"playback":"sim"}}"#
+    ));
+    assert_eq!(
+        (a.upload_start)(h, rec_c.as_ptr().cast(), options.as_ptr().cast(), &mut job),
+        OK,
+        "{}",
+        last_error()
+    );
     let p = wait_for_state(job, JOB_FAILED, Duration::from_secs(60));
     assert_eq!(p.state, JOB_FAILED);
     assert_eq!(p.error_code, -7, "SITAR_ERR_NETWORK");
     let mut len = 0;
     let mut buf = vec![0u8; 512];
-    assert_eq!((a.upload_message)(job, buf.as_mut_ptr().cast(), buf.len(), &mut len), OK);
+    assert_eq!(
+        (a.upload_message)(job, buf.as_mut_ptr().cast(), buf.len(), &mut len),
+        OK
+    );
     assert!(String::from_utf8_lossy(&buf[..len]).contains("127.0.0.1"));
     assert_eq!((a.upload_free)(job), OK);
 
@@ -589,13 +869,20 @@ fn upload_needs_a_server_and_reports_failure_and_cancel() {
     let silent = TcpListener::bind("127.0.0.1:0").unwrap();
     let url = format!("http://{}", silent.local_addr().unwrap());
     let options = c(&format!(r#"{{"server_url":"{url}","trials":3}}"#));
-    assert_eq!((a.upload_start)(h, rec_c.as_ptr().cast(), options.as_ptr().cast(), &mut job), OK);
+    assert_eq!(
+        (a.upload_start)(h, rec_c.as_ptr().cast(), options.as_ptr().cast(), &mut job),
+        OK
+    );
     assert_eq!((a.upload_cancel)(job), OK);
     let mut p = JobProgress::default();
     assert_eq!((a.upload_progress)(job, &mut p), OK);
     assert_eq!(p.state, JOB_CANCELLED);
     assert_eq!(p.results_revision, 0);
     assert_eq!((a.upload_free)(job), OK);
-    expect_err((a.upload_progress)(job, &mut p), ERR_INVALID_HANDLE, "upload handle");
+    expect_err(
+        (a.upload_progress)(job, &mut p),
+        ERR_INVALID_HANDLE,
+        "upload handle",
+    );
     assert_eq!((a.session_free)(h), OK);
 }

@@ -8,7 +8,10 @@ use std::sync::OnceLock;
 
 /// The workspace root.
 pub fn workspace_root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).parent().unwrap().to_path_buf()
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .unwrap()
+        .to_path_buf()
 }
 
 /// Builds `sitar-ffi` (cdylib, `--features testing`) and returns the path of
@@ -22,7 +25,15 @@ pub fn host_library() -> &'static Path {
         let output = Command::new(cargo)
             .current_dir(workspace_root())
             .env("CARGO_TARGET_DIR", &target_dir)
-            .args(["build", "-p", "sitar-ffi", "--lib", "--features", "testing", "--message-format=json"])
+            .args([
+                "build",
+                "-p",
+                "sitar-ffi",
+                "--lib",
+                "--features",
+                "testing",
+                "--message-format=json",
+            ])
             .output()
             .expect("cargo runs");
         assert!(
@@ -33,7 +44,9 @@ pub fn host_library() -> &'static Path {
         let stdout = String::from_utf8(output.stdout).unwrap();
         let mut found = None;
         for line in stdout.lines() {
-            let Ok(msg) = serde_json::from_str::<serde_json::Value>(line) else { continue };
+            let Ok(msg) = serde_json::from_str::<serde_json::Value>(line) else {
+                continue;
+            };
             if msg["reason"] != "compiler-artifact" || msg["target"]["name"] != "sitar" {
                 continue;
             }
@@ -70,7 +83,9 @@ pub fn skip(test: &str, reason: &str) {
 
 /// Runs a command; panics with its output on failure; returns stdout.
 pub fn run(cmd: &mut Command, what: &str) -> String {
-    let output = cmd.output().unwrap_or_else(|e| panic!("{what}: cannot run: {e}"));
+    let output = cmd
+        .output()
+        .unwrap_or_else(|e| panic!("{what}: cannot run: {e}"));
     let stdout = String::from_utf8_lossy(&output.stdout).into_owned();
     let stderr = String::from_utf8_lossy(&output.stderr).into_owned();
     assert!(
