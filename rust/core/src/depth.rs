@@ -471,35 +471,55 @@ mod tests {
 
     #[test]
     fn tilted_wall_seen_from_a_moved_camera() {
-        // World wall (Unity convention): through (0, 0, 4) with normal tilted 30° about +Y,
-        // facing −Z. The camera stands at (0.5, 1.6, 0.3), turned 20° about +Y, display at 90°.
-        let conv = Convention::Unity;
-        let wall_n = DQuat::from_rotation_y(30f64.to_radians()) * DVec3::NEG_Z;
-        let wall_d = wall_n.dot(DVec3::new(0.0, 0.0, 4.0));
-        let pose = Pose::new(
+        // World wall (given in Unity coordinates): through (0, 0, 4), normal tilted 30° about
+        // +Y, facing −Z. The camera stands at (0.5, 1.6, 0.3), turned 20° about +Y. The same
+        // physical scene in ARCore coordinates must give the same sensor image and the same
+        // (converted) answer, for every display rotation.
+        let (u, a) = (Convention::Unity, Convention::Arcore);
+        let wall_n_u = DQuat::from_rotation_y(30f64.to_radians()) * DVec3::NEG_Z;
+        let wall_p_u = DVec3::new(0.0, 0.0, 4.0);
+        let pose_u = Pose::new(
             DVec3::new(0.5, 1.6, 0.3),
             DQuat::from_rotation_y(20f64.to_radians()),
         );
-        let rot = DisplayRotation::Deg90;
-        // The plane in the sensor optical frame.
-        let n_cam = pose.rotation.inverse() * wall_n;
-        let n_sensor = rot.sensor_from_display(conv.optical_from_camera(n_cam));
-        let d_sensor = wall_d - wall_n.dot(pose.position);
         let k = phone_k();
-        let data = render_plane(256, 192, &k, n_sensor, d_sensor);
-        let img = DepthImage::new(&data, 256, 192, 512).unwrap();
-        let s = sample_surface(&img, &k, rot, conv, &pose, None).unwrap();
-        assert!(
-            angle_deg(s.normal, wall_n) < 0.5,
-            "{}",
-            angle_deg(s.normal, wall_n)
-        );
-        // On the plane to within the millimetre quantisation.
-        assert!((wall_n.dot(s.point) - wall_d).abs() < 1e-3);
-        // Along the centre pixel's ray from the camera.
-        let ray = pose.transform_vector(
-            conv.camera_from_optical(rot.display_from_sensor(k.ray(128.0, 96.0))),
-        );
-        assert!(angle_deg(s.point - pose.position, ray) < 1e-9);
+        for rot in [
+            DisplayRotation::Deg0,
+            DisplayRotation::Deg90,
+            DisplayRotation::Deg180,
+            DisplayRotation::Deg270,
+        ] {
+            let mut images = Vec::new();
+            let mut samples = Vec::new();
+            for conv in [u, a] {
+                let wall_n = u.convert_vector(wall_n_u, conv);
+                let wall_d = wall_n.dot(u.convert_vector(wall_p_u, conv));
+                let pose = u.convert_pose(pose_u, conv);
+                // The plane in the sensor optical frame.
+                let n_cam = pose.rotation.inverse() * wall_n;
+                let n_sensor = rot.sensor_from_display(conv.optical_from_camera(n_cam));
+                let d_sensor = wall_d - wall_n.dot(pose.position);
+                let data = render_plane(256, 192, &k, n_sensor, d_sensor);
+                let img = DepthImage::new(&data, 256, 192, 512).unwrap();
+                let s = sample_surface(&img, &k, rot, conv, &pose, None).unwrap();
+                let err = angle_deg(s.normal, wall_n);
+                assert!(err < 0.5, "{conv:?} {rot:?}: {err}°");
+                // On the plane to within the millimetre quantisation.
+                assert!((wall_n.dot(s.point) - wall_d).abs() < 1e-3);
+                // Along the centre pixel's ray from the camera.
+                let ray = pose.transform_vector(
+                    conv.camera_from_optical(rot.display_from_sensor(k.ray(128.0, 96.0))),
+                );
+                assert!(angle_deg(s.point - pose.position, ray) < 1e-9);
+                images.push(data);
+                samples.push(s);
+            }
+            assert_eq!(
+                images[0], images[1],
+                "{rot:?}: the physical camera sees one image"
+            );
+            assert!((u.convert_vector(samples[0].point, a) - samples[1].point).length() < 1e-9);
+            assert!((u.convert_vector(samples[0].normal, a) - samples[1].normal).length() < 1e-9);
+        }
     }
 }

@@ -183,6 +183,18 @@ impl Session {
             })
             .collect();
         let subs = parse_table(&read_file(&dir.join("subtrajectories.csv"))?)?;
+        if subs.len() * 2 > file.path_m.len() {
+            return Err(Error::parse(
+                "subtrajectories.csv",
+                0,
+                "index",
+                format!(
+                    "{} sub-trajectories but only {} logged poses in trajectory.txt",
+                    subs.len(),
+                    file.path_m.len()
+                ),
+            ));
+        }
         let results_path = dir.join("results.json");
         let results = if results_path.exists() {
             Some(Results::parse(&read_file(&results_path)?)?)

@@ -138,6 +138,7 @@ impl Results {
     /// Parses the legacy CSV (`start,error`) or the JSON form, whichever `text` is
     /// (JSON when it starts with `{`).
     pub fn parse(text: &str) -> Result<Self, Error> {
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         if text.trim_start().starts_with('{') {
             Self::parse_json(text)
         } else {
@@ -421,8 +422,10 @@ mod tests {
 
     #[test]
     fn legacy_csv_in_nanoseconds() {
-        let r = Results::parse("start,error\n1700000000200000000,0.12\n1700000000100000000,0.03\n")
-            .unwrap();
+        let r = Results::parse(
+            "\u{feff}start,error\r\n1700000000200000000,0.12\r\n1700000000100000000,0.03\r\n",
+        )
+        .unwrap();
         assert_eq!(r.windows.len(), 2);
         assert_eq!(r.windows[0].start, 1_700_000_000_100_000_000);
         assert_eq!(r.windows[0].error_m, 0.03);

@@ -169,6 +169,12 @@ impl Session {
         }
     }
 
+    /// Like [`Session::new`], but first checks the config ([`SessionConfig::validate`]).
+    pub fn try_new(config: SessionConfig) -> Result<Self, Error> {
+        config.validate()?;
+        Ok(Self::new(config))
+    }
+
     /// The session's config.
     pub fn config(&self) -> &SessionConfig {
         &self.config
@@ -293,7 +299,10 @@ impl Session {
                 "depth: the latest midpoint already has a depth sample",
             ));
         }
-        let mid_pose = self.logged[2 * sub.index as usize + 1].pose;
+        let Some(mid) = self.logged.get(2 * sub.index as usize + 1) else {
+            return Err(Error::InvalidState("depth: the midpoint pose is missing"));
+        };
+        let mid_pose = mid.pose;
         let result = sample_surface(image, k, rotation, self.config.convention, &mid_pose, pixel);
         let sub = self.subs.last_mut().expect("checked above");
         match result {
@@ -775,5 +784,81 @@ mod tests {
                 s.subs.capacity()
             )
         );
+    }
+
+    #[derive(Debug, Clone)]
+    enum Op {
+        Start(i64, f64),
+        Frame(i64, f64),
+        Depth(u16, u32, u32, i32),
+        Stop(i64, f64),
+        Results(String),
+        Query,
+    }
+
+    fn arb_op() -> impl proptest::strategy::Strategy<Value = Op> {
+        use proptest::prelude::*;
+        let x = prop_oneof![4 => -10.0f64..10.0, 1 => Just(f64::NAN), 1 => Just(f64::INFINITY)];
+        prop_oneof![
+            1 => (0i64..100, x.clone()).prop_map(|(t, x)| Op::Start(t, x)),
+            12 => (-5i64..60, x.clone()).prop_map(|(dt, x)| Op::Frame(dt, x)),
+            3 => (0u16..3000, 0u32..300, 0u32..300, -1i32..5).prop_map(|(d, w, h, r)| Op::Depth(d, w, h, r)),
+            1 => (-5i64..60, x).prop_map(|(dt, x)| Op::Stop(dt, x)),
+            1 => ".{0,40}".prop_map(Op::Results),
+            1 => (0i64..2000, 0.0f64..0.3).prop_map(|(t, e)| Op::Results(format!("start,error\n{t},{e}\n"))),
+            1 => Just(Op::Query),
+        ]
+    }
+
+    proptest::proptest! {
+        /// Any call sequence, including NaN poses, bad images and garbage results: no
+        /// panic, and the bookkeeping invariants hold.
+        #[test]
+        fn random_call_sequences_never_panic(ops in proptest::collection::vec(arb_op(), 0..120)) {
+            let mut s = Session::new(SessionConfig { subtrajectory_frames: 4, ..SessionConfig::default() });
+            let mut t = 0i64;
+            let k = phone_k();
+            for op in ops {
+                match op {
+                    Op::Start(t0, x) => { t = t0; let _ = s.start(t0, Pose::new(DVec3::new(x, 0.0, 0.0), DQuat::IDENTITY)); }
+                    Op::Frame(dt, x) => { t += dt; let _ = s.frame(t, Pose::new(DVec3::new(x, 1.0, 0.0), DQuat::IDENTITY)); }
+                    Op::Depth(d, w, h, r) => {
+                        let data = vec![d; (w * h) as usize];
+                        if let (Ok(img), Ok(rot)) = (DepthImage::new(&data, w, h, 2 * w), DisplayRotation::from_degrees(r * 90)) {
+                            let _ = s.depth(&img, &k, rot);
+                        }
+                    }
+                    Op::Stop(dt, x) => { t += dt; let _ = s.stop(t, Pose::new(DVec3::new(x, 0.0, 0.0), DQuat::IDENTITY)); }
+                    Op::Results(text) => { let _ = s.load_results(&text); }
+                    Op::Query => {
+                        let _ = s.markers();
+                        let _ = s.render_plan();
+                        let _ = s.error_at(t);
+                        let _ = s.results_unreliable();
+                        let _ = s.trajectory_tum();
+                    }
+                }
+                for (i, sub) in s.subtrajectories().iter().enumerate() {
+                    proptest::prop_assert_eq!(sub.index as usize, i);
+                }
+                // Start, every midpoint, every endpoint.
+                let completed = s.subtrajectories().iter().filter(|x| x.end_ns.is_some()).count();
+                let started = usize::from(s.state() != SessionState::Idle);
+                proptest::prop_assert_eq!(s.logged().len(), started * (1 + s.subtrajectories().len() + completed));
+                if let Some(sum) = s.summary() {
+                    proptest::prop_assert!(sum.depth_samples <= sum.midpoints && sum.subtrajectories <= sum.midpoints);
+                    proptest::prop_assert_eq!(sum.midpoints, sum.frames / 4 + u32::from(sum.frames % 4 >= 2));
+                }
+            }
+        }
+
+        #[test]
+        fn parsers_never_panic(text in "\\PC{0,80}") {
+            let _ = Results::parse(&text);
+            let _ = Results::parse(&format!("{{\"windows\":[{text}]}}"));
+            let _ = SessionConfig::from_json(&text);
+            let _ = SessionConfig::from_json(&format!("{{\"thresholds_m\":{text}}}"));
+            let _ = crate::tum::parse_tum_ns(&text, "t");
+        }
     }
 }
