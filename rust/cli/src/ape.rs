@@ -6,8 +6,9 @@ use sitar_estimator::ape;
 use crate::compare::{PairArgs, result_json};
 use crate::output::{OutputFormat, emit};
 
-/// Absolute pose error of EST against REF (evo_ape): CSV `t,error` or JSON with statistics.
-/// Trials live in their own world frame: use --align (or --align-origin).
+/// Absolute pose error of EST against REF, as evo_ape.
+///
+/// Writes CSV `t,error` or JSON with the statistics. Trials live in their own world frame: use --align (or --align-origin).
 #[derive(clap::Args, Debug)]
 #[command(
     after_help = "Example: sitar ape ground_truth.txt trials/trajectory_0.txt --align --format json"

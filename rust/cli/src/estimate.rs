@@ -8,10 +8,11 @@ use sitar_estimator::{EstimateOptions, PoseRelation, Setting, Thresholds, estima
 use crate::input::{self, Format, progress_bar};
 use crate::output::{OutputFormat, emit};
 
-/// Estimates each 10-frame window's pose error from the disagreement of repeated trials
-/// (all n(n−1)/2 pairwise RPEs, then a robust statistic per window). Writes the legacy CSV
-/// `start,error` (start in the trials' time unit, error in metres) or JSON with the pair count,
-/// spread and class of each window.
+/// Estimates each window's pose error from repeated trials, without ground truth.
+///
+/// All n(n−1)/2 pairwise RPEs of the trials (translation, delta 10 frames, every start), then
+/// a robust statistic per window. Writes the legacy CSV `start,error` (start in the trials'
+/// time unit, error in metres) or JSON with the pair count, spread and class of each window.
 #[derive(clap::Args, Debug)]
 #[command(
     after_help = "Examples:\n  sitar estimate trials/trajectory_*.txt\n  sitar estimate trials/ --setting median --format json -o results.json"

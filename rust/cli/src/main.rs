@@ -8,6 +8,7 @@
 mod ape;
 mod compare;
 mod estimate;
+mod evaluate;
 mod input;
 mod output;
 mod rpe;
@@ -19,7 +20,7 @@ use clap::{Parser, Subcommand};
 
 /// SiTAR: situated trajectory analysis for AR — pose error without ground truth.
 #[derive(Parser)]
-#[command(name = "sitar", version, about, propagate_version = true)]
+#[command(name = "sitar", version, propagate_version = true)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -30,6 +31,7 @@ enum Command {
     Rpe(rpe::Args),
     Ape(ape::Args),
     Estimate(estimate::Args),
+    Evaluate(evaluate::Args),
     Simulate(simulate::Args),
 }
 
@@ -38,6 +40,7 @@ fn main() -> ExitCode {
         Command::Rpe(args) => rpe::run(args),
         Command::Ape(args) => ape::run(args),
         Command::Estimate(args) => estimate::run(args),
+        Command::Evaluate(args) => evaluate::run(args),
         Command::Simulate(args) => simulate::run(args),
     };
     match result {

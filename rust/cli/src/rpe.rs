@@ -7,8 +7,10 @@ use sitar_estimator::{DeltaUnit, RpeOptions, rpe};
 use crate::compare::{PairArgs, result_json};
 use crate::output::{OutputFormat, emit};
 
-/// Relative pose error of EST against REF (evo_rpe): CSV `start,end,error` or JSON with
-/// statistics.
+/// Relative pose error of EST against REF, as evo_rpe.
+///
+/// Writes CSV `start,end,error` (one row per pose pair, times in the input's unit) or JSON
+/// with the statistics.
 #[derive(clap::Args, Debug)]
 #[command(
     after_help = "Example: sitar rpe ground_truth.txt trials/trajectory_0.txt --all-pairs --format json"

@@ -12,8 +12,10 @@ use sitar_sim::{Recording, TrialOptions, play_trial_with};
 
 use crate::input::progress_bar;
 
-/// Simulates a handheld walk through the demo room (a blank wall and a glass pane among
-/// textured surfaces) and N repeated SLAM-like trials of it, with ground truth.
+/// Simulates a walk through a room and N repeated SLAM-like trials, with ground truth.
+///
+/// The demo room has a blank wall and a glass pane among textured surfaces; the trials drift
+/// and disagree most where the camera faces them.
 ///
 /// Writes into DIR: ground_truth.txt, trials/trajectory_0.txt … (TUM), scene.json (room,
 /// hard surfaces, surface faced and tracking difficulty per frame) and recording.sitarsim

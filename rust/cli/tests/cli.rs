@@ -41,15 +41,10 @@ fn p(path: &Path) -> &str {
 /// `sitar simulate` into a fresh temporary directory.
 fn simulate(extra: &[&str]) -> tempfile::TempDir {
     let dir = tempfile::tempdir().unwrap();
-    let mut args = vec![
-        "simulate",
-        "--out",
-        p(dir.path()),
-        "--seconds",
-        "5",
-        "--trials",
-        "4",
-    ];
+    let mut args = vec!["simulate", "--out", p(dir.path()), "--seconds", "5"];
+    if !extra.contains(&"--trials") {
+        args.extend(["--trials", "4"]);
+    }
     args.extend_from_slice(extra);
     ok(&args);
     dir
@@ -266,18 +261,97 @@ fn bad_input_gives_one_clear_line() {
 }
 
 #[test]
+fn evaluate_reports_every_setting_and_draws_the_plot() {
+    let dir = simulate(&["--trials", "6", "--second-set", "--seed", "9"]);
+    let d = dir.path();
+    let (gt, a, b) = (
+        d.join("ground_truth.txt"),
+        d.join("trials"),
+        d.join("trials-b"),
+    );
+    let svg = d.join("figure5.svg");
+    let common = [
+        "--ground-truth",
+        p(&gt),
+        "--trials-a",
+        p(&a),
+        "--trials-b",
+        p(&b),
+    ];
+    let mut args = vec![
+        "evaluate",
+        "--trial-counts",
+        "2,4,6",
+        "--format",
+        "json",
+        "--plot",
+        p(&svg),
+    ];
+    args.extend(common);
+    let json: serde_json::Value = serde_json::from_str(&ok(&args)).unwrap();
+    assert_eq!(json["trials_a"], 6);
+    assert_eq!(json["truth_windows"], 140);
+    let results = json["results"].as_array().unwrap();
+    assert_eq!(results.len(), 3 * 7 * 3);
+    for r in results {
+        let accuracy = r["accuracy"].as_f64().unwrap();
+        assert!((0.0..=1.0).contains(&accuracy));
+        assert_eq!(r["windows"], 140);
+    }
+    // The paper's default: trim_mean_30 on 5 & 10 cm with all six trials classifies most
+    // windows right (the simulated trials disagree where the truth is bad).
+    let best = results
+        .iter()
+        .find(|r| {
+            r["setting"] == "trim_mean_30" && r["trials"] == 6 && r["boundaries_m"][0] == 0.05
+        })
+        .unwrap();
+    assert!(best["accuracy"].as_f64().unwrap() > 0.6, "{best}");
+    let plot = std::fs::read_to_string(&svg).unwrap();
+    assert!(
+        plot.starts_with("<svg")
+            && plot.contains("trim_mean_30")
+            && plot.contains("F1, boundaries 2 &amp; 5 cm")
+    );
+
+    let mut args = vec![
+        "evaluate",
+        "--trial-counts",
+        "3",
+        "--settings",
+        "mean,median",
+        "--no-plot",
+    ];
+    args.extend(common);
+    let table = ok(&args);
+    assert!(table.contains("class boundaries 5 & 10 cm"), "{table}");
+    assert_eq!(
+        table
+            .lines()
+            .filter(|l| l.starts_with("mean ") || l.starts_with("median "))
+            .count(),
+        6
+    );
+
+    let mut args = vec!["evaluate", "--trial-counts", "7", "--no-plot"];
+    args.extend(common);
+    assert!(fails(&args).contains("--trial-counts: 7 is not between 2 and the 6 trials of set B"));
+}
+
+#[test]
 fn every_subcommand_has_help() {
     for (cmd, flag) in [
         ("rpe", "--delta-unit"),
         ("ape", "--align-origin"),
         ("estimate", "--setting"),
         ("simulate", "--trials"),
+        ("evaluate", "--trials-b"),
     ] {
         let help = ok(&[cmd, "--help"]);
         assert!(help.contains(flag), "{cmd}: {help}");
     }
     let top = ok(&["--help"]);
-    for cmd in ["rpe", "ape", "estimate", "simulate"] {
+    for cmd in ["rpe", "ape", "estimate", "evaluate", "simulate"] {
         assert!(top.contains(cmd));
     }
 }
