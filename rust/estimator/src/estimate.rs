@@ -10,6 +10,7 @@
 //! association keeps the window contiguous; only windows broken by a dropped frame are
 //! recomputed from the poses. Pairs and windows run in parallel (rayon).
 
+use glam::{DQuat, DVec3};
 use rayon::prelude::*;
 
 use crate::metrics::RigidPose;
@@ -166,53 +167,129 @@ pub fn estimate(trials: &[Trajectory], opts: &EstimateOptions) -> Result<Estimat
     Ok(PairwiseValues::compute(trials, opts)?.estimate(opts.setting))
 }
 
-/// All pairwise RPE values of a set of trials, grouped by window key, from which an
+/// All pairwise RPE inputs of a set of trials, grouped for aggregation, from which an
 /// [`Estimate`] for any [`Setting`] is cheap to derive.
+///
+/// Pairs whose trials have identical stamps (the usual case: trials replay one recording)
+/// associate one to one; their values are computed on the fly during aggregation from the
+/// per-trial relative poses, so nothing per pair is stored. Other pairs are associated as evo
+/// does and their values stored.
 #[derive(Debug, Clone)]
 pub struct PairwiseValues {
     trials: usize,
     time_unit: TimeUnit,
     pose_relation: PoseRelation,
+    delta: usize,
     /// Sorted, distinct window start stamps (ns).
     keys: Vec<i64>,
     /// End stamp per key.
     ends: Vec<i64>,
-    /// Per pair: key indices (non-decreasing) and values.
-    pairs: Vec<PairValues>,
+    /// Per reference trial (all but the last): the key index of each of its poses.
+    key_of: Vec<Vec<u32>>,
+    /// Per reference trial: `[b]` = first pose whose key is in block `b` or later.
+    trial_block_starts: Vec<Vec<u32>>,
+    /// Per trial: relative poses over `delta` frames.
+    relative: Vec<RelativeWindows>,
+    pairs: Vec<Pair>,
 }
 
-#[derive(Debug, Clone, Default)]
-struct PairValues {
-    keys: Vec<u32>,
-    values: Vec<f64>,
+/// Keys per aggregation block (a block's buckets stay cache-sized).
+const BLOCK: usize = 128;
+
+#[derive(Debug, Clone)]
+enum Pair {
+    /// Identical stamps: window `k` is pose `k` → `k + delta` of both trials.
+    Identity {
+        reference: usize,
+        estimate: usize,
+        windows: usize,
+    },
+    /// Associated: stored key indices (non-decreasing) and values (as float bits).
+    Stored {
+        keys: Vec<u32>,
+        values: Vec<u64>,
+        block_starts: Vec<u32>,
+    },
 }
 
-/// Per-trial precomputation: relative poses over `delta` frames.
-struct TrialWindows<'a> {
-    trial: &'a Trajectory,
-    relative: Vec<RigidPose>,
+/// Per-trial relative poses `pose_k⁻¹ pose_{k+delta}` (struct of arrays).
+#[derive(Debug, Clone)]
+struct RelativeWindows {
+    translation: Vec<DVec3>,
+    /// Empty for the translation relation.
+    rotation: Vec<DQuat>,
 }
 
-impl<'a> TrialWindows<'a> {
-    fn new(trial: &'a Trajectory, delta: usize) -> Self {
-        let relative = (0..trial.len().saturating_sub(delta))
-            .map(|k| RigidPose::relative(trial.pose(k), trial.pose(k + delta)))
-            .collect();
-        Self { trial, relative }
+impl RelativeWindows {
+    fn new(trial: &Trajectory, delta: usize, with_rotation: bool) -> Self {
+        let count = trial.len().saturating_sub(delta);
+        let relative = |k: usize| RigidPose::relative(trial.pose(k), trial.pose(k + delta));
+        let translation = (0..count).map(|k| relative(k).translation).collect();
+        let rotation = if with_rotation {
+            (0..count).map(|k| relative(k).rotation).collect()
+        } else {
+            Vec::new()
+        };
+        Self {
+            translation,
+            rotation,
+        }
     }
 
-    #[inline]
-    fn relative(&self, a: usize, b: usize, delta: usize) -> RigidPose {
+    /// Relative pose `a → b`: precomputed when `b = a + delta`, else from the poses.
+    #[inline(always)]
+    fn pose(
+        &self,
+        trial: &Trajectory,
+        a: usize,
+        b: usize,
+        delta: usize,
+        with_rotation: bool,
+    ) -> RigidPose {
         if b == a + delta {
-            self.relative[a]
+            let rotation = if with_rotation {
+                self.rotation[a]
+            } else {
+                DQuat::IDENTITY
+            };
+            RigidPose {
+                rotation,
+                translation: self.translation[a],
+            }
         } else {
-            RigidPose::relative(self.trial.pose(a), self.trial.pose(b))
+            RigidPose::relative(trial.pose(a), trial.pose(b))
         }
     }
 }
 
+/// The RPE value of two relative poses, as float bits (`+ 0.0` turns −0 into +0, so the
+/// bit order of these non-negative values is their float order).
+#[inline(always)]
+fn value_bits(relation: PoseRelation, q: RigidPose, p: RigidPose) -> u64 {
+    let value = match relation {
+        // ‖Q_rel⁻¹P_rel‖ translation = ‖p_rel.t − q_rel.t‖ (a rotation keeps norms).
+        PoseRelation::TranslationPart => (p.translation - q.translation).length(),
+        _ => RigidPose::relative(q, p).error(relation),
+    };
+    (value + 0.0).to_bits()
+}
+
+/// `starts[b]` = first index whose key is in block `b` or later, for `b` in `0..=blocks`.
+fn block_starts(keys: &[u32], blocks: usize) -> Vec<u32> {
+    let mut starts = Vec::with_capacity(blocks + 1);
+    let mut index = 0usize;
+    for b in 0..=blocks {
+        let limit = (b * BLOCK) as u32;
+        while index < keys.len() && keys[index] < limit {
+            index += 1;
+        }
+        starts.push(index as u32);
+    }
+    starts
+}
+
 impl PairwiseValues {
-    /// Runs all n(n−1)/2 pairwise RPEs (`opts.setting` is not used here).
+    /// Prepares all n(n−1)/2 pairwise RPEs (`opts.setting` is not used here).
     pub fn compute(trials: &[Trajectory], opts: &EstimateOptions) -> Result<Self, Error> {
         if trials.len() < 2 {
             return Err(Error::InvalidArgument(format!(
@@ -229,20 +306,25 @@ impl PairwiseValues {
             return Err(Error::InvalidArgument(format!("trial {i} has no poses")));
         }
         let delta = opts.delta;
-        let windows: Vec<TrialWindows<'_>> = trials
+        let relation = opts.pose_relation;
+        let with_rotation = relation != PoseRelation::TranslationPart;
+        let relative: Vec<RelativeWindows> = trials
             .par_iter()
-            .map(|t| TrialWindows::new(t, delta))
+            .map(|t| RelativeWindows::new(t, delta, with_rotation))
             .collect();
 
         // Keys: the distinct stamps of every trial that is a reference somewhere (all but the last).
         let references = &trials[..trials.len() - 1];
-        let mut keys: Vec<i64> = references
-            .iter()
-            .flat_map(|t| t.stamps.iter().copied())
-            .collect();
+        let mut keys: Vec<i64> = Vec::with_capacity(references.len() * trials[0].len());
+        for (index, t) in references.iter().enumerate() {
+            // Trials usually share their stamps: skip re-adding an identical stamp list.
+            if index == 0 || t.stamps != references[index - 1].stamps {
+                keys.extend_from_slice(&t.stamps);
+            }
+        }
         keys.par_sort_unstable();
         keys.dedup();
-        if keys.len() > u32::MAX as usize {
+        if keys.len() >= u32::MAX as usize {
             return Err(Error::InvalidArgument("too many distinct stamps".into()));
         }
         let key_of: Vec<Vec<u32>> = references
@@ -267,15 +349,25 @@ impl PairwiseValues {
                 }
             }
         }
+        let blocks = keys.len().div_ceil(BLOCK);
+        let trial_block_starts = key_of.iter().map(|k| block_starts(k, blocks)).collect();
 
         let n = trials.len();
         let pair_ids: Vec<(usize, usize)> = (0..n)
             .flat_map(|i| (i + 1..n).map(move |j| (i, j)))
             .collect();
-        let relation = opts.pose_relation;
         let pairs = pair_ids
             .par_iter()
             .map(|&(i, j)| {
+                if trials[i].stamps == trials[j].stamps {
+                    // Identical stamps associate one to one (each stamp is its own nearest).
+                    let windows = trials[i].len().saturating_sub(delta);
+                    return Ok(Pair::Identity {
+                        reference: i,
+                        estimate: j,
+                        windows,
+                    });
+                }
                 let names = (format!("trial {i}"), format!("trial {j}"));
                 let (ids_ref, ids_est) = associate_named(
                     &trials[i],
@@ -285,25 +377,32 @@ impl PairwiseValues {
                     (&names.0, &names.1),
                 )?;
                 let count = ids_ref.len().saturating_sub(delta);
-                let mut out = PairValues {
-                    keys: Vec::with_capacity(count),
-                    values: Vec::with_capacity(count),
-                };
-                let (reference, estimate) = (&windows[i], &windows[j]);
-                for k in 0..count {
-                    let (a0, a1) = (ids_ref[k], ids_ref[k + delta]);
-                    let (b0, b1) = (ids_est[k], ids_est[k + delta]);
-                    let q = reference.relative(a0, a1, delta);
-                    let p = estimate.relative(b0, b1, delta);
-                    let value = match relation {
-                        // ‖Q_rel⁻¹P_rel‖ translation = ‖p_rel.t − q_rel.t‖ (rotation keeps norms).
-                        PoseRelation::TranslationPart => (p.translation - q.translation).length(),
-                        _ => RigidPose::relative(q, p).error(relation),
-                    };
-                    out.keys.push(key_of[i][a0]);
-                    out.values.push(value);
-                }
-                Ok(out)
+                let values = (0..count)
+                    .map(|k| {
+                        let q = relative[i].pose(
+                            &trials[i],
+                            ids_ref[k],
+                            ids_ref[k + delta],
+                            delta,
+                            with_rotation,
+                        );
+                        let p = relative[j].pose(
+                            &trials[j],
+                            ids_est[k],
+                            ids_est[k + delta],
+                            delta,
+                            with_rotation,
+                        );
+                        value_bits(relation, q, p)
+                    })
+                    .collect();
+                let keys: Vec<u32> = ids_ref[..count].iter().map(|&a| key_of[i][a]).collect();
+                let block_starts = block_starts(&keys, blocks);
+                Ok(Pair::Stored {
+                    keys,
+                    values,
+                    block_starts,
+                })
             })
             .collect::<Result<Vec<_>, Error>>()?;
 
@@ -311,29 +410,74 @@ impl PairwiseValues {
             trials: n,
             time_unit: trials[0].time_unit,
             pose_relation: relation,
+            delta,
             keys,
             ends,
+            key_of,
+            trial_block_starts,
+            relative,
             pairs,
         })
     }
 
     /// Aggregates the pair values per window with `setting`.
     pub fn estimate(&self, setting: Setting) -> Estimate {
-        const BLOCK: usize = 64;
-        let blocks: Vec<usize> = (0..self.keys.len()).step_by(BLOCK).collect();
-        let windows = blocks
-            .par_iter()
-            .flat_map_iter(|&block_start| {
-                let block_end = (block_start + BLOCK).min(self.keys.len());
-                let mut buckets: Vec<Vec<f64>> = vec![Vec::new(); block_end - block_start];
+        let blocks = self.keys.len().div_ceil(BLOCK);
+        let relation = self.pose_relation;
+        let with_rotation = relation != PoseRelation::TranslationPart;
+        let windows = (0..blocks)
+            .into_par_iter()
+            .flat_map_iter(|block| {
+                let block_start = block * BLOCK;
+                let block_len = BLOCK.min(self.keys.len() - block_start);
+                let mut buckets: Vec<Vec<u64>> = (0..block_len)
+                    .map(|_| Vec::with_capacity(self.pairs.len()))
+                    .collect();
                 for pair in &self.pairs {
-                    let from = pair.keys.partition_point(|&k| (k as usize) < block_start);
-                    for (&key, &value) in pair.keys[from..].iter().zip(&pair.values[from..]) {
-                        let key = key as usize;
-                        if key >= block_end {
-                            break;
+                    match pair {
+                        Pair::Identity {
+                            reference,
+                            estimate,
+                            windows,
+                        } => {
+                            let starts = &self.trial_block_starts[*reference];
+                            let from = (starts[block] as usize).min(*windows);
+                            let to = (starts[block + 1] as usize).min(*windows);
+                            let keys = &self.key_of[*reference][from..to];
+                            let (q, p) = (&self.relative[*reference], &self.relative[*estimate]);
+                            if with_rotation {
+                                for (k, &key) in (from..to).zip(keys) {
+                                    let rq = RigidPose {
+                                        rotation: q.rotation[k],
+                                        translation: q.translation[k],
+                                    };
+                                    let rp = RigidPose {
+                                        rotation: p.rotation[k],
+                                        translation: p.translation[k],
+                                    };
+                                    buckets[key as usize - block_start]
+                                        .push(value_bits(relation, rq, rp));
+                                }
+                            } else {
+                                let pairs =
+                                    q.translation[from..to].iter().zip(&p.translation[from..to]);
+                                for ((tq, tp), &key) in pairs.zip(keys) {
+                                    let value = (*tp - *tq).length() + 0.0;
+                                    buckets[key as usize - block_start].push(value.to_bits());
+                                }
+                            }
                         }
-                        buckets[key - block_start].push(value);
+                        Pair::Stored {
+                            keys,
+                            values,
+                            block_starts,
+                        } => {
+                            let range =
+                                block_starts[block] as usize..block_starts[block + 1] as usize;
+                            for (&key, &value) in keys[range.clone()].iter().zip(&values[range]) {
+                                buckets[key as usize - block_start].push(value);
+                            }
+                        }
                     }
                 }
                 buckets
@@ -342,8 +486,8 @@ impl PairwiseValues {
                     .filter(|(_, values)| !values.is_empty())
                     .map(|(offset, mut values)| {
                         let key = block_start + offset;
-                        let error = setting.apply(&mut values);
-                        let spread = statistics::interquartile_range(&mut values);
+                        let (error, spread) =
+                            statistics::bits::window_statistics(&mut values, setting);
                         WindowEstimate {
                             start: self.keys[key],
                             end: self.ends[key],
@@ -362,6 +506,11 @@ impl PairwiseValues {
             pose_relation: self.pose_relation,
             windows,
         }
+    }
+
+    /// The RPE delta (frames) these values were computed with.
+    pub fn delta(&self) -> usize {
+        self.delta
     }
 }
 

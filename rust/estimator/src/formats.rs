@@ -232,8 +232,7 @@ enum Stamp {
 /// Parses a timestamp token: an integer, or decimal seconds converted exactly to ns
 /// (rounded half away from zero at the 9th decimal), or scientific notation via f64.
 fn parse_stamp(token: &str, tokens: &Tokens<'_>) -> Result<Stamp, Error> {
-    let column = tokens.column_of(token);
-    let fail = |msg: String| parse_error(tokens.file, tokens.line, column, &msg);
+    let fail = |msg: String| parse_error(tokens.file, tokens.line, tokens.column_of(token), &msg);
     let (negative, body) = match token.as_bytes().first() {
         Some(b'-') => (true, &token[1..]),
         Some(b'+') => (false, &token[1..]),
@@ -313,7 +312,11 @@ impl<'a> Tokens<'a> {
 
     fn expect_f64(&mut self, expected: usize) -> Result<f64, Error> {
         match self.next_token() {
-            Some(token) => parse_finite(token, self.file, self.line, self.column_of(token)),
+            Some(token) => match token.parse::<f64>() {
+                Ok(v) if v.is_finite() => Ok(v),
+                // Slow path only on error: find the column.
+                _ => parse_finite(token, self.file, self.line, self.column_of(token)),
+            },
             None => Err(parse_error(
                 self.file,
                 self.line,

@@ -270,3 +270,133 @@ mod tests {
         }
     }
 }
+
+/// Order statistics on non-negative floats stored as their IEEE bits (whose integer order is
+/// the float order): the estimator's fast path, selecting only the ranks it needs.
+pub(crate) mod bits {
+    use super::Setting;
+
+    /// Partially sorts `v` (covering absolute ranks `offset..offset + v.len()`) so that every
+    /// rank in `ranks` (sorted, absolute) holds its order statistic, with smaller values
+    /// before it and larger ones after.
+    fn select_ranks(v: &mut [u64], offset: usize, ranks: &[usize]) {
+        if ranks.is_empty() || v.len() <= 1 {
+            return;
+        }
+        if v.len() <= 24 {
+            v.sort_unstable();
+            return;
+        }
+        let mid = ranks.len() / 2;
+        let r = ranks[mid] - offset;
+        v.select_nth_unstable(r);
+        let (left, right) = v.split_at_mut(r);
+        select_ranks(left, offset, &ranks[..mid]);
+        select_ranks(&mut right[1..], offset + r + 1, &ranks[mid + 1..]);
+    }
+
+    fn at(v: &[u64], rank: usize) -> f64 {
+        f64::from_bits(v[rank])
+    }
+
+    /// numpy's linear quantile on selected data.
+    fn quantile(v: &[u64], q: f64) -> f64 {
+        let n = v.len();
+        let position = q * (n - 1) as f64;
+        let below = (position.floor() as usize).min(n - 1);
+        let above = (below + 1).min(n - 1);
+        let t = position - below as f64;
+        let (a, b) = (at(v, below), at(v, above));
+        let diff = b - a;
+        if t >= 0.5 {
+            b - diff * (1.0 - t)
+        } else {
+            a + diff * t
+        }
+    }
+
+    fn quantile_ranks(n: usize, q: f64) -> [usize; 2] {
+        let below = ((q * (n - 1) as f64).floor() as usize).min(n - 1);
+        [below, (below + 1).min(n - 1)]
+    }
+
+    fn sum(v: &[u64]) -> f64 {
+        v.iter().map(|&b| f64::from_bits(b)).sum()
+    }
+
+    /// `(statistic, interquartile range)` of the values; equal to [`Setting::apply`] and
+    /// [`super::interquartile_range`]. `v` must be non-empty and hold non-negative floats.
+    pub(crate) fn window_statistics(v: &mut [u64], setting: Setting) -> (f64, f64) {
+        let n = v.len();
+        let mut ranks = Vec::with_capacity(8);
+        ranks.extend(quantile_ranks(n, 0.25));
+        ranks.extend(quantile_ranks(n, 0.75));
+        let trim = match setting {
+            Setting::TrimMean(percent) => {
+                let lowercut = (f64::from(percent) / 100.0 * n as f64) as usize;
+                let uppercut = n.saturating_sub(lowercut);
+                if lowercut > 0 && lowercut < uppercut {
+                    ranks.extend([lowercut, uppercut - 1]);
+                }
+                Some((lowercut, uppercut))
+            }
+            Setting::Median => {
+                ranks.extend([(n - 1) / 2, n / 2]);
+                None
+            }
+            Setting::Mean | Setting::MeanInliers => None,
+        };
+        ranks.sort_unstable();
+        ranks.dedup();
+        select_ranks(v, 0, &ranks);
+        let (q1, q3) = (quantile(v, 0.25), quantile(v, 0.75));
+        let iqr = q3 - q1;
+        let value = match setting {
+            Setting::Mean => sum(v) / n as f64,
+            Setting::Median => {
+                if n % 2 == 1 {
+                    at(v, n / 2)
+                } else {
+                    (at(v, n / 2 - 1) + at(v, n / 2)) / 2.0
+                }
+            }
+            Setting::TrimMean(_) => {
+                let (lowercut, uppercut) = trim.unwrap_or((0, n));
+                if lowercut >= uppercut {
+                    f64::NAN
+                } else {
+                    sum(&v[lowercut..uppercut]) / (uppercut - lowercut) as f64
+                }
+            }
+            Setting::MeanInliers => {
+                let (low, high) = (q1 - 1.5 * iqr, q3 + 1.5 * iqr);
+                let (total, count) = v
+                    .iter()
+                    .map(|&b| f64::from_bits(b))
+                    .filter(|&x| x >= low && x <= high)
+                    .fold((0.0, 0usize), |(s, c), x| (s + x, c + 1));
+                total / count as f64
+            }
+        };
+        (value, iqr)
+    }
+
+    #[cfg(test)]
+    mod tests {
+        use super::*;
+        use proptest::prelude::*;
+
+        proptest! {
+            #[test]
+            fn equals_the_float_statistics(values in prop::collection::vec(0.0f64..10.0, 1..300), which in 0usize..7) {
+                let setting = Setting::ALL[which];
+                let mut bits: Vec<u64> = values.iter().map(|v| v.to_bits()).collect();
+                let (value, spread) = window_statistics(&mut bits, setting);
+                let want = setting.apply(&mut values.clone());
+                let want_spread = crate::interquartile_range(&mut values.clone());
+                prop_assert!((value - want).abs() <= 1e-12 * (1.0 + want.abs()), "{} vs {}", value, want);
+                prop_assert!((spread - want_spread).abs() <= 1e-12);
+            }
+        }
+    }
+}
