@@ -416,3 +416,48 @@ fn rpe_and_ape_equal_evo() {
         }
     }
 }
+
+/// `sitar evaluate` equals an independent evo + numpy/scipy + scikit-learn computation of the
+/// paper's protocol (`tests/golden/make_evaluate_golden.py`) to 1e-12.
+#[test]
+fn evaluate_equals_evo_scipy_sklearn() {
+    let eval = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/golden/eval");
+    let expected: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(eval.join("expected.json")).unwrap())
+            .unwrap();
+    let (gt, a, b) = (
+        eval.join("ground_truth.txt"),
+        eval.join("trials"),
+        eval.join("trials-b"),
+    );
+    let got: serde_json::Value = serde_json::from_str(&ok(&[
+        "evaluate",
+        "--ground-truth",
+        p(&gt),
+        "--trials-a",
+        p(&a),
+        "--trials-b",
+        p(&b),
+        "--trial-counts",
+        "2,3,4",
+        "--format",
+        "json",
+        "--no-plot",
+    ]))
+    .unwrap();
+    assert_eq!(got["truth_windows"], expected["truth_windows"]);
+    let (got, want) = (
+        got["results"].as_array().unwrap(),
+        expected["results"].as_array().unwrap(),
+    );
+    assert_eq!(got.len(), want.len());
+    for (g, w) in got.iter().zip(want) {
+        for key in ["boundaries_m", "setting", "trials", "windows"] {
+            assert_eq!(g[key], w[key], "{key}: {g} vs {w}");
+        }
+        for key in ["accuracy", "macro_f1", "sensitivity", "specificity"] {
+            let (x, y) = (g[key].as_f64().unwrap(), w[key].as_f64().unwrap());
+            assert!((x - y).abs() < 1e-12, "{key}: {g} vs {w}");
+        }
+    }
+}
