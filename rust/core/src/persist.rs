@@ -30,6 +30,9 @@ struct SessionFile {
     sub_start_ns: i64,
     frame_intervals_ns: Vec<i64>,
     path_m: Vec<f64>,
+    /// Set only when the app replaced the default lookup tolerance.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    lookup_tolerance_ns: Option<i64>,
 }
 
 const HEADER: &str = "index,start_ns,mid_ns,end_ns,depth,pixel_x,pixel_y,depth_m,distance_m,cam_x,cam_y,cam_z,cam_nx,cam_ny,cam_nz,x,y,z,nx,ny,nz,error_m,class";
@@ -55,7 +58,7 @@ impl Session {
     /// | `trajectory.txt` | TUM `t x y z qx qy qz qw`, `t` integer ns: start, midpoints, endpoints |
     /// | `subtrajectories.csv` | one row per sub-trajectory, columns below |
     /// | `results.json` | the results in their JSON form (only once results were loaded) |
-    /// | `session.json` | recorder state: `version`, `state`, `frames`, `start`/`stop` (`{t_ns, pose}`), `last_t_ns`, `last_position`, `length_m`, `sub_start_ns`, `frame_intervals_ns`, `path_m` (per logged pose) |
+    /// | `session.json` | recorder state: `version`, `state`, `frames`, `start`/`stop` (`{t_ns, pose}`), `last_t_ns`, `last_position`, `length_m`, `sub_start_ns`, `frame_intervals_ns`, `path_m` (per logged pose), `lookup_tolerance_ns` (only if set) |
     ///
     /// `subtrajectories.csv` columns: `index,start_ns,mid_ns,end_ns,depth,pixel_x,pixel_y,
     /// depth_m,distance_m,cam_x,cam_y,cam_z,cam_nx,cam_ny,cam_nz,x,y,z,nx,ny,nz,error_m,class`;
@@ -80,6 +83,7 @@ impl Session {
             sub_start_ns: self.sub_start_ns,
             frame_intervals_ns: self.frame_intervals_ns.clone(),
             path_m: self.logged.iter().map(|l| l.path_m).collect(),
+            lookup_tolerance_ns: self.tolerance_override_ns,
         };
         let json = serde_json::to_string_pretty(&file)
             .map_err(|e| Error::io(dir, std::io::Error::other(e)))?;
@@ -216,8 +220,11 @@ impl Session {
         session.subs = subs;
         session.results = results;
         session.tolerance_ns = None;
+        session
+            .set_lookup_tolerance_ns(file.lookup_tolerance_ns)
+            .map_err(|e| Error::parse("session.json", 0, "lookup_tolerance_ns", e.to_string()))?;
         if session.state == SessionState::Stopped {
-            session.tolerance_ns = Some(session.lookup_tolerance_ns());
+            session.tolerance_ns = Some(session.compute_tolerance_ns());
         }
         Ok(session)
     }
@@ -380,6 +387,9 @@ mod tests {
                 )
                 .collect();
             s.load_results(&csv).unwrap();
+            if convention == "arcore" {
+                s.set_lookup_tolerance_ns(Some(1_000_000)).unwrap();
+            }
             let path = dir.path().join(convention);
             s.save(&path).unwrap();
             let back = Session::load(&path).unwrap();

@@ -498,6 +498,24 @@ mod tests {
     }
 
     #[test]
+    fn estimator_json_shape() {
+        // What sitar-estimator's Estimate::to_json writes (extra keys are ignored).
+        let text = r#"{"version":1,"setting":"trim_mean_30","trials":3,"time_unit":"s",
+            "pose_relation":"trans_part","windows":[{"start":1700000000000000000,
+            "end":1700000000333333333,"error_m":0.031,"pairs":3,"spread_m":0.002,"class":"low"}]}"#;
+        let r = Results::parse(text).unwrap();
+        assert_eq!(r.windows[0].start, 1_700_000_000_000_000_000);
+        assert_eq!(r.windows[0].end, Some(1_700_000_000_333_333_333));
+        assert_eq!((r.windows[0].error_m, r.windows[0].pairs), (0.031, Some(3)));
+        // A rotation-error document has no error_m: refused rather than misread.
+        let rot = r#"{"version":1,"windows":[{"start":1,"end":2,"error_deg":1.5,"pairs":3}]}"#;
+        assert!(
+            matches!(Results::parse(rot), Err(Error::Parse { field, .. }) if field == "windows[0].error_m")
+        );
+        assert!(Results::parse(r#"{"version":2,"windows":[]}"#).is_err());
+    }
+
+    #[test]
     fn classes_and_mean() {
         assert_eq!(ErrorClass::classify(0.10, 0.05, 0.10), ErrorClass::High);
         assert_eq!(ErrorClass::classify(0.0999, 0.05, 0.10), ErrorClass::Medium);

@@ -138,6 +138,8 @@ pub struct Session {
     pub(crate) results: Option<Results>,
     /// Half the median frame interval, fixed at stop (and on load).
     pub(crate) tolerance_ns: Option<i64>,
+    /// A lookup tolerance set by the app, replacing the default.
+    pub(crate) tolerance_override_ns: Option<i64>,
 }
 
 /// Frames pre-reserved: ten minutes at 30 fps without regrowth on the frame path.
@@ -166,6 +168,7 @@ impl Session {
             subs: Vec::with_capacity(logged_per_frame / 2 + 1),
             results: None,
             tolerance_ns: None,
+            tolerance_override_ns: None,
         }
     }
 
@@ -392,14 +395,26 @@ impl Session {
         Ok(())
     }
 
-    /// Half the median frame interval (ns): how far a window start may be from a
-    /// sub-trajectory's start timestamp. 0 before any frame.
+    /// How far (ns, inclusive) a window start may be from a sub-trajectory's start
+    /// timestamp: by default half the median frame interval (0 before any frame).
     pub fn lookup_tolerance_ns(&self) -> i64 {
-        self.tolerance_ns
+        self.tolerance_override_ns
+            .or(self.tolerance_ns)
             .unwrap_or_else(|| self.compute_tolerance_ns())
     }
 
-    fn compute_tolerance_ns(&self) -> i64 {
+    /// Replaces the default lookup tolerance (`None` restores it). Negative is an error.
+    pub fn set_lookup_tolerance_ns(&mut self, tolerance_ns: Option<i64>) -> Result<(), Error> {
+        if let Some(t) = tolerance_ns
+            && t < 0
+        {
+            return Err(Error::arg("tolerance_ns", format!("{t} is negative")));
+        }
+        self.tolerance_override_ns = tolerance_ns;
+        Ok(())
+    }
+
+    pub(crate) fn compute_tolerance_ns(&self) -> i64 {
         let mut v = self.frame_intervals_ns.clone();
         if v.is_empty() {
             return 0;
@@ -716,6 +731,12 @@ mod tests {
             s.subtrajectory_errors(),
             vec![Some(0.02), Some(0.07), Some(0.2), None]
         );
+        // A wider tolerance reaches sub 3's window one frame away; None restores the default.
+        s.set_lookup_tolerance_ns(Some(DT)).unwrap();
+        assert_eq!(s.subtrajectory_class(3), ErrorClass::High);
+        assert!(s.set_lookup_tolerance_ns(Some(-1)).is_err());
+        s.set_lookup_tolerance_ns(None).unwrap();
+        assert_eq!(s.subtrajectory_class(3), ErrorClass::Unknown);
         // Mean 0.1975 < 0.20; adding a bad window tips it.
         assert!(!s.results_unreliable());
         s.load_results(&format!("{csv}{},0.21\n", 1_000 + 50 * DT))
