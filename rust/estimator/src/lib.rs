@@ -28,6 +28,7 @@
 mod align;
 mod error;
 mod estimate;
+mod evaluate;
 mod formats;
 mod metrics;
 mod statistics;
@@ -38,6 +39,10 @@ pub use align::{Alignment, Similarity, align, umeyama};
 pub use error::Error;
 pub use estimate::{
     Estimate, EstimateOptions, PairwiseValues, Thresholds, WindowEstimate, estimate,
+};
+pub use evaluate::{
+    ClassBoundaries, ClassificationScores, Evaluation, EvaluationOptions, EvaluationRow,
+    classification_scores, evaluate, ground_truth_errors,
 };
 pub use formats::{
     parse_euroc_csv, parse_kitti, parse_tum, read_euroc_csv, read_kitti, read_tum, write_tum,

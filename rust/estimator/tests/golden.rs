@@ -205,3 +205,44 @@ fn rotational_estimate_equals_evo_and_scipy() {
         PoseRelation::RotationAngleDeg,
     );
 }
+
+#[test]
+fn evaluation_protocol_runs_on_the_golden_trials() {
+    use sitar_estimator::{ClassBoundaries, EvaluationOptions, evaluate, ground_truth_errors};
+    let gt = trajectory("gt.txt");
+    let trials: Vec<Trajectory> = (0..8)
+        .map(|i| trajectory(&format!("trial_{i:02}.txt")))
+        .collect();
+    let (a, b) = trials.split_at(4);
+    // The ground-truth error of one window equals the mean of the per-trial evo RPEs.
+    let truth = ground_truth_errors(&gt, a, &EstimateOptions::default()).unwrap();
+    let first = truth[0];
+    let mut per_trial = Vec::new();
+    for t in a {
+        let (g, e) = associate_trajectories(&gt, t, 0.01, 0.0).unwrap();
+        let r = rpe(&g, &e, &RpeOptions::default()).unwrap();
+        if let Some(k) = r.pairs.iter().position(|&(i, _)| g.stamps[i] == first.0) {
+            per_trial.push(r.errors[k]);
+        }
+    }
+    assert_eq!(per_trial.len(), 4);
+    assert_close("gt mean", first.1, per_trial.iter().sum::<f64>() / 4.0);
+    let opts = EvaluationOptions {
+        trial_counts: vec![2, 3, 4, 5],
+        ..EvaluationOptions::default()
+    };
+    let evaluation = evaluate(&gt, a, b, &opts).unwrap();
+    assert_eq!(
+        evaluation.rows.len(),
+        3 * Setting::ALL.len() * ClassBoundaries::PAPER.len()
+    );
+    for row in &evaluation.rows {
+        let s = row.scores;
+        assert!(s.windows > 400, "{row:?}");
+        assert!(
+            (0.0..=1.0).contains(&s.accuracy) && (0.0..=1.0).contains(&s.macro_f1),
+            "{row:?}"
+        );
+        assert_eq!(s.confusion.iter().flatten().sum::<usize>(), s.windows);
+    }
+}

@@ -1,0 +1,360 @@
+//! Evaluation of the estimate against ground truth (the paper's section 3.3, Table 2).
+//!
+//! Per sequence: the ground-truth average error per window comes from trial set A (RPE of
+//! every trial against the ground truth, averaged per window); the estimate comes from the
+//! first `k` trials of a disjoint set B. Both are classified by a 3-class classifier
+//! (low < `low_m` ≤ medium < `high_m` ≤ high) and scored with accuracy, macro F1 and the
+//! per-class sensitivity and specificity averaged over classes.
+
+use rayon::prelude::*;
+
+use crate::sync::{associate_named, seconds_to_ns};
+use crate::{Error, EstimateOptions, PairwiseValues, RpeOptions, Setting, Trajectory, rpe};
+
+/// The two boundaries of a 3-class error classifier.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct ClassBoundaries {
+    /// Errors at or above this are at least "medium".
+    pub low_m: f64,
+    /// Errors at or above this are "high".
+    pub high_m: f64,
+}
+
+impl ClassBoundaries {
+    /// The paper's three classifiers: 5 & 10 cm, 2 & 10 cm, 2 & 5 cm.
+    pub const PAPER: [ClassBoundaries; 3] = [
+        ClassBoundaries {
+            low_m: 0.05,
+            high_m: 0.10,
+        },
+        ClassBoundaries {
+            low_m: 0.02,
+            high_m: 0.10,
+        },
+        ClassBoundaries {
+            low_m: 0.02,
+            high_m: 0.05,
+        },
+    ];
+
+    /// Class 0 (low), 1 (medium) or 2 (high).
+    pub fn classify(&self, error: f64) -> usize {
+        if error >= self.high_m {
+            2
+        } else if error >= self.low_m {
+            1
+        } else {
+            0
+        }
+    }
+}
+
+/// Scores of a classifier on one set of windows.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct ClassificationScores {
+    /// Share of windows classified correctly.
+    pub accuracy: f64,
+    /// Mean F1 over the classes present in the truth or the prediction (as scikit-learn's
+    /// `f1_score(average="macro")`).
+    pub macro_f1: f64,
+    /// Mean sensitivity (recall) over the classes present in the truth.
+    pub sensitivity: f64,
+    /// Mean specificity over the classes with at least one true negative or false positive.
+    pub specificity: f64,
+    /// Number of windows scored.
+    pub windows: usize,
+    /// Confusion matrix `[truth][predicted]`.
+    pub confusion: [[usize; 3]; 3],
+}
+
+/// Scores predicted errors against true errors (same windows, same order).
+pub fn classification_scores(
+    truth: &[f64],
+    predicted: &[f64],
+    boundaries: ClassBoundaries,
+) -> Result<ClassificationScores, Error> {
+    if truth.len() != predicted.len() || truth.is_empty() {
+        return Err(Error::InvalidArgument(format!(
+            "need equally many, non-zero true and predicted errors (got {} and {})",
+            truth.len(),
+            predicted.len()
+        )));
+    }
+    let mut confusion = [[0usize; 3]; 3];
+    for (t, p) in truth.iter().zip(predicted) {
+        confusion[boundaries.classify(*t)][boundaries.classify(*p)] += 1;
+    }
+    let total = truth.len();
+    let correct: usize = (0..3).map(|c| confusion[c][c]).sum();
+    let (mut f1, mut f1_classes) = (0.0, 0);
+    let (mut sensitivity, mut sensitivity_classes) = (0.0, 0);
+    let (mut specificity, mut specificity_classes) = (0.0, 0);
+    for (c, row) in confusion.iter().enumerate() {
+        let tp = row[c];
+        let fn_ = row.iter().sum::<usize>() - tp;
+        let fp = (0..3).map(|t| confusion[t][c]).sum::<usize>() - tp;
+        let tn = total - tp - fn_ - fp;
+        if tp + fn_ + fp > 0 {
+            f1 += 2.0 * tp as f64 / (2 * tp + fp + fn_) as f64;
+            f1_classes += 1;
+        }
+        if tp + fn_ > 0 {
+            sensitivity += tp as f64 / (tp + fn_) as f64;
+            sensitivity_classes += 1;
+        }
+        if tn + fp > 0 {
+            specificity += tn as f64 / (tn + fp) as f64;
+            specificity_classes += 1;
+        }
+    }
+    let average = |sum: f64, count: usize| {
+        if count == 0 {
+            f64::NAN
+        } else {
+            sum / count as f64
+        }
+    };
+    Ok(ClassificationScores {
+        accuracy: correct as f64 / total as f64,
+        macro_f1: average(f1, f1_classes),
+        sensitivity: average(sensitivity, sensitivity_classes),
+        specificity: average(specificity, specificity_classes),
+        windows: total,
+        confusion,
+    })
+}
+
+/// Ground-truth average error per window: for every trial, the RPE (translation part,
+/// `opts.delta` frames, all pairs) against `ground_truth` after evo's association, keyed by
+/// the ground truth's start stamp; then the mean over trials per key. Sorted by key.
+pub fn ground_truth_errors(
+    ground_truth: &Trajectory,
+    trials: &[Trajectory],
+    opts: &EstimateOptions,
+) -> Result<Vec<(i64, f64)>, Error> {
+    if trials.is_empty() {
+        return Err(Error::InvalidArgument(
+            "need at least one trial for the ground-truth error".into(),
+        ));
+    }
+    let rpe_opts = RpeOptions {
+        pose_relation: opts.pose_relation,
+        delta: opts.delta as f64,
+        ..RpeOptions::default()
+    };
+    let per_trial = trials
+        .par_iter()
+        .enumerate()
+        .map(|(index, trial)| {
+            let name = format!("trial {index}");
+            let (ids_gt, ids_trial) = associate_named(
+                ground_truth,
+                trial,
+                opts.t_max_diff_s,
+                0.0,
+                ("ground truth", &name),
+            )?;
+            let (gt, est) = (
+                ground_truth.reduce_to_ids(&ids_gt),
+                trial.reduce_to_ids(&ids_trial),
+            );
+            let result = rpe(&gt, &est, &rpe_opts)?;
+            Ok(result
+                .pairs
+                .iter()
+                .zip(result.errors)
+                .map(|(&(i, _), e)| (gt.stamps[i], e))
+                .collect::<Vec<_>>())
+        })
+        .collect::<Result<Vec<_>, Error>>()?;
+    let mut all: Vec<(i64, f64)> = per_trial.into_iter().flatten().collect();
+    all.sort_by_key(|&(key, _)| key);
+    let mut out: Vec<(i64, f64)> = Vec::new();
+    let mut start = 0;
+    while start < all.len() {
+        let key = all[start].0;
+        let end = start + all[start..].partition_point(|&(k, _)| k == key);
+        let values: Vec<f64> = all[start..end].iter().map(|&(_, e)| e).collect();
+        out.push((key, crate::mean(&values)));
+        start = end;
+    }
+    Ok(out)
+}
+
+/// Options of [`evaluate`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct EvaluationOptions {
+    /// Numbers of B trials to estimate from (the paper: 5, 10, 20, …, 100); counts larger than
+    /// the set are skipped.
+    pub trial_counts: Vec<usize>,
+    /// Settings to evaluate (default: all seven).
+    pub settings: Vec<Setting>,
+    /// Classifiers (default: the paper's three).
+    pub boundaries: Vec<ClassBoundaries>,
+    /// Delta, association tolerance and pose relation (the setting field is unused).
+    pub estimate: EstimateOptions,
+}
+
+impl Default for EvaluationOptions {
+    fn default() -> Self {
+        Self {
+            trial_counts: vec![5, 10, 20, 30, 40, 50, 60, 70, 80, 90, 100],
+            settings: Setting::ALL.to_vec(),
+            boundaries: ClassBoundaries::PAPER.to_vec(),
+            estimate: EstimateOptions::default(),
+        }
+    }
+}
+
+/// One line of the evaluation table.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct EvaluationRow {
+    /// The statistic.
+    #[serde(serialize_with = "serialize_display")]
+    pub setting: Setting,
+    /// Number of B trials used.
+    pub trials: usize,
+    /// The classifier.
+    pub boundaries: ClassBoundaries,
+    /// Its scores.
+    pub scores: ClassificationScores,
+}
+
+fn serialize_display<S: serde::Serializer>(
+    value: &Setting,
+    serializer: S,
+) -> Result<S::Ok, S::Error> {
+    serializer.collect_str(value)
+}
+
+/// The result of [`evaluate`].
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Evaluation {
+    /// Ground-truth windows (from set A).
+    pub ground_truth_windows: usize,
+    /// One row per (trial count, setting, classifier).
+    pub rows: Vec<EvaluationRow>,
+}
+
+impl Evaluation {
+    /// The evaluation as JSON.
+    pub fn to_json(&self) -> String {
+        serde_json::to_string(self).unwrap_or_else(|e| format!("{{\"error\":\"{e}\"}}"))
+    }
+}
+
+/// Runs the paper's evaluation protocol on one sequence. Estimate windows are matched to the
+/// ground-truth window with the nearest start stamp within `t_max_diff_s`; unmatched windows
+/// are not scored.
+pub fn evaluate(
+    ground_truth: &Trajectory,
+    trials_a: &[Trajectory],
+    trials_b: &[Trajectory],
+    opts: &EvaluationOptions,
+) -> Result<Evaluation, Error> {
+    let truth = ground_truth_errors(ground_truth, trials_a, &opts.estimate)?;
+    let truth_keys: Vec<i64> = truth.iter().map(|&(k, _)| k).collect();
+    let tolerance = seconds_to_ns(opts.estimate.t_max_diff_s);
+    let mut rows = Vec::new();
+    for &count in &opts.trial_counts {
+        if count < 2 || count > trials_b.len() {
+            continue;
+        }
+        let values = PairwiseValues::compute(&trials_b[..count], &opts.estimate)?;
+        for &setting in &opts.settings {
+            let estimate = values.estimate(setting);
+            let (mut true_errors, mut predicted) = (Vec::new(), Vec::new());
+            for window in &estimate.windows {
+                if let Some(index) = nearest(&truth_keys, window.start, tolerance) {
+                    true_errors.push(truth[index].1);
+                    predicted.push(window.error_m);
+                }
+            }
+            if predicted.is_empty() {
+                return Err(Error::NoPairs(
+                    "no estimate window matches a ground-truth window".into(),
+                ));
+            }
+            for &boundaries in &opts.boundaries {
+                let scores = classification_scores(&true_errors, &predicted, boundaries)?;
+                rows.push(EvaluationRow {
+                    setting,
+                    trials: count,
+                    boundaries,
+                    scores,
+                });
+            }
+        }
+    }
+    if rows.is_empty() {
+        return Err(Error::InvalidArgument(format!(
+            "no trial count in {:?} is between 2 and the {} trials of set B",
+            opts.trial_counts,
+            trials_b.len()
+        )));
+    }
+    Ok(Evaluation {
+        ground_truth_windows: truth.len(),
+        rows,
+    })
+}
+
+/// Index of the nearest key within `tolerance` (earlier on a tie).
+fn nearest(keys: &[i64], stamp: i64, tolerance: i64) -> Option<usize> {
+    let upper = keys.partition_point(|&k| k <= stamp);
+    let candidates = [upper.checked_sub(1), (upper < keys.len()).then_some(upper)];
+    candidates
+        .into_iter()
+        .flatten()
+        .map(|i| (i, (keys[i] - stamp).abs()))
+        .filter(|&(_, d)| d <= tolerance)
+        .min_by_key(|&(i, d)| (d, i))
+        .map(|(i, _)| i)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn hand_computed_scores() {
+        let b = ClassBoundaries {
+            low_m: 0.05,
+            high_m: 0.10,
+        };
+        // truth:     low low low low medium medium high
+        // predicted: low low low medium medium low high
+        let truth = [0.01, 0.02, 0.03, 0.04, 0.06, 0.07, 0.2];
+        let predicted = [0.01, 0.02, 0.03, 0.06, 0.08, 0.01, 0.15];
+        let s = classification_scores(&truth, &predicted, b).unwrap();
+        assert_eq!(s.confusion, [[3, 1, 0], [1, 1, 0], [0, 0, 1]]);
+        assert!((s.accuracy - 5.0 / 7.0).abs() < 1e-15);
+        // F1: low 2·3/(6+1+1) = 0.75, medium 2/(2+1+1) = 0.5, high 1.
+        assert!((s.macro_f1 - (0.75 + 0.5 + 1.0) / 3.0).abs() < 1e-15);
+        // Sensitivity: 3/4, 1/2, 1. Specificity: low 2/3 (tn 2, fp 1), medium 4/5, high 6/6.
+        assert!((s.sensitivity - (0.75 + 0.5 + 1.0) / 3.0).abs() < 1e-15);
+        assert!((s.specificity - (2.0 / 3.0 + 0.8 + 1.0) / 3.0).abs() < 1e-15);
+        let perfect = classification_scores(&truth, &truth, b).unwrap();
+        assert_eq!(
+            (
+                perfect.accuracy,
+                perfect.macro_f1,
+                perfect.sensitivity,
+                perfect.specificity
+            ),
+            (1.0, 1.0, 1.0, 1.0)
+        );
+        assert!(classification_scores(&[], &[], b).is_err());
+        assert_eq!(b.classify(0.05), 1);
+        assert_eq!(b.classify(0.0999), 1);
+        assert_eq!(b.classify(0.1), 2);
+    }
+
+    #[test]
+    fn nearest_key() {
+        assert_eq!(nearest(&[10, 20, 30], 24, 5), Some(1));
+        assert_eq!(nearest(&[10, 20, 30], 25, 5), Some(1));
+        assert_eq!(nearest(&[10, 20, 30], 26, 5), Some(2));
+        assert_eq!(nearest(&[10, 20, 30], 36, 5), None);
+    }
+}
