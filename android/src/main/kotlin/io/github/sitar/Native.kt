@@ -1,0 +1,51 @@
+package io.github.sitar
+
+import java.nio.ByteBuffer
+
+/**
+ * The JNI entry points of `libsitar.so` (`Java_io_github_sitar_Native_*` in
+ * `rust/ffi/src/jni_api.rs`). Errors arrive as [SitarException]. Structs come
+ * back as flat `DoubleArray`s, decoded in `Types.kt`. Use [SitarSession].
+ */
+internal object Native {
+    init {
+        System.loadLibrary("sitar")
+    }
+
+    @JvmStatic external fun version(): String
+
+    @JvmStatic external fun sessionNew(configJson: String): Long
+    @JvmStatic external fun sessionFree(h: Long)
+    @JvmStatic external fun sessionStart(h: Long, tNs: Long, px: Double, py: Double, pz: Double, qx: Double, qy: Double, qz: Double, qw: Double)
+    @JvmStatic external fun sessionFrame(h: Long, tNs: Long, px: Double, py: Double, pz: Double, qx: Double, qy: Double, qz: Double, qw: Double): Int
+    @JvmStatic external fun sessionDepthBuffer(h: Long, buffer: ByteBuffer, width: Int, height: Int, rowStrideBytes: Int, fx: Double, fy: Double, cx: Double, cy: Double, displayRotation: Int)
+    @JvmStatic external fun sessionDepthArray(h: Long, data: ShortArray, width: Int, height: Int, rowStrideBytes: Int, fx: Double, fy: Double, cx: Double, cy: Double, displayRotation: Int)
+    @JvmStatic external fun sessionStop(h: Long, tNs: Long, px: Double, py: Double, pz: Double, qx: Double, qy: Double, qz: Double, qw: Double): DoubleArray
+    @JvmStatic external fun sessionSummary(h: Long): DoubleArray
+    @JvmStatic external fun sessionLoadResults(h: Long, csvOrJson: String)
+    @JvmStatic external fun sessionErrorAt(h: Long, tNs: Long): DoubleArray
+    @JvmStatic external fun sessionMarkers(h: Long): DoubleArray
+    @JvmStatic external fun sessionResultsUnreliable(h: Long): Boolean
+    @JvmStatic external fun sessionSubtrajectoryClass(h: Long, k: Int): Int
+    @JvmStatic external fun sessionRenderPlan(h: Long): DoubleArray
+    @JvmStatic external fun sessionTrajectoryTum(h: Long): String
+    @JvmStatic external fun sessionSave(h: Long, dir: String)
+    @JvmStatic external fun sessionLoad(dir: String): Long
+
+    @JvmStatic external fun playbackNew(configJson: String): Long
+    @JvmStatic external fun playbackLog(h: Long, tNs: Long, px: Double, py: Double, pz: Double, qx: Double, qy: Double, qz: Double, qw: Double)
+    @JvmStatic external fun playbackLen(h: Long): Long
+    @JvmStatic external fun playbackTum(h: Long): String
+    @JvmStatic external fun playbackWrite(h: Long, dir: String, index: Int): String
+    @JvmStatic external fun playbackFree(h: Long)
+
+    @JvmStatic external fun uploadStart(h: Long, recordingPath: String, optionsJson: String?): Long
+    @JvmStatic external fun uploadProgress(job: Long): DoubleArray
+    @JvmStatic external fun uploadMessage(job: Long): String
+    @JvmStatic external fun uploadServerId(job: Long): String
+    @JvmStatic external fun uploadCancel(job: Long)
+    @JvmStatic external fun uploadFree(job: Long)
+
+    /** Panics inside the library on purpose; only in builds with the `testing` feature. */
+    @JvmStatic external fun testingPanic()
+}

@@ -1,0 +1,160 @@
+package io.github.sitar
+
+import java.nio.ByteBuffer
+
+/**
+ * One recording session on the user's AR device: record (start, frame,
+ * depth, stop), upload, then visualise results (error at a time, markers,
+ * render plan). Every method throws [SitarException] on error; after
+ * [close] every call throws one with code [SitarException.INVALID_HANDLE].
+ * Safe to use from several threads.
+ */
+class SitarSession private constructor(handle: Long) : AutoCloseable {
+    @Volatile private var handle: Long = handle
+
+    /** A new session from its JSON config (every key optional; "{}" = defaults). */
+    constructor(configJson: String = "{}") : this(Native.sessionNew(configJson))
+
+    /** Starts recording (frame 0). */
+    fun start(tNs: Long, pose: Pose) = Native.sessionStart(handle, tNs, pose.px, pose.py, pose.pz, pose.qx, pose.qy, pose.qz, pose.qw)
+
+    /** One camera frame; returns flags ([MIDPOINT]: give depth now, [ENDPOINT]). */
+    fun frame(tNs: Long, pose: Pose): Int = frame(tNs, pose.px, pose.py, pose.pz, pose.qx, pose.qy, pose.qz, pose.qw)
+
+    /** Allocation-free variant of [frame] for the per-frame path. */
+    fun frame(tNs: Long, px: Double, py: Double, pz: Double, qx: Double, qy: Double, qz: Double, qw: Double): Int =
+        Native.sessionFrame(handle, tNs, px, py, pz, qx, qy, qz, qw)
+
+    /**
+     * The depth image (16-bit millimetres, sensor orientation) for the last
+     * midpoint, from a *direct* buffer such as ARCore's `Image.planes[0].buffer`.
+     * [displayRotation] is 0, 90, 180 or 270 (clockwise, sensor to display).
+     */
+    fun depth(buffer: ByteBuffer, width: Int, height: Int, rowStrideBytes: Int, k: Intrinsics, displayRotation: Int) =
+        Native.sessionDepthBuffer(handle, buffer, width, height, rowStrideBytes, k.fx, k.fy, k.cx, k.cy, displayRotation)
+
+    /** As [depth] with the samples in a `ShortArray` (row stride in bytes). */
+    fun depth(data: ShortArray, width: Int, height: Int, rowStrideBytes: Int, k: Intrinsics, displayRotation: Int) =
+        Native.sessionDepthArray(handle, data, width, height, rowStrideBytes, k.fx, k.fy, k.cx, k.cy, displayRotation)
+
+    /** Stops recording. */
+    fun stop(tNs: Long, pose: Pose): Summary =
+        Summary.of(Native.sessionStop(handle, tNs, pose.px, pose.py, pose.pz, pose.qx, pose.qy, pose.qz, pose.qw))
+
+    /** The summary of a stopped recording. */
+    fun summary(): Summary = Summary.of(Native.sessionSummary(handle))
+
+    /** Loads results: legacy CSV (`start,error`) or JSON. */
+    fun loadResults(csvOrJson: String) = Native.sessionLoadResults(handle, csvOrJson)
+
+    /** Class and error at a timestamp (nearest result window within tolerance). */
+    fun errorAt(tNs: Long): ErrorAt {
+        val v = Native.sessionErrorAt(handle, tNs)
+        return ErrorAt(ErrorClass.of(v[0].toInt()), if (v[1].isNaN()) null else v[1])
+    }
+
+    /** The class of sub-trajectory [k]. */
+    fun subtrajectoryClass(k: Int): ErrorClass = ErrorClass.of(Native.sessionSubtrajectoryClass(handle, k))
+
+    /** The markers (needs results). */
+    fun markers(): List<Marker> {
+        val v = Native.sessionMarkers(handle)
+        return (0 until v.size / Marker.STRIDE).map { Marker.at(v, it * Marker.STRIDE) }
+    }
+
+    /** Whether the loaded results are too noisy to trust (show a warning). */
+    fun resultsUnreliable(): Boolean = Native.sessionResultsUnreliable(handle)
+
+    /** What to draw: segments, joints, frustums, start and stop, each with its class. */
+    fun renderPlan(): RenderPlan = RenderPlan.of(Native.sessionRenderPlan(handle))
+
+    /** The logged poses as TUM text (integer nanoseconds). */
+    fun trajectoryTum(): String = Native.sessionTrajectoryTum(handle)
+
+    /** Saves the session folder [dir]. */
+    fun save(dir: String) = Native.sessionSave(handle, dir)
+
+    /**
+     * Uploads the recording in the background; when the server is done the
+     * results are loaded into this session ([UploadJob.progress] tells).
+     * [optionsJson]: `server_url` (else the config's), `trials`, `setting`,
+     * `playback`, `poll_interval_ms`.
+     */
+    fun upload(recordingPath: String, optionsJson: String = ""): UploadJob =
+        UploadJob(Native.uploadStart(handle, recordingPath, optionsJson))
+
+    /** Frees the native session exactly once; later calls are harmless. */
+    @Synchronized
+    override fun close() {
+        val h = handle
+        if (h != 0L) {
+            handle = 0L
+            Native.sessionFree(h)
+        }
+    }
+
+    companion object {
+        /** Frame flag: a midpoint, give the depth image now. */
+        const val MIDPOINT = 1
+        /** Frame flag: a sub-trajectory is complete. */
+        const val ENDPOINT = 2
+
+        /** The native library version. */
+        @JvmStatic fun version(): String = Native.version()
+
+        /** Loads a saved session folder. */
+        @JvmStatic fun load(dir: String): SitarSession = SitarSession(Native.sessionLoad(dir))
+    }
+}
+
+/** A background upload; [close] frees the handle and cancels a running job. */
+class UploadJob internal constructor(handle: Long) : AutoCloseable {
+    @Volatile private var handle: Long = handle
+
+    /** A snapshot (never blocks on the network). */
+    fun progress(): UploadProgress = UploadProgress.of(Native.uploadProgress(handle))
+
+    /** Why the job failed ("" otherwise). */
+    fun message(): String = Native.uploadMessage(handle)
+
+    /** The server's session id ("" until created). */
+    fun serverId(): String = Native.uploadServerId(handle)
+
+    /** Cancels: the state is [UploadState.CANCELLED] at once. */
+    fun cancel() = Native.uploadCancel(handle)
+
+    @Synchronized
+    override fun close() {
+        val h = handle
+        if (h != 0L) {
+            handle = 0L
+            Native.uploadFree(h)
+        }
+    }
+}
+
+/** The playback-device logger: logs every frame, writes `trajectory_N.txt`. */
+class PlaybackLogger(configJson: String = "{}") : AutoCloseable {
+    @Volatile private var handle: Long = Native.playbackNew(configJson)
+
+    /** Logs one frame's pose. */
+    fun log(tNs: Long, pose: Pose) = Native.playbackLog(handle, tNs, pose.px, pose.py, pose.pz, pose.qx, pose.qy, pose.qz, pose.qw)
+
+    /** Number of poses logged. */
+    val size: Long get() = Native.playbackLen(handle)
+
+    /** The poses as TUM text. */
+    fun tum(): String = Native.playbackTum(handle)
+
+    /** Writes `<dir>/trajectory_<index>.txt` and returns its path. */
+    fun write(dir: String, index: Int): String = Native.playbackWrite(handle, dir, index)
+
+    @Synchronized
+    override fun close() {
+        val h = handle
+        if (h != 0L) {
+            handle = 0L
+            Native.playbackFree(h)
+        }
+    }
+}
