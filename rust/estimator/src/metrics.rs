@@ -392,4 +392,45 @@ mod tests {
             vec![(0, 3), (3, 6), (6, 9)]
         );
     }
+
+    fn random_trajectory(seed: &[f64]) -> Trajectory {
+        let n = seed.len() / 6;
+        Trajectory {
+            stamps: (0..n as i64).collect(),
+            positions: seed
+                .chunks(6)
+                .map(|c| DVec3::new(c[0], c[1], c[2]))
+                .collect(),
+            orientations: seed
+                .chunks(6)
+                .map(|c| DQuat::from_scaled_axis(DVec3::new(c[3], c[4], c[5])))
+                .collect(),
+            time_unit: TimeUnit::Nanoseconds,
+        }
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn rpe_is_invariant_to_rigid_transforms(
+            seed_a in proptest::collection::vec(-3.0f64..3.0, 6 * 25),
+            seed_b in proptest::collection::vec(-3.0f64..3.0, 6 * 25),
+            rotation in (-3.0f64..3.0, -3.0f64..3.0, -3.0f64..3.0),
+            shift in (-50.0f64..50.0, -50.0f64..50.0, -50.0f64..50.0),
+            which in 0usize..2,
+            relation in 0usize..4,
+        ) {
+            let relation = [PoseRelation::TranslationPart, PoseRelation::RotationAngleDeg,
+                PoseRelation::RotationAngleRad, PoseRelation::FullTransformation][relation];
+            let (reference, estimate) = (random_trajectory(&seed_a), random_trajectory(&seed_b));
+            let opts = RpeOptions { pose_relation: relation, delta: 3.0, ..RpeOptions::default() };
+            let before = rpe(&reference, &estimate, &opts).unwrap();
+            let mut moved = if which == 0 { reference.clone() } else { estimate.clone() };
+            moved.transform(DQuat::from_scaled_axis(DVec3::new(rotation.0, rotation.1, rotation.2)),
+                            DVec3::new(shift.0, shift.1, shift.2), 1.0);
+            let after = if which == 0 { rpe(&moved, &estimate, &opts) } else { rpe(&reference, &moved, &opts) }.unwrap();
+            for (a, b) in before.errors.iter().zip(&after.errors) {
+                proptest::prop_assert!((a - b).abs() <= 1e-9, "{} vs {}", a, b);
+            }
+        }
+    }
 }
