@@ -196,20 +196,26 @@ pub struct PairwiseValues {
 /// Keys per aggregation block (a block's buckets stay cache-sized).
 const BLOCK: usize = 128;
 
+/// One pair's windows: runs where both trials advance frame by frame (values computed on
+/// the fly from the per-trial relative poses), plus stored values of the windows that a
+/// dropped or unmatched frame breaks.
 #[derive(Debug, Clone)]
-enum Pair {
-    /// Identical stamps: window `k` is pose `k` → `k + delta` of both trials.
-    Identity {
-        reference: usize,
-        estimate: usize,
-        windows: usize,
-    },
-    /// Associated: stored key indices (non-decreasing) and values (as float bits).
-    Stored {
-        keys: Vec<u32>,
-        values: Vec<u64>,
-        block_starts: Vec<u32>,
-    },
+struct Pair {
+    reference: usize,
+    estimate: usize,
+    /// Sorted by `reference_start`.
+    segments: Vec<Segment>,
+    irregular_keys: Vec<u32>,
+    irregular_values: Vec<u64>,
+    irregular_block_starts: Vec<u32>,
+}
+
+/// Windows `reference_start + t → +delta` against `estimate_start + t → +delta`, `t < len`.
+#[derive(Debug, Clone, Copy)]
+struct Segment {
+    reference_start: u32,
+    estimate_start: u32,
+    len: u32,
 }
 
 /// Per-trial relative poses `pose_k⁻¹ pose_{k+delta}` (struct of arrays).
@@ -233,31 +239,6 @@ impl RelativeWindows {
         Self {
             translation,
             rotation,
-        }
-    }
-
-    /// Relative pose `a → b`: precomputed when `b = a + delta`, else from the poses.
-    #[inline(always)]
-    fn pose(
-        &self,
-        trial: &Trajectory,
-        a: usize,
-        b: usize,
-        delta: usize,
-        with_rotation: bool,
-    ) -> RigidPose {
-        if b == a + delta {
-            let rotation = if with_rotation {
-                self.rotation[a]
-            } else {
-                DQuat::IDENTITY
-            };
-            RigidPose {
-                rotation,
-                translation: self.translation[a],
-            }
-        } else {
-            RigidPose::relative(trial.pose(a), trial.pose(b))
         }
     }
 }
@@ -359,14 +340,24 @@ impl PairwiseValues {
         let pairs = pair_ids
             .par_iter()
             .map(|&(i, j)| {
+                let mut pair = Pair {
+                    reference: i,
+                    estimate: j,
+                    segments: Vec::new(),
+                    irregular_keys: Vec::new(),
+                    irregular_values: Vec::new(),
+                    irregular_block_starts: Vec::new(),
+                };
                 if trials[i].stamps == trials[j].stamps {
                     // Identical stamps associate one to one (each stamp is its own nearest).
-                    let windows = trials[i].len().saturating_sub(delta);
-                    return Ok(Pair::Identity {
-                        reference: i,
-                        estimate: j,
-                        windows,
+                    let len = trials[i].len().saturating_sub(delta) as u32;
+                    pair.segments.push(Segment {
+                        reference_start: 0,
+                        estimate_start: 0,
+                        len,
                     });
+                    pair.irregular_block_starts = vec![0; blocks + 1];
+                    return Ok(pair);
                 }
                 let names = (format!("trial {i}"), format!("trial {j}"));
                 let (ids_ref, ids_est) = associate_named(
@@ -377,32 +368,43 @@ impl PairwiseValues {
                     (&names.0, &names.1),
                 )?;
                 let count = ids_ref.len().saturating_sub(delta);
-                let values = (0..count)
-                    .map(|k| {
-                        let q = relative[i].pose(
-                            &trials[i],
-                            ids_ref[k],
-                            ids_ref[k + delta],
-                            delta,
-                            with_rotation,
+                let regular = |k: usize| {
+                    ids_ref[k + delta] == ids_ref[k] + delta
+                        && ids_est[k + delta] == ids_est[k] + delta
+                };
+                let mut k = 0;
+                while k < count {
+                    if regular(k) {
+                        let start = k;
+                        k += 1;
+                        while k < count
+                            && regular(k)
+                            && ids_ref[k] == ids_ref[k - 1] + 1
+                            && ids_est[k] == ids_est[k - 1] + 1
+                        {
+                            k += 1;
+                        }
+                        pair.segments.push(Segment {
+                            reference_start: ids_ref[start] as u32,
+                            estimate_start: ids_est[start] as u32,
+                            len: (k - start) as u32,
+                        });
+                    } else {
+                        let q = RigidPose::relative(
+                            trials[i].pose(ids_ref[k]),
+                            trials[i].pose(ids_ref[k + delta]),
                         );
-                        let p = relative[j].pose(
-                            &trials[j],
-                            ids_est[k],
-                            ids_est[k + delta],
-                            delta,
-                            with_rotation,
+                        let p = RigidPose::relative(
+                            trials[j].pose(ids_est[k]),
+                            trials[j].pose(ids_est[k + delta]),
                         );
-                        value_bits(relation, q, p)
-                    })
-                    .collect();
-                let keys: Vec<u32> = ids_ref[..count].iter().map(|&a| key_of[i][a]).collect();
-                let block_starts = block_starts(&keys, blocks);
-                Ok(Pair::Stored {
-                    keys,
-                    values,
-                    block_starts,
-                })
+                        pair.irregular_keys.push(key_of[i][ids_ref[k]]);
+                        pair.irregular_values.push(value_bits(relation, q, p));
+                        k += 1;
+                    }
+                }
+                pair.irregular_block_starts = block_starts(&pair.irregular_keys, blocks);
+                Ok(pair)
             })
             .collect::<Result<Vec<_>, Error>>()?;
 
@@ -434,50 +436,58 @@ impl PairwiseValues {
                     .map(|_| Vec::with_capacity(self.pairs.len()))
                     .collect();
                 for pair in &self.pairs {
-                    match pair {
-                        Pair::Identity {
-                            reference,
-                            estimate,
-                            windows,
-                        } => {
-                            let starts = &self.trial_block_starts[*reference];
-                            let from = (starts[block] as usize).min(*windows);
-                            let to = (starts[block + 1] as usize).min(*windows);
-                            let keys = &self.key_of[*reference][from..to];
-                            let (q, p) = (&self.relative[*reference], &self.relative[*estimate]);
-                            if with_rotation {
-                                for (k, &key) in (from..to).zip(keys) {
-                                    let rq = RigidPose {
-                                        rotation: q.rotation[k],
-                                        translation: q.translation[k],
-                                    };
-                                    let rp = RigidPose {
-                                        rotation: p.rotation[k],
-                                        translation: p.translation[k],
-                                    };
-                                    buckets[key as usize - block_start]
-                                        .push(value_bits(relation, rq, rp));
-                                }
-                            } else {
-                                let pairs =
-                                    q.translation[from..to].iter().zip(&p.translation[from..to]);
-                                for ((tq, tp), &key) in pairs.zip(keys) {
-                                    let value = (*tp - *tq).length() + 0.0;
-                                    buckets[key as usize - block_start].push(value.to_bits());
-                                }
+                    let starts = &self.trial_block_starts[pair.reference];
+                    let (low, high) = (starts[block], starts[block + 1]);
+                    let keys_of_reference = &self.key_of[pair.reference];
+                    let (q, p) = (
+                        &self.relative[pair.reference],
+                        &self.relative[pair.estimate],
+                    );
+                    let first = pair
+                        .segments
+                        .partition_point(|s| s.reference_start + s.len <= low);
+                    for segment in &pair.segments[first..] {
+                        if segment.reference_start >= high {
+                            break;
+                        }
+                        let from = segment.reference_start.max(low) as usize;
+                        let to = (segment.reference_start + segment.len).min(high) as usize;
+                        let shift = segment.estimate_start as usize;
+                        let (est_from, est_to) = (
+                            from - segment.reference_start as usize + shift,
+                            to - segment.reference_start as usize + shift,
+                        );
+                        let keys = &keys_of_reference[from..to];
+                        if with_rotation {
+                            for ((a, b), &key) in (from..to).zip(est_from..est_to).zip(keys) {
+                                let rq = RigidPose {
+                                    rotation: q.rotation[a],
+                                    translation: q.translation[a],
+                                };
+                                let rp = RigidPose {
+                                    rotation: p.rotation[b],
+                                    translation: p.translation[b],
+                                };
+                                buckets[key as usize - block_start]
+                                    .push(value_bits(relation, rq, rp));
+                            }
+                        } else {
+                            let translations = q.translation[from..to]
+                                .iter()
+                                .zip(&p.translation[est_from..est_to]);
+                            for ((tq, tp), &key) in translations.zip(keys) {
+                                let value = (*tp - *tq).length() + 0.0;
+                                buckets[key as usize - block_start].push(value.to_bits());
                             }
                         }
-                        Pair::Stored {
-                            keys,
-                            values,
-                            block_starts,
-                        } => {
-                            let range =
-                                block_starts[block] as usize..block_starts[block + 1] as usize;
-                            for (&key, &value) in keys[range.clone()].iter().zip(&values[range]) {
-                                buckets[key as usize - block_start].push(value);
-                            }
-                        }
+                    }
+                    let range = pair.irregular_block_starts[block] as usize
+                        ..pair.irregular_block_starts[block + 1] as usize;
+                    for (&key, &value) in pair.irregular_keys[range.clone()]
+                        .iter()
+                        .zip(&pair.irregular_values[range])
+                    {
+                        buckets[key as usize - block_start].push(value);
                     }
                 }
                 buckets
