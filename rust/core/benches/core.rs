@@ -149,6 +149,10 @@ fn bench_markers(c: &mut Criterion) {
         b.iter(|| black_box(session.markers().unwrap()))
     });
 
+    c.bench_function("results/subtrajectory_errors_10000", |b| {
+        b.iter(|| black_box(session.subtrajectory_errors()))
+    });
+
     let candidates: Vec<MarkerCandidate> = (0..subs as u32)
         .map(|i| MarkerCandidate {
             subtrajectory: i,

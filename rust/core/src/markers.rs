@@ -71,7 +71,12 @@ pub fn warning_sign_rotation(normal: DVec3, convention: Convention) -> DQuat {
 struct SpatialHash {
     cell: f64,
     cells: HashMap<(i64, i64, i64), Vec<DVec3>, BuildHasherDefault<CellHasher>>,
+    /// Every point, for a direct scan while there are few (cheaper than 8 lookups).
+    points: Vec<DVec3>,
 }
+
+/// Up to this many points a query scans them directly instead of the cells.
+const DIRECT_SCAN: usize = 8;
 
 /// A small multiplicative hasher for integer cell keys (std's SipHash is ~5× slower here).
 #[derive(Default)]
@@ -107,6 +112,7 @@ impl SpatialHash {
         Self {
             cell,
             cells: HashMap::default(),
+            points: Vec::new(),
         }
     }
 
@@ -117,16 +123,18 @@ impl SpatialHash {
 
     fn insert(&mut self, p: DVec3) {
         self.cells.entry(self.key(p)).or_default().push(p);
+        self.points.push(p);
     }
 
     /// Whether an inserted point lies within `radius` (inclusive) of `p`.
     fn any_within(&self, p: DVec3, radius: f64) -> bool {
-        if self.cells.is_empty() {
-            return false;
+        let r2 = radius * radius;
+        if self.points.len() <= DIRECT_SCAN {
+            return self.points.iter().any(|q| q.distance_squared(p) <= r2);
         }
         let scaled = p / self.cell;
         let base = scaled.floor();
-        // Per axis, the neighbour cell on the side p is closer to (radius = cell size).
+        // Per axis, the neighbour cell on the side p is closer to (cell = 2 × radius).
         let side = |f: f64, b: f64| if f - b < 0.5 { -1 } else { 1 };
         let (bx, by, bz) = (base.x as i64, base.y as i64, base.z as i64);
         let (sx, sy, sz) = (
@@ -134,7 +142,6 @@ impl SpatialHash {
             side(scaled.y, base.y),
             side(scaled.z, base.z),
         );
-        let r2 = radius * radius;
         for dx in [0, sx] {
             for dy in [0, sy] {
                 for dz in [0, sz] {
