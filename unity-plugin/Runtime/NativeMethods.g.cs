@@ -36,7 +36,7 @@ namespace Sitar
         ///  convention). It never changes the stored message itself; "" if none yet.
         /// </summary>
         [DllImport(__DllName, EntryPoint = "sitar_last_error", CallingConvention = CallingConvention.Cdecl, ExactSpelling = true)]
-        internal static extern int sitar_last_error(byte* buf, nuint cap, nuint* out_len);
+        internal static extern int sitar_last_error(byte* buf, System.UIntPtr cap, System.UIntPtr* out_len);
 
         /// <summary>
         ///  Creates a session from a JSON config (every key optional; "" = defaults).
@@ -99,7 +99,7 @@ namespace Sitar
         ///  The markers (array-output convention; needs results loaded).
         /// </summary>
         [DllImport(__DllName, EntryPoint = "sitar_session_markers", CallingConvention = CallingConvention.Cdecl, ExactSpelling = true)]
-        internal static extern int sitar_session_markers(ulong h, SitarMarker* @out, nuint capacity, nuint* out_len);
+        internal static extern int sitar_session_markers(ulong h, SitarMarker* @out, System.UIntPtr capacity, System.UIntPtr* out_len);
 
         /// <summary>
         ///  `*out` = 1 if the loaded results are unreliable (mean error at or above
@@ -118,19 +118,19 @@ namespace Sitar
         ///  Render plan: path segments (array-output convention).
         /// </summary>
         [DllImport(__DllName, EntryPoint = "sitar_session_segments", CallingConvention = CallingConvention.Cdecl, ExactSpelling = true)]
-        internal static extern int sitar_session_segments(ulong h, SitarSegment* @out, nuint capacity, nuint* out_len);
+        internal static extern int sitar_session_segments(ulong h, SitarSegment* @out, System.UIntPtr capacity, System.UIntPtr* out_len);
 
         /// <summary>
         ///  Render plan: joints between segments (array-output convention).
         /// </summary>
         [DllImport(__DllName, EntryPoint = "sitar_session_joints", CallingConvention = CallingConvention.Cdecl, ExactSpelling = true)]
-        internal static extern int sitar_session_joints(ulong h, SitarJoint* @out, nuint capacity, nuint* out_len);
+        internal static extern int sitar_session_joints(ulong h, SitarJoint* @out, System.UIntPtr capacity, System.UIntPtr* out_len);
 
         /// <summary>
         ///  Render plan: camera frustums (array-output convention).
         /// </summary>
         [DllImport(__DllName, EntryPoint = "sitar_session_frustums", CallingConvention = CallingConvention.Cdecl, ExactSpelling = true)]
-        internal static extern int sitar_session_frustums(ulong h, SitarFrustum* @out, nuint capacity, nuint* out_len);
+        internal static extern int sitar_session_frustums(ulong h, SitarFrustum* @out, System.UIntPtr capacity, System.UIntPtr* out_len);
 
         /// <summary>
         ///  Render plan: start and stop poses. `*out_mask` bit 1 = start written,
@@ -143,7 +143,7 @@ namespace Sitar
         ///  The logged poses as TUM text (text-output convention).
         /// </summary>
         [DllImport(__DllName, EntryPoint = "sitar_session_trajectory_tum", CallingConvention = CallingConvention.Cdecl, ExactSpelling = true)]
-        internal static extern int sitar_session_trajectory_tum(ulong h, byte* buf, nuint cap, nuint* out_len);
+        internal static extern int sitar_session_trajectory_tum(ulong h, byte* buf, System.UIntPtr cap, System.UIntPtr* out_len);
 
         /// <summary>
         ///  Saves the session into folder `dir` (created if missing).
@@ -173,13 +173,13 @@ namespace Sitar
         ///  Number of poses logged.
         /// </summary>
         [DllImport(__DllName, EntryPoint = "sitar_playback_len", CallingConvention = CallingConvention.Cdecl, ExactSpelling = true)]
-        internal static extern int sitar_playback_len(ulong h, nuint* @out);
+        internal static extern int sitar_playback_len(ulong h, System.UIntPtr* @out);
 
         /// <summary>
         ///  The logged poses as TUM text (text-output convention).
         /// </summary>
         [DllImport(__DllName, EntryPoint = "sitar_playback_tum", CallingConvention = CallingConvention.Cdecl, ExactSpelling = true)]
-        internal static extern int sitar_playback_tum(ulong h, byte* buf, nuint cap, nuint* out_len);
+        internal static extern int sitar_playback_tum(ulong h, byte* buf, System.UIntPtr cap, System.UIntPtr* out_len);
 
         /// <summary>
         ///  Writes `&lt;dir&gt;/trajectory_&lt;index&gt;.txt` (creating `dir`).
@@ -212,13 +212,13 @@ namespace Sitar
         ///  Why the job failed, "" otherwise (text-output convention).
         /// </summary>
         [DllImport(__DllName, EntryPoint = "sitar_upload_message", CallingConvention = CallingConvention.Cdecl, ExactSpelling = true)]
-        internal static extern int sitar_upload_message(ulong job, byte* buf, nuint cap, nuint* out_len);
+        internal static extern int sitar_upload_message(ulong job, byte* buf, System.UIntPtr cap, System.UIntPtr* out_len);
 
         /// <summary>
         ///  The server's session id, "" until created (text-output convention).
         /// </summary>
         [DllImport(__DllName, EntryPoint = "sitar_upload_server_id", CallingConvention = CallingConvention.Cdecl, ExactSpelling = true)]
-        internal static extern int sitar_upload_server_id(ulong job, byte* buf, nuint cap, nuint* out_len);
+        internal static extern int sitar_upload_server_id(ulong job, byte* buf, System.UIntPtr cap, System.UIntPtr* out_len);
 
         /// <summary>
         ///  Cancels the job: its state is `SITAR_JOB_CANCELLED` at once.

@@ -1,0 +1,50 @@
+//! Compiles `SitarSession.cs` and the generated `NativeMethods.g.cs` with
+//! `mcs`, plus the host test main (`unity-plugin/Tests~/HostTest.cs`), and
+//! runs it with `mono` against the host-built `libsitar.so`: the same session
+//! and error cases as the Kotlin test. Skipped, loudly, where `mcs` or `mono`
+//! is missing.
+
+mod bindings_support;
+
+use std::process::Command;
+
+use bindings_support::{library_dir, run, skip, which, workspace_root};
+
+#[test]
+fn csharp_wrapper_runs_a_session_and_maps_every_error() {
+    const NAME: &str = "csharp_wrapper_runs_a_session_and_maps_every_error";
+    let Some(mcs) = which("mcs") else {
+        return skip(NAME, "`mcs` is not on PATH (Debian package `mono-mcs`)");
+    };
+    let Some(mono) = which("mono") else {
+        return skip(
+            NAME,
+            "`mono` is not on PATH (Debian package `mono-runtime`)",
+        );
+    };
+    let plugin = workspace_root().join("unity-plugin");
+    let dir = tempfile::tempdir().unwrap();
+    let exe = dir.path().join("HostTest.exe");
+    run(
+        Command::new(mcs)
+            .arg("-unsafe")
+            .arg("-warnaserror")
+            .arg(format!("-out:{}", exe.display()))
+            .arg(plugin.join("Runtime/NativeMethods.g.cs"))
+            .arg(plugin.join("Runtime/SitarSession.cs"))
+            .arg(plugin.join("Tests~/HostTest.cs")),
+        "mcs",
+    );
+    let work = dir.path().join("work");
+    std::fs::create_dir(&work).unwrap();
+    let stdout = run(
+        Command::new(mono)
+            .env("LD_LIBRARY_PATH", library_dir())
+            .arg(&exe)
+            .arg(env!("CARGO_PKG_VERSION"))
+            .arg(&work),
+        "C# host test",
+    );
+    assert!(stdout.contains("PASSED"), "{stdout}");
+    println!("{}", stdout.trim());
+}

@@ -1,0 +1,613 @@
+// SiTAR for C#: a SafeHandle-owning, exception-raising wrapper over the C ABI
+// (NativeMethods.g.cs). No UnityEngine dependency: it also runs on plain Mono
+// and .NET (the host test does). No geometry here: it all comes from the
+// native render plan and markers.
+using System;
+using System.Collections.Generic;
+using System.Runtime.ConstrainedExecution;
+using System.Runtime.InteropServices;
+using System.Text;
+
+namespace Sitar
+{
+    /// <summary>Status codes of the C ABI (SITAR_OK, SITAR_ERR_*).</summary>
+    public enum SitarErrorCode
+    {
+        Ok = 0,
+        Null = -1,
+        InvalidArgument = -2,
+        InvalidHandle = -3,
+        InvalidState = -4,
+        Parse = -5,
+        Io = -6,
+        Network = -7,
+        BufferTooSmall = -8,
+        Panic = -99,
+    }
+
+    /// <summary>An error reported by the native library; <see cref="Code"/> says which kind.</summary>
+    public sealed class SitarException : Exception
+    {
+        public SitarErrorCode Code { get; }
+
+        public SitarException(SitarErrorCode code, string message) : base(message)
+        {
+            Code = code;
+        }
+    }
+
+    /// <summary>World-from-camera pose (metres, unit quaternion) in the session's convention.</summary>
+    public struct Pose
+    {
+        public double Px, Py, Pz, Qx, Qy, Qz, Qw;
+
+        public Pose(double px, double py, double pz, double qx, double qy, double qz, double qw)
+        {
+            Px = px; Py = py; Pz = pz; Qx = qx; Qy = qy; Qz = qz; Qw = qw;
+        }
+
+        internal SitarPose ToNative()
+        {
+            return new SitarPose { px = Px, py = Py, pz = Pz, qx = Qx, qy = Qy, qz = Qz, qw = Qw };
+        }
+
+        internal static Pose FromNative(SitarPose p)
+        {
+            return new Pose(p.px, p.py, p.pz, p.qx, p.qy, p.qz, p.qw);
+        }
+
+        public override string ToString()
+        {
+            return string.Format("Pose(({0}, {1}, {2}), ({3}, {4}, {5}, {6}))", Px, Py, Pz, Qx, Qy, Qz, Qw);
+        }
+    }
+
+    /// <summary>Pinhole intrinsics of the depth image, in its pixels.</summary>
+    public struct Intrinsics
+    {
+        public double Fx, Fy, Cx, Cy;
+
+        public Intrinsics(double fx, double fy, double cx, double cy)
+        {
+            Fx = fx; Fy = fy; Cx = cx; Cy = cy;
+        }
+    }
+
+    /// <summary>Error class: 0 unknown, 1 low, 2 medium, 3 high.</summary>
+    public enum ErrorClass
+    {
+        Unknown = 0,
+        Low = 1,
+        Medium = 2,
+        High = 3,
+    }
+
+    /// <summary>What Stop reports (counting as in ARCHITECTURE.md).</summary>
+    public struct Summary
+    {
+        public uint Frames, Midpoints, Subtrajectories, DepthSamples;
+        public double DurationS, LengthM, MeanDepthM;
+
+        internal static Summary FromNative(SitarSummary s)
+        {
+            return new Summary
+            {
+                Frames = s.frames, Midpoints = s.midpoints, Subtrajectories = s.subtrajectories,
+                DepthSamples = s.depth_samples, DurationS = s.duration_s, LengthM = s.length_m, MeanDepthM = s.mean_depth_m,
+            };
+        }
+    }
+
+    /// <summary>A marker: position, warning-sign rotation (local +Y along the normal), surface normal.</summary>
+    public struct Marker
+    {
+        public double Px, Py, Pz, Qx, Qy, Qz, Qw, Nx, Ny, Nz;
+        public ErrorClass ErrorClass;
+        public uint Subtrajectory;
+        public double ErrorM;
+    }
+
+    /// <summary>A path segment: a cylinder of Length centred at C, local +Y along the path.</summary>
+    public struct Segment
+    {
+        public double Cx, Cy, Cz, Qx, Qy, Qz, Qw, Length;
+        public uint Subtrajectory;
+        public ErrorClass ErrorClass;
+    }
+
+    /// <summary>A sphere between segments.</summary>
+    public struct Joint
+    {
+        public double Px, Py, Pz;
+        public uint Subtrajectory;
+        public ErrorClass ErrorClass;
+    }
+
+    /// <summary>A camera frustum to draw.</summary>
+    public struct Frustum
+    {
+        public Pose Pose;
+        public uint Subtrajectory;
+        public ErrorClass ErrorClass;
+    }
+
+    /// <summary>Everything to draw the trajectory, each item with its class.</summary>
+    public sealed class RenderPlan
+    {
+        public Segment[] Segments;
+        public Joint[] Joints;
+        public Frustum[] Frustums;
+        public Pose? Start;
+        public Pose? Stop;
+    }
+
+    /// <summary>States of a background upload (SitarJobState).</summary>
+    public enum UploadState
+    {
+        Starting = 0,
+        Uploading = 1,
+        Playing = 2,
+        Estimating = 3,
+        Downloading = 4,
+        Done = 5,
+        Failed = 6,
+        Cancelled = 7,
+    }
+
+    /// <summary>A snapshot of an upload job.</summary>
+    public struct UploadProgress
+    {
+        public UploadState State;
+        public SitarErrorCode ErrorCode;
+        public double Progress;
+        /// <summary>Seconds to go as the server estimates; negative if unknown.</summary>
+        public double EtaS;
+        public ulong BytesSent, BytesTotal;
+        public uint TrialsDone, TrialsTotal;
+        /// <summary>Incremented whenever (progressive or final) results were loaded into the session.</summary>
+        public uint ResultsRevision;
+        public uint ResultsTrials;
+
+        public bool Finished { get { return State >= UploadState.Done; } }
+    }
+
+    /// <summary>
+    /// Owns one native handle (an id, not a pointer; it fits any platform) and
+    /// frees it exactly once, also from the finalizer.
+    /// </summary>
+    internal sealed class SitarHandle : SafeHandle
+    {
+        internal delegate int Free(ulong id);
+
+        private readonly Free free;
+        private ulong id;
+
+        internal SitarHandle(ulong id, Free free) : base(IntPtr.Zero, true)
+        {
+            this.id = id;
+            this.free = free;
+            SetHandle(new IntPtr(1));
+        }
+
+        /// <summary>The id, or 0 once closed (the native side then reports INVALID_HANDLE).</summary>
+        internal ulong Id { get { return IsClosed ? 0UL : id; } }
+
+        public override bool IsInvalid { get { return handle == IntPtr.Zero; } }
+
+        [ReliabilityContract(Consistency.WillNotCorruptState, Cer.Success)]
+        protected override bool ReleaseHandle()
+        {
+            ulong h = id;
+            id = 0;
+            return h == 0 || free(h) == 0;
+        }
+    }
+
+    internal static unsafe class Native
+    {
+        internal static void Check(int status)
+        {
+            if (status != 0)
+            {
+                throw new SitarException((SitarErrorCode)status, LastError());
+            }
+        }
+
+        internal static string LastError()
+        {
+            UIntPtr len;
+            NativeMethods.sitar_last_error(null, UIntPtr.Zero, &len);
+            byte[] buf = new byte[(int)len.ToUInt64() + 1];
+            fixed (byte* p = buf)
+            {
+                NativeMethods.sitar_last_error(p, new UIntPtr((ulong)buf.Length), &len);
+            }
+            return Encoding.UTF8.GetString(buf, 0, (int)len.ToUInt64());
+        }
+
+        /// <summary>NUL-terminated UTF-8; null stays null.</summary>
+        internal static byte[] Utf8(string s)
+        {
+            return s == null ? null : Encoding.UTF8.GetBytes(s + "\0");
+        }
+
+        internal delegate int TextCall(byte* buf, UIntPtr cap, UIntPtr* outLen);
+
+        /// <summary>Calls a text-output function, growing the buffer as needed.</summary>
+        internal static string Text(TextCall call)
+        {
+            UIntPtr len;
+            int st = call(null, UIntPtr.Zero, &len);
+            while (true)
+            {
+                if (st != (int)SitarErrorCode.BufferTooSmall) Check(st);
+                byte[] buf = new byte[(int)len.ToUInt64() + 1];
+                fixed (byte* p = buf)
+                {
+                    st = call(p, new UIntPtr((ulong)buf.Length), &len);
+                }
+                if (st == 0) return Encoding.UTF8.GetString(buf, 0, (int)len.ToUInt64());
+            }
+        }
+
+        /// <summary>Calls an array-output function with buf (null = size query) and its length as capacity.</summary>
+        internal delegate int ArrayCall<T>(T[] buf, UIntPtr* outLen);
+
+        internal static UIntPtr Cap<T>(T[] buf)
+        {
+            return new UIntPtr((ulong)(buf == null ? 0 : buf.Length));
+        }
+    }
+
+    /// <summary>
+    /// One recording session: Start, Frame (every camera frame), Depth (at
+    /// midpoints), Stop, Upload, then ErrorAt / Markers / GetRenderPlan.
+    /// Every method throws <see cref="SitarException"/> on error; after
+    /// Dispose calls throw one with code InvalidHandle. Thread-safe.
+    /// </summary>
+    public sealed unsafe class SitarSession : IDisposable
+    {
+        /// <summary>Frame flag: a midpoint, give the depth image now.</summary>
+        public const uint Midpoint = 1;
+        /// <summary>Frame flag: a sub-trajectory is complete.</summary>
+        public const uint Endpoint = 2;
+
+        private readonly SitarHandle handle;
+
+        /// <summary>A session from its JSON config (every key optional; "{}" = defaults).</summary>
+        public SitarSession(string configJson = "{}")
+        {
+            ulong h;
+            fixed (byte* c = Native.Utf8(configJson))
+            {
+                Native.Check(NativeMethods.sitar_session_new(c, &h));
+            }
+            handle = new SitarHandle(h, NativeMethods.sitar_session_free);
+        }
+
+        private SitarSession(ulong h)
+        {
+            handle = new SitarHandle(h, NativeMethods.sitar_session_free);
+        }
+
+        /// <summary>The native library version.</summary>
+        public static string Version
+        {
+            get { return Marshal.PtrToStringAnsi((IntPtr)NativeMethods.sitar_version()); }
+        }
+
+        /// <summary>Loads a saved session folder.</summary>
+        public static SitarSession Load(string dir)
+        {
+            ulong h;
+            fixed (byte* d = Native.Utf8(dir))
+            {
+                Native.Check(NativeMethods.sitar_session_load(d, &h));
+            }
+            return new SitarSession(h);
+        }
+
+        internal ulong Id { get { return handle.Id; } }
+
+        public void Start(long tNs, Pose pose)
+        {
+            SitarPose p = pose.ToNative();
+            Native.Check(NativeMethods.sitar_session_start(Id, tNs, &p));
+        }
+
+        /// <summary>One camera frame (allocation-free); returns flags (<see cref="Midpoint"/>, <see cref="Endpoint"/>).</summary>
+        public uint Frame(long tNs, Pose pose)
+        {
+            SitarPose p = pose.ToNative();
+            uint flags;
+            Native.Check(NativeMethods.sitar_session_frame(Id, tNs, &p, &flags));
+            return flags;
+        }
+
+        /// <summary>
+        /// The depth image (16-bit millimetres, sensor orientation) for the last
+        /// midpoint; <paramref name="data"/> points at (height-1)*rowStrideBytes + width*2 bytes.
+        /// </summary>
+        public void Depth(IntPtr data, int width, int height, int rowStrideBytes, Intrinsics k, int displayRotation)
+        {
+            SitarIntrinsics ki = new SitarIntrinsics { fx = k.Fx, fy = k.Fy, cx = k.Cx, cy = k.Cy };
+            Native.Check(NativeMethods.sitar_session_depth(Id, (ushort*)data, width, height, rowStrideBytes, &ki, displayRotation));
+        }
+
+        /// <summary>As <see cref="Depth(IntPtr,int,int,int,Intrinsics,int)"/> from a managed array (checked for size).</summary>
+        public void Depth(ushort[] data, int width, int height, int rowStrideBytes, Intrinsics k, int displayRotation)
+        {
+            if (data == null) throw new SitarException(SitarErrorCode.Null, "argument `data` is null");
+            long needed = width > 0 && height > 0 ? ((long)(height - 1) * rowStrideBytes + (long)width * 2) / 2 : 0;
+            if (data.LongLength < needed)
+            {
+                throw new SitarException(SitarErrorCode.InvalidArgument, string.Format(
+                    "invalid argument `data`: {0} samples; a {1}x{2} image with row stride {3} bytes needs {4}",
+                    data.LongLength, width, height, rowStrideBytes, needed));
+            }
+            fixed (ushort* p = data)
+            {
+                Depth((IntPtr)p, width, height, rowStrideBytes, k, displayRotation);
+            }
+        }
+
+        public Summary Stop(long tNs, Pose pose)
+        {
+            SitarPose p = pose.ToNative();
+            SitarSummary s;
+            Native.Check(NativeMethods.sitar_session_stop(Id, tNs, &p, &s));
+            return Summary.FromNative(s);
+        }
+
+        public Summary GetSummary()
+        {
+            SitarSummary s;
+            Native.Check(NativeMethods.sitar_session_summary(Id, &s));
+            return Summary.FromNative(s);
+        }
+
+        /// <summary>Loads results: legacy CSV (start,error) or JSON.</summary>
+        public void LoadResults(string csvOrJson)
+        {
+            fixed (byte* t = Native.Utf8(csvOrJson))
+            {
+                Native.Check(NativeMethods.sitar_session_load_results(Id, t));
+            }
+        }
+
+        /// <summary>Class and error (metres; null if no result window is near) at a timestamp.</summary>
+        public ErrorClass ErrorAt(long tNs, out double? errorM)
+        {
+            int cls;
+            double e;
+            Native.Check(NativeMethods.sitar_session_error_at(Id, tNs, &cls, &e));
+            errorM = double.IsNaN(e) ? (double?)null : e;
+            return (ErrorClass)cls;
+        }
+
+        public ErrorClass SubtrajectoryClass(uint k)
+        {
+            int cls;
+            Native.Check(NativeMethods.sitar_session_subtrajectory_class(Id, k, &cls));
+            return (ErrorClass)cls;
+        }
+
+        public bool ResultsUnreliable()
+        {
+            int v;
+            Native.Check(NativeMethods.sitar_session_results_unreliable(Id, &v));
+            return v != 0;
+        }
+
+        private static T[] Items<T>(Native.ArrayCall<T> call)
+        {
+            UIntPtr len;
+            int st = call(null, &len);
+            while (true)
+            {
+                if (st == 0) return new T[0];
+                if (st != (int)SitarErrorCode.BufferTooSmall) Native.Check(st);
+                T[] items = new T[(int)len.ToUInt64()];
+                st = call(items, &len);
+                if (st == 0) return items;
+            }
+        }
+
+        /// <summary>The markers (needs results).</summary>
+        public Marker[] Markers()
+        {
+            ulong id = Id;
+            SitarMarker[] raw = Items<SitarMarker>((b, l) => { fixed (SitarMarker* p = b) return NativeMethods.sitar_session_markers(id, p, Native.Cap(b), l); });
+            Marker[] markers = new Marker[raw.Length];
+            for (int i = 0; i < raw.Length; i++)
+            {
+                SitarMarker m = raw[i];
+                markers[i] = new Marker
+                {
+                    Px = m.px, Py = m.py, Pz = m.pz, Qx = m.qx, Qy = m.qy, Qz = m.qz, Qw = m.qw,
+                    Nx = m.nx, Ny = m.ny, Nz = m.nz, ErrorClass = (ErrorClass)m.error_class,
+                    Subtrajectory = m.subtrajectory, ErrorM = m.error_m,
+                };
+            }
+            return markers;
+        }
+
+        /// <summary>What to draw: segments, joints, frustums, start and stop.</summary>
+        public RenderPlan GetRenderPlan()
+        {
+            ulong id = Id;
+            SitarSegment[] segs = Items<SitarSegment>((b, l) => { fixed (SitarSegment* p = b) return NativeMethods.sitar_session_segments(id, p, Native.Cap(b), l); });
+            SitarJoint[] joints = Items<SitarJoint>((b, l) => { fixed (SitarJoint* p = b) return NativeMethods.sitar_session_joints(id, p, Native.Cap(b), l); });
+            SitarFrustum[] frus = Items<SitarFrustum>((b, l) => { fixed (SitarFrustum* p = b) return NativeMethods.sitar_session_frustums(id, p, Native.Cap(b), l); });
+            SitarPose start, stop;
+            uint mask;
+            Native.Check(NativeMethods.sitar_session_plan_ends(id, &start, &stop, &mask));
+            RenderPlan plan = new RenderPlan
+            {
+                Segments = new Segment[segs.Length],
+                Joints = new Joint[joints.Length],
+                Frustums = new Frustum[frus.Length],
+                Start = (mask & 1) != 0 ? Pose.FromNative(start) : (Pose?)null,
+                Stop = (mask & 2) != 0 ? Pose.FromNative(stop) : (Pose?)null,
+            };
+            for (int i = 0; i < segs.Length; i++)
+            {
+                SitarSegment s = segs[i];
+                plan.Segments[i] = new Segment
+                {
+                    Cx = s.cx, Cy = s.cy, Cz = s.cz, Qx = s.qx, Qy = s.qy, Qz = s.qz, Qw = s.qw, Length = s.length,
+                    Subtrajectory = s.subtrajectory, ErrorClass = (ErrorClass)s.error_class,
+                };
+            }
+            for (int i = 0; i < joints.Length; i++)
+            {
+                SitarJoint j = joints[i];
+                plan.Joints[i] = new Joint { Px = j.px, Py = j.py, Pz = j.pz, Subtrajectory = j.subtrajectory, ErrorClass = (ErrorClass)j.error_class };
+            }
+            for (int i = 0; i < frus.Length; i++)
+            {
+                plan.Frustums[i] = new Frustum { Pose = Pose.FromNative(frus[i].pose), Subtrajectory = frus[i].subtrajectory, ErrorClass = (ErrorClass)frus[i].error_class };
+            }
+            return plan;
+        }
+
+        /// <summary>The logged poses as TUM text (integer nanoseconds).</summary>
+        public string TrajectoryTum()
+        {
+            ulong id = Id;
+            return Native.Text((b, c, l) => NativeMethods.sitar_session_trajectory_tum(id, b, c, l));
+        }
+
+        /// <summary>Saves the session folder.</summary>
+        public void Save(string dir)
+        {
+            fixed (byte* d = Native.Utf8(dir))
+            {
+                Native.Check(NativeMethods.sitar_session_save(Id, d));
+            }
+        }
+
+        /// <summary>
+        /// Uploads the recording in the background; results are loaded into this
+        /// session when the server is done. Options JSON: server_url (else the
+        /// config's), trials, setting, playback, poll_interval_ms.
+        /// </summary>
+        public UploadJob Upload(string recordingPath, string optionsJson = null)
+        {
+            ulong job;
+            fixed (byte* r = Native.Utf8(recordingPath))
+            fixed (byte* o = Native.Utf8(optionsJson))
+            {
+                Native.Check(NativeMethods.sitar_upload_start(Id, r, o, &job));
+            }
+            return new UploadJob(job);
+        }
+
+        /// <summary>Frees the native session exactly once; calling it again is harmless.</summary>
+        public void Dispose()
+        {
+            handle.Dispose();
+        }
+    }
+
+    /// <summary>A background upload; Dispose frees the handle and cancels a running job.</summary>
+    public sealed unsafe class UploadJob : IDisposable
+    {
+        private readonly SitarHandle handle;
+
+        internal UploadJob(ulong id)
+        {
+            handle = new SitarHandle(id, NativeMethods.sitar_upload_free);
+        }
+
+        /// <summary>A snapshot; never blocks on the network.</summary>
+        public UploadProgress Progress()
+        {
+            SitarJobProgress p;
+            Native.Check(NativeMethods.sitar_upload_progress(handle.Id, &p));
+            return new UploadProgress
+            {
+                State = (UploadState)p.state, ErrorCode = (SitarErrorCode)p.error_code, Progress = p.progress,
+                EtaS = p.eta_s, BytesSent = p.bytes_sent, BytesTotal = p.bytes_total, TrialsDone = p.trials_done,
+                TrialsTotal = p.trials_total, ResultsRevision = p.results_revision, ResultsTrials = p.results_trials,
+            };
+        }
+
+        /// <summary>Why the job failed ("" otherwise).</summary>
+        public string Message()
+        {
+            ulong id = handle.Id;
+            return Native.Text((b, c, l) => NativeMethods.sitar_upload_message(id, b, c, l));
+        }
+
+        /// <summary>The server's session id ("" until created).</summary>
+        public string ServerId()
+        {
+            ulong id = handle.Id;
+            return Native.Text((b, c, l) => NativeMethods.sitar_upload_server_id(id, b, c, l));
+        }
+
+        /// <summary>Cancels: the state is Cancelled at once.</summary>
+        public void Cancel()
+        {
+            Native.Check(NativeMethods.sitar_upload_cancel(handle.Id));
+        }
+
+        public void Dispose()
+        {
+            handle.Dispose();
+        }
+    }
+
+    /// <summary>The playback-device logger: logs every frame, writes trajectory_N.txt.</summary>
+    public sealed unsafe class PlaybackLogger : IDisposable
+    {
+        private readonly SitarHandle handle;
+
+        public PlaybackLogger(string configJson = "{}")
+        {
+            ulong h;
+            fixed (byte* c = Native.Utf8(configJson))
+            {
+                Native.Check(NativeMethods.sitar_playback_new(c, &h));
+            }
+            handle = new SitarHandle(h, NativeMethods.sitar_playback_free);
+        }
+
+        public void Log(long tNs, Pose pose)
+        {
+            SitarPose p = pose.ToNative();
+            Native.Check(NativeMethods.sitar_playback_log(handle.Id, tNs, &p));
+        }
+
+        public ulong Count
+        {
+            get
+            {
+                UIntPtr n;
+                Native.Check(NativeMethods.sitar_playback_len(handle.Id, &n));
+                return n.ToUInt64();
+            }
+        }
+
+        public string Tum()
+        {
+            ulong id = handle.Id;
+            return Native.Text((b, c, l) => NativeMethods.sitar_playback_tum(id, b, c, l));
+        }
+
+        /// <summary>Writes dir/trajectory_index.txt (creating dir).</summary>
+        public void Write(string dir, uint index)
+        {
+            fixed (byte* d = Native.Utf8(dir))
+            {
+                Native.Check(NativeMethods.sitar_playback_write(handle.Id, d, index));
+            }
+        }
+
+        public void Dispose()
+        {
+            handle.Dispose();
+        }
+    }
+}

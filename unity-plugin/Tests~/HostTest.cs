@@ -1,0 +1,217 @@
+// Host test of SitarSession.cs + NativeMethods.g.cs against the host-built
+// libsitar.so (run by tests/tests/bindings_csharp.rs with mcs + mono): a whole
+// session and every error path. Unity ignores this folder (its name ends in ~).
+// Args: <expected version> <temp dir>. Prints "PASSED n checks" on success.
+using System;
+using System.IO;
+using System.Linq;
+using System.Net;
+using System.Net.Sockets;
+using System.Threading;
+using Sitar;
+
+static class HostTest
+{
+    static int checks;
+    const long FrameNs = 33333333;
+    const double StepM = 0.1;
+    static readonly double[] Errors = { 0.01, 0.12, 0.06, 0.01, 0.2, 0.03 };
+    const int W = 160, H = 120;
+    static readonly Intrinsics K = new Intrinsics(150, 150, 80, 60);
+
+    static void Check(bool condition, string what)
+    {
+        checks++;
+        if (!condition) throw new Exception("check failed: " + what);
+    }
+
+    static void Near(double a, double b, string what, double eps = 1e-9)
+    {
+        Check(Math.Abs(a - b) <= eps, what + ": " + a + " vs " + b);
+    }
+
+    static void ExpectSitar(SitarErrorCode code, string needle, Action action)
+    {
+        try
+        {
+            action();
+        }
+        catch (SitarException e)
+        {
+            Check(e.Code == code, "expected " + code + ", got " + e.Code + ": " + e.Message);
+            Check(e.Message.Contains(needle), "message '" + e.Message + "' should mention '" + needle + "'");
+            return;
+        }
+        throw new Exception("expected SitarException(" + code + ") mentioning '" + needle + "'");
+    }
+
+    static Pose PoseAt(long frame)
+    {
+        return new Pose(frame * StepM, 1.5, 0, 0, 0, 0, 1);
+    }
+
+    static ErrorClass ClassOf(double e)
+    {
+        return e >= 0.10 ? ErrorClass.High : e >= 0.05 ? ErrorClass.Medium : ErrorClass.Low;
+    }
+
+    static string ResultsCsv()
+    {
+        var sb = new System.Text.StringBuilder("start,error\n");
+        for (int k = 0; k < Errors.Length; k++) sb.Append(10L * k * FrameNs).Append(',').Append(Errors[k].ToString(System.Globalization.CultureInfo.InvariantCulture)).Append('\n');
+        return sb.ToString();
+    }
+
+    static Summary Record(SitarSession s)
+    {
+        var depth = Enumerable.Repeat((ushort)2000, W * H).ToArray();
+        s.Start(0, PoseAt(0));
+        for (long i = 1; i <= 60; i++)
+        {
+            uint flags = s.Frame(i * FrameNs, PoseAt(i));
+            uint expected = i % 10 == 5 ? SitarSession.Midpoint : i % 10 == 0 ? SitarSession.Endpoint : 0u;
+            Check(flags == expected, "flags of frame " + i + ": " + flags);
+            if (flags == SitarSession.Midpoint) s.Depth(depth, W, H, W * 2, K, 0);
+        }
+        return s.Stop(61 * FrameNs, PoseAt(61));
+    }
+
+    static void WholeSession(string tmp)
+    {
+        var s = new SitarSession("{\"convention\":\"unity\"}");
+        Summary sum = Record(s);
+        Check(sum.Frames == 60 && sum.Midpoints == 6 && sum.Subtrajectories == 6 && sum.DepthSamples == 6, "counts");
+        Near(sum.DurationS, 61.0 * FrameNs / 1e9, "duration");
+        Near(sum.LengthM, 6.1, "length", 1e-12);
+        Near(sum.MeanDepthM, 2.0, "mean depth");
+        Check(s.GetSummary().Equals(sum), "summary again");
+
+        ExpectSitar(SitarErrorCode.InvalidState, "", () => s.Markers());
+        double? err;
+        Check(s.ErrorAt(10 * FrameNs, out err) == ErrorClass.Unknown && err == null, "no results yet");
+
+        s.LoadResults(ResultsCsv());
+        for (int k = 0; k < Errors.Length; k++)
+        {
+            Check(s.ErrorAt(10L * k * FrameNs, out err) == ClassOf(Errors[k]) && err == Errors[k], "errorAt sub " + k);
+            Check(s.SubtrajectoryClass((uint)k) == ClassOf(Errors[k]), "class of sub " + k);
+        }
+        Check(s.ErrorAt(1000 * FrameNs, out err) == ErrorClass.Unknown && err == null, "far from any window");
+        Check(!s.ResultsUnreliable(), "reliable");
+
+        Marker[] markers = s.Markers().OrderBy(m => m.Subtrajectory).ToArray();
+        Check(markers.Select(m => m.Subtrajectory).SequenceEqual(new uint[] { 1, 2, 4 }), "marker subs");
+        foreach (Marker m in markers)
+        {
+            Check(m.ErrorM == Errors[m.Subtrajectory], "marker error");
+            Check(m.ErrorClass == ClassOf(Errors[m.Subtrajectory]), "marker class");
+            Near(m.Px, (10 * m.Subtrajectory + 5) * StepM, "marker x");
+            Near(m.Py, 1.5, "marker y");
+            Near(m.Pz, 2.0, "marker z");
+            Near(m.Nz, -1.0, "normal faces the camera");
+        }
+
+        RenderPlan plan = s.GetRenderPlan();
+        Check(plan.Segments.Length > 0, "segments");
+        foreach (Segment g in plan.Segments) Check(g.ErrorClass == ClassOf(Errors[g.Subtrajectory]), "segment class");
+        Check(plan.Start.HasValue && plan.Start.Value.Equals(PoseAt(0)), "start " + plan.Start);
+        Check(plan.Stop.HasValue && plan.Stop.Value.Equals(PoseAt(61)), "stop " + plan.Stop);
+
+        string tum = s.TrajectoryTum();
+        Check(tum.Split('\n').Count(l => l.Length > 0) == 13, "13 logged poses:\n" + tum);
+
+        string folder = Path.Combine(tmp, "csharp-session");
+        s.Save(folder);
+        using (var loaded = SitarSession.Load(folder))
+        {
+            Check(loaded.GetSummary().Equals(sum), "loaded summary");
+            Check(loaded.ErrorAt(40 * FrameNs, out err) == ErrorClass.High && err == 0.2, "loaded results");
+        }
+
+        s.Dispose();
+        s.Dispose(); // harmless
+        ExpectSitar(SitarErrorCode.InvalidHandle, "handle 0", () => s.GetSummary());
+        ExpectSitar(SitarErrorCode.InvalidHandle, "handle 0", () => s.Frame(1, PoseAt(1)));
+    }
+
+    static void ErrorPaths()
+    {
+        ExpectSitar(SitarErrorCode.Parse, "", () => new SitarSession("{"));
+        ExpectSitar(SitarErrorCode.Parse, "bogus", () => new SitarSession("{\"bogus\": 1}"));
+        ExpectSitar(SitarErrorCode.Null, "config_json", () => new SitarSession(null));
+        using (var s = new SitarSession())
+        {
+            ExpectSitar(SitarErrorCode.InvalidState, "start", () => s.Frame(FrameNs, PoseAt(1)));
+            s.Start(0, PoseAt(0));
+            ExpectSitar(SitarErrorCode.InvalidArgument, "pose", () => s.Frame(FrameNs, new Pose(double.NaN, 0, 0, 0, 0, 0, 1)));
+            for (long i = 1; i <= 5; i++) s.Frame(i * FrameNs, PoseAt(i));
+            ExpectSitar(SitarErrorCode.InvalidArgument, "needs", () => s.Depth(new ushort[W * H - 1], W, H, W * 2, K, 0));
+            ExpectSitar(SitarErrorCode.Null, "depth_mm", () => s.Depth(IntPtr.Zero, W, H, W * 2, K, 0));
+            ExpectSitar(SitarErrorCode.InvalidArgument, "45", () => s.Depth(new ushort[W * H], W, H, W * 2, K, 45));
+            ExpectSitar(SitarErrorCode.Parse, "line 2", () => s.LoadResults("start,error\n12,abc\n"));
+            ExpectSitar(SitarErrorCode.Null, "csv_or_json", () => s.LoadResults(null));
+            ExpectSitar(SitarErrorCode.Panic, "on purpose", () => Native.Check(NativeMethods.sitar_testing_panic()));
+            Check(s.Frame(6 * FrameNs, PoseAt(6)) == 0, "frame after a panic");
+        }
+        ExpectSitar(SitarErrorCode.InvalidHandle, "session handle", () => Native.Check(NativeMethods.sitar_session_free(12345)));
+    }
+
+    static void Playback(string tmp)
+    {
+        var p = new PlaybackLogger("{\"convention\":\"arcore\"}");
+        for (long i = 0; i < 3; i++) p.Log(1000 + i * FrameNs, PoseAt(i));
+        Check(p.Count == 3, "logged 3");
+        string dir = Path.Combine(tmp, "logs");
+        p.Write(dir, 4);
+        Check(File.ReadAllLines(Path.Combine(dir, "trajectory_4.txt")).Length == 3, "3 lines");
+        p.Dispose();
+        p.Dispose();
+        ExpectSitar(SitarErrorCode.InvalidHandle, "playback handle", () => p.Tum());
+    }
+
+    static void Upload(string tmp)
+    {
+        using (var s = new SitarSession())
+        {
+            string rec = Path.Combine(tmp, "rec.mp4");
+            File.WriteAllText(rec, "not really an mp4");
+            ExpectSitar(SitarErrorCode.InvalidArgument, "server_url", () => s.Upload(rec));
+            var closed = new TcpListener(IPAddress.Loopback, 0);
+            closed.Start();
+            int port = ((IPEndPoint)closed.LocalEndpoint).Port;
+            closed.Stop();
+            using (var job = s.Upload(rec, "{\"server_url\":\"http://127.0.0.1:" + port + "\",\"trials\":3}"))
+            {
+                DateTime deadline = DateTime.UtcNow.AddSeconds(60);
+                UploadProgress p = job.Progress();
+                while (!p.Finished && DateTime.UtcNow < deadline)
+                {
+                    Thread.Sleep(20);
+                    p = job.Progress();
+                }
+                Check(p.State == UploadState.Failed && p.ErrorCode == SitarErrorCode.Network, "upload to a closed port: " + p.State + " " + p.ErrorCode);
+                Check(job.Message().Contains("127.0.0.1"), job.Message());
+            }
+            var silent = new TcpListener(IPAddress.Loopback, 0);
+            silent.Start();
+            int silentPort = ((IPEndPoint)silent.LocalEndpoint).Port;
+            var job2 = s.Upload(rec, "{\"server_url\":\"http://127.0.0.1:" + silentPort + "\",\"trials\":3}");
+            job2.Cancel();
+            Check(job2.Progress().State == UploadState.Cancelled, "cancelled at once");
+            job2.Dispose();
+            job2.Dispose();
+            silent.Stop();
+        }
+    }
+
+    static int Main(string[] args)
+    {
+        Check(SitarSession.Version == args[0], "version " + SitarSession.Version);
+        WholeSession(args[1]);
+        ErrorPaths();
+        Playback(args[1]);
+        Upload(args[1]);
+        Console.WriteLine("PASSED " + checks + " checks");
+        return 0;
+    }
+}
