@@ -71,6 +71,19 @@
 //!   nearest window start within half the median frame interval.
 //! * [`RenderPlan`]: cylinders, joints, frustums every `frustum_spacing_m`, start/stop.
 //! * [`PlaybackLogger`]: the playback device's per-frame TUM log.
+//!
+//! ## Persistence
+//!
+//! [`Session::save`] writes a folder (`config.json`, `trajectory.txt` TUM in integer ns,
+//! `subtrajectories.csv` with depth/normal/error/class, `results.json`, `session.json`);
+//! [`Session::load`] reads it back exactly. The formats are documented on [`Session::save`].
+//!
+//! ## Errors
+//!
+//! Every fallible call returns [`Error`]; nothing panics on bad input. Calls in the wrong
+//! state are [`Error::InvalidState`], bad numbers [`Error::InvalidArgument`] (naming the
+//! parameter), malformed text [`Error::Parse`] (naming source, line and field), config
+//! problems [`Error::Config`] (naming the key) and unusable depth [`Error::InvalidDepth`].
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
 
