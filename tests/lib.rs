@@ -1,1 +1,212 @@
 //! Shared helpers of the cross-crate tests.
+#![allow(missing_docs)]
+
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+use sitar_server::{PlaybackKind, ServerConfig, ServerHandle};
+
+/// A `sitar-sim` demo recording written to `dir/name`.
+pub fn sim_recording(dir: &Path, name: &str, seconds: f64, seed: u64) -> PathBuf {
+    let rec = sitar_sim::Recording::demo(seconds, 30.0, seed).expect("demo recording");
+    let path = dir.join(name);
+    std::fs::write(&path, rec.to_bytes()).expect("write recording");
+    path
+}
+
+/// Server config on `data` with sim playback at `speed` times real time.
+pub fn sim_config(data: &Path, speed: f64, devices: u32) -> ServerConfig {
+    let mut config = ServerConfig::new(data);
+    config.playback = PlaybackKind::Sim;
+    config.sim.speed = speed;
+    config.sim.devices = devices;
+    config
+}
+
+pub fn start(config: ServerConfig) -> ServerHandle {
+    sitar_server::Server::spawn(config, "127.0.0.1:0".parse().unwrap()).expect("server starts")
+}
+
+pub fn client(server: &ServerHandle) -> sitar_client::Client {
+    sitar_client::Client::new(&server.url())
+        .unwrap()
+        .with_timeout(Duration::from_secs(20))
+}
+
+fn agent() -> ureq::Agent {
+    ureq::Agent::config_builder()
+        .http_status_as_error(false)
+        .timeout_global(Some(Duration::from_secs(20)))
+        .build()
+        .into()
+}
+
+/// A raw request: (status, content type, body). For what the typed client never sends.
+pub fn raw(
+    method: &str,
+    url: &str,
+    content_type: Option<&str>,
+    body: &[u8],
+    headers: &[(&str, &str)],
+) -> (u16, String, String) {
+    let agent = agent();
+    let result = match method {
+        "GET" => {
+            let mut r = agent.get(url);
+            for (k, v) in headers {
+                r = r.header(*k, *v);
+            }
+            r.call()
+        }
+        _ => {
+            let mut r = match method {
+                "PUT" => agent.put(url),
+                _ => agent.post(url),
+            };
+            if let Some(ct) = content_type {
+                r = r.header("content-type", ct);
+            }
+            for (k, v) in headers {
+                r = r.header(*k, *v);
+            }
+            r.send(body)
+        }
+    };
+    let mut response = result.expect("request goes through");
+    let status = response.status().as_u16();
+    let ct = response
+        .headers()
+        .get("content-type")
+        .and_then(|v| v.to_str().ok())
+        .unwrap_or_default()
+        .to_string();
+    let text = response.body_mut().read_to_string().unwrap_or_default();
+    (status, ct, text)
+}
+
+/// A multipart/form-data body with one file field, as Unity's `WWWForm.AddBinaryData` sends it.
+pub fn multipart(field: &str, file_name: &str, data: &[u8]) -> (String, Vec<u8>) {
+    let boundary = "----sitar-test-boundary-7MA4YWxkTrZu0gW";
+    let mut body = Vec::new();
+    body.extend_from_slice(
+        format!(
+            "--{boundary}\r\nContent-Disposition: form-data; name=\"{field}\"; filename=\"{file_name}\"\r\nContent-Type: application/octet-stream\r\n\r\n"
+        )
+        .as_bytes(),
+    );
+    body.extend_from_slice(data);
+    body.extend_from_slice(format!("\r\n--{boundary}--\r\n").as_bytes());
+    (format!("multipart/form-data; boundary={boundary}"), body)
+}
+
+/// Asserts a JSON error body `{"error":{"code","message"}}` and returns the code.
+pub fn error_code(status: u16, ct: &str, body: &str, expected: u16) -> String {
+    assert_eq!(status, expected, "body: {body}");
+    assert!(
+        ct.starts_with("application/json"),
+        "content type {ct} for {body}"
+    );
+    let v: serde_json::Value = serde_json::from_str(body).unwrap_or_else(|e| panic!("{e}: {body}"));
+    assert!(
+        v["error"]["message"]
+            .as_str()
+            .is_some_and(|m| !m.is_empty()),
+        "{body}"
+    );
+    v["error"]["code"].as_str().expect("code").to_string()
+}
+
+/// Every file under `dir`, relative, sorted.
+pub fn tree(dir: &Path) -> Vec<PathBuf> {
+    fn walk(root: &Path, dir: &Path, out: &mut Vec<PathBuf>) {
+        if let Ok(entries) = std::fs::read_dir(dir) {
+            for e in entries.flatten() {
+                let p = e.path();
+                if p.is_dir() {
+                    walk(root, &p, out);
+                } else {
+                    out.push(p.strip_prefix(root).unwrap().to_path_buf());
+                }
+            }
+        }
+    }
+    let mut out = Vec::new();
+    walk(dir, dir, &mut out);
+    out.sort();
+    out
+}
+
+/// The estimator run directly on the same trials, as TUM text like a phone sends
+/// them: the reference for the server's results.
+pub fn direct_csv(trials: &[sitar_estimator::Trajectory], setting: &str) -> String {
+    let trials: Vec<_> = trials
+        .iter()
+        .map(|t| sitar_estimator::parse_tum(&tum_text(t), "trial").unwrap())
+        .collect();
+    let options = sitar_estimator::EstimateOptions {
+        setting: setting.parse().unwrap(),
+        ..Default::default()
+    };
+    sitar_estimator::estimate(&trials, &options)
+        .unwrap()
+        .to_legacy_csv()
+}
+
+/// Asserts two results texts are equal without printing kilobytes of numbers.
+pub fn assert_same_results(got: &str, expected: &str) {
+    if got != expected {
+        let line = got.lines().zip(expected.lines()).position(|(a, b)| a != b);
+        panic!(
+            "results differ ({} vs {} lines), first difference at line {line:?}: {:?} vs {:?}",
+            got.lines().count(),
+            expected.lines().count(),
+            line.and_then(|l| got.lines().nth(l)),
+            line.and_then(|l| expected.lines().nth(l))
+        );
+    }
+}
+
+pub fn tum_text(trajectory: &sitar_estimator::Trajectory) -> String {
+    let mut out = Vec::new();
+    sitar_estimator::write_tum(trajectory, &mut out).unwrap();
+    String::from_utf8(out).unwrap()
+}
+
+/// ftyp + moov(mvhd v0): the smallest file whose mp4 header says `duration_ms`.
+pub fn minimal_mp4(duration_ms: u32) -> Vec<u8> {
+    let mut mvhd = Vec::new();
+    mvhd.extend_from_slice(&108u32.to_be_bytes());
+    mvhd.extend_from_slice(b"mvhd");
+    mvhd.extend_from_slice(&[0; 12]);
+    mvhd.extend_from_slice(&1000u32.to_be_bytes());
+    mvhd.extend_from_slice(&duration_ms.to_be_bytes());
+    mvhd.extend_from_slice(&0x0001_0000u32.to_be_bytes());
+    mvhd.extend_from_slice(&0x0100u16.to_be_bytes());
+    mvhd.extend_from_slice(&[0; 10]);
+    for m in [0x0001_0000u32, 0, 0, 0, 0x0001_0000, 0, 0, 0, 0x4000_0000] {
+        mvhd.extend_from_slice(&m.to_be_bytes());
+    }
+    mvhd.extend_from_slice(&[0; 24]);
+    mvhd.extend_from_slice(&1u32.to_be_bytes());
+    let mut out = Vec::new();
+    out.extend_from_slice(&20u32.to_be_bytes());
+    out.extend_from_slice(b"ftypisom");
+    out.extend_from_slice(&0x200u32.to_be_bytes());
+    out.extend_from_slice(b"isom");
+    out.extend_from_slice(&((8 + mvhd.len()) as u32).to_be_bytes());
+    out.extend_from_slice(b"moov");
+    out.extend_from_slice(&mvhd);
+    out
+}
+
+/// Parses a legacy CSV into (start, error) rows, checking the header.
+pub fn parse_csv(text: &str) -> Vec<(String, f64)> {
+    let mut lines = text.lines();
+    assert_eq!(lines.next(), Some("start,error"));
+    lines
+        .map(|l| {
+            let (s, e) = l.split_once(',').expect("two columns");
+            (s.to_string(), e.parse().expect("error is a number"))
+        })
+        .collect()
+}

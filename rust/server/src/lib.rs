@@ -1,2 +1,56 @@
-//! SiTAR server.
+//! The SiTAR backend: sessions, storage, playback, jobs, report.
+//!
+//! The paper's server side (section 4.2), sturdy: an axum + tokio HTTP API
+//! (versioned routes and the original Unity app's legacy routes), a SQLite
+//! database for sessions, trials, jobs and devices plus files in one data
+//! directory, uploads streamed to a temporary file and renamed when whole,
+//! server-made ids only, size limits answered with 413, JSON errors
+//! `{"error":{"code":…,"message":…}}`, and jobs that survive a restart.
+//!
+//! Playback backends implement one trait, [`Playback`]: [`SimPlayback`]
+//! replays a `sitar-sim` recording in scaled real time, [`AdbPlayback`]
+//! drives real phones, [`UploadPlayback`] takes trials from outside. Every
+//! finished trial from the 2nd on publishes a progressive estimate; with
+//! adaptive stopping a session ends early once no window's class changed over
+//! the last k trials.
+//!
+//! ```
+//! use sitar_server::{PlaybackKind, Server, ServerConfig};
+//!
+//! let dir = tempfile::tempdir()?;
+//! let mut config = ServerConfig::new(dir.path());
+//! config.playback = PlaybackKind::Sim;
+//! let server = Server::spawn(config, "127.0.0.1:0".parse()?)?;
+//! let client = sitar_client::Client::new(&server.url())?;
+//! client.health()?;
+//! // Unknown sessions are a JSON 404.
+//! let err = client.status("s0000000000000000").unwrap_err();
+//! assert_eq!(err.status(), Some(404));
+//! assert!(dir.path().join("sitar.db").is_file());
+//! server.stop();
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
 #![forbid(unsafe_code)]
+#![deny(missing_docs)]
+
+mod adb;
+mod config;
+mod db;
+mod error;
+mod estimation;
+mod files;
+mod jobs;
+mod playback;
+mod report;
+mod routes;
+mod server;
+mod state;
+
+pub use adb::{AdbPlayback, mp4_duration_s};
+pub use config::{AdbConfig, PlaybackKind, ServerConfig, SimConfig};
+pub use error::Error;
+pub use playback::{
+    DeviceInfo, Playback, PlaybackJob, PlaybackPlan, SimPlayback, TrialOutput, UploadPlayback,
+};
+pub use routes::IDEMPOTENCY_HEADER;
+pub use server::{Server, ServerHandle};

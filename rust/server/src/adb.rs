@@ -1,0 +1,438 @@
+//! Real playback phones over adb: push, start the playback app, pull `trajectory_N.txt`.
+
+use std::collections::{HashSet, VecDeque};
+use std::io::Read;
+use std::path::Path;
+use std::process::{Command, Stdio};
+use std::sync::Mutex;
+use std::time::{Duration, Instant};
+
+use crate::Error;
+use crate::config::AdbConfig;
+use crate::playback::{DeviceInfo, Playback, PlaybackJob, PlaybackPlan, TrialOutput};
+
+/// Playback on the phones `adb devices` lists. Each phone gets the recording
+/// pushed once and is started with its share of the trials
+/// (`am start -n PACKAGE/ACTIVITY --ei trials N --es recording FILE --es output DIR`);
+/// the app writes `DIR/trajectory_K.txt` (K = 0..N) after each trial and the
+/// files are pulled as they appear. A phone that disappears or misses its
+/// deadline hands its unfinished trials back to the others.
+#[derive(Debug, Clone)]
+pub struct AdbPlayback {
+    config: AdbConfig,
+}
+
+/// Runs a command with a deadline; stdout on success, an error naming the command otherwise.
+fn run(program: &Path, args: &[&str], timeout: Duration) -> Result<String, Error> {
+    let describe = || format!("{} {}", program.display(), args.join(" "));
+    let mut child = Command::new(program)
+        .args(args)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .map_err(|e| Error::Playback(format!("cannot run {}: {e}", describe())))?;
+    // Read the pipes on threads so a chatty command cannot block on a full pipe.
+    let mut stdout = child.stdout.take();
+    let mut stderr = child.stderr.take();
+    let out = std::thread::spawn(move || {
+        let mut s = String::new();
+        if let Some(p) = stdout.as_mut() {
+            let _ = p.read_to_string(&mut s);
+        }
+        s
+    });
+    let err = std::thread::spawn(move || {
+        let mut s = String::new();
+        if let Some(p) = stderr.as_mut() {
+            let _ = p.read_to_string(&mut s);
+        }
+        s
+    });
+    let started = Instant::now();
+    let status = loop {
+        match child.try_wait() {
+            Ok(Some(status)) => break status,
+            Ok(None) if started.elapsed() > timeout => {
+                let _ = child.kill();
+                let _ = child.wait();
+                return Err(Error::Playback(format!(
+                    "{} timed out after {:.0?}",
+                    describe(),
+                    timeout
+                )));
+            }
+            Ok(None) => std::thread::sleep(Duration::from_millis(5)),
+            Err(e) => return Err(Error::Playback(format!("{}: {e}", describe()))),
+        }
+    };
+    let out = out.join().unwrap_or_default();
+    let err = err.join().unwrap_or_default();
+    if !status.success() {
+        return Err(Error::Playback(format!(
+            "{} failed ({status}): {}",
+            describe(),
+            err.trim()
+        )));
+    }
+    Ok(out)
+}
+
+/// Duration of an mp4 from its header (`mvhd`), without decoding anything.
+pub fn mp4_duration_s(path: &Path) -> Result<f64, Error> {
+    let file = std::fs::File::open(path).map_err(|e| Error::io("cannot open", path, e))?;
+    let size = file
+        .metadata()
+        .map_err(|e| Error::io("cannot stat", path, e))?
+        .len();
+    let reader = mp4::Mp4Reader::read_header(std::io::BufReader::new(file), size).map_err(|e| {
+        Error::InvalidContent(format!("the recording has no readable mp4 header: {e}"))
+    })?;
+    Ok(reader.duration().as_secs_f64())
+}
+
+/// `trajectory_K.txt` → K.
+fn trajectory_number(name: &str) -> Option<usize> {
+    name.trim()
+        .strip_prefix("trajectory_")?
+        .strip_suffix(".txt")?
+        .parse()
+        .ok()
+}
+
+impl AdbPlayback {
+    /// An adb backend with the given configuration.
+    pub fn new(config: AdbConfig) -> AdbPlayback {
+        AdbPlayback { config }
+    }
+
+    fn adb(&self, args: &[&str], timeout: Duration) -> Result<String, Error> {
+        run(&self.config.adb_path, args, timeout)
+    }
+
+    fn on(&self, serial: &str, args: &[&str], timeout: Duration) -> Result<String, Error> {
+        let mut all = vec!["-s", serial];
+        all.extend_from_slice(args);
+        self.adb(&all, timeout)
+    }
+
+    /// `adb devices`, parsed: (serial, state) per attached device.
+    pub fn list(&self) -> Result<Vec<(String, String)>, Error> {
+        let out = self.adb(&["devices"], Duration::from_secs(10))?;
+        Ok(out
+            .lines()
+            .skip_while(|l| !l.starts_with("List of devices"))
+            .skip(1)
+            .filter_map(|l| {
+                let mut parts = l.split_whitespace();
+                Some((parts.next()?.to_string(), parts.next()?.to_string()))
+            })
+            .collect())
+    }
+
+    fn ready_devices(&self) -> Result<Vec<String>, Error> {
+        Ok(self
+            .list()?
+            .into_iter()
+            .filter(|(_, s)| s == "device")
+            .map(|(serial, _)| serial)
+            .collect())
+    }
+
+    fn duration_s(&self, recording: &Path) -> f64 {
+        match mp4_duration_s(recording) {
+            Ok(d) if d > 0.0 => d,
+            Ok(_) | Err(_) => self.config.fallback_duration_s,
+        }
+    }
+
+    /// One phone's loop: take a share of the queue, play it, pull results.
+    fn run_device(
+        &self,
+        serial: &str,
+        job: &PlaybackJob,
+        queue: &Mutex<VecDeque<u32>>,
+        active: &Mutex<usize>,
+        trial_s: f64,
+        sink: &(dyn Fn(TrialOutput) + Sync),
+    ) -> Result<(), Error> {
+        let cmd = Duration::from_secs(30);
+        let push = Duration::from_secs(600);
+        let dir = self.config.remote_dir.trim_end_matches('/');
+        let (remote_rec, out_dir) = (format!("{dir}/recording.mp4"), format!("{dir}/out"));
+        let recording = job.recording.to_string_lossy().into_owned();
+        self.on(serial, &["shell", "mkdir", "-p", &out_dir], cmd)?;
+        self.on(serial, &["push", &recording, &remote_rec], push)?;
+        let safe_serial: String = serial
+            .chars()
+            .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+            .collect();
+        let pull_dir = job.recording.with_file_name("adb-pull");
+        std::fs::create_dir_all(&pull_dir).map_err(|e| Error::io("cannot create", &pull_dir, e))?;
+        loop {
+            // Share: ⌈remaining / phones⌉, so D phones finish together.
+            let batch: Vec<u32> = {
+                let mut q = queue
+                    .lock()
+                    .map_err(|_| Error::Internal("queue lock".into()))?;
+                let phones = (*active.lock().map_err(|_| Error::Internal("lock".into()))?).max(1);
+                let share = q.len().div_ceil(phones);
+                q.drain(..share).collect()
+            };
+            if batch.is_empty() || job.cancelled() {
+                return Ok(());
+            }
+            let give_back = |from: usize, pulled: &HashSet<usize>| {
+                if let Ok(mut q) = queue.lock() {
+                    for (k, index) in batch.iter().enumerate().skip(from).rev() {
+                        if !pulled.contains(&k) {
+                            q.push_front(*index);
+                        }
+                    }
+                }
+            };
+            let mut pulled: HashSet<usize> = HashSet::new();
+            let outcome = (|| -> Result<(), Error> {
+                self.on(
+                    serial,
+                    &["shell", "rm", "-f", &format!("{out_dir}/trajectory_*.txt")],
+                    cmd,
+                )?;
+                let component = format!("{}/{}", self.config.package, self.config.activity);
+                let count = batch.len().to_string();
+                self.on(
+                    serial,
+                    &[
+                        "shell",
+                        "am",
+                        "start",
+                        "-n",
+                        &component,
+                        "--ei",
+                        "trials",
+                        &count,
+                        "--es",
+                        "recording",
+                        &remote_rec,
+                        "--es",
+                        "output",
+                        &out_dir,
+                    ],
+                    cmd,
+                )?;
+                let started = Instant::now();
+                while pulled.len() < batch.len() {
+                    if job.cancelled() {
+                        let _ = self.on(
+                            serial,
+                            &["shell", "am", "force-stop", &self.config.package],
+                            cmd,
+                        );
+                        return Ok(());
+                    }
+                    // Trial k is due by (k+1)·d·factor + slack.
+                    let due =
+                        trial_s * self.config.trial_timeout_factor * (pulled.len() + 1) as f64
+                            + self.config.trial_timeout_slack.as_secs_f64();
+                    if started.elapsed().as_secs_f64() > due {
+                        let _ = self.on(
+                            serial,
+                            &["shell", "am", "force-stop", &self.config.package],
+                            cmd,
+                        );
+                        return Err(Error::Playback(format!(
+                            "{serial}: trial {} not done after {due:.0} s",
+                            pulled.len()
+                        )));
+                    }
+                    std::thread::sleep(self.config.poll_interval);
+                    let listing = self.on(serial, &["shell", "ls", &out_dir], cmd)?;
+                    let mut ready: Vec<usize> = listing
+                        .split_whitespace()
+                        .filter_map(trajectory_number)
+                        .filter(|k| *k < batch.len() && !pulled.contains(k))
+                        .collect();
+                    ready.sort_unstable();
+                    for k in ready {
+                        let local = pull_dir.join(format!("{safe_serial}_{k}.txt"));
+                        let remote = format!("{out_dir}/trajectory_{k}.txt");
+                        self.on(serial, &["pull", &remote, &local.to_string_lossy()], cmd)?;
+                        let text = std::fs::read_to_string(&local)
+                            .map_err(|e| Error::io("cannot read", &local, e))?;
+                        let _ = std::fs::remove_file(&local);
+                        pulled.insert(k);
+                        sink(TrialOutput {
+                            index: batch[k],
+                            tum: text,
+                            source: format!("adb:{serial}"),
+                        });
+                    }
+                }
+                Ok(())
+            })();
+            if let Err(e) = outcome {
+                give_back(0, &pulled);
+                return Err(e);
+            }
+            if job.cancelled() {
+                return Ok(());
+            }
+        }
+    }
+}
+
+impl Playback for AdbPlayback {
+    fn name(&self) -> &'static str {
+        "adb"
+    }
+
+    fn plan(&self, recording: &Path, _trials: u32) -> Result<PlaybackPlan, Error> {
+        let devices = self.ready_devices()?;
+        if devices.is_empty() {
+            return Err(Error::Playback(
+                "no playback phone is connected (adb devices lists none ready)".into(),
+            ));
+        }
+        Ok(PlaybackPlan {
+            trial_seconds: self.duration_s(recording),
+            devices: devices.len() as u32,
+        })
+    }
+
+    fn play(&self, job: &PlaybackJob, sink: &(dyn Fn(TrialOutput) + Sync)) -> Result<(), Error> {
+        let devices = self.ready_devices()?;
+        if devices.is_empty() {
+            return Err(Error::Playback("no playback phone is connected".into()));
+        }
+        let trial_s = self.duration_s(&job.recording);
+        let queue =
+            Mutex::new((job.first_index..job.first_index + job.trials).collect::<VecDeque<u32>>());
+        let active = Mutex::new(devices.len());
+        let failures = Mutex::new(Vec::new());
+        std::thread::scope(|scope| {
+            for serial in &devices {
+                let (queue, active, failures) = (&queue, &active, &failures);
+                scope.spawn(move || {
+                    if let Err(e) = self.run_device(serial, job, queue, active, trial_s, sink) {
+                        log::warn!("adb device {serial} dropped out: {e}");
+                        if let Ok(mut a) = active.lock() {
+                            *a = a.saturating_sub(1);
+                        }
+                        if let Ok(mut f) = failures.lock() {
+                            f.push(e.to_string());
+                        }
+                    }
+                });
+            }
+        });
+        // Phones that finished before another dropped out pick up its trials.
+        loop {
+            let left = queue.lock().map(|q| q.len()).unwrap_or(0);
+            if left == 0 || job.cancelled() {
+                return Ok(());
+            }
+            let survivors = self.ready_devices().unwrap_or_default();
+            let failed_all = survivors.is_empty();
+            if failed_all {
+                let why = failures.lock().map(|f| f.join("; ")).unwrap_or_default();
+                return Err(Error::Playback(format!(
+                    "{left} trial(s) unplayed: every phone dropped out ({why})"
+                )));
+            }
+            if let Ok(mut a) = active.lock() {
+                *a = survivors.len();
+            }
+            let progress = std::thread::scope(|scope| {
+                let handles: Vec<_> = survivors
+                    .iter()
+                    .map(|serial| {
+                        let (queue, active) = (&queue, &active);
+                        scope.spawn(move || {
+                            self.run_device(serial, job, queue, active, trial_s, sink)
+                        })
+                    })
+                    .collect();
+                handles
+                    .into_iter()
+                    .any(|h| h.join().map(|r| r.is_ok()).unwrap_or(false))
+            });
+            if !progress {
+                let left = queue.lock().map(|q| q.len()).unwrap_or(0);
+                return Err(Error::Playback(format!(
+                    "{left} trial(s) unplayed: no phone could play them"
+                )));
+            }
+        }
+    }
+
+    fn devices(&self) -> Vec<DeviceInfo> {
+        match self.list() {
+            Ok(list) => list
+                .into_iter()
+                .map(|(serial, state)| DeviceInfo {
+                    serial,
+                    state,
+                    backend: "adb",
+                })
+                .collect(),
+            Err(e) => {
+                log::warn!("adb devices: {e}");
+                Vec::new()
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn trajectory_names_parse() {
+        assert_eq!(trajectory_number("trajectory_0.txt"), Some(0));
+        assert_eq!(trajectory_number("trajectory_12.txt\r"), Some(12));
+        assert_eq!(trajectory_number("trajectory_x.txt"), None);
+        assert_eq!(trajectory_number("recording.mp4"), None);
+    }
+
+    #[test]
+    fn mp4_duration_comes_from_mvhd() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("r.mp4");
+        std::fs::write(&path, minimal_mp4(1000, 2500)).unwrap();
+        assert!((mp4_duration_s(&path).unwrap() - 2.5).abs() < 1e-9);
+        std::fs::write(&path, b"not an mp4 at all").unwrap();
+        assert!(matches!(
+            mp4_duration_s(&path),
+            Err(Error::InvalidContent(_))
+        ));
+    }
+
+    /// ftyp + moov(mvhd v0) with the given timescale and duration.
+    pub(crate) fn minimal_mp4(timescale: u32, duration: u32) -> Vec<u8> {
+        let mut mvhd = Vec::new();
+        mvhd.extend_from_slice(&108u32.to_be_bytes());
+        mvhd.extend_from_slice(b"mvhd");
+        mvhd.extend_from_slice(&[0; 4]); // version 0, flags
+        mvhd.extend_from_slice(&[0; 8]); // creation, modification
+        mvhd.extend_from_slice(&timescale.to_be_bytes());
+        mvhd.extend_from_slice(&duration.to_be_bytes());
+        mvhd.extend_from_slice(&0x0001_0000u32.to_be_bytes()); // rate 1.0
+        mvhd.extend_from_slice(&0x0100u16.to_be_bytes()); // volume 1.0
+        mvhd.extend_from_slice(&[0; 10]);
+        for m in [0x0001_0000u32, 0, 0, 0, 0x0001_0000, 0, 0, 0, 0x4000_0000] {
+            mvhd.extend_from_slice(&m.to_be_bytes());
+        }
+        mvhd.extend_from_slice(&[0; 24]);
+        mvhd.extend_from_slice(&1u32.to_be_bytes());
+        let mut out = Vec::new();
+        out.extend_from_slice(&20u32.to_be_bytes());
+        out.extend_from_slice(b"ftypisom");
+        out.extend_from_slice(&0x200u32.to_be_bytes());
+        out.extend_from_slice(b"isom");
+        out.extend_from_slice(&((8 + mvhd.len()) as u32).to_be_bytes());
+        out.extend_from_slice(b"moov");
+        out.extend_from_slice(&mvhd);
+        out
+    }
+}

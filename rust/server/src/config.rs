@@ -1,0 +1,126 @@
+use std::path::PathBuf;
+use std::time::Duration;
+
+/// Which playback backend serves sessions that do not name one (legacy routes).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PlaybackKind {
+    /// Real phones over adb.
+    Adb,
+    /// The `sitar-sim` replay (demo, tests).
+    Sim,
+    /// Trials come from outside via `POST /v1/sessions/{id}/trials`.
+    Upload,
+}
+
+impl PlaybackKind {
+    /// The wire name: `adb`, `sim` or `upload`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            PlaybackKind::Adb => "adb",
+            PlaybackKind::Sim => "sim",
+            PlaybackKind::Upload => "upload",
+        }
+    }
+}
+
+impl std::str::FromStr for PlaybackKind {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "adb" => Ok(PlaybackKind::Adb),
+            "sim" => Ok(PlaybackKind::Sim),
+            "upload" => Ok(PlaybackKind::Upload),
+            other => Err(format!(
+                "unknown playback {other:?}: expected adb, sim or upload"
+            )),
+        }
+    }
+}
+
+/// Settings of the `sim` backend.
+#[derive(Debug, Clone)]
+pub struct SimConfig {
+    /// Replay speed: 1.0 is real time (a 15 s recording takes 15 s per trial), 10.0 ten times faster.
+    pub speed: f64,
+    /// Number of simulated playback phones running in parallel.
+    pub devices: u32,
+}
+
+/// Settings of the `adb` backend.
+#[derive(Debug, Clone)]
+pub struct AdbConfig {
+    /// The adb executable (a name looked up on `PATH`, or a path).
+    pub adb_path: PathBuf,
+    /// Package of the playback app.
+    pub package: String,
+    /// Activity started with `am start -n package/activity`.
+    pub activity: String,
+    /// Directory on the phone for the recording and the `trajectory_N.txt` files.
+    pub remote_dir: String,
+    /// How often the phone is asked for new trajectory files.
+    pub poll_interval: Duration,
+    /// A trial taking longer than `factor × duration + slack` counts as lost.
+    pub trial_timeout_factor: f64,
+    /// Fixed slack added to every trial's deadline.
+    pub trial_timeout_slack: Duration,
+    /// Duration to assume when the recording has no readable mp4 header.
+    pub fallback_duration_s: f64,
+}
+
+/// Everything `sitar serve` can be told.
+#[derive(Debug, Clone)]
+pub struct ServerConfig {
+    /// Where the SQLite database and all files live. Nothing is written outside it.
+    pub data_dir: PathBuf,
+    /// Backend for the legacy `POST /recording` route.
+    pub playback: PlaybackKind,
+    /// Largest accepted recording (default 2 GiB).
+    pub max_recording_bytes: u64,
+    /// Largest accepted trajectory or timestamps file (default 64 MiB).
+    pub max_trajectory_bytes: u64,
+    /// Trials for sessions created by the legacy route (default 5, the paper's).
+    pub default_trials: u32,
+    /// Statistic for legacy sessions (default `trim_mean_30`).
+    pub default_setting: String,
+    /// Adaptive stopping window when a session asks for it without one (default 3).
+    pub default_adaptive_k: u32,
+    /// Class thresholds in metres: medium from, high from (default 0.05, 0.10).
+    pub medium_threshold_m: f64,
+    /// See `medium_threshold_m`.
+    pub high_threshold_m: f64,
+    /// The `sim` backend.
+    pub sim: SimConfig,
+    /// The `adb` backend.
+    pub adb: AdbConfig,
+}
+
+impl ServerConfig {
+    /// Defaults with the given data directory.
+    pub fn new(data_dir: impl Into<PathBuf>) -> ServerConfig {
+        ServerConfig {
+            data_dir: data_dir.into(),
+            playback: PlaybackKind::Adb,
+            max_recording_bytes: 2 << 30,
+            max_trajectory_bytes: 64 << 20,
+            default_trials: 5,
+            default_setting: "trim_mean_30".to_string(),
+            default_adaptive_k: 3,
+            medium_threshold_m: 0.05,
+            high_threshold_m: 0.10,
+            sim: SimConfig {
+                speed: 1.0,
+                devices: 1,
+            },
+            adb: AdbConfig {
+                adb_path: PathBuf::from("adb"),
+                package: "org.sitar.playback".to_string(),
+                activity: ".PlaybackActivity".to_string(),
+                remote_dir: "/sdcard/sitar".to_string(),
+                poll_interval: Duration::from_millis(1000),
+                trial_timeout_factor: 2.0,
+                trial_timeout_slack: Duration::from_secs(30),
+                fallback_duration_s: 60.0,
+            },
+        }
+    }
+}

@@ -1,0 +1,110 @@
+use axum::http::StatusCode;
+use axum::response::{IntoResponse, Response};
+
+/// Everything that can go wrong in the backend.
+///
+/// Request-level variants map to a 4xx status and a JSON body
+/// `{"error":{"code":…,"message":…}}`; the rest to 5xx.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// No session (or resource) with that id: 404 `not_found`.
+    #[error("{0}")]
+    NotFound(String),
+    /// The request is malformed (bad JSON, bad multipart, missing field): 400 `bad_request`.
+    #[error("{0}")]
+    BadRequest(String),
+    /// The request body has a content type this route does not take: 415 `unsupported_media_type`.
+    #[error("{0}")]
+    UnsupportedMediaType(String),
+    /// The body is larger than the configured limit: 413 `too_large`.
+    #[error("{what} is larger than the limit of {limit} bytes")]
+    TooLarge {
+        /// What was uploaded.
+        what: &'static str,
+        /// The limit in bytes.
+        limit: u64,
+    },
+    /// The request does not fit the session's state (e.g. estimate before 2 trials): 409 `conflict`.
+    #[error("{0}")]
+    Conflict(String),
+    /// An uploaded trajectory or recording cannot be read: 422 `invalid_content`.
+    #[error("{0}")]
+    InvalidContent(String),
+    /// A file in the data directory could not be read or written: 500 `io`.
+    #[error("{context}: {source}")]
+    Io {
+        /// What was being done, with the path.
+        context: String,
+        /// The underlying error.
+        source: std::io::Error,
+    },
+    /// The SQLite database failed: 500 `database`.
+    #[error("database: {0}")]
+    Database(#[from] rusqlite::Error),
+    /// The estimator rejected the trials: 500 `estimate` (or 422 when the input is at fault).
+    #[error("estimate: {0}")]
+    Estimate(String),
+    /// A playback backend failed (adb missing, device lost, recording unreadable).
+    #[error("playback: {0}")]
+    Playback(String),
+    /// The configuration is unusable (e.g. data directory not writable, bad address).
+    #[error("configuration: {0}")]
+    Config(String),
+    /// Anything else that should not happen: 500 `internal`.
+    #[error("internal: {0}")]
+    Internal(String),
+}
+
+impl Error {
+    pub(crate) fn io(
+        context: impl Into<String>,
+        path: &std::path::Path,
+        source: std::io::Error,
+    ) -> Error {
+        Error::Io {
+            context: format!("{} {}", context.into(), path.display()),
+            source,
+        }
+    }
+
+    /// HTTP status and machine-readable code of this error.
+    pub fn status_and_code(&self) -> (StatusCode, &'static str) {
+        match self {
+            Error::NotFound(_) => (StatusCode::NOT_FOUND, "not_found"),
+            Error::BadRequest(_) => (StatusCode::BAD_REQUEST, "bad_request"),
+            Error::UnsupportedMediaType(_) => {
+                (StatusCode::UNSUPPORTED_MEDIA_TYPE, "unsupported_media_type")
+            }
+            Error::TooLarge { .. } => (StatusCode::PAYLOAD_TOO_LARGE, "too_large"),
+            Error::Conflict(_) => (StatusCode::CONFLICT, "conflict"),
+            Error::InvalidContent(_) => (StatusCode::UNPROCESSABLE_ENTITY, "invalid_content"),
+            Error::Io { .. } => (StatusCode::INTERNAL_SERVER_ERROR, "io"),
+            Error::Database(_) => (StatusCode::INTERNAL_SERVER_ERROR, "database"),
+            Error::Estimate(_) => (StatusCode::INTERNAL_SERVER_ERROR, "estimate"),
+            Error::Playback(_) => (StatusCode::INTERNAL_SERVER_ERROR, "playback"),
+            Error::Config(_) => (StatusCode::INTERNAL_SERVER_ERROR, "config"),
+            Error::Internal(_) => (StatusCode::INTERNAL_SERVER_ERROR, "internal"),
+        }
+    }
+}
+
+/// The JSON error body every failing route answers with.
+pub(crate) fn error_body(code: &str, message: &str) -> String {
+    serde_json::json!({"error": {"code": code, "message": message}}).to_string()
+}
+
+impl IntoResponse for Error {
+    fn into_response(self) -> Response {
+        let (status, code) = self.status_and_code();
+        if status.is_server_error() {
+            log::error!("{self}");
+        }
+        let mut response = (status, error_body(code, &self.to_string())).into_response();
+        response.headers_mut().insert(
+            axum::http::header::CONTENT_TYPE,
+            axum::http::HeaderValue::from_static("application/json"),
+        );
+        response
+    }
+}

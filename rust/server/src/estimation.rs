@@ -1,0 +1,147 @@
+//! The one place that calls the estimator: trial files in, published results out.
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+
+use sitar_estimator::{EstimateOptions, Setting, Thresholds, Trajectory};
+
+use crate::Error;
+
+/// Frames per sub-trajectory (the phone logs every 5th frame; a sub-trajectory spans 10).
+const SUBTRAJECTORY_FRAMES: usize = 10;
+
+/// Error class of a window, as the phone colours it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+pub(crate) enum Class {
+    Low,
+    Medium,
+    High,
+}
+
+/// One estimate, ready to publish.
+#[derive(Debug, Clone)]
+pub(crate) struct Published {
+    pub trials: u32,
+    pub csv: String,
+    pub json: String,
+    /// Class of the window of every sub-trajectory (every 10th frame of the
+    /// reference trial: what the phone colours), keyed by its start time (ns).
+    pub classes: BTreeMap<i64, Class>,
+}
+
+/// Parses a setting name, naming the accepted ones when it is wrong.
+pub(crate) fn check_setting(setting: &str) -> Result<Setting, Error> {
+    setting.parse::<Setting>().map_err(|e| {
+        Error::BadRequest(format!(
+            "setting {setting:?}: {e} (expected mean, median, trim_mean_10|20|30|40 or mean_inliers)"
+        ))
+    })
+}
+
+/// Reads and checks one TUM text; the error names `source` and the line.
+pub(crate) fn parse_trial(text: &str, source: &str) -> Result<Trajectory, Error> {
+    let traj = sitar_estimator::parse_tum(text, source)
+        .map_err(|e| Error::InvalidContent(e.to_string()))?;
+    if traj.len() < 2 {
+        return Err(Error::InvalidContent(format!(
+            "{source}: a trial needs at least 2 poses, found {}",
+            traj.len()
+        )));
+    }
+    Ok(traj)
+}
+
+/// Runs the pairwise estimate over the stored trial files. Blocking: call it
+/// from `spawn_blocking`.
+pub(crate) fn estimate_files(
+    paths: &[PathBuf],
+    setting: &str,
+    medium_m: f64,
+    high_m: f64,
+) -> Result<Published, Error> {
+    if paths.len() < 2 {
+        return Err(Error::Conflict(format!(
+            "an estimate needs at least 2 trials, the session has {}",
+            paths.len()
+        )));
+    }
+    let setting = check_setting(setting)?;
+    let trials = paths
+        .iter()
+        .map(|p| sitar_estimator::read_tum(p).map_err(|e| Error::InvalidContent(e.to_string())))
+        .collect::<Result<Vec<_>, _>>()?;
+    let options = EstimateOptions {
+        setting,
+        ..EstimateOptions::default()
+    };
+    let estimate =
+        sitar_estimator::estimate(&trials, &options).map_err(|e| Error::Estimate(e.to_string()))?;
+    let sub_starts: std::collections::HashSet<i64> = trials[0]
+        .stamps
+        .iter()
+        .step_by(SUBTRAJECTORY_FRAMES)
+        .copied()
+        .collect();
+    let classes = estimate
+        .windows
+        .iter()
+        .filter(|w| sub_starts.contains(&w.start))
+        .map(|w| {
+            let class = if w.error_m >= high_m {
+                Class::High
+            } else if w.error_m >= medium_m {
+                Class::Medium
+            } else {
+                Class::Low
+            };
+            (w.start, class)
+        })
+        .collect();
+    Ok(Published {
+        trials: paths.len() as u32,
+        csv: estimate.to_legacy_csv(),
+        json: estimate.to_json(Thresholds { medium_m, high_m }),
+        classes,
+    })
+}
+
+/// Adaptive stopping: true when the last `k + 1` estimates (so the last `k`
+/// finished trials) agree on every window's class.
+pub(crate) fn classes_stable(history: &[BTreeMap<i64, Class>], k: usize) -> bool {
+    if k == 0 || history.len() < k + 1 {
+        return false;
+    }
+    let recent = &history[history.len() - k - 1..];
+    recent.windows(2).all(|w| w[0] == w[1])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn classes(list: &[(i64, Class)]) -> BTreeMap<i64, Class> {
+        list.iter().copied().collect()
+    }
+
+    #[test]
+    fn stability_needs_k_unchanged_trials() {
+        let a = classes(&[(0, Class::Low), (10, Class::High)]);
+        let b = classes(&[(0, Class::Low), (10, Class::Medium)]);
+        assert!(!classes_stable(&[a.clone(), a.clone(), a.clone()], 3));
+        assert!(classes_stable(
+            &[a.clone(), a.clone(), a.clone(), a.clone()],
+            3
+        ));
+        assert!(!classes_stable(
+            &[a.clone(), b.clone(), a.clone(), a.clone()],
+            3
+        ));
+        assert!(classes_stable(
+            &[b.clone(), a.clone(), a.clone(), a.clone(), a.clone()],
+            3
+        ));
+        // A window that appears or vanishes is a change.
+        let c = classes(&[(0, Class::Low)]);
+        assert!(!classes_stable(&[a.clone(), a.clone(), a, c], 3));
+    }
+}
