@@ -230,7 +230,13 @@ impl Session {
                 ),
             ));
         }
-        self.frame_intervals_ns.push(t_ns - self.last_t_ns);
+        let Some(interval) = t_ns.checked_sub(self.last_t_ns) else {
+            return Err(Error::arg(
+                "t_ns",
+                "interval since the previous frame overflows i64",
+            ));
+        };
+        self.frame_intervals_ns.push(interval);
         self.length_m += pose.position.distance(self.last_position);
         self.last_position = pose.position;
         self.last_t_ns = t_ns;
@@ -363,7 +369,7 @@ impl Session {
             midpoints: self.subs.len() as u32,
             subtrajectories: self.subs.iter().filter(|s| s.end_ns.is_some()).count() as u32,
             depth_samples: valid.len() as u32,
-            duration_s: (t1 - t0) as f64 / 1e9,
+            duration_s: (i128::from(t1) - i128::from(t0)) as f64 / 1e9,
             length_m: self.length_m,
             mean_depth_m: if valid.is_empty() {
                 0.0
@@ -421,12 +427,13 @@ impl Session {
         }
         v.sort_unstable();
         let m = v.len() / 2;
+        // i128: two huge intervals must not overflow.
         let median2 = if v.len() % 2 == 1 {
-            2 * v[m]
+            2 * i128::from(v[m])
         } else {
-            v[m - 1] + v[m]
+            i128::from(v[m - 1]) + i128::from(v[m])
         };
-        median2 / 4
+        (median2 / 4) as i64
     }
 
     /// Class and error of the result window whose start is nearest to `t_ns` within the
@@ -783,6 +790,28 @@ mod tests {
         let tum = s.trajectory_tum();
         assert_eq!(tum.lines().count(), 13);
         assert!(tum.starts_with("1000 0 1.5 0 0 0 0 1\n"), "{tum}");
+    }
+
+    #[test]
+    fn extreme_timestamps_are_errors_not_overflows() {
+        let mut s = Session::new(SessionConfig::default());
+        s.start(i64::MIN, Pose::IDENTITY).unwrap();
+        assert!(matches!(
+            s.frame(i64::MAX, Pose::IDENTITY),
+            Err(Error::InvalidArgument { name: "t_ns", .. })
+        ));
+        s.frame(-1, Pose::IDENTITY).unwrap();
+        s.frame(i64::MAX - 1, Pose::IDENTITY).unwrap();
+        let summary = s.stop(i64::MAX, Pose::IDENTITY).unwrap();
+        assert_eq!(
+            summary.duration_s,
+            (i128::from(i64::MAX) - i128::from(i64::MIN)) as f64 / 1e9
+        );
+        // Intervals i64::MAX - 1 - (i64::MIN + 1) overflow no sum: median of two.
+        assert_eq!(
+            s.lookup_tolerance_ns(),
+            ((i128::from(i64::MAX - 1 - (-1)) + i128::from(-1 - i64::MIN)) / 4) as i64
+        );
     }
 
     #[test]
