@@ -1,0 +1,108 @@
+// The playback-device MonoBehaviour (replaces the original TrajectoryPlayback.cs):
+// replays the recorded mp4 through ARCore numPlaybacks times, logs the camera
+// pose every frame through libsitar, and writes trajectory_N.txt (TUM, integer
+// nanoseconds) to Application.persistentDataPath after each playback.
+using System.IO;
+using UnityEngine;
+using UnityEngine.UI;
+using UnityEngine.XR.ARFoundation;
+#if UNITY_ANDROID
+using UnityEngine.XR.ARCore;
+#endif
+
+namespace Sitar.Unity
+{
+    [RequireComponent(typeof(ARSession))]
+    public sealed class SitarPlaybackLogger : MonoBehaviour
+    {
+        [SerializeField] ARCameraManager cameraManager;
+        public Transform arCamera;
+        public Text log;
+        public int numPlaybacks = 5;
+        [Tooltip("Camera frames to wait before the first playback (the AR session must be running).")]
+        public int warmupFrames = 60;
+
+        ARSession arSession;
+        PlaybackLogger logger;
+        string mp4Path;
+        int frameCounter;
+        int playbackCount;
+        bool wasPlaying;
+
+        void Awake()
+        {
+            arSession = GetComponent<ARSession>();
+            mp4Path = Path.Combine(Application.persistentDataPath, "arcore-session.mp4");
+        }
+
+        void OnEnable()
+        {
+            if (cameraManager != null) cameraManager.frameReceived += OnCameraFrame;
+        }
+
+        void OnDisable()
+        {
+            if (cameraManager != null) cameraManager.frameReceived -= OnCameraFrame;
+        }
+
+        void OnDestroy()
+        {
+            if (logger != null) logger.Dispose();
+        }
+
+        void Say(string text)
+        {
+            if (log != null) log.text = text;
+        }
+
+        void OnCameraFrame(ARCameraFrameEventArgs args)
+        {
+#if UNITY_ANDROID
+            if (!(arSession.subsystem is ARCoreSessionSubsystem sub) || !args.timestampNs.HasValue) return;
+            frameCounter++;
+            if (frameCounter == warmupFrames)
+            {
+                if (!File.Exists(mp4Path))
+                {
+                    Say("No sequence found");
+                    return;
+                }
+                BeginPlayback(sub);
+            }
+            bool playing = sub.playbackStatus.Playing();
+            if (playing && logger != null)
+            {
+                Vector3 p = arCamera.position;
+                Quaternion q = arCamera.rotation;
+                logger.Log(args.timestampNs.Value, new Pose(p.x, p.y, p.z, q.x, q.y, q.z, q.w));
+            }
+            if (wasPlaying && sub.playbackStatus == ArPlaybackStatus.Finished)
+            {
+                playbackCount++;
+                logger.Write(Application.persistentDataPath, (uint)playbackCount);
+                logger.Dispose();
+                logger = null;
+                if (playbackCount < numPlaybacks)
+                {
+                    BeginPlayback(sub);
+                }
+                else
+                {
+                    playbackCount = 0;
+                    Say("Playback finished");
+                }
+            }
+            wasPlaying = playing;
+#endif
+        }
+
+#if UNITY_ANDROID
+        void BeginPlayback(ARCoreSessionSubsystem sub)
+        {
+            logger = new PlaybackLogger("{\"convention\":\"unity\"}");
+            sub.StartPlayback(mp4Path);
+            Say("Playback " + (playbackCount + 1) + " started");
+        }
+#endif
+    }
+}

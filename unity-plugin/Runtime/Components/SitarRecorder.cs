@@ -1,0 +1,353 @@
+// The user-device MonoBehaviour (replaces the original DrawTrajectory.cs):
+// Start/Stop buttons, ARCore recording, one Frame call per camera frame, depth
+// from AROcclusionManager CPU images at midpoints, background upload with a
+// progress text, then drawing the native render plan and markers with the
+// prefabs. No geometry here: positions, rotations, lengths and classes all
+// come from libsitar.
+using System;
+using System.Collections.Generic;
+using System.IO;
+using Unity.Collections.LowLevel.Unsafe;
+using UnityEngine;
+using UnityEngine.UI;
+using UnityEngine.XR.ARFoundation;
+using UnityEngine.XR.ARSubsystems;
+#if UNITY_ANDROID
+using UnityEngine.XR.ARCore;
+#endif
+
+namespace Sitar.Unity
+{
+    /// <summary>How results are shown (the paper's three styles).</summary>
+    public enum VisualizationStyle
+    {
+        TrajectoryOnly,
+        ExclamationPoints,
+        WarningSigns,
+    }
+
+    [RequireComponent(typeof(ARSession))]
+    public sealed class SitarRecorder : MonoBehaviour
+    {
+        [Header("AR")]
+        [SerializeField] ARCameraManager cameraManager;
+        [SerializeField] AROcclusionManager occlusionManager;
+        [Tooltip("The AR camera whose transform is the device pose.")]
+        public Transform arCamera;
+
+        [Header("Backend")]
+        public string serverUrl = "http://192.168.0.10:8000";
+        public int trials = 10;
+        public string setting = "trim_mean_30";
+        public string playback = "adb";
+
+        [Header("Prefabs (as in the original DrawTrajectory)")]
+        public GameObject startPrefab;
+        public GameObject stopPrefab;
+        public GameObject cylinderPrefab;
+        public GameObject jointPrefab;
+        public GameObject frustumPrefab;
+        [Tooltip("Exclamation point, high error.")] public GameObject errorAreaHighPrefab;
+        [Tooltip("Exclamation point, medium error.")] public GameObject errorAreaMediumPrefab;
+        [Tooltip("Warning sign, high error.")] public GameObject errorPatchHighPrefab;
+        [Tooltip("Warning sign, medium error.")] public GameObject errorPatchMediumPrefab;
+        public Material errorHigh;
+        public Material errorMedium;
+        [Tooltip("Low error; empty keeps the prefab's own material.")] public Material errorLow;
+
+        [Header("UI")]
+        public Button startButton;
+        public Button stopButton;
+        public Text status;
+        public Text trajectoryDuration;
+        public Text trajectoryLength;
+        public Text trajectoryDepth;
+        public Text trajectoryRegions;
+        [Tooltip("Shown when the results are too noisy to trust.")] public GameObject unreliableWarning;
+        public VisualizationStyle style = VisualizationStyle.WarningSigns;
+
+        ARSession arSession;
+        SitarSession session;
+        UploadJob upload;
+        string mp4Path;
+        bool recording;
+        uint drawnRevision;
+        readonly List<GameObject> spawned = new List<GameObject>();
+
+        void Awake()
+        {
+            arSession = GetComponent<ARSession>();
+            mp4Path = Path.Combine(Application.persistentDataPath, "arcore-session.mp4");
+            if (startButton != null) startButton.onClick.AddListener(StartRecording);
+            if (stopButton != null) stopButton.onClick.AddListener(StopRecording);
+            SetStatus("Press Start to record");
+        }
+
+        void OnEnable()
+        {
+            if (cameraManager != null) cameraManager.frameReceived += OnCameraFrame;
+        }
+
+        void OnDisable()
+        {
+            if (cameraManager != null) cameraManager.frameReceived -= OnCameraFrame;
+        }
+
+        void OnDestroy()
+        {
+            if (upload != null) upload.Dispose();
+            if (session != null) session.Dispose();
+        }
+
+        Pose CameraPose()
+        {
+            Vector3 p = arCamera.position;
+            Quaternion q = arCamera.rotation;
+            return new Pose(p.x, p.y, p.z, q.x, q.y, q.z, q.w);
+        }
+
+        public void StartRecording()
+        {
+            if (recording || startPending) return;
+            Clear();
+            if (upload != null) { upload.Dispose(); upload = null; }
+            if (session != null) session.Dispose();
+            session = new SitarSession("{\"convention\":\"unity\",\"server_url\":\"" + serverUrl + "\"}");
+#if UNITY_ANDROID
+            if (arSession.subsystem is ARCoreSessionSubsystem sub)
+            {
+                using (var config = new ArRecordingConfig(sub.session))
+                {
+                    config.SetMp4DatasetFilePath(sub.session, mp4Path);
+                    sub.StartRecording(config);
+                }
+            }
+#endif
+            drawnRevision = 0;
+            // Start and stop happen on the next camera frame, so all timestamps share its clock.
+            startPending = true;
+            SetStatus("Recording… walk, then press Stop");
+        }
+
+        bool startPending;
+        bool stopPending;
+
+        void OnCameraFrame(ARCameraFrameEventArgs args)
+        {
+            if (!args.timestampNs.HasValue) return;
+            long t = args.timestampNs.Value;
+            if (startPending)
+            {
+                startPending = false;
+                session.Start(t, CameraPose());
+                recording = true;
+                return;
+            }
+            if (!recording) return;
+            if (stopPending)
+            {
+                stopPending = false;
+                FinishRecording(t);
+                return;
+            }
+            try
+            {
+                uint flags = session.Frame(t, CameraPose());
+                if ((flags & SitarSession.Midpoint) != 0) GiveDepth();
+            }
+            catch (SitarException e)
+            {
+                Debug.LogWarning("SiTAR frame: " + e.Message);
+            }
+        }
+
+        /// <summary>Clockwise rotation from the (landscape) sensor image to the display.</summary>
+        static int DisplayRotation()
+        {
+            switch (Screen.orientation)
+            {
+                case ScreenOrientation.Portrait: return 90;
+                case ScreenOrientation.LandscapeRight: return 180;
+                case ScreenOrientation.PortraitUpsideDown: return 270;
+                default: return 0;
+            }
+        }
+
+        unsafe void GiveDepth()
+        {
+            if (occlusionManager == null || !occlusionManager.TryAcquireEnvironmentDepthCpuImage(out XRCpuImage image)) return;
+            using (image)
+            {
+                if (!cameraManager.TryGetIntrinsics(out XRCameraIntrinsics ci)) return;
+                // Camera intrinsics are for the camera image; scale them to the depth image.
+                double sx = (double)image.width / ci.resolution.x;
+                double sy = (double)image.height / ci.resolution.y;
+                var k = new Intrinsics(ci.focalLength.x * sx, ci.focalLength.y * sy, ci.principalPoint.x * sx, ci.principalPoint.y * sy);
+                XRCpuImage.Plane plane = image.GetPlane(0);
+                var data = (IntPtr)NativeArrayUnsafeUtility.GetUnsafeReadOnlyPtr(plane.data);
+                try
+                {
+                    session.Depth(data, image.width, image.height, plane.rowStride, k, DisplayRotation());
+                }
+                catch (SitarException e)
+                {
+                    Debug.Log("SiTAR depth sample skipped: " + e.Message);
+                }
+            }
+        }
+
+        public void StopRecording()
+        {
+            if (recording) stopPending = true;
+        }
+
+        void FinishRecording(long t)
+        {
+            recording = false;
+#if UNITY_ANDROID
+            if (arSession.subsystem is ARCoreSessionSubsystem sub) sub.StopRecording();
+#endif
+            Summary s = session.Stop(t, CameraPose());
+            if (trajectoryDuration != null) trajectoryDuration.text = s.DurationS.ToString("F1") + " s";
+            if (trajectoryLength != null) trajectoryLength.text = s.LengthM.ToString("F2") + " m";
+            if (trajectoryDepth != null) trajectoryDepth.text = s.MeanDepthM.ToString("F2") + " m";
+            session.Save(Path.Combine(Application.persistentDataPath, "sitar-session"));
+            Draw();
+            upload = session.Upload(mp4Path, "{\"trials\":" + trials + ",\"setting\":\"" + setting + "\",\"playback\":\"" + playback + "\"}");
+            SetStatus("Uploading…");
+        }
+
+        void Update()
+        {
+            if (upload == null) return;
+            UploadProgress p = upload.Progress();
+            if (p.ResultsRevision != drawnRevision)
+            {
+                drawnRevision = p.ResultsRevision;
+                Draw();
+            }
+            switch (p.State)
+            {
+                case UploadState.Failed:
+                    SetStatus("Failed: " + upload.Message());
+                    upload.Dispose();
+                    upload = null;
+                    break;
+                case UploadState.Done:
+                    SetStatus("Results ready");
+                    upload.Dispose();
+                    upload = null;
+                    break;
+                case UploadState.Cancelled:
+                    upload.Dispose();
+                    upload = null;
+                    break;
+                default:
+                    string eta = p.EtaS >= 0 ? ", about " + Mathf.CeilToInt((float)p.EtaS) + " s left" : "";
+                    SetStatus(p.State + " " + Mathf.RoundToInt((float)(p.Progress * 100)) + " % (" + p.TrialsDone + "/" + p.TrialsTotal + " trials" + eta + ")");
+                    break;
+            }
+        }
+
+        public void CancelUpload()
+        {
+            if (upload != null) upload.Cancel();
+        }
+
+        void SetStatus(string text)
+        {
+            if (status != null) status.text = text;
+        }
+
+        void Clear()
+        {
+            foreach (GameObject g in spawned) Destroy(g);
+            spawned.Clear();
+            if (unreliableWarning != null) unreliableWarning.SetActive(false);
+        }
+
+        static Vector3 V(double x, double y, double z)
+        {
+            return new Vector3((float)x, (float)y, (float)z);
+        }
+
+        static Quaternion Q(double x, double y, double z, double w)
+        {
+            return new Quaternion((float)x, (float)y, (float)z, (float)w);
+        }
+
+        Material MaterialFor(ErrorClass c)
+        {
+            switch (c)
+            {
+                case ErrorClass.High: return errorHigh;
+                case ErrorClass.Medium: return errorMedium;
+                case ErrorClass.Low: return errorLow;
+                default: return null;
+            }
+        }
+
+        GameObject Spawn(GameObject prefab, Vector3 position, Quaternion rotation, ErrorClass c)
+        {
+            if (prefab == null) return null;
+            GameObject g = Instantiate(prefab, position, rotation);
+            Material m = MaterialFor(c);
+            if (m != null)
+            {
+                foreach (Renderer r in g.GetComponentsInChildren<Renderer>()) r.sharedMaterial = m;
+            }
+            spawned.Add(g);
+            return g;
+        }
+
+        /// <summary>Draws the render plan (and markers, if results are loaded) in the chosen style.</summary>
+        public void Draw()
+        {
+            if (session == null) return;
+            Clear();
+            RenderPlan plan = session.GetRenderPlan();
+            foreach (Segment s in plan.Segments)
+            {
+                GameObject g = Spawn(cylinderPrefab, V(s.Cx, s.Cy, s.Cz), Q(s.Qx, s.Qy, s.Qz, s.Qw), s.ErrorClass);
+                // Unity's cylinder is 2 units tall along its local +Y.
+                if (g != null) g.transform.localScale = new Vector3(g.transform.localScale.x, (float)s.Length / 2, g.transform.localScale.z);
+            }
+            foreach (Joint j in plan.Joints) Spawn(jointPrefab, V(j.Px, j.Py, j.Pz), Quaternion.identity, j.ErrorClass);
+            foreach (Frustum f in plan.Frustums) Spawn(frustumPrefab, V(f.Pose.Px, f.Pose.Py, f.Pose.Pz), Q(f.Pose.Qx, f.Pose.Qy, f.Pose.Qz, f.Pose.Qw), f.ErrorClass);
+            if (plan.Start.HasValue) Spawn(startPrefab, V(plan.Start.Value.Px, plan.Start.Value.Py, plan.Start.Value.Pz), Quaternion.identity, ErrorClass.Unknown);
+            if (plan.Stop.HasValue) Spawn(stopPrefab, V(plan.Stop.Value.Px, plan.Stop.Value.Py, plan.Stop.Value.Pz), Quaternion.identity, ErrorClass.Unknown);
+
+            Marker[] markers;
+            try
+            {
+                markers = session.Markers();
+            }
+            catch (SitarException)
+            {
+                return; // no results yet
+            }
+            if (trajectoryRegions != null) trajectoryRegions.text = markers.Length.ToString();
+            if (unreliableWarning != null) unreliableWarning.SetActive(session.ResultsUnreliable());
+            if (style == VisualizationStyle.TrajectoryOnly) return;
+            foreach (Marker m in markers)
+            {
+                bool high = m.ErrorClass == ErrorClass.High;
+                if (style == VisualizationStyle.ExclamationPoints)
+                {
+                    Spawn(high ? errorAreaHighPrefab : errorAreaMediumPrefab, V(m.Px, m.Py, m.Pz), Quaternion.identity, ErrorClass.Unknown);
+                }
+                else
+                {
+                    Spawn(high ? errorPatchHighPrefab : errorPatchMediumPrefab, V(m.Px, m.Py, m.Pz), Q(m.Qx, m.Qy, m.Qz, m.Qw), ErrorClass.Unknown);
+                }
+            }
+        }
+
+        /// <summary>Switches style (e.g. from a UI dropdown) and redraws.</summary>
+        public void SetStyle(int newStyle)
+        {
+            style = (VisualizationStyle)newStyle;
+            Draw();
+        }
+    }
+}
