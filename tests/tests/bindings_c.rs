@@ -140,6 +140,7 @@ struct Api {
     upload_start: extern "C" fn(H, *const c_char, *const c_char, *mut H) -> i32,
     upload_progress: extern "C" fn(H, *mut JobProgress) -> i32,
     upload_message: extern "C" fn(H, *mut c_char, usize, *mut usize) -> i32,
+    upload_server_id: extern "C" fn(H, *mut c_char, usize, *mut usize) -> i32,
     upload_cancel: extern "C" fn(H) -> i32,
     upload_free: extern "C" fn(H) -> i32,
     testing_panic: extern "C" fn() -> i32,
@@ -186,6 +187,7 @@ fn api() -> &'static Api {
             upload_start: sym!("sitar_upload_start"),
             upload_progress: sym!("sitar_upload_progress"),
             upload_message: sym!("sitar_upload_message"),
+            upload_server_id: sym!("sitar_upload_server_id"),
             upload_cancel: sym!("sitar_upload_cancel"),
             upload_free: sym!("sitar_upload_free"),
             testing_panic: sym!("sitar_testing_panic"),
@@ -884,5 +886,121 @@ fn upload_needs_a_server_and_reports_failure_and_cancel() {
         ERR_INVALID_HANDLE,
         "upload handle",
     );
+    assert_eq!((a.session_free)(h), OK);
+}
+
+fn class_of(e: f64) -> i32 {
+    if e >= 0.10 {
+        3
+    } else if e >= 0.05 {
+        2
+    } else {
+        1
+    }
+}
+
+#[test]
+fn upload_against_a_sim_server_loads_progressive_then_final_results() {
+    let a = api();
+    let dir = tempfile::tempdir().unwrap();
+    // 6 s recording, 6 trials at 10× real time: about 0.6 s per trial.
+    let rec = sitar_tests::sim_recording(dir.path(), "walk.rec", 6.0, 11);
+    let server = sitar_tests::start(sitar_tests::sim_config(&dir.path().join("data"), 10.0, 1));
+    let h = new_session(&format!(r#"{{"server_url":"{}"}}"#, server.url()));
+    record(h);
+    let options =
+        c(r#"{"trials":6,"setting":"trim_mean_30","playback":"sim","poll_interval_ms":10}"#);
+    let mut job = 0;
+    assert_eq!(
+        (a.upload_start)(
+            h,
+            c(rec.to_str().unwrap()).as_ptr().cast(),
+            options.as_ptr().cast(),
+            &mut job
+        ),
+        OK,
+        "{}",
+        last_error()
+    );
+    let start = Instant::now();
+    let mut progressive = false;
+    let mut last = JobProgress::default();
+    let mut states = Vec::new();
+    while start.elapsed() < Duration::from_secs(120) {
+        let mut p = JobProgress::default();
+        assert_eq!((a.upload_progress)(job, &mut p), OK);
+        assert!(
+            p.progress >= last.progress - 1e-12,
+            "progress never goes back: {last:?} → {p:?}"
+        );
+        if p.results_revision > 0 && p.results_trials < 6 && p.state != 5 {
+            progressive = true;
+        }
+        if states.last() != Some(&p.state) {
+            states.push(p.state);
+        }
+        last = p;
+        if p.state >= 5 {
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    let mut len = 0;
+    let mut buf = vec![0u8; 512];
+    assert_eq!(
+        (a.upload_message)(job, buf.as_mut_ptr().cast(), buf.len(), &mut len),
+        OK
+    );
+    assert_eq!(
+        last.state,
+        5,
+        "job ended as {last:?}: {}",
+        String::from_utf8_lossy(&buf[..len])
+    );
+    assert_eq!(last.error_code, 0);
+    assert_eq!(last.progress, 1.0);
+    let size = std::fs::metadata(&rec).unwrap().len();
+    assert_eq!((last.bytes_sent, last.bytes_total), (size, size));
+    assert_eq!(
+        (last.trials_done, last.trials_total, last.results_trials),
+        (6, 6, 6)
+    );
+    assert!(
+        last.results_revision >= 2,
+        "progressive and final loads: {last:?}"
+    );
+    assert!(
+        progressive,
+        "saw results of fewer than 6 trials while playing (states {states:?})"
+    );
+    assert!(
+        states.windows(2).all(|w| w[0] < w[1]),
+        "states advance: {states:?}"
+    );
+
+    // The session now holds exactly the server's final results.
+    let mut id = vec![0u8; 256];
+    assert_eq!(
+        (a.upload_server_id)(job, id.as_mut_ptr().cast(), id.len(), &mut len),
+        OK
+    );
+    let server_id = String::from_utf8(id[..len].to_vec()).unwrap();
+    let json = sitar_tests::client(&server)
+        .results_json(&server_id)
+        .unwrap();
+    let v: serde_json::Value = serde_json::from_str(&json).unwrap();
+    let windows = v["windows"].as_array().unwrap();
+    assert!(windows.len() > 100, "{} windows", windows.len());
+    for w in windows {
+        let start = match w["start"].as_i64() {
+            Some(ns) => ns,
+            None => (w["start"].as_f64().unwrap() * 1e9).round() as i64,
+        };
+        let e = w["error_m"].as_f64().unwrap();
+        let (mut class, mut err) = (0, 0.0);
+        assert_eq!((a.error_at)(h, start, &mut class, &mut err), OK);
+        assert_eq!((class, err), (class_of(e), e), "window at {start}");
+    }
+    assert_eq!((a.upload_free)(job), OK);
     assert_eq!((a.session_free)(h), OK);
 }

@@ -223,8 +223,11 @@ fn run(shared: &Shared, client: &Client, recording: &Path, o: &UploadOptions) ->
     if shared.cancelled() {
         return Ok(());
     }
-    client.start_estimate(&id)?;
     set_state(shared, SitarJobState::SITAR_JOB_PLAYING);
+    // With "adb"/"sim" the server plays and estimates on its own (asking for an
+    // estimate would cut playback short). With "upload" the playback devices
+    // send their trials; once all are there, this job asks for the estimate.
+    let mut estimate_requested = o.playback != "upload";
     let mut loaded_trials = 0;
     loop {
         if shared.cancelled() {
@@ -251,6 +254,10 @@ fn run(shared: &Shared, client: &Client, recording: &Path, o: &UploadOptions) ->
                 )));
             }
             _ => {}
+        }
+        if !estimate_requested && st.trials_total >= 2 && st.trials_done >= st.trials_total {
+            client.start_estimate(&id)?;
+            estimate_requested = true;
         }
         if st.results_trials > loaded_trials {
             // Progressive results: a failure here is not fatal, the final fetch decides.
