@@ -427,14 +427,15 @@ impl PairwiseValues {
         let blocks = self.keys.len().div_ceil(BLOCK);
         let relation = self.pose_relation;
         let with_rotation = relation != PoseRelation::TranslationPart;
-        let windows = (0..blocks)
+        // Buckets are reused per worker thread: fresh ones for every block would be page
+        // faults all over again.
+        let per_block: Vec<Vec<WindowEstimate>> = (0..blocks)
             .into_par_iter()
-            .flat_map_iter(|block| {
+            .map_init(Vec::<Vec<u64>>::new, |buckets, block| {
                 let block_start = block * BLOCK;
                 let block_len = BLOCK.min(self.keys.len() - block_start);
-                let mut buckets: Vec<Vec<u64>> = (0..block_len)
-                    .map(|_| Vec::with_capacity(self.pairs.len()))
-                    .collect();
+                buckets.resize_with(BLOCK, || Vec::with_capacity(self.pairs.len()));
+                buckets.iter_mut().for_each(Vec::clear);
                 for pair in &self.pairs {
                     let starts = &self.trial_block_starts[pair.reference];
                     let (low, high) = (starts[block], starts[block + 1]);
@@ -490,14 +491,13 @@ impl PairwiseValues {
                         buckets[key as usize - block_start].push(value);
                     }
                 }
-                buckets
-                    .into_iter()
+                buckets[..block_len]
+                    .iter_mut()
                     .enumerate()
                     .filter(|(_, values)| !values.is_empty())
-                    .map(|(offset, mut values)| {
+                    .map(|(offset, values)| {
                         let key = block_start + offset;
-                        let (error, spread) =
-                            statistics::bits::window_statistics(&mut values, setting);
+                        let (error, spread) = statistics::bits::window_statistics(values, setting);
                         WindowEstimate {
                             start: self.keys[key],
                             end: self.ends[key],
@@ -509,6 +509,7 @@ impl PairwiseValues {
                     .collect::<Vec<_>>()
             })
             .collect();
+        let windows = per_block.into_iter().flatten().collect();
         Estimate {
             setting,
             trials: self.trials,
