@@ -121,6 +121,8 @@ pub fn align(
             estimate.len()
         )));
     }
+    estimate.validate()?;
+    reference.validate()?;
     let identity = Similarity {
         rotation: DMat3::IDENTITY,
         translation: DVec3::ZERO,

@@ -286,6 +286,11 @@ impl PairwiseValues {
         if let Some(i) = trials.iter().position(|t| t.is_empty()) {
             return Err(Error::InvalidArgument(format!("trial {i} has no poses")));
         }
+        for (i, trial) in trials.iter().enumerate() {
+            trial
+                .validate()
+                .map_err(|e| Error::InvalidArgument(format!("trial {i}: {e}")))?;
+        }
         let delta = opts.delta;
         let relation = opts.pose_relation;
         let with_rotation = relation != PoseRelation::TranslationPart;
@@ -573,5 +578,14 @@ mod tests {
     #[test]
     fn rejects_too_few_trials() {
         assert!(estimate(&[trial(20, 0.0)], &EstimateOptions::default()).is_err());
+        let mut unsorted = trial(20, 0.0);
+        unsorted.stamps.swap(3, 4);
+        assert!(matches!(
+            estimate(&[trial(20, 0.0), unsorted], &EstimateOptions::default()),
+            Err(Error::InvalidArgument(_))
+        ));
+        let mut short = trial(20, 0.0);
+        short.positions.pop();
+        assert!(estimate(&[short, trial(20, 0.0)], &EstimateOptions::default()).is_err());
     }
 }

@@ -137,6 +137,7 @@ pub fn ground_truth_errors(
             "need at least one trial for the ground-truth error".into(),
         ));
     }
+    ground_truth.validate()?;
     let rpe_opts = RpeOptions {
         pose_relation: opts.pose_relation,
         delta: opts.delta as f64,

@@ -69,6 +69,8 @@ pub fn associate(
     max_diff_s: f64,
     offset_s: f64,
 ) -> Result<(Vec<usize>, Vec<usize>), Error> {
+    traj_1.validate()?;
+    traj_2.validate()?;
     associate_named(
         traj_1,
         traj_2,
@@ -78,6 +80,7 @@ pub fn associate(
     )
 }
 
+/// [`associate`] with names for the error message; the caller has validated both.
 pub(crate) fn associate_named(
     traj_1: &Trajectory,
     traj_2: &Trajectory,

@@ -92,6 +92,39 @@ impl Trajectory {
         })
     }
 
+    /// Checks the invariants [`Trajectory::from_poses`] establishes (the fields are public):
+    /// equal lengths, strictly increasing stamps, finite positions, unit quaternions.
+    pub fn validate(&self) -> Result<(), Error> {
+        if self.stamps.len() != self.positions.len() || self.stamps.len() != self.orientations.len()
+        {
+            return Err(Error::InvalidTrajectory(format!(
+                "{} stamps, {} positions and {} orientations",
+                self.stamps.len(),
+                self.positions.len(),
+                self.orientations.len()
+            )));
+        }
+        if let Some(i) = self.stamps.windows(2).position(|w| w[1] <= w[0]) {
+            return Err(Error::InvalidTrajectory(format!(
+                "stamp {} does not increase after stamp {i}",
+                i + 1
+            )));
+        }
+        let bad =
+            |q: &DQuat| !q.is_finite() || (q.length() - 1.0).abs() > QUATERNION_NORM_TOLERANCE;
+        if let Some(i) = self.positions.iter().position(|p| !p.is_finite()) {
+            return Err(Error::InvalidTrajectory(format!(
+                "position {i} is not finite"
+            )));
+        }
+        if let Some(i) = self.orientations.iter().position(bad) {
+            return Err(Error::InvalidTrajectory(format!(
+                "orientation {i} is not a unit quaternion"
+            )));
+        }
+        Ok(())
+    }
+
     /// Number of poses.
     pub fn len(&self) -> usize {
         self.stamps.len()
