@@ -138,6 +138,11 @@ pub fn ground_truth_errors(
         ));
     }
     ground_truth.validate()?;
+    for (i, trial) in trials.iter().enumerate() {
+        trial
+            .validate()
+            .map_err(|e| Error::InvalidArgument(format!("trial {i}: {e}")))?;
+    }
     let rpe_opts = RpeOptions {
         pose_relation: opts.pose_relation,
         delta: opts.delta as f64,

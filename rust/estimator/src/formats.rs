@@ -515,4 +515,13 @@ mod tests {
         assert!(t.orientations[1].angle_between(expected) < 1e-12);
         assert!(parse_kitti("2 0 0 5 0 1 0 6 0 0 1 7\n", "k").is_err());
     }
+
+    proptest::proptest! {
+        #[test]
+        fn never_panics_on_garbage(text in "[0-9 .eE+#\\-na,\n]{0,200}") {
+            let _ = parse_tum(&text, "fuzz");
+            let _ = parse_euroc_csv(&text, "fuzz");
+            let _ = parse_kitti(&text, "fuzz");
+        }
+    }
 }

@@ -23,17 +23,18 @@ pub fn matching_time_indices(
     if n2 == 0 {
         return (ids_1, ids_2);
     }
-    let shifted = |k: usize| stamps_2[k] + offset_2_ns;
+    let shifted = |k: usize| stamps_2[k].saturating_add(offset_2_ns);
     let (first, last) = (shifted(0), shifted(n2 - 1));
     // `upper` is numpy's searchsorted(side="right"): the first k with stamps_2[k] > stamp_1.
     let mut upper = 0usize;
     let mut previous = i64::MIN;
     for (index_1, &stamp_1) in stamps_1.iter().enumerate() {
-        if stamp_1 < first - max_diff_ns || stamp_1 > last + max_diff_ns {
+        if stamp_1 < first.saturating_sub(max_diff_ns) || stamp_1 > last.saturating_add(max_diff_ns)
+        {
             continue;
         }
         if stamp_1 < previous {
-            upper = stamps_2.partition_point(|&s| s + offset_2_ns <= stamp_1);
+            upper = stamps_2.partition_point(|&s| s.saturating_add(offset_2_ns) <= stamp_1);
         } else {
             while upper < n2 && shifted(upper) <= stamp_1 {
                 upper += 1;
@@ -41,9 +42,9 @@ pub fn matching_time_indices(
         }
         previous = stamp_1;
         let k = upper.min(n2 - 1);
-        let diff_ub = shifted(k) - stamp_1;
+        let diff_ub = shifted(k).saturating_sub(stamp_1);
         let diff_lb = if k > 0 {
-            stamp_1 - shifted(k - 1)
+            stamp_1.saturating_sub(shifted(k - 1))
         } else {
             i64::MAX
         };
