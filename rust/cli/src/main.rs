@@ -7,11 +7,13 @@
 
 mod ape;
 mod compare;
+mod demo;
 mod estimate;
 mod evaluate;
 mod input;
 mod output;
 mod rpe;
+mod serve;
 mod simulate;
 
 use std::process::ExitCode;
@@ -33,6 +35,8 @@ enum Command {
     Estimate(estimate::Args),
     Evaluate(evaluate::Args),
     Simulate(simulate::Args),
+    Serve(serve::Args),
+    Demo(demo::Args),
 }
 
 fn main() -> ExitCode {
@@ -42,6 +46,8 @@ fn main() -> ExitCode {
         Command::Estimate(args) => estimate::run(args),
         Command::Evaluate(args) => evaluate::run(args),
         Command::Simulate(args) => simulate::run(args),
+        Command::Serve(args) => serve::run(args),
+        Command::Demo(args) => demo::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -42,6 +42,28 @@ impl Server {
             .map_err(|e| Error::Internal(format!("server: {e}")))
     }
 
+    /// Serves on `addr` until Ctrl-C (`sitar serve`). Blocking.
+    pub fn run(config: ServerConfig, addr: SocketAddr) -> Result<(), Error> {
+        let server = Server::open(config)?;
+        let runtime = tokio::runtime::Builder::new_multi_thread()
+            .enable_all()
+            .build()
+            .map_err(|e| Error::Internal(format!("runtime: {e}")))?;
+        let result = runtime.block_on(async {
+            let listener = tokio::net::TcpListener::bind(addr)
+                .await
+                .map_err(|e| Error::Config(format!("cannot listen on {addr}: {e}")))?;
+            log::info!("listening on http://{addr}");
+            server
+                .serve(listener, async {
+                    let _ = tokio::signal::ctrl_c().await;
+                })
+                .await
+        });
+        runtime.shutdown_timeout(Duration::from_secs(5));
+        result
+    }
+
     /// Starts the server on its own runtime thread, bound to `addr`
     /// (port 0: a free port). Used by `sitar demo` and the tests.
     pub fn spawn(config: ServerConfig, addr: SocketAddr) -> Result<ServerHandle, Error> {

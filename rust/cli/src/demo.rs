@@ -1,0 +1,309 @@
+//! `sitar demo`: the whole system end to end on one machine, no set-up.
+
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+use anyhow::{Context, Result, bail};
+use sitar_client::{Client, NewSession, SessionOptions, SessionState};
+use sitar_core::{
+    DepthImage, DisplayRotation, ErrorClass, Intrinsics, Pose, Session, SessionConfig,
+};
+use sitar_server::{PlaybackKind, Server, ServerConfig};
+use sitar_sim::{DepthCamera, Recording};
+
+/// Runs the whole system in one process: a simulated user walks a room with a blank wall and
+/// a glass pane, the phone logic (sitar-core) records the walk with depth, the recording goes
+/// to an in-process server (sim playback) through the HTTP client, the results come back and
+/// markers are placed; prints what was found and writes the report page.
+#[derive(clap::Args, Debug)]
+#[command(after_help = "Example: sitar demo")]
+pub struct Args {
+    /// Data directory of the in-process server (default: DEMO_DIR in the system temp dir).
+    #[arg(long, value_name = "DIR")]
+    data: Option<PathBuf>,
+    /// Playback trials.
+    #[arg(short = 'n', long, default_value_t = 8)]
+    trials: u32,
+    /// Walk duration in seconds (30 fps).
+    #[arg(long, default_value_t = 15.0)]
+    seconds: f64,
+    /// Playback speed: the simulated phones replay this many times faster than real time.
+    #[arg(long, default_value_t = 8.0)]
+    speed: f64,
+    /// Simulated playback phones.
+    #[arg(long, default_value_t = 2)]
+    devices: u32,
+    /// Seed of the walk and the trials.
+    #[arg(long, default_value_t = 42)]
+    seed: u64,
+    /// Adaptive stopping: finish once no sub-trajectory changed class over 3 trials, after this many.
+    #[arg(long, value_name = "MIN_TRIALS")]
+    adaptive: Option<u32>,
+}
+
+const DEMO_DIR: &str = "sitar-demo";
+
+pub fn run(args: Args) -> Result<()> {
+    let started = Instant::now();
+    if args.trials < 2 {
+        bail!("--trials must be at least 2 (an estimate compares pairs of trials)");
+    }
+    let data = args
+        .data
+        .clone()
+        .unwrap_or_else(|| std::env::temp_dir().join(DEMO_DIR));
+    std::fs::create_dir_all(&data).with_context(|| format!("cannot create {}", data.display()))?;
+
+    // 1. The backend, in-process on a free loopback port.
+    let mut config = ServerConfig::new(&data);
+    config.playback = PlaybackKind::Sim;
+    config.sim.speed = args.speed;
+    config.sim.devices = args.devices;
+    let server = Server::spawn(config, "127.0.0.1:0".parse()?)
+        .context("cannot start the in-process server")?;
+    println!(
+        "server      {} (sim playback, {} phones at {}×, data {})",
+        server.url(),
+        args.devices,
+        args.speed,
+        data.display()
+    );
+
+    // 2. The user walks the room; the phone logic records poses and depth like on a phone.
+    let recording =
+        Recording::demo(args.seconds, 30.0, args.seed).context("cannot simulate the walk")?;
+    let mut session = Session::new(SessionConfig::from_json(r#"{"convention":"arcore"}"#)?);
+    let summary = record_walk(&recording, &mut session)?;
+    println!(
+        "walk        {} frames, {:.1} s, {:.1} m; {} sub-trajectories, {} depth samples (mean {:.2} m)",
+        summary.frames,
+        summary.duration_s,
+        summary.length_m,
+        summary.subtrajectories,
+        summary.depth_samples,
+        summary.mean_depth_m
+    );
+
+    // 3. Upload through the client, as the phone's native library does.
+    let rec_path = data.join("demo-recording.sitarsim");
+    std::fs::write(&rec_path, recording.to_bytes())
+        .with_context(|| format!("cannot write {}", rec_path.display()))?;
+    let client = Client::new(&server.url())?;
+    let request = NewSession {
+        trials: args.trials,
+        setting: "trim_mean_30".into(),
+        playback: "sim".into(),
+    };
+    let options = SessionOptions {
+        adaptive_min_trials: args.adaptive,
+        adaptive_k: None,
+    };
+    let id = client.create_session_with(&request, &options)?;
+    let mut uploaded = 0;
+    client.upload_recording(&id, &rec_path, &mut |sent, _| uploaded = sent)?;
+    let upload_done = Instant::now();
+    println!(
+        "session     {id}: {uploaded} bytes uploaded, {} trials playing",
+        args.trials
+    );
+
+    // 4. Progress while the phones play; progressive results as they come.
+    let bar = indicatif::ProgressBar::new(1000);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("playback    [{bar:30}] {msg}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    let mut last_results = 0;
+    let mut first_results_s = None;
+    let status = client.wait(
+        &id,
+        Duration::from_millis(100),
+        Duration::from_secs(600),
+        &mut |s| {
+            bar.set_position((s.progress * 1000.0) as u64);
+            let eta = s
+                .eta_s
+                .map(|e| format!(", ETA {e:.1} s"))
+                .unwrap_or_default();
+            bar.set_message(format!(
+                "{} {}/{} trials{eta}",
+                s.state, s.trials_done, s.trials_total
+            ));
+            if s.results_trials > last_results {
+                last_results = s.results_trials;
+                let t = upload_done.elapsed().as_secs_f64();
+                first_results_s.get_or_insert(t);
+                let line = format!(
+                    "results     after {t:.1} s: estimate from {} trials",
+                    s.results_trials
+                );
+                if bar.is_hidden() {
+                    println!("{line}")
+                } else {
+                    bar.println(line)
+                }
+            }
+        },
+    )?;
+    bar.finish_and_clear();
+    if status.state != SessionState::Done {
+        bail!(
+            "session {id} {}: {}",
+            status.state,
+            status.error.unwrap_or_default()
+        );
+    }
+    let total_s = upload_done.elapsed().as_secs_f64();
+    println!(
+        "done        {} trials in {total_s:.1} s (first results after {:.1} s){}",
+        status.trials_done,
+        first_results_s.unwrap_or(total_s),
+        status
+            .stop_reason
+            .map(|r| format!("; {r}"))
+            .unwrap_or_default()
+    );
+
+    // 5. Results back on the phone: colours and markers.
+    let csv = client.results_csv(&id)?;
+    session.load_results(&csv)?;
+    let markers = session.markers()?;
+    println!(
+        "regions     {} marker(s){}",
+        markers.len(),
+        if session.results_unreliable() {
+            " (results flagged unreliable)"
+        } else {
+            ""
+        }
+    );
+    let room = recording.room();
+    let hard: Vec<&str> = room
+        .hard_surfaces()
+        .iter()
+        .map(|s| s.name.as_str())
+        .collect();
+    let mut on_hard = 0;
+    let mut found = std::collections::BTreeSet::new();
+    for (i, m) in markers.iter().enumerate() {
+        let class = match m.class {
+            ErrorClass::High => "high",
+            ErrorClass::Medium => "medium",
+            _ => "low",
+        };
+        let (name, kind_hard, distance) = match room.nearest_surface(m.position) {
+            Some((s, d)) => (s.name.clone(), s.kind.is_hard(), d),
+            None => ("nothing".into(), false, f64::NAN),
+        };
+        if kind_hard {
+            on_hard += 1;
+            found.insert(name.clone());
+        }
+        println!(
+            "  {}. sub-trajectory {:>3}: error {:5.1} cm ({class:6}) → {name} ({}, {:.2} m off)",
+            i + 1,
+            m.subtrajectory,
+            m.error_m * 100.0,
+            if kind_hard { "hard" } else { "not hard" },
+            distance
+        );
+    }
+    let missed: Vec<&str> = hard
+        .iter()
+        .copied()
+        .filter(|h| !found.contains(*h))
+        .collect();
+    println!(
+        "match       {on_hard}/{} markers on truly hard surfaces; hard surfaces found: {}/{}{}",
+        markers.len(),
+        found.len(),
+        hard.len(),
+        if missed.is_empty() {
+            String::new()
+        } else {
+            format!(" (missed: {})", missed.join(", "))
+        }
+    );
+
+    // 6. The report page.
+    let report = data.join(format!("report-{id}.html"));
+    std::fs::write(&report, client.report_html(&id)?)
+        .with_context(|| format!("cannot write {}", report.display()))?;
+    println!("report      {}", report.display());
+    println!("total       {:.1} s", started.elapsed().as_secs_f64());
+    server.stop();
+    Ok(())
+}
+
+/// Feeds the ground-truth walk to the phone logic: start, every frame, depth at midpoints, stop.
+fn record_walk(recording: &Recording, session: &mut Session) -> Result<sitar_core::Summary> {
+    let gt = &recording.walk().ground_truth;
+    if gt.len() < 3 {
+        bail!("the walk is too short");
+    }
+    let camera = DepthCamera::phone();
+    let k = Intrinsics {
+        fx: camera.intrinsics.fx,
+        fy: camera.intrinsics.fy,
+        cx: camera.intrinsics.cx,
+        cy: camera.intrinsics.cy,
+    };
+    let pose = |i: usize| Pose::new(gt.positions[i], gt.orientations[i]);
+    let last = gt.len() - 1;
+    session.start(gt.stamps[0], pose(0))?;
+    for i in 1..last {
+        let flags = session.frame(gt.stamps[i], pose(i))?;
+        if flags.is_midpoint() {
+            let depth =
+                recording
+                    .room()
+                    .render_depth_mm(gt.positions[i], gt.orientations[i], &camera);
+            let image = DepthImage::new(&depth, camera.width, camera.height, camera.width * 2)?;
+            session.depth(&image, &k, DisplayRotation::Deg0)?;
+        }
+    }
+    Ok(session.stop(gt.stamps[last], pose(last))?)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_short_demo_runs_end_to_end_and_writes_the_report() {
+        let dir = tempfile::tempdir().unwrap();
+        let args = Args {
+            data: Some(dir.path().to_path_buf()),
+            trials: 3,
+            seconds: 4.0,
+            speed: 40.0,
+            devices: 2,
+            seed: 7,
+            adaptive: None,
+        };
+        run(args).unwrap();
+        let names: Vec<String> = std::fs::read_dir(dir.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        assert!(
+            names
+                .iter()
+                .any(|n| n.starts_with("report-s") && n.ends_with(".html")),
+            "{names:?}"
+        );
+        assert!(names.iter().any(|n| n == "sitar.db"));
+    }
+
+    #[test]
+    fn the_recorded_walk_has_a_depth_sample_at_every_midpoint() {
+        let recording = Recording::demo(4.0, 30.0, 1).unwrap();
+        let mut session =
+            Session::new(SessionConfig::from_json(r#"{"convention":"arcore"}"#).unwrap());
+        let summary = record_walk(&recording, &mut session).unwrap();
+        assert_eq!(summary.frames as usize, recording.frames() - 2);
+        assert_eq!(summary.subtrajectories, summary.frames / 10);
+        assert_eq!(summary.depth_samples, summary.midpoints);
+        assert!(summary.mean_depth_m > 0.5 && summary.mean_depth_m < 6.0);
+    }
+}

@@ -1,0 +1,79 @@
+//! `sitar serve`: the backend the phones talk to.
+
+use std::net::SocketAddr;
+use std::path::PathBuf;
+use std::time::Duration;
+
+use anyhow::{Context, Result};
+use clap::ValueEnum;
+use sitar_server::{PlaybackKind, Server, ServerConfig};
+
+/// Runs the SiTAR backend: HTTP API (versioned and the original app's legacy routes),
+/// SQLite storage in DIR, playback on phones over adb (or the simulator), estimation.
+#[derive(clap::Args, Debug)]
+#[command(after_help = "Example: sitar serve --playback sim --data sitar-data")]
+pub struct Args {
+    /// Address to listen on.
+    #[arg(long, default_value = "127.0.0.1:8000")]
+    addr: SocketAddr,
+    /// Data directory (SQLite database and files; created if missing).
+    #[arg(long, value_name = "DIR", default_value = "sitar-data")]
+    data: PathBuf,
+    /// Playback backend for the legacy `POST /recording` route and `GET /v1/devices`.
+    #[arg(long, value_enum, default_value_t = Playback::Adb)]
+    playback: Playback,
+    /// The adb executable.
+    #[arg(long, default_value = "adb")]
+    adb: PathBuf,
+    /// Package of the playback app on the phones.
+    #[arg(long, default_value = "org.sitar.playback")]
+    package: String,
+    /// Activity of the playback app.
+    #[arg(long, default_value = ".PlaybackActivity")]
+    activity: String,
+    /// Sim playback speed (1 = real time).
+    #[arg(long, default_value_t = 1.0)]
+    sim_speed: f64,
+    /// Simulated playback phones.
+    #[arg(long, default_value_t = 1)]
+    sim_devices: u32,
+    /// Trials for sessions created by the legacy route.
+    #[arg(long, default_value_t = 5)]
+    trials: u32,
+    /// Largest recording accepted, in MiB.
+    #[arg(long, default_value_t = 2048)]
+    max_recording_mib: u64,
+    /// Largest trajectory accepted, in MiB.
+    #[arg(long, default_value_t = 64)]
+    max_trajectory_mib: u64,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+enum Playback {
+    Adb,
+    Sim,
+}
+
+pub fn run(args: Args) -> Result<()> {
+    let mut config = ServerConfig::new(&args.data);
+    config.playback = match args.playback {
+        Playback::Adb => PlaybackKind::Adb,
+        Playback::Sim => PlaybackKind::Sim,
+    };
+    config.adb.adb_path = args.adb;
+    config.adb.package = args.package;
+    config.adb.activity = args.activity;
+    config.adb.poll_interval = Duration::from_secs(1);
+    config.sim.speed = args.sim_speed;
+    config.sim.devices = args.sim_devices;
+    config.default_trials = args.trials;
+    config.max_recording_bytes = args.max_recording_mib << 20;
+    config.max_trajectory_bytes = args.max_trajectory_mib << 20;
+    eprintln!(
+        "sitar serve: http://{} (data {}, playback {}); Ctrl-C stops",
+        args.addr,
+        args.data.display(),
+        config.playback.as_str()
+    );
+    Server::run(config, args.addr).context("the server stopped")
+}
