@@ -10,6 +10,8 @@
 //! association keeps the window contiguous; only windows broken by a dropped frame are
 //! recomputed from the poses. Pairs and windows run in parallel (rayon).
 
+use std::collections::HashMap;
+
 use glam::{DQuat, DVec3};
 use rayon::prelude::*;
 
@@ -190,23 +192,36 @@ pub struct PairwiseValues {
     trial_block_starts: Vec<Vec<u32>>,
     /// Per trial: relative poses over `delta` frames.
     relative: Vec<RelativeWindows>,
+    matchings: Vec<Matching>,
     pairs: Vec<Pair>,
 }
 
 /// Keys per aggregation block (a block's buckets stay cache-sized).
 const BLOCK: usize = 128;
 
-/// One pair's windows: runs where both trials advance frame by frame (values computed on
-/// the fly from the per-trial relative poses), plus stored values of the windows that a
-/// dropped or unmatched frame breaks.
+/// One pair: its trials, the matching of their stamps, and the values of the windows the
+/// matching could not cover with segments.
 #[derive(Debug, Clone)]
 struct Pair {
     reference: usize,
     estimate: usize,
+    /// Index into `PairwiseValues::matchings`.
+    matching: usize,
+    /// Values (float bits) of `matchings[matching].irregular`, in the same order.
+    irregular_values: Vec<u64>,
+}
+
+/// How two stamp lists associate, as windows; depends only on the stamps, so trials with
+/// identical stamps share it. Segments are runs where both trials advance frame by frame
+/// (values computed on the fly from the per-trial relative poses); `irregular` are the
+/// windows a dropped or unmatched frame breaks.
+#[derive(Debug, Clone, Default)]
+struct Matching {
     /// Sorted by `reference_start`.
     segments: Vec<Segment>,
+    /// Broken windows as pose indices `[reference from, reference to, estimate from, estimate to]`.
+    irregular: Vec<[u32; 4]>,
     irregular_keys: Vec<u32>,
-    irregular_values: Vec<u64>,
     irregular_block_starts: Vec<u32>,
 }
 
@@ -338,36 +353,47 @@ impl PairwiseValues {
         let blocks = keys.len().div_ceil(BLOCK);
         let trial_block_starts = key_of.iter().map(|k| block_starts(k, blocks)).collect();
 
+        // Group trials by identical stamp lists: matchings depend only on the stamps.
+        let mut group_of_stamps: HashMap<&[i64], usize> = HashMap::new();
+        let group: Vec<usize> = trials
+            .iter()
+            .enumerate()
+            .map(|(i, t)| *group_of_stamps.entry(&t.stamps[..]).or_insert(i))
+            .collect();
         let n = trials.len();
         let pair_ids: Vec<(usize, usize)> = (0..n)
             .flat_map(|i| (i + 1..n).map(move |j| (i, j)))
             .collect();
-        let pairs = pair_ids
+        let mut matching_index: HashMap<(usize, usize), usize> = HashMap::new();
+        let mut matching_pairs: Vec<(usize, usize)> = Vec::new();
+        for &(i, j) in &pair_ids {
+            matching_index
+                .entry((group[i], group[j]))
+                .or_insert_with(|| {
+                    matching_pairs.push((i, j));
+                    matching_pairs.len() - 1
+                });
+        }
+        let matchings = matching_pairs
             .par_iter()
             .map(|&(i, j)| {
-                let mut pair = Pair {
-                    reference: i,
-                    estimate: j,
-                    segments: Vec::new(),
-                    irregular_keys: Vec::new(),
-                    irregular_values: Vec::new(),
-                    irregular_block_starts: Vec::new(),
-                };
-                if trials[i].stamps == trials[j].stamps {
+                let (reference, estimate) = (&trials[i], &trials[j]);
+                let mut matching = Matching::default();
+                if group[i] == group[j] {
                     // Identical stamps associate one to one (each stamp is its own nearest).
-                    let len = trials[i].len().saturating_sub(delta) as u32;
-                    pair.segments.push(Segment {
+                    let len = reference.len().saturating_sub(delta) as u32;
+                    matching.segments.push(Segment {
                         reference_start: 0,
                         estimate_start: 0,
                         len,
                     });
-                    pair.irregular_block_starts = vec![0; blocks + 1];
-                    return Ok(pair);
+                    matching.irregular_block_starts = vec![0; blocks + 1];
+                    return Ok(matching);
                 }
                 let names = (format!("trial {i}"), format!("trial {j}"));
                 let (ids_ref, ids_est) = associate_named(
-                    &trials[i],
-                    &trials[j],
+                    reference,
+                    estimate,
                     opts.t_max_diff_s,
                     0.0,
                     (&names.0, &names.1),
@@ -389,29 +415,56 @@ impl PairwiseValues {
                         {
                             k += 1;
                         }
-                        pair.segments.push(Segment {
+                        matching.segments.push(Segment {
                             reference_start: ids_ref[start] as u32,
                             estimate_start: ids_est[start] as u32,
                             len: (k - start) as u32,
                         });
                     } else {
-                        let q = RigidPose::relative(
-                            trials[i].pose(ids_ref[k]),
-                            trials[i].pose(ids_ref[k + delta]),
+                        let (a0, a1, b0, b1) = (
+                            ids_ref[k],
+                            ids_ref[k + delta],
+                            ids_est[k],
+                            ids_est[k + delta],
                         );
-                        let p = RigidPose::relative(
-                            trials[j].pose(ids_est[k]),
-                            trials[j].pose(ids_est[k + delta]),
-                        );
-                        pair.irregular_keys.push(key_of[i][ids_ref[k]]);
-                        pair.irregular_values.push(value_bits(relation, q, p));
+                        matching
+                            .irregular
+                            .push([a0 as u32, a1 as u32, b0 as u32, b1 as u32]);
+                        matching.irregular_keys.push(key_of[i][a0]);
                         k += 1;
                     }
                 }
-                pair.irregular_block_starts = block_starts(&pair.irregular_keys, blocks);
-                Ok(pair)
+                matching.irregular_block_starts = block_starts(&matching.irregular_keys, blocks);
+                Ok(matching)
             })
             .collect::<Result<Vec<_>, Error>>()?;
+        let pairs = pair_ids
+            .par_iter()
+            .map(|&(i, j)| {
+                let matching = matching_index[&(group[i], group[j])];
+                let irregular_values = matchings[matching]
+                    .irregular
+                    .iter()
+                    .map(|&[a0, a1, b0, b1]| {
+                        let q = RigidPose::relative(
+                            trials[i].pose(a0 as usize),
+                            trials[i].pose(a1 as usize),
+                        );
+                        let p = RigidPose::relative(
+                            trials[j].pose(b0 as usize),
+                            trials[j].pose(b1 as usize),
+                        );
+                        value_bits(relation, q, p)
+                    })
+                    .collect();
+                Pair {
+                    reference: i,
+                    estimate: j,
+                    matching,
+                    irregular_values,
+                }
+            })
+            .collect();
 
         Ok(Self {
             trials: n,
@@ -423,6 +476,7 @@ impl PairwiseValues {
             key_of,
             trial_block_starts,
             relative,
+            matchings,
             pairs,
         })
     }
@@ -449,10 +503,11 @@ impl PairwiseValues {
                         &self.relative[pair.reference],
                         &self.relative[pair.estimate],
                     );
-                    let first = pair
+                    let matching = &self.matchings[pair.matching];
+                    let first = matching
                         .segments
                         .partition_point(|s| s.reference_start + s.len <= low);
-                    for segment in &pair.segments[first..] {
+                    for segment in &matching.segments[first..] {
                         if segment.reference_start >= high {
                             break;
                         }
@@ -487,9 +542,9 @@ impl PairwiseValues {
                             }
                         }
                     }
-                    let range = pair.irregular_block_starts[block] as usize
-                        ..pair.irregular_block_starts[block + 1] as usize;
-                    for (&key, &value) in pair.irregular_keys[range.clone()]
+                    let range = matching.irregular_block_starts[block] as usize
+                        ..matching.irregular_block_starts[block + 1] as usize;
+                    for (&key, &value) in matching.irregular_keys[range.clone()]
                         .iter()
                         .zip(&pair.irregular_values[range])
                     {
@@ -533,7 +588,6 @@ impl PairwiseValues {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use glam::{DQuat, DVec3};
 
     fn trial(n: usize, wobble: f64) -> Trajectory {
         Trajectory {
