@@ -18,8 +18,7 @@ pub fn read_tum(path: &Path) -> Result<Trajectory, Error> {
 pub fn parse_tum(text: &str, source: &str) -> Result<Trajectory, Error> {
     let mut rows = Rows::with_capacity(text.len() / 64);
     let mut all_integer = true;
-    for (line_index, raw) in text.lines().enumerate() {
-        let line = raw.split('#').next().unwrap_or("");
+    for (line_index, line) in text.lines().enumerate() {
         let mut tokens = Tokens::new(line, source, line_index + 1);
         let Some(first) = tokens.next_token() else {
             continue;
@@ -282,7 +281,8 @@ fn parse_stamp(token: &str, tokens: &Tokens<'_>) -> Result<Stamp, Error> {
 /// Whitespace tokens of one line, remembering where each starts for error columns.
 struct Tokens<'a> {
     line_text: &'a str,
-    rest: std::str::SplitAsciiWhitespace<'a>,
+    /// Byte position of the scan; a `#` ends the line (comment).
+    position: usize,
     file: &'a str,
     line: usize,
     count: usize,
@@ -292,17 +292,33 @@ impl<'a> Tokens<'a> {
     fn new(line_text: &'a str, file: &'a str, line: usize) -> Self {
         Self {
             line_text,
-            rest: line_text.split_ascii_whitespace(),
+            position: 0,
             file,
             line,
             count: 0,
         }
     }
 
+    /// The next whitespace-separated token before any `#` (a hand-rolled scan: this is the
+    /// hot loop of reading 100 trials).
     fn next_token(&mut self) -> Option<&'a str> {
-        let t = self.rest.next();
-        self.count += usize::from(t.is_some());
-        t
+        let bytes = self.line_text.as_bytes();
+        let mut i = self.position;
+        while i < bytes.len() && bytes[i].is_ascii_whitespace() {
+            i += 1;
+        }
+        if i == bytes.len() || bytes[i] == b'#' {
+            self.position = bytes.len();
+            return None;
+        }
+        let start = i;
+        while i < bytes.len() && !bytes[i].is_ascii_whitespace() && bytes[i] != b'#' {
+            i += 1;
+        }
+        self.position = i;
+        self.count += 1;
+        // Both ends are ASCII bytes or the string's ends, so they are char boundaries.
+        Some(&self.line_text[start..i])
     }
 
     fn column_of(&self, token: &str) -> usize {
@@ -320,7 +336,14 @@ impl<'a> Tokens<'a> {
             None => Err(parse_error(
                 self.file,
                 self.line,
-                self.line_text.trim_end().chars().count() + 1,
+                self.line_text
+                    .split('#')
+                    .next()
+                    .unwrap_or("")
+                    .trim_end()
+                    .chars()
+                    .count()
+                    + 1,
                 &format!("expected {expected} values, found {}", self.count),
             )),
         }
