@@ -1,23 +1,19 @@
 //! `sitar evaluate`: the paper's evaluation protocol (section 3.3) against ground truth.
 
-use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use clap::ValueEnum;
 use plotters::prelude::*;
-use rayon::prelude::*;
 use sitar_estimator::{
-    DeltaUnit, EstimateOptions, PairwiseValues, PoseRelation, RpeOptions, Setting, Trajectory,
-    associate_trajectories, rpe, seconds_to_ns,
+    ClassBoundaries, EstimateOptions, EvaluationOptions, EvaluationRow, Setting, evaluate,
+    ground_truth_errors,
 };
 
 use crate::input::{self, Format, progress_bar};
 use crate::output::{emit, json_number};
 
-/// The paper's class boundaries (low | medium | high), metres.
-const BOUNDARIES: [(f64, f64); 3] = [(0.05, 0.10), (0.02, 0.10), (0.02, 0.05)];
 /// The paper's trial counts.
 const PAPER_COUNTS: [usize; 11] = [5, 10, 20, 30, 40, 50, 60, 70, 80, 90, 100];
 
@@ -86,121 +82,6 @@ fn parse_setting(s: &str) -> Result<Setting, String> {
     s.parse().map_err(|e: sitar_estimator::Error| e.to_string())
 }
 
-/// Classifier quality of one (boundaries, setting, trial count).
-#[derive(Debug, Clone, Copy, PartialEq)]
-struct Scores {
-    boundaries: (f64, f64),
-    setting: Setting,
-    trials: usize,
-    windows: usize,
-    accuracy: f64,
-    macro_f1: f64,
-    sensitivity: f64,
-    specificity: f64,
-}
-
-/// 0 low, 1 medium, 2 high.
-fn class(error: f64, (medium, high): (f64, f64)) -> usize {
-    if error >= high {
-        2
-    } else if error >= medium {
-        1
-    } else {
-        0
-    }
-}
-
-/// Accuracy, macro F1, mean sensitivity and mean specificity of 3-class predictions, averaged
-/// over the classes present in truth or prediction (as scikit-learn's macro average); a
-/// class without positives (or negatives) has no sensitivity (or specificity) to average.
-fn classification_scores(truth: &[usize], predicted: &[usize]) -> (f64, f64, f64, f64) {
-    let mut confusion = [[0usize; 3]; 3];
-    for (&t, &p) in truth.iter().zip(predicted) {
-        confusion[t][p] += 1;
-    }
-    let total = truth.len();
-    let correct: usize = (0..3).map(|c| confusion[c][c]).sum();
-    let (mut f1, mut sensitivity, mut specificity) = (Vec::new(), Vec::new(), Vec::new());
-    for (c, row) in confusion.iter().enumerate() {
-        let tp = row[c];
-        let fn_ = row.iter().sum::<usize>() - tp;
-        let fp = confusion.iter().map(|r| r[c]).sum::<usize>() - tp;
-        let tn = total - tp - fn_ - fp;
-        // Classes neither true nor predicted do not count (scikit-learn's default labels).
-        if tp + fn_ + fp == 0 {
-            continue;
-        }
-        f1.push(2.0 * tp as f64 / (2 * tp + fp + fn_) as f64);
-        if tp + fn_ > 0 {
-            sensitivity.push(tp as f64 / (tp + fn_) as f64);
-        }
-        if tn + fp > 0 {
-            specificity.push(tn as f64 / (tn + fp) as f64);
-        }
-    }
-    let mean = |v: &[f64]| {
-        if v.is_empty() {
-            f64::NAN
-        } else {
-            v.iter().sum::<f64>() / v.len() as f64
-        }
-    };
-    (
-        correct as f64 / total as f64,
-        mean(&f1),
-        mean(&sensitivity),
-        mean(&specificity),
-    )
-}
-
-/// Mean RPE against `gt` per GT window start over `trials` (sorted by start).
-fn true_errors(
-    gt: &Trajectory,
-    trials: &[Trajectory],
-    files: &[PathBuf],
-    opts: &RpeOptions,
-    t_max_diff: f64,
-) -> Result<Vec<(i64, f64)>> {
-    let per_trial: Vec<Vec<(i64, f64)>> = trials
-        .par_iter()
-        .zip(files)
-        .map(|(trial, file)| -> Result<Vec<(i64, f64)>> {
-            let (reference, estimate) = associate_trajectories(gt, trial, t_max_diff, 0.0)
-                .with_context(|| format!("associating the ground truth with {}", file.display()))?;
-            let errors = rpe(&reference, &estimate, opts)
-                .with_context(|| format!("RPE of {} against the ground truth", file.display()))?;
-            Ok(errors
-                .pairs
-                .iter()
-                .zip(&errors.errors)
-                .map(|(&(i, _), &e)| (reference.stamps[i], e))
-                .collect())
-        })
-        .collect::<Result<_>>()?;
-    let mut sums: BTreeMap<i64, (f64, usize)> = BTreeMap::new();
-    for (start, e) in per_trial.into_iter().flatten() {
-        let entry = sums.entry(start).or_default();
-        entry.0 += e;
-        entry.1 += 1;
-    }
-    Ok(sums
-        .into_iter()
-        .map(|(k, (s, n))| (k, s / n as f64))
-        .collect())
-}
-
-/// The true error of the window nearest to `start` within `tolerance`.
-fn nearest(truth: &[(i64, f64)], start: i64, tolerance: i64) -> Option<f64> {
-    let i = truth.partition_point(|&(k, _)| k < start);
-    [i.checked_sub(1), Some(i)]
-        .into_iter()
-        .flatten()
-        .filter_map(|j| truth.get(j))
-        .filter(|(k, _)| (k - start).abs() <= tolerance)
-        .min_by_key(|(k, _)| (k - start).abs())
-        .map(|&(_, e)| e)
-}
-
 pub fn run(args: Args) -> Result<()> {
     if args.delta == 0 {
         bail!("--delta must be at least 1 frame");
@@ -252,120 +133,99 @@ pub fn run(args: Args) -> Result<()> {
     let trials_b = input::read_all(&files_b, args.input_format, &bar)?;
     bar.finish_and_clear();
 
-    let rpe_opts = RpeOptions {
-        pose_relation: PoseRelation::TranslationPart,
-        delta: args.delta as f64,
-        delta_unit: DeltaUnit::Frames,
-        all_pairs: true,
-        ..RpeOptions::default()
+    let estimate = EstimateOptions {
+        delta: args.delta,
+        t_max_diff_s: args.t_max_diff,
+        ..EstimateOptions::default()
     };
-    let truth = true_errors(&gt, &trials_a, &files_a, &rpe_opts, args.t_max_diff)?;
-    let tolerance = seconds_to_ns(args.t_max_diff);
-
+    // Trials are numbered from 0 in natural file order in the estimator's messages.
+    let context = || {
+        format!(
+            "evaluating (trial i = the i-th file of {} or {})",
+            args.trials_a.display(),
+            args.trials_b.display()
+        )
+    };
+    let truth = ground_truth_errors(&gt, &trials_a, &estimate).with_context(context)?;
     let bar = progress_bar(counts.len() as u64, "estimating");
-    let mut scores = Vec::new();
+    let mut rows = Vec::new();
     for &k in &counts {
-        let opts = EstimateOptions {
-            delta: args.delta,
-            t_max_diff_s: args.t_max_diff,
-            ..EstimateOptions::default()
+        let opts = EvaluationOptions {
+            trial_counts: vec![k],
+            settings: settings.clone(),
+            boundaries: ClassBoundaries::PAPER.to_vec(),
+            estimate,
         };
-        let pairwise = PairwiseValues::compute(&trials_b[..k], &opts)
-            .with_context(|| format!("estimating from the first {k} trials of set B"))?;
-        for &setting in &settings {
-            let estimate = pairwise.estimate(setting);
-            let (mut t, mut e) = (Vec::new(), Vec::new());
-            for w in &estimate.windows {
-                if let Some(true_error) = nearest(&truth, w.start, tolerance) {
-                    t.push(true_error);
-                    e.push(w.error_m);
-                }
-            }
-            if t.is_empty() {
-                bail!("no estimated window matches a ground-truth window (check --t-max-diff)");
-            }
-            for boundaries in BOUNDARIES {
-                let tc: Vec<usize> = t.iter().map(|&x| class(x, boundaries)).collect();
-                let ec: Vec<usize> = e.iter().map(|&x| class(x, boundaries)).collect();
-                let (accuracy, macro_f1, sensitivity, specificity) =
-                    classification_scores(&tc, &ec);
-                scores.push(Scores {
-                    boundaries,
-                    setting,
-                    trials: k,
-                    windows: t.len(),
-                    accuracy,
-                    macro_f1,
-                    sensitivity,
-                    specificity,
-                });
-            }
-        }
+        rows.extend(
+            evaluate(&gt, &trials_a, &trials_b, &opts)
+                .with_context(context)?
+                .rows,
+        );
         bar.inc(1);
     }
     bar.finish_and_clear();
 
-    let truth_classes: Vec<[usize; 3]> = BOUNDARIES
+    let truth_classes: Vec<[usize; 3]> = ClassBoundaries::PAPER
         .iter()
-        .map(|&b| {
+        .map(|b| {
             let mut n = [0; 3];
-            truth.iter().for_each(|&(_, e)| n[class(e, b)] += 1);
+            truth.iter().for_each(|&(_, e)| n[b.classify(e)] += 1);
             n
         })
         .collect();
+    let summary = Summary {
+        args: &args,
+        truth_windows: truth.len(),
+        truth_classes: &truth_classes,
+        trials_a: files_a.len(),
+        trials_b: files_b.len(),
+    };
     let text = match args.format {
-        Report::Table => table(
-            &args,
-            &truth,
-            &truth_classes,
-            files_a.len(),
-            files_b.len(),
-            &scores,
-        ),
-        Report::Csv => csv(&scores),
-        Report::Json => json(
-            &args,
-            &truth,
-            &truth_classes,
-            files_a.len(),
-            files_b.len(),
-            &scores,
-        ),
+        Report::Table => table(&summary, &rows),
+        Report::Csv => csv(&rows),
+        Report::Json => json(&summary, &rows),
     };
     emit(args.output.as_deref(), &text)?;
     if !args.no_plot {
-        plot(&args.plot, &scores, &settings, &counts)?;
+        plot(&args.plot, &rows, &settings, &counts)?;
         eprintln!("wrote the plot to {}", args.plot.display());
     }
     Ok(())
 }
 
-fn cm(b: (f64, f64)) -> String {
-    format!("{} & {} cm", b.0 * 100.0, b.1 * 100.0)
+/// What the report says besides the rows.
+struct Summary<'a> {
+    args: &'a Args,
+    truth_windows: usize,
+    truth_classes: &'a [[usize; 3]],
+    trials_a: usize,
+    trials_b: usize,
 }
 
-fn table(
-    args: &Args,
-    truth: &[(i64, f64)],
-    classes: &[[usize; 3]],
-    a: usize,
-    b: usize,
-    scores: &[Scores],
-) -> String {
+fn cm(b: &ClassBoundaries) -> String {
+    format!("{} & {} cm", b.low_m * 100.0, b.high_m * 100.0)
+}
+
+fn table(summary: &Summary<'_>, rows: &[EvaluationRow]) -> String {
     let mut out = String::new();
     let _ = writeln!(
         out,
-        "ground truth: {} ({} windows, mean error over the {a} trials of set A)",
-        args.ground_truth.display(),
-        truth.len()
+        "ground truth: {} ({} windows, mean error over the {} trials of set A)",
+        summary.args.ground_truth.display(),
+        summary.truth_windows,
+        summary.trials_a
     );
-    let _ = writeln!(out, "estimates: first k of the {b} trials of set B");
-    for (bounds, n) in BOUNDARIES.iter().zip(classes) {
+    let _ = writeln!(
+        out,
+        "estimates: first k of the {} trials of set B",
+        summary.trials_b
+    );
+    for (bounds, n) in ClassBoundaries::PAPER.iter().zip(summary.truth_classes) {
         let _ = writeln!(out);
         let _ = writeln!(
             out,
             "class boundaries {} (true windows: {} low, {} medium, {} high)",
-            cm(*bounds),
+            cm(bounds),
             n[0],
             n[1],
             n[2]
@@ -375,12 +235,13 @@ fn table(
             "{:<14} {:>6} {:>8} {:>9} {:>8} {:>12} {:>12}",
             "setting", "trials", "windows", "accuracy", "F1", "sensitivity", "specificity"
         );
-        for s in scores.iter().filter(|s| s.boundaries == *bounds) {
+        for r in rows.iter().filter(|r| r.boundaries == *bounds) {
+            let s = &r.scores;
             let _ = writeln!(
                 out,
                 "{:<14} {:>6} {:>8} {:>8.1}% {:>8.3} {:>12.3} {:>12.3}",
-                s.setting.to_string(),
-                s.trials,
+                r.setting.to_string(),
+                r.trials,
                 s.windows,
                 100.0 * s.accuracy,
                 s.macro_f1,
@@ -392,18 +253,19 @@ fn table(
     out
 }
 
-fn csv(scores: &[Scores]) -> String {
+fn csv(rows: &[EvaluationRow]) -> String {
     let mut out = String::from(
         "medium_m,high_m,setting,trials,windows,accuracy,macro_f1,sensitivity,specificity\n",
     );
-    for s in scores {
+    for r in rows {
+        let s = &r.scores;
         let _ = writeln!(
             out,
             "{},{},{},{},{},{},{},{},{}",
-            s.boundaries.0,
-            s.boundaries.1,
-            s.setting,
-            s.trials,
+            r.boundaries.low_m,
+            r.boundaries.high_m,
+            r.setting,
+            r.trials,
             s.windows,
             s.accuracy,
             s.macro_f1,
@@ -414,41 +276,40 @@ fn csv(scores: &[Scores]) -> String {
     out
 }
 
-fn json(
-    args: &Args,
-    truth: &[(i64, f64)],
-    classes: &[[usize; 3]],
-    a: usize,
-    b: usize,
-    scores: &[Scores],
-) -> String {
-    let results: Vec<serde_json::Value> = scores
+fn json(summary: &Summary<'_>, rows: &[EvaluationRow]) -> String {
+    let results: Vec<serde_json::Value> = rows
         .iter()
-        .map(|s| {
+        .map(|r| {
+            let s = &r.scores;
             serde_json::json!({
-                "boundaries_m": [s.boundaries.0, s.boundaries.1],
-                "setting": s.setting.to_string(),
-                "trials": s.trials,
+                "boundaries_m": [r.boundaries.low_m, r.boundaries.high_m],
+                "setting": r.setting.to_string(),
+                "trials": r.trials,
                 "windows": s.windows,
                 "accuracy": json_number(s.accuracy),
                 "macro_f1": json_number(s.macro_f1),
                 "sensitivity": json_number(s.sensitivity),
                 "specificity": json_number(s.specificity),
+                "confusion": s.confusion,
             })
         })
         .collect();
-    let truth_classes: Vec<serde_json::Value> = BOUNDARIES
+    let truth_classes: Vec<serde_json::Value> = ClassBoundaries::PAPER
         .iter()
-        .zip(classes)
-        .map(|(b, n)| serde_json::json!({"boundaries_m": [b.0, b.1], "low": n[0], "medium": n[1], "high": n[2]}))
+        .zip(summary.truth_classes)
+        .map(|(b, n)| {
+            serde_json::json!({
+                "boundaries_m": [b.low_m, b.high_m], "low": n[0], "medium": n[1], "high": n[2],
+            })
+        })
         .collect();
     serde_json::json!({
         "version": 1,
-        "ground_truth": args.ground_truth.display().to_string(),
-        "trials_a": a,
-        "trials_b": b,
-        "delta": args.delta,
-        "truth_windows": truth.len(),
+        "ground_truth": summary.args.ground_truth.display().to_string(),
+        "trials_a": summary.trials_a,
+        "trials_b": summary.trials_b,
+        "delta": summary.args.delta,
+        "truth_windows": summary.truth_windows,
         "truth_classes": truth_classes,
         "results": results,
     })
@@ -458,7 +319,7 @@ fn json(
 
 /// The paper's Figure 5: per class-boundary setting, accuracy (left) and F1 (right) against
 /// the number of trials, one line per setting.
-fn plot(path: &Path, scores: &[Scores], settings: &[Setting], counts: &[usize]) -> Result<()> {
+fn plot(path: &Path, rows: &[EvaluationRow], settings: &[Setting], counts: &[usize]) -> Result<()> {
     let draw = || -> Result<(), Box<dyn std::error::Error>> {
         let root = SVGBackend::new(path, (1100, 1200)).into_drawing_area();
         root.fill(&WHITE)?;
@@ -467,7 +328,7 @@ fn plot(path: &Path, scores: &[Scores], settings: &[Setting], counts: &[usize]) 
             "SiTAR uncertainty-based pose error estimation vs ground truth",
             ("sans-serif", 22),
         )?;
-        let panels = body.split_evenly((BOUNDARIES.len(), 2));
+        let panels = body.split_evenly((ClassBoundaries::PAPER.len(), 2));
         let x_max = counts.iter().copied().max().unwrap_or(2) as f64;
         let x_min = counts.iter().copied().min().unwrap_or(2) as f64;
         let x_range = if x_max > x_min {
@@ -476,18 +337,24 @@ fn plot(path: &Path, scores: &[Scores], settings: &[Setting], counts: &[usize]) 
             x_min - 1.0..x_max + 1.0
         };
         // A common y range for all panels, like the paper's, zoomed to the data.
-        let lowest = scores
+        let lowest = rows
             .iter()
-            .flat_map(|s| [s.accuracy, s.macro_f1])
+            .flat_map(|r| [r.scores.accuracy, r.scores.macro_f1])
             .filter(|v| v.is_finite())
             .fold(1.0f64, f64::min);
         let y_min = ((lowest - 0.05) * 10.0).floor().max(0.0) / 10.0;
-        for (row, bounds) in BOUNDARIES.iter().enumerate() {
+        for (row, bounds) in ClassBoundaries::PAPER.iter().enumerate() {
             for (col, metric) in ["accuracy", "F1"].iter().enumerate() {
-                let value = |s: &Scores| if col == 0 { s.accuracy } else { s.macro_f1 };
+                let value = |r: &EvaluationRow| {
+                    if col == 0 {
+                        r.scores.accuracy
+                    } else {
+                        r.scores.macro_f1
+                    }
+                };
                 let mut chart = ChartBuilder::on(&panels[row * 2 + col])
                     .caption(
-                        format!("{metric}, boundaries {}", cm(*bounds)),
+                        format!("{metric}, boundaries {}", cm(bounds)),
                         ("sans-serif", 16),
                     )
                     .margin(10)
@@ -504,10 +371,10 @@ fn plot(path: &Path, scores: &[Scores], settings: &[Setting], counts: &[usize]) 
                     .draw()?;
                 for (i, setting) in settings.iter().enumerate() {
                     let colour = Palette99::pick(i).to_rgba();
-                    let points: Vec<(f64, f64)> = scores
+                    let points: Vec<(f64, f64)> = rows
                         .iter()
-                        .filter(|s| s.boundaries == *bounds && s.setting == *setting)
-                        .map(|s| (s.trials as f64, value(s)))
+                        .filter(|r| r.boundaries == *bounds && r.setting == *setting)
+                        .map(|r| (r.trials as f64, value(r)))
                         .filter(|(_, v)| v.is_finite())
                         .collect();
                     chart
@@ -533,49 +400,4 @@ fn plot(path: &Path, scores: &[Scores], settings: &[Setting], counts: &[usize]) 
         Ok(())
     };
     draw().map_err(|e| anyhow::anyhow!("{}: cannot draw the plot: {e}", path.display()))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn classification_scores_match_hand_computed_values() {
-        // truth:     0 0 0 0 1 1 2 2
-        // predicted: 0 0 0 1 1 2 2 2
-        let truth = [0, 0, 0, 0, 1, 1, 2, 2];
-        let predicted = [0, 0, 0, 1, 1, 2, 2, 2];
-        let (accuracy, f1, sensitivity, specificity) = classification_scores(&truth, &predicted);
-        assert_eq!(accuracy, 6.0 / 8.0);
-        // F1: class 0: 2*3/(6+0+1) = 6/7; class 1: 2/(2+1+1) = 1/2; class 2: 4/(4+1+0) = 4/5.
-        assert!((f1 - (6.0 / 7.0 + 0.5 + 0.8) / 3.0).abs() < 1e-15);
-        // Sensitivity: 3/4, 1/2, 2/2.
-        assert!((sensitivity - (0.75 + 0.5 + 1.0) / 3.0).abs() < 1e-15);
-        // Specificity: class 0: 4/4; class 1: 5/6; class 2: 5/6.
-        assert!((specificity - (1.0 + 5.0 / 6.0 + 5.0 / 6.0) / 3.0).abs() < 1e-15);
-    }
-
-    #[test]
-    fn absent_classes_are_left_out_of_the_macro_average() {
-        let (accuracy, f1, sensitivity, specificity) =
-            classification_scores(&[0, 0, 0], &[0, 0, 0]);
-        assert_eq!((accuracy, f1, sensitivity), (1.0, 1.0, 1.0));
-        assert!(specificity.is_nan());
-    }
-
-    #[test]
-    fn classes_follow_the_boundaries() {
-        assert_eq!(class(0.049, (0.05, 0.10)), 0);
-        assert_eq!(class(0.05, (0.05, 0.10)), 1);
-        assert_eq!(class(0.10, (0.05, 0.10)), 2);
-    }
-
-    #[test]
-    fn nearest_window_within_tolerance() {
-        let truth = [(100, 1.0), (200, 2.0), (300, 3.0)];
-        assert_eq!(nearest(&truth, 190, 20), Some(2.0));
-        assert_eq!(nearest(&truth, 251, 60), Some(3.0));
-        assert_eq!(nearest(&truth, 250, 10), None);
-        assert_eq!(nearest(&truth, 0, 10), None);
-    }
 }
