@@ -232,8 +232,7 @@ def golden_estimate(files, trial_names, relation_name):
         rows = []
         for key in sorted(buckets):
             v = np.array(buckets[key])
-            q1, q3 = np.percentile(v, [25, 75])
-            rows.append([key, fn(v), len(v), float(q3 - q1)])
+            rows.append([key, fn(v), len(v), float(np.std(v))])
         result[name] = rows
     return {"trials": trial_names, "delta": DELTA, "t_max_diff": MAX_DIFF,
             "pose_relation": relation_name, "settings": result}

@@ -86,7 +86,7 @@ pub struct WindowEstimate {
     pub error_m: f64,
     /// Number of pair values aggregated.
     pub pairs: usize,
-    /// Interquartile range (numpy linear quartiles) of the pair values.
+    /// Population standard deviation of the pair values (how much the trials disagree).
     pub spread_m: f64,
 }
 

@@ -60,7 +60,7 @@
 //! `delta` frames (10) gives one value per associated start frame, keyed by the reference's
 //! start stamp; per key, a [`Setting`] (`mean`, `median`, `trim_mean_10..40`,
 //! `mean_inliers`; default `trim_mean_30`) over every pair with that key is the estimate.
-//! Each [`WindowEstimate`] also carries the pair count and the interquartile range of the
+//! Each [`WindowEstimate`] also carries the pair count and the standard deviation of the
 //! pair values (`spread_m`). `EstimateOptions::pose_relation` = `RotationAngleDeg` gives the
 //! rotational estimate. [`PairwiseValues`] lets one computation serve several settings.
 //!

@@ -324,35 +324,34 @@ pub(crate) mod bits {
         v.iter().map(|&b| f64::from_bits(b)).sum()
     }
 
-    /// `(statistic, interquartile range)` of the values; equal to [`Setting::apply`] and
-    /// [`super::interquartile_range`]. `v` must be non-empty and hold non-negative floats.
+    /// `(statistic, population standard deviation)` of the values; equal to
+    /// [`Setting::apply`] and numpy's `std`. `v` must be non-empty and hold non-negative floats.
     pub(crate) fn window_statistics(v: &mut [u64], setting: Setting) -> (f64, f64) {
         let n = v.len();
-        let mut ranks = Vec::with_capacity(8);
-        ranks.extend(quantile_ranks(n, 0.25));
-        ranks.extend(quantile_ranks(n, 0.75));
-        let trim = match setting {
+        let mut ranks = Vec::with_capacity(4);
+        let mut trim = (0, n);
+        match setting {
             Setting::TrimMean(percent) => {
                 let lowercut = (f64::from(percent) / 100.0 * n as f64) as usize;
                 let uppercut = n.saturating_sub(lowercut);
                 if lowercut > 0 && lowercut < uppercut {
                     ranks.extend([lowercut, uppercut - 1]);
                 }
-                Some((lowercut, uppercut))
+                trim = (lowercut, uppercut);
             }
-            Setting::Median => {
-                ranks.extend([(n - 1) / 2, n / 2]);
-                None
+            Setting::Median => ranks.extend([(n - 1) / 2, n / 2]),
+            Setting::MeanInliers => {
+                ranks.extend(quantile_ranks(n, 0.25));
+                ranks.extend(quantile_ranks(n, 0.75));
             }
-            Setting::Mean | Setting::MeanInliers => None,
-        };
+            Setting::Mean => {}
+        }
         ranks.sort_unstable();
         ranks.dedup();
         select_ranks(v, 0, &ranks);
-        let (q1, q3) = (quantile(v, 0.25), quantile(v, 0.75));
-        let iqr = q3 - q1;
+        let mean = sum(v) / n as f64;
         let value = match setting {
-            Setting::Mean => sum(v) / n as f64,
+            Setting::Mean => mean,
             Setting::Median => {
                 if n % 2 == 1 {
                     at(v, n / 2)
@@ -361,7 +360,7 @@ pub(crate) mod bits {
                 }
             }
             Setting::TrimMean(_) => {
-                let (lowercut, uppercut) = trim.unwrap_or((0, n));
+                let (lowercut, uppercut) = trim;
                 if lowercut >= uppercut {
                     f64::NAN
                 } else {
@@ -369,6 +368,8 @@ pub(crate) mod bits {
                 }
             }
             Setting::MeanInliers => {
+                let (q1, q3) = (quantile(v, 0.25), quantile(v, 0.75));
+                let iqr = q3 - q1;
                 let (low, high) = (q1 - 1.5 * iqr, q3 + 1.5 * iqr);
                 let (total, count) = v
                     .iter()
@@ -378,7 +379,12 @@ pub(crate) mod bits {
                 total / count as f64
             }
         };
-        (value, iqr)
+        let variance = v
+            .iter()
+            .map(|&b| (f64::from_bits(b) - mean).powi(2))
+            .sum::<f64>()
+            / n as f64;
+        (value, variance.sqrt())
     }
 
     #[cfg(test)]
@@ -393,7 +399,7 @@ pub(crate) mod bits {
                 let mut bits: Vec<u64> = values.iter().map(|v| v.to_bits()).collect();
                 let (value, spread) = window_statistics(&mut bits, setting);
                 let want = setting.apply(&mut values.clone());
-                let want_spread = crate::interquartile_range(&mut values.clone());
+                let want_spread = crate::Statistics::from_errors(&values).std;
                 prop_assert!((value - want).abs() <= 1e-12 * (1.0 + want.abs()), "{} vs {}", value, want);
                 prop_assert!((spread - want_spread).abs() <= 1e-12);
             }
