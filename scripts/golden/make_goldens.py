@@ -147,17 +147,20 @@ def golden_rpe(files):
         dict(delta=0.5, unit="m", all_pairs=True),
         dict(delta=0.5, unit="m", all_pairs=False),
     ]
-    for ref_name, est_name in pairs:
+    cases_by_pair = [(r, e, 0.0, options) for r, e in pairs]
+    # A time offset of the second trajectory (evo's offset_2), shifting which frames match.
+    cases_by_pair.append(("trial_00.txt", "trial_03.txt", -0.0333, options[:1]))
+    for ref_name, est_name, offset, pair_options in cases_by_pair:
         _, ref = files[ref_name]
         _, est = files[est_name]
-        ref_s, est_s = sync.associate_trajectories(ref, est, max_diff=MAX_DIFF)
-        for opt in options:
+        ref_s, est_s = sync.associate_trajectories(ref, est, max_diff=MAX_DIFF, offset_2=offset)
+        for opt in pair_options:
             for rel_name, rel in RELATIONS.items():
                 unit = Unit.frames if opt["unit"] == "f" else Unit.meters
                 rpe = metrics.RPE(rel, delta=opt["delta"], delta_unit=unit, all_pairs=opt["all_pairs"])
                 rpe.process_data((ref_s, est_s))
                 cases.append({
-                    "reference": ref_name, "estimate": est_name, "t_max_diff": MAX_DIFF,
+                    "reference": ref_name, "estimate": est_name, "t_max_diff": MAX_DIFF, "t_offset": offset,
                     "delta": opt["delta"], "delta_unit": opt["unit"], "all_pairs": opt["all_pairs"],
                     "pose_relation": rel_name, "align": "none",
                     "end_ids": [int(j) for j in rpe.delta_ids],

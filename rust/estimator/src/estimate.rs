@@ -630,6 +630,67 @@ mod tests {
     }
 
     #[test]
+    fn csv_and_json_outputs() {
+        let (mut a, mut b) = (trial(25, 0.0), trial(25, 0.4));
+        a.time_unit = TimeUnit::Seconds;
+        b.time_unit = TimeUnit::Seconds;
+        let e = estimate(&[a, b], &EstimateOptions::default()).unwrap();
+        let csv = e.to_legacy_csv();
+        let second_row = csv.lines().nth(2).unwrap();
+        assert!(second_row.starts_with("1.033333333,"), "{second_row}");
+        assert_eq!(
+            second_row
+                .split(',')
+                .nth(1)
+                .unwrap()
+                .parse::<f64>()
+                .unwrap(),
+            e.windows[1].error_m
+        );
+        let thresholds = Thresholds {
+            medium_m: e.windows[0].error_m,
+            high_m: e.windows[0].error_m * 2.0,
+        };
+        let json: serde_json::Value = serde_json::from_str(&e.to_json(thresholds)).unwrap();
+        assert_eq!(json["version"], 1);
+        assert_eq!(json["setting"], "trim_mean_30");
+        assert_eq!(json["trials"], 2);
+        assert_eq!(json["time_unit"], "s");
+        let first = &json["windows"][0];
+        assert_eq!(first["start"], 1_000_000_000);
+        assert_eq!(first["end"], 1_000_000_000 + 10 * 33_333_333);
+        assert_eq!(first["pairs"], 1);
+        assert_eq!(first["error_m"].as_f64().unwrap(), e.windows[0].error_m);
+        assert_eq!(first["class"], "medium");
+        let classes: Vec<&str> = json["windows"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|w| w["class"].as_str().unwrap())
+            .collect();
+        let expected: Vec<&str> = e
+            .windows
+            .iter()
+            .map(|w| thresholds.class(w.error_m))
+            .collect();
+        assert_eq!(classes, expected);
+        let rotational = estimate(
+            &[trial(25, 0.0), trial(25, 0.4)],
+            &EstimateOptions {
+                pose_relation: PoseRelation::RotationAngleDeg,
+                ..EstimateOptions::default()
+            },
+        )
+        .unwrap();
+        let json: serde_json::Value =
+            serde_json::from_str(&rotational.to_json(Thresholds::default())).unwrap();
+        assert!(
+            json["windows"][0]["error_deg"].is_number()
+                && json["windows"][0].get("class").is_none()
+        );
+    }
+
+    #[test]
     fn rejects_too_few_trials() {
         assert!(estimate(&[trial(20, 0.0)], &EstimateOptions::default()).is_err());
         let mut unsorted = trial(20, 0.0);

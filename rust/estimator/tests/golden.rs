@@ -83,7 +83,7 @@ fn rpe_equals_evo() {
             &reference,
             &estimate,
             case["t_max_diff"].as_f64().unwrap(),
-            0.0,
+            case["t_offset"].as_f64().unwrap(),
         )
         .unwrap();
         let opts = RpeOptions {
