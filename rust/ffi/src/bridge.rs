@@ -48,9 +48,9 @@ fn with_session<R>(
     h: SitarHandle,
     f: impl FnOnce(&mut Session) -> Result<R, Error>,
 ) -> Result<R, Error> {
-    let shared = SESSIONS.get(h)?;
-    let mut session = lock(&shared)?;
-    f(&mut session)
+    // The registry's read lock is held for the call (no Arc clone on the
+    // frame path); nothing in `f` touches the session registry.
+    SESSIONS.with(h, |shared| f(&mut *lock(shared)?))?
 }
 
 /// Creates a session from its JSON config ("" or "{}" = defaults).
@@ -70,13 +70,13 @@ pub fn session_free(h: SitarHandle) -> Result<(), Error> {
 
 /// Starts recording (frame 0).
 pub fn session_start(h: SitarHandle, t_ns: i64, pose: &SitarPose) -> Result<(), Error> {
-    let pose = pose.to_core("pose")?;
+    let pose = pose.to_core();
     with_session(h, |s| Ok(s.start(t_ns, pose)?))
 }
 
 /// One camera frame; returns flags (1 = midpoint: give depth, 2 = endpoint).
 pub fn session_frame(h: SitarHandle, t_ns: i64, pose: &SitarPose) -> Result<u32, Error> {
-    let pose = pose.to_core("pose")?;
+    let pose = pose.to_core();
     with_session(h, |s| Ok(s.frame(t_ns, pose)?.0))
 }
 
@@ -126,7 +126,7 @@ pub fn depth_len(width: i32, height: i32, row_stride_bytes: i32) -> Result<usize
 
 /// Stops recording and returns the summary.
 pub fn session_stop(h: SitarHandle, t_ns: i64, pose: &SitarPose) -> Result<SitarSummary, Error> {
-    let pose = pose.to_core("pose")?;
+    let pose = pose.to_core();
     with_session(h, |s| Ok(SitarSummary::from(&s.stop(t_ns, pose)?)))
 }
 
@@ -243,7 +243,7 @@ pub fn playback_new(config_json: &str) -> Result<SitarHandle, Error> {
 
 /// Logs one playback frame.
 pub fn playback_log(h: SitarHandle, t_ns: i64, pose: &SitarPose) -> Result<(), Error> {
-    let pose = pose.to_core("pose")?;
+    let pose = pose.to_core();
     let shared = PLAYBACKS.get(h)?;
     let mut p = lock(&shared)?;
     Ok(p.log(t_ns, pose)?)

@@ -85,6 +85,16 @@ impl<T> Registry<T> {
             })
     }
 
+    /// Runs `f` on the object while holding the map's read lock.
+    pub(crate) fn with<R>(&self, handle: SitarHandle, f: impl FnOnce(&T) -> R) -> Result<R, Error> {
+        let map = self.map.read().unwrap_or_else(PoisonError::into_inner);
+        let value = map.get(&handle).ok_or(Error::InvalidHandle {
+            kind: self.kind,
+            handle,
+        })?;
+        Ok(f(value))
+    }
+
     pub(crate) fn remove(&self, handle: SitarHandle) -> Result<Arc<T>, Error> {
         self.map
             .write()

@@ -191,23 +191,12 @@ pub struct SitarJobProgress {
 }
 
 impl SitarPose {
-    /// Builds a core pose; rejects non-finite numbers and a zero quaternion.
-    pub fn to_core(&self, name: &'static str) -> Result<sitar_core::Pose, crate::Error> {
-        let v = [
-            self.px, self.py, self.pz, self.qx, self.qy, self.qz, self.qw,
-        ];
-        if !v.iter().all(|x| x.is_finite()) {
-            return Err(crate::Error::invalid(name, "pose has a non-finite number"));
-        }
-        let q = glam_quat(self.qx, self.qy, self.qz, self.qw);
-        let n = q.length();
-        if n < 1e-9 {
-            return Err(crate::Error::invalid(name, "pose quaternion is zero"));
-        }
-        Ok(sitar_core::Pose {
+    /// The core pose (validated and normalised by `sitar-core`, which names the argument).
+    pub fn to_core(&self) -> sitar_core::Pose {
+        sitar_core::Pose {
             position: glam::DVec3::new(self.px, self.py, self.pz),
-            rotation: q / n,
-        })
+            rotation: glam::DQuat::from_xyzw(self.qx, self.qy, self.qz, self.qw),
+        }
     }
 
     /// The C struct of a core pose.
@@ -222,10 +211,6 @@ impl SitarPose {
             qw: p.rotation.w,
         }
     }
-}
-
-fn glam_quat(x: f64, y: f64, z: f64, w: f64) -> glam::DQuat {
-    glam::DQuat::from_xyzw(x, y, z, w)
 }
 
 impl From<&sitar_core::Summary> for SitarSummary {
