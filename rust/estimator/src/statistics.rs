@@ -320,6 +320,33 @@ pub(crate) mod bits {
         [below, (below + 1).min(n - 1)]
     }
 
+    /// Mean and population standard deviation in one pass: moments about the first value
+    /// (the shift keeps a small variance accurate against a large mean), four independent
+    /// accumulators for instruction-level parallelism.
+    fn mean_and_std(v: &[u64]) -> (f64, f64) {
+        let pivot = f64::from_bits(v[0]);
+        let (mut s1, mut s2) = ([0.0f64; 4], [0.0f64; 4]);
+        let chunks = v.chunks_exact(4);
+        let rest = chunks.remainder();
+        for chunk in chunks {
+            for lane in 0..4 {
+                let d = f64::from_bits(chunk[lane]) - pivot;
+                s1[lane] += d;
+                s2[lane] += d * d;
+            }
+        }
+        for &b in rest {
+            let d = f64::from_bits(b) - pivot;
+            s1[0] += d;
+            s2[0] += d * d;
+        }
+        let n = v.len() as f64;
+        let (sum1, sum2) = (s1.iter().sum::<f64>(), s2.iter().sum::<f64>());
+        let shifted_mean = sum1 / n;
+        let variance = (sum2 / n - shifted_mean * shifted_mean).max(0.0);
+        (pivot + shifted_mean, variance.sqrt())
+    }
+
     fn sum(v: &[u64]) -> f64 {
         v.iter().map(|&b| f64::from_bits(b)).sum()
     }
@@ -349,7 +376,7 @@ pub(crate) mod bits {
         ranks.sort_unstable();
         ranks.dedup();
         select_ranks(v, 0, &ranks);
-        let mean = sum(v) / n as f64;
+        let (mean, std) = mean_and_std(v);
         let value = match setting {
             Setting::Mean => mean,
             Setting::Median => {
@@ -379,12 +406,7 @@ pub(crate) mod bits {
                 total / count as f64
             }
         };
-        let variance = v
-            .iter()
-            .map(|&b| (f64::from_bits(b) - mean).powi(2))
-            .sum::<f64>()
-            / n as f64;
-        (value, variance.sqrt())
+        (value, std)
     }
 
     #[cfg(test)]
