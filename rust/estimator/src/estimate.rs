@@ -190,6 +190,7 @@ pub struct PairwiseValues {
     key_of: Vec<Vec<u32>>,
     /// Per reference trial: `[b]` = first pose whose key is in block `b` or later.
     trial_block_starts: Vec<Vec<u32>>,
+    groups: Vec<Group>,
     /// Per trial: relative poses over `delta` frames.
     relative: Vec<RelativeWindows>,
     matchings: Vec<Matching>,
@@ -209,6 +210,18 @@ struct Pair {
     matching: usize,
     /// Values (float bits) of `matchings[matching].irregular`, in the same order.
     irregular_values: Vec<u64>,
+    /// Both trials have identical stamps: aggregated key by key through `groups` instead.
+    identity: bool,
+}
+
+/// Trials with identical stamps (at least two): their pairs associate one to one, so window
+/// values of all their pairs come from the same pose index.
+#[derive(Debug, Clone)]
+struct Group {
+    /// Trial indices, ascending.
+    members: Vec<usize>,
+    /// Pose index of each key in these trials' stamps (`u32::MAX`: not a stamp of theirs).
+    pose_of_key: Vec<u32>,
 }
 
 /// How two stamp lists associate, as windows; depends only on the stamps, so trials with
@@ -462,9 +475,30 @@ impl PairwiseValues {
                     estimate: j,
                     matching,
                     irregular_values,
+                    identity: group[i] == group[j],
                 }
             })
             .collect();
+        let mut members_of: HashMap<usize, Vec<usize>> = HashMap::new();
+        for (trial, &g) in group.iter().enumerate() {
+            members_of.entry(g).or_default().push(trial);
+        }
+        let mut groups: Vec<Group> = members_of
+            .into_values()
+            .filter(|members| members.len() >= 2)
+            .map(|members| {
+                // The first member is a reference trial (it has a later partner), so it has keys.
+                let mut pose_of_key = vec![u32::MAX; keys.len()];
+                for (pose, &key) in key_of[members[0]].iter().enumerate() {
+                    pose_of_key[key as usize] = pose as u32;
+                }
+                Group {
+                    members,
+                    pose_of_key,
+                }
+            })
+            .collect();
+        groups.sort_by_key(|g| g.members[0]);
 
         Ok(Self {
             trials: n,
@@ -475,6 +509,7 @@ impl PairwiseValues {
             ends,
             key_of,
             trial_block_starts,
+            groups,
             relative,
             matchings,
             pairs,
@@ -490,84 +525,139 @@ impl PairwiseValues {
         // faults all over again.
         let per_block: Vec<Vec<WindowEstimate>> = (0..blocks)
             .into_par_iter()
-            .map_init(Vec::<Vec<u64>>::new, |buckets, block| {
-                let block_start = block * BLOCK;
-                let block_len = BLOCK.min(self.keys.len() - block_start);
-                buckets.resize_with(BLOCK, || Vec::with_capacity(self.pairs.len()));
-                buckets.iter_mut().for_each(Vec::clear);
-                for pair in &self.pairs {
-                    let starts = &self.trial_block_starts[pair.reference];
-                    let (low, high) = (starts[block], starts[block + 1]);
-                    let keys_of_reference = &self.key_of[pair.reference];
-                    let (q, p) = (
-                        &self.relative[pair.reference],
-                        &self.relative[pair.estimate],
-                    );
-                    let matching = &self.matchings[pair.matching];
-                    let first = matching
-                        .segments
-                        .partition_point(|s| s.reference_start + s.len <= low);
-                    for segment in &matching.segments[first..] {
-                        if segment.reference_start >= high {
-                            break;
-                        }
-                        let from = segment.reference_start.max(low) as usize;
-                        let to = (segment.reference_start + segment.len).min(high) as usize;
-                        let shift = segment.estimate_start as usize;
-                        let (est_from, est_to) = (
-                            from - segment.reference_start as usize + shift,
-                            to - segment.reference_start as usize + shift,
+            .map_init(
+                || {
+                    (
+                        Vec::<Vec<u64>>::new(),
+                        Vec::<DVec3>::new(),
+                        Vec::<DQuat>::new(),
+                    )
+                },
+                |(buckets, translations, rotations), block| {
+                    let block_start = block * BLOCK;
+                    let block_len = BLOCK.min(self.keys.len() - block_start);
+                    buckets.resize_with(BLOCK, || Vec::with_capacity(self.pairs.len()));
+                    buckets.iter_mut().for_each(Vec::clear);
+                    for pair in self.pairs.iter().filter(|p| !p.identity) {
+                        let starts = &self.trial_block_starts[pair.reference];
+                        let (low, high) = (starts[block], starts[block + 1]);
+                        let keys_of_reference = &self.key_of[pair.reference];
+                        let (q, p) = (
+                            &self.relative[pair.reference],
+                            &self.relative[pair.estimate],
                         );
-                        let keys = &keys_of_reference[from..to];
-                        if with_rotation {
-                            for ((a, b), &key) in (from..to).zip(est_from..est_to).zip(keys) {
-                                let rq = RigidPose {
-                                    rotation: q.rotation[a],
-                                    translation: q.translation[a],
-                                };
-                                let rp = RigidPose {
-                                    rotation: p.rotation[b],
-                                    translation: p.translation[b],
-                                };
-                                buckets[key as usize - block_start]
-                                    .push(value_bits(relation, rq, rp));
+                        let matching = &self.matchings[pair.matching];
+                        let first = matching
+                            .segments
+                            .partition_point(|s| s.reference_start + s.len <= low);
+                        for segment in &matching.segments[first..] {
+                            if segment.reference_start >= high {
+                                break;
                             }
-                        } else {
-                            let translations = q.translation[from..to]
-                                .iter()
-                                .zip(&p.translation[est_from..est_to]);
-                            for ((tq, tp), &key) in translations.zip(keys) {
-                                let value = (*tp - *tq).length() + 0.0;
-                                buckets[key as usize - block_start].push(value.to_bits());
+                            let from = segment.reference_start.max(low) as usize;
+                            let to = (segment.reference_start + segment.len).min(high) as usize;
+                            let shift = segment.estimate_start as usize;
+                            let (est_from, est_to) = (
+                                from - segment.reference_start as usize + shift,
+                                to - segment.reference_start as usize + shift,
+                            );
+                            let keys = &keys_of_reference[from..to];
+                            if with_rotation {
+                                for ((a, b), &key) in (from..to).zip(est_from..est_to).zip(keys) {
+                                    let rq = RigidPose {
+                                        rotation: q.rotation[a],
+                                        translation: q.translation[a],
+                                    };
+                                    let rp = RigidPose {
+                                        rotation: p.rotation[b],
+                                        translation: p.translation[b],
+                                    };
+                                    buckets[key as usize - block_start]
+                                        .push(value_bits(relation, rq, rp));
+                                }
+                            } else {
+                                let translations = q.translation[from..to]
+                                    .iter()
+                                    .zip(&p.translation[est_from..est_to]);
+                                for ((tq, tp), &key) in translations.zip(keys) {
+                                    let value = (*tp - *tq).length() + 0.0;
+                                    buckets[key as usize - block_start].push(value.to_bits());
+                                }
+                            }
+                        }
+                        let range = matching.irregular_block_starts[block] as usize
+                            ..matching.irregular_block_starts[block + 1] as usize;
+                        for (&key, &value) in matching.irregular_keys[range.clone()]
+                            .iter()
+                            .zip(&pair.irregular_values[range])
+                        {
+                            buckets[key as usize - block_start].push(value);
+                        }
+                    }
+                    // Identity pairs, key by key: the group's poses at that key are gathered once
+                    // (a few kB, cache-resident) and every pair inside the group is formed from them.
+                    for (offset, bucket) in buckets[..block_len].iter_mut().enumerate() {
+                        for group in &self.groups {
+                            let pose = group.pose_of_key[block_start + offset] as usize;
+                            if pose >= self.relative[group.members[0]].translation.len() {
+                                continue; // not a stamp of this group, or fewer than delta frames after it
+                            }
+                            translations.clear();
+                            translations.extend(
+                                group
+                                    .members
+                                    .iter()
+                                    .map(|&t| self.relative[t].translation[pose]),
+                            );
+                            if with_rotation {
+                                rotations.clear();
+                                rotations.extend(
+                                    group
+                                        .members
+                                        .iter()
+                                        .map(|&t| self.relative[t].rotation[pose]),
+                                );
+                                for x in 0..translations.len() {
+                                    let q = RigidPose {
+                                        rotation: rotations[x],
+                                        translation: translations[x],
+                                    };
+                                    for y in x + 1..translations.len() {
+                                        let p = RigidPose {
+                                            rotation: rotations[y],
+                                            translation: translations[y],
+                                        };
+                                        bucket.push(value_bits(relation, q, p));
+                                    }
+                                }
+                            } else {
+                                for (x, tq) in translations.iter().enumerate() {
+                                    for tp in &translations[x + 1..] {
+                                        bucket.push(((*tp - *tq).length() + 0.0).to_bits());
+                                    }
+                                }
                             }
                         }
                     }
-                    let range = matching.irregular_block_starts[block] as usize
-                        ..matching.irregular_block_starts[block + 1] as usize;
-                    for (&key, &value) in matching.irregular_keys[range.clone()]
-                        .iter()
-                        .zip(&pair.irregular_values[range])
-                    {
-                        buckets[key as usize - block_start].push(value);
-                    }
-                }
-                buckets[..block_len]
-                    .iter_mut()
-                    .enumerate()
-                    .filter(|(_, values)| !values.is_empty())
-                    .map(|(offset, values)| {
-                        let key = block_start + offset;
-                        let (error, spread) = statistics::bits::window_statistics(values, setting);
-                        WindowEstimate {
-                            start: self.keys[key],
-                            end: self.ends[key],
-                            error_m: error,
-                            pairs: values.len(),
-                            spread_m: spread,
-                        }
-                    })
-                    .collect::<Vec<_>>()
-            })
+                    buckets[..block_len]
+                        .iter_mut()
+                        .enumerate()
+                        .filter(|(_, values)| !values.is_empty())
+                        .map(|(offset, values)| {
+                            let key = block_start + offset;
+                            let (error, spread) =
+                                statistics::bits::window_statistics(values, setting);
+                            WindowEstimate {
+                                start: self.keys[key],
+                                end: self.ends[key],
+                                error_m: error,
+                                pairs: values.len(),
+                                spread_m: spread,
+                            }
+                        })
+                        .collect::<Vec<_>>()
+                },
+            )
             .collect();
         let windows = per_block.into_iter().flatten().collect();
         Estimate {
