@@ -1,4 +1,5 @@
-//! `estimate_files gen DIR TRIALS POSES [SEED]` writes synthetic trials;
+//! `estimate_files gen DIR TRIALS POSES [SEED] [uniform]` writes synthetic trials (every third
+//! with dropped frames, unless `uniform`);
 //! `estimate_files run [--setting S] [--repeat N] FILE...` reads them and prints the legacy CSV
 //! (stdout) and the wall time per run (stderr). Used by `scripts/bench-vs-evo`.
 
@@ -16,7 +17,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     match args.first().map(String::as_str) {
         Some("gen") if args.len() >= 4 => {
             let seed = args.get(4).map_or(Ok(1), |s| s.parse())?;
-            let paths = synthetic::write_trials(&PathBuf::from(&args[1]), args[2].parse()?, args[3].parse()?, seed);
+            let drops = args.get(5).map(String::as_str) != Some("uniform");
+            let paths =
+                synthetic::write_trials(&PathBuf::from(&args[1]), args[2].parse()?, args[3].parse()?, seed, drops);
             eprintln!("wrote {} trials", paths.len());
             Ok(())
         }

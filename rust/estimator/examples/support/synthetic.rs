@@ -26,9 +26,10 @@ impl Rng {
     }
 }
 
-/// `count` trials of `poses` poses at 20 Hz (TUM VI-like) with drift, own world frames, and
-/// dropped frames in every third trial.
-pub fn trials(count: usize, poses: usize, seed: u64) -> Vec<Trajectory> {
+/// `count` trials of `poses` poses at 20 Hz (TUM VI-like) with drift and their own world
+/// frames; with `drops`, every third trial loses about 1 % of its frames (so those pairs need
+/// a real association).
+pub fn trials(count: usize, poses: usize, seed: u64, drops: bool) -> Vec<Trajectory> {
     let mut rng = Rng::new(seed);
     (0..count)
         .map(|index| {
@@ -49,7 +50,7 @@ pub fn trials(count: usize, poses: usize, seed: u64) -> Vec<Trajectory> {
                 let sigma = if hard { 0.003 } else { 0.0003 };
                 drift_t += DVec3::new(rng.normal(), rng.normal(), rng.normal()) * sigma;
                 drift_r += DVec3::new(rng.normal(), rng.normal(), rng.normal()) * sigma * 0.5;
-                let drop = index % 3 == 2 && rng.next_f64() < 0.01 && k > 0;
+                let drop = drops && index % 3 == 2 && rng.next_f64() < 0.01 && k > 0;
                 if drop {
                     continue;
                 }
@@ -75,10 +76,16 @@ pub fn trials(count: usize, poses: usize, seed: u64) -> Vec<Trajectory> {
         .collect()
 }
 
-/// Writes `trials(count, poses, seed)` as `trial_NNN.txt` into `dir`; returns the paths.
-pub fn write_trials(dir: &Path, count: usize, poses: usize, seed: u64) -> Vec<PathBuf> {
+/// Writes `trials(count, poses, seed, drops)` as `trial_NNN.txt` into `dir`; returns the paths.
+pub fn write_trials(
+    dir: &Path,
+    count: usize,
+    poses: usize,
+    seed: u64,
+    drops: bool,
+) -> Vec<PathBuf> {
     std::fs::create_dir_all(dir).expect("create bench data dir");
-    trials(count, poses, seed)
+    trials(count, poses, seed, drops)
         .iter()
         .enumerate()
         .map(|(i, t)| {
