@@ -290,6 +290,26 @@ fn record(h: H) -> Summary {
     summary
 }
 
+/// v rotated by the unit quaternion q = (x, y, z, w): v + 2w(u×v) + 2u×(u×v).
+fn rotate(q: (f64, f64, f64, f64), v: (f64, f64, f64)) -> (f64, f64, f64) {
+    let (x, y, z, w) = q;
+    let cross = |a: (f64, f64, f64), b: (f64, f64, f64)| {
+        (
+            a.1 * b.2 - a.2 * b.1,
+            a.2 * b.0 - a.0 * b.2,
+            a.0 * b.1 - a.1 * b.0,
+        )
+    };
+    let t = cross((x, y, z), v);
+    let t = (2.0 * t.0, 2.0 * t.1, 2.0 * t.2);
+    let u = cross((x, y, z), t);
+    (
+        v.0 + w * t.0 + u.0,
+        v.1 + w * t.1 + u.1,
+        v.2 + w * t.2 + u.2,
+    )
+}
+
 const ERRORS: [f64; 6] = [0.01, 0.12, 0.06, 0.01, 0.2, 0.03];
 
 #[test]
@@ -409,6 +429,12 @@ fn whole_session_through_the_c_abi() {
         );
         let qn = (m.qx * m.qx + m.qy * m.qy + m.qz * m.qz + m.qw * m.qw).sqrt();
         assert!((qn - 1.0).abs() < 1e-9);
+        // Warning signs: the rotation takes local +Y onto the surface normal.
+        let up = rotate((m.qx, m.qy, m.qz, m.qw), (0.0, 1.0, 0.0));
+        assert!(
+            (up.0 - m.nx).abs() < 1e-9 && (up.1 - m.ny).abs() < 1e-9 && (up.2 - m.nz).abs() < 1e-9,
+            "{up:?} vs {m:?}"
+        );
     }
 
     // Render plan: segments carry their sub-trajectory's class.
