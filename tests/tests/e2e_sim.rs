@@ -31,6 +31,13 @@ fn sim_flow_gives_the_estimators_numbers_progressively() {
         .unwrap();
     let size = std::fs::metadata(&recording).unwrap().len();
     assert_eq!(progress.last(), Some(&(size, size)));
+    // A retried PUT with the same bytes is accepted and starts nothing new; other bytes are refused.
+    let url = format!("{}/v1/sessions/{id}/recording", server.url());
+    let bytes = std::fs::read(&recording).unwrap();
+    let (status, _, body) = raw("PUT", &url, Some("application/octet-stream"), &bytes, &[]);
+    assert_eq!(status, 202, "{body}");
+    let (status, ct, body) = raw("PUT", &url, Some("application/octet-stream"), &bytes[..bytes.len() - 1], &[]);
+    assert_eq!(error_code(status, &ct, &body, 409), "conflict");
 
     let mut seen_while_playing = HashSet::new();
     let mut early_csv = None;

@@ -216,6 +216,18 @@ impl Db {
         .map(|_| ())
     }
 
+    /// Records the first recording of a session that is still `created`;
+    /// false when another request got there first (so playback starts once).
+    pub fn claim_recording(&self, id: &str, bytes: u64) -> Result<bool, Error> {
+        self.with(|c| {
+            c.execute(
+                "UPDATE sessions SET recording_bytes = ?2, state = 'uploaded' WHERE id = ?1 AND state = 'created'",
+                params![id, bytes as i64],
+            )
+        })
+        .map(|n| n == 1)
+    }
+
     pub fn set_results(&self, id: &str, trials: u32) -> Result<(), Error> {
         self.with(|c| {
             c.execute(

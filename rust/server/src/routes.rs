@@ -263,7 +263,7 @@ async fn put_recording(
             "a recording is a raw body (application/octet-stream or video/mp4), not {ct}"
         )));
     }
-    if !matches!(row.state.as_str(), "created" | "uploaded") {
+    if row.playback == "upload" && !matches!(row.state.as_str(), "created" | "uploaded") {
         return Err(Error::Conflict(format!(
             "session {id} is {}: the recording can no longer change",
             row.state
@@ -283,17 +283,64 @@ async fn put_recording(
 }
 
 /// Moves an uploaded recording into place and starts playback (sim, adb).
+///
+/// Only the first whole upload starts playback. A repeated upload with the
+/// same bytes (a client retry whose first answer was lost) is accepted as is;
+/// different bytes once playback has started are a conflict.
 fn accept_recording(shared: &Arc<Shared>, row: &SessionRow, temp: TempFile) -> Result<(), Error> {
     if temp.bytes == 0 {
         return Err(Error::BadRequest("the recording is empty".into()));
     }
     let bytes = temp.bytes;
-    temp.publish(&shared.files.recording(&row.id))?;
-    shared.db.set_recording(&row.id, bytes)?;
-    if row.playback != "upload" {
+    let dest = shared.files.recording(&row.id);
+    if row.playback == "upload" {
+        temp.publish(&dest)?;
+        return shared.db.set_recording(&row.id, bytes);
+    }
+    if dest.is_file() {
+        return if same_content(&temp.path, &dest)? {
+            Ok(())
+        } else {
+            Err(Error::Conflict(format!(
+                "session {} already has another recording and its playback has started",
+                row.id
+            )))
+        };
+    }
+    temp.publish(&dest)?;
+    if shared.db.claim_recording(&row.id, bytes)? {
         jobs::spawn_session(shared.clone(), row.id.clone());
     }
     Ok(())
+}
+
+fn same_content(a: &std::path::Path, b: &std::path::Path) -> Result<bool, Error> {
+    use std::io::Read;
+    let open =
+        |p: &std::path::Path| std::fs::File::open(p).map_err(|e| Error::io("cannot open", p, e));
+    let (mut fa, mut fb) = (open(a)?, open(b)?);
+    let len = |f: &std::fs::File, p| {
+        f.metadata()
+            .map(|m| m.len())
+            .map_err(|e| Error::io("cannot stat", p, e))
+    };
+    if len(&fa, a)? != len(&fb, b)? {
+        return Ok(false);
+    }
+    let (mut ba, mut bb) = (vec![0u8; 1 << 20], vec![0u8; 1 << 20]);
+    loop {
+        let n = fa
+            .read(&mut ba)
+            .map_err(|e| Error::io("cannot read", a, e))?;
+        if n == 0 {
+            return Ok(true);
+        }
+        fb.read_exact(&mut bb[..n])
+            .map_err(|e| Error::io("cannot read", b, e))?;
+        if ba[..n] != bb[..n] {
+            return Ok(false);
+        }
+    }
 }
 
 async fn post_trial(

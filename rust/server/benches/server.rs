@@ -1,0 +1,140 @@
+//! Backend figures: overhead beyond playback, upload throughput, 50 concurrent sessions.
+//!
+//! `cargo bench -p sitar-server`
+
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use sitar_client::{Client, NewSession, SessionState};
+use sitar_server::{PlaybackKind, Server, ServerConfig, ServerHandle};
+
+fn sim_server(data: &Path, speed: f64, devices: u32) -> ServerHandle {
+    let mut config = ServerConfig::new(data);
+    config.playback = PlaybackKind::Sim;
+    config.sim.speed = speed;
+    config.sim.devices = devices;
+    Server::spawn(config, "127.0.0.1:0".parse().unwrap()).unwrap()
+}
+
+fn run_session(client: &Client, recording: &Path, trials: u32) -> Duration {
+    let id = client
+        .create_session(&NewSession {
+            trials,
+            setting: "trim_mean_30".into(),
+            playback: "sim".into(),
+        })
+        .unwrap();
+    client
+        .upload_recording(&id, recording, &mut |_, _| {})
+        .unwrap();
+    let started = Instant::now();
+    let status = client
+        .wait(
+            &id,
+            Duration::from_millis(5),
+            Duration::from_secs(300),
+            &mut |_| {},
+        )
+        .unwrap();
+    assert_eq!(status.state, SessionState::Done, "{status:?}");
+    assert_eq!(status.trials_done, trials);
+    started.elapsed()
+}
+
+/// 20 trials × 450 poses (15 s at 30 fps) on one simulated phone at 300× (50 ms a trial):
+/// the figure is the session's wall time minus the playback time d·⌈T/D⌉ = 1 s.
+fn overhead_beyond_playback(c: &mut Criterion) {
+    let dir = tempfile::tempdir().unwrap();
+    let recording = dir.path().join("walk.rec");
+    let rec = sitar_sim::Recording::demo(15.0, 30.0, 42).unwrap();
+    assert_eq!(rec.frames(), 450);
+    std::fs::write(&recording, rec.to_bytes()).unwrap();
+    let speed = 300.0;
+    let playback = Duration::from_secs_f64(rec.duration_s() / speed * 20.0);
+    let server = sim_server(&dir.path().join("data"), speed, 1);
+    let client = Client::new(&server.url()).unwrap();
+    let mut group = c.benchmark_group("server");
+    group.sample_size(10);
+    group.bench_function("overhead_beyond_playback_20x450", |b| {
+        b.iter_custom(|iters| {
+            (0..iters)
+                .map(|_| run_session(&client, &recording, 20).saturating_sub(playback))
+                .sum()
+        })
+    });
+    group.finish();
+}
+
+/// PUT of a 256 MiB recording over loopback, streamed from disk to the data directory.
+fn upload_throughput(c: &mut Criterion) {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("big.bin");
+    let size: u64 = 256 << 20;
+    {
+        use std::io::Write;
+        let mut f = std::io::BufWriter::new(std::fs::File::create(&file).unwrap());
+        let block: Vec<u8> = (0..1 << 20).map(|i: u32| (i * 31 % 251) as u8).collect();
+        for _ in 0..size >> 20 {
+            f.write_all(&block).unwrap();
+        }
+    }
+    let server = sim_server(&dir.path().join("data"), 1.0, 1);
+    let client = Client::new(&server.url()).unwrap();
+    let id = client
+        .create_session(&NewSession {
+            trials: 2,
+            setting: "mean".into(),
+            playback: "upload".into(),
+        })
+        .unwrap();
+    let mut group = c.benchmark_group("server");
+    group.sample_size(10);
+    group.throughput(Throughput::Bytes(size));
+    group.bench_function("upload_256MiB", |b| {
+        b.iter(|| client.upload_recording(&id, &file, &mut |_, _| {}).unwrap())
+    });
+    group.finish();
+}
+
+/// 50 sessions at once (5 trials × 90 poses each, 2 simulated phones per session):
+/// every one must finish with all its trials.
+fn concurrent_sessions(c: &mut Criterion) {
+    let dir = tempfile::tempdir().unwrap();
+    let recording = dir.path().join("walk.rec");
+    std::fs::write(
+        &recording,
+        sitar_sim::Recording::demo(3.0, 30.0, 5).unwrap().to_bytes(),
+    )
+    .unwrap();
+    let server = sim_server(&dir.path().join("data"), 30.0, 2);
+    let url = server.url();
+    let mut group = c.benchmark_group("server");
+    group.sample_size(10);
+    group.bench_function("concurrent_50_sessions", |b| {
+        b.iter_custom(|iters| {
+            let started = Instant::now();
+            for _ in 0..iters {
+                std::thread::scope(|scope| {
+                    for _ in 0..50 {
+                        let (url, recording) = (&url, &recording);
+                        scope.spawn(move || {
+                            let client = Client::new(url).unwrap();
+                            run_session(&client, recording, 5);
+                        });
+                    }
+                });
+            }
+            started.elapsed()
+        })
+    });
+    group.finish();
+}
+
+criterion_group!(
+    benches,
+    overhead_beyond_playback,
+    upload_throughput,
+    concurrent_sessions
+);
+criterion_main!(benches);
