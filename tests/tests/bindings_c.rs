@@ -96,6 +96,14 @@ struct Segment {
 
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default)]
+struct SubResult {
+    error_m: f64,
+    subtrajectory: u32,
+    error_class: i32,
+}
+
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default)]
 struct JobProgress {
     state: i32,
     error_code: i32,
@@ -128,6 +136,7 @@ struct Api {
     unreliable: extern "C" fn(H, *mut i32) -> i32,
     sub_class: extern "C" fn(H, u32, *mut i32) -> i32,
     segments: extern "C" fn(H, *mut Segment, usize, *mut usize) -> i32,
+    sub_results: extern "C" fn(H, *mut SubResult, usize, *mut usize) -> i32,
     plan_ends: extern "C" fn(H, *mut Pose, *mut Pose, *mut u32) -> i32,
     trajectory_tum: extern "C" fn(H, *mut c_char, usize, *mut usize) -> i32,
     save: extern "C" fn(H, *const c_char) -> i32,
@@ -175,6 +184,7 @@ fn api() -> &'static Api {
             unreliable: sym!("sitar_session_results_unreliable"),
             sub_class: sym!("sitar_session_subtrajectory_class"),
             segments: sym!("sitar_session_segments"),
+            sub_results: sym!("sitar_session_subtrajectory_results"),
             plan_ends: sym!("sitar_session_plan_ends"),
             trajectory_tum: sym!("sitar_session_trajectory_tum"),
             save: sym!("sitar_session_save"),
@@ -383,6 +393,15 @@ fn whole_session_through_the_c_abi() {
     assert_eq!((a.error_at)(h, 1_000 * FRAME_NS, &mut class, &mut err), OK);
     assert_eq!(class, 0);
     assert!(err.is_nan());
+    let mut results = [SubResult::default(); 8];
+    assert_eq!((a.sub_results)(h, results.as_mut_ptr(), 8, &mut len), OK);
+    assert_eq!(len, ERRORS.len());
+    for (k, r) in results[..len].iter().enumerate() {
+        assert_eq!(
+            (r.subtrajectory, r.error_m, r.error_class),
+            (k as u32, ERRORS[k], class_of(ERRORS[k]))
+        );
+    }
     let mut unreliable = -1;
     assert_eq!((a.unreliable)(h, &mut unreliable), OK);
     assert_eq!(unreliable, 0);

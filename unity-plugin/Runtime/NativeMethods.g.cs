@@ -115,6 +115,13 @@ namespace Sitar
         internal static extern int sitar_session_subtrajectory_class(ulong h, uint k, int* out_class);
 
         /// <summary>
+        ///  Every sub-trajectory's error (NaN if unknown) and class, in order
+        ///  (array-output convention).
+        /// </summary>
+        [DllImport(__DllName, EntryPoint = "sitar_session_subtrajectory_results", CallingConvention = CallingConvention.Cdecl, ExactSpelling = true)]
+        internal static extern int sitar_session_subtrajectory_results(ulong h, SitarSubtrajectoryResult* @out, System.UIntPtr capacity, System.UIntPtr* out_len);
+
+        /// <summary>
         ///  Render plan: path segments (array-output convention).
         /// </summary>
         [DllImport(__DllName, EntryPoint = "sitar_session_segments", CallingConvention = CallingConvention.Cdecl, ExactSpelling = true)]
@@ -490,6 +497,26 @@ namespace Sitar
         public uint subtrajectory;
         /// <summary>
         ///  Class of that sub-trajectory: 0 unknown, 1 low, 2 medium, 3 high.
+        /// </summary>
+        public int error_class;
+    }
+
+    /// <summary>
+    ///  The result of one sub-trajectory.
+    /// </summary>
+    [StructLayout(LayoutKind.Sequential)]
+    internal unsafe partial struct SitarSubtrajectoryResult
+    {
+        /// <summary>
+        ///  Estimated error (metres); NaN when no result window is near its start.
+        /// </summary>
+        public double error_m;
+        /// <summary>
+        ///  Sub-trajectory number (from 0).
+        /// </summary>
+        public uint subtrajectory;
+        /// <summary>
+        ///  0 unknown, 1 low, 2 medium, 3 high.
         /// </summary>
         public int error_class;
     }

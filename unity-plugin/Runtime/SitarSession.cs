@@ -107,6 +107,14 @@ namespace Sitar
         public double ErrorM;
     }
 
+    /// <summary>The result of one sub-trajectory: error (metres; null when no result window is near) and class.</summary>
+    public struct SubtrajectoryResult
+    {
+        public uint Subtrajectory;
+        public double? ErrorM;
+        public ErrorClass ErrorClass;
+    }
+
     /// <summary>A path segment: a cylinder of Length centred at C, local +Y along the path.</summary>
     public struct Segment
     {
@@ -430,6 +438,24 @@ namespace Sitar
                 };
             }
             return markers;
+        }
+
+        /// <summary>Every sub-trajectory's error and class, in order (unknown before results arrive).</summary>
+        public SubtrajectoryResult[] Results()
+        {
+            ulong id = Id;
+            SitarSubtrajectoryResult[] raw = Items<SitarSubtrajectoryResult>((b, l) => { fixed (SitarSubtrajectoryResult* p = b) return NativeMethods.sitar_session_subtrajectory_results(id, p, Native.Cap(b), l); });
+            SubtrajectoryResult[] results = new SubtrajectoryResult[raw.Length];
+            for (int i = 0; i < raw.Length; i++)
+            {
+                results[i] = new SubtrajectoryResult
+                {
+                    Subtrajectory = raw[i].subtrajectory,
+                    ErrorM = double.IsNaN(raw[i].error_m) ? (double?)null : raw[i].error_m,
+                    ErrorClass = (ErrorClass)raw[i].error_class,
+                };
+            }
+            return results;
         }
 
         /// <summary>What to draw: segments, joints, frustums, start and stop.</summary>

@@ -87,6 +87,7 @@ static class HostTest
         Check(s.GetSummary().Equals(sum), "summary again");
 
         ExpectSitar(SitarErrorCode.InvalidState, "", () => s.Markers());
+        Check(s.Results().Length == 6 && s.Results().All(r => r.ErrorM == null && r.ErrorClass == ErrorClass.Unknown), "unknown before results");
         double? err;
         Check(s.ErrorAt(10 * FrameNs, out err) == ErrorClass.Unknown && err == null, "no results yet");
 
@@ -97,6 +98,12 @@ static class HostTest
             Check(s.SubtrajectoryClass((uint)k) == ClassOf(Errors[k]), "class of sub " + k);
         }
         Check(s.ErrorAt(1000 * FrameNs, out err) == ErrorClass.Unknown && err == null, "far from any window");
+        SubtrajectoryResult[] results = s.Results();
+        Check(results.Length == Errors.Length, "results of every sub-trajectory");
+        for (int k = 0; k < results.Length; k++)
+        {
+            Check(results[k].Subtrajectory == k && results[k].ErrorM == Errors[k] && results[k].ErrorClass == ClassOf(Errors[k]), "result " + k);
+        }
         Check(!s.ResultsUnreliable(), "reliable");
 
         Marker[] markers = s.Markers().OrderBy(m => m.Subtrajectory).ToArray();

@@ -171,6 +171,16 @@ typedef struct {
   double error_m;
 } SitarMarker;
 
+// The result of one sub-trajectory.
+typedef struct {
+  // Estimated error (metres); NaN when no result window is near its start.
+  double error_m;
+  // Sub-trajectory number (from 0).
+  uint32_t subtrajectory;
+  // 0 unknown, 1 low, 2 medium, 3 high.
+  int32_t error_class;
+} SitarSubtrajectoryResult;
+
 // A render-plan segment: a cylinder of `length` centred at `c`, local +Y along the path.
 typedef struct {
   // Centre x.
@@ -305,6 +315,13 @@ int32_t sitar_session_results_unreliable(SitarHandle h, int32_t *out);
 
 // The class of sub-trajectory `k` (0 unknown, 1 low, 2 medium, 3 high).
 int32_t sitar_session_subtrajectory_class(SitarHandle h, uint32_t k, int32_t *out_class);
+
+// Every sub-trajectory's error (NaN if unknown) and class, in order
+// (array-output convention).
+int32_t sitar_session_subtrajectory_results(SitarHandle h,
+                                            SitarSubtrajectoryResult *out,
+                                            size_t capacity,
+                                            size_t *out_len);
 
 // Render plan: path segments (array-output convention).
 int32_t sitar_session_segments(SitarHandle h, SitarSegment *out, size_t capacity, size_t *out_len);

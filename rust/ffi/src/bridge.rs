@@ -10,7 +10,7 @@ use crate::error::Error;
 use crate::registry::{Registry, SitarHandle};
 use crate::types::{
     SitarFrustum, SitarIntrinsics, SitarJobProgress, SitarJoint, SitarMarker, SitarPose,
-    SitarSegment, SitarSummary,
+    SitarSegment, SitarSubtrajectoryResult, SitarSummary,
 };
 use crate::upload::UploadJob;
 
@@ -167,6 +167,23 @@ pub fn session_results_unreliable(h: SitarHandle) -> Result<bool, Error> {
 /// The class of sub-trajectory `k`.
 pub fn session_subtrajectory_class(h: SitarHandle, k: u32) -> Result<i32, Error> {
     with_session(h, |s| Ok(s.subtrajectory_class(k) as i32))
+}
+
+/// Every sub-trajectory's error and class, in order.
+pub fn session_subtrajectory_results(
+    h: SitarHandle,
+) -> Result<Vec<SitarSubtrajectoryResult>, Error> {
+    with_session(h, |s| {
+        Ok(s.subtrajectory_errors()
+            .into_iter()
+            .enumerate()
+            .map(|(k, e)| SitarSubtrajectoryResult {
+                error_m: e.unwrap_or(f64::NAN),
+                subtrajectory: k as u32,
+                error_class: s.subtrajectory_class(k as u32) as i32,
+            })
+            .collect())
+    })
 }
 
 /// The render plan with each item's class.

@@ -27,7 +27,7 @@ use crate::guard::{run_ffi_safe, with_last_error};
 use crate::registry::SitarHandle;
 use crate::types::{
     SitarFrustum, SitarIntrinsics, SitarJobProgress, SitarJoint, SitarMarker, SitarPose,
-    SitarSegment, SitarSummary,
+    SitarSegment, SitarSubtrajectoryResult, SitarSummary,
 };
 
 fn text_arg<'a>(p: *const c_char, name: &'static str) -> Result<&'a str, Error> {
@@ -278,6 +278,26 @@ pub extern "C" fn sitar_session_subtrajectory_class(
         let out_class = out(out_class, "out_class")?;
         *out_class = bridge::session_subtrajectory_class(h, k)?;
         Ok(())
+    })
+}
+
+/// Every sub-trajectory's error (NaN if unknown) and class, in order
+/// (array-output convention).
+#[no_mangle]
+pub extern "C" fn sitar_session_subtrajectory_results(
+    h: SitarHandle,
+    out: *mut SitarSubtrajectoryResult,
+    capacity: usize,
+    out_len: *mut usize,
+) -> i32 {
+    run_ffi_safe(|| {
+        check_array_out(out, capacity, out_len)?;
+        copy_items(
+            &bridge::session_subtrajectory_results(h)?,
+            out,
+            capacity,
+            out_len,
+        )
     })
 }
 

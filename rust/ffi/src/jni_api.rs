@@ -408,6 +408,29 @@ pub extern "system" fn Java_io_github_sitar_Native_sessionSubtrajectoryClass<'l>
     })
 }
 
+/// `double[3 n] sessionSubtrajectoryResults(long h)`: per sub-trajectory errorM (NaN if unknown), subtrajectory, class.
+#[no_mangle]
+pub extern "system" fn Java_io_github_sitar_Native_sessionSubtrajectoryResults<'l>(
+    mut env: EnvUnowned<'l>,
+    _c: JClass<'l>,
+    h: jlong,
+) -> JDoubleArray<'l> {
+    run(&mut env, |env| {
+        let results = bridge::session_subtrajectory_results(handle(h))?;
+        let flat: Vec<f64> = results
+            .iter()
+            .flat_map(|r| {
+                [
+                    r.error_m,
+                    f64::from(r.subtrajectory),
+                    f64::from(r.error_class),
+                ]
+            })
+            .collect();
+        doubles(env, &flat)
+    })
+}
+
 /// Flattens a render plan: `[nSegments, nJoints, nFrustums, hasStart, hasStop,`
 /// segments × (cx cy cz qx qy qz qw length subtrajectory class),
 /// joints × (px py pz subtrajectory class),

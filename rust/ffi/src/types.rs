@@ -141,6 +141,18 @@ pub struct SitarFrustum {
     pub error_class: i32,
 }
 
+/// The result of one sub-trajectory.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct SitarSubtrajectoryResult {
+    /// Estimated error (metres); NaN when no result window is near its start.
+    pub error_m: f64,
+    /// Sub-trajectory number (from 0).
+    pub subtrajectory: u32,
+    /// 0 unknown, 1 low, 2 medium, 3 high.
+    pub error_class: i32,
+}
+
 /// States of a background upload job (`SitarJobProgress.state`).
 #[repr(i32)]
 #[allow(non_camel_case_types)]

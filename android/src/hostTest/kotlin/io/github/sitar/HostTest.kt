@@ -76,6 +76,8 @@ private fun wholeSession(tmp: File) {
     check(s.summary() == summary, "summary again")
 
     expectSitar(SitarException.INVALID_STATE, "") { s.markers() }
+    check(s.results().all { it.errorM == null && it.errorClass == ErrorClass.UNKNOWN } && s.results().size == 6, "unknown before results")
+    check(s.progress() == null, "no upload yet")
     check(s.errorAt(10 * FRAME_NS) == ErrorAt(ErrorClass.UNKNOWN, null), "no results yet")
 
     s.loadResults(resultsCsv())
@@ -84,6 +86,10 @@ private fun wholeSession(tmp: File) {
         check(s.subtrajectoryClass(k) == classOf(ERRORS[k]), "class of sub $k")
     }
     check(s.errorAt(1000 * FRAME_NS).errorM == null, "far from any window")
+    val results = s.results()
+    check(results.size == ERRORS.size, "results of every sub-trajectory: $results")
+    for (r in results) check(r == SubtrajectoryResult(r.subtrajectory, ERRORS[r.subtrajectory], classOf(ERRORS[r.subtrajectory])), "result $r")
+    check(results.map { it.subtrajectory } == (0 until ERRORS.size).toList(), "in order")
     check(!s.resultsUnreliable(), "reliable")
 
     val markers = s.markers().sortedBy { it.subtrajectory }
@@ -167,6 +173,7 @@ private fun upload(tmp: File) {
     }
     check(p.state == UploadState.FAILED && p.errorCode == SitarException.NETWORK, "upload to a closed port: $p")
     check(job.message().contains("127.0.0.1"), job.message())
+    check(s.progress() == p, "session progress is the latest job's")
     job.close()
     job.close()
 

@@ -27,6 +27,7 @@ internal object Native {
     @JvmStatic external fun sessionMarkers(h: Long): DoubleArray
     @JvmStatic external fun sessionResultsUnreliable(h: Long): Boolean
     @JvmStatic external fun sessionSubtrajectoryClass(h: Long, k: Int): Int
+    @JvmStatic external fun sessionSubtrajectoryResults(h: Long): DoubleArray
     @JvmStatic external fun sessionRenderPlan(h: Long): DoubleArray
     @JvmStatic external fun sessionTrajectoryTum(h: Long): String
     @JvmStatic external fun sessionSave(h: Long, dir: String)

@@ -62,6 +62,15 @@ class SitarSession private constructor(handle: Long) : AutoCloseable {
         return (0 until v.size / Marker.STRIDE).map { Marker.at(v, it * Marker.STRIDE) }
     }
 
+    /** Every sub-trajectory's error and class, in order (all unknown before results arrive). */
+    fun results(): List<SubtrajectoryResult> {
+        val v = Native.sessionSubtrajectoryResults(handle)
+        return (0 until v.size / 3).map {
+            val e = v[3 * it]
+            SubtrajectoryResult(v[3 * it + 1].toInt(), if (e.isNaN()) null else e, ErrorClass.of(v[3 * it + 2].toInt()))
+        }
+    }
+
     /** Whether the loaded results are too noisy to trust (show a warning). */
     fun resultsUnreliable(): Boolean = Native.sessionResultsUnreliable(handle)
 
@@ -80,8 +89,16 @@ class SitarSession private constructor(handle: Long) : AutoCloseable {
      * [optionsJson]: `server_url` (else the config's), `trials`, `setting`,
      * `playback`, `poll_interval_ms`.
      */
-    fun upload(recordingPath: String, optionsJson: String = ""): UploadJob =
-        UploadJob(Native.uploadStart(handle, recordingPath, optionsJson))
+    fun upload(recordingPath: String, optionsJson: String = ""): UploadJob {
+        val job = UploadJob(Native.uploadStart(handle, recordingPath, optionsJson))
+        lastUpload = job
+        return job
+    }
+
+    @Volatile private var lastUpload: UploadJob? = null
+
+    /** Progress of the latest [upload] (null if none was started). */
+    fun progress(): UploadProgress? = lastUpload?.progress()
 
     /** Frees the native session exactly once; later calls are harmless. */
     @Synchronized

@@ -52,6 +52,9 @@ data class Marker(
     }
 }
 
+/** The result of one sub-trajectory: error (metres; null when no result window is near) and class. */
+data class SubtrajectoryResult(val subtrajectory: Int, val errorM: Double?, val errorClass: ErrorClass)
+
 /** A 3-vector (metres). */
 data class Vec3(val x: Double, val y: Double, val z: Double)
 
