@@ -88,6 +88,24 @@ def write_tum(path, stamps, pos, rot, seconds=False):
     path.write_text("".join(lines))
 
 
+def write_euroc(path, stamps, pos, rot):
+    """EuRoC ground-truth CSV: ns stamp, position, quaternion w x y z, then velocity columns."""
+    quat = rot.as_quat()
+    lines = ["#timestamp, p_RS_R_x [m], p_RS_R_y [m], p_RS_R_z [m], q_RS_w [], q_RS_x [], q_RS_y [], q_RS_z [], v_x, v_y, v_z\n"]
+    for s, p, q in zip(stamps, pos, quat):
+        fields = [str(int(s))] + [fmt(v) for v in p] + [fmt(q[3]), fmt(q[0]), fmt(q[1]), fmt(q[2])] + ["0", "0", "0"]
+        lines.append(",".join(fields) + "\n")
+    path.write_text("".join(lines))
+
+
+def write_kitti(path, pos, rot):
+    """KITTI poses: the row-major 3x4 [R | t] per line."""
+    lines = []
+    for p, m in zip(pos, rot.as_matrix()):
+        lines.append(" ".join(fmt(v) for v in np.hstack([m, p[:, None]]).ravel()) + "\n")
+    path.write_text("".join(lines))
+
+
 def read_tum(path):
     """Reads our TUM files back (ns or seconds) into (stamps_ns, evo trajectory)."""
     stamps, rows = [], []
@@ -251,6 +269,8 @@ def main():
         name = f"trial_{index:02d}.txt"
         write_tum(OUT / "trials" / name, s, p, r, seconds=(index == 6))
         trial_names.append(name)
+    write_euroc(OUT / "gt_euroc.csv", stamps, pos, rot)
+    write_kitti(OUT / "gt_kitti.txt", pos, rot)
     files = {"gt.txt": read_tum(OUT / "gt.txt")}
     for name in trial_names:
         files[name] = read_tum(OUT / "trials" / name)

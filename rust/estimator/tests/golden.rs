@@ -246,3 +246,25 @@ fn evaluation_protocol_runs_on_the_golden_trials() {
         assert_eq!(s.confusion.iter().flatten().sum::<usize>(), s.windows);
     }
 }
+
+#[test]
+fn euroc_and_kitti_files_hold_the_same_ground_truth() {
+    use sitar_estimator::{read_euroc_csv, read_kitti};
+    let tum = trajectory("gt.txt");
+    let euroc = read_euroc_csv(&data("gt_euroc.csv")).unwrap();
+    assert_eq!(euroc.stamps, tum.stamps);
+    assert_eq!(euroc.positions, tum.positions);
+    // Same rotation: q or −q, compared componentwise.
+    let same = |a: glam::DQuat, b: glam::DQuat, tolerance: f64| {
+        (a - b).length().min((a + b).length()) < tolerance
+    };
+    for (a, b) in euroc.orientations.iter().zip(&tum.orientations) {
+        assert!(same(*a, *b, 1e-15));
+    }
+    let kitti = read_kitti(&data("gt_kitti.txt")).unwrap();
+    assert_eq!(kitti.len(), tum.len());
+    assert_eq!(kitti.positions, tum.positions);
+    for (a, b) in kitti.orientations.iter().zip(&tum.orientations) {
+        assert!(same(*a, *b, 1e-12), "{a} vs {b}");
+    }
+}
