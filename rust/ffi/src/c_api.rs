@@ -550,3 +550,68 @@ pub extern "C" fn sitar_upload_free(job: SitarHandle) -> i32 {
 pub extern "C" fn sitar_testing_panic() -> i32 {
     run_ffi_safe(bridge::testing_panic)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::SitarStatus::*;
+
+    fn text(s: &str, cap: usize) -> (Result<(), Error>, Vec<u8>, usize) {
+        let mut buf = vec![0x55u8; cap];
+        let mut len = usize::MAX;
+        let ptr = if cap == 0 {
+            std::ptr::null_mut()
+        } else {
+            buf.as_mut_ptr().cast()
+        };
+        let r = copy_text(s, ptr, cap, &mut len);
+        (r, buf, len)
+    }
+
+    #[test]
+    fn text_output_fits_exactly_or_truncates_with_a_nul() {
+        let (r, buf, len) = text("abc", 4);
+        assert!(r.is_ok());
+        assert_eq!((&buf[..], len), (&b"abc\0"[..], 3));
+        let (r, buf, len) = text("abc", 3);
+        assert_eq!(r.unwrap_err().status(), SITAR_ERR_BUFFER_TOO_SMALL);
+        assert_eq!((&buf[..], len), (&b"ab\0"[..], 3));
+        let (r, buf, len) = text("abc", 1);
+        assert_eq!(r.unwrap_err().status(), SITAR_ERR_BUFFER_TOO_SMALL);
+        assert_eq!((&buf[..], len), (&b"\0"[..], 3));
+        let (r, _, len) = text("", 0);
+        assert_eq!(r.unwrap_err().status(), SITAR_ERR_BUFFER_TOO_SMALL);
+        assert_eq!(len, 0);
+    }
+
+    #[test]
+    fn array_output_writes_all_or_nothing() {
+        let items = [1u32, 2, 3];
+        let mut out = [9u32; 3];
+        let mut len = 0;
+        let r = copy_items(&items, out.as_mut_ptr(), 2, &mut len);
+        assert_eq!(r.unwrap_err().status(), SITAR_ERR_BUFFER_TOO_SMALL);
+        assert_eq!((out, len), ([9, 9, 9], 3));
+        copy_items(&items, out.as_mut_ptr(), 3, &mut len).unwrap();
+        assert_eq!((out, len), ([1, 2, 3], 3));
+        copy_items(&[] as &[u32], std::ptr::null_mut(), 0, &mut len).unwrap();
+        assert_eq!(len, 0);
+        let r = copy_items(&items, std::ptr::null_mut(), 3, &mut len);
+        assert_eq!(r.unwrap_err().status(), SITAR_ERR_NULL);
+        let r = copy_items(&items, out.as_mut_ptr(), 3, std::ptr::null_mut());
+        assert_eq!(r.unwrap_err().status(), SITAR_ERR_NULL);
+    }
+
+    #[test]
+    fn depth_geometry_is_checked() {
+        assert_eq!(bridge::depth_len(160, 120, 320).unwrap(), 160 * 120);
+        assert_eq!(bridge::depth_len(3, 2, 8).unwrap(), 4 + 3);
+        for (w, h, s) in [(0, 1, 2), (1, 0, 2), (4, 4, 6), (4, 4, 9), (-1, 4, 8)] {
+            assert_eq!(
+                bridge::depth_len(w, h, s).unwrap_err().status(),
+                SITAR_ERR_INVALID_ARGUMENT,
+                "{w}x{h} stride {s}"
+            );
+        }
+    }
+}
