@@ -1,7 +1,8 @@
 #!/bin/sh
 # A fake `adb` that behaves like playback phones, for the adb backend's tests.
 # Phones are directories $FAKE_ADB_ROOT/phones/SERIAL (their file system under it).
-# A phone with a file .lost is gone; with .lose_after N it is lost after N trials.
+# A phone with a file .lost is gone; with .lose_after N it is lost after N trials;
+# with .hang its playback app never finishes a trial.
 # Trials come from $FAKE_ADB_ROOT/pool/trial_K.txt in order (K from $FAKE_ADB_ROOT/counter).
 R="$FAKE_ADB_ROOT"
 if [ "$1" = "devices" ]; then
@@ -36,6 +37,8 @@ case "$1" in
         # am start -n COMPONENT --ei trials N --es recording FILE --es output DIR
         N="$7"; OUT="${13}"
         [ -f "$P${10}" ] || { echo "fake adb: recording ${10} was not pushed" >&2; exit 1; }
+        # A hung playback app: starts, never writes a trajectory.
+        if [ -e "$P/.hang" ]; then echo "Starting: Intent { cmp=$4 }"; exit 0; fi
         (
           i=0
           while [ "$i" -lt "$N" ]; do

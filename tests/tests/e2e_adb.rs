@@ -141,6 +141,34 @@ fn adb_playback_with_fake_phones() {
     assert!(parse_csv(&csv).len() > 50);
     drop(server);
 
+    // A phone whose app hangs misses its deadline (2·d + slack); its trials go to the other.
+    fake_phones(&phones, &["PHONE1", "PHONE3"], &pool);
+    std::fs::write(phones.join("phones/PHONE3/.hang"), "").unwrap();
+    let mut config = adb_config(&dir.path().join("data"));
+    config.adb.trial_timeout_slack = Duration::from_millis(500);
+    let server = start(config);
+    let client = sitar_tests::client(&server);
+    let id = client.create_session(&new(4)).unwrap();
+    client.upload_recording(&id, &mp4, &mut |_, _| {}).unwrap();
+    let status = client
+        .wait(
+            &id,
+            Duration::from_millis(30),
+            Duration::from_secs(60),
+            &mut |_| {},
+        )
+        .unwrap();
+    assert_eq!(status.state, SessionState::Done, "{status:?}");
+    assert_eq!(status.trials_done, 4);
+    let log = std::fs::read_to_string(phones.join("log")).unwrap();
+    assert!(
+        log.contains("PHONE3 shell am force-stop org.sitar.playback"),
+        "{log}"
+    );
+    let pulls_from_3 = log.lines().filter(|l| l.starts_with("PHONE3 pull")).count();
+    assert_eq!(pulls_from_3, 0);
+    drop(server);
+
     // No phone at all: the session fails and says why.
     fake_phones(&phones, &[], &pool);
     let server = start(adb_config(&dir.path().join("data")));
