@@ -36,7 +36,13 @@ fn sim_flow_gives_the_estimators_numbers_progressively() {
     let bytes = std::fs::read(&recording).unwrap();
     let (status, _, body) = raw("PUT", &url, Some("application/octet-stream"), &bytes, &[]);
     assert_eq!(status, 202, "{body}");
-    let (status, ct, body) = raw("PUT", &url, Some("application/octet-stream"), &bytes[..bytes.len() - 1], &[]);
+    let (status, ct, body) = raw(
+        "PUT",
+        &url,
+        Some("application/octet-stream"),
+        &bytes[..bytes.len() - 1],
+        &[],
+    );
     assert_eq!(error_code(status, &ct, &body, 409), "conflict");
 
     let mut seen_while_playing = HashSet::new();
