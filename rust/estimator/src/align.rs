@@ -53,6 +53,11 @@ pub fn umeyama(x: &[DVec3], y: &[DVec3], with_scale: bool) -> Result<Similarity,
     if x.is_empty() {
         return Err(Error::DegenerateAlignment("no points".into()));
     }
+    if !x.iter().chain(y).all(|p| p.is_finite()) {
+        return Err(Error::InvalidArgument(
+            "alignment points must be finite".into(),
+        ));
+    }
     let n = x.len() as f64;
     let mean_x = x.iter().copied().sum::<DVec3>() / n;
     let mean_y = y.iter().copied().sum::<DVec3>() / n;
@@ -68,7 +73,10 @@ pub fn umeyama(x: &[DVec3], y: &[DVec3], with_scale: bool) -> Result<Similarity,
             * nalgebra::Vector3::new(dx.x, dx.y, dx.z).transpose();
     }
     cov /= n;
-    let svd = cov.svd(true, true);
+    // An iteration cap: nalgebra's plain `svd` has none, and must never hang on odd input.
+    let Some(svd) = cov.try_svd(true, true, f64::EPSILON * 5.0, 10_000) else {
+        return Err(Error::DegenerateAlignment("SVD did not converge".into()));
+    };
     let (Some(u), Some(v_t)) = (svd.u, svd.v_t) else {
         return Err(Error::DegenerateAlignment("SVD did not converge".into()));
     };

@@ -359,7 +359,7 @@ impl PairwiseValues {
             for (k, &key) in ids.iter().enumerate() {
                 let end = &mut ends[key as usize];
                 if *end == i64::MIN {
-                    *end = t.stamps[(k + delta).min(t.len() - 1)];
+                    *end = t.stamps[k.saturating_add(delta).min(t.len() - 1)];
                 }
             }
         }
@@ -778,6 +778,16 @@ mod tests {
             json["windows"][0]["error_deg"].is_number()
                 && json["windows"][0].get("class").is_none()
         );
+    }
+
+    #[test]
+    fn huge_delta_gives_no_windows_not_a_panic() {
+        let opts = EstimateOptions {
+            delta: usize::MAX,
+            ..EstimateOptions::default()
+        };
+        let e = estimate(&[trial(20, 0.0), trial(20, 0.1)], &opts).unwrap();
+        assert!(e.windows.is_empty());
     }
 
     #[test]
