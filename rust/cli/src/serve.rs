@@ -54,7 +54,29 @@ enum Playback {
     Sim,
 }
 
+/// Prints the server's log lines (info and above) to stderr.
+struct StderrLog;
+
+impl log::Log for StderrLog {
+    fn enabled(&self, metadata: &log::Metadata<'_>) -> bool {
+        metadata.level() <= log::Level::Info && metadata.target().starts_with("sitar")
+    }
+    fn log(&self, record: &log::Record<'_>) {
+        if self.enabled(record.metadata()) {
+            eprintln!(
+                "sitar serve: {}: {}",
+                record.level().as_str().to_lowercase(),
+                record.args()
+            );
+        }
+    }
+    fn flush(&self) {}
+}
+
 pub fn run(args: Args) -> Result<()> {
+    if log::set_logger(&StderrLog).is_ok() {
+        log::set_max_level(log::LevelFilter::Info);
+    }
     let mut config = ServerConfig::new(&args.data);
     config.playback = match args.playback {
         Playback::Adb => PlaybackKind::Adb,
