@@ -190,7 +190,7 @@ def golden_rpe(files):
 def golden_ape(files):
     cases = []
     _, gt = files["gt.txt"]
-    for est_name in ["trial_01.txt", "trial_03.txt", "trial_05.txt", "trial_06.txt", "trial_07.txt"]:
+    for est_name in ["trial_01.txt", "trial_03.txt", "trial_05.txt", "trial_06.txt", "trial_07.txt", "mirror_01.txt"]:
         _, est = files[est_name]
         for align in ["none", "se3", "sim3", "scale", "origin"]:
             ref_s, est_s = sync.associate_trajectories(gt, est, max_diff=MAX_DIFF)
@@ -271,8 +271,12 @@ def main():
         trial_names.append(name)
     write_euroc(OUT / "gt_euroc.csv", stamps, pos, rot)
     write_kitti(OUT / "gt_kitti.txt", pos, rot)
+    # One more trial, mirrored (x -> -x; drawn after the others so they stay unchanged):
+    # Umeyama must not return the reflection.
+    s1, p1, r1 = make_trial(1, stamps, pos, rot)
+    write_tum(OUT / "trials" / "mirror_01.txt", s1, p1 * np.array([-1.0, 1.0, 1.0]), r1)
     files = {"gt.txt": read_tum(OUT / "gt.txt")}
-    for name in trial_names:
+    for name in trial_names + ["mirror_01.txt"]:
         files[name] = read_tum(OUT / "trials" / name)
     dump = lambda name, obj: (OUT / name).write_text(json.dumps(obj, separators=(",", ":")) + "\n")
     dump("golden_rpe.json", golden_rpe(files))
