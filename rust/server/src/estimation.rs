@@ -105,14 +105,22 @@ pub(crate) fn estimate_files(
     })
 }
 
-/// Adaptive stopping: true when the last `k + 1` estimates (so the last `k`
-/// finished trials) agree on every window's class.
-pub(crate) fn classes_stable(history: &[BTreeMap<i64, Class>], k: usize) -> bool {
-    if k == 0 || history.len() < k + 1 {
+/// Adaptive stopping: true when no published estimate over the last `k`
+/// finished trials changed a class. `history` holds (trials, classes) per
+/// published estimate in order; trials that arrived together during one
+/// estimate share one entry, so the check spans from the last estimate made
+/// with at most `n − k` trials to the newest (n trials).
+pub(crate) fn classes_stable(history: &[(u32, BTreeMap<i64, Class>)], k: u32) -> bool {
+    let Some((n, _)) = history.last() else {
+        return false;
+    };
+    if k == 0 || *n < k {
         return false;
     }
-    let recent = &history[history.len() - k - 1..];
-    recent.windows(2).all(|w| w[0] == w[1])
+    let Some(base) = history.iter().rposition(|(count, _)| *count <= n - k) else {
+        return false;
+    };
+    history[base..].windows(2).all(|w| w[0].1 == w[1].1)
 }
 
 #[cfg(test)]
@@ -123,25 +131,42 @@ mod tests {
         list.iter().copied().collect()
     }
 
+    fn numbered(list: &[(u32, &BTreeMap<i64, Class>)]) -> Vec<(u32, BTreeMap<i64, Class>)> {
+        list.iter().map(|(n, c)| (*n, (*c).clone())).collect()
+    }
+
     #[test]
     fn stability_needs_k_unchanged_trials() {
         let a = classes(&[(0, Class::Low), (10, Class::High)]);
         let b = classes(&[(0, Class::Low), (10, Class::Medium)]);
-        assert!(!classes_stable(&[a.clone(), a.clone(), a.clone()], 3));
+        assert!(!classes_stable(&numbered(&[(2, &a), (3, &a), (4, &a)]), 3));
         assert!(classes_stable(
-            &[a.clone(), a.clone(), a.clone(), a.clone()],
+            &numbered(&[(2, &a), (3, &a), (4, &a), (5, &a)]),
             3
         ));
         assert!(!classes_stable(
-            &[a.clone(), b.clone(), a.clone(), a.clone()],
+            &numbered(&[(2, &a), (3, &b), (4, &a), (5, &a)]),
             3
         ));
         assert!(classes_stable(
-            &[b.clone(), a.clone(), a.clone(), a.clone(), a.clone()],
+            &numbered(&[(2, &b), (3, &a), (4, &a), (5, &a), (6, &a)]),
+            3
+        ));
+        // Trials 4 and 5 arrived together: 3 → 5 → 6 still spans the last 3 trials.
+        assert!(classes_stable(
+            &numbered(&[(2, &b), (3, &a), (5, &a), (6, &a)]),
+            3
+        ));
+        assert!(!classes_stable(
+            &numbered(&[(2, &a), (3, &b), (5, &a), (6, &a)]),
             3
         ));
         // A window that appears or vanishes is a change.
         let c = classes(&[(0, Class::Low)]);
-        assert!(!classes_stable(&[a.clone(), a.clone(), a, c], 3));
+        assert!(!classes_stable(
+            &numbered(&[(2, &a), (3, &a), (4, &a), (5, &c)]),
+            3
+        ));
+        assert!(!classes_stable(&[], 3));
     }
 }

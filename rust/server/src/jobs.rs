@@ -163,14 +163,14 @@ async fn play_and_estimate(shared: &Arc<Shared>, id: &str) -> Result<Outcome, Er
 
     let adaptive = row
         .adaptive_min
-        .map(|min| (min.max(2), row.adaptive_k.max(1) as usize));
+        .map(|min| (min.max(2), row.adaptive_k.max(1)));
     let mut history = Vec::new();
     let mut published_trials = 0;
     let mut stop_reason: Option<String> = None;
     if done_before >= 2 {
         let p = estimate_and_publish(shared, id, &row.setting).await?;
         published_trials = p.trials;
-        history.push(p.classes);
+        history.push((p.trials, p.classes));
     }
     while let Some(first) = rx.recv().await {
         // Trials that queued up while the last estimate ran go in together.
@@ -201,7 +201,7 @@ async fn play_and_estimate(shared: &Arc<Shared>, id: &str) -> Result<Outcome, Er
         // Progressive results: a first picture from the 2nd trial on.
         let p = estimate_and_publish(shared, id, &row.setting).await?;
         published_trials = p.trials;
-        history.push(p.classes);
+        history.push((p.trials, p.classes));
         if let Some((min, k)) = adaptive
             && count >= min
             && count < row.trials_total
