@@ -461,3 +461,35 @@ fn evaluate_equals_evo_scipy_sklearn() {
         }
     }
 }
+
+/// `sitar estimate` equals the evo + scipy/numpy goldens of sitar-estimator for every setting
+/// (its data: own world frames, dropped frames, stamp jitter, one trial in seconds).
+#[test]
+fn estimate_equals_evo_scipy_for_every_setting() {
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("../estimator/tests/data");
+    let golden: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(data.join("golden_estimate.json")).unwrap())
+            .unwrap();
+    let trials: Vec<PathBuf> = golden["trials"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|t| data.join("trials").join(t.as_str().unwrap()))
+        .collect();
+    let settings = golden["settings"].as_object().unwrap();
+    assert_eq!(settings.len(), 7);
+    for (setting, windows) in settings {
+        let mut args = vec!["estimate", "--setting", setting, "--format", "json"];
+        args.extend(trials.iter().map(|t| p(t)));
+        let json: serde_json::Value = serde_json::from_str(&ok(&args)).unwrap();
+        let got = json["windows"].as_array().unwrap();
+        let want = windows.as_array().unwrap();
+        assert_eq!(got.len(), want.len(), "{setting}");
+        for (g, w) in got.iter().zip(want) {
+            assert_eq!(g["start"].as_i64(), w[0].as_i64(), "{setting}");
+            let (x, y) = (g["error_m"].as_f64().unwrap(), w[1].as_f64().unwrap());
+            assert!((x - y).abs() < 1e-9, "{setting} at {}: {x} vs {y}", w[0]);
+            assert_eq!(g["pairs"].as_u64(), w[2].as_u64(), "{setting}");
+        }
+    }
+}
