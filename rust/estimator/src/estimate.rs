@@ -348,7 +348,10 @@ impl PairwiseValues {
                 t.stamps
                     .iter()
                     .map(|&s| {
-                        cursor += keys[cursor..].partition_point(|&k| k < s);
+                        // Stamps increase, so the cursor only moves forward.
+                        while keys[cursor] < s {
+                            cursor += 1;
+                        }
                         cursor as u32
                     })
                     .collect()
@@ -455,19 +458,36 @@ impl PairwiseValues {
             .par_iter()
             .map(|&(i, j)| {
                 let matching = matching_index[&(group[i], group[j])];
+                // A broken window is usually broken on one side only: the other side's
+                // relative pose is the precomputed one.
+                let relative_pose = |t: usize, from: u32, to: u32| {
+                    let (from, to) = (from as usize, to as usize);
+                    if to == from + delta {
+                        let rotation = if with_rotation {
+                            relative[t].rotation[from]
+                        } else {
+                            DQuat::IDENTITY
+                        };
+                        RigidPose {
+                            rotation,
+                            translation: relative[t].translation[from],
+                        }
+                    } else if with_rotation {
+                        RigidPose::relative(trials[t].pose(from), trials[t].pose(to))
+                    } else {
+                        let (a, b) = (trials[t].pose(from), trials[t].pose(to));
+                        let translation = a.rotation.conjugate() * (b.translation - a.translation);
+                        RigidPose {
+                            rotation: DQuat::IDENTITY,
+                            translation,
+                        }
+                    }
+                };
                 let irregular_values = matchings[matching]
                     .irregular
                     .iter()
                     .map(|&[a0, a1, b0, b1]| {
-                        let q = RigidPose::relative(
-                            trials[i].pose(a0 as usize),
-                            trials[i].pose(a1 as usize),
-                        );
-                        let p = RigidPose::relative(
-                            trials[j].pose(b0 as usize),
-                            trials[j].pose(b1 as usize),
-                        );
-                        value_bits(relation, q, p)
+                        value_bits(relation, relative_pose(i, a0, a1), relative_pose(j, b0, b1))
                     })
                     .collect();
                 Pair {
