@@ -311,6 +311,12 @@ impl PairwiseValues {
                 "delta must be at least 1 frame".into(),
             ));
         }
+        if !(opts.t_max_diff_s.is_finite() && opts.t_max_diff_s >= 0.0) {
+            return Err(Error::InvalidArgument(format!(
+                "t_max_diff must be a finite, non-negative number of seconds, got {}",
+                opts.t_max_diff_s
+            )));
+        }
         if let Some(i) = trials.iter().position(|t| t.is_empty()) {
             return Err(Error::InvalidArgument(format!("trial {i} has no poses")));
         }
@@ -819,6 +825,11 @@ mod tests {
             estimate(&[trial(20, 0.0), unsorted], &EstimateOptions::default()),
             Err(Error::InvalidArgument(_))
         ));
+        let negative = EstimateOptions {
+            t_max_diff_s: -1.0,
+            ..EstimateOptions::default()
+        };
+        assert!(estimate(&[trial(20, 0.0), trial(20, 0.0)], &negative).is_err());
         let mut short = trial(20, 0.0);
         short.positions.pop();
         assert!(estimate(&[short, trial(20, 0.0)], &EstimateOptions::default()).is_err());
