@@ -834,4 +834,83 @@ mod tests {
         short.positions.pop();
         assert!(estimate(&[short, trial(20, 0.0)], &EstimateOptions::default()).is_err());
     }
+
+    /// The definition, written plainly: per pair associate, RPE, bucket by reference stamp.
+    fn naive(trials: &[Trajectory], opts: &EstimateOptions) -> Vec<(i64, f64, usize)> {
+        let mut buckets: std::collections::BTreeMap<i64, Vec<f64>> = Default::default();
+        let rpe_opts = crate::RpeOptions {
+            pose_relation: opts.pose_relation,
+            delta: opts.delta as f64,
+            ..Default::default()
+        };
+        for i in 0..trials.len() {
+            for j in i + 1..trials.len() {
+                let (r, e) =
+                    crate::associate_trajectories(&trials[i], &trials[j], opts.t_max_diff_s, 0.0)
+                        .unwrap();
+                if let Ok(result) = crate::rpe(&r, &e, &rpe_opts) {
+                    for (&(a, _), v) in result.pairs.iter().zip(result.errors) {
+                        buckets.entry(r.stamps[a]).or_default().push(v);
+                    }
+                }
+            }
+        }
+        buckets
+            .into_iter()
+            .map(|(k, mut v)| (k, opts.setting.apply(&mut v), v.len()))
+            .collect()
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
+        #[test]
+        fn fast_paths_equal_the_plain_definition(
+            seed in proptest::collection::vec(-1.0f64..1.0, 6 * 5 * 40),
+            drops in proptest::collection::vec(0usize..40, 0..6),
+            jitter in proptest::collection::vec(-14_000_000i64..14_000_000, 0..4),
+            n in 2usize..6, len in 12usize..40, which in 0usize..7, rotational: bool,
+        ) {
+            let mut trials = Vec::new();
+            for t in 0..n {
+                let base = &seed[t * 6 * 40..];
+                let mut trial = Trajectory {
+                    stamps: (0..len as i64).map(|k| 5_000_000_000 + k * 33_333_333).collect(),
+                    positions: (0..len).map(|k| DVec3::new(k as f64 * 0.02 + base[6 * k], base[6 * k + 1], base[6 * k + 2]) * 0.5).collect(),
+                    orientations: (0..len).map(|k| DQuat::from_scaled_axis(DVec3::new(base[6 * k + 3], base[6 * k + 4], base[6 * k + 5]) * 0.3)).collect(),
+                    time_unit: TimeUnit::Nanoseconds,
+                };
+                // Trial 1 drops frames, trial 2 has jittered stamps (some beyond 10 ms).
+                if t == 1 {
+                    let keep: Vec<usize> = (0..len).filter(|k| !drops.contains(k)).collect();
+                    trial = trial.reduce_to_ids(&keep);
+                }
+                if t == 2 {
+                    for (k, j) in jitter.iter().enumerate() {
+                        trial.stamps[3 + 7 * k % (len - 4)] += j;
+                    }
+                    let mut order: Vec<usize> = (0..trial.len()).collect();
+                    order.sort_by_key(|&k| trial.stamps[k]);
+                    trial = trial.reduce_to_ids(&order);
+                    trial.stamps.dedup();
+                    if trial.stamps.len() != trial.positions.len() { continue; }
+                }
+                trials.push(trial);
+            }
+            proptest::prop_assume!(trials.len() >= 2);
+            let opts = EstimateOptions {
+                setting: Setting::ALL[which],
+                delta: 3,
+                pose_relation: if rotational { PoseRelation::RotationAngleDeg } else { PoseRelation::TranslationPart },
+                ..EstimateOptions::default()
+            };
+            let fast = estimate(&trials, &opts).unwrap();
+            let plain = naive(&trials, &opts);
+            proptest::prop_assert_eq!(fast.windows.len(), plain.len());
+            for (w, (start, value, pairs)) in fast.windows.iter().zip(&plain) {
+                proptest::prop_assert_eq!(w.start, *start);
+                proptest::prop_assert_eq!(w.pairs, *pairs);
+                proptest::prop_assert!((w.error_m - value).abs() <= 1e-9, "{} vs {}", w.error_m, value);
+            }
+        }
+    }
 }
