@@ -369,6 +369,30 @@ mod tests {
         assert!(with(swapped).contains("stamps[1]: timestamps must increase"));
     }
 
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
+
+        /// Corrupted or truncated uploads are errors, never panics.
+        #[test]
+        fn corrupted_bytes_never_panic(
+            keep in 0.0f64..1.5, flips in proptest::collection::vec((0.0f64..1.0, 0u8..=255), 0..4),
+        ) {
+            let bytes = Recording::demo(1.0, 30.0, 3).unwrap().to_bytes();
+            let cut = ((keep * bytes.len() as f64) as usize).min(bytes.len());
+            let mut bad = bytes[..cut].to_vec();
+            for (at, value) in flips {
+                let at = (at * bad.len() as f64) as usize;
+                if let Some(b) = bad.get_mut(at) {
+                    *b = value;
+                }
+            }
+            if let Ok(rec) = Recording::from_bytes(&bad) {
+                // Whatever parses is a valid recording that plays.
+                proptest::prop_assert!(play_trial(&rec, 0).len() == rec.frames());
+            }
+        }
+    }
+
     #[test]
     fn scene_json_names_the_hard_surfaces_and_the_facing_surface() {
         let rec = Recording::demo(15.0, 30.0, 2).unwrap();
