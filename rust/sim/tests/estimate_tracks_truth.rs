@@ -55,3 +55,34 @@ fn estimated_uncertainty_correlates_strongly_with_true_error() {
         eprintln!("seed {seed}: r = {r:.3}, estimate/truth = {ratio:.2}");
     }
 }
+
+#[test]
+fn the_worst_estimated_windows_face_hard_surfaces() {
+    for seed in 10u64..16 {
+        let rec = Recording::demo(15.0, 30.0, seed).unwrap();
+        let trials: Vec<_> = (0..10).map(|i| play_trial(&rec, i)).collect();
+        let est = estimate(&trials, &EstimateOptions::default()).unwrap();
+        let stamps = &rec.walk().ground_truth.stamps;
+        let mut windows: Vec<_> = est.windows.iter().collect();
+        windows.sort_by(|a, b| b.error_m.total_cmp(&a.error_m));
+        // The three worst windows at least a second apart, like the app's three markers.
+        let mut picked: Vec<i64> = Vec::new();
+        for w in windows {
+            if picked.iter().all(|&p| (p - w.start).abs() >= 1_000_000_000) {
+                picked.push(w.start);
+            }
+            if picked.len() == 3 {
+                break;
+            }
+        }
+        for start in picked {
+            // The surface at the image centre in the middle of the window.
+            let mid = stamps.iter().position(|&s| s == start).unwrap() + 5;
+            let kind = rec.views()[mid].facing_kind.unwrap();
+            assert!(
+                kind.is_hard(),
+                "seed {seed}: window at {start} faces {kind:?}"
+            );
+        }
+    }
+}
