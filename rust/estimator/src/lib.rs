@@ -71,7 +71,7 @@
 //! the group is formed from that small, cache-resident set. Other pairs are associated once
 //! per distinct pair of stamp lists and stored as contiguous runs plus the few windows a
 //! dropped frame breaks. Windows are aggregated in parallel blocks with rank selection on
-//! the values' bits (no sorting). 100 trials × 2820 poses take about 0.45 CPU-seconds end to
+//! the values' bits (no sorting). 100 trials × 2820 poses take 0.35–0.45 CPU-seconds end to
 //! end from files, at under 60 MB peak memory.
 //!
 //! ## Evaluation against ground truth
