@@ -59,7 +59,8 @@ pub struct ClassificationScores {
     pub macro_f1: f64,
     /// Mean sensitivity (recall) over the classes present in the truth.
     pub sensitivity: f64,
-    /// Mean specificity over the classes with at least one true negative or false positive.
+    /// Mean specificity over the classes present in the truth or the prediction (a class
+    /// that occurs in neither would add a meaningless 1).
     pub specificity: f64,
     /// Number of windows scored.
     pub windows: usize,
@@ -102,7 +103,7 @@ pub fn classification_scores(
             sensitivity += tp as f64 / (tp + fn_) as f64;
             sensitivity_classes += 1;
         }
-        if tn + fp > 0 {
+        if tp + fn_ + fp > 0 && tn + fp > 0 {
             specificity += tn as f64 / (tn + fp) as f64;
             specificity_classes += 1;
         }
@@ -351,6 +352,10 @@ mod tests {
             (1.0, 1.0, 1.0, 1.0)
         );
         assert!(classification_scores(&[], &[], b).is_err());
+        // No high window in truth or prediction: high is left out of every average.
+        let two_class = classification_scores(&[0.01, 0.06], &[0.01, 0.01], b).unwrap();
+        assert!((two_class.specificity - (0.0 + 1.0) / 2.0).abs() < 1e-15);
+        assert!((two_class.sensitivity - (1.0 + 0.0) / 2.0).abs() < 1e-15);
         assert_eq!(b.classify(0.05), 1);
         assert_eq!(b.classify(0.0999), 1);
         assert_eq!(b.classify(0.1), 2);
