@@ -63,9 +63,15 @@ impl PlaybackLogger {
         crate::tum::to_tum(self.stamps.iter().copied().zip(self.poses.iter()))
     }
 
-    /// Writes [`PlaybackLogger::to_tum`] to `path`.
+    /// Writes [`PlaybackLogger::to_tum`] to `path`, whole or not at all: the
+    /// text goes to `path` + `.part` first and is renamed into place, so the
+    /// backend polling the folder over adb never pulls a half-written trial.
     pub fn write(&self, path: &Path) -> Result<(), Error> {
-        std::fs::write(path, self.to_tum()).map_err(|e| Error::io(path, e))
+        let mut partial = path.as_os_str().to_owned();
+        partial.push(".part");
+        let partial = std::path::PathBuf::from(partial);
+        std::fs::write(&partial, self.to_tum()).map_err(|e| Error::io(&partial, e))?;
+        std::fs::rename(&partial, path).map_err(|e| Error::io(path, e))
     }
 }
 
@@ -95,6 +101,12 @@ mod tests {
         let path = dir.path().join("trajectory_0.txt");
         log.write(&path).unwrap();
         assert_eq!(std::fs::read_to_string(&path).unwrap(), text);
+        // Only the finished file is left: no `.part` for a poller to pick up.
+        let names: Vec<_> = std::fs::read_dir(dir.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        assert_eq!(names, ["trajectory_0.txt"]);
         assert!(matches!(
             log.write(&dir.path().join("missing/x.txt")),
             Err(Error::Io { .. })

@@ -1,7 +1,10 @@
 // The playback-device MonoBehaviour (replaces the original TrajectoryPlayback.cs):
 // replays the recorded mp4 through ARCore numPlaybacks times, logs the camera
-// pose every frame through libsitar, and writes trajectory_N.txt (TUM, integer
-// nanoseconds) to Application.persistentDataPath after each playback.
+// pose every frame through libsitar, and writes trajectory_K.txt (K = 0 … N−1;
+// TUM, integer nanoseconds) after each playback. `sitar serve --playback adb`
+// starts the app with the intent extras `trials` (int), `recording` and
+// `output` (paths); without them the inspector values and
+// Application.persistentDataPath are used.
 using System.IO;
 using UnityEngine;
 using UnityEngine.UI;
@@ -25,6 +28,7 @@ namespace Sitar.Unity
         ARSession arSession;
         PlaybackLogger logger;
         string mp4Path;
+        string outputDir;
         int frameCounter;
         int playbackCount;
         bool wasPlaying;
@@ -33,6 +37,26 @@ namespace Sitar.Unity
         {
             arSession = GetComponent<ARSession>();
             mp4Path = Path.Combine(Application.persistentDataPath, "arcore-session.mp4");
+            outputDir = Application.persistentDataPath;
+            ReadLaunchExtras();
+        }
+
+        // The backend's `am start … --ei trials N --es recording FILE --es output DIR`.
+        void ReadLaunchExtras()
+        {
+#if UNITY_ANDROID && !UNITY_EDITOR
+            using (var player = new AndroidJavaClass("com.unity3d.player.UnityPlayer"))
+            using (var activity = player.GetStatic<AndroidJavaObject>("currentActivity"))
+            using (var intent = activity.Call<AndroidJavaObject>("getIntent"))
+            {
+                if (intent == null) return;
+                numPlaybacks = intent.Call<int>("getIntExtra", "trials", numPlaybacks);
+                string recording = intent.Call<string>("getStringExtra", "recording");
+                if (!string.IsNullOrEmpty(recording)) mp4Path = recording;
+                string output = intent.Call<string>("getStringExtra", "output");
+                if (!string.IsNullOrEmpty(output)) outputDir = output;
+            }
+#endif
         }
 
         void OnEnable()
@@ -78,8 +102,8 @@ namespace Sitar.Unity
             }
             if (wasPlaying && sub.playbackStatus == ArPlaybackStatus.Finished)
             {
+                logger.Write(outputDir, (uint)playbackCount);
                 playbackCount++;
-                logger.Write(Application.persistentDataPath, (uint)playbackCount);
                 logger.Dispose();
                 logger = null;
                 if (playbackCount < numPlaybacks)
