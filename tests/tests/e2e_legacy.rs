@@ -1,7 +1,5 @@
 //! The original Unity app's routes, called as it calls them (multipart form uploads).
 
-use std::time::{Duration, Instant};
-
 use sitar_tests::*;
 
 #[test]
@@ -27,6 +25,8 @@ fn unity_app_flow_over_legacy_routes() {
     );
     assert_eq!(error_code(status, &ct, &body, 409), "conflict");
 
+    // The app posts the recording and, once the answer comes, fetches
+    // /results.csv: the answer must wait until the session is done.
     let rec = sitar_sim::Recording::demo(3.0, 30.0, 5).unwrap();
     let (ct_rec, body_rec) = multipart("recording", "recording.mp4", &rec.to_bytes());
     let (status, _, body) = raw(
@@ -37,10 +37,14 @@ fn unity_app_flow_over_legacy_routes() {
         &[],
     );
     assert_eq!(status, 200, "{body}");
-    let id = serde_json::from_str::<serde_json::Value>(&body).unwrap()["id"]
-        .as_str()
-        .unwrap()
-        .to_string();
+    let answer: serde_json::Value = serde_json::from_str(&body).unwrap();
+    assert_eq!(answer["state"], "done", "{body}");
+    let id = answer["id"].as_str().unwrap().to_string();
+    let expected = direct_csv(&sitar_sim::simulate_trials(&rec, 4), "trim_mean_30");
+    let (status, ct, csv) = raw("GET", &format!("{base}/results.csv"), None, b"", &[]);
+    assert_eq!(status, 200, "{csv}");
+    assert!(ct.starts_with("text/csv"));
+    assert_same_results(&csv, &expected);
 
     let timestamps = tum_text(&rec.walk().ground_truth);
     let (ct_ts, body_ts) = multipart("timestamps", "timestamps.txt", timestamps.as_bytes());
@@ -57,21 +61,5 @@ fn unity_app_flow_over_legacy_routes() {
         timestamps
     );
 
-    // The app polls /results.csv until the session is done.
-    let started = Instant::now();
-    let csv = loop {
-        let (status, ct, body) = raw("GET", &format!("{base}/results.csv"), None, b"", &[]);
-        if status == 200 {
-            assert!(ct.starts_with("text/csv"));
-            break body;
-        }
-        assert!(
-            started.elapsed() < Duration::from_secs(60),
-            "no results: {status} {body}"
-        );
-        std::thread::sleep(Duration::from_millis(50));
-    };
-    let expected = direct_csv(&sitar_sim::simulate_trials(&rec, 4), "trim_mean_30");
-    assert_same_results(&csv, &expected);
     assert_same_results(&client(&server).results_csv(&id).unwrap(), &csv);
 }

@@ -549,11 +549,33 @@ async fn legacy_recording(
     )?;
     let row = session_row(&shared, &id)?;
     accept_recording(&shared, &row, temp)?;
-    Ok(json_response(
-        StatusCode::OK,
-        &json!({"id": id, "status": format!("/v1/sessions/{id}")}).to_string(),
-    ))
+    // The original app treats this answer as "evaluation complete" and then
+    // fetches GET /results.csv, so the request is held until the session ends
+    // (as the original backend did). A client that gives up loses nothing:
+    // the session goes on and its results stay at /v1/sessions/{id}.
+    loop {
+        let row = session_row(&shared, &id)?;
+        match row.state.as_str() {
+            "done" => {
+                return Ok(json_response(
+                    StatusCode::OK,
+                    &json!({"id": id, "state": "done", "status": format!("/v1/sessions/{id}")})
+                        .to_string(),
+                ));
+            }
+            "failed" => {
+                return Err(Error::Playback(format!(
+                    "session {id} failed: {}",
+                    row.error.as_deref().unwrap_or("no reason recorded")
+                )));
+            }
+            _ => tokio::time::sleep(LEGACY_POLL).await,
+        }
+    }
 }
+
+/// How often a held legacy `POST /recording` looks at its session's state.
+const LEGACY_POLL: std::time::Duration = std::time::Duration::from_millis(100);
 
 async fn legacy_timestamps(
     State(shared): AppState,
