@@ -200,6 +200,16 @@ fn bad_inputs_are_json_4xx_and_write_nothing_outside_the_data_dir() {
         415,
         "unsupported_media_type",
     );
+    // curl's default label for a raw body is read as the raw TUM it is.
+    expect(
+        post(
+            &trials_url,
+            Some("application/x-www-form-urlencoded"),
+            b"1 0 0 0 0 0 0 1\n2 0 0 nan 0 0 0 1\n",
+        ),
+        422,
+        "invalid_content",
+    );
     let b = expect(
         post(
             &trials_url,

@@ -243,10 +243,16 @@ async fn session_status(
     Ok(axum::Json(status_json(&shared, &row)?).into_response())
 }
 
+/// `curl --data-binary @file` labels any raw body form-urlencoded; the bytes
+/// are still raw, so that label is accepted wherever a raw body is.
+const CURL_DEFAULT_CONTENT_TYPE: &str = "application/x-www-form-urlencoded";
+
 fn recording_content_type_ok(ct: &str) -> bool {
     matches!(
         ct,
-        "" | "application/octet-stream" | "application/x-sitar-recording"
+        "" | "application/octet-stream"
+            | "application/x-sitar-recording"
+            | CURL_DEFAULT_CONTENT_TYPE
     ) || ct.starts_with("video/")
 }
 
@@ -353,7 +359,7 @@ async fn post_trial(
     let ct = content_type(&headers);
     if !matches!(
         ct.as_str(),
-        "" | "text/plain" | "text/x-tum" | "application/octet-stream"
+        "" | "text/plain" | "text/x-tum" | "application/octet-stream" | CURL_DEFAULT_CONTENT_TYPE
     ) {
         return Err(Error::UnsupportedMediaType(format!(
             "a trial is TUM text (text/plain), not {ct}"
