@@ -5,9 +5,7 @@ use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result, bail};
 use sitar_client::{Client, NewSession, SessionOptions, SessionState};
-use sitar_core::{
-    DepthImage, DisplayRotation, ErrorClass, Intrinsics, Pose, Session, SessionConfig,
-};
+use sitar_core::{DepthImage, DisplayRotation, ErrorClass, Pose, Session, SessionConfig};
 use sitar_server::{PlaybackKind, Server, ServerConfig};
 use sitar_sim::{DepthCamera, Recording};
 
@@ -242,12 +240,7 @@ fn record_walk(recording: &Recording, session: &mut Session) -> Result<sitar_cor
         bail!("the walk is too short");
     }
     let camera = DepthCamera::phone();
-    let k = Intrinsics {
-        fx: camera.intrinsics.fx,
-        fy: camera.intrinsics.fy,
-        cx: camera.intrinsics.cx,
-        cy: camera.intrinsics.cy,
-    };
+    let k = camera.intrinsics;
     let pose = |i: usize| Pose::new(gt.positions[i], gt.orientations[i]);
     let last = gt.len() - 1;
     session.start(gt.stamps[0], pose(0))?;

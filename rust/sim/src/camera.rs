@@ -5,19 +5,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::{Room, SurfaceKind};
 
-/// Pinhole intrinsics in pixels. Pixel `(u, v)` (column, row, integer indices from the
-/// top-left) looks along optical ray `((u − cx)/fx, (v − cy)/fy, 1)`.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct Intrinsics {
-    /// Focal length along x (pixels).
-    pub fx: f64,
-    /// Focal length along y (pixels).
-    pub fy: f64,
-    /// Principal point x (pixels).
-    pub cx: f64,
-    /// Principal point y (pixels).
-    pub cy: f64,
-}
+/// The phone's pinhole model, shared with `sitar-core` so a rendered image and its
+/// intrinsics go to the phone logic as they are.
+pub use sitar_core::Intrinsics;
 
 /// A depth camera like ARCore's Depth API: 16-bit millimetres, 0 = no depth.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]

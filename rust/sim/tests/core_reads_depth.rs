@@ -2,19 +2,14 @@
 //! image (ARCore convention, display rotation 0) lands on the surface the simulator hits.
 
 use glam::DVec3;
-use sitar_core::{Convention, DepthImage, DisplayRotation, Intrinsics, Pose, sample_surface};
+use sitar_core::{Convention, DepthImage, DisplayRotation, Pose, sample_surface};
 use sitar_sim::{DepthCamera, Recording};
 
 #[test]
 fn core_samples_the_surface_the_camera_faces() {
     let rec = Recording::demo(15.0, 30.0, 4).unwrap();
     let camera = DepthCamera::phone();
-    let k = Intrinsics {
-        fx: camera.intrinsics.fx,
-        fy: camera.intrinsics.fy,
-        cx: camera.intrinsics.cx,
-        cy: camera.intrinsics.cy,
-    };
+    let k = camera.intrinsics;
     let gt = &rec.walk().ground_truth;
     let mut angles = Vec::new();
     for f in (5..gt.len()).step_by(10) {
