@@ -9,6 +9,9 @@ Deterministic (fixed seed). Writes into rust/estimator/tests/data/:
   golden_rpe.json         evo RPE on associated pairs for several options
   golden_ape.json         evo APE with every alignment mode and pose relation
   golden_estimate.json    SiTAR pairwise estimate for every setting (evo RPE + scipy/numpy)
+  trials/shared_nearest_00.txt  trial_00 with a few stamps moved so that two of its frames
+                          share one nearest stamp: associated trajectories repeat a stamp
+  golden_estimate_shared_nearest.json  the estimate over trials that include it
 
 Usage: python3 scripts/golden/make_goldens.py   (needs: pip install evo numpy scipy)
 """
@@ -168,6 +171,8 @@ def golden_rpe(files):
     cases_by_pair = [(r, e, 0.0, options) for r, e in pairs]
     # A time offset of the second trajectory (evo's offset_2), shifting which frames match.
     cases_by_pair.append(("trial_00.txt", "trial_03.txt", -0.0333, options[:1]))
+    # Two frames of the walked trajectory share their nearest stamp: evo keeps both matches.
+    cases_by_pair.append(("gt.txt", "shared_nearest_00.txt", 0.0, options[:2]))
     for ref_name, est_name, offset, pair_options in cases_by_pair:
         _, ref = files[ref_name]
         _, est = files[est_name]
@@ -190,7 +195,8 @@ def golden_rpe(files):
 def golden_ape(files):
     cases = []
     _, gt = files["gt.txt"]
-    for est_name in ["trial_01.txt", "trial_03.txt", "trial_05.txt", "trial_06.txt", "trial_07.txt", "mirror_01.txt"]:
+    for est_name in ["trial_01.txt", "trial_03.txt", "trial_05.txt", "trial_06.txt", "trial_07.txt", "mirror_01.txt",
+                     "shared_nearest_00.txt"]:
         _, est = files[est_name]
         for align in ["none", "se3", "sim3", "scale", "origin"]:
             ref_s, est_s = sync.associate_trajectories(gt, est, max_diff=MAX_DIFF)
@@ -275,14 +281,25 @@ def main():
     # Umeyama must not return the reflection.
     s1, p1, r1 = make_trial(1, stamps, pos, rot)
     write_tum(OUT / "trials" / "mirror_01.txt", s1, p1 * np.array([-1.0, 1.0, 1.0]), r1)
+    # trial_00 with stamps moved by -24, -28 and +24 ms (no random draws, so the files above
+    # stay as they are): each moved frame lands within MAX_DIFF of a neighbour's stamp.
     files = {"gt.txt": read_tum(OUT / "gt.txt")}
     for name in trial_names + ["mirror_01.txt"]:
         files[name] = read_tum(OUT / "trials" / name)
+    ns0, traj0 = files["trial_00.txt"]
+    shared = ns0.copy()
+    shared[[100, 300]] -= [24_000_000, 28_000_000]
+    shared[200] += 24_000_000
+    write_tum(OUT / "trials" / "shared_nearest_00.txt", shared, traj0.positions_xyz,
+              Rotation.from_quat(traj0.orientations_quat_wxyz[:, [1, 2, 3, 0]]))
+    files["shared_nearest_00.txt"] = read_tum(OUT / "trials" / "shared_nearest_00.txt")
     dump = lambda name, obj: (OUT / name).write_text(json.dumps(obj, separators=(",", ":")) + "\n")
     dump("golden_rpe.json", golden_rpe(files))
     dump("golden_ape.json", golden_ape(files))
     dump("golden_estimate.json", golden_estimate(files, trial_names, "trans"))
     dump("golden_estimate_angle_deg.json", golden_estimate(files, trial_names, "angle_deg"))
+    shared_names = ["trial_00.txt", "trial_01.txt", "shared_nearest_00.txt", "trial_02.txt"]
+    dump("golden_estimate_shared_nearest.json", golden_estimate(files, shared_names, "trans"))
 
 
 if __name__ == "__main__":

@@ -129,8 +129,8 @@ pub fn align(
             estimate.len()
         )));
     }
-    estimate.validate()?;
-    reference.validate()?;
+    estimate.validate_poses()?;
+    reference.validate_poses()?;
     let identity = Similarity {
         rotation: DMat3::IDENTITY,
         translation: DVec3::ZERO,

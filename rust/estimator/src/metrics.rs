@@ -316,8 +316,8 @@ pub fn ape(
 }
 
 fn check_same_length(reference: &Trajectory, estimate: &Trajectory) -> Result<(), Error> {
-    reference.validate()?;
-    estimate.validate()?;
+    reference.validate_poses()?;
+    estimate.validate_poses()?;
     if reference.len() != estimate.len() {
         return Err(Error::InvalidArgument(format!(
             "trajectories must be associated (same number of poses): {} vs {}",

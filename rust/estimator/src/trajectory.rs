@@ -95,6 +95,20 @@ impl Trajectory {
     /// Checks the invariants [`Trajectory::from_poses`] establishes (the fields are public):
     /// equal lengths, strictly increasing stamps, finite positions, unit quaternions.
     pub fn validate(&self) -> Result<(), Error> {
+        self.validate_poses()?;
+        if let Some(i) = self.stamps.windows(2).position(|w| w[1] <= w[0]) {
+            return Err(Error::InvalidTrajectory(format!(
+                "stamp {} does not increase after stamp {i}",
+                i + 1
+            )));
+        }
+        Ok(())
+    }
+
+    /// [`Trajectory::validate`] without the stamp order: what metrics and alignment need.
+    /// An *associated* trajectory may repeat a stamp, because two poses of the walked
+    /// trajectory can share their nearest match (evo keeps both, and so do we).
+    pub fn validate_poses(&self) -> Result<(), Error> {
         if self.stamps.len() != self.positions.len() || self.stamps.len() != self.orientations.len()
         {
             return Err(Error::InvalidTrajectory(format!(
@@ -102,12 +116,6 @@ impl Trajectory {
                 self.stamps.len(),
                 self.positions.len(),
                 self.orientations.len()
-            )));
-        }
-        if let Some(i) = self.stamps.windows(2).position(|w| w[1] <= w[0]) {
-            return Err(Error::InvalidTrajectory(format!(
-                "stamp {} does not increase after stamp {i}",
-                i + 1
             )));
         }
         let bad =
