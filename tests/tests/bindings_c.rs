@@ -22,6 +22,7 @@ const ERR_PARSE: i32 = -5;
 const ERR_BUFFER_TOO_SMALL: i32 = -8;
 const ERR_PANIC: i32 = -99;
 
+const JOB_UPLOADING: i32 = 1;
 const JOB_FAILED: i32 = 6;
 const JOB_CANCELLED: i32 = 7;
 
@@ -932,6 +933,105 @@ fn upload_needs_a_server_and_reports_failure_and_cancel() {
         "upload handle",
     );
     assert_eq!((a.session_free)(h), OK);
+}
+
+/// A cancel during the transfer drops the connection: the server stops receiving long
+/// before the end of the file, and the job ends cancelled.
+#[test]
+fn upload_cancel_stops_a_transfer_in_flight() {
+    use std::io::{BufRead, BufReader, Read, Write};
+    let a = api();
+    let h = new_session("{}");
+    let dir = tempfile::tempdir().unwrap();
+    let rec = dir.path().join("big.mp4");
+    let total = 512u64 << 20;
+    std::fs::File::create(&rec).unwrap().set_len(total).unwrap();
+    // A server that creates session "s1", then reads the upload slowly (about 20 MB/s)
+    // and reports how many bytes arrived before the connection closed.
+    let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+    let url = format!("http://{}", listener.local_addr().unwrap());
+    let (tx, rx) = std::sync::mpsc::channel::<u64>();
+    std::thread::spawn(move || {
+        for (k, stream) in listener.incoming().enumerate() {
+            let Ok(mut stream) = stream else { return };
+            let mut reader = BufReader::new(stream.try_clone().unwrap());
+            let mut head = String::new();
+            while reader.read_line(&mut head).map(|n| n > 2).unwrap_or(false) {}
+            if k == 0 {
+                let mut body = [0u8; 4096];
+                let len: usize = head
+                    .lines()
+                    .find_map(|l| {
+                        l.to_ascii_lowercase()
+                            .strip_prefix("content-length:")
+                            .map(|v| v.trim().parse().unwrap())
+                    })
+                    .unwrap_or(0);
+                reader.read_exact(&mut body[..len]).unwrap();
+                let answer = r#"{"id":"s1","state":"created"}"#;
+                let _ = write!(
+                    stream,
+                    "HTTP/1.1 201 Created\r\ncontent-type: application/json\r\ncontent-length: {}\r\nconnection: close\r\n\r\n{answer}",
+                    answer.len()
+                );
+                continue;
+            }
+            let mut buf = vec![0u8; 1 << 16];
+            let mut received = 0u64;
+            while let Ok(n @ 1..) = reader.read(&mut buf) {
+                received += n as u64;
+                std::thread::sleep(Duration::from_millis(3));
+            }
+            let _ = tx.send(received);
+            return;
+        }
+    });
+    let options = c(&format!(
+        r#"{{"server_url":"{url}","trials":3,"playback":"sim"}}"#
+    ));
+    let mut job = 0;
+    assert_eq!(
+        (a.upload_start)(
+            h,
+            c(rec.to_str().unwrap()).as_ptr().cast(),
+            options.as_ptr().cast(),
+            &mut job
+        ),
+        OK,
+        "{}",
+        last_error()
+    );
+    let start = Instant::now();
+    let mut p = JobProgress::default();
+    while start.elapsed() < Duration::from_secs(60) {
+        assert_eq!((a.upload_progress)(job, &mut p), OK);
+        if p.state == JOB_UPLOADING && p.bytes_sent >= 8 << 20 {
+            break;
+        }
+        assert!(p.state <= JOB_UPLOADING, "{p:?}: {}", message(job));
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    assert_eq!(p.bytes_total, total);
+    assert_eq!((a.upload_cancel)(job), OK);
+    let received = rx
+        .recv_timeout(Duration::from_secs(20))
+        .expect("the connection is closed after a cancel");
+    assert!(
+        received < total / 4,
+        "the server received {received} of {total} bytes"
+    );
+    assert_eq!((a.upload_progress)(job, &mut p), OK);
+    assert_eq!(p.state, JOB_CANCELLED);
+    assert!(p.bytes_sent < total / 4, "{p:?}");
+    assert_eq!((a.upload_free)(job), OK);
+    assert_eq!((a.session_free)(h), OK);
+}
+
+fn message(job: H) -> String {
+    let mut len = 0;
+    let mut buf = vec![0u8; 512];
+    (api().upload_message)(job, buf.as_mut_ptr().cast(), buf.len(), &mut len);
+    String::from_utf8_lossy(&buf[..len.min(buf.len())]).into_owned()
 }
 
 fn class_of(e: f64) -> i32 {

@@ -2,7 +2,7 @@ use std::fs::File;
 use std::hash::{BuildHasher, Hasher};
 use std::io::Read;
 use std::path::Path;
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
 use ureq::Agent;
@@ -32,7 +32,7 @@ enum Payload<'a> {
     Empty,
     Json(String),
     Text(&'a str),
-    File(&'a Path, &'a mut dyn FnMut(u64, u64)),
+    File(&'a Path, &'a mut dyn FnMut(u64, u64), &'a AtomicBool),
 }
 
 impl Client {
@@ -129,8 +129,21 @@ impl Client {
         path: &Path,
         progress: &mut dyn FnMut(u64, u64),
     ) -> Result<(), Error> {
+        self.upload_recording_cancellable(id, path, progress, &AtomicBool::new(false))
+    }
+
+    /// [`Client::upload_recording`] that stops as soon as `cancel` is set, also in the
+    /// middle of the transfer: the connection is dropped (the server keeps no partial
+    /// file) and the call returns [`Error::Cancelled`] without retrying.
+    pub fn upload_recording_cancellable(
+        &self,
+        id: &str,
+        path: &Path,
+        progress: &mut dyn FnMut(u64, u64),
+        cancel: &AtomicBool,
+    ) -> Result<(), Error> {
         let url = format!("/v1/sessions/{}/recording", check_id(id)?);
-        self.request("PUT", &url, Payload::File(path, progress), None)
+        self.request("PUT", &url, Payload::File(path, progress, cancel), None)
             .map(|_| ())
     }
 
@@ -219,6 +232,11 @@ impl Client {
         let mut attempt = 0;
         loop {
             attempt += 1;
+            if let Payload::File(_, _, cancel) = &payload
+                && cancel.load(Ordering::Acquire)
+            {
+                return Err(Error::Cancelled);
+            }
             let outcome = self.attempt(method, &url, &mut payload, idempotency);
             let retryable = match &outcome {
                 Ok(_) => false,
@@ -270,7 +288,7 @@ impl Client {
             (m, Payload::Text(text)) => with_key(body_builder(agent, m, url))
                 .header("content-type", "text/plain; charset=utf-8")
                 .send(*text),
-            (m, Payload::File(path, progress)) => {
+            (m, Payload::File(path, progress, cancel)) => {
                 let path: &Path = path;
                 let file = File::open(path).map_err(|source| Error::Io {
                     path: path.to_path_buf(),
@@ -290,11 +308,16 @@ impl Client {
                     reported: 0,
                     total,
                     progress: &mut **progress,
+                    cancel,
                 };
-                with_key(body_builder(agent, m, url))
+                let sent = with_key(body_builder(agent, m, url))
                     .header("content-type", "application/octet-stream")
                     .header("content-length", total.to_string())
-                    .send(ureq::SendBody::from_reader(&mut reader))
+                    .send(ureq::SendBody::from_reader(&mut reader));
+                if cancel.load(Ordering::Acquire) {
+                    return Err(Error::Cancelled);
+                }
+                sent
             }
         };
         let mut response = result.map_err(|e| transport_error(url, e))?;
@@ -416,10 +439,16 @@ struct ProgressReader<'a> {
     reported: u64,
     total: u64,
     progress: &'a mut dyn FnMut(u64, u64),
+    cancel: &'a AtomicBool,
 }
 
 impl Read for ProgressReader<'_> {
     fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        // Checked on every read (one atomic load per buffer), so a cancel stops a slow
+        // upload within one buffer rather than at the end of the file.
+        if self.cancel.load(Ordering::Acquire) {
+            return Err(std::io::Error::other("upload cancelled"));
+        }
         let n = self.inner.read(buf)?;
         self.sent += n as u64;
         // Report every MiB and at the end: cheap even for multi-GiB files.
@@ -632,7 +661,12 @@ mod tests {
         let started = Instant::now();
         let err = client.health().unwrap_err();
         assert!(matches!(err, Error::Timeout { attempts: 2, .. }), "{err:?}");
-        assert!(started.elapsed() < Duration::from_millis(1400));
+        // Two attempts of 0.3 s, far below the 30 s default (a loose bound: CI machines are loaded).
+        assert!(
+            started.elapsed() < Duration::from_secs(5),
+            "{:?}",
+            started.elapsed()
+        );
     }
 
     #[test]
@@ -654,6 +688,80 @@ mod tests {
         assert_eq!(calls.first(), Some(&(0, 3_000_000)));
         assert_eq!(calls.last(), Some(&(3_000_000, 3_000_000)));
         assert!(calls.windows(2).all(|w| w[0].0 <= w[1].0));
+    }
+
+    #[test]
+    fn a_cancelled_upload_stops_mid_transfer_and_is_not_retried() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("rec.mp4");
+        let total = 64u64 << 20;
+        std::fs::File::create(&path)
+            .unwrap()
+            .set_len(total)
+            .unwrap();
+        // A server that reads whatever arrives on each connection and counts it.
+        let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+        let base = format!("http://{}", listener.local_addr().unwrap());
+        let received = Arc::new(Mutex::new(Vec::<u64>::new()));
+        let log = received.clone();
+        std::thread::spawn(move || {
+            for stream in listener.incoming() {
+                let Ok(mut stream) = stream else { return };
+                let mut buf = vec![0; 1 << 16];
+                let mut n = 0u64;
+                while let Ok(k @ 1..) = stream.read(&mut buf) {
+                    n += k as u64;
+                }
+                log.lock().unwrap().push(n);
+            }
+        });
+        let cancel = AtomicBool::new(false);
+        let mut last = 0;
+        let err = fast(&base)
+            .upload_recording_cancellable(
+                "s1",
+                &path,
+                &mut |sent, _| {
+                    last = sent;
+                    if sent >= 4 << 20 {
+                        cancel.store(true, Ordering::Release);
+                    }
+                },
+                &cancel,
+            )
+            .unwrap_err();
+        assert!(matches!(err, Error::Cancelled), "{err:?}");
+        assert!(
+            (4 << 20..8 << 20).contains(&last),
+            "stopped after {last} bytes"
+        );
+        // The server sees the connection close early, once: no retry.
+        let deadline = Instant::now() + Duration::from_secs(10);
+        while received.lock().unwrap().is_empty() && Instant::now() < deadline {
+            std::thread::sleep(Duration::from_millis(10));
+        }
+        std::thread::sleep(Duration::from_millis(200));
+        let received = received.lock().unwrap();
+        assert_eq!(received.len(), 1, "{received:?}");
+        assert!(
+            received[0] < total / 2,
+            "the server got {} bytes",
+            received[0]
+        );
+    }
+
+    #[test]
+    fn a_cancel_before_the_upload_sends_nothing() {
+        let (base, seen) = serve(vec![Reply::Answer(202, "{}")]);
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("rec.mp4");
+        std::fs::write(&path, b"data").unwrap();
+        let err = fast(&base)
+            .upload_recording_cancellable("s1", &path, &mut |_, _| {}, &AtomicBool::new(true))
+            .unwrap_err();
+        assert!(matches!(err, Error::Cancelled), "{err:?}");
+        std::thread::sleep(Duration::from_millis(100));
+        assert!(seen.lock().unwrap().is_empty());
     }
 
     #[test]

@@ -46,6 +46,9 @@ pub enum Error {
         /// The underlying error.
         source: std::io::Error,
     },
+    /// The caller cancelled the call (see [`crate::Client::upload_recording_cancellable`]).
+    #[error("cancelled")]
+    Cancelled,
     /// The server's answer was not what the API promises.
     #[error("unexpected answer from the server: {0}")]
     InvalidResponse(String),

@@ -6,6 +6,8 @@
 //! connection errors, timeouts and 5xx answers are retried with exponential
 //! backoff; `POST`s carry an [`IDEMPOTENCY_HEADER`] key that stays the same
 //! across retries, so a retry never creates a second session or trial.
+//! [`Client::upload_recording_cancellable`] stops a recording upload mid-transfer
+//! when its flag is set (the app's cancel button).
 //!
 //! ```
 //! use sitar_client::{Client, Error, NewSession};

@@ -209,17 +209,27 @@ fn run(shared: &Shared, client: &Client, recording: &Path, o: &UploadOptions) ->
         return Ok(());
     }
     set_state(shared, SitarJobState::SITAR_JOB_UPLOADING);
-    client.upload_recording(&id, recording, &mut |sent, total| {
-        shared.update(|s| {
-            s.progress.bytes_sent = sent;
-            s.progress.bytes_total = total;
-            s.progress.progress = if total == 0 {
-                0.0
-            } else {
-                UPLOAD_SHARE * sent as f64 / total as f64
-            };
-        });
-    })?;
+    // A cancel stops the transfer itself, not only what comes after it.
+    let sent = client.upload_recording_cancellable(
+        &id,
+        recording,
+        &mut |sent, total| {
+            shared.update(|s| {
+                s.progress.bytes_sent = sent;
+                s.progress.bytes_total = total;
+                s.progress.progress = if total == 0 {
+                    0.0
+                } else {
+                    UPLOAD_SHARE * sent as f64 / total as f64
+                };
+            });
+        },
+        &shared.cancelled,
+    );
+    match sent {
+        Err(sitar_client::Error::Cancelled) => return Ok(()),
+        other => other?,
+    }
     if shared.cancelled() {
         return Ok(());
     }
