@@ -126,6 +126,7 @@ pub fn depth_len(width: i32, height: i32, row_stride_bytes: i32) -> Result<usize
 
 /// Stops recording and returns the summary.
 pub fn session_stop(h: SitarHandle, t_ns: i64, pose: &SitarPose) -> Result<SitarSummary, Error> {
+    let _trace = crate::trace::section("sitar stop");
     let pose = pose.to_core();
     with_session(h, |s| Ok(SitarSummary::from(&s.stop(t_ns, pose)?)))
 }
@@ -141,6 +142,7 @@ pub fn session_summary(h: SitarHandle) -> Result<SitarSummary, Error> {
 
 /// Loads results (legacy CSV or JSON) into the session.
 pub fn session_load_results(h: SitarHandle, csv_or_json: &str) -> Result<(), Error> {
+    let _trace = crate::trace::section("sitar load results");
     with_session(h, |s| Ok(s.load_results(csv_or_json)?))
 }
 
@@ -154,6 +156,7 @@ pub fn session_error_at(h: SitarHandle, t_ns: i64) -> Result<(i32, f64), Error> 
 
 /// The markers (needs results).
 pub fn session_markers(h: SitarHandle) -> Result<Vec<SitarMarker>, Error> {
+    let _trace = crate::trace::section("sitar markers");
     with_session(h, |s| {
         Ok(s.markers()?.iter().map(SitarMarker::from).collect())
     })
@@ -188,6 +191,7 @@ pub fn session_subtrajectory_results(
 
 /// The render plan with each item's class.
 pub fn session_render_plan(h: SitarHandle) -> Result<RenderPlanC, Error> {
+    let _trace = crate::trace::section("sitar render plan");
     with_session(h, |s| {
         let plan = s.render_plan();
         let class = |k: u32| s.subtrajectory_class(k) as i32;
@@ -241,12 +245,14 @@ pub fn session_trajectory_tum(h: SitarHandle) -> Result<String, Error> {
 
 /// Saves the session folder.
 pub fn session_save(h: SitarHandle, dir: &Path) -> Result<(), Error> {
+    let _trace = crate::trace::section("sitar save");
     with_session(h, |s| Ok(s.save(dir)?))
 }
 
 /// Loads a saved session folder as a new session.
 pub fn session_load(dir: &Path) -> Result<SitarHandle, Error> {
     crate::logging::init();
+    let _trace = crate::trace::section("sitar load");
     let session = Session::load(dir)?;
     Ok(SESSIONS.insert(Mutex::new(session)))
 }
@@ -282,6 +288,7 @@ pub fn playback_tum(h: SitarHandle) -> Result<String, Error> {
 
 /// Writes `<dir>/trajectory_<index>.txt` (creating `dir`) and returns the path.
 pub fn playback_write(h: SitarHandle, dir: &Path, index: u32) -> Result<PathBuf, Error> {
+    let _trace = crate::trace::section("sitar playback write");
     let shared = PLAYBACKS.get(h)?;
     let p = lock(&shared)?;
     std::fs::create_dir_all(dir).map_err(|source| Error::Io {

@@ -41,6 +41,7 @@ mod guard;
 mod jni_api;
 mod logging;
 mod registry;
+mod trace;
 mod types;
 mod upload;
 

@@ -210,6 +210,7 @@ fn run(shared: &Shared, client: &Client, recording: &Path, o: &UploadOptions) ->
     }
     set_state(shared, SitarJobState::SITAR_JOB_UPLOADING);
     // A cancel stops the transfer itself, not only what comes after it.
+    let trace = crate::trace::section("sitar upload recording");
     let sent = client.upload_recording_cancellable(
         &id,
         recording,
@@ -226,6 +227,7 @@ fn run(shared: &Shared, client: &Client, recording: &Path, o: &UploadOptions) ->
         },
         &shared.cancelled,
     );
+    drop(trace);
     match sent {
         Err(sitar_client::Error::Cancelled) => return Ok(()),
         other => other?,
