@@ -245,7 +245,30 @@ fn a_retried_create_returns_the_same_session() {
     let (s1, _, b1) = raw("POST", &url, Some("application/json"), body, &key);
     let (s2, _, b2) = raw("POST", &url, Some("application/json"), body, &key);
     let (s3, _, b3) = raw("POST", &url, Some("application/json"), body, &[]);
-    assert_eq!((s1, s2, s3), (201, 200, 201));
+    // The retry gets the first answer again; a request without the key is a new session.
+    assert_eq!((s1, s2, s3), (201, 201, 201));
     assert_eq!(b1, b2);
     assert_ne!(b1, b3);
+}
+
+#[test]
+fn a_session_that_names_nothing_takes_the_servers_defaults() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut config = sim_config(&dir.path().join("data"), 20.0, 1);
+    config.playback = sitar_server::PlaybackKind::Upload;
+    config.default_trials = 4;
+    let server = start(config);
+    let url = format!("{}/v1/sessions", server.url());
+    let (status, _, body) = raw("POST", &url, Some("application/json"), b"{}", &[]);
+    assert_eq!(status, 201, "{body}");
+    let id = serde_json::from_str::<serde_json::Value>(&body).unwrap()["id"]
+        .as_str()
+        .unwrap()
+        .to_owned();
+    let (status, _, body) = raw("GET", &format!("{url}/{id}"), None, b"", &[]);
+    assert_eq!(status, 200, "{body}");
+    let doc: serde_json::Value = serde_json::from_str(&body).unwrap();
+    assert_eq!(doc["trials_total"], 4, "{body}");
+    assert_eq!(doc["playback"], "upload", "{body}");
+    assert_eq!(doc["setting"], "trim_mean_30", "{body}");
 }

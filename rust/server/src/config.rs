@@ -72,13 +72,14 @@ pub struct AdbConfig {
 pub struct ServerConfig {
     /// Where the SQLite database and all files live. Nothing is written outside it.
     pub data_dir: PathBuf,
-    /// Backend for the legacy `POST /recording` route.
+    /// Backend for the legacy `POST /recording` route and for sessions that name none.
     pub playback: PlaybackKind,
     /// Largest accepted recording (default 2 GiB).
     pub max_recording_bytes: u64,
     /// Largest accepted trajectory or timestamps file (default 64 MiB).
     pub max_trajectory_bytes: u64,
-    /// Trials for sessions created by the legacy route (default 5, the paper's).
+    /// Trials for sessions created by the legacy route or without `trials` (default 5, the
+    /// paper's).
     pub default_trials: u32,
     /// Statistic for legacy sessions (default `trim_mean_30`).
     pub default_setting: String,

@@ -121,10 +121,14 @@ async fn health() -> Response {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct CreateRequest {
-    trials: u32,
+    /// Defaults to the server's trial count for legacy sessions.
+    #[serde(default)]
+    trials: Option<u32>,
     #[serde(default)]
     setting: Option<String>,
-    playback: String,
+    /// Defaults to the server's `--playback`.
+    #[serde(default)]
+    playback: Option<String>,
     #[serde(default)]
     adaptive_min_trials: Option<u32>,
     #[serde(default)]
@@ -143,17 +147,20 @@ async fn create_session(
     }
     let req: CreateRequest = serde_json::from_slice(&body)
         .map_err(|e| Error::BadRequest(format!("session request: {e}")))?;
-    if !(1..=1000).contains(&req.trials) {
+    let trials = req.trials.unwrap_or(shared.config.default_trials);
+    if !(1..=1000).contains(&trials) {
         return Err(Error::BadRequest(format!(
-            "trials: {} is not in 1..=1000",
-            req.trials
+            "trials: {trials} is not in 1..=1000"
         )));
     }
+    let playback = req
+        .playback
+        .unwrap_or_else(|| shared.config.playback.as_str().to_owned());
     let setting = req
         .setting
         .unwrap_or_else(|| shared.config.default_setting.clone());
     estimation::check_setting(&setting)?;
-    shared.backend(&req.playback)?;
+    shared.backend(&playback)?;
     if let Some(min) = req.adaptive_min_trials
         && min < 2
     {
@@ -162,25 +169,21 @@ async fn create_session(
         )));
     }
     let key = idempotency_key(&headers)?;
-    let (id, created) = create_row(
+    let (id, _created) = create_row(
         &shared,
         &NewSessionRow {
             idempotency_key: key.as_deref(),
-            trials_total: req.trials,
+            trials_total: trials,
             setting: &setting,
-            playback: &req.playback,
+            playback: &playback,
             adaptive_min: req.adaptive_min_trials,
             adaptive_k: req.adaptive_k.unwrap_or(shared.config.default_adaptive_k),
             legacy: false,
         },
     )?;
-    let status = if created {
-        StatusCode::CREATED
-    } else {
-        StatusCode::OK
-    };
+    // A replayed request (same Idempotency-Key) gets the answer of the first one.
     Ok((
-        status,
+        StatusCode::CREATED,
         [(header::LOCATION, format!("/v1/sessions/{id}"))],
         axum::Json(json!({"id": id})),
     )
@@ -387,13 +390,12 @@ async fn post_trial(
     let text = std::fs::read(&temp.path).map_err(|e| Error::io("cannot read", &temp.path, e))?;
     let text = String::from_utf8(text)
         .map_err(|e| Error::InvalidContent(format!("trajectory is not UTF-8 text: {e}")))?;
-    let (index, created) = jobs::store_trial(&shared, &id, key.as_deref(), None, &text, "upload")?;
-    let status = if created {
-        StatusCode::CREATED
-    } else {
-        StatusCode::OK
-    };
-    Ok(json_response(status, &json!({"index": index}).to_string()))
+    let (index, _created) = jobs::store_trial(&shared, &id, key.as_deref(), None, &text, "upload")?;
+    // A replayed request (same Idempotency-Key) gets the answer of the first one.
+    Ok(json_response(
+        StatusCode::CREATED,
+        &json!({"index": index}).to_string(),
+    ))
 }
 
 async fn post_estimate(State(shared): AppState, Path(id): Path<String>) -> Result<Response, Error> {
