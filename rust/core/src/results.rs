@@ -258,8 +258,31 @@ impl Results {
             .get("windows")
             .and_then(Value::as_array)
             .ok_or_else(|| Error::parse(SRC, 0, "windows", "missing or not an array"))?;
+        // The stamps' number text, read a second time without going through f64: decimal
+        // seconds keep all nine digits (1403636579.763555527 is not an f64).
+        #[derive(Deserialize)]
+        struct RawStamps {
+            start: Option<Box<serde_json::value::RawValue>>,
+            end: Option<Box<serde_json::value::RawValue>>,
+        }
+        #[derive(Deserialize)]
+        struct RawDocument {
+            windows: Vec<RawStamps>,
+        }
+        let raw = serde_json::from_str::<RawDocument>(text)
+            .ok()
+            .filter(|d| d.windows.len() == list.len());
         let mut windows = Vec::with_capacity(list.len());
         for (i, w) in list.iter().enumerate() {
+            let raw_text = |f: &str| {
+                let stamps = &raw.as_ref()?.windows[i];
+                let value = if f == "start" {
+                    &stamps.start
+                } else {
+                    &stamps.end
+                };
+                value.as_ref().map(|v| v.get().to_owned())
+            };
             let path = |f: &str| format!("windows[{i}].{f}");
             let stamp = |f: &str, required: bool| -> Result<Option<i64>, Error> {
                 match w.get(f) {
@@ -268,7 +291,7 @@ impl Results {
                     Some(Value::Number(n)) => {
                         let parsed = match n.as_i64() {
                             Some(ns) => Some(ns),
-                            None => seconds_to_ns(&n.to_string()),
+                            None => seconds_to_ns(&raw_text(f).unwrap_or_else(|| n.to_string())),
                         };
                         parsed.map(Some).ok_or_else(|| {
                             Error::parse(SRC, 0, path(f), format!("`{n}` is not a timestamp"))
@@ -495,6 +518,13 @@ mod tests {
         }
         let secs = Results::parse(r#"{"windows":[{"start":1.5,"error_m":0.1}]}"#).unwrap();
         assert_eq!(secs.windows[0].start, 1_500_000_000);
+        // Decimal seconds are read from the text, not through f64 (which keeps ~16 digits).
+        let exact = Results::parse(
+            r#"{"windows":[{"start":1403636579.763555527,"end":1403636580.096888861,"error_m":0.1}]}"#,
+        )
+        .unwrap();
+        assert_eq!(exact.windows[0].start, 1_403_636_579_763_555_527);
+        assert_eq!(exact.windows[0].end, Some(1_403_636_580_096_888_861));
     }
 
     #[test]

@@ -121,10 +121,24 @@ impl Estimate {
     }
 
     /// JSON: `{"version":1,"setting":…,"trials":n,"time_unit":"ns"|"s","pose_relation":…,
-    /// "windows":[{"start","end","error_m","pairs","spread_m","class"}]}`; `start`/`end` are
-    /// integer nanoseconds. For rotational relations the error keys are `error_deg`/`error_rad`
+    /// "windows":[{"start","end","error_m","pairs","spread_m","class"}]}`; `start`/`end` keep
+    /// the trials' unit, written exactly: integer nanoseconds, or seconds with 9 decimals.
+    /// For rotational relations the error keys are `error_deg`/`error_rad`
     /// (`spread_deg`/`spread_rad`) and `class` is omitted.
     pub fn to_json(&self, thresholds: Thresholds) -> String {
+        /// One window: the stamps as exact number text, the rest as values.
+        #[derive(serde::Serialize)]
+        struct Window {
+            start: Box<serde_json::value::RawValue>,
+            end: Box<serde_json::value::RawValue>,
+            #[serde(flatten)]
+            values: serde_json::Map<String, serde_json::Value>,
+        }
+        let stamp = |t: i64| {
+            // A plain decimal number is always valid JSON number text.
+            serde_json::value::RawValue::from_string(self.time_unit.format_stamp(t))
+                .expect("a formatted stamp is a JSON number")
+        };
         let (error_key, spread_key) = match self.pose_relation {
             PoseRelation::TranslationPart => ("error_m", "spread_m"),
             PoseRelation::RotationAngleDeg => ("error_deg", "spread_deg"),
@@ -132,31 +146,46 @@ impl Estimate {
             PoseRelation::FullTransformation => ("error", "spread"),
         };
         let translation = self.pose_relation == PoseRelation::TranslationPart;
-        let windows: Vec<serde_json::Value> = self
+        let windows: Vec<Window> = self
             .windows
             .iter()
             .map(|w| {
                 let mut o = serde_json::Map::new();
-                o.insert("start".into(), w.start.into());
-                o.insert("end".into(), w.end.into());
                 o.insert(error_key.into(), json_number(w.error_m));
                 o.insert("pairs".into(), w.pairs.into());
                 o.insert(spread_key.into(), json_number(w.spread_m));
                 if translation {
                     o.insert("class".into(), thresholds.class(w.error_m).into());
                 }
-                serde_json::Value::Object(o)
+                Window {
+                    start: stamp(w.start),
+                    end: stamp(w.end),
+                    values: o,
+                }
             })
             .collect();
-        let document = serde_json::json!({
-            "version": 1,
-            "setting": self.setting.to_string(),
-            "trials": self.trials,
-            "time_unit": match self.time_unit { TimeUnit::Nanoseconds => "ns", TimeUnit::Seconds => "s" },
-            "pose_relation": self.pose_relation.to_string(),
-            "windows": windows,
-        });
-        document.to_string()
+        // Serialized as a struct: through a `Value` the raw stamps would become floats again.
+        #[derive(serde::Serialize)]
+        struct Document {
+            version: u32,
+            setting: String,
+            trials: usize,
+            time_unit: &'static str,
+            pose_relation: String,
+            windows: Vec<Window>,
+        }
+        let document = Document {
+            version: 1,
+            setting: self.setting.to_string(),
+            trials: self.trials,
+            time_unit: match self.time_unit {
+                TimeUnit::Nanoseconds => "ns",
+                TimeUnit::Seconds => "s",
+            },
+            pose_relation: self.pose_relation.to_string(),
+            windows,
+        };
+        serde_json::to_string(&document).expect("plain data serializes")
     }
 }
 
@@ -767,14 +796,19 @@ mod tests {
             medium_m: e.windows[0].error_m,
             high_m: e.windows[0].error_m * 2.0,
         };
-        let json: serde_json::Value = serde_json::from_str(&e.to_json(thresholds)).unwrap();
+        let text = e.to_json(thresholds);
+        // Seconds in, seconds out: exact, with 9 decimals (as the CSV).
+        assert!(
+            text.contains(r#""start":1.000000000,"end":1.333333330,"#),
+            "{text}"
+        );
+        let json: serde_json::Value = serde_json::from_str(&text).unwrap();
         assert_eq!(json["version"], 1);
         assert_eq!(json["setting"], "trim_mean_30");
         assert_eq!(json["trials"], 2);
         assert_eq!(json["time_unit"], "s");
         let first = &json["windows"][0];
-        assert_eq!(first["start"], 1_000_000_000);
-        assert_eq!(first["end"], 1_000_000_000 + 10 * 33_333_333);
+        assert_eq!(first["start"].as_f64(), Some(1.0));
         assert_eq!(first["pairs"], 1);
         assert_eq!(first["error_m"].as_f64().unwrap(), e.windows[0].error_m);
         assert_eq!(first["class"], "medium");
@@ -798,8 +832,14 @@ mod tests {
             },
         )
         .unwrap();
-        let json: serde_json::Value =
-            serde_json::from_str(&rotational.to_json(Thresholds::default())).unwrap();
+        let text = rotational.to_json(Thresholds::default());
+        // Nanoseconds in, integer nanoseconds out.
+        assert!(
+            text.contains(r#""start":1000000000,"end":1333333330,"#),
+            "{text}"
+        );
+        let json: serde_json::Value = serde_json::from_str(&text).unwrap();
+        assert_eq!(json["time_unit"], "ns");
         assert!(
             json["windows"][0]["error_deg"].is_number()
                 && json["windows"][0].get("class").is_none()
