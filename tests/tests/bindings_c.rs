@@ -989,18 +989,7 @@ fn upload_cancel_stops_a_transfer_in_flight() {
     let options = c(&format!(
         r#"{{"server_url":"{url}","trials":3,"playback":"sim"}}"#
     ));
-    let mut job = 0;
-    assert_eq!(
-        (a.upload_start)(
-            h,
-            c(rec.to_str().unwrap()).as_ptr().cast(),
-            options.as_ptr().cast(),
-            &mut job
-        ),
-        OK,
-        "{}",
-        last_error()
-    );
+    let job = start_upload(h, &rec, &options);
     let start = Instant::now();
     let mut p = JobProgress::default();
     while start.elapsed() < Duration::from_secs(60) {
@@ -1025,6 +1014,24 @@ fn upload_cancel_stops_a_transfer_in_flight() {
     assert!(p.bytes_sent < total / 4, "{p:?}");
     assert_eq!((a.upload_free)(job), OK);
     assert_eq!((a.session_free)(h), OK);
+}
+
+/// Starts an upload job of `recording` with `options` (a C string); panics with the
+/// library's last error if it does not start.
+fn start_upload(h: H, recording: &std::path::Path, options: &[u8]) -> H {
+    let mut job = 0;
+    assert_eq!(
+        (api().upload_start)(
+            h,
+            c(recording.to_str().unwrap()).as_ptr().cast(),
+            options.as_ptr().cast(),
+            &mut job
+        ),
+        OK,
+        "{}",
+        last_error()
+    );
+    job
 }
 
 fn message(job: H) -> String {
@@ -1055,18 +1062,7 @@ fn upload_against_a_sim_server_loads_progressive_then_final_results() {
     record(h);
     let options =
         c(r#"{"trials":6,"setting":"trim_mean_30","playback":"sim","poll_interval_ms":10}"#);
-    let mut job = 0;
-    assert_eq!(
-        (a.upload_start)(
-            h,
-            c(rec.to_str().unwrap()).as_ptr().cast(),
-            options.as_ptr().cast(),
-            &mut job
-        ),
-        OK,
-        "{}",
-        last_error()
-    );
+    let job = start_upload(h, &rec, &options);
     let start = Instant::now();
     let mut progressive = false;
     let mut last = JobProgress::default();
