@@ -10,6 +10,7 @@ use sitar_estimator::{
 
 use crate::input::{self, Format};
 use crate::output::{OutputFormat, json_number};
+use crate::plot::{ErrorFigure, Sample};
 
 /// Arguments common to `rpe` and `ape` (evo's names; `_` spellings accepted too).
 #[derive(clap::Args, Debug)]
@@ -160,6 +161,56 @@ pub fn result_json(
         object.extend(extra);
     }
     doc.to_string()
+}
+
+/// The `--plot` figure of an APE/RPE result: each error at the reference pose (APE) or the
+/// window's first reference pose (RPE), on the associated reference trajectory.
+pub fn error_figure(
+    metric: &'static str,
+    args: &PairArgs,
+    prepared: &Prepared,
+    errors: &PoseErrors,
+) -> ErrorFigure {
+    let reference = &prepared.reference;
+    let stats = errors.statistics();
+    ErrorFigure {
+        title: format!(
+            "{metric} of {} w.r.t. {} ({}, alignment {})",
+            file_name(&args.estimate),
+            file_name(&args.reference),
+            args.pose_relation,
+            alignment_name(prepared.alignment)
+        ),
+        metric,
+        unit: unit(args.pose_relation),
+        first_stamp: reference.stamps.first().copied().unwrap_or(0),
+        stamps_are_indices: args.input_format == Format::Kitti,
+        lines: vec![
+            ("rmse", stats.rmse),
+            ("mean", stats.mean),
+            ("median", stats.median),
+        ],
+        trajectory_name: format!("reference {}", file_name(&args.reference)),
+        trajectory: reference.positions.iter().map(|p| p.to_array()).collect(),
+        samples: errors
+            .pairs
+            .iter()
+            .zip(&errors.errors)
+            .map(|(&(i, _), &error)| Sample {
+                stamp: reference.stamps[i],
+                position: Some(reference.positions[i].to_array()),
+                error,
+            })
+            .collect(),
+    }
+}
+
+/// A path's file name, for figure titles (the whole path if it has none).
+pub fn file_name(path: &std::path::Path) -> String {
+    path.file_name().map_or_else(
+        || path.display().to_string(),
+        |n| n.to_string_lossy().into_owned(),
+    )
 }
 
 fn statistics_json(s: &Statistics) -> serde_json::Value {

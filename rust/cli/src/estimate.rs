@@ -1,21 +1,27 @@
 //! `sitar estimate`: per-window pose error from repeated trials, without ground truth.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
-use sitar_estimator::{EstimateOptions, PoseRelation, Setting, Thresholds, estimate};
+use sitar_estimator::{
+    Estimate, EstimateOptions, PoseRelation, Setting, Thresholds, Trajectory, estimate,
+    matching_time_indices, seconds_to_ns,
+};
 
+use crate::compare::{file_name, unit};
 use crate::input::{self, Format, progress_bar};
 use crate::output::{OutputFormat, emit};
+use crate::plot::{self, ErrorFigure, PlotArgs, Sample};
 
 /// Estimates each window's pose error from repeated trials, without ground truth.
 ///
 /// All n(n−1)/2 pairwise RPEs of the trials (translation, delta 10 frames, every start), then
 /// a robust statistic per window. Writes the legacy CSV `start,error` (start in the trials'
-/// time unit, error in metres) or JSON with the pair count, spread and class of each window.
+/// time unit, error in metres) or JSON with the pair count, spread and class of each window;
+/// --plot also draws the estimate over time and on the first trial's path as SVG.
 #[derive(clap::Args, Debug)]
 #[command(
-    after_help = "Examples:\n  sitar estimate trials/trajectory_*.txt\n  sitar estimate trials/ --setting median --format json -o results.json"
+    after_help = "Examples:\n  sitar estimate trials/trajectory_*.txt\n  sitar estimate trials/ --setting median --format json -o results.json\n  sitar estimate trials/ --plot estimate.svg --plot-mode xz"
 )]
 pub struct Args {
     /// Trial trajectory files, at least 2, taken in the order given; a directory stands for
@@ -49,6 +55,8 @@ pub struct Args {
     /// Write the result to this file instead of stdout.
     #[arg(short = 'o', long)]
     output: Option<PathBuf>,
+    #[command(flatten)]
+    plot: PlotArgs,
 }
 
 fn parse_setting(s: &str) -> Result<Setting, String> {
@@ -87,6 +95,10 @@ pub fn run(args: Args) -> Result<()> {
         pose_relation: args.pose_relation,
     };
     let result = estimate(&trials, &options).context("estimating")?;
+    if let Some(path) = &args.plot.plot {
+        let figure = error_figure(&args, &files[0], &trials[0], &result);
+        plot::write(path, args.plot.plot_mode, &figure)?;
+    }
     let text = match args.format {
         OutputFormat::Csv => result.to_legacy_csv(),
         OutputFormat::Json => {
@@ -97,4 +109,52 @@ pub fn run(args: Args) -> Result<()> {
         }
     };
     emit(args.output.as_deref(), &text)
+}
+
+/// The `--plot` figure: each window's estimate at its start, on the first trial's path (the
+/// reference of all its pairs). A window starting where the first trial has no pose within
+/// --t-max-diff (a frame it dropped) is drawn over time only.
+fn error_figure(
+    args: &Args,
+    first_file: &Path,
+    first: &Trajectory,
+    result: &Estimate,
+) -> ErrorFigure {
+    let starts: Vec<i64> = result.windows.iter().map(|w| w.start).collect();
+    let (windows, poses) =
+        matching_time_indices(&starts, &first.stamps, seconds_to_ns(args.t_max_diff), 0);
+    let mut positions = vec![None; starts.len()];
+    for (w, p) in windows.into_iter().zip(poses) {
+        positions[w] = Some(first.positions[p].to_array());
+    }
+    ErrorFigure {
+        title: format!(
+            "estimated error of {} trials ({}, {}, delta {} frames)",
+            result.trials, result.setting, result.pose_relation, args.delta
+        ),
+        metric: "estimated error",
+        unit: unit(args.pose_relation),
+        first_stamp: first
+            .stamps
+            .first()
+            .copied()
+            .into_iter()
+            .chain(starts.first().copied())
+            .min()
+            .unwrap_or(0),
+        stamps_are_indices: args.input_format == Format::Kitti,
+        lines: Vec::new(),
+        trajectory_name: format!("first trial {}", file_name(first_file)),
+        trajectory: first.positions.iter().map(|p| p.to_array()).collect(),
+        samples: result
+            .windows
+            .iter()
+            .zip(positions)
+            .map(|(w, position)| Sample {
+                stamp: w.start,
+                position,
+                error: w.error_m,
+            })
+            .collect(),
+    }
 }

@@ -12,6 +12,7 @@ mod estimate;
 mod evaluate;
 mod input;
 mod output;
+mod plot;
 mod rpe;
 mod serve;
 mod simulate;

@@ -4,16 +4,17 @@ use anyhow::{Context, Result};
 use clap::ValueEnum;
 use sitar_estimator::{DeltaUnit, RpeOptions, rpe};
 
-use crate::compare::{PairArgs, result_json};
+use crate::compare::{PairArgs, error_figure, result_json};
 use crate::output::{OutputFormat, emit};
+use crate::plot::{self, PlotArgs};
 
 /// Relative pose error of EST against REF, as evo_rpe.
 ///
 /// Writes CSV `start,end,error` (one row per pose pair, times in the input's unit) or JSON
-/// with the statistics.
+/// with the statistics; --plot also draws each pair's error at its start as SVG.
 #[derive(clap::Args, Debug)]
 #[command(
-    after_help = "Example: sitar rpe ground_truth.txt trials/trajectory_0.txt --all-pairs --format json"
+    after_help = "Examples:\n  sitar rpe ground_truth.txt trials/trajectory_0.txt --all-pairs --format json\n  sitar rpe ground_truth.txt trials/trajectory_0.txt --plot rpe.svg --plot-mode xz"
 )]
 pub struct Args {
     #[command(flatten)]
@@ -33,6 +34,8 @@ pub struct Args {
     /// Choose pose pairs on the reference instead of the estimate.
     #[arg(long = "pairs-from-reference", alias = "pairs_from_reference")]
     pairs_from_reference: bool,
+    #[command(flatten)]
+    plot: PlotArgs,
 }
 
 /// RPE delta unit, as evo's `-u f|m`.
@@ -59,6 +62,10 @@ pub fn run(args: Args) -> Result<()> {
     };
     let errors =
         rpe(&prepared.reference, &prepared.estimate, &options).context("computing the RPE")?;
+    if let Some(path) = &args.plot.plot {
+        let figure = error_figure("RPE", &args.pair, &prepared, &errors);
+        plot::write(path, args.plot.plot_mode, &figure)?;
+    }
     let reference = &prepared.reference;
     let text = match args.pair.format {
         OutputFormat::Csv => {

@@ -342,8 +342,11 @@ fn evaluate_reports_every_setting_and_draws_the_plot() {
 fn every_subcommand_has_help() {
     for (cmd, flag) in [
         ("rpe", "--delta-unit"),
+        ("rpe", "--plot-mode"),
         ("ape", "--align-origin"),
+        ("ape", "--plot <FILE.svg>"),
         ("estimate", "--setting"),
+        ("estimate", "--plot-mode"),
         ("simulate", "--trials"),
         ("evaluate", "--trials-b"),
     ] {
@@ -354,6 +357,264 @@ fn every_subcommand_has_help() {
     for cmd in ["rpe", "ape", "estimate", "evaluate", "simulate"] {
         assert!(top.contains(cmd));
     }
+}
+
+/// The `<circle>` elements of an SVG (only the trajectory panel draws circles): their fills.
+fn circle_fills(svg: &str) -> Vec<String> {
+    svg.split("<circle")
+        .skip(1)
+        .map(|e| attribute(e, "fill").to_owned())
+        .collect()
+}
+
+/// The trimmed contents of the `<text>` elements of an SVG (`&amp;` etc. left escaped).
+fn svg_texts(svg: &str) -> Vec<&str> {
+    svg.split("<text")
+        .skip(1)
+        .filter_map(|e| {
+            let body = &e[e.find('>')? + 1..];
+            Some(body[..body.find("</text>")?].trim())
+        })
+        .collect()
+}
+
+/// Point counts of the `<polyline>` elements stroked in `colour` (`#RRGGBB`).
+fn polyline_lengths(svg: &str, colour: &str) -> Vec<usize> {
+    svg.split("<polyline")
+        .skip(1)
+        .filter(|e| attribute(e, "stroke") == colour)
+        .map(|e| attribute(e, "points").split_whitespace().count())
+        .collect()
+}
+
+/// The value of `name="…"` in the element starting `element`.
+fn attribute<'a>(element: &'a str, name: &str) -> &'a str {
+    let tag = &element[..element.find("/>").expect("closed element")];
+    let key = format!(" {name}=\"");
+    let start = tag.find(&key).map(|k| k + key.len()).unwrap_or_else(|| {
+        panic!("no {name} in {tag}");
+    });
+    &tag[start..start + tag[start..].find('"').unwrap()]
+}
+
+/// The error line's colour and the grey trajectory's, as `plot.rs` draws them.
+const ERROR_LINE: &str = "#1F77B4";
+const TRAJECTORY_LINE: &str = "#A0A0A0";
+/// Viridis' ends: the smallest and the largest error.
+const VIRIDIS_LOW: &str = "#440154";
+const VIRIDIS_HIGH: &str = "#FDE725";
+
+/// Reads a written figure and checks what every error figure has: SVG text, one dot per drawn
+/// error spanning the colour map, one error line with a point per error, the whole trajectory.
+fn check_figure(path: &Path, errors: usize, dots: usize, trajectory: usize) -> String {
+    let svg = std::fs::read_to_string(path).unwrap();
+    assert!(svg.starts_with("<svg"), "{}", &svg[..80.min(svg.len())]);
+    assert!(svg.trim_end().ends_with("</svg>"));
+    let fills = circle_fills(&svg);
+    assert_eq!(fills.len(), dots, "coloured trajectory points");
+    assert!(
+        fills.iter().any(|f| f == VIRIDIS_LOW),
+        "no dot at the minimum"
+    );
+    assert!(
+        fills.iter().any(|f| f == VIRIDIS_HIGH),
+        "no dot at the maximum"
+    );
+    let distinct: std::collections::HashSet<&String> = fills.iter().collect();
+    assert!(distinct.len() > 5, "{} colours", distinct.len());
+    let lines = polyline_lengths(&svg, ERROR_LINE);
+    assert_eq!(lines.iter().max(), Some(&errors), "error line: {lines:?}");
+    assert_eq!(polyline_lengths(&svg, TRAJECTORY_LINE), [trajectory]);
+    svg
+}
+
+#[test]
+fn rpe_plot_draws_each_window_over_time_and_on_the_reference() {
+    let dir = simulate(&[]);
+    let d = dir.path();
+    let (gt, est) = (
+        d.join("ground_truth.txt"),
+        d.join("trials/trajectory_0.txt"),
+    );
+    let svg_path = d.join("rpe.svg");
+    let json: serde_json::Value = serde_json::from_str(&ok(&[
+        "rpe",
+        p(&gt),
+        p(&est),
+        "--format",
+        "json",
+        "--plot",
+        p(&svg_path),
+    ]))
+    .unwrap();
+    // 150 poses, delta 10: 14 windows on the 150-pose reference.
+    assert_eq!(json["errors"].as_array().unwrap().len(), 14);
+    let svg = check_figure(&svg_path, 14, 14, 150);
+    let texts = svg_texts(&svg);
+    for text in [
+        "RPE over time",
+        "RPE (m)",
+        "rmse",
+        "mean",
+        "median",
+        "x (m)",
+        "z (m)",
+    ] {
+        assert!(texts.contains(&text), "{text}: {texts:?}");
+    }
+    assert!(texts.iter().any(|t| t.contains("in the xz plane")));
+    // Mean and median are horizontal lines: two points at one height.
+    for colour in ["#D62728", "#2CA02C", "#FF7F0E"] {
+        assert!(polyline_lengths(&svg, colour).contains(&2), "{colour}");
+    }
+    // Another plane: same dots, other caption (evo's underscore spelling works too).
+    ok(&[
+        "rpe",
+        p(&gt),
+        p(&est),
+        "--all-pairs",
+        "--plot",
+        p(&svg_path),
+        "--plot_mode",
+        "zy",
+    ]);
+    let svg = check_figure(&svg_path, 140, 140, 150);
+    let texts = svg_texts(&svg);
+    assert!(texts.iter().any(|t| t.contains("in the zy plane")));
+    assert!(texts.contains(&"z (m)") && texts.contains(&"y (m)") && !texts.contains(&"x (m)"));
+}
+
+#[test]
+fn ape_plot_colours_every_reference_pose() {
+    let dir = simulate(&["--seed", "2"]);
+    let d = dir.path();
+    let (gt, est) = (
+        d.join("ground_truth.txt"),
+        d.join("trials/trajectory_1.txt"),
+    );
+    let svg_path = d.join("ape.svg");
+    let csv = ok(&[
+        "ape",
+        p(&gt),
+        p(&est),
+        "--align",
+        "-r",
+        "angle_deg",
+        "--plot",
+        p(&svg_path),
+        "--plot-mode",
+        "xy",
+    ]);
+    assert_eq!(csv_rows(&csv).len(), 150);
+    let svg = check_figure(&svg_path, 150, 150, 150);
+    let texts = svg_texts(&svg);
+    for text in ["APE over time", "APE (deg)", "x (m)", "y (m)"] {
+        assert!(texts.contains(&text), "{text}: {texts:?}");
+    }
+    assert!(texts.iter().any(|t| t.contains("in the xy plane")));
+    assert!(texts.iter().any(|t| t.contains("angle_deg, alignment se3")));
+}
+
+#[test]
+fn estimate_plot_colours_window_starts_on_the_first_trial() {
+    let dir = simulate(&["--seed", "5"]);
+    let trials = dir.path().join("trials");
+    let svg_path = dir.path().join("estimate.svg");
+    let json: serde_json::Value = serde_json::from_str(&ok(&[
+        "estimate",
+        p(&trials),
+        "--format",
+        "json",
+        "--plot",
+        p(&svg_path),
+    ]))
+    .unwrap();
+    assert_eq!(json["windows"].as_array().unwrap().len(), 140);
+    let svg = check_figure(&svg_path, 140, 140, 150);
+    let texts = svg_texts(&svg);
+    assert!(texts.contains(&"estimated error (m)"), "{texts:?}");
+    assert!(texts.iter().any(|t| t.contains("trajectory_0.txt")));
+    assert!(!svg.contains("not drawn"));
+    assert!(
+        !texts.contains(&"median") && !texts.contains(&"mean"),
+        "the estimate has no statistic lines"
+    );
+
+    // Dropped frames: windows starting where trial 0 has no pose are drawn over time only.
+    let dir = simulate(&["--seed", "6", "--drop-frames", "0.2"]);
+    let trials = dir.path().join("trials");
+    let json: serde_json::Value = serde_json::from_str(&ok(&[
+        "estimate",
+        p(&trials),
+        "--format",
+        "json",
+        "--plot",
+        p(&svg_path),
+    ]))
+    .unwrap();
+    let first = read_tum(&trials.join("trajectory_0.txt")).unwrap();
+    let windows = json["windows"].as_array().unwrap();
+    let on_first = windows
+        .iter()
+        .filter(|w| first.stamps.contains(&w["start"].as_i64().unwrap()))
+        .count();
+    assert!(on_first < windows.len(), "trial 0 should miss some starts");
+    let svg = check_figure(&svg_path, windows.len(), on_first, first.len());
+    assert!(
+        svg.contains(&format!(
+            "({} of {} not drawn: no pose here)",
+            windows.len() - on_first,
+            windows.len()
+        )),
+        "caption"
+    );
+}
+
+#[test]
+fn plot_errors_are_clear() {
+    let dir = simulate(&[]);
+    let d = dir.path();
+    let (gt, est) = (
+        d.join("ground_truth.txt"),
+        d.join("trials/trajectory_0.txt"),
+    );
+    let trials = d.join("trials");
+    let unwritable = d.join("no/such/dir/figure.svg");
+    for args in [
+        vec!["rpe", p(&gt), p(&est)],
+        vec!["ape", p(&gt), p(&est), "-a"],
+        vec!["estimate", p(&trials)],
+    ] {
+        let mut args = args.clone();
+        args.extend(["--plot", p(&unwritable)]);
+        let err = fails(&args);
+        assert!(
+            err.contains(&format!("{}: cannot write the plot", unwritable.display())),
+            "{err}"
+        );
+    }
+    // clap rejects an unknown plane (exit code 2) and names the flag and the planes.
+    let out = sitar(&[
+        "rpe",
+        p(&gt),
+        p(&est),
+        "--plot",
+        p(&d.join("x.svg")),
+        "--plot-mode",
+        "xx",
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("invalid value 'xx' for '--plot-mode")
+            && stderr.contains("xy, xz, yz, zx, zy, yx"),
+        "{stderr}"
+    );
+    assert!(!d.join("x.svg").exists());
+    // A plane without a figure is a mistake, not silently ignored.
+    let out = sitar(&["ape", p(&gt), p(&est), "--plot-mode", "xy"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--plot <FILE.svg>"));
 }
 
 #[derive(serde::Deserialize)]
