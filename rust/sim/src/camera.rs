@@ -2,6 +2,7 @@
 
 use glam::{DQuat, DVec3};
 use serde::{Deserialize, Serialize};
+use sitar_core::DisplayRotation;
 
 use crate::{Room, SurfaceKind};
 
@@ -42,31 +43,57 @@ impl DepthCamera {
     }
 }
 
-/// Direction, in the ARCore camera frame (x right, y up, looking along −z), of the optical ray
-/// through image point `(u, v)`; its z component is −1 so that `t` along it is the z-depth.
-fn camera_ray(k: &Intrinsics, u: f64, v: f64) -> DVec3 {
-    DVec3::new((u - k.cx) / k.fx, -(v - k.cy) / k.fy, -1.0)
+/// Direction, in the display-oriented ARCore camera frame (x right, y up, looking along −z),
+/// of the optical ray through sensor image point `(u, v)`; its z component is −1 so that `t`
+/// along it is the z-depth.
+///
+/// The sensor image appears on the display turned clockwise by the display rotation θ: in
+/// screen coordinates (x right, y down) an offset `(x, y)` becomes
+/// `(x cos θ − y sin θ, x sin θ + y cos θ)`. Written here with trigonometry rather than with
+/// `sitar-core`'s exact quarter-turn tables, so a test that compares the two checks something.
+fn camera_ray(k: &Intrinsics, u: f64, v: f64, display: DisplayRotation) -> DVec3 {
+    let (x, y) = ((u - k.cx) / k.fx, (v - k.cy) / k.fy);
+    let (sin, cos) = f64::from(display.degrees()).to_radians().sin_cos();
+    // Quarter turns: sin and cos are exactly 0 or ±1 (sin_cos leaves ~1e-16 residues).
+    let (sin, cos) = (sin.round(), cos.round());
+    let (x, y) = (x * cos - y * sin, x * sin + y * cos);
+    DVec3::new(x, -y, -1.0)
 }
 
 impl Room {
-    /// Renders the depth image a phone at `position`/`rotation` would see.
-    ///
-    /// The pose is world-from-camera in the ARCore convention (right-handed, +Y up, camera
-    /// looks along −Z, +X right) and the display rotation is 0, so the returned sensor image is
-    /// row-major, `width × height`, row 0 at the top. Each pixel holds the depth along the
-    /// optical axis (z-depth, as ARCore reports it) in millimetres, rounded to nearest; 0 where
-    /// the ray hits nothing or the depth exceeds `max_range_m` or 65.535 m.
+    /// Renders the depth image a phone at `position`/`rotation` would see, held so that the
+    /// display rotation is 0 (see [`Room::render_depth_mm_rotated`]).
     pub fn render_depth_mm(
         &self,
         position: DVec3,
         rotation: DQuat,
         camera: &DepthCamera,
     ) -> Vec<u16> {
+        self.render_depth_mm_rotated(position, rotation, camera, DisplayRotation::Deg0)
+    }
+
+    /// Renders the depth image a phone at `position`/`rotation` would see, with the sensor
+    /// image turned clockwise by `display` on the screen (e.g. 90 for a phone whose landscape
+    /// sensor is shown in portrait).
+    ///
+    /// The pose is the display-oriented world-from-camera pose in the ARCore convention
+    /// (right-handed, +Y up, camera looks along −Z, +X right), as ARCore and AR Foundation
+    /// report it. The returned image is in the *sensor* orientation, as ARCore's depth API
+    /// gives it: row-major, `width × height`, row 0 at the top. Each pixel holds the depth along
+    /// the optical axis (z-depth, as ARCore reports it) in millimetres, rounded to nearest; 0
+    /// where the ray hits nothing or the depth exceeds `max_range_m` or 65.535 m.
+    pub fn render_depth_mm_rotated(
+        &self,
+        position: DVec3,
+        rotation: DQuat,
+        camera: &DepthCamera,
+        display: DisplayRotation,
+    ) -> Vec<u16> {
         let k = &camera.intrinsics;
         let mut image = Vec::with_capacity(camera.width as usize * camera.height as usize);
         for v in 0..camera.height {
             for u in 0..camera.width {
-                let ray = camera_ray(k, f64::from(u), f64::from(v));
+                let ray = camera_ray(k, f64::from(u), f64::from(v), display);
                 let world_dir = rotation * ray;
                 let depth_m = self
                     .raycast(position, world_dir)
@@ -171,7 +198,7 @@ mod tests {
         let rot = look(DVec3::new(0.0, -1.0, -1.0));
         let img = room.render_depth_mm(pos, rot, &cam);
         for (u, v) in [(80u32, 60u32), (0, 0), (159, 119), (40, 100), (120, 10)] {
-            let ray = rot * camera_ray(&k, f64::from(u), f64::from(v));
+            let ray = rot * camera_ray(&k, f64::from(u), f64::from(v), DisplayRotation::Deg0);
             // Floor y = 0: pos.y + t * ray.y = 0, and t is the z-depth.
             let z_depth = -pos.y / ray.y;
             let hit = pos + ray * z_depth;
@@ -220,6 +247,54 @@ mod tests {
         assert!(shelf.difficulty < 0.2, "{shelf:?}");
     }
 
+    /// The renderer (trigonometry) and `sitar-core`'s sampling (quarter-turn tables) agree on
+    /// the display rotation: for every rotation, a sensor pixel off the centre unprojects with
+    /// the core to the point the renderer's ray through that pixel hits, with the wall's normal.
+    #[test]
+    fn every_display_rotation_agrees_with_the_core_sampling() {
+        use sitar_core::{Convention, DepthImage, Pose, sample_surface};
+        let room = Room::demo();
+        let cam = DepthCamera::phone();
+        // Standing in the room, looking slightly down and to the side at a wall.
+        let position = DVec3::new(0.3, 1.5, 0.2);
+        let rotation = DQuat::from_rotation_y(0.4) * DQuat::from_rotation_x(-0.15);
+        let pose = Pose::new(position, rotation);
+        for display in [
+            DisplayRotation::Deg0,
+            DisplayRotation::Deg90,
+            DisplayRotation::Deg180,
+            DisplayRotation::Deg270,
+        ] {
+            let depth = room.render_depth_mm_rotated(position, rotation, &cam, display);
+            let image = DepthImage::new(&depth, cam.width, cam.height, cam.width * 2).unwrap();
+            for (u, v) in [(80, 60), (110, 60), (80, 35), (50, 85)] {
+                let sample = sample_surface(
+                    &image,
+                    &cam.intrinsics,
+                    display,
+                    Convention::Arcore,
+                    &pose,
+                    Some((u, v)),
+                )
+                .unwrap();
+                let ray =
+                    rotation * camera_ray(&cam.intrinsics, f64::from(u), f64::from(v), display);
+                let hit = room.raycast(position, ray).unwrap();
+                // Millimetre depth: the point is within a millimetre or so along the ray.
+                let miss = (sample.point - hit.point).length();
+                assert!(miss < 2e-3, "{display:?} ({u}, {v}): {miss} m off");
+                let angle = sample.normal.angle_between(hit.normal).to_degrees();
+                assert!(angle < 1.0, "{display:?} ({u}, {v}): normal {angle}° off");
+            }
+        }
+        // A different rotation is a different image: the off-centre pixels see other points.
+        let upright = room.render_depth_mm_rotated(position, rotation, &cam, DisplayRotation::Deg0);
+        let portrait =
+            room.render_depth_mm_rotated(position, rotation, &cam, DisplayRotation::Deg90);
+        assert_eq!(upright[60 * 160 + 80], portrait[60 * 160 + 80]);
+        assert_ne!(upright, portrait);
+    }
+
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(48))]
 
@@ -234,7 +309,7 @@ mod tests {
             let pos = DVec3::new(x, y, z);
             let rot = DQuat::from_rotation_y(yaw) * DQuat::from_rotation_x(pitch);
             let img = room.render_depth_mm(pos, rot, &cam);
-            let ray_cam = camera_ray(&cam.intrinsics, f64::from(u), f64::from(v));
+            let ray_cam = camera_ray(&cam.intrinsics, f64::from(u), f64::from(v), DisplayRotation::Deg0);
             let hit = room.raycast(pos, rot * ray_cam).unwrap();
             // z-depth is the hit point's distance along the optical axis.
             let z_depth = (hit.point - pos).dot(rot * -DVec3::Z);
