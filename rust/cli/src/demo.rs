@@ -37,6 +37,19 @@ pub struct Args {
     /// Adaptive stopping: finish once no sub-trajectory changed class over 3 trials, after this many.
     #[arg(long, value_name = "MIN_TRIALS")]
     adaptive: Option<u32>,
+    /// How the phone is held: the clockwise turn (degrees) from the landscape depth image to
+    /// the screen; 90 is a phone held upright, 0 one held sideways.
+    #[arg(long, default_value_t = 90, value_parser = parse_display_rotation)]
+    display_rotation: i32,
+}
+
+fn parse_display_rotation(text: &str) -> Result<i32, String> {
+    let degrees: i32 = text
+        .parse()
+        .map_err(|_| format!("`{text}` is not a number of degrees"))?;
+    DisplayRotation::from_degrees(degrees)
+        .map(|_| degrees)
+        .map_err(|_| format!("{degrees} is not 0, 90, 180 or 270"))
 }
 
 const DEMO_DIR: &str = "sitar-demo";
@@ -71,7 +84,8 @@ pub fn run(args: Args) -> Result<()> {
     let recording =
         Recording::demo(args.seconds, 30.0, args.seed).context("cannot simulate the walk")?;
     let mut session = Session::new(SessionConfig::from_json(r#"{"convention":"arcore"}"#)?);
-    let summary = record_walk(&recording, &mut session)?;
+    let display = DisplayRotation::from_degrees(args.display_rotation)?;
+    let summary = record_walk(&recording, &mut session, display)?;
     println!(
         "walk        {} frames, {:.1} s, {:.1} m; {} sub-trajectories, {} depth samples (mean {:.2} m)",
         summary.frames,
@@ -234,7 +248,11 @@ pub fn run(args: Args) -> Result<()> {
 }
 
 /// Feeds the ground-truth walk to the phone logic: start, every frame, depth at midpoints, stop.
-fn record_walk(recording: &Recording, session: &mut Session) -> Result<sitar_core::Summary> {
+fn record_walk(
+    recording: &Recording,
+    session: &mut Session,
+    display: DisplayRotation,
+) -> Result<sitar_core::Summary> {
     let gt = &recording.walk().ground_truth;
     if gt.len() < 3 {
         bail!("the walk is too short");
@@ -247,12 +265,14 @@ fn record_walk(recording: &Recording, session: &mut Session) -> Result<sitar_cor
     for i in 1..last {
         let flags = session.frame(gt.stamps[i], pose(i))?;
         if flags.is_midpoint() {
-            let depth =
-                recording
-                    .room()
-                    .render_depth_mm(gt.positions[i], gt.orientations[i], &camera);
+            let depth = recording.room().render_depth_mm_rotated(
+                gt.positions[i],
+                gt.orientations[i],
+                &camera,
+                display,
+            );
             let image = DepthImage::new(&depth, camera.width, camera.height, camera.width * 2)?;
-            session.depth(&image, &k, DisplayRotation::Deg0)?;
+            session.depth(&image, &k, display)?;
         }
     }
     Ok(session.stop(gt.stamps[last], pose(last))?)
@@ -273,6 +293,7 @@ mod tests {
             devices: 2,
             seed: 7,
             adaptive: None,
+            display_rotation: 90,
         };
         run(args).unwrap();
         let names: Vec<String> = std::fs::read_dir(dir.path())
@@ -293,10 +314,47 @@ mod tests {
         let recording = Recording::demo(4.0, 30.0, 1).unwrap();
         let mut session =
             Session::new(SessionConfig::from_json(r#"{"convention":"arcore"}"#).unwrap());
-        let summary = record_walk(&recording, &mut session).unwrap();
+        let summary = record_walk(&recording, &mut session, DisplayRotation::Deg90).unwrap();
         assert_eq!(summary.frames as usize, recording.frames() - 2);
         assert_eq!(summary.subtrajectories, summary.frames / 10);
         assert_eq!(summary.depth_samples, summary.midpoints);
         assert!(summary.mean_depth_m > 0.5 && summary.mean_depth_m < 6.0);
+    }
+
+    /// However the phone is held, the centre of the depth image is the same ray: every
+    /// display rotation finds the same surface points and normals.
+    #[test]
+    fn the_walk_finds_the_same_surfaces_for_every_display_rotation() {
+        let recording = Recording::demo(4.0, 30.0, 3).unwrap();
+        let samples = |display| {
+            let mut session =
+                Session::new(SessionConfig::from_json(r#"{"convention":"arcore"}"#).unwrap());
+            record_walk(&recording, &mut session, display).unwrap();
+            session
+                .subtrajectories()
+                .iter()
+                .map(|k| *k.depth.sample().unwrap())
+                .collect::<Vec<_>>()
+        };
+        let upright = samples(DisplayRotation::Deg0);
+        assert!(!upright.is_empty());
+        for display in [
+            DisplayRotation::Deg90,
+            DisplayRotation::Deg180,
+            DisplayRotation::Deg270,
+        ] {
+            let turned = samples(display);
+            assert_eq!(turned.len(), upright.len());
+            for (a, b) in upright.iter().zip(&turned) {
+                assert!(
+                    (a.point - b.point).length() < 1e-9,
+                    "{display:?}: {a:?} vs {b:?}"
+                );
+                assert!(
+                    a.normal.angle_between(b.normal) < 1e-6,
+                    "{display:?}: {a:?} vs {b:?}"
+                );
+            }
+        }
     }
 }

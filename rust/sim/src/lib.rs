@@ -15,8 +15,10 @@
 //! error all trials share, one per trial index).
 //!
 //! **Convention**: world and poses are ARCore's: right-handed, +Y up, metres; poses are
-//! world-from-camera with the camera looking along −Z and +X to the right (display rotation
-//! 0, so the depth image is in the same orientation). Timestamps are integer nanoseconds.
+//! world-from-camera with the camera looking along −Z and +X to the right, display-oriented
+//! as ARCore reports them; depth images are in the sensor orientation, turned on screen by
+//! the display rotation ([`Room::render_depth_mm_rotated`]; [`Room::render_depth_mm`] is
+//! rotation 0). Timestamps are integer nanoseconds.
 //!
 //! ```
 //! use sitar_sim::{play_trial, DepthCamera, Recording};
