@@ -25,20 +25,26 @@ namespace Sitar.Unity
         [Tooltip("Camera frames to wait before the first playback (the AR session must be running).")]
         public int warmupFrames = 60;
 
-        ARSession arSession;
         PlaybackLogger logger;
+#if UNITY_ANDROID
+        ARSession arSession;
         string mp4Path;
         string outputDir;
         int frameCounter;
         int playbackCount;
         bool wasPlaying;
+#endif
 
         void Awake()
         {
+#if UNITY_ANDROID
             arSession = GetComponent<ARSession>();
             mp4Path = Path.Combine(Application.persistentDataPath, "arcore-session.mp4");
             outputDir = Application.persistentDataPath;
             ReadLaunchExtras();
+#else
+            Say("Playback needs ARCore (Android)");
+#endif
         }
 
         // The backend's `am start … --ei trials N --es recording FILE --es output DIR`.
@@ -124,8 +130,10 @@ namespace Sitar.Unity
         void BeginPlayback(ARCoreSessionSubsystem sub)
         {
             logger = new PlaybackLogger("{\"convention\":\"unity\"}");
-            sub.StartPlayback(mp4Path);
-            Say("Playback " + (playbackCount + 1) + " started");
+            ArStatus st = sub.StartPlayback(mp4Path);
+            Say(st == ArStatus.Success
+                ? "Playback " + (playbackCount + 1) + " started"
+                : "Playback " + (playbackCount + 1) + " did not start: " + st);
         }
 #endif
     }

@@ -66,7 +66,9 @@ namespace Sitar.Unity
         [Tooltip("Shown when the results are too noisy to trust.")] public GameObject unreliableWarning;
         public VisualizationStyle style = VisualizationStyle.WarningSigns;
 
+#if UNITY_ANDROID
         ARSession arSession;
+#endif
         SitarSession session;
         UploadJob upload;
         string mp4Path;
@@ -76,7 +78,9 @@ namespace Sitar.Unity
 
         void Awake()
         {
+#if UNITY_ANDROID
             arSession = GetComponent<ARSession>();
+#endif
             mp4Path = Path.Combine(Application.persistentDataPath, "arcore-session.mp4");
             if (startButton != null) startButton.onClick.AddListener(StartRecording);
             if (stopButton != null) stopButton.onClick.AddListener(StopRecording);
@@ -119,7 +123,8 @@ namespace Sitar.Unity
                 using (var config = new ArRecordingConfig(sub.session))
                 {
                     config.SetMp4DatasetFilePath(sub.session, mp4Path);
-                    sub.StartRecording(config);
+                    ArStatus st = sub.StartRecording(config);
+                    if (st != ArStatus.Success) Debug.LogWarning("SiTAR: the ARCore recording did not start: " + st);
                 }
             }
 #endif
@@ -205,7 +210,11 @@ namespace Sitar.Unity
         {
             recording = false;
 #if UNITY_ANDROID
-            if (arSession.subsystem is ARCoreSessionSubsystem sub) sub.StopRecording();
+            if (arSession.subsystem is ARCoreSessionSubsystem sub)
+            {
+                ArStatus st = sub.StopRecording();
+                if (st != ArStatus.Success) Debug.LogWarning("SiTAR: the ARCore recording did not stop cleanly: " + st);
+            }
 #endif
             Summary s = session.Stop(t, CameraPose());
             if (trajectoryDuration != null) trajectoryDuration.text = s.DurationS.ToString("F1") + " s";
