@@ -78,6 +78,11 @@ struct SpatialHash {
 /// Up to this many points a query scans them directly instead of the cells.
 const DIRECT_SCAN: usize = 8;
 
+/// Cell coordinates are exact integers below 2^52 cells from the origin. Farther out (or
+/// with a tiny radius) they are not, and the `i64` keys saturate, so a neighbour key would
+/// overflow: a query there scans every point.
+const EXACT_CELLS: f64 = 4_503_599_627_370_496.0;
+
 /// A small multiplicative hasher for integer cell keys (std's SipHash is ~5× slower here).
 #[derive(Default)]
 struct CellHasher(u64);
@@ -129,10 +134,10 @@ impl SpatialHash {
     /// Whether an inserted point lies within `radius` (inclusive) of `p`.
     fn any_within(&self, p: DVec3, radius: f64) -> bool {
         let r2 = radius * radius;
-        if self.points.len() <= DIRECT_SCAN {
+        let scaled = p / self.cell;
+        if self.points.len() <= DIRECT_SCAN || scaled.abs().max_element() >= EXACT_CELLS {
             return self.points.iter().any(|q| q.distance_squared(p) <= r2);
         }
-        let scaled = p / self.cell;
         let base = scaled.floor();
         // Per axis, the neighbour cell on the side p is closer to (cell = 2 × radius).
         let side = |f: f64, b: f64| if f - b < 0.5 { -1 } else { 1 };
@@ -280,6 +285,36 @@ mod tests {
         let q = warning_sign_rotation(DVec3::NEG_Z, Convention::Unity);
         assert!((q * DVec3::Z - DVec3::NEG_Y).length() < 1e-12);
         assert!((q * DVec3::X - DVec3::NEG_X).length() < 1e-12);
+    }
+
+    #[test]
+    fn far_out_positions_and_tiny_radii_do_not_overflow_the_cell_keys() {
+        // Found by fuzzing (fuzz target `markers`): with more than DIRECT_SCAN accepted
+        // markers, a candidate whose cell coordinate saturates the i64 key made the neighbour
+        // key `i64::MIN - 1` overflow (a panic in debug builds).
+        let mut c: Vec<MarkerCandidate> = (0..9).map(|k| cand(k, 10.0 * k as f64, 0.2)).collect();
+        c.push(cand(9, -8.2e62, 0.2));
+        c.push(cand(10, -8.2e62, 0.2)); // the same point: deduplicated
+        c.push(cand(11, 1e300, 0.2));
+        let config = SessionConfig {
+            max_regions: 20,
+            ..SessionConfig::default()
+        };
+        let ks: Vec<u32> = select_markers(&c, &config)
+            .iter()
+            .map(|m| m.subtrajectory)
+            .collect();
+        assert_eq!(ks, (0..10).chain([11]).collect::<Vec<_>>());
+        // A radius so small that every cell coordinate is beyond the exact range.
+        let config = SessionConfig {
+            dedup_radius_m: 1e-300,
+            ..config
+        };
+        let ks: Vec<u32> = select_markers(&c, &config)
+            .iter()
+            .map(|m| m.subtrajectory)
+            .collect();
+        assert_eq!(ks, (0..10).chain([11]).collect::<Vec<_>>());
     }
 
     fn arb_candidates() -> impl Strategy<Value = Vec<MarkerCandidate>> {

@@ -175,6 +175,25 @@ impl Session {
             ));
         }
         let half = config.subtrajectory_frames / 2;
+        // The start pose, then one every `half` frames; an idle session has neither.
+        let expected_poses = match file.state {
+            SessionState::Idle if file.frames == 0 => Some(0),
+            SessionState::Idle => None,
+            _ => Some(1 + (file.frames / half) as usize),
+        };
+        if expected_poses != Some(poses.len()) {
+            return Err(Error::parse(
+                "session.json",
+                0,
+                "frames",
+                format!(
+                    "{} frames in state {:?} do not match the {} logged poses in trajectory.txt",
+                    file.frames,
+                    file.state,
+                    poses.len()
+                ),
+            ));
+        }
         let logged = poses
             .into_iter()
             .zip(&file.path_m)
@@ -445,5 +464,61 @@ mod tests {
             Session::load(&dir.path().join("nope")),
             Err(Error::Io { .. })
         ));
+    }
+
+    #[test]
+    fn frame_count_must_match_the_logged_poses() {
+        // Found with the fuzz target `persist`: a recording session.json claiming u32::MAX
+        // frames loaded, and the next `frame` call overflowed the frame counter (a panic in
+        // debug builds, a wrap to frame 0 in release).
+        let dir = tempfile::tempdir().unwrap();
+        let mut s = recorded("unity");
+        s.save(dir.path()).unwrap();
+        let file = dir.path().join("session.json");
+        let text = std::fs::read_to_string(&file).unwrap();
+        assert!(text.contains("\"frames\": 47,"));
+        for (state, frames) in [
+            ("recording", "4294967295"),
+            ("recording", "57"),
+            ("idle", "47"),
+        ] {
+            let broken = text
+                .replacen("\"frames\": 47,", &format!("\"frames\": {frames},"), 1)
+                .replacen(
+                    "\"state\": \"recording\"",
+                    &format!("\"state\": \"{state}\""),
+                    1,
+                );
+            std::fs::write(&file, broken).unwrap();
+            match Session::load(dir.path()) {
+                Err(Error::Parse {
+                    source_name,
+                    field,
+                    message,
+                    ..
+                }) => {
+                    assert_eq!(
+                        (source_name.as_str(), field.as_str()),
+                        ("session.json", "frames")
+                    );
+                    assert!(message.contains("10 logged poses"), "{message}");
+                }
+                other => panic!("{state} {frames}: {other:?}"),
+            }
+        }
+        // 47 and 49 frames both log 10 poses (every fifth frame): consistent, loads, records on.
+        std::fs::write(
+            &file,
+            text.replacen("\"frames\": 47,", "\"frames\": 49,", 1),
+        )
+        .unwrap();
+        assert!(Session::load(dir.path()).is_ok());
+        std::fs::write(&file, text).unwrap();
+        let mut back = Session::load(dir.path()).unwrap();
+        let t = 1_700_000_000_000_000_000 + 48 * 33_333_334;
+        assert_eq!(
+            back.frame(t, Pose::IDENTITY).unwrap(),
+            s.frame(t, Pose::IDENTITY).unwrap()
+        );
     }
 }

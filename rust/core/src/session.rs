@@ -212,7 +212,8 @@ impl Session {
 
     /// One camera frame. Returns [`FrameFlags::MIDPOINT`] at frames `k·n + n/2` (give depth
     /// now) and [`FrameFlags::ENDPOINT`] at `k·n + n` (sub-trajectory `k` is complete);
-    /// `n = subtrajectory_frames`. Timestamps must increase strictly. Allocation-free except
+    /// `n = subtrajectory_frames`. Timestamps must increase strictly, and a pose so far from the
+    /// previous one that the path length overflows is refused. Allocation-free except
     /// amortised growth of pre-reserved vectors.
     pub fn frame(&mut self, t_ns: i64, pose: Pose) -> Result<FrameFlags, Error> {
         if self.state != SessionState::Recording {
@@ -236,8 +237,9 @@ impl Session {
                 "interval since the previous frame overflows i64",
             ));
         };
+        let length_m = self.path_to(pose.position)?;
         self.frame_intervals_ns.push(interval);
-        self.length_m += pose.position.distance(self.last_position);
+        self.length_m = length_m;
         self.last_position = pose.position;
         self.last_t_ns = t_ns;
         self.frames += 1;
@@ -339,13 +341,30 @@ impl Session {
                 format!("{t_ns} is before the last frame ({})", self.last_t_ns),
             ));
         }
-        self.length_m += pose.position.distance(self.last_position);
+        self.length_m = self.path_to(pose.position)?;
         self.last_position = pose.position;
         self.last_t_ns = t_ns;
         self.stop = Some((t_ns, pose));
         self.state = SessionState::Stopped;
         self.tolerance_ns = Some(self.compute_tolerance_ns());
         Ok(self.make_summary())
+    }
+
+    /// The path length after moving on to `position`. Finite positions far enough apart
+    /// (beyond ~1e154 m) overflow it to infinity, which `session.json` cannot hold: an error.
+    fn path_to(&self, position: DVec3) -> Result<f64, Error> {
+        let length_m = self.length_m + position.distance(self.last_position);
+        if length_m.is_finite() {
+            Ok(length_m)
+        } else {
+            Err(Error::arg(
+                "pose",
+                format!(
+                    "the path length overflows: position {position} is too far from the previous one ({})",
+                    self.last_position
+                ),
+            ))
+        }
     }
 
     /// The summary once stopped.
@@ -812,6 +831,31 @@ mod tests {
             s.lookup_tolerance_ns(),
             ((i128::from(i64::MAX - 1 - (-1)) + i128::from(-1 - i64::MIN)) / 4) as i64
         );
+    }
+
+    #[test]
+    fn far_apart_positions_are_errors_not_an_infinite_path() {
+        // Found by fuzzing (fuzz target `session`): a start at x = −5.3e304 and a frame at
+        // x = −25.6 (finite, valid poses) made the path length infinite; `save` wrote it as
+        // `null` and `load` then refused session.json.
+        let mut s = Session::new(SessionConfig::default());
+        let far = Pose::new(DVec3::new(-5.3e304, 0.0, 0.0), DQuat::IDENTITY);
+        s.start(-7_668_058_320_836_127_339, far).unwrap();
+        let err = s.frame(16_777_215, pose(-256)).unwrap_err();
+        assert!(
+            matches!(&err, Error::InvalidArgument { name: "pose", reason } if reason.contains("path length overflows")),
+            "{err}"
+        );
+        s.frame(16_777_215, far).unwrap(); // the rejected frame did not count
+        assert!(matches!(
+            s.stop(16_777_216, pose(-256)),
+            Err(Error::InvalidArgument { name: "pose", .. })
+        ));
+        let summary = s.stop(16_777_216, far).unwrap();
+        assert_eq!((summary.frames, summary.length_m), (1, 0.0));
+        let dir = tempfile::tempdir().unwrap();
+        s.save(dir.path()).unwrap();
+        assert_eq!(Session::load(dir.path()).unwrap(), s);
     }
 
     #[test]
