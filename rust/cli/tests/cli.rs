@@ -515,20 +515,25 @@ fn ape_plot_colours_every_reference_pose() {
     assert!(texts.iter().any(|t| t.contains("angle_deg, alignment se3")));
 }
 
+/// `sitar estimate TRIALS --format json --plot SVG`, parsed.
+fn estimate_json_with_plot(trials: &Path, svg: &Path) -> serde_json::Value {
+    serde_json::from_str(&ok(&[
+        "estimate",
+        p(trials),
+        "--format",
+        "json",
+        "--plot",
+        p(svg),
+    ]))
+    .unwrap()
+}
+
 #[test]
 fn estimate_plot_colours_window_starts_on_the_first_trial() {
     let dir = simulate(&["--seed", "5"]);
     let trials = dir.path().join("trials");
     let svg_path = dir.path().join("estimate.svg");
-    let json: serde_json::Value = serde_json::from_str(&ok(&[
-        "estimate",
-        p(&trials),
-        "--format",
-        "json",
-        "--plot",
-        p(&svg_path),
-    ]))
-    .unwrap();
+    let json = estimate_json_with_plot(&trials, &svg_path);
     assert_eq!(json["windows"].as_array().unwrap().len(), 140);
     let svg = check_figure(&svg_path, 140, 140, 150);
     let texts = svg_texts(&svg);
@@ -543,15 +548,7 @@ fn estimate_plot_colours_window_starts_on_the_first_trial() {
     // Dropped frames: windows starting where trial 0 has no pose are drawn over time only.
     let dir = simulate(&["--seed", "6", "--drop-frames", "0.2"]);
     let trials = dir.path().join("trials");
-    let json: serde_json::Value = serde_json::from_str(&ok(&[
-        "estimate",
-        p(&trials),
-        "--format",
-        "json",
-        "--plot",
-        p(&svg_path),
-    ]))
-    .unwrap();
+    let json = estimate_json_with_plot(&trials, &svg_path);
     let first = read_tum(&trials.join("trajectory_0.txt")).unwrap();
     let windows = json["windows"].as_array().unwrap();
     let on_first = windows
