@@ -352,19 +352,27 @@ impl Session {
 
     /// The path length after moving on to `position`. Finite positions far enough apart
     /// (beyond ~1e154 m) overflow it to infinity, which `session.json` cannot hold: an error.
+    #[inline(always)]
     fn path_to(&self, position: DVec3) -> Result<f64, Error> {
         let length_m = self.length_m + position.distance(self.last_position);
         if length_m.is_finite() {
             Ok(length_m)
         } else {
-            Err(Error::arg(
-                "pose",
-                format!(
-                    "the path length overflows: position {position} is too far from the previous one ({})",
-                    self.last_position
-                ),
-            ))
+            Err(self.path_overflow(position))
         }
+    }
+
+    /// The error of [`Session::path_to`], kept off the frame path.
+    #[cold]
+    #[inline(never)]
+    fn path_overflow(&self, position: DVec3) -> Error {
+        Error::arg(
+            "pose",
+            format!(
+                "the path length overflows: position {position} is too far from the previous one ({})",
+                self.last_position
+            ),
+        )
     }
 
     /// The summary once stopped.
