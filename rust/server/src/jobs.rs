@@ -82,6 +82,11 @@ pub(crate) fn spawn_session(shared: Arc<Shared>, id: String) {
             Ok(Outcome::Interrupted) => {
                 log::info!("session {id}: interrupted by shutdown, resumes on next start")
             }
+            // An error while the server stops (a cancelled playback, a refused blocking
+            // task) is the stop's doing: the session stays in flight for the next start.
+            Err(e) if shared.stopping() => {
+                log::info!("session {id}: interrupted by shutdown ({e}), resumes on next start")
+            }
             Err(e) => {
                 let message = e.to_string();
                 log::warn!("session {id} failed: {message}");
