@@ -1,6 +1,6 @@
 use std::fs::File;
 use std::hash::{BuildHasher, Hasher};
-use std::io::Read;
+use std::io::{Read, Seek, SeekFrom};
 use std::path::Path;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
@@ -11,6 +11,9 @@ use crate::{Error, NewSession, SessionOptions, SessionStatus};
 
 /// Header carrying the client-made key that makes `POST` requests safe to retry.
 pub const IDEMPOTENCY_HEADER: &str = "Idempotency-Key";
+
+/// Header in which the server tells how many bytes of an interrupted recording upload it kept.
+pub const UPLOAD_OFFSET_HEADER: &str = "Upload-Offset";
 
 /// Blocking client of the SiTAR backend.
 ///
@@ -32,7 +35,13 @@ enum Payload<'a> {
     Empty,
     Json(String),
     Text(&'a str),
-    File(&'a Path, &'a mut dyn FnMut(u64, u64), &'a AtomicBool),
+    /// A file sent from byte `offset` on (a resumed upload when `offset > 0`).
+    File {
+        path: &'a Path,
+        offset: u64,
+        progress: &'a mut dyn FnMut(u64, u64),
+        cancel: &'a AtomicBool,
+    },
 }
 
 impl Client {
@@ -121,8 +130,13 @@ impl Client {
     }
 
     /// `PUT /v1/sessions/{id}/recording`: streams the file at `path` from disk
-    /// (never whole in memory). `progress(sent, total)` is called as bytes go
-    /// out; a retry starts over from byte 0 (the `PUT` replaces, so it is safe).
+    /// (never whole in memory). `progress(sent, total)` is called as bytes go out.
+    ///
+    /// A retry after a dropped connection resumes: it asks the server how many bytes it
+    /// kept (`HEAD`, `Upload-Offset`) and sends only the rest, with `Content-Range`. Every
+    /// request of one call carries the same `Idempotency-Key`, to which the server ties the
+    /// kept bytes, so a resume never continues another upload's bytes. When nothing was
+    /// kept it sends the whole file again (the `PUT` replaces, so that is safe).
     pub fn upload_recording(
         &self,
         id: &str,
@@ -142,9 +156,67 @@ impl Client {
         progress: &mut dyn FnMut(u64, u64),
         cancel: &AtomicBool,
     ) -> Result<(), Error> {
-        let url = format!("/v1/sessions/{}/recording", check_id(id)?);
-        self.request("PUT", &url, Payload::File(path, progress, cancel), None)
-            .map(|_| ())
+        let url = format!("{}/v1/sessions/{}/recording", self.base, check_id(id)?);
+        let total = std::fs::metadata(path)
+            .map_err(|source| Error::Io {
+                path: path.to_path_buf(),
+                source,
+            })?
+            .len();
+        // One key per call: the server ties the bytes it keeps to it, so a resume never
+        // continues another upload's bytes.
+        let key = idempotency_key();
+        let mut delay = self.backoff;
+        let mut attempt = 0;
+        let mut offset = 0;
+        loop {
+            attempt += 1;
+            if cancel.load(Ordering::Acquire) {
+                return Err(Error::Cancelled);
+            }
+            let mut payload = Payload::File {
+                path,
+                offset,
+                progress: &mut *progress,
+                cancel,
+            };
+            let outcome = self.attempt("PUT", &url, &mut payload, Some(&key));
+            // A 409 to a resume means the kept offset moved (or an earlier attempt is still
+            // being received): ask again.
+            let stale_offset =
+                offset > 0 && matches!(outcome, Err(Error::Server { status: 409, .. }));
+            if !(retryable(&outcome) || stale_offset) || attempt > self.retries {
+                return outcome.map(|_| ()).map_err(|e| with_attempts(e, attempt));
+            }
+            std::thread::sleep(delay);
+            delay = delay.saturating_mul(2);
+            // Resume from what the server kept; anything unusable means from the start.
+            offset = self
+                .kept_offset(&url, &key)
+                .filter(|&n| n < total)
+                .unwrap_or(0);
+        }
+    }
+
+    /// `HEAD` on a recording URL: the bytes of the interrupted upload with `key` that the
+    /// server kept. `None` when the server does not say (an older server, or unreachable).
+    fn kept_offset(&self, url: &str, key: &str) -> Option<u64> {
+        let response = self
+            .agent
+            .head(url)
+            .header(IDEMPOTENCY_HEADER, key)
+            .call()
+            .ok()?;
+        if response.status().as_u16() != 200 {
+            return None;
+        }
+        response
+            .headers()
+            .get(UPLOAD_OFFSET_HEADER)?
+            .to_str()
+            .ok()?
+            .parse()
+            .ok()
     }
 
     /// `POST /v1/sessions/{id}/trials`: one trial's TUM text (e.g. from an outside SLAM run).
@@ -232,31 +304,9 @@ impl Client {
         let mut attempt = 0;
         loop {
             attempt += 1;
-            if let Payload::File(_, _, cancel) = &payload
-                && cancel.load(Ordering::Acquire)
-            {
-                return Err(Error::Cancelled);
-            }
             let outcome = self.attempt(method, &url, &mut payload, idempotency);
-            let retryable = match &outcome {
-                Ok(_) => false,
-                Err(Error::Server { status, .. }) => *status >= 500,
-                Err(Error::Network { .. } | Error::Timeout { .. }) => true,
-                Err(_) => false,
-            };
-            if !retryable || attempt > self.retries {
-                return outcome.map_err(|e| match e {
-                    Error::Network { url, message, .. } => Error::Network {
-                        url,
-                        attempts: attempt,
-                        message,
-                    },
-                    Error::Timeout { url, .. } => Error::Timeout {
-                        url,
-                        attempts: attempt,
-                    },
-                    other => other,
-                });
+            if !retryable(&outcome) || attempt > self.retries {
+                return outcome.map_err(|e| with_attempts(e, attempt));
             }
             std::thread::sleep(delay);
             delay = delay.saturating_mul(2);
@@ -270,7 +320,7 @@ impl Client {
         payload: &mut Payload<'_>,
         idempotency: Option<&str>,
     ) -> Result<String, Error> {
-        let agent = if matches!(payload, Payload::File(..)) {
+        let agent = if matches!(payload, Payload::File { .. }) {
             &self.upload_agent
         } else {
             &self.agent
@@ -288,32 +338,43 @@ impl Client {
             (m, Payload::Text(text)) => with_key(body_builder(agent, m, url))
                 .header("content-type", "text/plain; charset=utf-8")
                 .send(*text),
-            (m, Payload::File(path, progress, cancel)) => {
+            (
+                m,
+                Payload::File {
+                    path,
+                    offset,
+                    progress,
+                    cancel,
+                },
+            ) => {
                 let path: &Path = path;
-                let file = File::open(path).map_err(|source| Error::Io {
+                let io = |source| Error::Io {
                     path: path.to_path_buf(),
                     source,
-                })?;
-                let total = file
-                    .metadata()
-                    .map_err(|source| Error::Io {
-                        path: path.to_path_buf(),
-                        source,
-                    })?
-                    .len();
-                progress(0, total);
+                };
+                let mut file = File::open(path).map_err(io)?;
+                let total = file.metadata().map_err(io)?.len();
+                let offset = (*offset).min(total);
+                file.seek(SeekFrom::Start(offset)).map_err(io)?;
+                progress(offset, total);
                 let mut reader = ProgressReader {
                     inner: file,
-                    sent: 0,
-                    reported: 0,
+                    sent: offset,
+                    reported: offset,
                     total,
                     progress: &mut **progress,
                     cancel,
                 };
-                let sent = with_key(body_builder(agent, m, url))
+                let request = with_key(body_builder(agent, m, url))
                     .header("content-type", "application/octet-stream")
-                    .header("content-length", total.to_string())
-                    .send(ureq::SendBody::from_reader(&mut reader));
+                    .header("content-length", (total - offset).to_string());
+                let request = if offset > 0 {
+                    let last = total - 1;
+                    request.header("content-range", format!("bytes {offset}-{last}/{total}"))
+                } else {
+                    request
+                };
+                let sent = request.send(ureq::SendBody::from_reader(&mut reader));
                 if cancel.load(Ordering::Acquire) {
                     return Err(Error::Cancelled);
                 }
@@ -332,6 +393,29 @@ impl Client {
             return Err(server_error(status, &text));
         }
         Ok(text)
+    }
+}
+
+/// Connection errors, timeouts and 5xx answers are worth another attempt.
+fn retryable<T>(outcome: &Result<T, Error>) -> bool {
+    match outcome {
+        Ok(_) => false,
+        Err(Error::Server { status, .. }) => *status >= 500,
+        Err(Error::Network { .. } | Error::Timeout { .. }) => true,
+        Err(_) => false,
+    }
+}
+
+/// The error of the last attempt, saying how many were made.
+fn with_attempts(e: Error, attempts: u32) -> Error {
+    match e {
+        Error::Network { url, message, .. } => Error::Network {
+            url,
+            attempts,
+            message,
+        },
+        Error::Timeout { url, .. } => Error::Timeout { url, attempts },
+        other => other,
     }
 }
 

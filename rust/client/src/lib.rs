@@ -5,7 +5,9 @@
 //! status, download results as legacy CSV or JSON. Every call has a timeout;
 //! connection errors, timeouts and 5xx answers are retried with exponential
 //! backoff; `POST`s carry an [`IDEMPOTENCY_HEADER`] key that stays the same
-//! across retries, so a retry never creates a second session or trial.
+//! across retries, so a retry never creates a second session or trial. A
+//! recording upload cut off by a dropped connection is resumed from the bytes
+//! the server kept ([`UPLOAD_OFFSET_HEADER`]), not sent again from the start.
 //! [`Client::upload_recording_cancellable`] stops a recording upload mid-transfer
 //! when its flag is set (the app's cancel button).
 //!
@@ -40,6 +42,6 @@ mod client;
 mod error;
 mod types;
 
-pub use client::{Client, IDEMPOTENCY_HEADER};
+pub use client::{Client, IDEMPOTENCY_HEADER, UPLOAD_OFFSET_HEADER};
 pub use error::Error;
 pub use types::{NewSession, SessionOptions, SessionState, SessionStatus};

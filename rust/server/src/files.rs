@@ -15,6 +15,8 @@ use crate::Error;
 /// DATA/sitar.db                       SQLite: sessions, trials, jobs, devices
 /// DATA/tmp/upload-*.part              uploads in progress (cleared at start)
 /// DATA/sessions/ID/recording          the uploaded recording (mp4 or sim recording)
+/// DATA/sessions/ID/recording.part     the bytes kept of an interrupted recording upload
+/// DATA/sessions/ID/recording.part.key the Idempotency-Key of the upload they belong to
 /// DATA/sessions/ID/trials/trial_NNN.txt   one TUM file per finished trial
 /// DATA/sessions/ID/timestamps.txt     legacy POST /timestamps upload
 /// DATA/sessions/ID/results.csv|json   latest published estimate
@@ -72,6 +74,14 @@ impl Files {
         self.session_dir(id).join("recording")
     }
 
+    pub fn recording_part(&self, id: &str) -> PathBuf {
+        self.session_dir(id).join("recording.part")
+    }
+
+    pub fn recording_part_key(&self, id: &str) -> PathBuf {
+        self.session_dir(id).join("recording.part.key")
+    }
+
     pub fn trial(&self, id: &str, index: u32) -> PathBuf {
         self.session_dir(id)
             .join("trials")
@@ -102,10 +112,10 @@ impl Files {
     }
 
     /// Streams `body` into a temporary file, refusing more than `limit` bytes.
-    /// The caller moves the result into place with [`Files::publish`].
+    /// The caller moves the result into place with [`TempFile::publish`].
     pub async fn receive<S, E>(
         &self,
-        mut body: S,
+        body: S,
         limit: u64,
         what: &'static str,
     ) -> Result<TempFile, Error>
@@ -113,30 +123,96 @@ impl Files {
         S: Stream<Item = Result<Bytes, E>> + Unpin,
         E: std::fmt::Display,
     {
-        let temp = TempFile {
+        self.receive_or_prefix(body, limit, what)
+            .await?
+            .map_err(|broken| broken.error)
+    }
+
+    /// [`Files::receive`] that keeps what arrived when the body breaks off (the client's
+    /// connection dropped): `Ok(Err(BrokenOff))` holds the prefix, so it can be resumed.
+    pub async fn receive_or_prefix<S, E>(
+        &self,
+        mut body: S,
+        limit: u64,
+        what: &'static str,
+    ) -> Result<Result<TempFile, BrokenOff>, Error>
+    where
+        S: Stream<Item = Result<Bytes, E>> + Unpin,
+        E: std::fmt::Display,
+    {
+        let mut temp = TempFile {
             path: self.temp_path(),
             bytes: 0,
         };
         let file = tokio::fs::File::create(&temp.path)
             .await
             .map_err(|e| Error::io("cannot create", &temp.path, e))?;
-        let mut out = tokio::io::BufWriter::with_capacity(1 << 20, file);
-        let mut temp = temp;
-        while let Some(chunk) = body.next().await {
-            let chunk =
-                chunk.map_err(|e| Error::BadRequest(format!("{what}: body broke off: {e}")))?;
-            temp.bytes += chunk.len() as u64;
-            if temp.bytes > limit {
-                return Err(Error::TooLarge { what, limit });
-            }
-            out.write_all(&chunk)
-                .await
-                .map_err(|e| Error::io("cannot write", &temp.path, e))?;
+        let mut sink = Sink::new(file, &temp.path, temp.bytes);
+        let outcome = sink.copy(&mut body, limit, what).await;
+        temp.bytes = sink.written;
+        match outcome {
+            Ok(()) => Ok(Ok(temp)),
+            Err(Copy::BrokeOff(error)) => Ok(Err(BrokenOff { temp, error })),
+            Err(Copy::Failed(error)) => Err(error),
         }
-        out.flush()
+    }
+
+    /// Appends `body` to the kept prefix at `path`, which must be `offset` bytes long, and
+    /// refuses to grow it beyond `end` bytes. Returns the new length. A body that breaks
+    /// off keeps what arrived (a prefix is always valid); any other failure cuts the file
+    /// back to `offset`, so a refused request leaves nothing behind.
+    pub async fn append<S, E>(
+        &self,
+        mut body: S,
+        path: &Path,
+        offset: u64,
+        end: u64,
+        what: &'static str,
+    ) -> Result<u64, Error>
+    where
+        S: Stream<Item = Result<Bytes, E>> + Unpin,
+        E: std::fmt::Display,
+    {
+        let mut file = tokio::fs::OpenOptions::new()
+            .write(true)
+            .create(true)
+            .truncate(false)
+            .open(path)
             .await
-            .map_err(|e| Error::io("cannot write", &temp.path, e))?;
-        Ok(temp)
+            .map_err(|e| Error::io("cannot open", path, e))?;
+        let len = file
+            .metadata()
+            .await
+            .map_err(|e| Error::io("cannot stat", path, e))?
+            .len();
+        if len != offset {
+            return Err(Error::Internal(format!(
+                "{} is {len} bytes, not the expected {offset}",
+                path.display()
+            )));
+        }
+        use tokio::io::AsyncSeekExt;
+        file.seek(std::io::SeekFrom::Start(offset))
+            .await
+            .map_err(|e| Error::io("cannot seek in", path, e))?;
+        let mut sink = Sink::new(file, path, offset);
+        match sink.copy(&mut body, end, what).await {
+            Ok(()) | Err(Copy::BrokeOff(_)) => Ok(sink.written),
+            Err(Copy::Failed(error)) => {
+                let error = match error {
+                    Error::TooLarge { .. } => Error::BadRequest(format!(
+                        "{what}: the body is longer than its Content-Range ({} bytes)",
+                        end - offset
+                    )),
+                    other => other,
+                };
+                let file = sink.out.into_inner();
+                file.set_len(offset)
+                    .await
+                    .map_err(|e| Error::io("cannot truncate", path, e))?;
+                Err(error)
+            }
+        }
     }
 
     /// Writes small server-made content atomically (temp file + rename).
@@ -149,6 +225,82 @@ impl Files {
             .map_err(|e| Error::io("cannot write", &temp.path, e))?;
         temp.publish(dest)
     }
+}
+
+/// Why copying a body stopped.
+enum Copy {
+    /// The body broke off (the client went away): what arrived is whole and kept.
+    BrokeOff(Error),
+    /// Too large, or the disk failed: what arrived must not be used.
+    Failed(Error),
+}
+
+/// A buffered file being written from a request body.
+struct Sink<'p> {
+    out: tokio::io::BufWriter<tokio::fs::File>,
+    path: &'p Path,
+    /// The file's length once flushed.
+    written: u64,
+}
+
+impl<'p> Sink<'p> {
+    fn new(file: tokio::fs::File, path: &'p Path, written: u64) -> Self {
+        Sink {
+            out: tokio::io::BufWriter::with_capacity(1 << 20, file),
+            path,
+            written,
+        }
+    }
+
+    /// Copies `body` until it ends, refusing to grow the file past `limit` bytes; the
+    /// buffer is flushed whatever happens, so `written` counts bytes in the file.
+    async fn copy<S, E>(&mut self, body: &mut S, limit: u64, what: &'static str) -> Result<(), Copy>
+    where
+        S: Stream<Item = Result<Bytes, E>> + Unpin,
+        E: std::fmt::Display,
+    {
+        let outcome = self.copy_unflushed(body, limit, what).await;
+        let flushed = self
+            .out
+            .flush()
+            .await
+            .map_err(|e| Copy::Failed(Error::io("cannot write", self.path, e)));
+        // A failed flush spoils even a broken-off prefix: it is not all in the file.
+        flushed.and(outcome)
+    }
+
+    async fn copy_unflushed<S, E>(
+        &mut self,
+        body: &mut S,
+        limit: u64,
+        what: &'static str,
+    ) -> Result<(), Copy>
+    where
+        S: Stream<Item = Result<Bytes, E>> + Unpin,
+        E: std::fmt::Display,
+    {
+        while let Some(chunk) = body.next().await {
+            let chunk = chunk.map_err(|e| {
+                Copy::BrokeOff(Error::BadRequest(format!("{what}: body broke off: {e}")))
+            })?;
+            if self.written + chunk.len() as u64 > limit {
+                return Err(Copy::Failed(Error::TooLarge { what, limit }));
+            }
+            self.out
+                .write_all(&chunk)
+                .await
+                .map_err(|e| Copy::Failed(Error::io("cannot write", self.path, e)))?;
+            self.written += chunk.len() as u64;
+        }
+        Ok(())
+    }
+}
+
+/// A body that broke off: the bytes that arrived, and why it ended.
+#[derive(Debug)]
+pub(crate) struct BrokenOff {
+    pub temp: TempFile,
+    pub error: Error,
 }
 
 /// An upload in `DATA/tmp`; removed on drop unless published.
@@ -224,5 +376,67 @@ mod tests {
             std::fs::read_dir(dir.path().join("tmp")).unwrap().count(),
             0
         );
+    }
+
+    fn broken_after(chunks: usize) -> impl Stream<Item = Result<Bytes, std::io::Error>> + Unpin {
+        futures_util::stream::iter((0..=chunks).map(move |i| {
+            if i < chunks {
+                Ok(Bytes::from(vec![i as u8; 1000]))
+            } else {
+                Err(std::io::Error::other("connection reset"))
+            }
+        }))
+    }
+
+    #[tokio::test]
+    async fn a_broken_body_keeps_its_prefix_and_an_append_continues_it() {
+        let dir = tempfile::tempdir().unwrap();
+        let files = Files::open(dir.path()).unwrap();
+        let broken = files
+            .receive_or_prefix(broken_after(3), 10_000, "recording")
+            .await
+            .unwrap()
+            .unwrap_err();
+        assert_eq!(broken.temp.bytes, 3000);
+        assert!(
+            broken.error.to_string().contains("broke off"),
+            "{}",
+            broken.error
+        );
+        let part = dir.path().join("sessions/x/recording.part");
+        broken.temp.publish(&part).unwrap();
+
+        // Another break while appending: what arrived is kept.
+        let len = files
+            .append(broken_after(2), &part, 3000, 10_000, "recording")
+            .await
+            .unwrap();
+        assert_eq!(len, 5000);
+        let kept = std::fs::read(&part).unwrap();
+        assert_eq!(kept.len(), 5000);
+        assert_eq!((kept[2999], kept[3000], kept[4999]), (2, 0, 1));
+    }
+
+    #[tokio::test]
+    async fn an_append_past_its_range_or_at_the_wrong_offset_changes_nothing() {
+        let dir = tempfile::tempdir().unwrap();
+        let files = Files::open(dir.path()).unwrap();
+        let part = dir.path().join("part");
+        std::fs::write(&part, [9u8; 500]).unwrap();
+        let err = files
+            .append(broken_after(3), &part, 500, 2500, "recording")
+            .await
+            .unwrap_err();
+        assert!(
+            matches!(err, Error::BadRequest(ref m) if m.contains("Content-Range")),
+            "{err}"
+        );
+        assert_eq!(std::fs::read(&part).unwrap(), vec![9u8; 500]);
+        let err = files
+            .append(broken_after(1), &part, 400, 10_000, "recording")
+            .await
+            .unwrap_err();
+        assert!(matches!(err, Error::Internal(_)), "{err}");
+        assert_eq!(std::fs::read(&part).unwrap(), vec![9u8; 500]);
     }
 }

@@ -3,7 +3,8 @@
 //! The paper's server side (section 4.2), sturdy: an axum + tokio HTTP API
 //! (versioned routes and the original Unity app's legacy routes), a SQLite
 //! database for sessions, trials, jobs and devices plus files in one data
-//! directory, uploads streamed to a temporary file and renamed when whole,
+//! directory, uploads streamed to a temporary file and renamed when whole
+//! (a recording upload that breaks off keeps its prefix and can be resumed),
 //! server-made ids only, size limits answered with 413, JSON errors
 //! `{"error":{"code":…,"message":…}}`, and jobs that survive a restart.
 //!
@@ -41,6 +42,7 @@ mod estimation;
 mod files;
 mod jobs;
 mod playback;
+mod recording;
 mod report;
 mod routes;
 mod server;

@@ -17,6 +17,7 @@ use crate::db::{NewSessionRow, SessionRow};
 use crate::estimation;
 use crate::files::{TempFile, is_server_id, new_id};
 use crate::jobs;
+use crate::recording::{self, accept_recording};
 use crate::report;
 use crate::state::Shared;
 
@@ -30,7 +31,10 @@ pub(crate) fn router(shared: Arc<Shared>) -> Router {
         .route("/healthz", get(health))
         .route("/v1/sessions", post(create_session))
         .route("/v1/sessions/{id}", get(session_status))
-        .route("/v1/sessions/{id}/recording", put(put_recording))
+        .route(
+            "/v1/sessions/{id}/recording",
+            put(recording::put_recording).head(recording::kept_offset),
+        )
         .route("/v1/sessions/{id}/trials", post(post_trial))
         .route("/v1/sessions/{id}/estimate", post(post_estimate))
         .route("/v1/sessions/{id}/results.csv", get(results_csv))
@@ -52,7 +56,7 @@ pub(crate) fn router(shared: Arc<Shared>) -> Router {
         .with_state(shared)
 }
 
-fn json_response(status: StatusCode, body: &str) -> Response {
+pub(crate) fn json_response(status: StatusCode, body: &str) -> Response {
     (
         status,
         [(header::CONTENT_TYPE, "application/json")],
@@ -61,7 +65,7 @@ fn json_response(status: StatusCode, body: &str) -> Response {
         .into_response()
 }
 
-fn content_type(headers: &HeaderMap) -> String {
+pub(crate) fn content_type(headers: &HeaderMap) -> String {
     headers
         .get(header::CONTENT_TYPE)
         .and_then(|v| v.to_str().ok())
@@ -75,7 +79,7 @@ fn content_type(headers: &HeaderMap) -> String {
         .unwrap_or_default()
 }
 
-fn idempotency_key(headers: &HeaderMap) -> Result<Option<String>, Error> {
+pub(crate) fn idempotency_key(headers: &HeaderMap) -> Result<Option<String>, Error> {
     match headers.get(IDEMPOTENCY_HEADER) {
         None => Ok(None),
         Some(v) => {
@@ -93,7 +97,11 @@ fn idempotency_key(headers: &HeaderMap) -> Result<Option<String>, Error> {
 }
 
 /// Refuses a body whose declared length is over the limit before reading it.
-fn check_declared_length(headers: &HeaderMap, limit: u64, what: &'static str) -> Result<(), Error> {
+pub(crate) fn check_declared_length(
+    headers: &HeaderMap,
+    limit: u64,
+    what: &'static str,
+) -> Result<(), Error> {
     let declared = headers
         .get(header::CONTENT_LENGTH)
         .and_then(|v| v.to_str().ok())
@@ -104,7 +112,7 @@ fn check_declared_length(headers: &HeaderMap, limit: u64, what: &'static str) ->
     }
 }
 
-fn session_row(shared: &Shared, id: &str) -> Result<SessionRow, Error> {
+pub(crate) fn session_row(shared: &Shared, id: &str) -> Result<SessionRow, Error> {
     if !is_server_id(id) {
         return Err(Error::NotFound(format!("no session {id:?}")));
     }
@@ -248,109 +256,7 @@ async fn session_status(
 
 /// `curl --data-binary @file` labels any raw body form-urlencoded; the bytes
 /// are still raw, so that label is accepted wherever a raw body is.
-const CURL_DEFAULT_CONTENT_TYPE: &str = "application/x-www-form-urlencoded";
-
-fn recording_content_type_ok(ct: &str) -> bool {
-    matches!(
-        ct,
-        "" | "application/octet-stream"
-            | "application/x-sitar-recording"
-            | CURL_DEFAULT_CONTENT_TYPE
-    ) || ct.starts_with("video/")
-}
-
-async fn put_recording(
-    State(shared): AppState,
-    Path(id): Path<String>,
-    headers: HeaderMap,
-    body: Body,
-) -> Result<Response, Error> {
-    let row = session_row(&shared, &id)?;
-    let ct = content_type(&headers);
-    if !recording_content_type_ok(&ct) {
-        return Err(Error::UnsupportedMediaType(format!(
-            "a recording is a raw body (application/octet-stream or video/mp4), not {ct}"
-        )));
-    }
-    if row.playback == "upload" && !matches!(row.state.as_str(), "created" | "uploaded") {
-        return Err(Error::Conflict(format!(
-            "session {id} is {}: the recording can no longer change",
-            row.state
-        )));
-    }
-    let limit = shared.config.max_recording_bytes;
-    check_declared_length(&headers, limit, "recording")?;
-    let temp = shared
-        .files
-        .receive(body.into_data_stream(), limit, "recording")
-        .await?;
-    accept_recording(&shared, &row, temp)?;
-    Ok(json_response(
-        StatusCode::ACCEPTED,
-        &json!({"id": id, "state": "uploaded"}).to_string(),
-    ))
-}
-
-/// Moves an uploaded recording into place and starts playback (sim, adb).
-///
-/// Only the first whole upload starts playback. A repeated upload with the
-/// same bytes (a client retry whose first answer was lost) is accepted as is;
-/// different bytes once playback has started are a conflict.
-fn accept_recording(shared: &Arc<Shared>, row: &SessionRow, temp: TempFile) -> Result<(), Error> {
-    if temp.bytes == 0 {
-        return Err(Error::BadRequest("the recording is empty".into()));
-    }
-    let bytes = temp.bytes;
-    let dest = shared.files.recording(&row.id);
-    if row.playback == "upload" {
-        temp.publish(&dest)?;
-        return shared.db.set_recording(&row.id, bytes);
-    }
-    if dest.is_file() {
-        return if same_content(&temp.path, &dest)? {
-            Ok(())
-        } else {
-            Err(Error::Conflict(format!(
-                "session {} already has another recording and its playback has started",
-                row.id
-            )))
-        };
-    }
-    temp.publish(&dest)?;
-    if shared.db.claim_recording(&row.id, bytes)? {
-        jobs::spawn_session(shared.clone(), row.id.clone());
-    }
-    Ok(())
-}
-
-fn same_content(a: &std::path::Path, b: &std::path::Path) -> Result<bool, Error> {
-    use std::io::Read;
-    let open =
-        |p: &std::path::Path| std::fs::File::open(p).map_err(|e| Error::io("cannot open", p, e));
-    let (mut fa, mut fb) = (open(a)?, open(b)?);
-    let len = |f: &std::fs::File, p| {
-        f.metadata()
-            .map(|m| m.len())
-            .map_err(|e| Error::io("cannot stat", p, e))
-    };
-    if len(&fa, a)? != len(&fb, b)? {
-        return Ok(false);
-    }
-    let (mut ba, mut bb) = (vec![0u8; 1 << 20], vec![0u8; 1 << 20]);
-    loop {
-        let n = fa
-            .read(&mut ba)
-            .map_err(|e| Error::io("cannot read", a, e))?;
-        if n == 0 {
-            return Ok(true);
-        }
-        fb.read_exact(&mut bb[..n])
-            .map_err(|e| Error::io("cannot read", b, e))?;
-        if ba[..n] != bb[..n] {
-            return Ok(false);
-        }
-    }
-}
+pub(crate) const CURL_DEFAULT_CONTENT_TYPE: &str = "application/x-www-form-urlencoded";
 
 async fn post_trial(
     State(shared): AppState,

@@ -31,6 +31,8 @@ pub(crate) struct Shared {
     adb: Arc<dyn Playback>,
     upload: Arc<dyn Playback>,
     pub live: Mutex<HashMap<String, Live>>,
+    /// Per session: held while a request writes or replaces its `recording.part`.
+    part_locks: Mutex<HashMap<String, Arc<tokio::sync::Mutex<()>>>>,
     /// Set when the server stops: jobs stop without changing their session's
     /// state, so the next start resumes them.
     pub shutdown: AtomicBool,
@@ -48,6 +50,7 @@ impl Shared {
             db,
             files,
             live: Mutex::new(HashMap::new()),
+            part_locks: Mutex::new(HashMap::new()),
             shutdown: AtomicBool::new(false),
         })
     }
@@ -78,6 +81,12 @@ impl Shared {
                 }
             }
         }
+    }
+
+    /// The lock over session `id`'s kept upload prefix (`recording.part`).
+    pub fn part_lock(&self, id: &str) -> Arc<tokio::sync::Mutex<()>> {
+        let mut locks = self.part_locks.lock().unwrap_or_else(|e| e.into_inner());
+        locks.entry(id.to_string()).or_default().clone()
     }
 
     /// Stops every job; their sessions stay in flight for the next start.

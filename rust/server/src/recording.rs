@@ -1,0 +1,409 @@
+//! Recording uploads: whole, and resumed after a dropped connection.
+//!
+//! A `PUT /v1/sessions/{id}/recording` whose body breaks off (the phone's Wi-Fi
+//! dropped) keeps what arrived as `recording.part`, tied to the request's
+//! `Idempotency-Key`. `HEAD` on the same URL with the same key tells how much
+//! is kept (`Upload-Offset`), and a `PUT` with that key and
+//! `Content-Range: bytes S-E/T` appends from byte `S`, which must be the kept
+//! length. When the kept bytes reach `T` the recording is whole and is
+//! accepted exactly as a whole upload is. So a 2 GiB upload that fails at 90 %
+//! sends the last 10 %, not all of it again.
+//!
+//! The key keeps uploads apart: bytes kept from one file are never continued
+//! with another (another key sees offset 0), and the latest whole upload that
+//! broke off replaces any older prefix.
+
+use std::sync::Arc;
+
+use axum::body::Body;
+use axum::extract::{Path, State};
+use axum::http::{HeaderMap, HeaderValue, StatusCode, header};
+use axum::response::{IntoResponse, Response};
+use serde_json::json;
+
+use crate::Error;
+use crate::db::SessionRow;
+use crate::files::TempFile;
+use crate::jobs;
+use crate::routes::{
+    CURL_DEFAULT_CONTENT_TYPE, check_declared_length, content_type, idempotency_key, json_response,
+    session_row,
+};
+use crate::state::Shared;
+
+/// Response header: the bytes of an interrupted upload the server keeps.
+pub const UPLOAD_OFFSET_HEADER: &str = "upload-offset";
+
+type AppState = State<Arc<Shared>>;
+
+fn recording_content_type_ok(ct: &str) -> bool {
+    matches!(
+        ct,
+        "" | "application/octet-stream"
+            | "application/x-sitar-recording"
+            | CURL_DEFAULT_CONTENT_TYPE
+    ) || ct.starts_with("video/")
+}
+
+/// `PUT /v1/sessions/{id}/recording`: a whole recording, or with `Content-Range`
+/// the rest of an interrupted one.
+pub(crate) async fn put_recording(
+    State(shared): AppState,
+    Path(id): Path<String>,
+    headers: HeaderMap,
+    body: Body,
+) -> Result<Response, Error> {
+    let row = session_row(&shared, &id)?;
+    let ct = content_type(&headers);
+    if !recording_content_type_ok(&ct) {
+        return Err(Error::UnsupportedMediaType(format!(
+            "a recording is a raw body (application/octet-stream or video/mp4), not {ct}"
+        )));
+    }
+    if row.playback == "upload" && !matches!(row.state.as_str(), "created" | "uploaded") {
+        return Err(Error::Conflict(format!(
+            "session {id} is {}: the recording can no longer change",
+            row.state
+        )));
+    }
+    let limit = shared.config.max_recording_bytes;
+    let key = idempotency_key(&headers)?;
+    match content_range(&headers)? {
+        Some(range) => resume(&shared, &row, &headers, key, range, body).await,
+        None => {
+            check_declared_length(&headers, limit, "recording")?;
+            whole(&shared, &row, key, body).await
+        }
+    }
+}
+
+/// `HEAD /v1/sessions/{id}/recording`: `Upload-Offset` is the length of the kept prefix
+/// of the interrupted upload with the request's `Idempotency-Key` (0 when there is none).
+pub(crate) async fn kept_offset(
+    State(shared): AppState,
+    Path(id): Path<String>,
+    headers: HeaderMap,
+) -> Result<Response, Error> {
+    let row = session_row(&shared, &id)?;
+    let key = idempotency_key(&headers)?;
+    let kept = kept_for(&shared, &row.id, key.as_deref())?.unwrap_or(0);
+    let mut response = StatusCode::OK.into_response();
+    let headers = response.headers_mut();
+    headers.insert(UPLOAD_OFFSET_HEADER, HeaderValue::from(kept));
+    headers.insert(header::CACHE_CONTROL, HeaderValue::from_static("no-store"));
+    Ok(response)
+}
+
+async fn whole(
+    shared: &Arc<Shared>,
+    row: &SessionRow,
+    key: Option<String>,
+    body: Body,
+) -> Result<Response, Error> {
+    let limit = shared.config.max_recording_bytes;
+    let received = shared
+        .files
+        .receive_or_prefix(body.into_data_stream(), limit, "recording")
+        .await?;
+    let lock = shared.part_lock(&row.id);
+    let _held = lock.lock().await;
+    let part = shared.files.recording_part(&row.id);
+    match received {
+        Ok(temp) => {
+            accept_recording(shared, row, temp)?;
+            discard_part(shared, &row.id)?;
+            Ok(uploaded(&row.id))
+        }
+        Err(broken) => {
+            // The latest upload's prefix replaces any older one: a retry resumes from it.
+            if broken.temp.bytes > 0 && !shared.files.recording(&row.id).is_file() {
+                // Key file last: a crash in between leaves a prefix no key matches.
+                remove_if_present(&shared.files.recording_part_key(&row.id))?;
+                broken.temp.publish(&part)?;
+                write_key(shared, &row.id, key.as_deref())?;
+            }
+            Err(broken.error)
+        }
+    }
+}
+
+async fn resume(
+    shared: &Arc<Shared>,
+    row: &SessionRow,
+    headers: &HeaderMap,
+    key: Option<String>,
+    range: ContentRange,
+    body: Body,
+) -> Result<Response, Error> {
+    let limit = shared.config.max_recording_bytes;
+    if range.total > limit {
+        return Err(Error::TooLarge {
+            what: "recording",
+            limit,
+        });
+    }
+    let declared = headers
+        .get(header::CONTENT_LENGTH)
+        .and_then(|v| v.to_str().ok())
+        .and_then(|v| v.parse::<u64>().ok());
+    if let Some(n) = declared
+        && n != range.len()
+    {
+        return Err(Error::BadRequest(format!(
+            "Content-Length {n} does not match Content-Range bytes {}-{}/{} ({} bytes)",
+            range.start,
+            range.last,
+            range.total,
+            range.len()
+        )));
+    }
+    let lock = shared.part_lock(&row.id);
+    let Ok(_held) = lock.try_lock() else {
+        return Err(Error::Conflict(format!(
+            "another upload to session {} is still being received; try again shortly",
+            row.id
+        )));
+    };
+    let part = shared.files.recording_part(&row.id);
+    let kept = match kept_for(shared, &row.id, key.as_deref())? {
+        Some(kept) => kept,
+        None if range.start == 0 => {
+            // A chunked upload from byte 0 under a new key: it starts a fresh prefix.
+            discard_part(shared, &row.id)?;
+            write_key(shared, &row.id, key.as_deref())?;
+            0
+        }
+        None => 0,
+    };
+    if range.start != kept {
+        let mut response = Error::Conflict(format!(
+            "Content-Range starts at byte {}, but {kept} bytes of session {}'s recording are kept: \
+             resume from byte {kept}",
+            range.start, row.id
+        ))
+        .into_response();
+        response
+            .headers_mut()
+            .insert(UPLOAD_OFFSET_HEADER, HeaderValue::from(kept));
+        return Ok(response);
+    }
+    let end = range.last + 1;
+    let now = shared
+        .files
+        .append(body.into_data_stream(), &part, kept, end, "recording")
+        .await?;
+    if now == range.total {
+        let temp = TempFile {
+            path: part,
+            bytes: now,
+        };
+        let accepted = accept_recording(shared, row, temp);
+        discard_part(shared, &row.id)?;
+        accepted?;
+        return Ok(uploaded(&row.id));
+    }
+    if now < end {
+        return Err(Error::BadRequest(format!(
+            "recording: the body ended at byte {now}, before the end of its Content-Range \
+             ({end}); the {now} bytes are kept"
+        )));
+    }
+    let mut response = json_response(
+        StatusCode::OK,
+        &json!({"id": row.id, "state": row.state, "received": now, "total": range.total})
+            .to_string(),
+    );
+    response
+        .headers_mut()
+        .insert(UPLOAD_OFFSET_HEADER, HeaderValue::from(now));
+    Ok(response)
+}
+
+fn uploaded(id: &str) -> Response {
+    json_response(
+        StatusCode::ACCEPTED,
+        &json!({"id": id, "state": "uploaded"}).to_string(),
+    )
+}
+
+/// The kept prefix's length if it belongs to the upload with `key` (no key is the empty
+/// key); `None` when the prefix is another upload's, or has no key file.
+fn kept_for(shared: &Shared, id: &str, key: Option<&str>) -> Result<Option<u64>, Error> {
+    let key_path = shared.files.recording_part_key(id);
+    let stored = match std::fs::read(&key_path) {
+        Ok(stored) => stored,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+        Err(e) => return Err(Error::io("cannot read", &key_path, e)),
+    };
+    if stored != key.unwrap_or("").as_bytes() {
+        return Ok(None);
+    }
+    let part = shared.files.recording_part(id);
+    match std::fs::metadata(&part) {
+        Ok(m) => Ok(Some(m.len())),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(Some(0)),
+        Err(e) => Err(Error::io("cannot stat", &part, e)),
+    }
+}
+
+fn write_key(shared: &Shared, id: &str, key: Option<&str>) -> Result<(), Error> {
+    let path = shared.files.recording_part_key(id);
+    shared
+        .files
+        .write_atomic(&path, key.unwrap_or("").as_bytes())
+}
+
+/// Removes the kept prefix and its key (key first: a prefix without a key is never used).
+fn discard_part(shared: &Shared, id: &str) -> Result<(), Error> {
+    remove_if_present(&shared.files.recording_part_key(id))?;
+    remove_if_present(&shared.files.recording_part(id))
+}
+
+fn remove_if_present(path: &std::path::Path) -> Result<(), Error> {
+    match std::fs::remove_file(path) {
+        Ok(()) => Ok(()),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(()),
+        Err(e) => Err(Error::io("cannot remove", path, e)),
+    }
+}
+
+/// `Content-Range: bytes START-LAST/TOTAL` (inclusive `LAST`, as in RFC 9110).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct ContentRange {
+    start: u64,
+    last: u64,
+    total: u64,
+}
+
+impl ContentRange {
+    fn len(&self) -> u64 {
+        self.last - self.start + 1
+    }
+}
+
+fn content_range(headers: &HeaderMap) -> Result<Option<ContentRange>, Error> {
+    let Some(value) = headers.get(header::CONTENT_RANGE) else {
+        return Ok(None);
+    };
+    let text = value.to_str().unwrap_or("");
+    parse_content_range(text).map(Some).ok_or_else(|| {
+        Error::BadRequest(format!(
+            "Content-Range {text:?} is not `bytes START-LAST/TOTAL` with START <= LAST < TOTAL"
+        ))
+    })
+}
+
+fn parse_content_range(text: &str) -> Option<ContentRange> {
+    let rest = text.trim().strip_prefix("bytes ")?;
+    let (span, total) = rest.split_once('/')?;
+    let (start, last) = span.split_once('-')?;
+    let number = |s: &str| {
+        let s = s.trim();
+        (!s.is_empty() && s.bytes().all(|b| b.is_ascii_digit()))
+            .then(|| s.parse::<u64>().ok())
+            .flatten()
+    };
+    let range = ContentRange {
+        start: number(start)?,
+        last: number(last)?,
+        total: number(total)?,
+    };
+    (range.start <= range.last && range.last < range.total).then_some(range)
+}
+
+/// Moves an uploaded recording into place and starts playback (sim, adb).
+///
+/// Only the first whole upload starts playback. A repeated upload with the
+/// same bytes (a client retry whose first answer was lost) is accepted as is;
+/// different bytes once playback has started are a conflict.
+pub(crate) fn accept_recording(
+    shared: &Arc<Shared>,
+    row: &SessionRow,
+    temp: TempFile,
+) -> Result<(), Error> {
+    if temp.bytes == 0 {
+        return Err(Error::BadRequest("the recording is empty".into()));
+    }
+    let bytes = temp.bytes;
+    let dest = shared.files.recording(&row.id);
+    if row.playback == "upload" {
+        temp.publish(&dest)?;
+        return shared.db.set_recording(&row.id, bytes);
+    }
+    if dest.is_file() {
+        return if same_content(&temp.path, &dest)? {
+            Ok(())
+        } else {
+            Err(Error::Conflict(format!(
+                "session {} already has another recording and its playback has started",
+                row.id
+            )))
+        };
+    }
+    temp.publish(&dest)?;
+    if shared.db.claim_recording(&row.id, bytes)? {
+        jobs::spawn_session(shared.clone(), row.id.clone());
+    }
+    Ok(())
+}
+
+fn same_content(a: &std::path::Path, b: &std::path::Path) -> Result<bool, Error> {
+    use std::io::Read;
+    let open =
+        |p: &std::path::Path| std::fs::File::open(p).map_err(|e| Error::io("cannot open", p, e));
+    let (mut fa, mut fb) = (open(a)?, open(b)?);
+    let len = |f: &std::fs::File, p| {
+        f.metadata()
+            .map(|m| m.len())
+            .map_err(|e| Error::io("cannot stat", p, e))
+    };
+    if len(&fa, a)? != len(&fb, b)? {
+        return Ok(false);
+    }
+    let (mut ba, mut bb) = (vec![0u8; 1 << 20], vec![0u8; 1 << 20]);
+    loop {
+        let n = fa
+            .read(&mut ba)
+            .map_err(|e| Error::io("cannot read", a, e))?;
+        if n == 0 {
+            return Ok(true);
+        }
+        fb.read_exact(&mut bb[..n])
+            .map_err(|e| Error::io("cannot read", b, e))?;
+        if ba[..n] != bb[..n] {
+            return Ok(false);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn content_range_parses_only_the_whole_well_formed_form() {
+        assert_eq!(
+            parse_content_range("bytes 100-199/200"),
+            Some(ContentRange {
+                start: 100,
+                last: 199,
+                total: 200
+            })
+        );
+        assert_eq!(parse_content_range("bytes 0-0/1").map(|r| r.len()), Some(1));
+        for bad in [
+            "bytes 5-4/10",
+            "bytes 0-10/10",
+            "bytes */10",
+            "bytes 0-9/*",
+            "bytes -1-9/10",
+            "bytes +1-9/10",
+            "items 0-9/10",
+            "bytes 0-9",
+            "bytes 0-99999999999999999999/100000000000000000000",
+            "",
+        ] {
+            assert_eq!(parse_content_range(bad), None, "{bad}");
+        }
+    }
+}
