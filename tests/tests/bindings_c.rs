@@ -946,8 +946,8 @@ fn upload_cancel_stops_a_transfer_in_flight() {
     let rec = dir.path().join("big.mp4");
     let total = 512u64 << 20;
     std::fs::File::create(&rec).unwrap().set_len(total).unwrap();
-    // A server that creates session "s1", then reads the upload slowly (about 20 MB/s)
-    // and reports how many bytes arrived before the connection closed.
+    // A server that creates session "s1", says it kept nothing, then reads the upload
+    // slowly (about 20 MB/s) and reports how many bytes arrived before the connection closed.
     let listener = TcpListener::bind("127.0.0.1:0").unwrap();
     let url = format!("http://{}", listener.local_addr().unwrap());
     let (tx, rx) = std::sync::mpsc::channel::<u64>();
@@ -973,6 +973,14 @@ fn upload_cancel_stops_a_transfer_in_flight() {
                     stream,
                     "HTTP/1.1 201 Created\r\ncontent-type: application/json\r\ncontent-length: {}\r\nconnection: close\r\n\r\n{answer}",
                     answer.len()
+                );
+                continue;
+            }
+            if head.starts_with("HEAD ") {
+                // No kept prefix to resume from.
+                let _ = write!(
+                    stream,
+                    "HTTP/1.1 200 OK\r\nupload-offset: 0\r\ncontent-length: 0\r\nconnection: close\r\n\r\n"
                 );
                 continue;
             }

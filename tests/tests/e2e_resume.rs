@@ -5,7 +5,7 @@ use std::io::{Read, Write};
 use std::net::{Shutdown, TcpListener, TcpStream};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
 use sitar_client::NewSession;
@@ -177,9 +177,16 @@ fn a_broken_upload_keeps_its_prefix_across_a_restart_and_resumes_exactly() {
     server.stop();
 }
 
-/// A TCP proxy that cuts its first connection after `cut_after` request bytes, once the
-/// server has kept what it got (`kept_marker` exists), so the client's retry can only resume. Counts the request
-/// bytes it forwards on every later connection.
+fn wait_for(path: &Path) {
+    let deadline = Instant::now() + Duration::from_secs(20);
+    while !path.exists() && Instant::now() < deadline {
+        std::thread::sleep(Duration::from_millis(5));
+    }
+}
+
+/// A TCP proxy that cuts the first connection to carry `cut_after` request bytes, once the
+/// server has kept what it got (`kept_marker` exists), so the client can only resume.
+/// Counts the request bytes it forwards on every other connection.
 struct CuttingProxy {
     url: String,
     forwarded_after_cut: Arc<AtomicU64>,
@@ -191,37 +198,44 @@ fn cutting_proxy(server_url: &str, kept_marker: PathBuf, cut_after: u64) -> Cutt
     let url = format!("http://{}", listener.local_addr().unwrap());
     let forwarded_after_cut = Arc::new(AtomicU64::new(0));
     let counter = forwarded_after_cut.clone();
+    let cut = Arc::new(AtomicBool::new(false));
     std::thread::spawn(move || {
-        for (n, client) in listener.incoming().enumerate() {
+        for client in listener.incoming() {
             let Ok(client) = client else { return };
             let server = TcpStream::connect(&upstream).unwrap();
             let (mut from_client, mut to_server) =
                 (client.try_clone().unwrap(), server.try_clone().unwrap());
             let (mut from_server, mut to_client) = (server, client);
+            // The client learns of the cut only once the server kept the prefix.
+            let this_cut = Arc::new(AtomicBool::new(false));
+            let (cut_here, marker) = (this_cut.clone(), kept_marker.clone());
             std::thread::spawn(move || {
                 let _ = std::io::copy(&mut from_server, &mut to_client);
-                let _ = to_client.shutdown(Shutdown::Write);
+                if cut_here.load(Ordering::SeqCst) {
+                    wait_for(&marker);
+                }
+                let _ = to_client.shutdown(Shutdown::Both);
             });
             let counter = counter.clone();
             let kept_marker = kept_marker.clone();
+            let cut = cut.clone();
             std::thread::spawn(move || {
                 let mut buf = vec![0u8; 64 << 10];
                 let mut sent = 0u64;
                 loop {
-                    let room = if n == 0 {
-                        cut_after - sent
+                    let limit = if cut.load(Ordering::SeqCst) {
+                        u64::MAX
                     } else {
-                        buf.len() as u64
+                        cut_after
                     };
-                    let want = buf.len().min(room as usize);
-                    if want == 0 {
+                    let want = buf.len().min((limit - sent).min(1 << 30) as usize);
+                    if want == 0 && !cut.swap(true, Ordering::SeqCst) {
                         // Cut: the server sees the body break off; wait until it kept the
                         // prefix, then hang up on the client too.
+                        counter.fetch_sub(sent, Ordering::SeqCst);
+                        this_cut.store(true, Ordering::SeqCst);
                         let _ = to_server.shutdown(Shutdown::Both);
-                        let deadline = Instant::now() + Duration::from_secs(20);
-                        while !kept_marker.exists() && Instant::now() < deadline {
-                            std::thread::sleep(Duration::from_millis(5));
-                        }
+                        wait_for(&kept_marker);
                         let _ = from_client.shutdown(Shutdown::Both);
                         return;
                     }
@@ -233,9 +247,7 @@ fn cutting_proxy(server_url: &str, kept_marker: PathBuf, cut_after: u64) -> Cutt
                         return;
                     }
                     sent += got as u64;
-                    if n > 0 {
-                        counter.fetch_add(got as u64, Ordering::Relaxed);
-                    }
+                    counter.fetch_add(got as u64, Ordering::SeqCst);
                 }
             });
         }
@@ -271,7 +283,7 @@ fn the_client_resumes_a_cut_upload_and_sends_only_the_rest() {
     assert_eq!(stored(&data, &id, "recording.part"), None);
     assert_eq!(stored(&data, &id, "recording.part.key"), None);
     // After the cut only the rest went through (plus a HEAD and headers): under 5.1 MiB of 8.
-    let after = proxy.forwarded_after_cut.load(Ordering::Relaxed);
+    let after = proxy.forwarded_after_cut.load(Ordering::SeqCst);
     assert!(
         after < (5 << 20) + (100 << 10),
         "{after} bytes sent after the cut"
@@ -286,4 +298,43 @@ fn the_client_resumes_a_cut_upload_and_sends_only_the_rest() {
         .map(|w| w[1].0)
         .expect("progress starts again after the cut");
     assert!(restart > (2 << 20), "resumed at {restart}");
+}
+
+#[test]
+fn a_later_call_for_the_same_file_resumes_what_a_failed_one_left() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("data");
+    let server = start(sim_config(&data, 10.0, 1));
+    let id = upload_session(&client(&server));
+    let bytes = recording_bytes(6 << 20);
+    let path = dir.path().join("recording.mp4");
+    std::fs::write(&path, &bytes).unwrap();
+
+    // The app gives up (no retries) when its connection is cut...
+    let marker = data.join("sessions").join(&id).join("recording.part.key");
+    let proxy = cutting_proxy(&server.url(), marker, 2 << 20);
+    let impatient = sitar_client::Client::new(&proxy.url)
+        .unwrap()
+        .with_timeout(Duration::from_secs(20))
+        .with_retries(0, Duration::from_millis(20));
+    let err = impatient
+        .upload_recording(&id, &path, &mut |_, _| {})
+        .unwrap_err();
+    assert!(
+        matches!(err, sitar_client::Error::Network { .. }),
+        "{err:?}"
+    );
+    assert_eq!(stored(&data, &id, "recording"), None);
+
+    // ...and a later call (a new client, as after an app restart) sends only the rest.
+    let mut reports = Vec::new();
+    client(&server)
+        .upload_recording(&id, &path, &mut |sent, total| reports.push((sent, total)))
+        .unwrap();
+    let total = bytes.len() as u64;
+    let first = reports.first().unwrap().0;
+    assert!((1 << 20..2 << 20).contains(&first), "resumed at {first}");
+    assert_eq!(reports.last(), Some(&(total, total)));
+    assert_eq!(stored(&data, &id, "recording").as_deref(), Some(&bytes[..]));
+    assert_eq!(stored(&data, &id, "recording.part"), None);
 }

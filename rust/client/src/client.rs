@@ -132,11 +132,12 @@ impl Client {
     /// `PUT /v1/sessions/{id}/recording`: streams the file at `path` from disk
     /// (never whole in memory). `progress(sent, total)` is called as bytes go out.
     ///
-    /// A retry after a dropped connection resumes: it asks the server how many bytes it
-    /// kept (`HEAD`, `Upload-Offset`) and sends only the rest, with `Content-Range`. Every
-    /// request of one call carries the same `Idempotency-Key`, to which the server ties the
-    /// kept bytes, so a resume never continues another upload's bytes. When nothing was
-    /// kept it sends the whole file again (the `PUT` replaces, so that is safe).
+    /// An upload cut off by a dropped connection resumes, on a retry or in a later call for
+    /// the same file: the client asks the server how many bytes it kept (`HEAD`,
+    /// `Upload-Offset`) and sends only the rest, with `Content-Range`. Its requests carry an
+    /// `Idempotency-Key` made from the file's path, length and modification time, to which
+    /// the server ties the kept bytes, so a resume never continues another file's bytes.
+    /// When nothing was kept it sends the whole file (the `PUT` replaces, so that is safe).
     pub fn upload_recording(
         &self,
         id: &str,
@@ -157,18 +158,27 @@ impl Client {
         cancel: &AtomicBool,
     ) -> Result<(), Error> {
         let url = format!("{}/v1/sessions/{}/recording", self.base, check_id(id)?);
-        let total = std::fs::metadata(path)
-            .map_err(|source| Error::Io {
-                path: path.to_path_buf(),
-                source,
-            })?
-            .len();
-        // One key per call: the server ties the bytes it keeps to it, so a resume never
-        // continues another upload's bytes.
-        let key = idempotency_key();
+        let meta = std::fs::metadata(path).map_err(|source| Error::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let total = meta.len();
+        // The server ties the bytes it keeps to this key, so a resume never continues another
+        // file's bytes, and the same file uploaded again (after an app restart) resumes.
+        let key = file_key(path, &meta);
+        if cancel.load(Ordering::Acquire) {
+            return Err(Error::Cancelled);
+        }
         let mut delay = self.backoff;
         let mut attempt = 0;
-        let mut offset = 0;
+        // Resume from what the server kept; anything unusable means from the start.
+        let kept = |client: &Client| {
+            client
+                .kept_offset(&url, &key)
+                .filter(|&n| n < total)
+                .unwrap_or(0)
+        };
+        let mut offset = kept(self);
         loop {
             attempt += 1;
             if cancel.load(Ordering::Acquire) {
@@ -190,11 +200,7 @@ impl Client {
             }
             std::thread::sleep(delay);
             delay = delay.saturating_mul(2);
-            // Resume from what the server kept; anything unusable means from the start.
-            offset = self
-                .kept_offset(&url, &key)
-                .filter(|&n| n < total)
-                .unwrap_or(0);
+            offset = kept(self);
         }
     }
 
@@ -497,6 +503,25 @@ fn check_id(id: &str) -> Result<&str, Error> {
     }
 }
 
+/// The key of a recording upload: the file's path, length and modification time, so the
+/// same file gets the same key in every process (FNV-1a: stable across runs and Rust
+/// versions) and a rewritten file gets another. Random when the file system keeps no time.
+fn file_key(path: &Path, meta: &std::fs::Metadata) -> String {
+    let Ok(modified) = meta.modified() else {
+        return idempotency_key();
+    };
+    let mtime_ns = modified
+        .duration_since(UNIX_EPOCH)
+        .map(|d| d.as_nanos())
+        .unwrap_or(0);
+    let canonical = std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
+    let mut hash = 0xcbf2_9ce4_8422_2325u64;
+    for &byte in canonical.as_os_str().as_encoded_bytes() {
+        hash = (hash ^ u64::from(byte)).wrapping_mul(0x0100_0000_01b3);
+    }
+    format!("recording-{hash:016x}-{}-{mtime_ns}", meta.len())
+}
+
 /// 128 random-enough bits: a per-process random hasher seed, the clock and a counter.
 pub(crate) fn idempotency_key() -> String {
     static COUNTER: AtomicU64 = AtomicU64::new(0);
@@ -572,6 +597,8 @@ mod tests {
 
     enum Reply {
         Answer(u16, &'static str),
+        /// 200 with `Upload-Offset: N`, as to a `HEAD` on a recording.
+        Offset(u64),
         Hang,
     }
 
@@ -595,6 +622,13 @@ mod tests {
                             s,
                             "HTTP/1.1 {status} X\r\ncontent-type: application/json\r\ncontent-length: {}\r\nconnection: close\r\n\r\n{body}",
                             body.len()
+                        );
+                    }
+                    Reply::Offset(n) => {
+                        let mut s = stream;
+                        let _ = write!(
+                            s,
+                            "HTTP/1.1 200 X\r\nupload-offset: {n}\r\ncontent-length: 0\r\nconnection: close\r\n\r\n"
                         );
                     }
                     Reply::Hang => {
@@ -759,19 +793,64 @@ mod tests {
         let path = dir.path().join("rec.mp4");
         let data: Vec<u8> = (0..3_000_000u32).map(|i| (i * 7 % 251) as u8).collect();
         std::fs::write(&path, &data).unwrap();
-        let (base, seen) = serve(vec![Reply::Answer(202, "{}")]);
+        // A server without resumable uploads: 405 to the HEAD, then the whole file.
+        let (base, seen) = serve(vec![Reply::Answer(405, "{}"), Reply::Answer(202, "{}")]);
         let mut calls = Vec::new();
         fast(&base)
             .upload_recording("s1", &path, &mut |sent, total| calls.push((sent, total)))
             .unwrap();
         let seen = seen.lock().unwrap();
-        assert_eq!(seen[0].method, "PUT");
-        assert_eq!(seen[0].path, "/v1/sessions/s1/recording");
-        assert_eq!(seen[0].header("content-length"), Some("3000000"));
-        assert!(seen[0].body == data);
+        assert_eq!(seen[0].method, "HEAD");
+        assert_eq!(seen[1].method, "PUT");
+        assert_eq!(seen[1].path, "/v1/sessions/s1/recording");
+        assert_eq!(seen[1].header("content-length"), Some("3000000"));
+        assert_eq!(seen[1].header("content-range"), None);
+        assert!(seen[1].body == data);
+        // Both carry the file's key.
+        let key = seen[1].header("idempotency-key").unwrap();
+        assert!(
+            key.starts_with("recording-") && key.contains("-3000000-"),
+            "{key}"
+        );
+        assert_eq!(seen[0].header("idempotency-key"), Some(key));
         assert_eq!(calls.first(), Some(&(0, 3_000_000)));
         assert_eq!(calls.last(), Some(&(3_000_000, 3_000_000)));
         assert!(calls.windows(2).all(|w| w[0].0 <= w[1].0));
+    }
+
+    #[test]
+    fn an_upload_the_server_kept_part_of_sends_only_the_rest() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("rec.mp4");
+        let data: Vec<u8> = (0..3_000_000u32).map(|i| (i * 7 % 251) as u8).collect();
+        std::fs::write(&path, &data).unwrap();
+        let (base, seen) = serve(vec![Reply::Offset(1_000_000), Reply::Answer(202, "{}")]);
+        let mut calls = Vec::new();
+        fast(&base)
+            .upload_recording("s1", &path, &mut |sent, total| calls.push((sent, total)))
+            .unwrap();
+        let seen = seen.lock().unwrap();
+        assert_eq!(seen[1].method, "PUT");
+        assert_eq!(
+            seen[1].header("content-range"),
+            Some("bytes 1000000-2999999/3000000")
+        );
+        assert_eq!(seen[1].header("content-length"), Some("2000000"));
+        assert!(seen[1].body == data[1_000_000..]);
+        assert_eq!(calls.first(), Some(&(1_000_000, 3_000_000)));
+        assert_eq!(calls.last(), Some(&(3_000_000, 3_000_000)));
+        // Another file (here: the same path rewritten, so a new time) gets another key.
+        let key = seen[1].header("idempotency-key").unwrap().to_string();
+        drop(seen);
+        std::fs::File::options()
+            .write(true)
+            .open(&path)
+            .unwrap()
+            .set_modified(UNIX_EPOCH + Duration::from_secs(1_700_000_000))
+            .unwrap();
+        let meta = std::fs::metadata(&path).unwrap();
+        assert_ne!(file_key(&path, &meta), key);
+        assert_eq!(file_key(&path, &meta), file_key(&path, &meta));
     }
 
     #[test]
@@ -792,6 +871,17 @@ mod tests {
             for stream in listener.incoming() {
                 let Ok(mut stream) = stream else { return };
                 let mut buf = vec![0; 1 << 16];
+                // The HEAD asking for a kept prefix: none.
+                if stream
+                    .peek(&mut buf[..5])
+                    .is_ok_and(|k| &buf[..k] == b"HEAD ")
+                {
+                    let _ = stream.read(&mut buf);
+                    let _ = stream.write_all(
+                        b"HTTP/1.1 200 X\r\nupload-offset: 0\r\ncontent-length: 0\r\nconnection: close\r\n\r\n",
+                    );
+                    continue;
+                }
                 let mut n = 0u64;
                 while let Ok(k @ 1..) = stream.read(&mut buf) {
                     n += k as u64;

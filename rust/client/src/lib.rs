@@ -7,7 +7,8 @@
 //! backoff; `POST`s carry an [`IDEMPOTENCY_HEADER`] key that stays the same
 //! across retries, so a retry never creates a second session or trial. A
 //! recording upload cut off by a dropped connection is resumed from the bytes
-//! the server kept ([`UPLOAD_OFFSET_HEADER`]), not sent again from the start.
+//! the server kept ([`UPLOAD_OFFSET_HEADER`]), on a retry or in a later call
+//! for the same file, not sent again from the start.
 //! [`Client::upload_recording_cancellable`] stops a recording upload mid-transfer
 //! when its flag is set (the app's cancel button).
 //!
