@@ -23,6 +23,7 @@ const ERR_BUFFER_TOO_SMALL: i32 = -8;
 const ERR_PANIC: i32 = -99;
 
 const JOB_UPLOADING: i32 = 1;
+const JOB_PLAYING: i32 = 2;
 const JOB_FAILED: i32 = 6;
 const JOB_CANCELLED: i32 = 7;
 
@@ -1152,4 +1153,105 @@ fn upload_against_a_sim_server_loads_progressive_then_final_results() {
     }
     assert_eq!((a.upload_free)(job), OK);
     assert_eq!((a.session_free)(h), OK);
+}
+
+#[test]
+fn a_job_for_an_existing_server_session_resumes_its_upload() {
+    let a = api();
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("data");
+    let server = sitar_tests::start(sitar_tests::sim_config(&data, 10.0, 1));
+    let id = sitar_tests::client(&server)
+        .create_session(&sitar_client::NewSession {
+            trials: 3,
+            setting: "median".into(),
+            playback: "upload".into(),
+        })
+        .unwrap();
+    let rec = dir.path().join("big.mp4");
+    let total = 96u64 << 20;
+    std::fs::File::create(&rec).unwrap().set_len(total).unwrap();
+    let h = new_session("{}");
+    let options = c(&format!(
+        r#"{{"server_url":"{}","session_id":"{id}","poll_interval_ms":10}}"#,
+        server.url()
+    ));
+    let session_dir = data.join("sessions").join(&id);
+
+    // A first job is cut off mid-transfer (here by a cancel): the server keeps a prefix.
+    let job = start_upload(h, &rec, &options);
+    let start = Instant::now();
+    let mut p = JobProgress::default();
+    while start.elapsed() < Duration::from_secs(60) {
+        assert_eq!((a.upload_progress)(job, &mut p), OK);
+        if p.bytes_sent >= 8 << 20 {
+            break;
+        }
+        assert!(p.state <= JOB_UPLOADING, "{p:?}: {}", message(job));
+        std::thread::sleep(Duration::from_millis(1));
+    }
+    assert_eq!((a.upload_cancel)(job), OK);
+    assert_eq!((a.upload_free)(job), OK);
+    let deadline = Instant::now() + Duration::from_secs(20);
+    while !session_dir.join("recording.part.key").exists() {
+        assert!(Instant::now() < deadline, "the server kept nothing");
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    let kept = std::fs::metadata(session_dir.join("recording.part"))
+        .unwrap()
+        .len();
+    assert!(kept > 0 && kept < total, "kept {kept}");
+
+    // A second job for the same session and file resumes: no byte count below the kept one.
+    let job = start_upload(h, &rec, &options);
+    let mut lowest = u64::MAX;
+    let p = loop {
+        let mut p = JobProgress::default();
+        assert_eq!((a.upload_progress)(job, &mut p), OK);
+        if p.state == JOB_UPLOADING && p.bytes_sent > 0 {
+            lowest = lowest.min(p.bytes_sent);
+        }
+        if p.state >= JOB_PLAYING {
+            break p;
+        }
+        assert!(start.elapsed() < Duration::from_secs(60), "{p:?}");
+        std::thread::yield_now();
+    };
+    assert_eq!(p.state, JOB_PLAYING, "{p:?}: {}", message(job));
+    assert!(lowest >= kept, "sent from {lowest}, kept {kept}");
+    assert_eq!((p.bytes_sent, p.bytes_total), (total, total));
+    assert_eq!(
+        std::fs::metadata(session_dir.join("recording"))
+            .unwrap()
+            .len(),
+        total
+    );
+    assert!(!session_dir.join("recording.part").exists());
+    assert_eq!((a.upload_free)(job), OK);
+
+    // A third job finds the recording on the server and sends nothing.
+    let job = start_upload(h, &rec, &options);
+    let p = wait_for_state(job, JOB_PLAYING, Duration::from_secs(20));
+    assert_eq!(p.state, JOB_PLAYING, "{p:?}: {}", message(job));
+    assert_eq!((p.bytes_sent, p.bytes_total), (total, total));
+    assert_eq!((a.upload_free)(job), OK);
+
+    // A session id that is not server-made is refused at once.
+    let mut job = 0;
+    expect_err(
+        (a.upload_start)(
+            h,
+            c(rec.to_str().unwrap()).as_ptr().cast(),
+            c(&format!(
+                r#"{{"server_url":"{}","session_id":"../x"}}"#,
+                server.url()
+            ))
+            .as_ptr()
+            .cast(),
+            &mut job,
+        ),
+        ERR_INVALID_ARGUMENT,
+        "session_id",
+    );
+    server.stop();
 }

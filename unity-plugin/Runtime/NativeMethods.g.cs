@@ -204,7 +204,8 @@ namespace Sitar
         ///  Starts uploading `recording_path` in the background and, when the server
         ///  is done, loads the results into session `h`. `options_json` (NULL or ""
         ///  = defaults): `server_url`, `trials` (10), `setting` ("trim_mean_30"),
-        ///  `playback` ("adb"), `poll_interval_ms` (500).
+        ///  `playback` ("adb"), `poll_interval_ms` (500), `session_id` (continue that
+        ///  server session, e.g. a failed job's: the upload resumes or is skipped).
         /// </summary>
         [DllImport(__DllName, EntryPoint = "sitar_upload_start", CallingConvention = CallingConvention.Cdecl, ExactSpelling = true)]
         internal static extern int sitar_upload_start(ulong h, byte* recording_path, byte* options_json, ulong* out_job);

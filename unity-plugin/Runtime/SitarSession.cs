@@ -516,7 +516,8 @@ namespace Sitar
         /// <summary>
         /// Uploads the recording in the background; results are loaded into this
         /// session when the server is done. Options JSON: server_url (else the
-        /// config's), trials, setting, playback, poll_interval_ms.
+        /// config's), trials, setting, playback, poll_interval_ms, session_id (continue
+        /// that server session, e.g. a failed job's ServerId(): the upload resumes).
         /// </summary>
         public UploadJob Upload(string recordingPath, string optionsJson = null)
         {

@@ -88,4 +88,7 @@ pub struct SessionStatus {
     /// Why playback stopped before `trials_total` (adaptive stopping), if it did.
     #[serde(default)]
     pub stop_reason: Option<String>,
+    /// Playback backend of the session (`adb`, `sim`, `upload`), when the server says.
+    #[serde(default)]
+    pub playback: Option<String>,
 }

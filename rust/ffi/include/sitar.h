@@ -369,7 +369,8 @@ int32_t sitar_playback_free(SitarHandle h);
 // Starts uploading `recording_path` in the background and, when the server
 // is done, loads the results into session `h`. `options_json` (NULL or ""
 // = defaults): `server_url`, `trials` (10), `setting` ("trim_mean_30"),
-// `playback` ("adb"), `poll_interval_ms` (500).
+// `playback` ("adb"), `poll_interval_ms` (500), `session_id` (continue that
+// server session, e.g. a failed job's: the upload resumes or is skipped).
 int32_t sitar_upload_start(SitarHandle h,
                            const char *recording_path,
                            const char *options_json,

@@ -308,7 +308,8 @@ pub fn playback_free(h: SitarHandle) -> Result<(), Error> {
 /// Starts the background upload of `recording` and download of the results
 /// into session `h`. `options_json` keys (all optional): `server_url` (else
 /// the session config's), `trials` (10), `setting` ("trim_mean_30"),
-/// `playback` ("adb"), `poll_interval_ms` (500).
+/// `playback` ("adb"), `poll_interval_ms` (500), `session_id` (continue that
+/// server session, e.g. a failed job's: the upload resumes or is skipped).
 pub fn upload_start(
     h: SitarHandle,
     recording: &Path,

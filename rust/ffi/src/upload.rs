@@ -20,6 +20,9 @@ const UPLOAD_SHARE: f64 = 0.2;
 #[serde(deny_unknown_fields, default)]
 struct UploadOptions {
     server_url: Option<String>,
+    /// An existing server session to continue (e.g. after a failed job): no new session;
+    /// its recording upload resumes, or is skipped once the server has it.
+    session_id: Option<String>,
     trials: u32,
     setting: String,
     playback: String,
@@ -30,6 +33,7 @@ impl Default for UploadOptions {
     fn default() -> Self {
         UploadOptions {
             server_url: None,
+            session_id: None,
             trials: 10,
             setting: "trim_mean_30".to_owned(),
             playback: "adb".to_owned(),
@@ -125,6 +129,19 @@ impl UploadJob {
         if options.trials < 2 {
             return Err(Error::invalid("options_json", "trials must be at least 2"));
         }
+        if let Some(id) = &options.session_id {
+            let server_made = !id.is_empty()
+                && id.len() <= 64
+                && id
+                    .bytes()
+                    .all(|b| b.is_ascii_alphanumeric() || b == b'-' || b == b'_');
+            if !server_made {
+                return Err(Error::invalid(
+                    "options_json",
+                    format!("session_id {id:?} is not a server-made id"),
+                ));
+            }
+        }
         let shared = Arc::new(Shared {
             status: Mutex::new(JobStatus {
                 progress: SitarJobProgress {
@@ -192,27 +209,18 @@ impl UploadJob {
     }
 }
 
-fn set_state(shared: &Shared, state: SitarJobState) {
-    shared.update(|s| s.progress.state = state as i32);
-}
-
-/// The worker: create, upload, estimate, poll (loading progressive results), download.
-fn run(shared: &Shared, client: &Client, recording: &Path, o: &UploadOptions) -> Result<(), Error> {
-    let id = client.create_session(&NewSession {
-        trials: o.trials,
-        setting: o.setting.clone(),
-        playback: o.playback.clone(),
-    })?;
-    log::info!("upload: server session {id}");
-    shared.update(|s| s.server_id = id.clone());
-    if shared.cancelled() {
-        return Ok(());
-    }
+/// Sends the recording (resuming what the server kept of an earlier attempt); a cancel
+/// stops the transfer itself, not only what comes after it.
+fn send_recording(
+    shared: &Shared,
+    client: &Client,
+    id: &str,
+    recording: &Path,
+) -> Result<(), Error> {
     set_state(shared, SitarJobState::SITAR_JOB_UPLOADING);
-    // A cancel stops the transfer itself, not only what comes after it.
     let trace = crate::trace::section("sitar upload recording");
     let sent = client.upload_recording_cancellable(
-        &id,
+        id,
         recording,
         &mut |sent, total| {
             shared.update(|s| {
@@ -229,8 +237,48 @@ fn run(shared: &Shared, client: &Client, recording: &Path, o: &UploadOptions) ->
     );
     drop(trace);
     match sent {
-        Err(sitar_client::Error::Cancelled) => return Ok(()),
-        other => other?,
+        Err(sitar_client::Error::Cancelled) => Ok(()),
+        other => Ok(other?),
+    }
+}
+
+fn set_state(shared: &Shared, state: SitarJobState) {
+    shared.update(|s| s.progress.state = state as i32);
+}
+
+/// The worker: create, upload, estimate, poll (loading progressive results), download.
+fn run(shared: &Shared, client: &Client, recording: &Path, o: &UploadOptions) -> Result<(), Error> {
+    let (id, playback, upload) = match &o.session_id {
+        None => {
+            let id = client.create_session(&NewSession {
+                trials: o.trials,
+                setting: o.setting.clone(),
+                playback: o.playback.clone(),
+            })?;
+            (id, o.playback.clone(), true)
+        }
+        Some(id) => {
+            let st = client.status(id)?;
+            let playback = st.playback.unwrap_or_else(|| o.playback.clone());
+            shared.update(|s| s.progress.trials_total = st.trials_total);
+            (id.clone(), playback, st.state == SessionState::Created)
+        }
+    };
+    log::info!("upload: server session {id}");
+    shared.update(|s| s.server_id = id.clone());
+    if shared.cancelled() {
+        return Ok(());
+    }
+    if upload {
+        send_recording(shared, client, &id, recording)?;
+    } else {
+        // The server already has the whole recording.
+        let size = std::fs::metadata(recording).map(|m| m.len()).unwrap_or(0);
+        shared.update(|s| {
+            s.progress.bytes_sent = size;
+            s.progress.bytes_total = size;
+            s.progress.progress = UPLOAD_SHARE;
+        });
     }
     if shared.cancelled() {
         return Ok(());
@@ -239,7 +287,7 @@ fn run(shared: &Shared, client: &Client, recording: &Path, o: &UploadOptions) ->
     // With "adb"/"sim" the server plays and estimates on its own (asking for an
     // estimate would cut playback short). With "upload" the playback devices
     // send their trials; once all are there, this job asks for the estimate.
-    let mut estimate_requested = o.playback != "upload";
+    let mut estimate_requested = playback != "upload";
     let mut loaded_trials = 0;
     loop {
         if shared.cancelled() {

@@ -58,6 +58,7 @@ namespace Sitar.Unity
         [Header("UI")]
         public Button startButton;
         public Button stopButton;
+        [Tooltip("Optional: continues a failed upload where the server's copy ends.")] public Button retryButton;
         public Text status;
         public Text trajectoryDuration;
         public Text trajectoryLength;
@@ -71,6 +72,8 @@ namespace Sitar.Unity
 #endif
         SitarSession session;
         UploadJob upload;
+        // The server session of a failed upload: a retry continues it instead of starting over.
+        string failedServerId;
         string mp4Path;
         bool recording;
         uint drawnRevision;
@@ -84,6 +87,7 @@ namespace Sitar.Unity
             mp4Path = Path.Combine(Application.persistentDataPath, "arcore-session.mp4");
             if (startButton != null) startButton.onClick.AddListener(StartRecording);
             if (stopButton != null) stopButton.onClick.AddListener(StopRecording);
+            if (retryButton != null) retryButton.onClick.AddListener(RetryUpload);
             SetStatus("Press Start to record");
         }
 
@@ -222,8 +226,22 @@ namespace Sitar.Unity
             if (trajectoryDepth != null) trajectoryDepth.text = s.MeanDepthM.ToString("F2") + " m";
             session.Save(Path.Combine(Application.persistentDataPath, "sitar-session"));
             Draw();
-            upload = session.Upload(mp4Path, "{\"trials\":" + trials + ",\"setting\":\"" + setting + "\",\"playback\":\"" + playback + "\"}");
+            failedServerId = null;
+            StartUpload("");
+        }
+
+        void StartUpload(string sessionIdOption)
+        {
+            upload = session.Upload(mp4Path, "{\"trials\":" + trials + ",\"setting\":\"" + setting + "\",\"playback\":\"" + playback + "\"" + sessionIdOption + "}");
             SetStatus("Uploading…");
+        }
+
+        /// <summary>After a failed upload (e.g. the Wi-Fi dropped): continues the same server
+        /// session; the recording upload resumes from the bytes the server kept.</summary>
+        public void RetryUpload()
+        {
+            if (upload != null || string.IsNullOrEmpty(failedServerId)) return;
+            StartUpload(",\"session_id\":\"" + failedServerId + "\"");
         }
 
         void Update()
@@ -238,7 +256,8 @@ namespace Sitar.Unity
             switch (p.State)
             {
                 case UploadState.Failed:
-                    SetStatus("Failed: " + upload.Message());
+                    failedServerId = upload.ServerId();
+                    SetStatus("Failed: " + upload.Message() + (string.IsNullOrEmpty(failedServerId) ? "" : " (Retry continues it)"));
                     upload.Dispose();
                     upload = null;
                     break;

@@ -87,7 +87,8 @@ class SitarSession private constructor(handle: Long) : AutoCloseable {
      * Uploads the recording in the background; when the server is done the
      * results are loaded into this session ([UploadJob.progress] tells).
      * [optionsJson]: `server_url` (else the config's), `trials`, `setting`,
-     * `playback`, `poll_interval_ms`.
+     * `playback`, `poll_interval_ms`, `session_id` (continue that server session, e.g. a
+     * failed job's [UploadJob.serverId]: the upload resumes where the server's copy ends).
      */
     fun upload(recordingPath: String, optionsJson: String = ""): UploadJob {
         val job = UploadJob(Native.uploadStart(handle, recordingPath, optionsJson))
