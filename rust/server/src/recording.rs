@@ -406,4 +406,28 @@ mod tests {
             assert_eq!(parse_content_range(bad), None, "{bad}");
         }
     }
+
+    proptest::proptest! {
+        #[test]
+        fn every_well_formed_range_parses_back(
+            start in 0u64..u64::MAX - 1,
+            len in 1u64..1 << 40,
+            extra in 0u64..1 << 40,
+        ) {
+            let last = start.saturating_add(len - 1).min(u64::MAX - 2);
+            let total = last.saturating_add(1).saturating_add(extra);
+            let text = format!("bytes {start}-{last}/{total}");
+            proptest::prop_assert_eq!(
+                parse_content_range(&text),
+                Some(ContentRange { start, last, total })
+            );
+        }
+
+        #[test]
+        fn any_text_parses_without_panicking_and_only_to_a_valid_range(text in ".{0,40}") {
+            if let Some(r) = parse_content_range(&text) {
+                proptest::prop_assert!(r.start <= r.last && r.last < r.total);
+            }
+        }
+    }
 }
