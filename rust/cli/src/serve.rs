@@ -92,8 +92,7 @@ pub fn run(args: Args) -> Result<()> {
     config.max_recording_bytes = args.max_recording_mib << 20;
     config.max_trajectory_bytes = args.max_trajectory_mib << 20;
     eprintln!(
-        "sitar serve: http://{} (data {}, playback {}); Ctrl-C stops",
-        args.addr,
+        "sitar serve: data {}, playback {}; Ctrl-C stops",
         args.data.display(),
         config.playback.as_str()
     );

@@ -53,7 +53,32 @@ pub(crate) fn router(shared: Arc<Shared>) -> Router {
         })
         // Limits are ours, per route, checked while streaming.
         .layer(DefaultBodyLimit::disable())
+        .layer(axum::middleware::from_fn(log_request))
         .with_state(shared)
+}
+
+/// One log line per request: method, path (server-made ids only, no query), status, time.
+/// Successful `GET`/`HEAD`s log at debug: phones poll their status every half second.
+async fn log_request(request: axum::extract::Request, next: axum::middleware::Next) -> Response {
+    let method = request.method().clone();
+    let path = request.uri().path().to_owned();
+    let started = std::time::Instant::now();
+    let response = next.run(request).await;
+    let status = response.status();
+    let quiet =
+        matches!(method, axum::http::Method::GET | axum::http::Method::HEAD) && status.is_success();
+    let level = if quiet {
+        log::Level::Debug
+    } else {
+        log::Level::Info
+    };
+    log::log!(
+        level,
+        "{method} {path} → {} in {:.1} ms",
+        status.as_u16(),
+        started.elapsed().as_secs_f64() * 1e3
+    );
+    response
 }
 
 pub(crate) fn json_response(status: StatusCode, body: &str) -> Response {

@@ -53,7 +53,9 @@ impl Server {
             let listener = tokio::net::TcpListener::bind(addr)
                 .await
                 .map_err(|e| Error::Config(format!("cannot listen on {addr}: {e}")))?;
-            log::info!("listening on http://{addr}");
+            // The bound address: with port 0 the system chose the port.
+            let bound = listener.local_addr().unwrap_or(addr);
+            log::info!("listening on http://{bound}");
             server
                 .serve(listener, async {
                     let _ = tokio::signal::ctrl_c().await;
