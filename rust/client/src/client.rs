@@ -241,6 +241,14 @@ impl Client {
             .map(|_| ())
     }
 
+    /// `DELETE /v1/sessions/{id}`: removes a session that no job works on (done, failed, or
+    /// waiting for uploads) with its files. A session in flight is a 409 [`Error::Server`].
+    pub fn delete_session(&self, id: &str) -> Result<(), Error> {
+        let url = format!("/v1/sessions/{}", check_id(id)?);
+        self.request("DELETE", &url, Payload::Empty, None)
+            .map(|_| ())
+    }
+
     /// `GET /v1/sessions/{id}`.
     pub fn status(&self, id: &str) -> Result<SessionStatus, Error> {
         let url = format!("/v1/sessions/{}", check_id(id)?);
@@ -337,6 +345,7 @@ impl Client {
         };
         let result = match (method, payload) {
             ("GET", _) => agent.get(url).call(),
+            ("DELETE", _) => agent.delete(url).call(),
             (m, Payload::Empty) => with_key(body_builder(agent, m, url)).send_empty(),
             (m, Payload::Json(text)) => with_key(body_builder(agent, m, url))
                 .header("content-type", "application/json")

@@ -292,6 +292,25 @@ impl Db {
         Ok((idx, true))
     }
 
+    /// Removes a session with its trials and jobs (devices forget it) in one transaction.
+    /// Returns whether it existed.
+    pub fn delete_session(&self, id: &str) -> Result<bool, Error> {
+        let mut conn = self
+            .conn
+            .lock()
+            .map_err(|_| Error::Internal("database lock poisoned".into()))?;
+        let tx = conn.transaction()?;
+        tx.execute("DELETE FROM trials WHERE session_id = ?1", [id])?;
+        tx.execute("DELETE FROM jobs WHERE session_id = ?1", [id])?;
+        tx.execute(
+            "UPDATE devices SET session_id = NULL WHERE session_id = ?1",
+            [id],
+        )?;
+        let removed = tx.execute("DELETE FROM sessions WHERE id = ?1", [id])?;
+        tx.commit()?;
+        Ok(removed == 1)
+    }
+
     pub fn trial_count(&self, session: &str) -> Result<u32, Error> {
         self.with(|c| {
             c.query_row(

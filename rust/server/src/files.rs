@@ -14,6 +14,7 @@ use crate::Error;
 /// ```text
 /// DATA/sitar.db                       SQLite: sessions, trials, jobs, devices
 /// DATA/tmp/upload-*.part              uploads in progress (cleared at start)
+/// DATA/tmp/deleted-ID                 a deleted session's folder, until removed (cleared at start)
 /// DATA/sessions/ID/recording          the uploaded recording (mp4 or sim recording)
 /// DATA/sessions/ID/recording.part     the bytes kept of an interrupted recording upload
 /// DATA/sessions/ID/recording.part.key the Idempotency-Key of the upload they belong to
@@ -54,10 +55,15 @@ impl Files {
         for dir in [root.to_path_buf(), root.join("sessions"), root.join("tmp")] {
             std::fs::create_dir_all(&dir).map_err(|e| Error::io("cannot create", &dir, e))?;
         }
-        // Half-written uploads of a dead process are garbage.
+        // Half-written uploads and deleted sessions' folders of a dead process are garbage.
         if let Ok(entries) = std::fs::read_dir(root.join("tmp")) {
             for entry in entries.flatten() {
-                let _ = std::fs::remove_file(entry.path());
+                let path = entry.path();
+                let _ = if path.is_dir() {
+                    std::fs::remove_dir_all(&path)
+                } else {
+                    std::fs::remove_file(&path)
+                };
             }
         }
         Ok(Files {
@@ -98,6 +104,24 @@ impl Files {
 
     pub fn results_json(&self, id: &str) -> PathBuf {
         self.session_dir(id).join("results.json")
+    }
+
+    /// Moves a session's folder out of `sessions/` into `tmp/` (one rename: the session's
+    /// files vanish at once; `tmp/` is emptied at every start). `None` if it has no folder.
+    pub fn trash_session_dir(&self, id: &str) -> Result<Option<PathBuf>, Error> {
+        let dir = self.session_dir(id);
+        let trash = self.root.join("tmp").join(format!("deleted-{id}"));
+        match std::fs::rename(&dir, &trash) {
+            Ok(()) => Ok(Some(trash)),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
+            Err(e) => Err(Error::io("cannot move away", &dir, e)),
+        }
+    }
+
+    /// Undoes [`Files::trash_session_dir`].
+    pub fn restore_session_dir(&self, id: &str, trash: &Path) -> Result<(), Error> {
+        let dir = self.session_dir(id);
+        std::fs::rename(trash, &dir).map_err(|e| Error::io("cannot move back", &dir, e))
     }
 
     pub fn create_session_dirs(&self, id: &str) -> Result<(), Error> {
@@ -438,5 +462,32 @@ mod tests {
             .unwrap_err();
         assert!(matches!(err, Error::Internal(_)), "{err}");
         assert_eq!(std::fs::read(&part).unwrap(), vec![9u8; 500]);
+    }
+
+    #[test]
+    fn a_restart_clears_what_uploads_and_deletes_left_in_tmp() {
+        let dir = tempfile::tempdir().unwrap();
+        let files = Files::open(dir.path()).unwrap();
+        std::fs::create_dir_all(dir.path().join("sessions/s0123456789abcdef/trials")).unwrap();
+        std::fs::write(
+            dir.path()
+                .join("sessions/s0123456789abcdef/trials/trial_000.txt"),
+            "x",
+        )
+        .unwrap();
+        let trash = files
+            .trash_session_dir("s0123456789abcdef")
+            .unwrap()
+            .unwrap();
+        assert!(trash.join("trials/trial_000.txt").is_file());
+        assert!(!dir.path().join("sessions/s0123456789abcdef").exists());
+        assert_eq!(files.trash_session_dir("s0123456789abcdef").unwrap(), None);
+        std::fs::write(dir.path().join("tmp/upload-x.part"), "half").unwrap();
+        drop(files);
+        Files::open(dir.path()).unwrap();
+        assert_eq!(
+            std::fs::read_dir(dir.path().join("tmp")).unwrap().count(),
+            0
+        );
     }
 }

@@ -37,6 +37,7 @@
 mod adb;
 mod config;
 mod db;
+mod deletion;
 mod error;
 mod estimation;
 mod files;

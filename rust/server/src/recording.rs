@@ -105,8 +105,10 @@ async fn whole(
         .files
         .receive_or_prefix(body.into_data_stream(), limit, "recording")
         .await?;
-    let lock = shared.part_lock(&row.id);
+    let lock = shared.session_lock(&row.id);
     let _held = lock.lock().await;
+    // The session may have been deleted while the body was arriving.
+    session_row(shared, &row.id)?;
     let part = shared.files.recording_part(&row.id);
     match received {
         Ok(temp) => {
@@ -157,13 +159,14 @@ async fn resume(
             range.len()
         )));
     }
-    let lock = shared.part_lock(&row.id);
+    let lock = shared.session_lock(&row.id);
     let Ok(_held) = lock.try_lock() else {
         return Err(Error::Conflict(format!(
             "another upload to session {} is still being received; try again shortly",
             row.id
         )));
     };
+    session_row(shared, &row.id)?;
     let part = shared.files.recording_part(&row.id);
     let kept = match kept_for(shared, &row.id, key.as_deref())? {
         Some(kept) => kept,

@@ -14,6 +14,7 @@ use serde_json::json;
 
 use crate::Error;
 use crate::db::{NewSessionRow, SessionRow};
+use crate::deletion;
 use crate::estimation;
 use crate::files::{TempFile, is_server_id, new_id};
 use crate::jobs;
@@ -30,7 +31,10 @@ pub(crate) fn router(shared: Arc<Shared>) -> Router {
     Router::new()
         .route("/healthz", get(health))
         .route("/v1/sessions", post(create_session))
-        .route("/v1/sessions/{id}", get(session_status))
+        .route(
+            "/v1/sessions/{id}",
+            get(session_status).delete(deletion::delete_session),
+        )
         .route(
             "/v1/sessions/{id}/recording",
             put(recording::put_recording).head(recording::kept_offset),
@@ -321,6 +325,16 @@ async fn post_trial(
     let text = std::fs::read(&temp.path).map_err(|e| Error::io("cannot read", &temp.path, e))?;
     let text = String::from_utf8(text)
         .map_err(|e| Error::InvalidContent(format!("trajectory is not UTF-8 text: {e}")))?;
+    let lock = shared.session_lock(&id);
+    let _held = lock.lock().await;
+    // Deleted, or estimated, while the body was arriving?
+    let row = session_row(&shared, &id)?;
+    if row.state != "created" && row.state != "uploaded" {
+        return Err(Error::Conflict(format!(
+            "session {id} is {}: it takes no more trials",
+            row.state
+        )));
+    }
     let (index, _created) = jobs::store_trial(&shared, &id, key.as_deref(), None, &text, "upload")?;
     // A replayed request (same Idempotency-Key) gets the answer of the first one.
     Ok(json_response(
@@ -330,6 +344,10 @@ async fn post_trial(
 }
 
 async fn post_estimate(State(shared): AppState, Path(id): Path<String>) -> Result<Response, Error> {
+    // Only a known id gets a lock (garbage ids must not grow the lock table).
+    session_row(&shared, &id)?;
+    let lock = shared.session_lock(&id);
+    let _held = lock.lock().await;
     let row = session_row(&shared, &id)?;
     let count = shared.db.trial_count(&id)?;
     match row.state.as_str() {
@@ -352,6 +370,8 @@ async fn post_estimate(State(shared): AppState, Path(id): Path<String>) -> Resul
             }
         }
         _ if row.playback == "upload" => {
+            // In the database before the lock is released: no delete slips in before the job.
+            shared.db.set_state(&id, "estimating", None)?;
             jobs::spawn_estimate(shared.clone(), id.clone(), row.setting.clone())
         }
         state => {
@@ -533,6 +553,9 @@ async fn legacy_timestamps(
     let id = shared.db.latest_session(false, true)?.ok_or_else(|| {
         Error::Conflict("no recording uploaded yet: POST /recording first".into())
     })?;
+    let lock = shared.session_lock(&id);
+    let _held = lock.lock().await;
+    session_row(&shared, &id)?;
     temp.publish(&shared.files.timestamps(&id))?;
     Ok(json_response(
         StatusCode::OK,

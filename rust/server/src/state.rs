@@ -31,8 +31,9 @@ pub(crate) struct Shared {
     adb: Arc<dyn Playback>,
     upload: Arc<dyn Playback>,
     pub live: Mutex<HashMap<String, Live>>,
-    /// Per session: held while a request writes or replaces its `recording.part`.
-    part_locks: Mutex<HashMap<String, Arc<tokio::sync::Mutex<()>>>>,
+    /// Per session: held by a request while it writes into the session's folder (a
+    /// recording or its kept prefix, a trial, timestamps) or deletes the session.
+    session_locks: Mutex<HashMap<String, Arc<tokio::sync::Mutex<()>>>>,
     /// Set when the server stops: jobs stop without changing their session's
     /// state, so the next start resumes them.
     pub shutdown: AtomicBool,
@@ -50,7 +51,7 @@ impl Shared {
             db,
             files,
             live: Mutex::new(HashMap::new()),
-            part_locks: Mutex::new(HashMap::new()),
+            session_locks: Mutex::new(HashMap::new()),
             shutdown: AtomicBool::new(false),
         })
     }
@@ -83,10 +84,16 @@ impl Shared {
         }
     }
 
-    /// The lock over session `id`'s kept upload prefix (`recording.part`).
-    pub fn part_lock(&self, id: &str) -> Arc<tokio::sync::Mutex<()>> {
-        let mut locks = self.part_locks.lock().unwrap_or_else(|e| e.into_inner());
+    /// The lock over session `id`'s folder: writers hold it, and a delete waits for them.
+    pub fn session_lock(&self, id: &str) -> Arc<tokio::sync::Mutex<()>> {
+        let mut locks = self.session_locks.lock().unwrap_or_else(|e| e.into_inner());
         locks.entry(id.to_string()).or_default().clone()
+    }
+
+    /// Forgets a deleted session's lock.
+    pub fn forget_session_lock(&self, id: &str) {
+        let mut locks = self.session_locks.lock().unwrap_or_else(|e| e.into_inner());
+        locks.remove(id);
     }
 
     /// Stops every job; their sessions stay in flight for the next start.

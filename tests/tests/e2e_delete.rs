@@ -1,0 +1,135 @@
+//! `DELETE /v1/sessions/{id}`: whole sessions go, with their files; sessions in flight stay.
+
+use std::path::Path;
+use std::time::Duration;
+
+use sitar_client::{NewSession, SessionState};
+use sitar_tests::*;
+
+fn session_dir(data: &Path, id: &str) -> std::path::PathBuf {
+    data.join("sessions").join(id)
+}
+
+#[test]
+fn finished_and_waiting_sessions_are_deleted_whole_and_running_ones_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("data");
+    // 5× real time: a playback lasts long enough (about 1 s) to be caught in flight.
+    let server = start(sim_config(&data, 5.0, 2));
+    let client = client(&server);
+    let rec = sim_recording(dir.path(), "walk.rec", 3.0, 5);
+
+    // A sim session: refused while its playback job runs, deleted once done.
+    let played = client
+        .create_session(&NewSession {
+            trials: 3,
+            setting: "median".into(),
+            playback: "sim".into(),
+        })
+        .unwrap();
+    client
+        .upload_recording(&played, &rec, &mut |_, _| {})
+        .unwrap();
+    let err = client.delete_session(&played).unwrap_err();
+    assert_eq!(err.status(), Some(409), "{err}");
+    assert!(err.to_string().contains("job"), "{err}");
+    let status = client
+        .wait(
+            &played,
+            Duration::from_millis(20),
+            Duration::from_secs(60),
+            &mut |_| {},
+        )
+        .unwrap();
+    assert_eq!(status.state, SessionState::Done, "{status:?}");
+    assert!(session_dir(&data, &played).join("results.csv").is_file());
+    client.delete_session(&played).unwrap();
+    assert_eq!(client.status(&played).unwrap_err().status(), Some(404));
+    assert_eq!(client.results_csv(&played).unwrap_err().status(), Some(404));
+    assert!(!session_dir(&data, &played).exists());
+    // Deleted means gone: a second delete is a 404, like any unknown id.
+    assert_eq!(
+        client.delete_session(&played).unwrap_err().status(),
+        Some(404)
+    );
+
+    // An upload session waiting for trials, with a trial and a recording.
+    let waiting = client
+        .create_session(&NewSession {
+            trials: 4,
+            setting: "median".into(),
+            playback: "upload".into(),
+        })
+        .unwrap();
+    let trial = sitar_sim::simulate_trials(&sitar_sim::Recording::demo(3.0, 30.0, 5).unwrap(), 1);
+    client.upload_trial(&waiting, &tum_text(&trial[0])).unwrap();
+    let (status, _, _) = raw(
+        "PUT",
+        &format!("{}/v1/sessions/{waiting}/recording", server.url()),
+        Some("application/octet-stream"),
+        b"0123456789",
+        &[],
+    );
+    assert_eq!(status, 202);
+    assert!(session_dir(&data, &waiting).join("trials").is_dir());
+    client.delete_session(&waiting).unwrap();
+    assert!(!session_dir(&data, &waiting).exists());
+    assert_eq!(
+        client
+            .upload_trial(&waiting, &tum_text(&trial[0]))
+            .unwrap_err()
+            .status(),
+        Some(404)
+    );
+
+    // Path-like and unknown ids are plain 404s; nothing outside the data directory moves.
+    for id in ["..%2F..%2Fx", "s0000000000000000"] {
+        let (status, ct, body) = raw_delete(&format!("{}/v1/sessions/{id}", server.url()));
+        assert_eq!(error_code(status, &ct, &body, 404), "not_found", "{id}");
+    }
+    assert!(data.join("sitar.db").is_file());
+    // Nothing of the deleted sessions is left, in sessions/ or in tmp/.
+    let left: Vec<_> = tree(&data)
+        .into_iter()
+        .filter(|p| p.starts_with("sessions") || p.starts_with("tmp"))
+        .collect();
+    assert!(left.is_empty(), "{left:?}");
+
+    // The server goes on: a new session plays to the end.
+    let next = client
+        .create_session(&NewSession {
+            trials: 2,
+            setting: "median".into(),
+            playback: "sim".into(),
+        })
+        .unwrap();
+    client
+        .upload_recording(&next, &rec, &mut |_, _| {})
+        .unwrap();
+    let status = client
+        .wait(
+            &next,
+            Duration::from_millis(20),
+            Duration::from_secs(60),
+            &mut |_| {},
+        )
+        .unwrap();
+    assert_eq!(status.state, SessionState::Done, "{status:?}");
+}
+
+fn raw_delete(url: &str) -> (u16, String, String) {
+    let agent: ureq::Agent = ureq::Agent::config_builder()
+        .http_status_as_error(false)
+        .timeout_global(Some(Duration::from_secs(20)))
+        .build()
+        .into();
+    let mut response = agent.delete(url).call().unwrap();
+    let ct = response
+        .headers()
+        .get("content-type")
+        .and_then(|v| v.to_str().ok())
+        .unwrap_or_default()
+        .to_string();
+    let body = response.body_mut().read_to_string().unwrap_or_default();
+    (response.status().as_u16(), ct, body)
+}
