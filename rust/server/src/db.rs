@@ -183,6 +183,17 @@ impl Db {
         })
     }
 
+    /// The newest `limit` sessions, newest first.
+    pub fn recent_sessions(&self, limit: u32) -> Result<Vec<SessionRow>, Error> {
+        self.with(|c| {
+            let mut stmt = c.prepare(&format!(
+                "SELECT {SESSION_COLUMNS} FROM sessions ORDER BY rowid DESC LIMIT ?1"
+            ))?;
+            let rows = stmt.query_map([limit], session_from_row)?;
+            rows.collect()
+        })
+    }
+
     /// Sessions a previous server process left in flight.
     pub fn sessions_in_states(&self, states: &[&str]) -> Result<Vec<SessionRow>, Error> {
         self.with(|c| {

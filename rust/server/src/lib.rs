@@ -42,6 +42,7 @@ mod error;
 mod estimation;
 mod files;
 mod jobs;
+mod overview;
 mod playback;
 mod recording;
 mod report;

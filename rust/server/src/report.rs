@@ -32,7 +32,7 @@ const MEDIUM: &str = "#e0b100";
 const HIGH: &str = "#d62728";
 const UNKNOWN: &str = "#9a9a9a";
 
-fn escape(text: &str) -> String {
+pub(crate) fn escape(text: &str) -> String {
     text.replace('&', "&amp;")
         .replace('<', "&lt;")
         .replace('>', "&gt;")

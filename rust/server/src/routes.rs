@@ -18,6 +18,7 @@ use crate::deletion;
 use crate::estimation;
 use crate::files::{TempFile, is_server_id, new_id};
 use crate::jobs;
+use crate::overview;
 use crate::recording::{self, accept_recording};
 use crate::report;
 use crate::state::Shared;
@@ -30,7 +31,10 @@ pub const IDEMPOTENCY_HEADER: &str = "idempotency-key";
 pub(crate) fn router(shared: Arc<Shared>) -> Router {
     Router::new()
         .route("/healthz", get(health))
-        .route("/v1/sessions", post(create_session))
+        .route("/", get(overview::page))
+        // Browsers ask for it on every refresh of the page; no icon, no log noise.
+        .route("/favicon.ico", get(|| async { StatusCode::NO_CONTENT }))
+        .route("/v1/sessions", post(create_session).get(overview::list))
         .route(
             "/v1/sessions/{id}",
             get(session_status).delete(deletion::delete_session),

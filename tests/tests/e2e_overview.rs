@@ -1,0 +1,104 @@
+//! `GET /v1/sessions` and the `GET /` page: what the server holds, newest first.
+
+use std::time::Duration;
+
+use sitar_client::{NewSession, SessionState};
+use sitar_tests::*;
+
+#[test]
+fn the_list_and_the_page_show_the_newest_sessions_with_their_links() {
+    let dir = tempfile::tempdir().unwrap();
+    let server = start(sim_config(&dir.path().join("data"), 20.0, 2));
+    let client = client(&server);
+    let base = server.url();
+
+    let (status, ct, page) = raw("GET", &format!("{base}/"), None, b"", &[]);
+    assert_eq!(status, 200);
+    assert!(ct.starts_with("text/html"), "{ct}");
+    assert!(page.contains("No sessions yet"), "{page}");
+    let (status, _, body) = raw("GET", &format!("{base}/v1/sessions"), None, b"", &[]);
+    assert_eq!(status, 200);
+    assert_eq!(body, r#"{"sessions":[]}"#);
+
+    let played = client
+        .create_session(&NewSession {
+            trials: 2,
+            setting: "median".into(),
+            playback: "sim".into(),
+        })
+        .unwrap();
+    let rec = sim_recording(dir.path(), "walk.rec", 3.0, 5);
+    client
+        .upload_recording(&played, &rec, &mut |_, _| {})
+        .unwrap();
+    let done = client
+        .wait(
+            &played,
+            Duration::from_millis(20),
+            Duration::from_secs(60),
+            &mut |_| {},
+        )
+        .unwrap();
+    assert_eq!(done.state, SessionState::Done, "{done:?}");
+    let waiting = client
+        .create_session(&NewSession {
+            trials: 3,
+            setting: "mean".into(),
+            playback: "upload".into(),
+        })
+        .unwrap();
+
+    // Newest first, each entry the session's status.
+    let (_, ct, body) = raw("GET", &format!("{base}/v1/sessions"), None, b"", &[]);
+    assert!(ct.starts_with("application/json"), "{ct}");
+    let list: serde_json::Value = serde_json::from_str(&body).unwrap();
+    let sessions = list["sessions"].as_array().unwrap();
+    let ids: Vec<&str> = sessions.iter().map(|s| s["id"].as_str().unwrap()).collect();
+    assert_eq!(ids, [waiting.as_str(), played.as_str()]);
+    assert_eq!(sessions[0]["state"], "created");
+    assert_eq!(sessions[1]["state"], "done");
+    assert_eq!(sessions[1]["results_trials"], 2);
+    let (_, _, body) = raw(
+        "GET",
+        &format!("{base}/v1/sessions?limit=1"),
+        None,
+        b"",
+        &[],
+    );
+    let list: serde_json::Value = serde_json::from_str(&body).unwrap();
+    assert_eq!(list["sessions"].as_array().unwrap().len(), 1);
+    for bad in ["limit=0", "limit=lots", "offset=3"] {
+        let (status, ct, body) = raw("GET", &format!("{base}/v1/sessions?{bad}"), None, b"", &[]);
+        assert_eq!(error_code(status, &ct, &body, 400), "bad_request", "{bad}");
+    }
+
+    // The page: both sessions, a report link only where there are results.
+    let (_, _, page) = raw("GET", &format!("{base}/"), None, b"", &[]);
+    assert!(page.contains("http-equiv=\"refresh\""));
+    let row_of = |id: &str| {
+        page.lines()
+            .find(|l| l.contains(&format!("<code>{id}</code>")))
+            .unwrap_or_else(|| panic!("no row for {id}: {page}"))
+            .to_string()
+    };
+    let played_row = row_of(&played);
+    assert!(
+        played_row.contains(&format!("href=\"/v1/sessions/{played}/report\"")),
+        "{played_row}"
+    );
+    assert!(played_row.contains("<td>done</td>") && played_row.contains("<td>2/2</td>"));
+    let waiting_row = row_of(&waiting);
+    assert!(!waiting_row.contains("/report"), "{waiting_row}");
+    assert!(waiting_row.contains("<td>created</td>") && waiting_row.contains("<td>0/3</td>"));
+    assert!(page.find(&waiting).unwrap() < page.find(&played).unwrap());
+    // The linked report is there.
+    let (status, _, report) = raw(
+        "GET",
+        &format!("{base}/v1/sessions/{played}/report"),
+        None,
+        b"",
+        &[],
+    );
+    assert_eq!(status, 200);
+    assert!(report.contains("<svg"));
+}
