@@ -133,3 +133,54 @@ fn raw_delete(url: &str) -> (u16, String, String) {
     let body = response.body_mut().read_to_string().unwrap_or_default();
     (response.status().as_u16(), ct, body)
 }
+
+#[test]
+fn past_the_retention_finished_sessions_go_by_themselves_and_others_stay() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("data");
+    let mut config = sim_config(&data, 20.0, 2);
+    config.retention = Some(Duration::ZERO);
+    config.retention_sweep = Duration::from_millis(50);
+    let server = start(config);
+    let client = client(&server);
+    let waiting = client
+        .create_session(&NewSession {
+            trials: 3,
+            setting: "median".into(),
+            playback: "upload".into(),
+        })
+        .unwrap();
+    let played = client
+        .create_session(&NewSession {
+            trials: 2,
+            setting: "median".into(),
+            playback: "sim".into(),
+        })
+        .unwrap();
+    let rec = sim_recording(dir.path(), "walk.rec", 3.0, 5);
+    client
+        .upload_recording(&played, &rec, &mut |_, _| {})
+        .unwrap();
+    // Done, then gone: the sweep deletes it with its folder.
+    let deadline = std::time::Instant::now() + Duration::from_secs(60);
+    loop {
+        match client.status(&played) {
+            Ok(s) => assert!(
+                !s.state.is_finished() || s.state == SessionState::Done,
+                "{s:?}"
+            ),
+            Err(e) if e.status() == Some(404) => break,
+            Err(e) => panic!("{e}"),
+        }
+        assert!(std::time::Instant::now() < deadline, "never swept");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    assert!(!session_dir(&data, &played).exists());
+    // The session still waiting for trials is not finished: it stays.
+    std::thread::sleep(Duration::from_millis(200));
+    assert_eq!(
+        client.status(&waiting).unwrap().state,
+        SessionState::Created
+    );
+    assert!(session_dir(&data, &waiting).is_dir());
+}

@@ -46,6 +46,10 @@ pub struct Args {
     /// Largest trajectory accepted, in MiB.
     #[arg(long, default_value_t = 64)]
     max_trajectory_mib: u64,
+    /// Delete finished (done or failed) sessions, files included, this many days after
+    /// they finished. Without it everything is kept (DELETE /v1/sessions/{id} frees one).
+    #[arg(long, value_name = "DAYS")]
+    keep_days: Option<u32>,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -91,6 +95,9 @@ pub fn run(args: Args) -> Result<()> {
     config.default_trials = args.trials;
     config.max_recording_bytes = args.max_recording_mib << 20;
     config.max_trajectory_bytes = args.max_trajectory_mib << 20;
+    config.retention = args
+        .keep_days
+        .map(|days| Duration::from_secs(u64::from(days) * 86_400));
     eprintln!(
         "sitar serve: data {}, playback {}; Ctrl-C stops",
         args.data.display(),

@@ -93,6 +93,11 @@ pub struct ServerConfig {
     pub sim: SimConfig,
     /// The `adb` backend.
     pub adb: AdbConfig,
+    /// Finished (done or failed) sessions are deleted this long after they finished;
+    /// `None` (the default) keeps everything.
+    pub retention: Option<Duration>,
+    /// How often finished sessions are checked against `retention` (default 10 min).
+    pub retention_sweep: Duration,
 }
 
 impl ServerConfig {
@@ -122,6 +127,8 @@ impl ServerConfig {
                 trial_timeout_slack: Duration::from_secs(30),
                 fallback_duration_s: 60.0,
             },
+            retention: None,
+            retention_sweep: Duration::from_secs(600),
         }
     }
 }

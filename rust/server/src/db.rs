@@ -194,6 +194,18 @@ impl Db {
         })
     }
 
+    /// Done or failed sessions that finished before `cutoff_ms` (ms since the epoch).
+    pub fn finished_before(&self, cutoff_ms: i64) -> Result<Vec<String>, Error> {
+        self.with(|c| {
+            let mut stmt = c.prepare(
+                "SELECT id FROM sessions WHERE state IN ('done', 'failed') AND finished_ms < ?1 \
+                 ORDER BY finished_ms",
+            )?;
+            let rows = stmt.query_map([cutoff_ms], |r| r.get(0))?;
+            rows.collect()
+        })
+    }
+
     /// Sessions a previous server process left in flight.
     pub fn sessions_in_states(&self, states: &[&str]) -> Result<Vec<SessionRow>, Error> {
         self.with(|c| {

@@ -1,6 +1,6 @@
-//! `DELETE /v1/sessions/{id}`: an operator's way to free the data directory. A
-//! session is deleted whole (its row, trials, jobs and folder) or not at all,
-//! and never while a job works on it.
+//! `DELETE /v1/sessions/{id}`, and the retention sweep: the ways to free the
+//! data directory. A session is deleted whole (its row, trials, jobs and
+//! folder) or not at all, and never while a job works on it.
 
 use std::sync::Arc;
 use std::time::Duration;
@@ -21,7 +21,17 @@ pub(crate) async fn delete_session(
     State(shared): State<Arc<Shared>>,
     Path(id): Path<String>,
 ) -> Result<Response, Error> {
-    let row = session_row(&shared, &id)?;
+    delete_idle(&shared, &id).await?;
+    Ok(json_response(
+        StatusCode::OK,
+        &json!({"id": id, "deleted": true}).to_string(),
+    ))
+}
+
+/// Deletes session `id` unless a job works on it (409) or it does not exist (404).
+pub(crate) async fn delete_idle(shared: &Arc<Shared>, id: &str) -> Result<(), Error> {
+    let id = id.to_string();
+    let row = session_row(shared, &id)?;
     let lock = shared.session_lock(&row.id);
     let Ok(_held) = tokio::time::timeout(WRITER_WAIT, lock.lock()).await else {
         return Err(Error::Conflict(format!(
@@ -29,7 +39,7 @@ pub(crate) async fn delete_session(
         )));
     };
     // Read again under the lock: the state may have moved on meanwhile.
-    let row = session_row(&shared, &id)?;
+    let row = session_row(shared, &id)?;
     let idle = match row.state.as_str() {
         "created" | "done" | "failed" => true,
         // An `upload` session waits for trials; any other has its playback job.
@@ -57,8 +67,30 @@ pub(crate) async fn delete_session(
         }
     }
     log::info!("session {id} deleted");
-    Ok(json_response(
-        StatusCode::OK,
-        &json!({"id": id, "deleted": true}).to_string(),
-    ))
+    Ok(())
+}
+
+/// With a retention set, deletes finished sessions once they are older than it, looking
+/// every `retention_sweep`, until the server stops.
+pub(crate) fn spawn_retention_sweep(shared: Arc<Shared>) {
+    let Some(retention) = shared.config.retention else {
+        return;
+    };
+    tokio::spawn(async move {
+        while !shared.stopping() {
+            let cutoff = crate::db::now_ms() - retention.as_millis().min(i64::MAX as u128) as i64;
+            match shared.db.finished_before(cutoff) {
+                Ok(ids) => {
+                    for id in ids {
+                        match delete_idle(&shared, &id).await {
+                            Ok(()) => log::info!("session {id}: past the retention, deleted"),
+                            Err(e) => log::warn!("session {id}: past the retention: {e}"),
+                        }
+                    }
+                }
+                Err(e) => log::warn!("retention sweep: {e}"),
+            }
+            tokio::time::sleep(shared.config.retention_sweep).await;
+        }
+    });
 }

@@ -4,7 +4,7 @@ use std::time::Duration;
 
 use crate::config::ServerConfig;
 use crate::state::Shared;
-use crate::{Error, jobs, routes};
+use crate::{Error, deletion, jobs, routes};
 
 /// The backend: storage opened, ready to serve.
 pub struct Server {
@@ -32,6 +32,7 @@ impl Server {
         shutdown: impl std::future::Future<Output = ()> + Send + 'static,
     ) -> Result<(), Error> {
         jobs::recover(&self.shared)?;
+        deletion::spawn_retention_sweep(self.shared.clone());
         let shared = self.shared.clone();
         axum::serve(listener, self.router())
             .with_graceful_shutdown(async move {
