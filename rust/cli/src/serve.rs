@@ -47,7 +47,8 @@ pub struct Args {
     #[arg(long, default_value_t = 64)]
     max_trajectory_mib: u64,
     /// Delete finished (done or failed) sessions, files included, this many days after
-    /// they finished. Without it everything is kept (DELETE /v1/sessions/{id} frees one).
+    /// they finished, and idle ones (never uploaded, or waiting for trials) this many days
+    /// after they were created. Without it everything is kept (DELETE frees one).
     #[arg(long, value_name = "DAYS")]
     keep_days: Option<u32>,
 }

@@ -93,8 +93,9 @@ pub struct ServerConfig {
     pub sim: SimConfig,
     /// The `adb` backend.
     pub adb: AdbConfig,
-    /// Finished (done or failed) sessions are deleted this long after they finished;
-    /// `None` (the default) keeps everything.
+    /// Finished (done or failed) sessions are deleted this long after they finished, and
+    /// idle ones (created, or `upload` sessions waiting for trials) this long after they
+    /// were created; `None` (the default) keeps everything.
     pub retention: Option<Duration>,
     /// How often finished sessions are checked against `retention` (default 10 min).
     pub retention_sweep: Duration,

@@ -194,12 +194,17 @@ impl Db {
         })
     }
 
-    /// Done or failed sessions that finished before `cutoff_ms` (ms since the epoch).
-    pub fn finished_before(&self, cutoff_ms: i64) -> Result<Vec<String>, Error> {
+    /// Sessions past a retention that ends at `cutoff_ms` (ms since the epoch): done or
+    /// failed before it, or created before it and left idle since (an upload that was
+    /// abandoned, an `upload` session that never got its estimate).
+    pub fn expired(&self, cutoff_ms: i64) -> Result<Vec<String>, Error> {
         self.with(|c| {
             let mut stmt = c.prepare(
-                "SELECT id FROM sessions WHERE state IN ('done', 'failed') AND finished_ms < ?1 \
-                 ORDER BY finished_ms",
+                "SELECT id FROM sessions WHERE \
+                 (state IN ('done', 'failed') AND finished_ms < ?1) \
+                 OR (created_ms < ?1 AND (state = 'created' \
+                     OR (state = 'uploaded' AND playback = 'upload'))) \
+                 ORDER BY created_ms",
             )?;
             let rows = stmt.query_map([cutoff_ms], |r| r.get(0))?;
             rows.collect()

@@ -70,8 +70,8 @@ pub(crate) async fn delete_idle(shared: &Arc<Shared>, id: &str) -> Result<(), Er
     Ok(())
 }
 
-/// With a retention set, deletes finished sessions once they are older than it, looking
-/// every `retention_sweep`, until the server stops.
+/// With a retention set, deletes sessions past it (finished that long ago, or created that
+/// long ago and idle since), looking every `retention_sweep`, until the server stops.
 pub(crate) fn spawn_retention_sweep(shared: Arc<Shared>) {
     let Some(retention) = shared.config.retention else {
         return;
@@ -79,7 +79,7 @@ pub(crate) fn spawn_retention_sweep(shared: Arc<Shared>) {
     tokio::spawn(async move {
         while !shared.stopping() {
             let cutoff = crate::db::now_ms() - retention.as_millis().min(i64::MAX as u128) as i64;
-            match shared.db.finished_before(cutoff) {
+            match shared.db.expired(cutoff) {
                 Ok(ids) => {
                     for id in ids {
                         match delete_idle(&shared, &id).await {
