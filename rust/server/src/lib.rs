@@ -15,6 +15,12 @@
 //! adaptive stopping a session ends early once no window's class changed over
 //! the last k trials.
 //!
+//! For the people who run it: `GET /` is an HTML overview of the newest
+//! sessions (with links to their reports) and the playback devices,
+//! `GET /v1/sessions` the same as JSON; `DELETE /v1/sessions/{id}` and the
+//! optional [`ServerConfig::retention`] free the data directory; every request
+//! is logged as one line through `log`.
+//!
 //! ```
 //! use sitar_server::{PlaybackKind, Server, ServerConfig};
 //!
