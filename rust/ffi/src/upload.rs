@@ -226,11 +226,14 @@ fn send_recording(
             shared.update(|s| {
                 s.progress.bytes_sent = sent;
                 s.progress.bytes_total = total;
-                s.progress.progress = if total == 0 {
+                // `bytes_sent` tells the truth (a resumed retry starts at the kept offset,
+                // below what was sent before); `progress` only grows, for progress bars.
+                let share = if total == 0 {
                     0.0
                 } else {
                     UPLOAD_SHARE * sent as f64 / total as f64
                 };
+                s.progress.progress = s.progress.progress.max(share);
             });
         },
         &shared.cancelled,
