@@ -338,3 +338,44 @@ fn a_later_call_for_the_same_file_resumes_what_a_failed_one_left() {
     assert_eq!(stored(&data, &id, "recording").as_deref(), Some(&bytes[..]));
     assert_eq!(stored(&data, &id, "recording.part"), None);
 }
+
+#[test]
+fn a_stalled_upload_is_cut_off_and_its_prefix_resumed_while_it_still_hangs() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("data");
+    let mut config = sim_config(&data, 10.0, 1);
+    config.upload_idle_timeout = Duration::from_millis(300);
+    let server = start(config);
+    let id = upload_session(&client(&server));
+    let url = format!("{}/v1/sessions/{id}/recording", server.url());
+    let bytes = recording_bytes(200_000);
+
+    // A client that sends half and then goes silent, keeping the connection open.
+    let rest = url.strip_prefix("http://").unwrap();
+    let (host, path) = rest.split_at(rest.find('/').unwrap());
+    let mut silent = TcpStream::connect(host).unwrap();
+    write!(
+        silent,
+        "PUT {path} HTTP/1.1\r\nhost: {host}\r\ncontent-type: application/octet-stream\r\n\
+         idempotency-key: k1\r\ncontent-length: {}\r\n\r\n",
+        bytes.len()
+    )
+    .unwrap();
+    silent.write_all(&bytes[..80_000]).unwrap();
+    silent.flush().unwrap();
+
+    // The server gives up on it, keeps the prefix, and answers it with a 400 naming why.
+    wait_until_kept(&url, "k1", 80_000);
+    silent
+        .set_read_timeout(Some(Duration::from_secs(20)))
+        .unwrap();
+    let mut answer = [0u8; 512];
+    let n = silent.read(&mut answer).unwrap();
+    let answer = String::from_utf8_lossy(&answer[..n]);
+    assert!(answer.starts_with("HTTP/1.1 400"), "{answer}");
+    assert!(answer.contains("no data for 0.3 s"), "{answer}");
+
+    let (status, text, _) = resume_put(&url, "k1", "bytes 80000-199999/200000", &bytes[80_000..]);
+    assert_eq!(status, 202, "{text}");
+    assert_eq!(stored(&data, &id, "recording").as_deref(), Some(&bytes[..]));
+}

@@ -99,6 +99,9 @@ pub struct ServerConfig {
     pub retention: Option<Duration>,
     /// How often finished sessions are checked against `retention` (default 10 min).
     pub retention_sweep: Duration,
+    /// An upload body that sends nothing for this long is taken as broken off: what
+    /// arrived is kept for a resume and the request ends (default 60 s).
+    pub upload_idle_timeout: Duration,
 }
 
 impl ServerConfig {
@@ -130,6 +133,7 @@ impl ServerConfig {
             },
             retention: None,
             retention_sweep: Duration::from_secs(600),
+            upload_idle_timeout: Duration::from_secs(60),
         }
     }
 }

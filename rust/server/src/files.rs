@@ -25,7 +25,12 @@ use crate::Error;
 #[derive(Debug, Clone)]
 pub(crate) struct Files {
     root: PathBuf,
+    /// A body that sends nothing for this long is treated as broken off.
+    idle: std::time::Duration,
 }
+
+/// Default of [`Files::with_idle_timeout`].
+const DEFAULT_IDLE: std::time::Duration = std::time::Duration::from_secs(60);
 
 /// A fresh server-made id: `s` and 16 hex digits.
 pub(crate) fn new_id() -> String {
@@ -68,7 +73,16 @@ impl Files {
         }
         Ok(Files {
             root: root.to_path_buf(),
+            idle: DEFAULT_IDLE,
         })
+    }
+
+    /// The same files, with bodies that stall longer than `idle` treated as broken off:
+    /// what arrived is kept (a recording can be resumed), and the request ends instead of
+    /// holding its session for as long as a silent client keeps the connection open.
+    pub fn with_idle_timeout(mut self, idle: std::time::Duration) -> Files {
+        self.idle = idle;
+        self
     }
 
     pub fn session_dir(&self, id: &str) -> PathBuf {
@@ -171,7 +185,7 @@ impl Files {
         let file = tokio::fs::File::create(&temp.path)
             .await
             .map_err(|e| Error::io("cannot create", &temp.path, e))?;
-        let mut sink = Sink::new(file, &temp.path, temp.bytes);
+        let mut sink = Sink::new(file, &temp.path, temp.bytes, self.idle);
         let outcome = sink.copy(&mut body, limit, what).await;
         temp.bytes = sink.written;
         match outcome {
@@ -219,7 +233,7 @@ impl Files {
         file.seek(std::io::SeekFrom::Start(offset))
             .await
             .map_err(|e| Error::io("cannot seek in", path, e))?;
-        let mut sink = Sink::new(file, path, offset);
+        let mut sink = Sink::new(file, path, offset, self.idle);
         match sink.copy(&mut body, end, what).await {
             Ok(()) | Err(Copy::BrokeOff(_)) => Ok(sink.written),
             Err(Copy::Failed(error)) => {
@@ -265,14 +279,16 @@ struct Sink<'p> {
     path: &'p Path,
     /// The file's length once flushed.
     written: u64,
+    idle: std::time::Duration,
 }
 
 impl<'p> Sink<'p> {
-    fn new(file: tokio::fs::File, path: &'p Path, written: u64) -> Self {
+    fn new(file: tokio::fs::File, path: &'p Path, written: u64, idle: std::time::Duration) -> Self {
         Sink {
             out: tokio::io::BufWriter::with_capacity(1 << 20, file),
             path,
             written,
+            idle,
         }
     }
 
@@ -303,7 +319,16 @@ impl<'p> Sink<'p> {
         S: Stream<Item = Result<Bytes, E>> + Unpin,
         E: std::fmt::Display,
     {
-        while let Some(chunk) = body.next().await {
+        loop {
+            let next = tokio::time::timeout(self.idle, body.next())
+                .await
+                .map_err(|_| {
+                    Copy::BrokeOff(Error::BadRequest(format!(
+                        "{what}: no data for {} s, the body is taken as broken off",
+                        self.idle.as_secs_f64()
+                    )))
+                })?;
+            let Some(chunk) = next else { break };
             let chunk = chunk.map_err(|e| {
                 Copy::BrokeOff(Error::BadRequest(format!("{what}: body broke off: {e}")))
             })?;
