@@ -157,7 +157,11 @@ impl Client {
         progress: &mut dyn FnMut(u64, u64),
         cancel: &AtomicBool,
     ) -> Result<(), Error> {
-        let url = format!("{}/v1/sessions/{}/recording", self.base, check_id(id)?);
+        let url = format!(
+            "{}/v1/sessions/{}/recording",
+            self.base,
+            check_session_id(id)?
+        );
         let meta = std::fs::metadata(path).map_err(|source| Error::Io {
             path: path.to_path_buf(),
             source,
@@ -227,7 +231,7 @@ impl Client {
 
     /// `POST /v1/sessions/{id}/trials`: one trial's TUM text (e.g. from an outside SLAM run).
     pub fn upload_trial(&self, id: &str, tum_text: &str) -> Result<(), Error> {
-        let url = format!("/v1/sessions/{}/trials", check_id(id)?);
+        let url = format!("/v1/sessions/{}/trials", check_session_id(id)?);
         let key = idempotency_key();
         self.request("POST", &url, Payload::Text(tum_text), Some(&key))
             .map(|_| ())
@@ -235,7 +239,7 @@ impl Client {
 
     /// `POST /v1/sessions/{id}/estimate`: asks for the estimate of the trials so far.
     pub fn start_estimate(&self, id: &str) -> Result<(), Error> {
-        let url = format!("/v1/sessions/{}/estimate", check_id(id)?);
+        let url = format!("/v1/sessions/{}/estimate", check_session_id(id)?);
         let key = idempotency_key();
         self.request("POST", &url, Payload::Empty, Some(&key))
             .map(|_| ())
@@ -244,14 +248,14 @@ impl Client {
     /// `DELETE /v1/sessions/{id}`: removes a session that no job works on (done, failed, or
     /// waiting for uploads) with its files. A session in flight is a 409 [`Error::Server`].
     pub fn delete_session(&self, id: &str) -> Result<(), Error> {
-        let url = format!("/v1/sessions/{}", check_id(id)?);
+        let url = format!("/v1/sessions/{}", check_session_id(id)?);
         self.request("DELETE", &url, Payload::Empty, None)
             .map(|_| ())
     }
 
     /// `GET /v1/sessions/{id}`.
     pub fn status(&self, id: &str) -> Result<SessionStatus, Error> {
-        let url = format!("/v1/sessions/{}", check_id(id)?);
+        let url = format!("/v1/sessions/{}", check_session_id(id)?);
         let text = self.request("GET", &url, Payload::Empty, None)?;
         serde_json::from_str(&text)
             .map_err(|e| Error::InvalidResponse(format!("status: {e}: {text}")))
@@ -285,19 +289,19 @@ impl Client {
 
     /// `GET /v1/sessions/{id}/results.csv` (legacy `start,error` form).
     pub fn results_csv(&self, id: &str) -> Result<String, Error> {
-        let url = format!("/v1/sessions/{}/results.csv", check_id(id)?);
+        let url = format!("/v1/sessions/{}/results.csv", check_session_id(id)?);
         self.request("GET", &url, Payload::Empty, None)
     }
 
     /// `GET /v1/sessions/{id}/results.json`.
     pub fn results_json(&self, id: &str) -> Result<String, Error> {
-        let url = format!("/v1/sessions/{}/results.json", check_id(id)?);
+        let url = format!("/v1/sessions/{}/results.json", check_session_id(id)?);
         self.request("GET", &url, Payload::Empty, None)
     }
 
     /// `GET /v1/sessions/{id}/report`: the HTML report page.
     pub fn report_html(&self, id: &str) -> Result<String, Error> {
-        let url = format!("/v1/sessions/{}/report", check_id(id)?);
+        let url = format!("/v1/sessions/{}/report", check_session_id(id)?);
         self.request("GET", &url, Payload::Empty, None)
     }
 
@@ -496,8 +500,9 @@ fn server_error(status: u16, body: &str) -> Error {
     }
 }
 
-/// Session ids are server-made `[A-Za-z0-9_-]`; anything else could change the URL path.
-fn check_id(id: &str) -> Result<&str, Error> {
+/// Checks that `id` has the shape of a server-made session id (`[A-Za-z0-9_-]`, 1 to 64
+/// bytes); anything else could change a URL's path. Every call that takes an id checks it.
+pub fn check_session_id(id: &str) -> Result<&str, Error> {
     if !id.is_empty()
         && id.len() <= 64
         && id
@@ -987,9 +992,9 @@ mod tests {
 
     #[test]
     fn ids_and_keys_are_checked_and_unique() {
-        assert!(check_id("a-B_9").is_ok());
+        assert!(check_session_id("a-B_9").is_ok());
         for bad in ["", "../x", "a/b", "a b", "a%2e"] {
-            assert!(check_id(bad).is_err(), "{bad}");
+            assert!(check_session_id(bad).is_err(), "{bad}");
         }
         let keys: std::collections::HashSet<String> =
             (0..1000).map(|_| idempotency_key()).collect();

@@ -43,6 +43,6 @@ mod client;
 mod error;
 mod types;
 
-pub use client::{Client, IDEMPOTENCY_HEADER, UPLOAD_OFFSET_HEADER};
+pub use client::{Client, IDEMPOTENCY_HEADER, UPLOAD_OFFSET_HEADER, check_session_id};
 pub use error::Error;
 pub use types::{NewSession, SessionOptions, SessionState, SessionStatus};

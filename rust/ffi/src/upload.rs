@@ -130,17 +130,8 @@ impl UploadJob {
             return Err(Error::invalid("options_json", "trials must be at least 2"));
         }
         if let Some(id) = &options.session_id {
-            let server_made = !id.is_empty()
-                && id.len() <= 64
-                && id
-                    .bytes()
-                    .all(|b| b.is_ascii_alphanumeric() || b == b'-' || b == b'_');
-            if !server_made {
-                return Err(Error::invalid(
-                    "options_json",
-                    format!("session_id {id:?} is not a server-made id"),
-                ));
-            }
+            sitar_client::check_session_id(id)
+                .map_err(|e| Error::invalid("options_json", format!("session_id: {e}")))?;
         }
         let shared = Arc::new(Shared {
             status: Mutex::new(JobStatus {

@@ -26,8 +26,8 @@ use crate::db::SessionRow;
 use crate::files::TempFile;
 use crate::jobs;
 use crate::routes::{
-    CURL_DEFAULT_CONTENT_TYPE, check_declared_length, content_type, idempotency_key, json_response,
-    session_row,
+    CURL_DEFAULT_CONTENT_TYPE, check_declared_length, content_type, declared_length,
+    idempotency_key, json_response, session_row,
 };
 use crate::state::Shared;
 
@@ -144,11 +144,7 @@ async fn resume(
             limit,
         });
     }
-    let declared = headers
-        .get(header::CONTENT_LENGTH)
-        .and_then(|v| v.to_str().ok())
-        .and_then(|v| v.parse::<u64>().ok());
-    if let Some(n) = declared
+    if let Some(n) = declared_length(headers)
         && n != range.len()
     {
         return Err(Error::BadRequest(format!(

@@ -129,17 +129,21 @@ pub(crate) fn idempotency_key(headers: &HeaderMap) -> Result<Option<String>, Err
     }
 }
 
+/// The body length the request declares (`Content-Length`), if it declares one.
+pub(crate) fn declared_length(headers: &HeaderMap) -> Option<u64> {
+    headers
+        .get(header::CONTENT_LENGTH)
+        .and_then(|v| v.to_str().ok())
+        .and_then(|v| v.parse().ok())
+}
+
 /// Refuses a body whose declared length is over the limit before reading it.
 pub(crate) fn check_declared_length(
     headers: &HeaderMap,
     limit: u64,
     what: &'static str,
 ) -> Result<(), Error> {
-    let declared = headers
-        .get(header::CONTENT_LENGTH)
-        .and_then(|v| v.to_str().ok())
-        .and_then(|v| v.parse::<u64>().ok());
-    match declared {
+    match declared_length(headers) {
         Some(n) if n > limit => Err(Error::TooLarge { what, limit }),
         _ => Ok(()),
     }
