@@ -27,13 +27,27 @@ pub fn start(config: ServerConfig) -> ServerHandle {
     sitar_server::Server::spawn(config, "127.0.0.1:0".parse().unwrap()).expect("server starts")
 }
 
+/// Waits (polling every 20 ms, up to 60 s) until session `id` is done or failed.
+pub fn wait_done(client: &sitar_client::Client, id: &str) -> sitar_client::SessionStatus {
+    client
+        .wait(
+            id,
+            Duration::from_millis(20),
+            Duration::from_secs(60),
+            &mut |_| {},
+        )
+        .expect("the session finishes")
+}
+
 pub fn client(server: &ServerHandle) -> sitar_client::Client {
     sitar_client::Client::new(&server.url())
         .unwrap()
         .with_timeout(Duration::from_secs(20))
 }
 
-fn agent() -> ureq::Agent {
+/// A plain HTTP agent for requests the typed client never sends: statuses are answers,
+/// not errors; 20 s at most.
+pub fn agent() -> ureq::Agent {
     ureq::Agent::config_builder()
         .http_status_as_error(false)
         .timeout_global(Some(Duration::from_secs(20)))
@@ -51,8 +65,12 @@ pub fn raw(
 ) -> (u16, String, String) {
     let agent = agent();
     let result = match method {
-        "GET" => {
-            let mut r = agent.get(url);
+        "GET" | "DELETE" => {
+            let mut r = if method == "GET" {
+                agent.get(url)
+            } else {
+                agent.delete(url)
+            };
             for (k, v) in headers {
                 r = r.header(*k, *v);
             }

@@ -33,14 +33,7 @@ fn finished_and_waiting_sessions_are_deleted_whole_and_running_ones_refused() {
     let err = client.delete_session(&played).unwrap_err();
     assert_eq!(err.status(), Some(409), "{err}");
     assert!(err.to_string().contains("job"), "{err}");
-    let status = client
-        .wait(
-            &played,
-            Duration::from_millis(20),
-            Duration::from_secs(60),
-            &mut |_| {},
-        )
-        .unwrap();
+    let status = wait_done(&client, &played);
     assert_eq!(status.state, SessionState::Done, "{status:?}");
     assert!(session_dir(&data, &played).join("results.csv").is_file());
     client.delete_session(&played).unwrap();
@@ -84,7 +77,13 @@ fn finished_and_waiting_sessions_are_deleted_whole_and_running_ones_refused() {
 
     // Path-like and unknown ids are plain 404s; nothing outside the data directory moves.
     for id in ["..%2F..%2Fx", "s0000000000000000"] {
-        let (status, ct, body) = raw_delete(&format!("{}/v1/sessions/{id}", server.url()));
+        let (status, ct, body) = raw(
+            "DELETE",
+            &format!("{}/v1/sessions/{id}", server.url()),
+            None,
+            b"",
+            &[],
+        );
         assert_eq!(error_code(status, &ct, &body, 404), "not_found", "{id}");
     }
     assert!(data.join("sitar.db").is_file());
@@ -106,32 +105,8 @@ fn finished_and_waiting_sessions_are_deleted_whole_and_running_ones_refused() {
     client
         .upload_recording(&next, &rec, &mut |_, _| {})
         .unwrap();
-    let status = client
-        .wait(
-            &next,
-            Duration::from_millis(20),
-            Duration::from_secs(60),
-            &mut |_| {},
-        )
-        .unwrap();
+    let status = wait_done(&client, &next);
     assert_eq!(status.state, SessionState::Done, "{status:?}");
-}
-
-fn raw_delete(url: &str) -> (u16, String, String) {
-    let agent: ureq::Agent = ureq::Agent::config_builder()
-        .http_status_as_error(false)
-        .timeout_global(Some(Duration::from_secs(20)))
-        .build()
-        .into();
-    let mut response = agent.delete(url).call().unwrap();
-    let ct = response
-        .headers()
-        .get("content-type")
-        .and_then(|v| v.to_str().ok())
-        .unwrap_or_default()
-        .to_string();
-    let body = response.body_mut().read_to_string().unwrap_or_default();
-    (response.status().as_u16(), ct, body)
 }
 
 #[test]

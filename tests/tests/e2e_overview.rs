@@ -1,7 +1,5 @@
 //! `GET /v1/sessions` and the `GET /` page: what the server holds, newest first.
 
-use std::time::Duration;
-
 use sitar_client::{NewSession, SessionState};
 use sitar_tests::*;
 
@@ -31,14 +29,7 @@ fn the_list_and_the_page_show_the_newest_sessions_with_their_links() {
     client
         .upload_recording(&played, &rec, &mut |_, _| {})
         .unwrap();
-    let done = client
-        .wait(
-            &played,
-            Duration::from_millis(20),
-            Duration::from_secs(60),
-            &mut |_| {},
-        )
-        .unwrap();
+    let done = wait_done(&client, &played);
     assert_eq!(done.state, SessionState::Done, "{done:?}");
     let waiting = client
         .create_session(&NewSession {

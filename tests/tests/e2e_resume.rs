@@ -30,12 +30,7 @@ fn recording_bytes(len: usize) -> Vec<u8> {
 
 /// `HEAD` on the recording URL with an `Idempotency-Key`: the `Upload-Offset` answered.
 fn kept(url: &str, key: Option<&str>) -> u64 {
-    let agent: ureq::Agent = ureq::Agent::config_builder()
-        .http_status_as_error(false)
-        .timeout_global(Some(Duration::from_secs(10)))
-        .build()
-        .into();
-    let mut request = agent.head(url);
+    let mut request = agent().head(url);
     if let Some(key) = key {
         request = request.header("idempotency-key", key);
     }
@@ -62,8 +57,8 @@ fn wait_until_kept(url: &str, key: &str, wanted: u64) {
     }
 }
 
-/// A PUT that announces `announced` bytes, sends `body`, and hangs up.
-fn put_and_hang_up(url: &str, key: &str, announced: usize, body: &[u8]) {
+/// A raw connection with the head of a recording PUT that announces `announced` bytes.
+fn open_put(url: &str, key: &str, announced: usize) -> TcpStream {
     let rest = url.strip_prefix("http://").unwrap();
     let (host, path) = rest.split_at(rest.find('/').unwrap());
     let mut stream = TcpStream::connect(host).unwrap();
@@ -73,18 +68,19 @@ fn put_and_hang_up(url: &str, key: &str, announced: usize, body: &[u8]) {
          idempotency-key: {key}\r\ncontent-length: {announced}\r\n\r\n"
     )
     .unwrap();
+    stream
+}
+
+/// A PUT that announces `announced` bytes, sends `body`, and hangs up.
+fn put_and_hang_up(url: &str, key: &str, announced: usize, body: &[u8]) {
+    let mut stream = open_put(url, key, announced);
     stream.write_all(body).unwrap();
     stream.flush().unwrap();
     stream.shutdown(Shutdown::Both).unwrap();
 }
 
 fn resume_put(url: &str, key: &str, range: &str, body: &[u8]) -> (u16, String, Option<String>) {
-    let agent: ureq::Agent = ureq::Agent::config_builder()
-        .http_status_as_error(false)
-        .timeout_global(Some(Duration::from_secs(20)))
-        .build()
-        .into();
-    let mut response = agent
+    let mut response = agent()
         .put(url)
         .header("content-type", "application/octet-stream")
         .header("content-range", range)
@@ -351,16 +347,7 @@ fn a_stalled_upload_is_cut_off_and_its_prefix_resumed_while_it_still_hangs() {
     let bytes = recording_bytes(200_000);
 
     // A client that sends half and then goes silent, keeping the connection open.
-    let rest = url.strip_prefix("http://").unwrap();
-    let (host, path) = rest.split_at(rest.find('/').unwrap());
-    let mut silent = TcpStream::connect(host).unwrap();
-    write!(
-        silent,
-        "PUT {path} HTTP/1.1\r\nhost: {host}\r\ncontent-type: application/octet-stream\r\n\
-         idempotency-key: k1\r\ncontent-length: {}\r\n\r\n",
-        bytes.len()
-    )
-    .unwrap();
+    let mut silent = open_put(&url, "k1", bytes.len());
     silent.write_all(&bytes[..80_000]).unwrap();
     silent.flush().unwrap();
 
