@@ -99,11 +99,12 @@ pub(crate) fn spawn_session(shared: Arc<Shared>, id: String) {
     });
 }
 
-/// Starts the estimate of an `upload` session in the background.
+/// Starts the estimate of an `upload` session in the background. The session is
+/// `estimating` when this returns (so a delete under the session lock sees it in flight).
 pub(crate) fn spawn_estimate(shared: Arc<Shared>, id: String, setting: String) {
+    let _ = shared.db.set_state(&id, "estimating", None);
     tokio::spawn(async move {
         let job = shared.db.start_job(&id, "estimate").ok();
-        let _ = shared.db.set_state(&id, "estimating", None);
         match estimate_and_publish(&shared, &id, &setting).await {
             Ok(_) => {
                 let _ = shared.db.set_state(&id, "done", None);

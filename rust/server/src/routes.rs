@@ -378,8 +378,6 @@ async fn post_estimate(State(shared): AppState, Path(id): Path<String>) -> Resul
             }
         }
         _ if row.playback == "upload" => {
-            // In the database before the lock is released: no delete slips in before the job.
-            shared.db.set_state(&id, "estimating", None)?;
             jobs::spawn_estimate(shared.clone(), id.clone(), row.setting.clone())
         }
         state => {
