@@ -103,7 +103,7 @@ pub fn run(args: Args) -> Result<()> {
     let client = Client::new(&server.url())?;
     let request = NewSession {
         trials: args.trials,
-        setting: "trim_mean_30".into(),
+        setting: sitar_core::DEFAULT_SETTING.into(),
         playback: "sim".into(),
     };
     let options = SessionOptions {

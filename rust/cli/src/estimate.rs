@@ -29,7 +29,7 @@ pub struct Args {
     #[arg(required = true, value_name = "TRIAL")]
     trials: Vec<PathBuf>,
     /// Statistic per window: mean, median, trim_mean_10|20|30|40 or mean_inliers.
-    #[arg(long, default_value = "trim_mean_30", value_parser = parse_setting)]
+    #[arg(long, default_value = sitar_core::DEFAULT_SETTING, value_parser = parse_setting)]
     setting: Setting,
     /// RPE delta in frames (the sub-trajectory length).
     #[arg(short = 'd', long, default_value_t = 10)]
@@ -47,10 +47,10 @@ pub struct Args {
     #[arg(long, value_enum, default_value_t)]
     format: OutputFormat,
     /// JSON classes: errors at or above this are "medium" (m).
-    #[arg(long = "medium", default_value_t = 0.05)]
+    #[arg(long = "medium", default_value_t = Thresholds::DEFAULT_M.medium)]
     medium_m: f64,
     /// JSON classes: errors at or above this are "high" (m).
-    #[arg(long = "high", default_value_t = 0.10)]
+    #[arg(long = "high", default_value_t = Thresholds::DEFAULT_M.high)]
     high_m: f64,
     /// Write the result to this file instead of stdout.
     #[arg(short = 'o', long)]
@@ -101,12 +101,7 @@ pub fn run(args: Args) -> Result<()> {
     }
     let text = match args.format {
         OutputFormat::Csv => result.to_legacy_csv(),
-        OutputFormat::Json => {
-            result.to_json(Thresholds {
-                medium_m: args.medium_m,
-                high_m: args.high_m,
-            }) + "\n"
-        }
+        OutputFormat::Json => result.to_json(Thresholds::new(args.medium_m, args.high_m)) + "\n",
     };
     emit(args.output.as_deref(), &text)
 }

@@ -7,8 +7,8 @@ use anyhow::{Context, Result, bail};
 use clap::ValueEnum;
 use plotters::prelude::*;
 use sitar_estimator::{
-    ClassBoundaries, EstimateOptions, EvaluationOptions, EvaluationRow, Setting, evaluate,
-    ground_truth_errors,
+    EstimateOptions, EvaluationOptions, EvaluationRow, PAPER_CLASSIFIERS, Setting, Thresholds,
+    evaluate, ground_truth_errors,
 };
 
 use crate::input::{self, Format, progress_bar};
@@ -153,7 +153,7 @@ pub fn run(args: Args) -> Result<()> {
         let opts = EvaluationOptions {
             trial_counts: vec![k],
             settings: settings.clone(),
-            boundaries: ClassBoundaries::PAPER.to_vec(),
+            boundaries: PAPER_CLASSIFIERS.to_vec(),
             estimate,
         };
         rows.extend(
@@ -165,11 +165,13 @@ pub fn run(args: Args) -> Result<()> {
     }
     bar.finish_and_clear();
 
-    let truth_classes: Vec<[usize; 3]> = ClassBoundaries::PAPER
+    let truth_classes: Vec<[usize; 3]> = PAPER_CLASSIFIERS
         .iter()
         .map(|b| {
             let mut n = [0; 3];
-            truth.iter().for_each(|&(_, e)| n[b.classify(e)] += 1);
+            truth
+                .iter()
+                .for_each(|&(_, e)| n[b.classify(e).index().unwrap_or(0)] += 1);
             n
         })
         .collect();
@@ -202,8 +204,8 @@ struct Summary<'a> {
     trials_b: usize,
 }
 
-fn cm(b: &ClassBoundaries) -> String {
-    format!("{} & {} cm", b.low_m * 100.0, b.high_m * 100.0)
+fn cm(b: &Thresholds) -> String {
+    format!("{} & {} cm", b.medium * 100.0, b.high * 100.0)
 }
 
 fn table(summary: &Summary<'_>, rows: &[EvaluationRow]) -> String {
@@ -220,7 +222,7 @@ fn table(summary: &Summary<'_>, rows: &[EvaluationRow]) -> String {
         "estimates: first k of the {} trials of set B",
         summary.trials_b
     );
-    for (bounds, n) in ClassBoundaries::PAPER.iter().zip(summary.truth_classes) {
+    for (bounds, n) in PAPER_CLASSIFIERS.iter().zip(summary.truth_classes) {
         let _ = writeln!(out);
         let _ = writeln!(
             out,
@@ -262,8 +264,8 @@ fn csv(rows: &[EvaluationRow]) -> String {
         let _ = writeln!(
             out,
             "{},{},{},{},{},{},{},{},{}",
-            r.boundaries.low_m,
-            r.boundaries.high_m,
+            r.boundaries.medium,
+            r.boundaries.high,
             r.setting,
             r.trials,
             s.windows,
@@ -282,7 +284,7 @@ fn json(summary: &Summary<'_>, rows: &[EvaluationRow]) -> String {
         .map(|r| {
             let s = &r.scores;
             serde_json::json!({
-                "boundaries_m": [r.boundaries.low_m, r.boundaries.high_m],
+                "boundaries_m": [r.boundaries.medium, r.boundaries.high],
                 "setting": r.setting.to_string(),
                 "trials": r.trials,
                 "windows": s.windows,
@@ -294,12 +296,12 @@ fn json(summary: &Summary<'_>, rows: &[EvaluationRow]) -> String {
             })
         })
         .collect();
-    let truth_classes: Vec<serde_json::Value> = ClassBoundaries::PAPER
+    let truth_classes: Vec<serde_json::Value> = PAPER_CLASSIFIERS
         .iter()
         .zip(summary.truth_classes)
         .map(|(b, n)| {
             serde_json::json!({
-                "boundaries_m": [b.low_m, b.high_m], "low": n[0], "medium": n[1], "high": n[2],
+                "boundaries_m": [b.medium, b.high], "low": n[0], "medium": n[1], "high": n[2],
             })
         })
         .collect();
@@ -328,7 +330,7 @@ fn plot(path: &Path, rows: &[EvaluationRow], settings: &[Setting], counts: &[usi
             "SiTAR uncertainty-based pose error estimation vs ground truth",
             ("sans-serif", 22),
         )?;
-        let panels = body.split_evenly((ClassBoundaries::PAPER.len(), 2));
+        let panels = body.split_evenly((PAPER_CLASSIFIERS.len(), 2));
         let x_max = counts.iter().copied().max().unwrap_or(2) as f64;
         let x_min = counts.iter().copied().min().unwrap_or(2) as f64;
         let x_range = if x_max > x_min {
@@ -343,7 +345,7 @@ fn plot(path: &Path, rows: &[EvaluationRow], settings: &[Setting], counts: &[usi
             .filter(|v| v.is_finite())
             .fold(1.0f64, f64::min);
         let y_min = ((lowest - 0.05) * 10.0).floor().max(0.0) / 10.0;
-        for (row, bounds) in ClassBoundaries::PAPER.iter().enumerate() {
+        for (row, bounds) in PAPER_CLASSIFIERS.iter().enumerate() {
             for (col, metric) in ["accuracy", "F1"].iter().enumerate() {
                 let value = |r: &EvaluationRow| {
                     if col == 0 {

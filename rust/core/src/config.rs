@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
-use crate::{Convention, Error};
+use crate::{Convention, Error, Thresholds};
 
 /// Settings of one session. Parse with [`SessionConfig::from_json`]; see the field docs for
 /// the defaults (those of ARCHITECTURE.md).
@@ -44,8 +44,8 @@ impl Default for SessionConfig {
             dedup_radius_m: 0.5,
             max_regions: 3,
             thresholds_m: vec![0.10, 0.05, 0.02, 0.01],
-            high_threshold_m: 0.10,
-            medium_threshold_m: 0.05,
+            high_threshold_m: Thresholds::DEFAULT_M.high,
+            medium_threshold_m: Thresholds::DEFAULT_M.medium,
             frustum_spacing_m: 0.5,
             unreliable_mean_error_m: 0.20,
             data_dir: None,
@@ -116,6 +116,11 @@ impl SessionConfig {
         }
         config.validate()?;
         Ok(config)
+    }
+
+    /// The class boundaries of `medium_threshold_m` and `high_threshold_m`.
+    pub fn class_thresholds(&self) -> Thresholds {
+        Thresholds::new(self.medium_threshold_m, self.high_threshold_m)
     }
 
     /// The config as pretty JSON (every key, `null` for absent options); parses back equal.

@@ -87,6 +87,7 @@
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
 
+mod classes;
 mod config;
 mod convention;
 mod depth;
@@ -99,6 +100,7 @@ mod results;
 mod session;
 mod tum;
 
+pub use classes::{DEFAULT_SETTING, ErrorClass, Thresholds};
 pub use config::SessionConfig;
 pub use convention::{Convention, DisplayRotation, Pose};
 pub use depth::{DepthImage, DepthSample, Intrinsics, sample_surface};
@@ -106,7 +108,7 @@ pub use error::{Error, InvalidDepth};
 pub use markers::{Marker, MarkerCandidate, select_markers, warning_sign_rotation};
 pub use playback::PlaybackLogger;
 pub use render::{Frustum, Joint, RenderPlan, Segment};
-pub use results::{ErrorClass, ResultWindow, Results};
+pub use results::{ResultWindow, Results};
 pub use session::{
     DepthStatus, FrameFlags, LoggedPose, Session, SessionState, SubTrajectory, Summary,
 };

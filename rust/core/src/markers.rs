@@ -191,11 +191,11 @@ pub fn select_markers(candidates: &[MarkerCandidate], config: &SessionConfig) ->
                 continue;
             }
             hash.insert(c.position);
-            let class = if c.error_m >= config.high_threshold_m {
-                ErrorClass::High
-            } else {
-                ErrorClass::Medium
-            };
+            // Markers are never low: the original app coloured them medium or high.
+            let class = config
+                .class_thresholds()
+                .classify(c.error_m)
+                .max(ErrorClass::Medium);
             markers.push(Marker {
                 position: c.position,
                 rotation: warning_sign_rotation(c.normal, config.convention),

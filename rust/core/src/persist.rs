@@ -133,10 +133,7 @@ impl Session {
 
         let results_path = dir.join("results.json");
         match &self.results {
-            Some(r) => write_file(
-                &results_path,
-                &r.to_json(self.config.medium_threshold_m, self.config.high_threshold_m),
-            )?,
+            Some(r) => write_file(&results_path, &r.to_json(self.config.class_thresholds()))?,
             None => {
                 if results_path.exists() {
                     std::fs::remove_file(&results_path).map_err(|e| Error::io(&results_path, e))?;

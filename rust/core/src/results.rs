@@ -3,59 +3,7 @@
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
-use crate::Error;
-
-/// The error class of a sub-trajectory (numbers as in the C ABI).
-#[derive(
-    Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Default, Serialize, Deserialize,
-)]
-#[serde(rename_all = "lowercase")]
-#[repr(i32)]
-pub enum ErrorClass {
-    /// No result within the lookup tolerance.
-    #[default]
-    Unknown = 0,
-    /// Below the medium threshold.
-    Low = 1,
-    /// At or above the medium threshold, below high.
-    Medium = 2,
-    /// At or above the high threshold.
-    High = 3,
-}
-
-impl ErrorClass {
-    /// Classifies an error: high ≥ `high_m`, medium ≥ `medium_m`, else low.
-    pub fn classify(error_m: f64, medium_m: f64, high_m: f64) -> Self {
-        if error_m >= high_m {
-            Self::High
-        } else if error_m >= medium_m {
-            Self::Medium
-        } else {
-            Self::Low
-        }
-    }
-
-    /// `"unknown"`, `"low"`, `"medium"` or `"high"`.
-    pub fn name(&self) -> &'static str {
-        match self {
-            Self::Unknown => "unknown",
-            Self::Low => "low",
-            Self::Medium => "medium",
-            Self::High => "high",
-        }
-    }
-
-    /// The inverse of [`ErrorClass::name`].
-    pub fn from_name(name: &str) -> Option<Self> {
-        match name {
-            "unknown" => Some(Self::Unknown),
-            "low" => Some(Self::Low),
-            "medium" => Some(Self::Medium),
-            "high" => Some(Self::High),
-            _ => None,
-        }
-    }
-}
+use crate::{Error, Thresholds};
 
 /// One RPE window: the estimated error of the 10 frames starting at `start`.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -353,7 +301,7 @@ impl Results {
     }
 
     /// Writes the JSON form (starts and ends in integer nanoseconds), classes from the thresholds.
-    pub fn to_json(&self, medium_m: f64, high_m: f64) -> String {
+    pub fn to_json(&self, thresholds: Thresholds) -> String {
         let windows: Vec<Value> = self
             .windows
             .iter()
@@ -363,7 +311,7 @@ impl Results {
                     "end": w.end,
                     "error_m": w.error_m,
                     "pairs": w.pairs,
-                    "class": ErrorClass::classify(w.error_m, medium_m, high_m).name(),
+                    "class": thresholds.classify(w.error_m).name(),
                 })
             })
             .collect();
@@ -505,8 +453,14 @@ mod tests {
                 pairs: Some(9)
             }
         );
-        assert_eq!(Results::parse(&r.to_json(0.05, 0.1)).unwrap(), r);
-        assert!(r.to_json(0.05, 0.1).contains("\"class\": \"high\""));
+        assert_eq!(
+            Results::parse(&r.to_json(Thresholds::DEFAULT_M)).unwrap(),
+            r
+        );
+        assert!(
+            r.to_json(Thresholds::DEFAULT_M)
+                .contains("\"class\": \"high\"")
+        );
         let bad = r#"{"windows":[{"start":1,"error_m":-1}]}"#;
         match Results::parse(bad) {
             Err(Error::Parse { field, .. }) => assert_eq!(field, "windows[0].error_m"),
@@ -547,11 +501,6 @@ mod tests {
 
     #[test]
     fn classes_and_mean() {
-        assert_eq!(ErrorClass::classify(0.10, 0.05, 0.10), ErrorClass::High);
-        assert_eq!(ErrorClass::classify(0.0999, 0.05, 0.10), ErrorClass::Medium);
-        assert_eq!(ErrorClass::classify(0.05, 0.05, 0.10), ErrorClass::Medium);
-        assert_eq!(ErrorClass::classify(0.049, 0.05, 0.10), ErrorClass::Low);
-        assert_eq!(ErrorClass::classify(0.3, 0.2, 0.5), ErrorClass::Medium);
         let r = Results::parse("start,error\n1,0.1\n2,0.3\n").unwrap();
         assert!((r.mean_error_m().unwrap() - 0.2).abs() < 1e-15);
         assert_eq!(Results::default().mean_error_m(), None);

@@ -481,11 +481,7 @@ impl Session {
     }
 
     fn classify(&self, error_m: f64) -> ErrorClass {
-        ErrorClass::classify(
-            error_m,
-            self.config.medium_threshold_m,
-            self.config.high_threshold_m,
-        )
+        self.config.class_thresholds().classify(error_m)
     }
 
     /// Estimated error of sub-trajectory `k` (looked up by its start timestamp).

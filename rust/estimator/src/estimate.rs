@@ -17,7 +17,7 @@ use rayon::prelude::*;
 
 use crate::metrics::RigidPose;
 use crate::sync::associate_named;
-use crate::{Error, PoseRelation, Setting, TimeUnit, Trajectory, statistics};
+use crate::{Error, PoseRelation, Setting, Thresholds, TimeUnit, Trajectory, statistics};
 
 /// Options of [`estimate`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -40,37 +40,6 @@ impl Default for EstimateOptions {
             delta: 10,
             t_max_diff_s: 0.01,
             pose_relation: PoseRelation::TranslationPart,
-        }
-    }
-}
-
-/// Class boundaries of the JSON output.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Thresholds {
-    /// Errors at or above this are "medium" (default 0.05 m).
-    pub medium_m: f64,
-    /// Errors at or above this are "high" (default 0.10 m).
-    pub high_m: f64,
-}
-
-impl Default for Thresholds {
-    fn default() -> Self {
-        Self {
-            medium_m: 0.05,
-            high_m: 0.10,
-        }
-    }
-}
-
-impl Thresholds {
-    /// "low", "medium" or "high" for an error.
-    pub fn class(&self, error: f64) -> &'static str {
-        if error >= self.high_m {
-            "high"
-        } else if error >= self.medium_m {
-            "medium"
-        } else {
-            "low"
         }
     }
 }
@@ -155,7 +124,7 @@ impl Estimate {
                 o.insert("pairs".into(), w.pairs.into());
                 o.insert(spread_key.into(), json_number(w.spread_m));
                 if translation {
-                    o.insert("class".into(), thresholds.class(w.error_m).into());
+                    o.insert("class".into(), thresholds.classify(w.error_m).name().into());
                 }
                 Window {
                     start: stamp(w.start),
@@ -792,10 +761,7 @@ mod tests {
                 .unwrap(),
             e.windows[1].error_m
         );
-        let thresholds = Thresholds {
-            medium_m: e.windows[0].error_m,
-            high_m: e.windows[0].error_m * 2.0,
-        };
+        let thresholds = Thresholds::new(e.windows[0].error_m, e.windows[0].error_m * 2.0);
         let text = e.to_json(thresholds);
         // Seconds in, seconds out: exact, with 9 decimals (as the CSV).
         assert!(
@@ -821,7 +787,7 @@ mod tests {
         let expected: Vec<&str> = e
             .windows
             .iter()
-            .map(|w| thresholds.class(w.error_m))
+            .map(|w| thresholds.classify(w.error_m).name())
             .collect();
         assert_eq!(classes, expected);
         let rotational = estimate(

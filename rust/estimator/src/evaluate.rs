@@ -3,50 +3,28 @@
 //! Per sequence: the ground-truth average error per window comes from trial set A (RPE of
 //! every trial against the ground truth, averaged per window); the estimate comes from the
 //! first `k` trials of a disjoint set B. Both are classified by a 3-class classifier
-//! (low < `low_m` ≤ medium < `high_m` ≤ high) and scored with accuracy, macro F1 and the
+//! (low < `medium` ≤ medium < `high` ≤ high, [`Thresholds`]) and scored with accuracy, macro F1 and the
 //! per-class sensitivity and specificity averaged over classes.
 
 use rayon::prelude::*;
 
 use crate::sync::{associate_named, seconds_to_ns};
-use crate::{Error, EstimateOptions, PairwiseValues, RpeOptions, Setting, Trajectory, rpe};
+use crate::{
+    Error, EstimateOptions, PairwiseValues, RpeOptions, Setting, Thresholds, Trajectory, rpe,
+};
 
-/// The two boundaries of a 3-class error classifier.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
-pub struct ClassBoundaries {
-    /// Errors at or above this are at least "medium".
-    pub low_m: f64,
-    /// Errors at or above this are "high".
-    pub high_m: f64,
-}
+/// The paper's three classifiers (Table 2): medium from 5 cm and high from 10 cm, 2 & 10 cm,
+/// 2 & 5 cm.
+pub const PAPER_CLASSIFIERS: [Thresholds; 3] = [
+    Thresholds::DEFAULT_M,
+    Thresholds::new(0.02, 0.10),
+    Thresholds::new(0.02, 0.05),
+];
 
-impl ClassBoundaries {
-    /// The paper's three classifiers: 5 & 10 cm, 2 & 10 cm, 2 & 5 cm.
-    pub const PAPER: [ClassBoundaries; 3] = [
-        ClassBoundaries {
-            low_m: 0.05,
-            high_m: 0.10,
-        },
-        ClassBoundaries {
-            low_m: 0.02,
-            high_m: 0.10,
-        },
-        ClassBoundaries {
-            low_m: 0.02,
-            high_m: 0.05,
-        },
-    ];
-
-    /// Class 0 (low), 1 (medium) or 2 (high).
-    pub fn classify(&self, error: f64) -> usize {
-        if error >= self.high_m {
-            2
-        } else if error >= self.low_m {
-            1
-        } else {
-            0
-        }
-    }
+/// The row or column of `error` in a confusion matrix: 0 low, 1 medium, 2 high.
+fn class_index(boundaries: &Thresholds, error: f64) -> usize {
+    // `classify` never answers Unknown.
+    boundaries.classify(error).index().unwrap_or(0)
 }
 
 /// Scores of a classifier on one set of windows.
@@ -72,7 +50,7 @@ pub struct ClassificationScores {
 pub fn classification_scores(
     truth: &[f64],
     predicted: &[f64],
-    boundaries: ClassBoundaries,
+    boundaries: Thresholds,
 ) -> Result<ClassificationScores, Error> {
     if truth.len() != predicted.len() || truth.is_empty() {
         return Err(Error::InvalidArgument(format!(
@@ -83,7 +61,7 @@ pub fn classification_scores(
     }
     let mut confusion = [[0usize; 3]; 3];
     for (t, p) in truth.iter().zip(predicted) {
-        confusion[boundaries.classify(*t)][boundaries.classify(*p)] += 1;
+        confusion[class_index(&boundaries, *t)][class_index(&boundaries, *p)] += 1;
     }
     let total = truth.len();
     let correct: usize = (0..3).map(|c| confusion[c][c]).sum();
@@ -197,7 +175,7 @@ pub struct EvaluationOptions {
     /// Settings to evaluate (default: all seven).
     pub settings: Vec<Setting>,
     /// Classifiers (default: the paper's three).
-    pub boundaries: Vec<ClassBoundaries>,
+    pub boundaries: Vec<Thresholds>,
     /// Delta, association tolerance and pose relation (the setting field is unused).
     pub estimate: EstimateOptions,
 }
@@ -207,7 +185,7 @@ impl Default for EvaluationOptions {
         Self {
             trial_counts: vec![5, 10, 20, 30, 40, 50, 60, 70, 80, 90, 100],
             settings: Setting::ALL.to_vec(),
-            boundaries: ClassBoundaries::PAPER.to_vec(),
+            boundaries: PAPER_CLASSIFIERS.to_vec(),
             estimate: EstimateOptions::default(),
         }
     }
@@ -222,7 +200,7 @@ pub struct EvaluationRow {
     /// Number of B trials used.
     pub trials: usize,
     /// The classifier.
-    pub boundaries: ClassBoundaries,
+    pub boundaries: Thresholds,
     /// Its scores.
     pub scores: ClassificationScores,
 }
@@ -325,10 +303,7 @@ mod tests {
 
     #[test]
     fn hand_computed_scores() {
-        let b = ClassBoundaries {
-            low_m: 0.05,
-            high_m: 0.10,
-        };
+        let b = Thresholds::DEFAULT_M;
         // truth:     low low low low medium medium high
         // predicted: low low low medium medium low high
         let truth = [0.01, 0.02, 0.03, 0.04, 0.06, 0.07, 0.2];
@@ -356,9 +331,9 @@ mod tests {
         let two_class = classification_scores(&[0.01, 0.06], &[0.01, 0.01], b).unwrap();
         assert!((two_class.specificity - (0.0 + 1.0) / 2.0).abs() < 1e-15);
         assert!((two_class.sensitivity - (1.0 + 0.0) / 2.0).abs() < 1e-15);
-        assert_eq!(b.classify(0.05), 1);
-        assert_eq!(b.classify(0.0999), 1);
-        assert_eq!(b.classify(0.1), 2);
+        assert_eq!(class_index(&b, 0.05), 1);
+        assert_eq!(class_index(&b, 0.0999), 1);
+        assert_eq!(class_index(&b, 0.1), 2);
     }
 
     #[test]

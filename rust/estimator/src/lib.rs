@@ -79,7 +79,7 @@
 //! [`evaluate`] runs the paper's section 3.3 protocol on one sequence: the ground-truth
 //! per-window error is the mean RPE of trial set A against the ground truth
 //! ([`ground_truth_errors`]); the estimate uses the first `k` trials of set B; both are
-//! classified by 3-class classifiers ([`ClassBoundaries::PAPER`]: 5 & 10, 2 & 10, 2 & 5 cm)
+//! classified by 3-class classifiers ([`PAPER_CLASSIFIERS`]: 5 & 10, 2 & 10, 2 & 5 cm, each [`Thresholds`])
 //! and scored ([`classification_scores`]: accuracy, macro F1, mean per-class sensitivity and
 //! specificity) for every setting and trial count.
 #![forbid(unsafe_code)]
@@ -97,11 +97,9 @@ mod trajectory;
 
 pub use align::{Alignment, Similarity, align, umeyama};
 pub use error::Error;
-pub use estimate::{
-    Estimate, EstimateOptions, PairwiseValues, Thresholds, WindowEstimate, estimate,
-};
+pub use estimate::{Estimate, EstimateOptions, PairwiseValues, WindowEstimate, estimate};
 pub use evaluate::{
-    ClassBoundaries, ClassificationScores, Evaluation, EvaluationOptions, EvaluationRow,
+    ClassificationScores, Evaluation, EvaluationOptions, EvaluationRow, PAPER_CLASSIFIERS,
     classification_scores, evaluate, ground_truth_errors,
 };
 pub use formats::{
@@ -111,6 +109,8 @@ pub use metrics::{
     DeltaUnit, PoseErrors, PoseRelation, RigidPose, RpeOptions, ape, delta_pairs, rotation_angle,
     rpe,
 };
+/// The class rule and its defaults, shared with the phone and the backend.
+pub use sitar_core::{DEFAULT_SETTING, ErrorClass, Thresholds};
 pub use statistics::{
     Setting, Statistics, interquartile_range, mean, mean_inliers, median, quantile, trim_mean,
 };

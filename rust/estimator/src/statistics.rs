@@ -44,6 +44,7 @@ impl Setting {
 }
 
 impl Default for Setting {
+    /// [`sitar_core::DEFAULT_SETTING`]: `trim_mean_30` (a test keeps the two equal).
     fn default() -> Self {
         Setting::TrimMean(30)
     }
@@ -208,6 +209,15 @@ impl Statistics {
 mod tests {
     use super::*;
     use proptest::prelude::*;
+
+    #[test]
+    fn default_is_the_shared_default_name() {
+        assert_eq!(Setting::default().to_string(), sitar_core::DEFAULT_SETTING);
+        assert_eq!(
+            sitar_core::DEFAULT_SETTING.parse::<Setting>().unwrap(),
+            Setting::default()
+        );
+    }
 
     fn naive_trim_mean(values: &[f64], proportion: f64) -> f64 {
         let mut sorted = values.to_vec();

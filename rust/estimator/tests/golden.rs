@@ -218,7 +218,7 @@ fn estimate_keeps_frames_that_share_a_nearest_stamp() {
 
 #[test]
 fn evaluation_protocol_runs_on_the_golden_trials() {
-    use sitar_estimator::{ClassBoundaries, EvaluationOptions, evaluate, ground_truth_errors};
+    use sitar_estimator::{EvaluationOptions, PAPER_CLASSIFIERS, evaluate, ground_truth_errors};
     let gt = trajectory("gt.txt");
     let trials: Vec<Trajectory> = (0..8)
         .map(|i| trajectory(&format!("trial_{i:02}.txt")))
@@ -244,7 +244,7 @@ fn evaluation_protocol_runs_on_the_golden_trials() {
     let evaluation = evaluate(&gt, a, b, &opts).unwrap();
     assert_eq!(
         evaluation.rows.len(),
-        3 * Setting::ALL.len() * ClassBoundaries::PAPER.len()
+        3 * Setting::ALL.len() * PAPER_CLASSIFIERS.len()
     );
     for row in &evaluation.rows {
         let s = row.scores;

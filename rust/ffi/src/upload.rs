@@ -35,7 +35,7 @@ impl Default for UploadOptions {
             server_url: None,
             session_id: None,
             trials: 10,
-            setting: "trim_mean_30".to_owned(),
+            setting: sitar_core::DEFAULT_SETTING.to_owned(),
             playback: "adb".to_owned(),
             poll_interval_ms: 500,
         }

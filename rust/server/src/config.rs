@@ -1,6 +1,8 @@
 use std::path::PathBuf;
 use std::time::Duration;
 
+use sitar_core::Thresholds;
+
 /// Which playback backend serves sessions that do not name one (legacy routes).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum PlaybackKind {
@@ -81,14 +83,13 @@ pub struct ServerConfig {
     /// Trials for sessions created by the legacy route or without `trials` (default 5, the
     /// paper's).
     pub default_trials: u32,
-    /// Statistic for legacy sessions (default `trim_mean_30`).
+    /// Statistic for legacy sessions (default [`sitar_core::DEFAULT_SETTING`], `trim_mean_30`).
     pub default_setting: String,
     /// Adaptive stopping window when a session asks for it without one (default 3).
     pub default_adaptive_k: u32,
-    /// Class thresholds in metres: medium from, high from (default 0.05, 0.10).
-    pub medium_threshold_m: f64,
-    /// See `medium_threshold_m`.
-    pub high_threshold_m: f64,
+    /// Class thresholds in metres: medium from, high from (default 0.05, 0.10:
+    /// [`Thresholds::DEFAULT_M`]).
+    pub thresholds: Thresholds,
     /// The `sim` backend.
     pub sim: SimConfig,
     /// The `adb` backend.
@@ -113,10 +114,9 @@ impl ServerConfig {
             max_recording_bytes: 2 << 30,
             max_trajectory_bytes: 64 << 20,
             default_trials: 5,
-            default_setting: "trim_mean_30".to_string(),
+            default_setting: sitar_core::DEFAULT_SETTING.to_string(),
             default_adaptive_k: 3,
-            medium_threshold_m: 0.05,
-            high_threshold_m: 0.10,
+            thresholds: Thresholds::DEFAULT_M,
             sim: SimConfig {
                 speed: 1.0,
                 devices: 1,

@@ -3,20 +3,13 @@
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
-use sitar_estimator::{EstimateOptions, Setting, Thresholds, Trajectory};
+use sitar_core::{ErrorClass, Thresholds};
+use sitar_estimator::{EstimateOptions, Setting, Trajectory};
 
 use crate::Error;
 
 /// Frames per sub-trajectory (the phone logs every 5th frame; a sub-trajectory spans 10).
 const SUBTRAJECTORY_FRAMES: usize = 10;
-
-/// Error class of a window, as the phone colours it.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
-pub(crate) enum Class {
-    Low,
-    Medium,
-    High,
-}
 
 /// One estimate, ready to publish.
 #[derive(Debug, Clone)]
@@ -26,7 +19,7 @@ pub(crate) struct Published {
     pub json: String,
     /// Class of the window of every sub-trajectory (every 10th frame of the
     /// reference trial: what the phone colours), keyed by its start time (ns).
-    pub classes: BTreeMap<i64, Class>,
+    pub classes: BTreeMap<i64, ErrorClass>,
 }
 
 /// Parses a setting name, naming the accepted ones when it is wrong.
@@ -56,8 +49,7 @@ pub(crate) fn parse_trial(text: &str, source: &str) -> Result<Trajectory, Error>
 pub(crate) fn estimate_files(
     paths: &[PathBuf],
     setting: &str,
-    medium_m: f64,
-    high_m: f64,
+    thresholds: Thresholds,
 ) -> Result<Published, Error> {
     if paths.len() < 2 {
         return Err(Error::Conflict(format!(
@@ -86,21 +78,12 @@ pub(crate) fn estimate_files(
         .windows
         .iter()
         .filter(|w| sub_starts.contains(&w.start))
-        .map(|w| {
-            let class = if w.error_m >= high_m {
-                Class::High
-            } else if w.error_m >= medium_m {
-                Class::Medium
-            } else {
-                Class::Low
-            };
-            (w.start, class)
-        })
+        .map(|w| (w.start, thresholds.classify(w.error_m)))
         .collect();
     Ok(Published {
         trials: paths.len() as u32,
         csv: estimate.to_legacy_csv(),
-        json: estimate.to_json(Thresholds { medium_m, high_m }),
+        json: estimate.to_json(thresholds),
         classes,
     })
 }
@@ -110,7 +93,7 @@ pub(crate) fn estimate_files(
 /// published estimate in order; trials that arrived together during one
 /// estimate share one entry, so the check spans from the last estimate made
 /// with at most `n − k` trials to the newest (n trials).
-pub(crate) fn classes_stable(history: &[(u32, BTreeMap<i64, Class>)], k: u32) -> bool {
+pub(crate) fn classes_stable(history: &[(u32, BTreeMap<i64, ErrorClass>)], k: u32) -> bool {
     let Some((n, _)) = history.last() else {
         return false;
     };
@@ -127,18 +110,20 @@ pub(crate) fn classes_stable(history: &[(u32, BTreeMap<i64, Class>)], k: u32) ->
 mod tests {
     use super::*;
 
-    fn classes(list: &[(i64, Class)]) -> BTreeMap<i64, Class> {
+    fn classes(list: &[(i64, ErrorClass)]) -> BTreeMap<i64, ErrorClass> {
         list.iter().copied().collect()
     }
 
-    fn numbered(list: &[(u32, &BTreeMap<i64, Class>)]) -> Vec<(u32, BTreeMap<i64, Class>)> {
+    fn numbered(
+        list: &[(u32, &BTreeMap<i64, ErrorClass>)],
+    ) -> Vec<(u32, BTreeMap<i64, ErrorClass>)> {
         list.iter().map(|(n, c)| (*n, (*c).clone())).collect()
     }
 
     #[test]
     fn stability_needs_k_unchanged_trials() {
-        let a = classes(&[(0, Class::Low), (10, Class::High)]);
-        let b = classes(&[(0, Class::Low), (10, Class::Medium)]);
+        let a = classes(&[(0, ErrorClass::Low), (10, ErrorClass::High)]);
+        let b = classes(&[(0, ErrorClass::Low), (10, ErrorClass::Medium)]);
         assert!(!classes_stable(&numbered(&[(2, &a), (3, &a), (4, &a)]), 3));
         assert!(classes_stable(
             &numbered(&[(2, &a), (3, &a), (4, &a), (5, &a)]),
@@ -162,7 +147,7 @@ mod tests {
             3
         ));
         // A window that appears or vanishes is a change.
-        let c = classes(&[(0, Class::Low)]);
+        let c = classes(&[(0, ErrorClass::Low)]);
         assert!(!classes_stable(
             &numbered(&[(2, &a), (3, &a), (4, &a), (5, &c)]),
             3

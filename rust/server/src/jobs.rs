@@ -47,13 +47,9 @@ pub(crate) async fn estimate_and_publish(
         .into_iter()
         .map(|i| shared.files.trial(id, i))
         .collect();
-    let (setting, medium, high) = (
-        setting.to_string(),
-        shared.config.medium_threshold_m,
-        shared.config.high_threshold_m,
-    );
+    let (setting, thresholds) = (setting.to_string(), shared.config.thresholds);
     let published = tokio::task::spawn_blocking(move || {
-        estimation::estimate_files(&paths, &setting, medium, high)
+        estimation::estimate_files(&paths, &setting, thresholds)
     })
     .await
     .map_err(|e| Error::Internal(format!("estimate task: {e}")))??;

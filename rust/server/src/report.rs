@@ -3,6 +3,7 @@
 use std::fmt::Write;
 
 use serde::Deserialize;
+use sitar_core::ErrorClass;
 
 use crate::Error;
 use crate::config::ServerConfig;
@@ -40,13 +41,14 @@ pub(crate) fn escape(text: &str) -> String {
 }
 
 fn class_of(error_m: f64, config: &ServerConfig) -> (&'static str, &'static str) {
-    if error_m >= config.high_threshold_m {
-        ("high", HIGH)
-    } else if error_m >= config.medium_threshold_m {
-        ("medium", MEDIUM)
-    } else {
-        ("low", LOW)
-    }
+    let class = config.thresholds.classify(error_m);
+    let colour = match class {
+        ErrorClass::High => HIGH,
+        ErrorClass::Medium => MEDIUM,
+        ErrorClass::Low => LOW,
+        ErrorClass::Unknown => UNKNOWN,
+    };
+    (class.name(), colour)
 }
 
 /// The report: a top view (x right, z up) of the reference trial coloured by
@@ -167,8 +169,8 @@ pub(crate) fn render(
             "Thresholds",
             format!(
                 "medium ≥ {:.0} cm, high ≥ {:.0} cm",
-                config.medium_threshold_m * 100.0,
-                config.high_threshold_m * 100.0
+                config.thresholds.medium * 100.0,
+                config.thresholds.high * 100.0
             ),
         ),
         (
