@@ -79,6 +79,15 @@ impl Thresholds {
         high: 0.10,
     };
 
+    /// Classes for the rotation angle (`angle_deg`): medium from 2°, high from 4°. A rotation
+    /// error of θ moves a surface d metres away by about θ·d; at 1.5 m (the distance the
+    /// phone's depth samples typically see indoors) the metric boundaries 5 cm and 10 cm
+    /// are 1.9° and 3.8°, rounded here to 2° and 4°.
+    pub const DEFAULT_DEG: Thresholds = Thresholds {
+        medium: 2.0,
+        high: 4.0,
+    };
+
     /// Classes with both boundaries given.
     pub const fn new(medium: f64, high: f64) -> Thresholds {
         Thresholds { medium, high }
@@ -121,6 +130,16 @@ mod tests {
         assert_eq!(t.classify(f64::NAN), ErrorClass::Low);
         assert_eq!(Thresholds::new(0.2, 0.5).classify(0.3), ErrorClass::Medium);
         assert_eq!(Thresholds::default(), Thresholds::DEFAULT_M);
+        // The degree boundaries are the metric ones seen from 1.5 m, to a tenth of a degree.
+        for (deg, m) in [
+            (Thresholds::DEFAULT_DEG.medium, 0.05),
+            (Thresholds::DEFAULT_DEG.high, 0.10),
+        ] {
+            assert!(
+                (deg - (m / 1.5f64).atan().to_degrees()).abs() < 0.2,
+                "{deg}"
+            );
+        }
     }
 
     #[test]
