@@ -21,7 +21,7 @@ fuzz_target!(|data: &[u8]| {
             .iter()
             .all(|w| w.error_m.is_finite() && w.error_m >= 0.0)
     );
-    let json = results.to_json(0.05, 0.10);
+    let json = results.to_json(sitar_core::Thresholds::DEFAULT_M);
     assert_eq!(Results::parse(&json).ok(), Some(results.clone()));
     let mut times: Vec<i64> = results.windows.iter().map(|w| w.start).collect();
     times.extend([i64::MIN, -1, 0, 1, i64::MAX]);
