@@ -40,6 +40,16 @@
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
 
+// Layers, lowest first (a module uses only those above it; `tests/layout.rs` checks that
+// no import cycle exists):
+// error, config, settings, files, db            — vocabulary and storage
+// session (state, record, store, lifecycle)     — a session's life; the only state writer
+// estimation, live, playback, adb               — estimates over trials held in memory
+// shared, published, trials, status, report     — what handlers and jobs share
+// jobs, recordings, deletion                    — work on sessions
+// http                                          — helpers below every handler
+// handlers/*                                    — one file per resource
+// router, server                                — route table and middleware; serving
 mod adb;
 mod config;
 mod db;
@@ -47,20 +57,27 @@ mod deletion;
 mod error;
 mod estimation;
 mod files;
+mod handlers;
+mod http;
 mod jobs;
-mod overview;
+mod live;
 mod playback;
-mod recording;
+mod published;
+mod recordings;
 mod report;
-mod routes;
+mod router;
 mod server;
-mod state;
+mod session;
+mod settings;
+mod shared;
+mod status;
+mod trials;
 
 pub use adb::{AdbPlayback, mp4_duration_s};
 pub use config::{AdbConfig, PlaybackKind, ServerConfig, SimConfig};
 pub use error::Error;
+pub use http::IDEMPOTENCY_HEADER;
 pub use playback::{
     DeviceInfo, Playback, PlaybackJob, PlaybackPlan, SimPlayback, TrialOutput, UploadPlayback,
 };
-pub use routes::IDEMPOTENCY_HEADER;
 pub use server::{Server, ServerHandle};
