@@ -10,6 +10,23 @@ use rusqlite::{Connection, OptionalExtension, params};
 
 use crate::Error;
 
+/// How a job ended (the `jobs` table's states are `running`, these, and `interrupted`, which
+/// a restart gives the jobs a dead process left running).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum JobEnd {
+    Done,
+    Failed,
+}
+
+impl JobEnd {
+    fn as_str(self) -> &'static str {
+        match self {
+            JobEnd::Done => "done",
+            JobEnd::Failed => "failed",
+        }
+    }
+}
+
 /// serial, state, session, last seen (ms since the epoch).
 pub(crate) type DeviceRow = (String, String, Option<String>, i64);
 
@@ -218,11 +235,11 @@ impl Db {
         })
     }
 
-    pub fn finish_job(&self, job: i64, state: &str, error: Option<&str>) -> Result<(), Error> {
+    pub fn finish_job(&self, job: i64, end: JobEnd, error: Option<&str>) -> Result<(), Error> {
         self.with(|c| {
             c.execute(
                 "UPDATE jobs SET state = ?2, error = ?3, finished_ms = ?4 WHERE id = ?1",
-                params![job, state, error, now_ms()],
+                params![job, end.as_str(), error, now_ms()],
             )
         })
         .map(|_| ())

@@ -7,6 +7,7 @@ use std::time::Instant;
 
 use crate::Error;
 use crate::config::PlaybackKind;
+use crate::db::JobEnd;
 use crate::estimation::{self, Published};
 use crate::live::LiveSession;
 use crate::playback::{PlaybackJob, TrialOutput};
@@ -49,7 +50,7 @@ fn conclude(shared: &Shared, id: &str, job: Option<i64>, outcome: Result<Outcome
     match outcome {
         Ok(Outcome::Done) => {
             if let Some(job) = job {
-                let _ = shared.db.finish_job(job, "done", None);
+                let _ = shared.db.finish_job(job, JobEnd::Done, None);
             }
         }
         Ok(Outcome::Interrupted) => {
@@ -67,7 +68,7 @@ fn conclude(shared: &Shared, id: &str, job: Option<i64>, outcome: Result<Outcome
                 log::warn!("session {id}: {e}");
             }
             if let Some(job) = job {
-                let _ = shared.db.finish_job(job, "failed", Some(&message));
+                let _ = shared.db.finish_job(job, JobEnd::Failed, Some(&message));
             }
         }
     }

@@ -87,7 +87,11 @@ pub(crate) async fn recording(
             SessionState::Done => {
                 return Ok(json_value(
                     StatusCode::OK,
-                    &json!({"id": id, "state": "done", "status": format!("/v1/sessions/{id}")}),
+                    &json!({
+                        "id": id,
+                        "state": SessionState::Done.as_str(),
+                        "status": format!("/v1/sessions/{id}"),
+                    }),
                 ));
             }
             SessionState::Failed => {

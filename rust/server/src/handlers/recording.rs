@@ -30,7 +30,7 @@ use crate::http::{
     declared_length, idempotency_key, json_response,
 };
 use crate::recordings::accept_recording;
-use crate::session::{Session, Step};
+use crate::session::{Session, SessionState, Step};
 use crate::shared::Shared;
 
 /// Response header: the bytes of an interrupted upload the server keeps.
@@ -216,7 +216,7 @@ async fn resume(
 fn uploaded(id: &str) -> Response {
     json_response(
         StatusCode::ACCEPTED,
-        &json!({"id": id, "state": "uploaded"}).to_string(),
+        &json!({"id": id, "state": SessionState::Uploaded.as_str()}).to_string(),
     )
 }
 
