@@ -98,4 +98,10 @@ pub struct SessionStatus {
     /// Playback backend of the session (`adb`, `sim`, `upload`), when the server says.
     #[serde(default)]
     pub playback: Option<String>,
+    /// Frames per results window, when the server says.
+    #[serde(default)]
+    pub window_frames: Option<u32>,
+    /// Pose relation of the estimate (`trans_part`, `angle_deg`), when the server says.
+    #[serde(default)]
+    pub pose_relation: Option<String>,
 }

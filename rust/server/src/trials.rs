@@ -16,7 +16,7 @@ use crate::shared::Shared;
 pub(crate) fn parse_trial(bytes: &[u8], source: &str) -> Result<Trajectory, Error> {
     let text = std::str::from_utf8(bytes)
         .map_err(|e| Error::InvalidContent(format!("trajectory is not UTF-8 text: {e}")))?;
-    let trial = sitar_estimator::parse_tum(text, source)
+    let mut trial = sitar_estimator::parse_tum(text, source)
         .map_err(|e| Error::InvalidContent(e.to_string()))?;
     if trial.len() < 2 {
         return Err(Error::InvalidContent(format!(
@@ -24,6 +24,10 @@ pub(crate) fn parse_trial(bytes: &[u8], source: &str) -> Result<Trajectory, Erro
             trial.len()
         )));
     }
+    // Held in memory for the session's life: no spare capacity (64 bytes a pose).
+    trial.stamps.shrink_to_fit();
+    trial.positions.shrink_to_fit();
+    trial.orientations.shrink_to_fit();
     Ok(trial)
 }
 

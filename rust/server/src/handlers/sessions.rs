@@ -53,8 +53,16 @@ pub(crate) async fn create(
             "POST /v1/sessions takes application/json".into(),
         ));
     }
-    let req: CreateRequest = serde_json::from_slice(&body)
-        .map_err(|e| Error::BadRequest(format!("session request: {e}")))?;
+    let req: CreateRequest =
+        serde_path_to_error::deserialize(&mut serde_json::Deserializer::from_slice(&body))
+            .map_err(|e| {
+                // The key at fault first: `window_frames: invalid type: string "20", …`.
+                let key = e.path().to_string();
+                match key.as_str() {
+                    "." => Error::BadRequest(format!("session request: {}", e.inner())),
+                    _ => Error::BadRequest(format!("{key}: {}", e.inner())),
+                }
+            })?;
     let trials = req.trials.unwrap_or(shared.config.default_trials);
     if !(1..=1000).contains(&trials) {
         return Err(Error::BadRequest(format!(
