@@ -167,7 +167,11 @@ fn run_cli(sitar: Option<&Path>, files: &[PathBuf]) -> (f64, f64) {
                 .args(files)
                 .output()
                 .expect("sitar runs");
-            assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+            assert!(
+                out.status.success(),
+                "{}",
+                String::from_utf8_lossy(&out.stderr)
+            );
             let (_, children1) = cpu_seconds("self");
             (children1 - children0, started.elapsed().as_secs_f64())
         }
@@ -265,7 +269,11 @@ fn main() {
     );
     println!(
         "(c) sitar estimate on the files ({}): {c_cpu:.2} CPU s ({c_wall:.2} s wall)",
-        if sitar.is_some() { "binary" } else { "in process" }
+        if sitar.is_some() {
+            "binary"
+        } else {
+            "in process"
+        }
     );
     println!("a/b = {:.1}x   b/c = {:.2}x", a_cpu / b_cpu, b_cpu / c_cpu);
 }
