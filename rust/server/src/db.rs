@@ -336,39 +336,4 @@ mod tests {
         );
         assert_eq!(db.trial_count("b").unwrap(), 0);
     }
-
-    #[test]
-    fn a_database_of_the_previous_version_gains_the_new_columns_with_their_defaults() {
-        let dir = tempfile::tempdir().unwrap();
-        let path = dir.path().join("sitar.db");
-        {
-            // The sessions table as the previous version made it, with one session.
-            let old = Connection::open(&path).unwrap();
-            old.execute_batch(
-                "CREATE TABLE sessions (id TEXT PRIMARY KEY, idempotency_key TEXT UNIQUE, \
-                 created_ms INTEGER NOT NULL, trials_total INTEGER NOT NULL, setting TEXT NOT NULL, \
-                 playback TEXT NOT NULL, state TEXT NOT NULL, error TEXT, stop_reason TEXT, \
-                 adaptive_min INTEGER, adaptive_k INTEGER NOT NULL, recording_bytes INTEGER, \
-                 results_trials INTEGER NOT NULL DEFAULT 0, legacy INTEGER NOT NULL DEFAULT 0, \
-                 finished_ms INTEGER);
-                 INSERT INTO sessions (id, created_ms, trials_total, setting, playback, state, adaptive_k) \
-                 VALUES ('s0123456789abcdef', 1, 5, 'median', 'sim', 'done', 3);",
-            )
-            .unwrap();
-        }
-        for _ in 0..2 {
-            // Opening twice: the second open finds the columns and adds nothing.
-            let db = Db::open(&path).unwrap();
-            let (frames, relation): (u32, String) = db
-                .with(|c| {
-                    c.query_row(
-                        "SELECT window_frames, pose_relation FROM sessions",
-                        [],
-                        |r| Ok((r.get(0)?, r.get(1)?)),
-                    )
-                })
-                .unwrap();
-            assert_eq!((frames, relation.as_str()), (10, "trans_part"));
-        }
-    }
 }

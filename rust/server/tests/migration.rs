@@ -26,16 +26,19 @@ fn a_previous_versions_data_directory_is_served_with_the_default_window_settings
     std::fs::create_dir_all(session_dir.join("trials")).unwrap();
     std::fs::write(session_dir.join("results.csv"), "start,error\n1,0.5\n").unwrap();
 
-    let server = Server::spawn(
-        ServerConfig::new(dir.path()),
-        "127.0.0.1:0".parse().unwrap(),
-    )
-    .unwrap();
-    let client = sitar_client::Client::new(&server.url()).unwrap();
-    let status = client.status(id).unwrap();
-    assert_eq!(status.state, sitar_client::SessionState::Done);
-    assert_eq!(client.results_csv(id).unwrap(), "start,error\n1,0.5\n");
-    assert_eq!(status.window_frames, Some(10));
-    assert_eq!(status.pose_relation.as_deref(), Some("trans_part"));
-    server.stop();
+    // Twice: the second start finds the columns in place and adds nothing.
+    for _ in 0..2 {
+        let server = Server::spawn(
+            ServerConfig::new(dir.path()),
+            "127.0.0.1:0".parse().unwrap(),
+        )
+        .unwrap();
+        let client = sitar_client::Client::new(&server.url()).unwrap();
+        let status = client.status(id).unwrap();
+        assert_eq!(status.state, sitar_client::SessionState::Done);
+        assert_eq!(client.results_csv(id).unwrap(), "start,error\n1,0.5\n");
+        assert_eq!(status.window_frames, Some(10));
+        assert_eq!(status.pose_relation.as_deref(), Some("trans_part"));
+        server.stop();
+    }
 }
