@@ -156,18 +156,44 @@ pub fn tree(dir: &Path) -> Vec<PathBuf> {
 
 /// The estimator run directly on the same trials, as TUM text like a phone sends
 /// them: the reference for the server's results.
-pub fn direct_csv(trials: &[sitar_estimator::Trajectory], setting: &str) -> String {
+pub fn direct_estimate(
+    trials: &[sitar_estimator::Trajectory],
+    options: &sitar_estimator::EstimateOptions,
+) -> sitar_estimator::Estimate {
     let trials: Vec<_> = trials
         .iter()
         .map(|t| sitar_estimator::parse_tum(&tum_text(t), "trial").unwrap())
         .collect();
+    sitar_estimator::estimate(&trials, options).unwrap()
+}
+
+/// [`direct_estimate`] with `setting` and the defaults, as legacy CSV.
+pub fn direct_csv(trials: &[sitar_estimator::Trajectory], setting: &str) -> String {
     let options = sitar_estimator::EstimateOptions {
         setting: setting.parse().unwrap(),
         ..Default::default()
     };
-    sitar_estimator::estimate(&trials, &options)
-        .unwrap()
-        .to_legacy_csv()
+    direct_estimate(trials, &options).to_legacy_csv()
+}
+
+/// Waits (polling every 5 ms, up to 60 s) until session `id` has published results over
+/// `trials` trials; panics if it publishes more or fails.
+pub fn wait_results(client: &sitar_client::Client, id: &str, trials: u32) {
+    let deadline = std::time::Instant::now() + Duration::from_secs(60);
+    loop {
+        let status = client.status(id).expect("status");
+        assert!(status.results_trials <= trials, "{status:?}");
+        assert_ne!(
+            status.state,
+            sitar_client::SessionState::Failed,
+            "{status:?}"
+        );
+        if status.results_trials == trials {
+            return;
+        }
+        assert!(std::time::Instant::now() < deadline, "{status:?}");
+        std::thread::sleep(Duration::from_millis(5));
+    }
 }
 
 /// Asserts two results texts are equal without printing kilobytes of numbers.

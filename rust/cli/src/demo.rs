@@ -108,7 +108,7 @@ pub fn run(args: Args) -> Result<()> {
     };
     let options = SessionOptions {
         adaptive_min_trials: args.adaptive,
-        adaptive_k: None,
+        ..SessionOptions::default()
     };
     let id = client.create_session_with(&request, &options)?;
     let mut uploaded = 0;

@@ -100,7 +100,8 @@ impl Client {
         self.create_session_with(req, &SessionOptions::default())
     }
 
-    /// Like [`Client::create_session`], with adaptive stopping options.
+    /// Like [`Client::create_session`], with the optional settings (adaptive stopping,
+    /// window length, pose relation); the server answers 400 naming a bad one.
     pub fn create_session_with(
         &self,
         req: &NewSession,
@@ -113,6 +114,12 @@ impl Client {
         }
         if let Some(k) = options.adaptive_k {
             body["adaptive_k"] = k.into();
+        }
+        if let Some(frames) = options.window_frames {
+            body["window_frames"] = frames.into();
+        }
+        if let Some(relation) = &options.pose_relation {
+            body["pose_relation"] = relation.as_str().into();
         }
         let key = idempotency_key();
         let text = self.request(
@@ -714,6 +721,38 @@ mod tests {
         let body: serde_json::Value = serde_json::from_slice(&seen[0].body).unwrap();
         assert_eq!(
             body,
+            serde_json::json!({"trials":4,"setting":"median","playback":"upload"})
+        );
+    }
+
+    #[test]
+    fn session_options_travel_as_their_json_keys_and_absent_ones_stay_absent() {
+        let (base, seen) = serve(vec![
+            Reply::Answer(201, r#"{"id":"s-abc"}"#),
+            Reply::Answer(201, r#"{"id":"s-def"}"#),
+        ]);
+        let client = fast(&base);
+        let options = SessionOptions {
+            adaptive_min_trials: Some(5),
+            window_frames: Some(20),
+            pose_relation: Some("angle_deg".into()),
+            ..SessionOptions::default()
+        };
+        client
+            .create_session_with(&new_session(), &options)
+            .unwrap();
+        client
+            .create_session_with(&new_session(), &SessionOptions::default())
+            .unwrap();
+        let seen = seen.lock().unwrap();
+        let body = |i: usize| serde_json::from_slice::<serde_json::Value>(&seen[i].body).unwrap();
+        assert_eq!(
+            body(0),
+            serde_json::json!({"trials":4,"setting":"median","playback":"upload",
+                "adaptive_min_trials":5,"window_frames":20,"pose_relation":"angle_deg"})
+        );
+        assert_eq!(
+            body(1),
             serde_json::json!({"trials":4,"setting":"median","playback":"upload"})
         );
     }

@@ -11,8 +11,9 @@ pub struct NewSession {
     pub playback: String,
 }
 
-/// Optional per-session extras beyond [`NewSession`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+/// Optional per-session extras beyond [`NewSession`]; `None` takes the server's default.
+/// Build one with `..SessionOptions::default()` so later options need no change.
+#[derive(Debug, Clone, PartialEq, Eq, Default, Serialize, Deserialize)]
 pub struct SessionOptions {
     /// Adaptive stopping: finish early once no window's class changed over the
     /// last `adaptive_k` finished trials, but never before this many trials.
@@ -20,6 +21,12 @@ pub struct SessionOptions {
     pub adaptive_min_trials: Option<u32>,
     /// Window of finished trials over which classes must be stable (server default 3).
     pub adaptive_k: Option<u32>,
+    /// Frames per results window, the RPE delta (2–1000, server default 10): the phone's
+    /// `subtrajectory_frames`.
+    pub window_frames: Option<u32>,
+    /// Pose relation of the estimate, evo's names: `trans_part` (metres, the default) or
+    /// `angle_deg` (degrees).
+    pub pose_relation: Option<String>,
 }
 
 /// Life cycle of a session on the server.
@@ -91,4 +98,10 @@ pub struct SessionStatus {
     /// Playback backend of the session (`adb`, `sim`, `upload`), when the server says.
     #[serde(default)]
     pub playback: Option<String>,
+    /// Frames per results window, when the server says.
+    #[serde(default)]
+    pub window_frames: Option<u32>,
+    /// Pose relation of the estimate (`trans_part`, `angle_deg`), when the server says.
+    #[serde(default)]
+    pub pose_relation: Option<String>,
 }

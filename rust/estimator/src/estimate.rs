@@ -70,6 +70,8 @@ pub struct Estimate {
     pub time_unit: TimeUnit,
     /// The pose relation of the RPE.
     pub pose_relation: PoseRelation,
+    /// The RPE delta in frames: every window spans this many frames (JSON `window_frames`).
+    pub delta: usize,
     /// Windows, sorted by start.
     pub windows: Vec<WindowEstimate>,
 }
@@ -90,10 +92,13 @@ impl Estimate {
     }
 
     /// JSON: `{"version":1,"setting":…,"trials":n,"time_unit":"ns"|"s","pose_relation":…,
-    /// "windows":[{"start","end","error_m","pairs","spread_m","class"}]}`; `start`/`end` keep
-    /// the trials' unit, written exactly: integer nanoseconds, or seconds with 9 decimals.
-    /// For rotational relations the error keys are `error_deg`/`error_rad`
-    /// (`spread_deg`/`spread_rad`) and `class` is omitted.
+    /// "window_frames":delta,"unit":…,"windows":[{"start","end","error_m","pairs","spread_m",
+    /// "class"}]}`; `start`/`end` keep the trials' unit, written exactly: integer nanoseconds,
+    /// or seconds with 9 decimals. `unit` is the unit of the window values: `m` for
+    /// `trans_part`, `deg` for `angle_deg` (keys `error_deg`/`spread_deg`), `rad` for
+    /// `angle_rad` (`error_rad`/`spread_rad`), `unit-less` for `full` (`error`/`spread`), as
+    /// evo names them. `class` comes from `thresholds`, which are in that unit; it is given for
+    /// `trans_part` and `angle_deg` windows (the two the phone colours) and omitted otherwise.
     pub fn to_json(&self, thresholds: Thresholds) -> String {
         /// One window: the stamps as exact number text, the rest as values.
         #[derive(serde::Serialize)]
@@ -108,13 +113,16 @@ impl Estimate {
             serde_json::value::RawValue::from_string(self.time_unit.format_stamp(t))
                 .expect("a formatted stamp is a JSON number")
         };
-        let (error_key, spread_key) = match self.pose_relation {
-            PoseRelation::TranslationPart => ("error_m", "spread_m"),
-            PoseRelation::RotationAngleDeg => ("error_deg", "spread_deg"),
-            PoseRelation::RotationAngleRad => ("error_rad", "spread_rad"),
-            PoseRelation::FullTransformation => ("error", "spread"),
+        let (error_key, spread_key, unit) = match self.pose_relation {
+            PoseRelation::TranslationPart => ("error_m", "spread_m", "m"),
+            PoseRelation::RotationAngleDeg => ("error_deg", "spread_deg", "deg"),
+            PoseRelation::RotationAngleRad => ("error_rad", "spread_rad", "rad"),
+            PoseRelation::FullTransformation => ("error", "spread", "unit-less"),
         };
-        let translation = self.pose_relation == PoseRelation::TranslationPart;
+        let classified = matches!(
+            self.pose_relation,
+            PoseRelation::TranslationPart | PoseRelation::RotationAngleDeg
+        );
         let windows: Vec<Window> = self
             .windows
             .iter()
@@ -123,7 +131,7 @@ impl Estimate {
                 o.insert(error_key.into(), json_number(w.error_m));
                 o.insert("pairs".into(), w.pairs.into());
                 o.insert(spread_key.into(), json_number(w.spread_m));
-                if translation {
+                if classified {
                     o.insert("class".into(), thresholds.classify(w.error_m).name().into());
                 }
                 Window {
@@ -141,6 +149,8 @@ impl Estimate {
             trials: usize,
             time_unit: &'static str,
             pose_relation: String,
+            window_frames: usize,
+            unit: &'static str,
             windows: Vec<Window>,
         }
         let document = Document {
@@ -152,6 +162,8 @@ impl Estimate {
                 TimeUnit::Seconds => "s",
             },
             pose_relation: self.pose_relation.to_string(),
+            window_frames: self.delta,
+            unit,
             windows,
         };
         serde_json::to_string(&document).expect("plain data serializes")
@@ -689,6 +701,7 @@ impl PairwiseValues {
             trials: self.trials,
             time_unit: self.time_unit,
             pose_relation: self.pose_relation,
+            delta: self.delta,
             windows,
         }
     }
@@ -773,6 +786,9 @@ mod tests {
         assert_eq!(json["setting"], "trim_mean_30");
         assert_eq!(json["trials"], 2);
         assert_eq!(json["time_unit"], "s");
+        assert_eq!(json["pose_relation"], "trans_part");
+        assert_eq!(json["window_frames"], 10);
+        assert_eq!(json["unit"], "m");
         let first = &json["windows"][0];
         assert_eq!(first["start"].as_f64(), Some(1.0));
         assert_eq!(first["pairs"], 1);
@@ -790,26 +806,67 @@ mod tests {
             .map(|w| thresholds.classify(w.error_m).name())
             .collect();
         assert_eq!(classes, expected);
+        // A second trial that also turns its own way, so the angles differ.
+        let mut turning = trial(25, 0.4);
+        for (i, q) in turning.orientations.iter_mut().enumerate() {
+            *q = (*q * DQuat::from_rotation_x((i as f64 * 0.7).sin() * 0.05)).normalize();
+        }
         let rotational = estimate(
-            &[trial(25, 0.0), trial(25, 0.4)],
+            &[trial(25, 0.0), turning],
             &EstimateOptions {
                 pose_relation: PoseRelation::RotationAngleDeg,
+                delta: 7,
                 ..EstimateOptions::default()
             },
         )
         .unwrap();
-        let text = rotational.to_json(Thresholds::default());
+        let degrees = Thresholds::new(
+            rotational.windows[3].error_m,
+            rotational.windows[3].error_m * 2.0,
+        );
+        let text = rotational.to_json(degrees);
         // Nanoseconds in, integer nanoseconds out.
         assert!(
-            text.contains(r#""start":1000000000,"end":1333333330,"#),
+            text.contains(r#""start":1000000000,"end":1233333331,"#),
             "{text}"
         );
         let json: serde_json::Value = serde_json::from_str(&text).unwrap();
         assert_eq!(json["time_unit"], "ns");
-        assert!(
-            json["windows"][0]["error_deg"].is_number()
-                && json["windows"][0].get("class").is_none()
-        );
+        assert_eq!(json["pose_relation"], "angle_deg");
+        assert_eq!(json["window_frames"], 7);
+        assert_eq!(json["unit"], "deg");
+        let windows = json["windows"].as_array().unwrap();
+        assert_eq!(windows.len(), rotational.windows.len());
+        for (doc, w) in windows.iter().zip(&rotational.windows) {
+            assert_eq!(doc["error_deg"].as_f64(), Some(w.error_m));
+            assert_eq!(doc["spread_deg"].as_f64(), Some(w.spread_m));
+            assert!(doc.get("error_m").is_none(), "{doc}");
+            // Classes come from the thresholds given, in degrees.
+            assert_eq!(doc["class"], degrees.classify(w.error_m).name(), "{doc}");
+        }
+        assert_eq!(windows[3]["class"], "medium");
+        // Radians and the full transformation have no class (the phone colours neither).
+        for (relation, key, unit) in [
+            (PoseRelation::RotationAngleRad, "error_rad", "rad"),
+            (PoseRelation::FullTransformation, "error", "unit-less"),
+        ] {
+            let e = estimate(
+                &[trial(25, 0.0), trial(25, 0.4)],
+                &EstimateOptions {
+                    pose_relation: relation,
+                    ..EstimateOptions::default()
+                },
+            )
+            .unwrap();
+            let json: serde_json::Value =
+                serde_json::from_str(&e.to_json(Thresholds::default())).unwrap();
+            assert_eq!(json["unit"], unit);
+            let first = &json["windows"][0];
+            assert!(
+                first[key].is_number() && first.get("class").is_none(),
+                "{first}"
+            );
+        }
     }
 
     #[test]

@@ -3,8 +3,9 @@ use std::time::Duration;
 
 use sitar_core::Thresholds;
 
-/// Which playback backend serves sessions that do not name one (legacy routes).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// Where a session's trials come from; the server's default serves sessions that name none
+/// (and the legacy routes). Stored typed with every session.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum PlaybackKind {
     /// Real phones over adb.
     Adb,
@@ -87,9 +88,23 @@ pub struct ServerConfig {
     pub default_setting: String,
     /// Adaptive stopping window when a session asks for it without one (default 3).
     pub default_adaptive_k: u32,
-    /// Class thresholds in metres: medium from, high from (default 0.05, 0.10:
-    /// [`Thresholds::DEFAULT_M`]).
+    /// Class thresholds of `trans_part` sessions, in metres: medium from, high from (default
+    /// 0.05, 0.10: [`Thresholds::DEFAULT_M`]).
     pub thresholds: Thresholds,
+    /// Class thresholds of `angle_deg` sessions, in degrees (default 2°, 4°:
+    /// [`Thresholds::DEFAULT_DEG`], the metric boundaries seen from 1.5 m).
+    pub thresholds_deg: Thresholds,
+    /// Memory bound of one live session's parsed trials, in bytes (default 256 MiB: 64 bytes
+    /// a pose, so 4.2 million poses, e.g. 1000 trials of 4 190 poses; 100 trials of 2 820
+    /// poses take 18 MB). A trial beyond it is refused with 413 (`upload`) or ends the
+    /// playback early with a stop reason (sim, adb).
+    pub live_session_bytes: usize,
+    /// Memory bound of all live sessions' parsed trials together, in bytes (default 1 GiB).
+    /// A trial beyond it is refused with 503 `busy` (`upload`) or ends the playback early.
+    pub live_total_bytes: usize,
+    /// Whether `upload` sessions publish a progressive estimate after every trial from the
+    /// 2nd on (default true); without, only `POST …/estimate` estimates.
+    pub progressive_uploads: bool,
     /// The `sim` backend.
     pub sim: SimConfig,
     /// The `adb` backend.
@@ -117,6 +132,10 @@ impl ServerConfig {
             default_setting: sitar_core::DEFAULT_SETTING.to_string(),
             default_adaptive_k: 3,
             thresholds: Thresholds::DEFAULT_M,
+            thresholds_deg: Thresholds::DEFAULT_DEG,
+            live_session_bytes: 256 << 20,
+            live_total_bytes: 1 << 30,
+            progressive_uploads: true,
             sim: SimConfig {
                 speed: 1.0,
                 devices: 1,

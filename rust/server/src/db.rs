@@ -1,3 +1,7 @@
+//! The SQLite database: the connection, the schema and its migrations, and the tables of
+//! trials, jobs and devices. The `sessions` table is [`crate::session`]'s: it reads and
+//! writes those rows (`session/store.rs`, `session/lifecycle.rs`).
+
 use std::path::Path;
 use std::sync::Mutex;
 use std::time::{SystemTime, UNIX_EPOCH};
@@ -6,36 +10,25 @@ use rusqlite::{Connection, OptionalExtension, params};
 
 use crate::Error;
 
-/// One row of the `sessions` table.
-#[derive(Debug, Clone, PartialEq)]
-pub(crate) struct SessionRow {
-    pub id: String,
-    pub trials_total: u32,
-    pub setting: String,
-    pub playback: String,
-    pub state: String,
-    pub error: Option<String>,
-    pub stop_reason: Option<String>,
-    pub adaptive_min: Option<u32>,
-    pub adaptive_k: u32,
-    pub recording_bytes: Option<u64>,
-    pub results_trials: u32,
-    pub legacy: bool,
+/// How a job ended (the `jobs` table's states are `running`, these, and `interrupted`, which
+/// a restart gives the jobs a dead process left running).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum JobEnd {
+    Done,
+    Failed,
+}
+
+impl JobEnd {
+    fn as_str(self) -> &'static str {
+        match self {
+            JobEnd::Done => "done",
+            JobEnd::Failed => "failed",
+        }
+    }
 }
 
 /// serial, state, session, last seen (ms since the epoch).
 pub(crate) type DeviceRow = (String, String, Option<String>, i64);
-
-/// What a new session needs.
-pub(crate) struct NewSessionRow<'a> {
-    pub idempotency_key: Option<&'a str>,
-    pub trials_total: u32,
-    pub setting: &'a str,
-    pub playback: &'a str,
-    pub adaptive_min: Option<u32>,
-    pub adaptive_k: u32,
-    pub legacy: bool,
-}
 
 /// The SQLite database: sessions, trials, jobs, devices.
 pub(crate) struct Db {
@@ -60,7 +53,9 @@ CREATE TABLE IF NOT EXISTS sessions (
     recording_bytes INTEGER,
     results_trials INTEGER NOT NULL DEFAULT 0,
     legacy INTEGER NOT NULL DEFAULT 0,
-    finished_ms INTEGER
+    finished_ms INTEGER,
+    window_frames INTEGER NOT NULL DEFAULT 10,
+    pose_relation TEXT NOT NULL DEFAULT 'trans_part'
 );
 CREATE TABLE IF NOT EXISTS trials (
     session_id TEXT NOT NULL REFERENCES sessions(id),
@@ -97,37 +92,51 @@ pub(crate) fn now_ms() -> i64 {
         .unwrap_or(0)
 }
 
-fn session_from_row(r: &rusqlite::Row<'_>) -> rusqlite::Result<SessionRow> {
-    Ok(SessionRow {
-        id: r.get(0)?,
-        trials_total: r.get(1)?,
-        setting: r.get(2)?,
-        playback: r.get(3)?,
-        state: r.get(4)?,
-        error: r.get(5)?,
-        stop_reason: r.get(6)?,
-        adaptive_min: r.get(7)?,
-        adaptive_k: r.get(8)?,
-        recording_bytes: r.get::<_, Option<i64>>(9)?.map(|b| b as u64),
-        results_trials: r.get(10)?,
-        legacy: r.get::<_, i64>(11)? != 0,
-    })
-}
+/// Columns later versions added to a table, with their definitions: an older database gets
+/// them on open (`ALTER TABLE … ADD COLUMN`, existing rows take the default).
+const ADDED_COLUMNS: &[(&str, &str, &str)] = &[
+    ("sessions", "window_frames", "INTEGER NOT NULL DEFAULT 10"),
+    (
+        "sessions",
+        "pose_relation",
+        "TEXT NOT NULL DEFAULT 'trans_part'",
+    ),
+];
 
-const SESSION_COLUMNS: &str = "id, trials_total, setting, playback, state, error, stop_reason, adaptive_min, \
-     adaptive_k, recording_bytes, results_trials, legacy";
+/// Adds the [`ADDED_COLUMNS`] a database made by an older version lacks.
+fn migrate(conn: &Connection) -> rusqlite::Result<()> {
+    for (table, column, definition) in ADDED_COLUMNS {
+        let present: bool = conn
+            .prepare(&format!(
+                "SELECT 1 FROM pragma_table_info('{table}') WHERE name = ?1"
+            ))?
+            .exists([column])?;
+        if !present {
+            conn.execute_batch(&format!(
+                "ALTER TABLE {table} ADD COLUMN {column} {definition}"
+            ))?;
+            log::info!("database: added {table}.{column}");
+        }
+    }
+    Ok(())
+}
 
 impl Db {
     pub fn open(path: &Path) -> Result<Db, Error> {
         let conn = Connection::open(path)?;
         conn.busy_timeout(std::time::Duration::from_secs(5))?;
         conn.execute_batch(SCHEMA)?;
+        migrate(&conn)?;
         Ok(Db {
             conn: Mutex::new(conn),
         })
     }
 
-    fn with<T>(&self, f: impl FnOnce(&mut Connection) -> rusqlite::Result<T>) -> Result<T, Error> {
+    /// Runs `f` on the connection (one at a time: the connection is behind a mutex).
+    pub fn with<T>(
+        &self,
+        f: impl FnOnce(&mut Connection) -> rusqlite::Result<T>,
+    ) -> Result<T, Error> {
         let mut conn = self
             .conn
             .lock()
@@ -135,145 +144,19 @@ impl Db {
         Ok(f(&mut conn)?)
     }
 
-    /// Inserts a session, or returns the one created earlier with the same idempotency key.
-    /// The bool is true when a new row was made.
-    pub fn insert_session(
+    /// Runs `f` in one transaction, committed when it returns `Ok`.
+    pub fn transaction<T>(
         &self,
-        id: &str,
-        new: &NewSessionRow<'_>,
-    ) -> Result<(String, bool), Error> {
-        self.with(|c| {
-            let tx = c.transaction()?;
-            if let Some(key) = new.idempotency_key {
-                let existing: Option<String> = tx
-                    .query_row("SELECT id FROM sessions WHERE idempotency_key = ?1", [key], |r| r.get(0))
-                    .optional()?;
-                if let Some(existing) = existing {
-                    return Ok((existing, false));
-                }
-            }
-            tx.execute(
-                "INSERT INTO sessions (id, idempotency_key, created_ms, trials_total, setting, playback, state, \
-                 adaptive_min, adaptive_k, legacy) VALUES (?1, ?2, ?3, ?4, ?5, ?6, 'created', ?7, ?8, ?9)",
-                params![
-                    id,
-                    new.idempotency_key,
-                    now_ms(),
-                    new.trials_total,
-                    new.setting,
-                    new.playback,
-                    new.adaptive_min,
-                    new.adaptive_k,
-                    new.legacy as i64
-                ],
-            )?;
-            tx.commit()?;
-            Ok((id.to_string(), true))
-        })
-    }
-
-    pub fn session(&self, id: &str) -> Result<Option<SessionRow>, Error> {
-        self.with(|c| {
-            c.query_row(
-                &format!("SELECT {SESSION_COLUMNS} FROM sessions WHERE id = ?1"),
-                [id],
-                session_from_row,
-            )
-            .optional()
-        })
-    }
-
-    /// The newest `limit` sessions, newest first.
-    pub fn recent_sessions(&self, limit: u32) -> Result<Vec<SessionRow>, Error> {
-        self.with(|c| {
-            let mut stmt = c.prepare(&format!(
-                "SELECT {SESSION_COLUMNS} FROM sessions ORDER BY rowid DESC LIMIT ?1"
-            ))?;
-            let rows = stmt.query_map([limit], session_from_row)?;
-            rows.collect()
-        })
-    }
-
-    /// Sessions past a retention that ends at `cutoff_ms` (ms since the epoch): done or
-    /// failed before it, or created before it and left idle since (an upload that was
-    /// abandoned, an `upload` session that never got its estimate).
-    pub fn expired(&self, cutoff_ms: i64) -> Result<Vec<String>, Error> {
-        self.with(|c| {
-            let mut stmt = c.prepare(
-                "SELECT id FROM sessions WHERE \
-                 (state IN ('done', 'failed') AND finished_ms < ?1) \
-                 OR (created_ms < ?1 AND (state = 'created' \
-                     OR (state = 'uploaded' AND playback = 'upload'))) \
-                 ORDER BY created_ms",
-            )?;
-            let rows = stmt.query_map([cutoff_ms], |r| r.get(0))?;
-            rows.collect()
-        })
-    }
-
-    /// Sessions a previous server process left in flight.
-    pub fn sessions_in_states(&self, states: &[&str]) -> Result<Vec<SessionRow>, Error> {
-        self.with(|c| {
-            let mut stmt = c.prepare(&format!(
-                "SELECT {SESSION_COLUMNS} FROM sessions WHERE state IN (SELECT value FROM json_each(?1)) ORDER BY created_ms"
-            ))?;
-            let list = serde_json::to_string(states).unwrap_or_default();
-            let rows = stmt.query_map([list], session_from_row)?;
-            rows.collect()
-        })
-    }
-
-    pub fn set_state(&self, id: &str, state: &str, error: Option<&str>) -> Result<(), Error> {
-        let finished = matches!(state, "done" | "failed").then(now_ms);
-        self.with(|c| {
-            c.execute(
-                "UPDATE sessions SET state = ?2, error = ?3, finished_ms = ?4 WHERE id = ?1",
-                params![id, state, error, finished],
-            )
-        })
-        .map(|_| ())
-    }
-
-    pub fn set_recording(&self, id: &str, bytes: u64) -> Result<(), Error> {
-        self.with(|c| {
-            c.execute(
-                "UPDATE sessions SET recording_bytes = ?2, state = 'uploaded' WHERE id = ?1",
-                params![id, bytes as i64],
-            )
-        })
-        .map(|_| ())
-    }
-
-    /// Records the first recording of a session that is still `created`;
-    /// false when another request got there first (so playback starts once).
-    pub fn claim_recording(&self, id: &str, bytes: u64) -> Result<bool, Error> {
-        self.with(|c| {
-            c.execute(
-                "UPDATE sessions SET recording_bytes = ?2, state = 'uploaded' WHERE id = ?1 AND state = 'created'",
-                params![id, bytes as i64],
-            )
-        })
-        .map(|n| n == 1)
-    }
-
-    pub fn set_results(&self, id: &str, trials: u32) -> Result<(), Error> {
-        self.with(|c| {
-            c.execute(
-                "UPDATE sessions SET results_trials = ?2 WHERE id = ?1",
-                params![id, trials],
-            )
-        })
-        .map(|_| ())
-    }
-
-    pub fn set_stop_reason(&self, id: &str, reason: &str) -> Result<(), Error> {
-        self.with(|c| {
-            c.execute(
-                "UPDATE sessions SET stop_reason = ?2 WHERE id = ?1",
-                params![id, reason],
-            )
-        })
-        .map(|_| ())
+        f: impl FnOnce(&rusqlite::Transaction<'_>) -> Result<T, Error>,
+    ) -> Result<T, Error> {
+        let mut conn = self
+            .conn
+            .lock()
+            .map_err(|_| Error::Internal("database lock poisoned".into()))?;
+        let tx = conn.transaction()?;
+        let value = f(&tx)?;
+        tx.commit()?;
+        Ok(value)
     }
 
     /// Adds a trial under the next index. With a key already used in this
@@ -320,25 +203,6 @@ impl Db {
         Ok((idx, true))
     }
 
-    /// Removes a session with its trials and jobs (devices forget it) in one transaction.
-    /// Returns whether it existed.
-    pub fn delete_session(&self, id: &str) -> Result<bool, Error> {
-        let mut conn = self
-            .conn
-            .lock()
-            .map_err(|_| Error::Internal("database lock poisoned".into()))?;
-        let tx = conn.transaction()?;
-        tx.execute("DELETE FROM trials WHERE session_id = ?1", [id])?;
-        tx.execute("DELETE FROM jobs WHERE session_id = ?1", [id])?;
-        tx.execute(
-            "UPDATE devices SET session_id = NULL WHERE session_id = ?1",
-            [id],
-        )?;
-        let removed = tx.execute("DELETE FROM sessions WHERE id = ?1", [id])?;
-        tx.commit()?;
-        Ok(removed == 1)
-    }
-
     pub fn trial_count(&self, session: &str) -> Result<u32, Error> {
         self.with(|c| {
             c.query_row(
@@ -349,35 +213,16 @@ impl Db {
         })
     }
 
-    /// Storage indices of a session's trials in playback order, the order the
-    /// estimate uses (trials of parallel devices arrive out of order).
-    pub fn trials_in_order(&self, session: &str) -> Result<Vec<u32>, Error> {
+    /// (storage index, playback index) of a session's trials in playback order, the order
+    /// the estimate uses (trials of parallel devices arrive out of order).
+    pub fn trials_in_order(&self, session: &str) -> Result<Vec<(u32, u32)>, Error> {
         self.with(|c| {
-            let mut stmt =
-                c.prepare("SELECT idx FROM trials WHERE session_id = ?1 ORDER BY play_index, idx")?;
-            let rows = stmt.query_map([session], |r| r.get(0))?;
+            let mut stmt = c.prepare(
+                "SELECT idx, play_index FROM trials WHERE session_id = ?1 ORDER BY play_index, idx",
+            )?;
+            let rows = stmt.query_map([session], |r| Ok((r.get(0)?, r.get(1)?)))?;
             rows.collect()
         })
-    }
-
-    pub fn latest_session(
-        &self,
-        done_only: bool,
-        legacy_only: bool,
-    ) -> Result<Option<String>, Error> {
-        let mut sql = String::from("SELECT id FROM sessions WHERE 1=1");
-        if done_only {
-            sql.push_str(" AND state = 'done'");
-        }
-        if legacy_only {
-            sql.push_str(" AND legacy = 1");
-        }
-        sql.push_str(if done_only {
-            " ORDER BY finished_ms DESC, rowid DESC LIMIT 1"
-        } else {
-            " ORDER BY rowid DESC LIMIT 1"
-        });
-        self.with(|c| c.query_row(&sql, [], |r| r.get(0)).optional())
     }
 
     pub fn start_job(&self, session: &str, kind: &str) -> Result<i64, Error> {
@@ -390,11 +235,11 @@ impl Db {
         })
     }
 
-    pub fn finish_job(&self, job: i64, state: &str, error: Option<&str>) -> Result<(), Error> {
+    pub fn finish_job(&self, job: i64, end: JobEnd, error: Option<&str>) -> Result<(), Error> {
         self.with(|c| {
             c.execute(
                 "UPDATE jobs SET state = ?2, error = ?3, finished_ms = ?4 WHERE id = ?1",
-                params![job, state, error, now_ms()],
+                params![job, end.as_str(), error, now_ms()],
             )
         })
         .map(|_| ())
@@ -451,47 +296,25 @@ impl Db {
 mod tests {
     use super::*;
 
-    fn new_row(key: Option<&str>) -> NewSessionRow<'_> {
-        NewSessionRow {
-            idempotency_key: key,
-            trials_total: 5,
-            setting: "median",
-            playback: "upload",
-            adaptive_min: None,
-            adaptive_k: 3,
-            legacy: false,
-        }
-    }
-
     #[test]
-    fn idempotent_insert_and_trials_survive_reopen() {
+    fn trials_are_idempotent_and_survive_a_reopen() {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("sitar.db");
         {
             let db = Db::open(&path).unwrap();
-            assert_eq!(
-                db.insert_session("a", &new_row(Some("k1"))).unwrap(),
-                ("a".into(), true)
-            );
-            assert_eq!(
-                db.insert_session("b", &new_row(Some("k1"))).unwrap(),
-                ("a".into(), false)
-            );
-            assert_eq!(
-                db.add_trial("a", Some("t1"), None, 10, "upload", |_| Ok(()))
-                    .unwrap(),
-                (0, true)
-            );
-            assert_eq!(
-                db.add_trial("a", Some("t2"), None, 10, "upload", |_| Ok(()))
-                    .unwrap(),
-                (1, true)
-            );
-            assert_eq!(
-                db.add_trial("a", Some("t1"), None, 10, "upload", |_| Ok(()))
-                    .unwrap(),
-                (0, false)
-            );
+            // Trials belong to a session (a foreign key).
+            db.with(|c| {
+                c.execute(
+                    "INSERT INTO sessions (id, created_ms, trials_total, setting, playback, state, \
+                     adaptive_k) VALUES ('a', 0, 5, 'median', 'upload', 'created', 3)",
+                    [],
+                )
+            })
+            .unwrap();
+            let add = |key, play| db.add_trial("a", key, play, 10, "upload", |_| Ok(()));
+            assert_eq!(add(Some("t1"), None).unwrap(), (0, true));
+            assert_eq!(add(Some("t2"), None).unwrap(), (1, true));
+            assert_eq!(add(Some("t1"), None).unwrap(), (0, false));
             // A failed store leaves no row behind.
             assert!(
                 db.add_trial("a", None, Some(0), 10, "upload", |_| Err(Error::Internal(
@@ -499,7 +322,6 @@ mod tests {
                 )))
                 .is_err()
             );
-            db.set_state("a", "playing", None).unwrap();
         }
         let db = Db::open(&path).unwrap();
         assert_eq!(db.trial_count("a").unwrap(), 2);
@@ -508,10 +330,10 @@ mod tests {
                 .unwrap(),
             (2, true)
         );
-        assert_eq!(db.trials_in_order("a").unwrap(), vec![0, 2, 1]);
-        let row = db.session("a").unwrap().unwrap();
-        assert_eq!((row.state.as_str(), row.trials_total), ("playing", 5));
-        assert_eq!(db.sessions_in_states(&["playing"]).unwrap().len(), 1);
-        assert!(db.session("b").unwrap().is_none());
+        assert_eq!(
+            db.trials_in_order("a").unwrap(),
+            vec![(0, 0), (2, 0), (1, 1)]
+        );
+        assert_eq!(db.trial_count("b").unwrap(), 0);
     }
 }

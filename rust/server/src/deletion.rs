@@ -1,55 +1,44 @@
-//! `DELETE /v1/sessions/{id}`, and the retention sweep: the ways to free the
-//! data directory. A session is deleted whole (its row, trials, jobs and
-//! folder) or not at all, and never while a job works on it.
+//! Deleting sessions: `DELETE /v1/sessions/{id}` and the retention sweep, the ways to free
+//! the data directory. A session is deleted whole (its row, trials, jobs, folder and
+//! trials in memory) or not at all, and never while a job or an estimate works on it.
 
 use std::sync::Arc;
 use std::time::Duration;
 
-use axum::extract::{Path, State};
-use axum::http::StatusCode;
-use axum::response::Response;
-use serde_json::json;
-
 use crate::Error;
-use crate::routes::{json_response, session_row};
-use crate::state::Shared;
+use crate::shared::Shared;
 
 /// How long a delete waits for a request that is writing into the session.
 const WRITER_WAIT: Duration = Duration::from_secs(5);
 
-pub(crate) async fn delete_session(
-    State(shared): State<Arc<Shared>>,
-    Path(id): Path<String>,
-) -> Result<Response, Error> {
-    delete_idle(&shared, &id).await?;
-    Ok(json_response(
-        StatusCode::OK,
-        &json!({"id": id, "deleted": true}).to_string(),
-    ))
-}
-
 /// Deletes session `id` unless a job works on it (409) or it does not exist (404).
 pub(crate) async fn delete_idle(shared: &Arc<Shared>, id: &str) -> Result<(), Error> {
-    let id = id.to_string();
-    let row = session_row(shared, &id)?;
-    let lock = shared.session_lock(&row.id);
+    let session = shared.session(id)?;
+    let id = session.id;
+    // A progressive estimate publishes under the session lock: let a running one end first.
+    if let Some(live) = shared.live.get(&id) {
+        let deadline = tokio::time::Instant::now() + WRITER_WAIT;
+        while live.estimating() && tokio::time::Instant::now() < deadline {
+            tokio::time::sleep(Duration::from_millis(10)).await;
+        }
+    }
+    let lock = shared.session_lock(&id);
     let Ok(_held) = tokio::time::timeout(WRITER_WAIT, lock.lock()).await else {
         return Err(Error::Conflict(format!(
             "session {id} is receiving an upload; try again when it ends"
         )));
     };
     // Read again under the lock: the state may have moved on meanwhile.
-    let row = session_row(shared, &id)?;
-    let idle = match row.state.as_str() {
-        "created" | "done" | "failed" => true,
-        // An `upload` session waits for trials; any other has its playback job.
-        "uploaded" => row.playback == "upload",
-        _ => false,
-    };
-    if !idle || shared.live(&id).is_some() {
+    let session = shared.session(&id)?;
+    if !session.is_idle() || shared.running(&id).is_some() {
         return Err(Error::Conflict(format!(
             "session {id} is {}: a job works on it; delete it once it is done or failed",
-            row.state
+            session.state
+        )));
+    }
+    if shared.live.get(&id).is_some_and(|live| live.estimating()) {
+        return Err(Error::Conflict(format!(
+            "session {id}: an estimate of its trials runs (a job works on it); try again shortly"
         )));
     }
     let trash = shared.files.trash_session_dir(&id)?;
@@ -59,6 +48,7 @@ pub(crate) async fn delete_idle(shared: &Arc<Shared>, id: &str) -> Result<(), Er
         }
         return Err(e);
     }
+    shared.live.remove(&id);
     shared.forget_session_lock(&id);
     if let Some(trash) = trash {
         // Already out of sight; what a failure leaves, the next start removes.

@@ -28,6 +28,20 @@ pub enum Error {
     /// The request does not fit the session's state (e.g. estimate before 2 trials): 409 `conflict`.
     #[error("{0}")]
     Conflict(String),
+    /// The session's state does not allow the step asked for: 409 `conflict`, naming the state.
+    #[error("session {session} is {state}: it cannot {action}")]
+    Transition {
+        /// The session.
+        session: String,
+        /// Its state (wire name: `created`, `uploaded`, `playing`, `estimating`, `done`, `failed`).
+        state: &'static str,
+        /// What was asked, e.g. `take more trials`.
+        action: &'static str,
+    },
+    /// The server holds as much as its memory bound allows and cannot take this now: 503
+    /// `busy`. Retrying later (when other sessions have finished) can succeed.
+    #[error("{0}")]
+    Busy(String),
     /// An uploaded trajectory or recording cannot be read: 422 `invalid_content`.
     #[error("{0}")]
     InvalidContent(String),
@@ -77,7 +91,8 @@ impl Error {
                 (StatusCode::UNSUPPORTED_MEDIA_TYPE, "unsupported_media_type")
             }
             Error::TooLarge { .. } => (StatusCode::PAYLOAD_TOO_LARGE, "too_large"),
-            Error::Conflict(_) => (StatusCode::CONFLICT, "conflict"),
+            Error::Conflict(_) | Error::Transition { .. } => (StatusCode::CONFLICT, "conflict"),
+            Error::Busy(_) => (StatusCode::SERVICE_UNAVAILABLE, "busy"),
             Error::InvalidContent(_) => (StatusCode::UNPROCESSABLE_ENTITY, "invalid_content"),
             Error::Io { .. } => (StatusCode::INTERNAL_SERVER_ERROR, "io"),
             Error::Database(_) => (StatusCode::INTERNAL_SERVER_ERROR, "database"),

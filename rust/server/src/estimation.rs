@@ -1,15 +1,10 @@
-//! The one place that calls the estimator: trial files in, published results out.
+//! From an estimate to what is published: the results files and the classes adaptive
+//! stopping watches. (The estimate itself runs in `live.rs`, over the trials held in memory.)
 
-use std::collections::BTreeMap;
-use std::path::PathBuf;
+use std::collections::{BTreeMap, HashSet};
 
 use sitar_core::{ErrorClass, Thresholds};
-use sitar_estimator::{EstimateOptions, Setting, Trajectory};
-
-use crate::Error;
-
-/// Frames per sub-trajectory (the phone logs every 5th frame; a sub-trajectory spans 10).
-const SUBTRAJECTORY_FRAMES: usize = 10;
+use sitar_estimator::{Estimate, Trajectory};
 
 /// One estimate, ready to publish.
 #[derive(Debug, Clone)]
@@ -17,75 +12,39 @@ pub(crate) struct Published {
     pub trials: u32,
     pub csv: String,
     pub json: String,
-    /// Class of the window of every sub-trajectory (every 10th frame of the
+    /// Class of the window of every sub-trajectory (every `window_frames`-th frame of the
     /// reference trial: what the phone colours), keyed by its start time (ns).
     pub classes: BTreeMap<i64, ErrorClass>,
 }
 
-/// Parses a setting name, naming the accepted ones when it is wrong.
-pub(crate) fn check_setting(setting: &str) -> Result<Setting, Error> {
-    setting.parse::<Setting>().map_err(|e| {
-        Error::BadRequest(format!(
-            "setting {setting:?}: {e} (expected mean, median, trim_mean_10|20|30|40 or mean_inliers)"
-        ))
-    })
-}
-
-/// Reads and checks one TUM text; the error names `source` and the line.
-pub(crate) fn parse_trial(text: &str, source: &str) -> Result<Trajectory, Error> {
-    let traj = sitar_estimator::parse_tum(text, source)
-        .map_err(|e| Error::InvalidContent(e.to_string()))?;
-    if traj.len() < 2 {
-        return Err(Error::InvalidContent(format!(
-            "{source}: a trial needs at least 2 poses, found {}",
-            traj.len()
-        )));
+impl Published {
+    /// The results of `estimate`, whose first trial is `reference`; windows are classified
+    /// with `thresholds` (in the estimate's unit).
+    pub fn new(
+        estimate: &Estimate,
+        reference: &Trajectory,
+        window_frames: usize,
+        thresholds: Thresholds,
+    ) -> Published {
+        let sub_starts: HashSet<i64> = reference
+            .stamps
+            .iter()
+            .step_by(window_frames.max(1))
+            .copied()
+            .collect();
+        let classes = estimate
+            .windows
+            .iter()
+            .filter(|w| sub_starts.contains(&w.start))
+            .map(|w| (w.start, thresholds.classify(w.error_m)))
+            .collect();
+        Published {
+            trials: estimate.trials as u32,
+            csv: estimate.to_legacy_csv(),
+            json: estimate.to_json(thresholds),
+            classes,
+        }
     }
-    Ok(traj)
-}
-
-/// Runs the pairwise estimate over the stored trial files. Blocking: call it
-/// from `spawn_blocking`.
-pub(crate) fn estimate_files(
-    paths: &[PathBuf],
-    setting: &str,
-    thresholds: Thresholds,
-) -> Result<Published, Error> {
-    if paths.len() < 2 {
-        return Err(Error::Conflict(format!(
-            "an estimate needs at least 2 trials, the session has {}",
-            paths.len()
-        )));
-    }
-    let setting = check_setting(setting)?;
-    let trials = paths
-        .iter()
-        .map(|p| sitar_estimator::read_tum(p).map_err(|e| Error::InvalidContent(e.to_string())))
-        .collect::<Result<Vec<_>, _>>()?;
-    let options = EstimateOptions {
-        setting,
-        ..EstimateOptions::default()
-    };
-    let estimate =
-        sitar_estimator::estimate(&trials, &options).map_err(|e| Error::Estimate(e.to_string()))?;
-    let sub_starts: std::collections::HashSet<i64> = trials[0]
-        .stamps
-        .iter()
-        .step_by(SUBTRAJECTORY_FRAMES)
-        .copied()
-        .collect();
-    let classes = estimate
-        .windows
-        .iter()
-        .filter(|w| sub_starts.contains(&w.start))
-        .map(|w| (w.start, thresholds.classify(w.error_m)))
-        .collect();
-    Ok(Published {
-        trials: paths.len() as u32,
-        csv: estimate.to_legacy_csv(),
-        json: estimate.to_json(thresholds),
-        classes,
-    })
 }
 
 /// Adaptive stopping: true when no published estimate over the last `k`
@@ -109,6 +68,58 @@ pub(crate) fn classes_stable(history: &[(u32, BTreeMap<i64, ErrorClass>)], k: u3
 #[cfg(test)]
 mod tests {
     use super::*;
+    use sitar_estimator::{EstimateOptions, PoseRelation, TimeUnit};
+
+    #[test]
+    fn sub_trajectory_classes_follow_the_window_length_and_unit() {
+        let trial = |turn: f64| {
+            let n = 61;
+            Trajectory {
+                stamps: (0..n as i64).map(|k| 1_000 + k * 33_000_000).collect(),
+                positions: (0..n)
+                    .map(|k| glam::DVec3::new(k as f64 * 0.01 * (1.0 + turn), 0.0, 0.0))
+                    .collect(),
+                orientations: (0..n)
+                    .map(|k| glam::DQuat::from_rotation_y(k as f64 * turn))
+                    .collect(),
+                time_unit: TimeUnit::Nanoseconds,
+            }
+        };
+        let trials = [trial(0.0), trial(0.02)];
+        for (frames, relation) in [
+            (10, PoseRelation::TranslationPart),
+            (20, PoseRelation::RotationAngleDeg),
+        ] {
+            let options = EstimateOptions {
+                delta: frames,
+                pose_relation: relation,
+                ..EstimateOptions::default()
+            };
+            let estimate = sitar_estimator::estimate(&trials, &options).unwrap();
+            let thresholds = Thresholds::new(1.0, 2.0);
+            let published = Published::new(&estimate, &trials[0], frames, thresholds);
+            // One class per sub-trajectory start that has a window: frames 0, k, 2k, … < 61 − k.
+            let starts: Vec<i64> = published.classes.keys().copied().collect();
+            let expected: Vec<i64> = (0..61 - frames)
+                .step_by(frames)
+                .map(|k| 1_000 + k as i64 * 33_000_000)
+                .collect();
+            assert_eq!(starts, expected, "{frames}");
+            for w in estimate
+                .windows
+                .iter()
+                .filter(|w| starts.contains(&w.start))
+            {
+                assert_eq!(published.classes[&w.start], thresholds.classify(w.error_m));
+            }
+            assert_eq!(published.trials, 2);
+            assert!(
+                published
+                    .json
+                    .contains(&format!("\"window_frames\":{frames}"))
+            );
+        }
+    }
 
     fn classes(list: &[(i64, ErrorClass)]) -> BTreeMap<i64, ErrorClass> {
         list.iter().copied().collect()

@@ -253,6 +253,30 @@ impl Files {
         }
     }
 
+    /// Reads `body` into memory, refusing more than `limit` bytes (a trial: it is parsed
+    /// from these bytes and written once). A body that breaks off or stalls is a 400.
+    pub async fn receive_bytes<S, E>(
+        &self,
+        mut body: S,
+        limit: u64,
+        what: &'static str,
+    ) -> Result<Vec<u8>, Error>
+    where
+        S: Stream<Item = Result<Bytes, E>> + Unpin,
+        E: std::fmt::Display,
+    {
+        let mut sink = Sink {
+            out: Vec::new(),
+            path: Path::new("(memory)"),
+            written: 0,
+            idle: self.idle,
+        };
+        match sink.copy(&mut body, limit, what).await {
+            Ok(()) => Ok(sink.out),
+            Err(Copy::BrokeOff(error) | Copy::Failed(error)) => Err(error),
+        }
+    }
+
     /// Writes small server-made content atomically (temp file + rename).
     pub fn write_atomic(&self, dest: &Path, content: &[u8]) -> Result<(), Error> {
         let temp = TempFile {
@@ -273,16 +297,17 @@ enum Copy {
     Failed(Error),
 }
 
-/// A buffered file being written from a request body.
-struct Sink<'p> {
-    out: tokio::io::BufWriter<tokio::fs::File>,
+/// Where a request body is being written: a buffered file, or memory.
+struct Sink<'p, W> {
+    out: W,
+    /// Named in write errors.
     path: &'p Path,
-    /// The file's length once flushed.
+    /// The length written once flushed.
     written: u64,
     idle: std::time::Duration,
 }
 
-impl<'p> Sink<'p> {
+impl<'p> Sink<'p, tokio::io::BufWriter<tokio::fs::File>> {
     fn new(file: tokio::fs::File, path: &'p Path, written: u64, idle: std::time::Duration) -> Self {
         Sink {
             out: tokio::io::BufWriter::with_capacity(1 << 20, file),
@@ -291,7 +316,9 @@ impl<'p> Sink<'p> {
             idle,
         }
     }
+}
 
+impl<W: tokio::io::AsyncWrite + Unpin> Sink<'_, W> {
     /// Copies `body` until it ends, refusing to grow the file past `limit` bytes; the
     /// buffer is flushed whatever happens, so `written` counts bytes in the file.
     async fn copy<S, E>(&mut self, body: &mut S, limit: u64, what: &'static str) -> Result<(), Copy>
@@ -434,6 +461,42 @@ mod tests {
         let dest = dir.path().join("sessions/x/recording");
         temp.publish(&dest).unwrap();
         assert_eq!(std::fs::read(&dest).unwrap(), vec![7u8; 4000]);
+        assert_eq!(
+            std::fs::read_dir(dir.path().join("tmp")).unwrap().count(),
+            0
+        );
+    }
+
+    #[tokio::test]
+    async fn bytes_in_memory_keep_the_limit_and_a_broken_body_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let files = Files::open(dir.path()).unwrap();
+        let body = || {
+            futures_util::stream::iter(
+                (0..3).map(|i| Ok::<_, std::io::Error>(Bytes::from(vec![i as u8; 10]))),
+            )
+        };
+        let bytes = files.receive_bytes(body(), 30, "trajectory").await.unwrap();
+        assert_eq!((bytes.len(), bytes[0], bytes[29]), (30, 0, 2));
+        let err = files
+            .receive_bytes(body(), 29, "trajectory")
+            .await
+            .unwrap_err();
+        assert!(
+            matches!(
+                err,
+                Error::TooLarge {
+                    what: "trajectory",
+                    limit: 29
+                }
+            ),
+            "{err}"
+        );
+        let err = files
+            .receive_bytes(broken_after(2), 10_000, "trajectory")
+            .await
+            .unwrap_err();
+        assert!(err.to_string().contains("broke off"), "{err}");
         assert_eq!(
             std::fs::read_dir(dir.path().join("tmp")).unwrap().count(),
             0

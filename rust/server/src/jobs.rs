@@ -1,13 +1,19 @@
-//! Session jobs: playback, progressive estimates, adaptive stopping, the final estimate.
+//! Session jobs: playback with progressive estimates and adaptive stopping, the final
+//! estimate, `upload` sessions' progressive estimates, and resuming after a restart.
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use crate::Error;
+use crate::config::PlaybackKind;
+use crate::db::JobEnd;
 use crate::estimation::{self, Published};
+use crate::live::LiveSession;
 use crate::playback::{PlaybackJob, TrialOutput};
-use crate::state::{Live, Shared};
+use crate::session::{SessionState, Step};
+use crate::shared::{RunningJob, Shared};
+use crate::trials::{self, Arrival};
 
 /// How a job ended.
 enum Outcome {
@@ -16,118 +22,111 @@ enum Outcome {
     Interrupted,
 }
 
-/// Checks and stores one trial's TUM text under the next index; with an
-/// idempotency key seen before, returns the earlier index and stores nothing.
-pub(crate) fn store_trial(
-    shared: &Shared,
-    id: &str,
-    key: Option<&str>,
-    play_index: Option<u32>,
-    tum: &str,
-    source: &str,
-) -> Result<(u32, bool), Error> {
-    let trajectory = estimation::parse_trial(tum, "trial")?;
-    shared
-        .db
-        .add_trial(id, key, play_index, trajectory.len(), source, |index| {
-            let dest = shared.files.trial(id, index);
-            shared.files.write_atomic(&dest, tum.as_bytes())
-        })
+/// How a playback job begins.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Begin {
+    /// The recording was just accepted: `uploaded → playing`.
+    Start,
+    /// After a restart; the session was already resumed (`Lifecycle::resume`).
+    Resume,
 }
 
-/// Estimates over every stored trial (off the async runtime) and publishes the results.
-pub(crate) async fn estimate_and_publish(
+/// Publishes the estimate over the live session's trials if any arrived since the last.
+async fn publish(
     shared: &Arc<Shared>,
+    live: &Arc<LiveSession>,
     id: &str,
-    setting: &str,
-) -> Result<Published, Error> {
-    let paths: Vec<_> = shared
-        .db
-        .trials_in_order(id)?
-        .into_iter()
-        .map(|i| shared.files.trial(id, i))
-        .collect();
-    let (setting, thresholds) = (setting.to_string(), shared.config.thresholds);
-    let published = tokio::task::spawn_blocking(move || {
-        estimation::estimate_files(&paths, &setting, thresholds)
-    })
-    .await
-    .map_err(|e| Error::Internal(format!("estimate task: {e}")))??;
-    shared
-        .files
-        .write_atomic(&shared.files.results_csv(id), published.csv.as_bytes())?;
-    shared
-        .files
-        .write_atomic(&shared.files.results_json(id), published.json.as_bytes())?;
-    shared.db.set_results(id, published.trials)?;
-    Ok(published)
+) -> Result<Option<Published>, Error> {
+    let (shared, id) = (shared.clone(), id.to_string());
+    live.publish(move |published| crate::published::write(&shared, &id, published))
+        .await
+}
+
+/// Ends a job's session: a failure is recorded (unless the server is stopping, which leaves
+/// the session in flight), the job row closed, the live session dropped.
+fn conclude(shared: &Shared, id: &str, job: Option<i64>, outcome: Result<Outcome, Error>) {
+    shared.set_running(id, None);
+    shared.live.remove(id);
+    match outcome {
+        Ok(Outcome::Done) => {
+            if let Some(job) = job {
+                let _ = shared.db.finish_job(job, JobEnd::Done, None);
+            }
+        }
+        Ok(Outcome::Interrupted) => {
+            log::info!("session {id}: interrupted by shutdown, resumes on next start")
+        }
+        // An error while the server stops (a cancelled playback, a refused blocking
+        // task) is the stop's doing: the session stays in flight for the next start.
+        Err(e) if shared.stopping() => {
+            log::info!("session {id}: interrupted by shutdown ({e}), resumes on next start")
+        }
+        Err(e) => {
+            let message = e.to_string();
+            log::warn!("session {id} failed: {message}");
+            if let Err(e) = shared.lifecycle().fail(id, &message) {
+                log::warn!("session {id}: {e}");
+            }
+            if let Some(job) = job {
+                let _ = shared.db.finish_job(job, JobEnd::Failed, Some(&message));
+            }
+        }
+    }
 }
 
 /// Starts the playback job of a session in the background.
-pub(crate) fn spawn_session(shared: Arc<Shared>, id: String) {
+pub(crate) fn spawn_session(shared: Arc<Shared>, id: String, begin: Begin) {
     tokio::spawn(async move {
         let job = shared.db.start_job(&id, "playback").ok();
-        let outcome = play_and_estimate(&shared, &id).await;
-        shared.set_live(&id, None);
-        match outcome {
-            Ok(Outcome::Done) => {
-                if let Some(job) = job {
-                    let _ = shared.db.finish_job(job, "done", None);
-                }
-            }
-            Ok(Outcome::Interrupted) => {
-                log::info!("session {id}: interrupted by shutdown, resumes on next start")
-            }
-            // An error while the server stops (a cancelled playback, a refused blocking
-            // task) is the stop's doing: the session stays in flight for the next start.
-            Err(e) if shared.stopping() => {
-                log::info!("session {id}: interrupted by shutdown ({e}), resumes on next start")
-            }
-            Err(e) => {
-                let message = e.to_string();
-                log::warn!("session {id} failed: {message}");
-                let _ = shared.db.set_state(&id, "failed", Some(&message));
-                if let Some(job) = job {
-                    let _ = shared.db.finish_job(job, "failed", Some(&message));
-                }
-            }
-        }
+        let outcome = play_and_estimate(&shared, &id, begin).await;
+        conclude(&shared, &id, job, outcome);
     });
 }
 
-/// Starts the estimate of an `upload` session in the background. The session is
-/// `estimating` when this returns (so a delete under the session lock sees it in flight).
-pub(crate) fn spawn_estimate(shared: Arc<Shared>, id: String, setting: String) {
-    let _ = shared.db.set_state(&id, "estimating", None);
+/// Runs the final estimate of an `upload` session in the background; the caller has moved
+/// it to `estimating` (so a delete under the session lock sees it in flight).
+pub(crate) fn spawn_estimate(shared: Arc<Shared>, id: String) {
     tokio::spawn(async move {
         let job = shared.db.start_job(&id, "estimate").ok();
-        match estimate_and_publish(&shared, &id, &setting).await {
-            Ok(_) => {
-                let _ = shared.db.set_state(&id, "done", None);
-                if let Some(job) = job {
-                    let _ = shared.db.finish_job(job, "done", None);
-                }
+        let outcome = async {
+            let session = shared.session(&id)?;
+            let live = trials::live_session(&shared, &session).await?;
+            // Nothing new since the last progressive estimate: it is the final one.
+            publish(&shared, &live, &id).await?;
+            shared.lifecycle().finish(&id)?;
+            Ok(Outcome::Done)
+        }
+        .await;
+        conclude(&shared, &id, job, outcome);
+    });
+}
+
+/// After a trial of an `upload` session: publishes progressive estimates in the background
+/// until no trial is left waiting (trials that arrive during one are taken together by the
+/// next). One such worker per session at a time.
+pub(crate) fn spawn_progressive(shared: Arc<Shared>, live: Arc<LiveSession>, id: String) {
+    if !shared.config.progressive_uploads || !live.claim_worker() {
+        return;
+    }
+    tokio::spawn(async move {
+        loop {
+            if let Err(e) = publish(&shared, &live, &id).await
+                && !shared.stopping()
+            {
+                log::warn!("session {id}: progressive estimate: {e}");
             }
-            Err(e) if shared.stopping() => log::info!("session {id}: estimate interrupted: {e}"),
-            Err(e) => {
-                let message = e.to_string();
-                let _ = shared.db.set_state(&id, "failed", Some(&message));
-                if let Some(job) = job {
-                    let _ = shared.db.finish_job(job, "failed", Some(&message));
-                }
+            if !live.release_worker() {
+                break;
             }
         }
     });
 }
 
-async fn play_and_estimate(shared: &Arc<Shared>, id: &str) -> Result<Outcome, Error> {
-    let row = shared
-        .db
-        .session(id)?
-        .ok_or_else(|| Error::NotFound(format!("no session {id}")))?;
-    let backend = shared.backend(&row.playback)?;
+async fn play_and_estimate(shared: &Arc<Shared>, id: &str, begin: Begin) -> Result<Outcome, Error> {
+    let session = shared.session(id)?;
+    let backend = shared.backend(session.playback);
     let done_before = shared.db.trial_count(id)?;
-    let needed = row.trials_total.saturating_sub(done_before);
+    let needed = session.trials_total.saturating_sub(done_before);
     let recording = shared.files.recording(id);
     let plan = {
         let (backend, recording) = (backend.clone(), recording.clone());
@@ -136,9 +135,9 @@ async fn play_and_estimate(shared: &Arc<Shared>, id: &str) -> Result<Outcome, Er
             .map_err(|e| Error::Internal(format!("plan task: {e}")))??
     };
     let cancel = Arc::new(AtomicBool::new(shared.stopping()));
-    shared.set_live(
+    shared.set_running(
         id,
-        Some(Live {
+        Some(RunningJob {
             cancel: cancel.clone(),
             plan: Some(plan),
             started: Instant::now(),
@@ -146,7 +145,10 @@ async fn play_and_estimate(shared: &Arc<Shared>, id: &str) -> Result<Outcome, Er
             needed,
         }),
     );
-    shared.db.set_state(id, "playing", None)?;
+    if begin == Begin::Start {
+        shared.lifecycle().start_playing(id)?;
+    }
+    let live = trials::live_session(shared, &session).await?;
 
     let (tx, mut rx) = tokio::sync::mpsc::unbounded_channel::<TrialOutput>();
     let job = PlaybackJob {
@@ -163,15 +165,20 @@ async fn play_and_estimate(shared: &Arc<Shared>, id: &str) -> Result<Outcome, Er
         backend.play(&job, &sink)
     });
 
-    let adaptive = row
+    let adaptive = session
         .adaptive_min
-        .map(|min| (min.max(2), row.adaptive_k.max(1)));
+        .map(|min| (min.max(2), session.adaptive_k.max(1)));
     let mut history = Vec::new();
-    let mut published_trials = 0;
     let mut stop_reason: Option<String> = None;
-    if done_before >= 2 {
-        let p = estimate_and_publish(shared, id, &row.setting).await?;
-        published_trials = p.trials;
+    let stop = |reason: String, stop_reason: &mut Option<String>| -> Result<(), Error> {
+        shared.lifecycle().stop(id, &reason)?;
+        *stop_reason = Some(reason);
+        cancel.store(true, Ordering::SeqCst);
+        Ok(())
+    };
+    if done_before >= 2
+        && let Some(p) = publish(shared, &live, id).await?
+    {
         history.push((p.trials, p.classes));
     }
     while let Some(first) = rx.recv().await {
@@ -181,19 +188,29 @@ async fn play_and_estimate(shared: &Arc<Shared>, id: &str) -> Result<Outcome, Er
             batch.push(more);
         }
         for trial in batch {
-            if let Err(e) = store_trial(
-                shared,
-                id,
-                None,
-                Some(trial.index),
-                &trial.tum,
-                &trial.source,
-            ) {
-                log::warn!(
+            let arrival = Arrival {
+                key: None,
+                play_index: Some(trial.index),
+                source: &trial.source,
+            };
+            let bytes = trial.tum.as_bytes();
+            let stored = trials::parse_trial(bytes, "trial")
+                .and_then(|parsed| trials::store_trial(shared, &live, id, arrival, bytes, parsed));
+            match stored {
+                Ok(_) => {}
+                // The memory bound: what is there is estimated, nothing more is played.
+                Err(e @ (Error::TooLarge { .. } | Error::Busy(_))) if stop_reason.is_none() => {
+                    let count = shared.db.trial_count(id)?;
+                    stop(
+                        format!("memory bound: {e} (stopped after {count} trials)"),
+                        &mut stop_reason,
+                    )?;
+                }
+                Err(e) => log::warn!(
                     "session {id}: trial {} from {} dropped: {e}",
                     trial.index,
                     trial.source
-                );
+                ),
             }
         }
         let count = shared.db.trial_count(id)?;
@@ -201,21 +218,22 @@ async fn play_and_estimate(shared: &Arc<Shared>, id: &str) -> Result<Outcome, Er
             continue;
         }
         // Progressive results: a first picture from the 2nd trial on.
-        let p = estimate_and_publish(shared, id, &row.setting).await?;
-        published_trials = p.trials;
+        let Some(p) = publish(shared, &live, id).await? else {
+            continue;
+        };
         history.push((p.trials, p.classes));
         if let Some((min, k)) = adaptive
             && count >= min
-            && count < row.trials_total
+            && count < session.trials_total
             && estimation::classes_stable(&history, k)
         {
-            let reason = format!(
-                "adaptive stop: no window changed class over the last {k} trials (stopped after {count} of {})",
-                row.trials_total
-            );
-            shared.db.set_stop_reason(id, &reason)?;
-            stop_reason = Some(reason);
-            cancel.store(true, Ordering::SeqCst);
+            stop(
+                format!(
+                    "adaptive stop: no window changed class over the last {k} trials (stopped after {count} of {})",
+                    session.trials_total
+                ),
+                &mut stop_reason,
+            )?;
         }
     }
     let played = player
@@ -227,57 +245,81 @@ async fn play_and_estimate(shared: &Arc<Shared>, id: &str) -> Result<Outcome, Er
     let count = shared.db.trial_count(id)?;
     match played {
         Err(e) if count < 2 => return Err(e),
-        Err(e) => {
-            let reason = format!("playback failed after {count} trials: {e}");
-            shared.db.set_stop_reason(id, &reason)?;
-        }
+        Err(e) => stop(
+            format!("playback failed after {count} trials: {e}"),
+            &mut stop_reason,
+        )?,
         Ok(()) if count < 2 => {
             return Err(Error::Playback(format!(
                 "only {count} trial(s) finished; an estimate needs 2"
             )));
         }
         Ok(()) => {
-            if count < row.trials_total && stop_reason.is_none() && cancel.load(Ordering::SeqCst) {
-                shared
-                    .db
-                    .set_stop_reason(id, &format!("estimate requested after {count} trials"))?;
+            if count < session.trials_total
+                && stop_reason.is_none()
+                && cancel.load(Ordering::SeqCst)
+            {
+                stop(
+                    format!("estimate requested after {count} trials"),
+                    &mut stop_reason,
+                )?;
             }
         }
     }
-    shared.db.set_state(id, "estimating", None)?;
-    if published_trials != count {
-        estimate_and_publish(shared, id, &row.setting).await?;
-    }
-    shared.db.set_state(id, "done", None)?;
+    shared.lifecycle().start_estimating(id)?;
+    publish(shared, &live, id).await?;
+    shared.lifecycle().finish(id)?;
     Ok(Outcome::Done)
 }
 
-/// After a restart: resume sessions in flight or mark them failed with a reason.
+/// After a restart: resume sessions in flight or mark them failed with a reason. Jobs a dead
+/// process left running are marked interrupted first.
 pub(crate) fn recover(shared: &Arc<Shared>) -> Result<(), Error> {
     let interrupted = shared.db.interrupt_running_jobs()?;
     if interrupted > 0 {
         log::info!("{interrupted} job(s) were interrupted by the last stop");
     }
-    for row in shared
-        .db
-        .sessions_in_states(&["uploaded", "playing", "estimating"])?
-    {
-        let id = row.id.clone();
-        if row.playback == "upload" {
-            if row.state == "estimating" {
-                spawn_estimate(shared.clone(), id, row.setting.clone());
+    let in_flight = [
+        SessionState::Created,
+        SessionState::Uploaded,
+        SessionState::Playing,
+        SessionState::Estimating,
+    ];
+    for session in shared.db.sessions_in(&in_flight)? {
+        let id = session.id.clone();
+        if session.playback == PlaybackKind::Upload {
+            if session.state == SessionState::Estimating {
+                shared.lifecycle().resume(&id)?;
+                spawn_estimate(shared.clone(), id);
+            } else if shared.config.progressive_uploads
+                && session.results_trials < shared.db.trial_count(&id)?
+            {
+                // Trials arrived after the last published estimate: catch up.
+                let shared = shared.clone();
+                tokio::spawn(async move {
+                    match trials::live_session(&shared, &session).await {
+                        Ok(live) => spawn_progressive(shared.clone(), live, id),
+                        Err(e) => log::warn!("session {id}: cannot rebuild its trials: {e}"),
+                    }
+                });
             }
             continue;
         }
-        if shared.files.recording(&id).is_file() {
-            log::info!("session {id}: resuming after restart");
-            spawn_session(shared.clone(), id);
+        if session.state == SessionState::Created {
+            continue;
+        }
+        if !shared.files.recording(&id).is_file() {
+            shared
+                .lifecycle()
+                .fail(&id, "server restarted and the recording is missing")?;
+            continue;
+        }
+        log::info!("session {id}: resuming after restart");
+        if session.allows(Step::StartPlaying) {
+            spawn_session(shared.clone(), id, Begin::Start);
         } else {
-            shared.db.set_state(
-                &id,
-                "failed",
-                Some("server restarted and the recording is missing"),
-            )?;
+            shared.lifecycle().resume(&id)?;
+            spawn_session(shared.clone(), id, Begin::Resume);
         }
     }
     Ok(())

@@ -8,12 +8,23 @@
 //! server-made ids only, size limits answered with 413, JSON errors
 //! `{"error":{"code":…,"message":…}}`, and jobs that survive a restart.
 //!
+//! A session's life is one state machine (`created → uploaded → playing →
+//! estimating → done`, or `failed`), written in one module; a request its state
+//! does not allow is a 409 that names the state. Its estimate settings —
+//! statistic (`setting`), window length (`window_frames`, default 10) and pose
+//! relation (`trans_part` or `angle_deg`, evo's names) — are parsed once when it
+//! is created and stored typed; the results JSON records them
+//! (`"window_frames"`, `"pose_relation"`, `"unit"`).
+//!
 //! Playback backends implement one trait, [`Playback`]: [`SimPlayback`]
 //! replays a `sitar-sim` recording in scaled real time, [`AdbPlayback`]
 //! drives real phones, [`UploadPlayback`] takes trials from outside. Every
-//! finished trial from the 2nd on publishes a progressive estimate; with
-//! adaptive stopping a session ends early once no window's class changed over
-//! the last k trials.
+//! trial is parsed once on arrival and kept in memory while its session is in
+//! flight (bounded: [`ServerConfig::live_session_bytes`],
+//! [`ServerConfig::live_total_bytes`]); every finished trial from the 2nd on
+//! publishes a progressive estimate over them, bitwise equal to a one-shot
+//! estimate; with adaptive stopping a session ends early once no window's
+//! class changed over the last k trials.
 //!
 //! For the people who run it: `GET /` is an HTML overview of the newest
 //! sessions (with links to their reports) and the playback devices,
@@ -34,12 +45,38 @@
 //! let err = client.status("s0000000000000000").unwrap_err();
 //! assert_eq!(err.status(), Some(404));
 //! assert!(dir.path().join("sitar.db").is_file());
+//!
+//! // A session with 20-frame windows and the rotational estimate.
+//! use sitar_client::{NewSession, SessionOptions};
+//! let new = NewSession { trials: 2, setting: "median".into(), playback: "upload".into() };
+//! let options = SessionOptions {
+//!     window_frames: Some(20),
+//!     pose_relation: Some("angle_deg".into()),
+//!     ..SessionOptions::default()
+//! };
+//! let id = client.create_session_with(&new, &options)?;
+//! assert_eq!(client.status(&id)?.window_frames, Some(20));
+//! // A window of 1 frame is refused with a 400 that names the key.
+//! let bad = SessionOptions { window_frames: Some(1), ..SessionOptions::default() };
+//! let err = client.create_session_with(&new, &bad).unwrap_err();
+//! assert_eq!(err.status(), Some(400));
+//! assert!(err.to_string().contains("window_frames"), "{err}");
 //! server.stop();
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
 
+// Layers, lowest first (a module uses only those above it; `tests/layout.rs` checks that
+// no import cycle exists):
+// error, config, settings, files, db            — vocabulary and storage
+// session (state, record, store, lifecycle)     — a session's life; the only state writer
+// estimation, live, playback, adb               — estimates over trials held in memory
+// shared, published, trials, status, report     — what handlers and jobs share
+// jobs, recordings, deletion                    — work on sessions
+// http                                          — helpers below every handler
+// handlers/*                                    — one file per resource
+// router, server                                — route table and middleware; serving
 mod adb;
 mod config;
 mod db;
@@ -47,20 +84,27 @@ mod deletion;
 mod error;
 mod estimation;
 mod files;
+mod handlers;
+mod http;
 mod jobs;
-mod overview;
+mod live;
 mod playback;
-mod recording;
+mod published;
+mod recordings;
 mod report;
-mod routes;
+mod router;
 mod server;
-mod state;
+mod session;
+mod settings;
+mod shared;
+mod status;
+mod trials;
 
 pub use adb::{AdbPlayback, mp4_duration_s};
 pub use config::{AdbConfig, PlaybackKind, ServerConfig, SimConfig};
 pub use error::Error;
+pub use http::IDEMPOTENCY_HEADER;
 pub use playback::{
     DeviceInfo, Playback, PlaybackJob, PlaybackPlan, SimPlayback, TrialOutput, UploadPlayback,
 };
-pub use routes::IDEMPOTENCY_HEADER;
 pub use server::{Server, ServerHandle};

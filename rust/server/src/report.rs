@@ -1,13 +1,15 @@
-//! `GET /v1/sessions/{id}/report`: one self-contained HTML page.
+//! The report of a session (`GET /v1/sessions/{id}/report`): one self-contained HTML page,
+//! the reference trial seen from above coloured by error, the worst windows and the
+//! settings, every error in its unit (cm for `trans_part`, degrees for `angle_deg`).
 
 use std::fmt::Write;
 
 use serde::Deserialize;
-use sitar_core::ErrorClass;
+use sitar_core::{ErrorClass, Thresholds};
 
 use crate::Error;
 use crate::config::ServerConfig;
-use crate::db::SessionRow;
+use crate::session::Session;
 
 #[derive(Debug, Deserialize)]
 struct ResultsDoc {
@@ -23,7 +25,9 @@ struct WindowDoc {
     start: i64,
     #[serde(default)]
     end: Option<i64>,
-    error_m: f64,
+    /// `error_m` of `trans_part` results, `error_deg` of `angle_deg` ones.
+    #[serde(rename = "error_m", alias = "error_deg")]
+    error: f64,
     #[serde(default)]
     pairs: Option<u32>,
 }
@@ -40,8 +44,39 @@ pub(crate) fn escape(text: &str) -> String {
         .replace('"', "&quot;")
 }
 
-fn class_of(error_m: f64, config: &ServerConfig) -> (&'static str, &'static str) {
-    let class = config.thresholds.classify(error_m);
+/// How the report writes errors of one unit.
+struct Unit {
+    /// Column header, e.g. `error (cm)`.
+    header: &'static str,
+    /// The factor from the results' unit to the shown one.
+    scale: f64,
+    /// After a number, e.g. ` cm`.
+    suffix: &'static str,
+}
+
+impl Unit {
+    fn of(session: &Session) -> Unit {
+        match session.settings.unit() {
+            "deg" => Unit {
+                header: "error (°)",
+                scale: 1.0,
+                suffix: "°",
+            },
+            _ => Unit {
+                header: "error (cm)",
+                scale: 100.0,
+                suffix: " cm",
+            },
+        }
+    }
+
+    fn show(&self, value: f64, decimals: usize) -> String {
+        format!("{:.*}{}", decimals, value * self.scale, self.suffix)
+    }
+}
+
+fn class_of(error: f64, thresholds: Thresholds) -> (&'static str, &'static str) {
+    let class = thresholds.classify(error);
     let colour = match class {
         ErrorClass::High => HIGH,
         ErrorClass::Medium => MEDIUM,
@@ -54,11 +89,13 @@ fn class_of(error_m: f64, config: &ServerConfig) -> (&'static str, &'static str)
 /// The report: a top view (x right, z up) of the reference trial coloured by
 /// the error of the window starting at each pose, the worst windows and the settings.
 pub(crate) fn render(
-    row: &SessionRow,
+    row: &Session,
     reference_tum: &str,
     results_json: &str,
     config: &ServerConfig,
 ) -> Result<String, Error> {
+    let thresholds = row.settings.thresholds(config);
+    let unit = Unit::of(row);
     let doc: ResultsDoc = serde_json::from_str(results_json)
         .map_err(|e| Error::Internal(format!("results.json of {} is unreadable: {e}", row.id)))?;
     let mut windows = doc.windows;
@@ -100,7 +137,7 @@ pub(crate) fn render(
                     w += 1;
                 }
                 let (class, colour) = match windows.get(w) {
-                    Some(win) if win.start <= t.stamps[i] => class_of(win.error_m, config),
+                    Some(win) if win.start <= t.stamps[i] => class_of(win.error, thresholds),
                     _ => ("unknown", UNKNOWN),
                 };
                 let (a, b) = (t.positions[i], t.positions[i + 1]);
@@ -126,10 +163,10 @@ pub(crate) fn render(
     }
 
     let mut worst: Vec<&WindowDoc> = windows.iter().collect();
-    worst.sort_by(|a, b| b.error_m.total_cmp(&a.error_m));
+    worst.sort_by(|a, b| b.error.total_cmp(&a.error));
     let mut rows = String::new();
     for (rank, w) in worst.iter().take(10).enumerate() {
-        let (class, colour) = class_of(w.error_m, config);
+        let (class, colour) = class_of(w.error, thresholds);
         let _ = write!(
             rows,
             r#"<tr class="{class}"><td>{}</td><td>{:.3}</td><td>{}</td><td style="color:{colour}">{:.2}</td><td>{class}</td><td>{}</td></tr>"#,
@@ -138,12 +175,12 @@ pub(crate) fn render(
             w.end
                 .map(|e| format!("{:.3}", seconds(e)))
                 .unwrap_or_default(),
-            w.error_m * 100.0,
+            w.error * unit.scale,
             w.pairs.map(|p| p.to_string()).unwrap_or_default()
         );
     }
     let counts = windows.iter().fold([0usize; 3], |mut c, w| {
-        match class_of(w.error_m, config).0 {
+        match class_of(w.error, thresholds).0 {
             "high" => c[2] += 1,
             "medium" => c[1] += 1,
             _ => c[0] += 1,
@@ -153,24 +190,29 @@ pub(crate) fn render(
 
     let settings = [
         ("Session", row.id.clone()),
-        ("State", row.state.clone()),
+        ("State", row.state.as_str().to_string()),
         (
             "Statistic",
             if doc.setting.is_empty() {
-                row.setting.clone()
+                row.settings.setting.to_string()
             } else {
                 doc.setting.clone()
             },
         ),
+        ("Windows", format!("{} frames", row.settings.window_frames)),
+        (
+            "Pose relation",
+            format!("{} ({})", row.settings.pose_relation, row.settings.unit()),
+        ),
         ("Trials in this estimate", doc.trials.to_string()),
         ("Trials planned", row.trials_total.to_string()),
-        ("Playback", row.playback.clone()),
+        ("Playback", row.playback.as_str().to_string()),
         (
             "Thresholds",
             format!(
-                "medium ≥ {:.0} cm, high ≥ {:.0} cm",
-                config.thresholds.medium * 100.0,
-                config.thresholds.high * 100.0
+                "medium ≥ {}, high ≥ {}",
+                unit.show(thresholds.medium, 1),
+                unit.show(thresholds.high, 1)
             ),
         ),
         (
@@ -207,12 +249,13 @@ pub(crate) fn render(
 <p class="legend"><span style="background:{LOW}"></span>low<span style="background:{MEDIUM}"></span>medium<span style="background:{HIGH}"></span>high<span style="background:{UNKNOWN}"></span>no estimate</p>
 {svg}
 <h2>Worst windows</h2>
-<table id="worst"><thead><tr><th>#</th><th>start (s)</th><th>end (s)</th><th>error (cm)</th><th>class</th><th>pairs</th></tr></thead><tbody>{rows}</tbody></table>
+<table id="worst"><thead><tr><th>#</th><th>start (s)</th><th>end (s)</th><th>{error_header}</th><th>class</th><th>pairs</th></tr></thead><tbody>{rows}</tbody></table>
 <h2>Settings</h2>
 <table id="settings">{settings_rows}</table>
 </body></html>
 "#,
         id = escape(&row.id),
+        error_header = unit.header,
         n = windows.len(),
         high = counts[2],
         medium = counts[1],

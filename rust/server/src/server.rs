@@ -1,10 +1,12 @@
+//! The server: storage opened, routes served, jobs resumed; on its own thread or blocking.
+
 use std::net::SocketAddr;
 use std::sync::Arc;
 use std::time::Duration;
 
 use crate::config::ServerConfig;
-use crate::state::Shared;
-use crate::{Error, deletion, jobs, routes};
+use crate::shared::Shared;
+use crate::{Error, deletion, jobs, router};
 
 /// The backend: storage opened, ready to serve.
 pub struct Server {
@@ -21,7 +23,7 @@ impl Server {
 
     /// The axum router of every route (for embedding or tests).
     pub fn router(&self) -> axum::Router {
-        routes::router(self.shared.clone())
+        router::router(self.shared.clone())
     }
 
     /// Serves on `listener` until `shutdown` resolves. Sessions a previous

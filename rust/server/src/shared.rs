@@ -1,3 +1,6 @@
+//! What the handlers and jobs share: configuration, storage, live sessions, running jobs,
+//! the playback backends and the per-session write locks.
+
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
@@ -5,14 +8,16 @@ use std::time::Instant;
 
 use crate::Error;
 use crate::adb::AdbPlayback;
-use crate::config::ServerConfig;
+use crate::config::{PlaybackKind, ServerConfig};
 use crate::db::Db;
 use crate::files::Files;
+use crate::live::LiveSessions;
 use crate::playback::{Playback, PlaybackPlan, SimPlayback, UploadPlayback};
+use crate::session::{Lifecycle, NewSession, Session};
 
 /// What a running job knows that the database does not: timing and the cancel flag.
 #[derive(Debug, Clone)]
-pub(crate) struct Live {
+pub(crate) struct RunningJob {
     pub cancel: Arc<AtomicBool>,
     pub plan: Option<PlaybackPlan>,
     pub started: Instant,
@@ -27,16 +32,18 @@ pub(crate) struct Shared {
     pub config: ServerConfig,
     pub db: Db,
     pub files: Files,
+    /// Parsed trials of the sessions in flight.
+    pub live: LiveSessions,
     sim: Arc<dyn Playback>,
     adb: Arc<dyn Playback>,
     upload: Arc<dyn Playback>,
-    pub live: Mutex<HashMap<String, Live>>,
+    running: Mutex<HashMap<String, RunningJob>>,
     /// Per session: held by a request while it writes into the session's folder (a
     /// recording or its kept prefix, a trial, timestamps) or deletes the session.
     session_locks: Mutex<HashMap<String, Arc<tokio::sync::Mutex<()>>>>,
     /// Set when the server stops: jobs stop without changing their session's
     /// state, so the next start resumes them.
-    pub shutdown: AtomicBool,
+    shutdown: AtomicBool,
 }
 
 impl Shared {
@@ -47,41 +54,62 @@ impl Shared {
             sim: Arc::new(SimPlayback::new(config.sim.clone())),
             adb: Arc::new(AdbPlayback::new(config.adb.clone())),
             upload: Arc::new(UploadPlayback),
+            live: LiveSessions::new(config.live_session_bytes, config.live_total_bytes),
             config,
             db,
             files,
-            live: Mutex::new(HashMap::new()),
+            running: Mutex::new(HashMap::new()),
             session_locks: Mutex::new(HashMap::new()),
             shutdown: AtomicBool::new(false),
         })
     }
 
-    pub fn backend(&self, name: &str) -> Result<Arc<dyn Playback>, Error> {
-        match name {
-            "sim" => Ok(self.sim.clone()),
-            "adb" => Ok(self.adb.clone()),
-            "upload" => Ok(self.upload.clone()),
-            other => Err(Error::BadRequest(format!(
-                "unknown playback {other:?}: expected adb, sim or upload"
-            ))),
+    /// The transitions of this server's sessions.
+    pub fn lifecycle(&self) -> Lifecycle<'_> {
+        Lifecycle::new(&self.db)
+    }
+
+    /// Session `id`, or a 404 (an id the server cannot have made is never looked up).
+    pub fn session(&self, id: &str) -> Result<Session, Error> {
+        if !crate::files::is_server_id(id) {
+            return Err(Error::NotFound(format!("no session {id:?}")));
+        }
+        self.db
+            .session(id)?
+            .ok_or_else(|| Error::NotFound(format!("no session {id:?}")))
+    }
+
+    /// Makes a session's row and folder; with an idempotency key seen before, returns the
+    /// earlier session (the bool is false).
+    pub fn create_session(&self, new: &NewSession<'_>) -> Result<(String, bool), Error> {
+        let (id, created) = self.db.insert_session(&crate::files::new_id(), new)?;
+        self.files.create_session_dirs(&id)?;
+        Ok((id, created))
+    }
+
+    pub fn backend(&self, kind: PlaybackKind) -> Arc<dyn Playback> {
+        match kind {
+            PlaybackKind::Sim => self.sim.clone(),
+            PlaybackKind::Adb => self.adb.clone(),
+            PlaybackKind::Upload => self.upload.clone(),
         }
     }
 
-    pub fn live(&self, id: &str) -> Option<Live> {
-        self.live.lock().ok().and_then(|m| m.get(id).cloned())
+    fn running_jobs(&self) -> std::sync::MutexGuard<'_, HashMap<String, RunningJob>> {
+        self.running.lock().unwrap_or_else(|e| e.into_inner())
     }
 
-    pub fn set_live(&self, id: &str, live: Option<Live>) {
-        if let Ok(mut m) = self.live.lock() {
-            match live {
-                Some(l) => {
-                    m.insert(id.to_string(), l);
-                }
-                None => {
-                    m.remove(id);
-                }
-            }
-        }
+    /// The job running on session `id`, if one does.
+    pub fn running(&self, id: &str) -> Option<RunningJob> {
+        self.running_jobs().get(id).cloned()
+    }
+
+    pub fn set_running(&self, id: &str, job: Option<RunningJob>) {
+        let mut jobs = self.running_jobs();
+        match job {
+            Some(job) => jobs.insert(id.to_string(), job),
+            None => jobs.remove(id),
+        };
     }
 
     /// The lock over session `id`'s folder: writers hold it, and a delete waits for them.
@@ -99,10 +127,8 @@ impl Shared {
     /// Stops every job; their sessions stay in flight for the next start.
     pub fn stop_all(&self) {
         self.shutdown.store(true, Ordering::SeqCst);
-        if let Ok(m) = self.live.lock() {
-            for live in m.values() {
-                live.cancel.store(true, Ordering::SeqCst);
-            }
+        for job in self.running_jobs().values() {
+            job.cancel.store(true, Ordering::SeqCst);
         }
     }
 

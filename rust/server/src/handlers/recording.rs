@@ -1,4 +1,5 @@
-//! Recording uploads: whole, and resumed after a dropped connection.
+//! `PUT` and `HEAD /v1/sessions/{id}/recording`: recording uploads, whole, and resumed
+//! after a dropped connection.
 //!
 //! A `PUT /v1/sessions/{id}/recording` whose body breaks off (the phone's Wi-Fi
 //! dropped) keeps what arrived as `recording.part`, tied to the request's
@@ -16,25 +17,24 @@
 use std::sync::Arc;
 
 use axum::body::Body;
-use axum::extract::{Path, State};
+use axum::extract::State;
 use axum::http::{HeaderMap, HeaderValue, StatusCode, header};
 use axum::response::{IntoResponse, Response};
 use serde_json::json;
 
 use crate::Error;
-use crate::db::SessionRow;
+use crate::config::PlaybackKind;
 use crate::files::TempFile;
-use crate::jobs;
-use crate::routes::{
-    CURL_DEFAULT_CONTENT_TYPE, check_declared_length, content_type, declared_length,
-    idempotency_key, json_response, session_row,
+use crate::http::{
+    AppState, CURL_DEFAULT_CONTENT_TYPE, Found, check_declared_length, content_type,
+    declared_length, idempotency_key, json_response,
 };
-use crate::state::Shared;
+use crate::recordings::accept_recording;
+use crate::session::{Session, SessionState, Step};
+use crate::shared::Shared;
 
 /// Response header: the bytes of an interrupted upload the server keeps.
 pub const UPLOAD_OFFSET_HEADER: &str = "upload-offset";
-
-type AppState = State<Arc<Shared>>;
 
 fn recording_content_type_ok(ct: &str) -> bool {
     matches!(
@@ -49,22 +49,18 @@ fn recording_content_type_ok(ct: &str) -> bool {
 /// the rest of an interrupted one.
 pub(crate) async fn put_recording(
     State(shared): AppState,
-    Path(id): Path<String>,
+    Found(row): Found,
     headers: HeaderMap,
     body: Body,
 ) -> Result<Response, Error> {
-    let row = session_row(&shared, &id)?;
     let ct = content_type(&headers);
     if !recording_content_type_ok(&ct) {
         return Err(Error::UnsupportedMediaType(format!(
             "a recording is a raw body (application/octet-stream or video/mp4), not {ct}"
         )));
     }
-    if row.playback == "upload" && !matches!(row.state.as_str(), "created" | "uploaded") {
-        return Err(Error::Conflict(format!(
-            "session {id} is {}: the recording can no longer change",
-            row.state
-        )));
+    if row.playback == PlaybackKind::Upload {
+        row.require(Step::AcceptRecording)?;
     }
     let limit = shared.config.max_recording_bytes;
     let key = idempotency_key(&headers)?;
@@ -81,10 +77,9 @@ pub(crate) async fn put_recording(
 /// of the interrupted upload with the request's `Idempotency-Key` (0 when there is none).
 pub(crate) async fn kept_offset(
     State(shared): AppState,
-    Path(id): Path<String>,
+    Found(row): Found,
     headers: HeaderMap,
 ) -> Result<Response, Error> {
-    let row = session_row(&shared, &id)?;
     let key = idempotency_key(&headers)?;
     let kept = kept_for(&shared, &row.id, key.as_deref())?.unwrap_or(0);
     let mut response = StatusCode::OK.into_response();
@@ -96,7 +91,7 @@ pub(crate) async fn kept_offset(
 
 async fn whole(
     shared: &Arc<Shared>,
-    row: &SessionRow,
+    row: &Session,
     key: Option<String>,
     body: Body,
 ) -> Result<Response, Error> {
@@ -107,8 +102,8 @@ async fn whole(
         .await?;
     let lock = shared.session_lock(&row.id);
     let _held = lock.lock().await;
-    // The session may have been deleted while the body was arriving.
-    session_row(shared, &row.id)?;
+    // The session may have been deleted, or moved on, while the body was arriving.
+    let row = &shared.session(&row.id)?;
     let part = shared.files.recording_part(&row.id);
     match received {
         Ok(temp) => {
@@ -131,7 +126,7 @@ async fn whole(
 
 async fn resume(
     shared: &Arc<Shared>,
-    row: &SessionRow,
+    row: &Session,
     headers: &HeaderMap,
     key: Option<String>,
     range: ContentRange,
@@ -162,7 +157,7 @@ async fn resume(
             row.id
         )));
     };
-    session_row(shared, &row.id)?;
+    let row = &shared.session(&row.id)?;
     let part = shared.files.recording_part(&row.id);
     let kept = match kept_for(shared, &row.id, key.as_deref())? {
         Some(kept) => kept,
@@ -209,7 +204,7 @@ async fn resume(
     }
     let mut response = json_response(
         StatusCode::OK,
-        &json!({"id": row.id, "state": row.state, "received": now, "total": range.total})
+        &json!({"id": row.id, "state": row.state.as_str(), "received": now, "total": range.total})
             .to_string(),
     );
     response
@@ -221,7 +216,7 @@ async fn resume(
 fn uploaded(id: &str) -> Response {
     json_response(
         StatusCode::ACCEPTED,
-        &json!({"id": id, "state": "uploaded"}).to_string(),
+        &json!({"id": id, "state": SessionState::Uploaded.as_str()}).to_string(),
     )
 }
 
@@ -308,71 +303,6 @@ fn parse_content_range(text: &str) -> Option<ContentRange> {
         total: number(total)?,
     };
     (range.start <= range.last && range.last < range.total).then_some(range)
-}
-
-/// Moves an uploaded recording into place and starts playback (sim, adb).
-///
-/// Only the first whole upload starts playback. A repeated upload with the
-/// same bytes (a client retry whose first answer was lost) is accepted as is;
-/// different bytes once playback has started are a conflict.
-pub(crate) fn accept_recording(
-    shared: &Arc<Shared>,
-    row: &SessionRow,
-    temp: TempFile,
-) -> Result<(), Error> {
-    if temp.bytes == 0 {
-        return Err(Error::BadRequest("the recording is empty".into()));
-    }
-    let bytes = temp.bytes;
-    let dest = shared.files.recording(&row.id);
-    if row.playback == "upload" {
-        temp.publish(&dest)?;
-        return shared.db.set_recording(&row.id, bytes);
-    }
-    if dest.is_file() {
-        return if same_content(&temp.path, &dest)? {
-            Ok(())
-        } else {
-            Err(Error::Conflict(format!(
-                "session {} already has another recording and its playback has started",
-                row.id
-            )))
-        };
-    }
-    temp.publish(&dest)?;
-    if shared.db.claim_recording(&row.id, bytes)? {
-        jobs::spawn_session(shared.clone(), row.id.clone());
-    }
-    Ok(())
-}
-
-fn same_content(a: &std::path::Path, b: &std::path::Path) -> Result<bool, Error> {
-    use std::io::Read;
-    let open =
-        |p: &std::path::Path| std::fs::File::open(p).map_err(|e| Error::io("cannot open", p, e));
-    let (mut fa, mut fb) = (open(a)?, open(b)?);
-    let len = |f: &std::fs::File, p| {
-        f.metadata()
-            .map(|m| m.len())
-            .map_err(|e| Error::io("cannot stat", p, e))
-    };
-    if len(&fa, a)? != len(&fb, b)? {
-        return Ok(false);
-    }
-    let (mut ba, mut bb) = (vec![0u8; 1 << 20], vec![0u8; 1 << 20]);
-    loop {
-        let n = fa
-            .read(&mut ba)
-            .map_err(|e| Error::io("cannot read", a, e))?;
-        if n == 0 {
-            return Ok(true);
-        }
-        fb.read_exact(&mut bb[..n])
-            .map_err(|e| Error::io("cannot read", b, e))?;
-        if ba[..n] != bb[..n] {
-            return Ok(false);
-        }
-    }
 }
 
 #[cfg(test)]

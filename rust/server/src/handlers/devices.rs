@@ -1,0 +1,30 @@
+//! `GET /v1/devices`: the playback devices of the configured backend, and every one seen.
+
+use axum::extract::State;
+use axum::response::{IntoResponse, Response};
+use serde_json::json;
+
+use crate::Error;
+use crate::http::AppState;
+
+pub(crate) async fn list(State(shared): AppState) -> Result<Response, Error> {
+    let backend = shared.backend(shared.config.playback);
+    let list = tokio::task::spawn_blocking(move || backend.devices())
+        .await
+        .map_err(|e| Error::Internal(format!("devices task: {e}")))?;
+    for d in &list {
+        shared.db.upsert_device(&d.serial, &d.state, None)?;
+    }
+    let known: Vec<_> = shared
+        .db
+        .devices()?
+        .into_iter()
+        .map(|(serial, state, session, seen)| {
+            json!({"serial": serial, "state": state, "session": session, "last_seen_ms": seen})
+        })
+        .collect();
+    Ok(axum::Json(
+        json!({"playback": shared.config.playback.as_str(), "devices": list, "known": known}),
+    )
+    .into_response())
+}

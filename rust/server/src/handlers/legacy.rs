@@ -1,0 +1,141 @@
+//! The original Unity app's routes, unchanged for it: `POST /recording`, `POST /timestamps`
+//! (multipart form uploads) and `GET /results.csv`.
+
+use axum::extract::multipart::MultipartRejection;
+use axum::extract::{Multipart, State};
+use axum::http::{HeaderMap, StatusCode, header};
+use axum::response::{IntoResponse, Response};
+use serde_json::json;
+
+use crate::Error;
+use crate::files::TempFile;
+use crate::http::{AppState, check_declared_length, content_type, json_value};
+use crate::published::{self, Form};
+use crate::recordings::accept_recording;
+use crate::session::{NewSession, SessionState};
+use crate::settings::EstimateSettings;
+use crate::shared::Shared;
+
+/// How often a held legacy `POST /recording` looks at its session's state.
+const LEGACY_POLL: std::time::Duration = std::time::Duration::from_millis(100);
+
+/// Reads the multipart field `name` of a legacy upload into a temp file.
+async fn multipart_field(
+    shared: &Shared,
+    multipart: Result<Multipart, MultipartRejection>,
+    headers: &HeaderMap,
+    name: &str,
+    limit: u64,
+    what: &'static str,
+) -> Result<TempFile, Error> {
+    let mut multipart = multipart.map_err(|e| {
+        if content_type(headers) != "multipart/form-data" {
+            Error::UnsupportedMediaType(format!(
+                "this route takes multipart/form-data with a field {name:?}"
+            ))
+        } else {
+            Error::BadRequest(format!("malformed multipart: {e}"))
+        }
+    })?;
+    // Multipart framing adds a little; the field itself is limited exactly.
+    check_declared_length(headers, limit.saturating_add(64 << 10), what)?;
+    loop {
+        let field = multipart
+            .next_field()
+            .await
+            .map_err(|e| Error::BadRequest(format!("malformed multipart: {e}")))?
+            .ok_or_else(|| Error::BadRequest(format!("multipart field {name:?} is missing")))?;
+        // The client's file name is ignored: it never becomes a path.
+        if field.name() == Some(name) {
+            return shared.files.receive(field, limit, what).await;
+        }
+    }
+}
+
+/// `POST /recording`: a new session with the server's defaults; playback starts.
+pub(crate) async fn recording(
+    State(shared): AppState,
+    headers: HeaderMap,
+    multipart: Result<Multipart, MultipartRejection>,
+) -> Result<Response, Error> {
+    let temp = multipart_field(
+        &shared,
+        multipart,
+        &headers,
+        "recording",
+        shared.config.max_recording_bytes,
+        "recording",
+    )
+    .await?;
+    let (id, _) = shared.create_session(&NewSession {
+        idempotency_key: None,
+        trials_total: shared.config.default_trials,
+        playback: shared.config.playback,
+        settings: EstimateSettings::defaults(&shared.config)?,
+        adaptive_min: None,
+        adaptive_k: shared.config.default_adaptive_k,
+        legacy: true,
+    })?;
+    accept_recording(&shared, &shared.session(&id)?, temp)?;
+    // The original app treats this answer as "evaluation complete" and then
+    // fetches GET /results.csv, so the request is held until the session ends
+    // (as the original backend did). A client that gives up loses nothing:
+    // the session goes on and its results stay at /v1/sessions/{id}.
+    loop {
+        let session = shared.session(&id)?;
+        match session.state {
+            SessionState::Done => {
+                return Ok(json_value(
+                    StatusCode::OK,
+                    &json!({
+                        "id": id,
+                        "state": SessionState::Done.as_str(),
+                        "status": format!("/v1/sessions/{id}"),
+                    }),
+                ));
+            }
+            SessionState::Failed => {
+                return Err(Error::Playback(format!(
+                    "session {id} failed: {}",
+                    session.error.as_deref().unwrap_or("no reason recorded")
+                )));
+            }
+            _ => tokio::time::sleep(LEGACY_POLL).await,
+        }
+    }
+}
+
+/// `POST /timestamps`: stored with the latest legacy session.
+pub(crate) async fn timestamps(
+    State(shared): AppState,
+    headers: HeaderMap,
+    multipart: Result<Multipart, MultipartRejection>,
+) -> Result<Response, Error> {
+    let temp = multipart_field(
+        &shared,
+        multipart,
+        &headers,
+        "timestamps",
+        shared.config.max_trajectory_bytes,
+        "timestamps",
+    )
+    .await?;
+    let id = shared.db.latest_session(false, true)?.ok_or_else(|| {
+        Error::Conflict("no recording uploaded yet: POST /recording first".into())
+    })?;
+    let lock = shared.session_lock(&id);
+    let _held = lock.lock().await;
+    shared.session(&id)?;
+    temp.publish(&shared.files.timestamps(&id))?;
+    Ok(json_value(StatusCode::OK, &json!({"id": id})))
+}
+
+/// `GET /results.csv`: the results of the latest finished session.
+pub(crate) async fn results(State(shared): AppState) -> Result<Response, Error> {
+    let id = shared
+        .db
+        .latest_session(true, false)?
+        .ok_or_else(|| Error::NotFound("no finished session yet".into()))?;
+    let text = published::read(&shared, &shared.session(&id)?, Form::Csv)?;
+    Ok(([(header::CONTENT_TYPE, "text/csv; charset=utf-8")], text).into_response())
+}

@@ -1,0 +1,11 @@
+//! One file per resource; each handler takes the helpers of `crate::http` (the session
+//! lookup extractor, JSON answers) and never another handler.
+
+pub(crate) mod devices;
+pub(crate) mod health;
+pub(crate) mod legacy;
+pub(crate) mod pages;
+pub(crate) mod recording;
+pub(crate) mod results;
+pub(crate) mod sessions;
+pub(crate) mod trials;

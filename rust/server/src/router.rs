@@ -1,0 +1,77 @@
+//! The route table and the middleware stack, and nothing else: handlers live in
+//! `handlers/`, one file per resource.
+
+use std::sync::Arc;
+
+use axum::Router;
+use axum::extract::DefaultBodyLimit;
+use axum::http::StatusCode;
+use axum::response::Response;
+use axum::routing::{get, post, put};
+
+use crate::Error;
+use crate::handlers::{devices, health, legacy, pages, recording, results, sessions, trials};
+use crate::http::json_response;
+use crate::shared::Shared;
+
+pub(crate) fn router(shared: Arc<Shared>) -> Router {
+    Router::new()
+        .route("/healthz", get(health::get))
+        .route("/", get(pages::overview))
+        // Browsers ask for it on every refresh of the page; no icon, no log noise.
+        .route("/favicon.ico", get(|| async { StatusCode::NO_CONTENT }))
+        .route("/v1/sessions", post(sessions::create).get(sessions::list))
+        .route(
+            "/v1/sessions/{id}",
+            get(sessions::status).delete(sessions::delete),
+        )
+        .route(
+            "/v1/sessions/{id}/recording",
+            put(recording::put_recording).head(recording::kept_offset),
+        )
+        .route("/v1/sessions/{id}/trials", post(trials::post))
+        .route("/v1/sessions/{id}/estimate", post(results::estimate))
+        .route("/v1/sessions/{id}/results.csv", get(results::csv))
+        .route("/v1/sessions/{id}/results.json", get(results::json))
+        .route("/v1/sessions/{id}/report", get(pages::report))
+        .route("/v1/devices", get(devices::list))
+        .route("/recording", post(legacy::recording))
+        .route("/timestamps", post(legacy::timestamps))
+        .route("/results.csv", get(legacy::results))
+        .fallback(|| async { Error::NotFound("no such route".into()) })
+        .method_not_allowed_fallback(|| async {
+            json_response(
+                StatusCode::METHOD_NOT_ALLOWED,
+                &crate::error::error_body("method_not_allowed", "method not allowed on this route"),
+            )
+        })
+        // Middleware, innermost first. Body limits are ours, per route, checked while
+        // streaming.
+        .layer(DefaultBodyLimit::disable())
+        .layer(axum::middleware::from_fn(log_request))
+        .with_state(shared)
+}
+
+/// One log line per request: method, path (server-made ids only, no query), status, time.
+/// Successful `GET`/`HEAD`s log at debug: phones poll their status every half second.
+async fn log_request(request: axum::extract::Request, next: axum::middleware::Next) -> Response {
+    let method = request.method().clone();
+    let path = request.uri().path().to_owned();
+    let started = std::time::Instant::now();
+    let response = next.run(request).await;
+    let status = response.status();
+    let quiet =
+        matches!(method, axum::http::Method::GET | axum::http::Method::HEAD) && status.is_success();
+    let level = if quiet {
+        log::Level::Debug
+    } else {
+        log::Level::Info
+    };
+    log::log!(
+        level,
+        "{method} {path} → {} in {:.1} ms",
+        status.as_u16(),
+        started.elapsed().as_secs_f64() * 1e3
+    );
+    response
+}

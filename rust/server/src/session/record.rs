@@ -1,0 +1,78 @@
+//! A session as the server knows it: the typed row of the `sessions` table.
+
+use crate::config::PlaybackKind;
+use crate::session::state::{SessionState, Step};
+use crate::settings::EstimateSettings;
+
+/// One session, every column typed.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Session {
+    /// Server-made id (`s` + 16 hex digits).
+    pub id: String,
+    /// Where it is in its life.
+    pub state: SessionState,
+    /// Where its trials come from.
+    pub playback: PlaybackKind,
+    /// Trials planned.
+    pub trials_total: u32,
+    /// How its trials are estimated.
+    pub settings: EstimateSettings,
+    /// Why it failed.
+    pub error: Option<String>,
+    /// Why playback stopped before `trials_total`.
+    pub stop_reason: Option<String>,
+    /// Adaptive stopping: at least this many trials (`None`: off).
+    pub adaptive_min: Option<u32>,
+    /// Adaptive stopping: classes unchanged over this many trials.
+    pub adaptive_k: u32,
+    /// Size of the accepted recording.
+    pub recording_bytes: Option<u64>,
+    /// Trials behind the latest published results (0: none yet).
+    pub results_trials: u32,
+    /// Created by the legacy `POST /recording`.
+    pub legacy: bool,
+}
+
+impl Session {
+    /// Whether `step` is allowed now.
+    pub fn allows(&self, step: Step) -> bool {
+        step.next(self.state, self.playback).is_some()
+    }
+
+    /// `Ok` when `step` is allowed now, else the 409 that names the state.
+    pub fn require(&self, step: Step) -> Result<(), crate::Error> {
+        if self.allows(step) {
+            Ok(())
+        } else {
+            Err(crate::Error::Transition {
+                session: self.id.clone(),
+                state: self.state.as_str(),
+                action: step.describe(),
+            })
+        }
+    }
+
+    /// Whether no job of its own works on it, so it may be deleted: made and never uploaded,
+    /// finished, or an `upload` session waiting for trials. (A playback job or a running
+    /// estimate is checked separately: see `deletion.rs`.)
+    pub fn is_idle(&self) -> bool {
+        match self.state {
+            SessionState::Created | SessionState::Done | SessionState::Failed => true,
+            SessionState::Uploaded => self.playback == PlaybackKind::Upload,
+            SessionState::Playing | SessionState::Estimating => false,
+        }
+    }
+}
+
+/// What a new session needs.
+#[derive(Debug, Clone)]
+pub(crate) struct NewSession<'a> {
+    /// A client-made key: a request repeated with it gets the first session back.
+    pub idempotency_key: Option<&'a str>,
+    pub trials_total: u32,
+    pub playback: PlaybackKind,
+    pub settings: EstimateSettings,
+    pub adaptive_min: Option<u32>,
+    pub adaptive_k: u32,
+    pub legacy: bool,
+}

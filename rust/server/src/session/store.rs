@@ -1,0 +1,262 @@
+//! Reading, creating and deleting rows of the `sessions` table, typed. (Changing a
+//! session's state is `lifecycle.rs`'s alone.)
+
+use rusqlite::types::Type;
+use rusqlite::{OptionalExtension, params};
+
+use crate::Error;
+use crate::config::PlaybackKind;
+use crate::db::{Db, now_ms};
+use crate::session::record::{NewSession, Session};
+use crate::session::state::SessionState;
+use crate::settings::{self, EstimateSettings};
+
+const COLUMNS: &str = "id, trials_total, setting, playback, state, error, stop_reason, adaptive_min, \
+     adaptive_k, recording_bytes, results_trials, legacy, window_frames, pose_relation";
+
+/// A text column parsed into its type; a value no version of the server writes is an error
+/// that names the column.
+fn typed<T>(
+    r: &rusqlite::Row<'_>,
+    index: usize,
+    column: &str,
+    parse: impl FnOnce(&str) -> Option<T>,
+) -> rusqlite::Result<T> {
+    let text: String = r.get(index)?;
+    parse(&text).ok_or_else(|| {
+        rusqlite::Error::FromSqlConversionFailure(
+            index,
+            Type::Text,
+            format!("sessions.{column}: unknown value {text:?}").into(),
+        )
+    })
+}
+
+fn session_from_row(r: &rusqlite::Row<'_>) -> rusqlite::Result<Session> {
+    Ok(Session {
+        id: r.get(0)?,
+        trials_total: r.get(1)?,
+        settings: EstimateSettings {
+            setting: typed(r, 2, "setting", |s| settings::parse_setting(s).ok())?,
+            window_frames: r.get(12)?,
+            pose_relation: typed(r, 13, "pose_relation", |s| {
+                settings::parse_pose_relation(s).ok()
+            })?,
+        },
+        playback: typed(r, 3, "playback", |s| s.parse::<PlaybackKind>().ok())?,
+        state: typed(r, 4, "state", SessionState::from_wire)?,
+        error: r.get(5)?,
+        stop_reason: r.get(6)?,
+        adaptive_min: r.get(7)?,
+        adaptive_k: r.get(8)?,
+        recording_bytes: r.get::<_, Option<i64>>(9)?.map(|b| b as u64),
+        results_trials: r.get(10)?,
+        legacy: r.get::<_, i64>(11)? != 0,
+    })
+}
+
+impl Db {
+    /// Inserts a session (state `created`), or returns the one created earlier with the same
+    /// idempotency key. The bool is true when a new row was made.
+    pub fn insert_session(&self, id: &str, new: &NewSession<'_>) -> Result<(String, bool), Error> {
+        self.transaction(|tx| {
+            if let Some(key) = new.idempotency_key {
+                let existing: Option<String> = tx
+                    .query_row(
+                        "SELECT id FROM sessions WHERE idempotency_key = ?1",
+                        [key],
+                        |r| r.get(0),
+                    )
+                    .optional()?;
+                if let Some(existing) = existing {
+                    return Ok((existing, false));
+                }
+            }
+            tx.execute(
+                "INSERT INTO sessions (id, idempotency_key, created_ms, trials_total, setting, playback, \
+                 state, adaptive_min, adaptive_k, legacy, window_frames, pose_relation) \
+                 VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12)",
+                params![
+                    id,
+                    new.idempotency_key,
+                    now_ms(),
+                    new.trials_total,
+                    new.settings.setting.to_string(),
+                    new.playback.as_str(),
+                    SessionState::Created.as_str(),
+                    new.adaptive_min,
+                    new.adaptive_k,
+                    new.legacy as i64,
+                    new.settings.window_frames,
+                    new.settings.pose_relation.to_string(),
+                ],
+            )?;
+            Ok((id.to_string(), true))
+        })
+    }
+
+    pub fn session(&self, id: &str) -> Result<Option<Session>, Error> {
+        self.with(|c| {
+            c.query_row(
+                &format!("SELECT {COLUMNS} FROM sessions WHERE id = ?1"),
+                [id],
+                session_from_row,
+            )
+            .optional()
+        })
+    }
+
+    /// The newest `limit` sessions, newest first.
+    pub fn recent_sessions(&self, limit: u32) -> Result<Vec<Session>, Error> {
+        self.with(|c| {
+            let mut stmt = c.prepare(&format!(
+                "SELECT {COLUMNS} FROM sessions ORDER BY rowid DESC LIMIT ?1"
+            ))?;
+            let rows = stmt.query_map([limit], session_from_row)?;
+            rows.collect()
+        })
+    }
+
+    /// Sessions in any of `states`, oldest first.
+    pub fn sessions_in(&self, states: &[SessionState]) -> Result<Vec<Session>, Error> {
+        let names: Vec<&str> = states.iter().map(|s| s.as_str()).collect();
+        let list = serde_json::to_string(&names).unwrap_or_default();
+        self.with(|c| {
+            let mut stmt = c.prepare(&format!(
+                "SELECT {COLUMNS} FROM sessions WHERE state IN (SELECT value FROM json_each(?1)) \
+                 ORDER BY created_ms"
+            ))?;
+            let rows = stmt.query_map([list], session_from_row)?;
+            rows.collect()
+        })
+    }
+
+    /// Sessions past a retention that ends at `cutoff_ms` (ms since the epoch): finished
+    /// before it, or created before it and idle since (never uploaded, or an `upload` session
+    /// still waiting for trials).
+    pub fn expired(&self, cutoff_ms: i64) -> Result<Vec<String>, Error> {
+        self.with(|c| {
+            let mut stmt = c.prepare(
+                "SELECT id FROM sessions WHERE \
+                 (state IN (?2, ?3) AND finished_ms < ?1) \
+                 OR (created_ms < ?1 AND (state = ?4 OR (state = ?5 AND playback = ?6))) \
+                 ORDER BY created_ms",
+            )?;
+            let rows = stmt.query_map(
+                params![
+                    cutoff_ms,
+                    SessionState::Done.as_str(),
+                    SessionState::Failed.as_str(),
+                    SessionState::Created.as_str(),
+                    SessionState::Uploaded.as_str(),
+                    PlaybackKind::Upload.as_str(),
+                ],
+                |r| r.get(0),
+            )?;
+            rows.collect()
+        })
+    }
+
+    /// The newest session (by finish time when `done_only`), of the legacy routes when
+    /// `legacy_only`.
+    pub fn latest_session(
+        &self,
+        done_only: bool,
+        legacy_only: bool,
+    ) -> Result<Option<String>, Error> {
+        let legacy = if legacy_only { " AND legacy = 1" } else { "" };
+        self.with(|c| {
+            if done_only {
+                let sql = format!(
+                    "SELECT id FROM sessions WHERE state = ?1{legacy} \
+                     ORDER BY finished_ms DESC, rowid DESC LIMIT 1"
+                );
+                c.query_row(&sql, [SessionState::Done.as_str()], |r| r.get(0))
+                    .optional()
+            } else {
+                let sql = format!(
+                    "SELECT id FROM sessions WHERE 1 = 1{legacy} ORDER BY rowid DESC LIMIT 1"
+                );
+                c.query_row(&sql, [], |r| r.get(0)).optional()
+            }
+        })
+    }
+
+    /// Removes a session with its trials and jobs (devices forget it) in one transaction.
+    /// Returns whether it existed.
+    pub fn delete_session(&self, id: &str) -> Result<bool, Error> {
+        self.transaction(|tx| {
+            tx.execute("DELETE FROM trials WHERE session_id = ?1", [id])?;
+            tx.execute("DELETE FROM jobs WHERE session_id = ?1", [id])?;
+            tx.execute(
+                "UPDATE devices SET session_id = NULL WHERE session_id = ?1",
+                [id],
+            )?;
+            Ok(tx.execute("DELETE FROM sessions WHERE id = ?1", [id])? == 1)
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use sitar_estimator::{PoseRelation, Setting};
+
+    pub(crate) fn new_session(key: Option<&str>) -> NewSession<'_> {
+        NewSession {
+            idempotency_key: key,
+            trials_total: 5,
+            playback: PlaybackKind::Upload,
+            settings: EstimateSettings {
+                setting: Setting::Median,
+                window_frames: 20,
+                pose_relation: PoseRelation::RotationAngleDeg,
+            },
+            adaptive_min: None,
+            adaptive_k: 3,
+            legacy: false,
+        }
+    }
+
+    #[test]
+    fn sessions_come_back_typed_and_idempotent_after_a_reopen() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("sitar.db");
+        {
+            let db = Db::open(&path).unwrap();
+            let new = new_session(Some("k1"));
+            assert_eq!(db.insert_session("a", &new).unwrap(), ("a".into(), true));
+            assert_eq!(db.insert_session("b", &new).unwrap(), ("a".into(), false));
+        }
+        let db = Db::open(&path).unwrap();
+        let session = db.session("a").unwrap().unwrap();
+        assert_eq!(session.state, SessionState::Created);
+        assert_eq!(session.playback, PlaybackKind::Upload);
+        assert_eq!(session.settings, new_session(None).settings);
+        assert_eq!((session.trials_total, session.adaptive_k), (5, 3));
+        assert!(db.session("b").unwrap().is_none());
+        assert_eq!(db.sessions_in(&[SessionState::Created]).unwrap().len(), 1);
+        assert!(db.sessions_in(&[SessionState::Done]).unwrap().is_empty());
+        assert_eq!(
+            db.latest_session(false, false).unwrap().as_deref(),
+            Some("a")
+        );
+        assert_eq!(db.latest_session(true, false).unwrap(), None);
+        assert!(db.delete_session("a").unwrap());
+        assert!(!db.delete_session("a").unwrap());
+    }
+
+    #[test]
+    fn a_value_no_server_writes_is_an_error_naming_the_column() {
+        let dir = tempfile::tempdir().unwrap();
+        let db = Db::open(&dir.path().join("sitar.db")).unwrap();
+        db.insert_session("a", &new_session(None)).unwrap();
+        db.with(|c| c.execute("UPDATE sessions SET pose_relation = 'sideways'", []))
+            .unwrap();
+        let err = db.session("a").unwrap_err().to_string();
+        assert!(
+            err.contains("sessions.pose_relation") && err.contains("sideways"),
+            "{err}"
+        );
+    }
+}
