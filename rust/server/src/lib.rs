@@ -48,6 +48,7 @@ mod error;
 mod estimation;
 mod files;
 mod jobs;
+mod mp4_check;
 mod overview;
 mod playback;
 mod recording;
@@ -56,7 +57,7 @@ mod routes;
 mod server;
 mod state;
 
-pub use adb::{AdbPlayback, mp4_duration_s};
+pub use adb::{AdbPlayback, contract as adb_contract, mp4_duration_s};
 pub use config::{AdbConfig, PlaybackKind, ServerConfig, SimConfig};
 pub use error::Error;
 pub use playback::{

@@ -323,6 +323,7 @@ pub(crate) fn accept_recording(
     if temp.bytes == 0 {
         return Err(Error::BadRequest("the recording is empty".into()));
     }
+    crate::mp4_check::check_recording(&row.playback, &temp.path)?;
     let bytes = temp.bytes;
     let dest = shared.files.recording(&row.id);
     if row.playback == "upload" {
