@@ -1,8 +1,8 @@
 //! The playback contract (docs/playback-contract.md) as the shipped apps declare
 //! it, read from their sources: the Kotlin playback app's package
 //! (`android/playback/build.gradle.kts`), its activity (its manifest), and the
-//! extras and file names in `PlaybackRequest.kt` and the Unity
-//! `SitarPlaybackLogger.cs`. The tests compare them with the backend's defaults.
+//! extras and file names in `PlaybackRequest.kt` and the Unity package's
+//! `SitarPlaybackRun.cs`. The tests compare them with the backend's defaults.
 #![allow(dead_code)]
 
 use std::collections::BTreeMap;
@@ -116,10 +116,16 @@ pub fn kotlin_constants() -> BTreeMap<String, String> {
     )
 }
 
-/// The string constants of the Unity `SitarPlaybackLogger` (`ExtraTrials` → `trials`, …).
+/// The string constants of the Unity package's `PlaybackRequest` (`ExtraTrials` → `trials`,
+/// …), which `SitarPlaybackLogger` reads the launch with.
 pub fn unity_constants() -> BTreeMap<String, String> {
     constants(
-        "unity-plugin/Runtime/Components/SitarPlaybackLogger.cs",
+        "unity-plugin/Runtime/SitarPlaybackRun.cs",
         "public const string",
     )
+}
+
+/// The source of the Unity `SitarPlaybackLogger` MonoBehaviour.
+pub fn unity_logger_source() -> String {
+    read("unity-plugin/Runtime/Components/SitarPlaybackLogger.cs")
 }
