@@ -43,18 +43,6 @@ fn fake_phones_with(
     }
 }
 
-/// Waits for session `id` to finish (60 s at most).
-fn finished(client: &sitar_client::Client, id: &str) -> sitar_client::SessionStatus {
-    client
-        .wait(
-            id,
-            Duration::from_millis(30),
-            Duration::from_secs(60),
-            &mut |_| {},
-        )
-        .unwrap()
-}
-
 fn adb_config(data: &Path) -> ServerConfig {
     let mut config = ServerConfig::new(data);
     config.playback = PlaybackKind::Adb;
@@ -269,7 +257,7 @@ fn adb_playback_with_fake_phones() {
     let client = sitar_tests::client(&server);
     let id = client.create_session(&new(3)).unwrap();
     client.upload_recording(&id, &mp4, &mut |_, _| {}).unwrap();
-    let status = finished(&client, &id);
+    let status = wait_done(&client, &id);
     assert_eq!(status.state, SessionState::Failed, "{status:?}");
     let error = status.error.unwrap();
     assert!(
@@ -292,7 +280,7 @@ fn adb_playback_with_fake_phones() {
     let id = client.create_session(&new(2)).unwrap();
     let began = std::time::Instant::now();
     client.upload_recording(&id, &mp4, &mut |_, _| {}).unwrap();
-    let status = finished(&client, &id);
+    let status = wait_done(&client, &id);
     assert_eq!(status.state, SessionState::Failed, "{status:?}");
     let error = status.error.unwrap();
     assert!(
@@ -316,7 +304,7 @@ fn adb_playback_with_fake_phones() {
     let client = sitar_tests::client(&server);
     let id = client.create_session(&new(2)).unwrap();
     client.upload_recording(&id, &mp4, &mut |_, _| {}).unwrap();
-    let status = finished(&client, &id);
+    let status = wait_done(&client, &id);
     assert_eq!(status.state, SessionState::Done, "{status:?}");
     let log = std::fs::read_to_string(phones.join("log")).unwrap();
     assert!(
@@ -348,7 +336,7 @@ fn adb_playback_with_fake_phones() {
     );
     // The same session then takes the real recording.
     client.upload_recording(&id, &mp4, &mut |_, _| {}).unwrap();
-    assert_eq!(finished(&client, &id).state, SessionState::Done);
+    assert_eq!(wait_done(&client, &id).state, SessionState::Done);
     // The legacy route, when the server plays over adb.
     let (ct, form) = multipart("recording", "session.mp4", b"not an mp4 at all, just text");
     let (code, rct, body) = raw(

@@ -14,29 +14,13 @@
 //! Skipped, loudly, where `kotlinc` or `java` is missing.
 
 mod bindings_support;
+mod host_support;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 
 use bindings_support::{library_dir, run, skip, which, workspace_root};
-
-/// Every file under `dir` whose name ends with `suffix`, recursively, sorted.
-fn files(dir: &Path, suffix: &str) -> Vec<PathBuf> {
-    let mut out = Vec::new();
-    let mut dirs = vec![dir.to_path_buf()];
-    while let Some(d) = dirs.pop() {
-        for entry in std::fs::read_dir(&d).unwrap_or_else(|e| panic!("{}: {e}", d.display())) {
-            let path = entry.unwrap().path();
-            if path.is_dir() {
-                dirs.push(path);
-            } else if path.to_string_lossy().ends_with(suffix) {
-                out.push(path);
-            }
-        }
-    }
-    out.sort();
-    out
-}
+use host_support::{check_json_cases, files_with_suffix as files};
 
 /// Whether a Kotlin source needs Android or ARCore (so it only type-checks against stubs).
 fn uses_android(source: &Path) -> bool {
@@ -160,21 +144,7 @@ fn kotlin_app_logic_runs_on_the_jvm_with_the_real_library() {
 
     let recorder = java_main("io.github.sitar.recorder.RecorderHostTestKt", &[]);
     assert!(recorder.contains("PASSED"), "{recorder}");
-    let mut cases = 0;
-    for line in recorder.lines().filter_map(|l| l.strip_prefix("JSON ")) {
-        let (hex, doc) = line.split_once(' ').expect("JSON <hex> <document>");
-        let bytes: Vec<u8> = (0..hex.len())
-            .step_by(2)
-            .map(|i| u8::from_str_radix(&hex[i..i + 2], 16).unwrap())
-            .collect();
-        let expected = String::from_utf8(bytes).unwrap();
-        let parsed: serde_json::Value =
-            serde_json::from_str(doc).unwrap_or_else(|e| panic!("{e}: {doc}"));
-        assert_eq!(parsed["server_url"], expected.as_str(), "{doc}");
-        assert_eq!(parsed["convention"], "arcore");
-        assert_eq!(parsed.as_object().unwrap().len(), 2, "{doc}");
-        cases += 1;
-    }
+    let cases = check_json_cases(&recorder, "arcore");
     assert!(cases >= 7, "{recorder}");
     println!(
         "recorder sample: {} ({cases} JSON escaping cases parsed by serde_json)",

@@ -7,6 +7,7 @@
 //! loudly, where `mcs` or `mono` is missing.
 
 mod bindings_support;
+mod host_support;
 
 use std::process::Command;
 
@@ -48,21 +49,7 @@ fn unity_playback_logic_and_json_run_on_mono_with_the_real_library() {
         "C# logic test",
     );
     assert!(stdout.contains("PASSED"), "{stdout}");
-    let mut cases = 0;
-    for line in stdout.lines().filter_map(|l| l.strip_prefix("JSON ")) {
-        let (hex, doc) = line.split_once(' ').expect("JSON <hex> <document>");
-        let bytes: Vec<u8> = (0..hex.len())
-            .step_by(2)
-            .map(|i| u8::from_str_radix(&hex[i..i + 2], 16).unwrap())
-            .collect();
-        let expected = String::from_utf8(bytes).unwrap();
-        let parsed: serde_json::Value =
-            serde_json::from_str(doc).unwrap_or_else(|e| panic!("{e}: {doc}"));
-        assert_eq!(parsed["server_url"], expected.as_str(), "{doc}");
-        assert_eq!(parsed["convention"], "unity");
-        assert_eq!(parsed.as_object().unwrap().len(), 2, "{doc}");
-        cases += 1;
-    }
+    let cases = host_support::check_json_cases(&stdout, "unity");
     assert!(cases >= 7, "{stdout}");
     println!(
         "{} ({cases} JSON escaping cases parsed by serde_json)",

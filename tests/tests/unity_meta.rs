@@ -7,6 +7,7 @@
 //! API. A new file without its `.meta` fails here: run `scripts/unity-meta`.
 
 mod bindings_support;
+mod host_support;
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -394,15 +395,7 @@ fn the_editor_scripts_type_check_against_the_unity_editor_api_shapes() {
         return skip(NAME, "`mcs` is not on PATH (Debian package `mono-mcs`)");
     };
     let support = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/bindings_support");
-    let cs = |dir: &Path| -> Vec<PathBuf> {
-        let mut v: Vec<PathBuf> = std::fs::read_dir(dir)
-            .unwrap()
-            .map(|e| e.unwrap().path())
-            .filter(|p| p.extension().is_some_and(|e| e == "cs"))
-            .collect();
-        v.sort();
-        v
-    };
+    let cs = |dir: &Path| host_support::files_with_suffix(dir, ".cs");
     let dir = tempfile::tempdir().unwrap();
     let stubs = dir.path().join("UnityEditorStubs.dll");
     run(
