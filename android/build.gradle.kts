@@ -1,10 +1,13 @@
-// Android library module `io.github.sitar`: Kotlin wrapper + libsitar.so.
-// The native library is built by cargo-ndk before every build:
-//   cargo ndk -t arm64-v8a -t armeabi-v7a -t x86_64 -o src/main/jniLibs build --release -p sitar-ffi
-// (run in this directory; cargo finds the workspace above it).
+// Android library module `io.github.sitar`: the Kotlin wrapper and libsitar.so.
+//
+// The Android Gradle plugin and Kotlin versions come from the build that includes
+// this module (an app applies them already); built on its own, the versions are in
+// settings.gradle.kts. `./gradlew publishReleasePublicationToLocalRepository` writes
+// the AAR to build/repo (`publishToMavenLocal` to ~/.m2).
 plugins {
-    id("com.android.library") version "8.5.2"
-    id("org.jetbrains.kotlin.android") version "1.9.24"
+    id("com.android.library")
+    id("org.jetbrains.kotlin.android")
+    `maven-publish`
 }
 
 android {
@@ -25,19 +28,85 @@ android {
     kotlinOptions {
         jvmTarget = "1.8"
     }
+
+    publishing {
+        singleVariant("release") {
+            withSourcesJar()
+        }
+    }
+}
+
+/** The repository root: the Cargo workspace that builds libsitar.so. */
+val workspace: File = projectDir.parentFile
+
+/**
+ * The NDK cargo-ndk should use: ANDROID_NDK_HOME, ANDROID_NDK_ROOT, local.properties'
+ * ndk.dir, else the newest NDK under the SDK (sdk.dir, ANDROID_HOME, ANDROID_SDK_ROOT).
+ */
+fun findNdk(): File? {
+    val local = java.util.Properties()
+    val props = rootProject.file("local.properties")
+    if (props.isFile) props.inputStream().use { local.load(it) }
+    listOf(System.getenv("ANDROID_NDK_HOME"), System.getenv("ANDROID_NDK_ROOT"), local.getProperty("ndk.dir"))
+        .filterNotNull()
+        .map { File(it) }
+        .firstOrNull { it.isDirectory }
+        ?.let { return it }
+    return listOf(local.getProperty("sdk.dir"), System.getenv("ANDROID_HOME"), System.getenv("ANDROID_SDK_ROOT"))
+        .filterNotNull()
+        .map { File(it, "ndk") }
+        .filter { it.isDirectory }
+        .flatMap { it.listFiles()?.toList() ?: emptyList() }
+        .filter { File(it, "source.properties").isFile }
+        .maxByOrNull { it.name }
 }
 
 val cargoNdk by tasks.registering(Exec::class) {
-    description = "Builds libsitar.so for every ABI with cargo-ndk."
+    description = "Builds libsitar.so for arm64-v8a, armeabi-v7a and x86_64 with cargo-ndk."
+    group = "build"
     workingDir = projectDir
+    // Up to date (skipped) while neither the Rust sources of sitar-ffi and its crates nor the
+    // lock file changed and the libraries are in place.
+    inputs.files(
+        fileTree(workspace.resolve("rust")) {
+            include("ffi/**", "core/**", "client/**")
+            exclude("**/target/**")
+        }
+    ).withPropertyName("rustSources")
+    inputs.files(workspace.resolve("Cargo.toml"), workspace.resolve("Cargo.lock")).withPropertyName("cargoManifests")
+    outputs.dir("src/main/jniLibs").withPropertyName("jniLibs")
     commandLine(
         "cargo", "ndk",
         "-t", "arm64-v8a", "-t", "armeabi-v7a", "-t", "x86_64",
         "-o", "src/main/jniLibs",
         "build", "--release", "-p", "sitar-ffi",
     )
+    doFirst {
+        val ndk = findNdk()
+            ?: throw GradleException("cargoNdk: no Android NDK found; set ANDROID_NDK_HOME to the NDK folder (e.g. \$ANDROID_HOME/ndk/26.3.11579264)")
+        environment("ANDROID_NDK_HOME", ndk.path)
+    }
 }
 
 tasks.named("preBuild") {
     dependsOn(cargoNdk)
+}
+
+publishing {
+    publications {
+        register<MavenPublication>("release") {
+            groupId = "io.github.sitar"
+            artifactId = "sitar"
+            version = "0.1.0"
+            afterEvaluate {
+                from(components["release"])
+            }
+        }
+    }
+    repositories {
+        maven {
+            name = "local"
+            url = uri(layout.buildDirectory.dir("repo"))
+        }
+    }
 }

@@ -1,6 +1,11 @@
-//! The `adb` playback against a fake `adb` on PATH that behaves like phones.
+//! The `adb` playback against a fake `adb` on PATH that behaves like phones
+//! running the shipped playback app (`tests/fake_adb.sh` checks the contract of
+//! docs/playback-contract.md: the `am start` options and extras, an installed
+//! activity, the app's own folder).
 //!
 //! One test function: it sets PATH and FAKE_ADB_ROOT for the whole process.
+
+mod playback_support;
 
 use std::path::Path;
 use std::time::Duration;
@@ -9,7 +14,18 @@ use sitar_client::{NewSession, SessionState};
 use sitar_server::{PlaybackKind, ServerConfig};
 use sitar_tests::*;
 
+/// Fake phones with the Kotlin playback app (as its manifest declares it) installed.
 fn fake_phones(root: &Path, serials: &[&str], pool: &[sitar_estimator::Trajectory]) {
+    let component = playback_support::kotlin_playback_app().component();
+    fake_phones_with(root, serials, pool, &component);
+}
+
+fn fake_phones_with(
+    root: &Path,
+    serials: &[&str],
+    pool: &[sitar_estimator::Trajectory],
+    installed: &str,
+) {
     let _ = std::fs::remove_dir_all(root);
     std::fs::create_dir_all(root.join("pool")).unwrap();
     for (k, t) in pool.iter().enumerate() {
@@ -21,7 +37,9 @@ fn fake_phones(root: &Path, serials: &[&str], pool: &[sitar_estimator::Trajector
     }
     std::fs::write(root.join("counter"), "0\n").unwrap();
     for s in serials {
-        std::fs::create_dir_all(root.join("phones").join(s)).unwrap();
+        let phone = root.join("phones").join(s);
+        std::fs::create_dir_all(&phone).unwrap();
+        std::fs::write(phone.join(".installed"), format!("{installed}\n")).unwrap();
     }
 }
 
@@ -99,14 +117,35 @@ fn adb_playback_with_fake_phones() {
         &direct_csv(&pool[..4], "trim_mean_30"),
     );
     let log = std::fs::read_to_string(phones.join("log")).unwrap();
-    assert!(log.contains("PHONE1 push "), "{log}");
+    // The backend's defaults are the shipped app's package and its own external folder.
+    let files = "/sdcard/Android/data/io.github.sitar.playback/files";
     assert!(
-        log.contains("am start -n org.sitar.playback/.PlaybackActivity --ei trials 4"),
+        log.lines()
+            .any(|l| l.starts_with("PHONE1 push ")
+                && l.ends_with(&format!(" {files}/recording.mp4"))),
         "{log}"
     );
     assert!(
-        log.contains("pull /sdcard/sitar/out/trajectory_3.txt"),
+        log.contains(&format!(
+            "PHONE1 shell am start -S -W -n io.github.sitar.playback/.PlaybackActivity \
+             --ei trials 4 --ei first 0 --es recording {files}/recording.mp4 --es output {files}/out"
+        )),
         "{log}"
+    );
+    assert!(
+        log.contains(&format!(
+            "PHONE1 shell rm -f {files}/out/trajectory_*.txt {files}/out/status.txt"
+        )),
+        "{log}"
+    );
+    assert!(
+        log.contains(&format!("pull {files}/out/trajectory_3.txt")),
+        "{log}"
+    );
+    assert_eq!(
+        std::fs::read_to_string(phones.join(format!("phones/PHONE1{files}/out/status.txt")))
+            .unwrap(),
+        "done 4/4\n"
     );
     drop(server);
 
@@ -137,6 +176,26 @@ fn adb_playback_with_fake_phones() {
         "PHONE1 took over the lost phone's trials: {log}"
     );
     assert!(phones.join("phones/PHONE2/.lost").exists());
+    // PHONE1's later shares (its own second one, the lost phone's trials) start at a
+    // later trial: their files are numbered from there.
+    let later: Vec<&str> = log
+        .lines()
+        .filter(|l| l.starts_with("PHONE1 shell am start") && !l.contains("--ei first 0 "))
+        .collect();
+    assert!(!later.is_empty(), "a share with first > 0: {log}");
+    for start in later {
+        let first: u32 = start
+            .split("--ei first ")
+            .nth(1)
+            .and_then(|r| r.split_whitespace().next())
+            .and_then(|n| n.parse().ok())
+            .unwrap();
+        let serial = start.split_whitespace().next().unwrap();
+        assert!(
+            log.contains(&format!("{serial} pull /sdcard/Android/data/io.github.sitar.playback/files/out/trajectory_{first}.txt")),
+            "{serial} pulls trajectory_{first}: {log}"
+        );
+    }
     let csv = client.results_csv(&id).unwrap();
     assert!(parse_csv(&csv).len() > 50);
     drop(server);
@@ -162,7 +221,7 @@ fn adb_playback_with_fake_phones() {
     assert_eq!(status.trials_done, 4);
     let log = std::fs::read_to_string(phones.join("log")).unwrap();
     assert!(
-        log.contains("PHONE3 shell am force-stop org.sitar.playback"),
+        log.contains("PHONE3 shell am force-stop io.github.sitar.playback"),
         "{log}"
     );
     let pulls_from_3 = log.lines().filter(|l| l.starts_with("PHONE3 pull")).count();
@@ -185,4 +244,108 @@ fn adb_playback_with_fake_phones() {
         .unwrap();
     assert_eq!(status.state, SessionState::Failed);
     assert!(status.error.unwrap().contains("no playback phone"));
+    drop(server);
+
+    // The app reports a failure in its status file: the phone's share fails with that message.
+    fake_phones(&phones, &["PHONE4"], &pool);
+    std::fs::write(
+        phones.join("phones/PHONE4/.fail"),
+        "ARCore cannot play the recording: PlaybackFailedException",
+    )
+    .unwrap();
+    let server = start(adb_config(&dir.path().join("data")));
+    let client = sitar_tests::client(&server);
+    let id = client.create_session(&new(3)).unwrap();
+    client.upload_recording(&id, &mp4, &mut |_, _| {}).unwrap();
+    let status = wait_done(&client, &id);
+    assert_eq!(status.state, SessionState::Failed, "{status:?}");
+    let error = status.error.unwrap();
+    assert!(
+        error.contains("PHONE4: the playback app failed: ARCore cannot play the recording: PlaybackFailedException"),
+        "{error}"
+    );
+    let log = std::fs::read_to_string(phones.join("log")).unwrap();
+    assert!(
+        log.contains(
+            "PHONE4 shell cat /sdcard/Android/data/io.github.sitar.playback/files/out/status.txt"
+        ),
+        "{log}"
+    );
+    drop(server);
+
+    // Another app is installed: am's own error, not a wait for the deadline.
+    fake_phones_with(&phones, &["PHONE5"], &pool, "com.example.other/.Main");
+    let server = start(adb_config(&dir.path().join("data")));
+    let client = sitar_tests::client(&server);
+    let id = client.create_session(&new(2)).unwrap();
+    let began = std::time::Instant::now();
+    client.upload_recording(&id, &mp4, &mut |_, _| {}).unwrap();
+    let status = wait_done(&client, &id);
+    assert_eq!(status.state, SessionState::Failed, "{status:?}");
+    let error = status.error.unwrap();
+    assert!(
+        error.contains("does not exist") && error.contains("is the playback app installed"),
+        "{error}"
+    );
+    assert!(
+        began.elapsed() < Duration::from_secs(10),
+        "failed at once: {:?}",
+        began.elapsed()
+    );
+    drop(server);
+
+    // A Unity playback app: another package and activity, its own folder by default.
+    let unity = "com.example.unityplayback/com.unity3d.player.UnityPlayerActivity";
+    fake_phones_with(&phones, &["PHONE6"], &pool, unity);
+    let mut config = adb_config(&dir.path().join("data"));
+    config.adb.package = "com.example.unityplayback".into();
+    config.adb.activity = "com.unity3d.player.UnityPlayerActivity".into();
+    let server = start(config);
+    let client = sitar_tests::client(&server);
+    let id = client.create_session(&new(2)).unwrap();
+    client.upload_recording(&id, &mp4, &mut |_, _| {}).unwrap();
+    let status = wait_done(&client, &id);
+    assert_eq!(status.state, SessionState::Done, "{status:?}");
+    let log = std::fs::read_to_string(phones.join("log")).unwrap();
+    assert!(
+        log.contains(&format!(
+            "PHONE6 shell am start -S -W -n {unity} --ei trials 2 --ei first 0 \
+             --es recording /sdcard/Android/data/com.example.unityplayback/files/recording.mp4"
+        )),
+        "{log}"
+    );
+    drop(server);
+
+    // A recording that is not an MP4 is refused at upload (422), for adb sessions only.
+    fake_phones(&phones, &["PHONE1"], &pool);
+    let server = start(adb_config(&dir.path().join("data")));
+    let client = sitar_tests::client(&server);
+    let id = client.create_session(&new(2)).unwrap();
+    let url = format!("{}/v1/sessions/{id}/recording", server.url());
+    let garbage: Vec<u8> = (0..4096u32)
+        .map(|i| (i.wrapping_mul(2654435761) >> 24) as u8)
+        .collect();
+    let (code, ct, body) = raw("PUT", &url, Some("application/octet-stream"), &garbage, &[]);
+    assert_eq!(error_code(code, &ct, &body, 422), "invalid_content");
+    assert!(body.contains("not an MP4"), "{body}");
+    let status = client.status(&id).unwrap();
+    assert_eq!(
+        status.state,
+        SessionState::Created,
+        "nothing was played: {status:?}"
+    );
+    // The same session then takes the real recording.
+    client.upload_recording(&id, &mp4, &mut |_, _| {}).unwrap();
+    assert_eq!(wait_done(&client, &id).state, SessionState::Done);
+    // The legacy route, when the server plays over adb.
+    let (ct, form) = multipart("recording", "session.mp4", b"not an mp4 at all, just text");
+    let (code, rct, body) = raw(
+        "POST",
+        &format!("{}/recording", server.url()),
+        Some(&ct),
+        &form,
+        &[],
+    );
+    assert_eq!(error_code(code, &rct, &body, 422), "invalid_content");
+    drop(server);
 }

@@ -6,7 +6,7 @@ use std::time::Duration;
 
 use anyhow::{Context, Result};
 use clap::ValueEnum;
-use sitar_server::{PlaybackKind, Server, ServerConfig};
+use sitar_server::{AdbConfig, PlaybackKind, Server, ServerConfig};
 
 /// Runs the SiTAR backend: HTTP API (versioned and the original app's legacy routes),
 /// SQLite storage in DIR, playback on phones over adb (or the simulator), estimation.
@@ -25,12 +25,19 @@ pub struct Args {
     /// The adb executable.
     #[arg(long, default_value = "adb")]
     adb: PathBuf,
-    /// Package of the playback app on the phones.
-    #[arg(long, default_value = "org.sitar.playback")]
-    package: String,
-    /// Activity of the playback app.
-    #[arg(long, default_value = ".PlaybackActivity")]
-    activity: String,
+    /// Package of the playback app on the phones (the contract: docs/playback-contract.md;
+    /// a Unity playback app: its bundle identifier).
+    #[arg(long = "adb-package", alias = "package", value_name = "PACKAGE",
+          default_value = AdbConfig::DEFAULT_PACKAGE)]
+    adb_package: String,
+    /// Activity of the playback app (a Unity app: com.unity3d.player.UnityPlayerActivity).
+    #[arg(long = "adb-activity", alias = "activity", value_name = "ACTIVITY",
+          default_value = AdbConfig::DEFAULT_ACTIVITY)]
+    adb_activity: String,
+    /// Folder on the phones for the recording and the trajectories
+    /// [default: /sdcard/Android/data/PACKAGE/files, the app's own external folder].
+    #[arg(long = "adb-remote-dir", value_name = "DIR")]
+    adb_remote_dir: Option<String>,
     /// Sim playback speed (1 = real time).
     #[arg(long, default_value_t = 1.0)]
     sim_speed: f64,
@@ -88,8 +95,13 @@ pub fn run(args: Args) -> Result<()> {
         Playback::Sim => PlaybackKind::Sim,
     };
     config.adb.adb_path = args.adb;
-    config.adb.package = args.package;
-    config.adb.activity = args.activity;
+    config.adb.package = args.adb_package;
+    config.adb.activity = args.adb_activity;
+    config.adb.remote_dir = args.adb_remote_dir;
+    config
+        .adb
+        .check()
+        .context("sitar serve --adb-package/--adb-activity/--adb-remote-dir")?;
     config.adb.poll_interval = Duration::from_secs(1);
     config.sim.speed = args.sim_speed;
     config.sim.devices = args.sim_devices;

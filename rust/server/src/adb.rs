@@ -11,12 +11,61 @@ use crate::Error;
 use crate::config::AdbConfig;
 use crate::playback::{DeviceInfo, Playback, PlaybackJob, PlaybackPlan, TrialOutput};
 
+/// The contract between the backend and a playback app, written out in
+/// `docs/playback-contract.md`: the intent extras of `am start`, the file names in
+/// the phone folder ([`AdbConfig::remote_dir`]) and the status file. The Kotlin
+/// playback app (`android/playback`) and the Unity `SitarPlaybackLogger` use the same
+/// names; a test compares them.
+pub mod contract {
+    /// Int extra: how many trials to play.
+    pub const EXTRA_TRIALS: &str = "trials";
+    /// Int extra: the number of the first trial; trial `k` (0-based) of the launch is
+    /// written as `trajectory_{first + k}.txt`.
+    pub const EXTRA_FIRST: &str = "first";
+    /// String extra: the recording (mp4) on the phone.
+    pub const EXTRA_RECORDING: &str = "recording";
+    /// String extra: the folder to write the trajectories and the status file into.
+    pub const EXTRA_OUTPUT: &str = "output";
+    /// The recording's name in the phone folder.
+    pub const RECORDING_FILE: &str = "recording.mp4";
+    /// The output folder's name in the phone folder.
+    pub const OUTPUT_DIR: &str = "out";
+    /// The app's one-line status in the output folder: `starting`, `playing K/N`,
+    /// `done N/N`, or `failed MESSAGE` (the backend fails the phone's share with it).
+    pub const STATUS_FILE: &str = "status.txt";
+
+    /// The name of trial `index`'s trajectory (TUM, integer nanoseconds).
+    pub fn trajectory_file(index: u32) -> String {
+        format!("trajectory_{index}.txt")
+    }
+
+    /// `trajectory_K.txt` → K.
+    pub fn trajectory_number(name: &str) -> Option<u32> {
+        name.trim()
+            .strip_prefix("trajectory_")?
+            .strip_suffix(".txt")?
+            .parse()
+            .ok()
+    }
+
+    /// The message of a `failed MESSAGE` status (`None` for every other state).
+    pub fn failure(status: &str) -> Option<&str> {
+        let line = status.lines().next()?.trim();
+        let rest = line.strip_prefix("failed")?;
+        (rest.is_empty() || rest.starts_with(char::is_whitespace)).then(|| rest.trim())
+    }
+}
+
 /// Playback on the phones `adb devices` lists. Each phone gets the recording
-/// pushed once and is started with its share of the trials
-/// (`am start -n PACKAGE/ACTIVITY --ei trials N --es recording FILE --es output DIR`);
-/// the app writes `DIR/trajectory_K.txt` (K = 0..N) after each trial and the
-/// files are pulled as they appear. A phone that disappears or misses its
-/// deadline hands its unfinished trials back to the others.
+/// pushed once to `DIR/recording.mp4` (`DIR` is [`AdbConfig::remote_dir`]) and is
+/// started with its share of the trials
+/// (`am start -S -W -n PACKAGE/ACTIVITY --ei trials N --ei first F --es recording
+/// DIR/recording.mp4 --es output DIR/out`: `-S` stops a run still going, `-W` waits
+/// for the launch); the app writes `DIR/out/trajectory_K.txt` (K = F … F+N−1) after
+/// each trial and the files are pulled as they appear. A `failed …` line in
+/// `DIR/out/status.txt` fails the phone's share with that message. A phone that
+/// disappears, fails or misses its deadline hands its unfinished trials back to the
+/// others.
 #[derive(Debug, Clone)]
 pub struct AdbPlayback {
     config: AdbConfig,
@@ -91,15 +140,6 @@ pub fn mp4_duration_s(path: &Path) -> Result<f64, Error> {
     Ok(reader.duration().as_secs_f64())
 }
 
-/// `trajectory_K.txt` → K.
-fn trajectory_number(name: &str) -> Option<usize> {
-    name.trim()
-        .strip_prefix("trajectory_")?
-        .strip_suffix(".txt")?
-        .parse()
-        .ok()
-}
-
 impl AdbPlayback {
     /// An adb backend with the given configuration.
     pub fn new(config: AdbConfig) -> AdbPlayback {
@@ -158,8 +198,10 @@ impl AdbPlayback {
     ) -> Result<(), Error> {
         let cmd = Duration::from_secs(30);
         let push = Duration::from_secs(600);
-        let dir = self.config.remote_dir.trim_end_matches('/');
-        let (remote_rec, out_dir) = (format!("{dir}/recording.mp4"), format!("{dir}/out"));
+        let dir = self.config.remote_dir();
+        let remote_rec = format!("{dir}/{}", contract::RECORDING_FILE);
+        let out_dir = format!("{dir}/{}", contract::OUTPUT_DIR);
+        let status_file = format!("{out_dir}/{}", contract::STATUS_FILE);
         let recording = job.recording.to_string_lossy().into_owned();
         self.on(serial, &["shell", "mkdir", "-p", &out_dir], cmd)?;
         self.on(serial, &["push", &recording, &remote_rec], push)?;
@@ -193,41 +235,72 @@ impl AdbPlayback {
             };
             let mut pulled: HashSet<usize> = HashSet::new();
             let outcome = (|| -> Result<(), Error> {
+                // Last run's files: a stale trajectory or failure must not count for this one.
                 self.on(
                     serial,
-                    &["shell", "rm", "-f", &format!("{out_dir}/trajectory_*.txt")],
+                    &[
+                        "shell",
+                        "rm",
+                        "-f",
+                        &format!("{out_dir}/trajectory_*.txt"),
+                        &status_file,
+                    ],
                     cmd,
                 )?;
                 let component = format!("{}/{}", self.config.package, self.config.activity);
                 let count = batch.len().to_string();
-                self.on(
+                let first = batch[0];
+                let first_text = first.to_string();
+                let started_app = self.on(
                     serial,
                     &[
                         "shell",
                         "am",
                         "start",
+                        "-S",
+                        "-W",
                         "-n",
                         &component,
                         "--ei",
-                        "trials",
+                        contract::EXTRA_TRIALS,
                         &count,
+                        "--ei",
+                        contract::EXTRA_FIRST,
+                        &first_text,
                         "--es",
-                        "recording",
+                        contract::EXTRA_RECORDING,
                         &remote_rec,
                         "--es",
-                        "output",
+                        contract::EXTRA_OUTPUT,
                         &out_dir,
                     ],
                     cmd,
                 )?;
+                // `am` reports a missing activity on stdout ("Error type 3", "Error: Activity
+                // class {…} does not exist.") and still exits 0.
+                let errors: Vec<&str> = started_app
+                    .lines()
+                    .map(str::trim)
+                    .filter(|l| l.starts_with("Error"))
+                    .collect();
+                if !errors.is_empty() {
+                    return Err(Error::Playback(format!(
+                        "{serial}: am start -n {component}: {} (is the playback app installed? \
+                         see docs/playback-contract.md)",
+                        errors.join("; ")
+                    )));
+                }
+                let stop_app = || {
+                    let _ = self.on(
+                        serial,
+                        &["shell", "am", "force-stop", &self.config.package],
+                        cmd,
+                    );
+                };
                 let started = Instant::now();
                 while pulled.len() < batch.len() {
                     if job.cancelled() {
-                        let _ = self.on(
-                            serial,
-                            &["shell", "am", "force-stop", &self.config.package],
-                            cmd,
-                        );
+                        stop_app();
                         return Ok(());
                     }
                     // Trial k is due by (k+1)·d·factor + slack.
@@ -235,11 +308,7 @@ impl AdbPlayback {
                         trial_s * self.config.trial_timeout_factor * (pulled.len() + 1) as f64
                             + self.config.trial_timeout_slack.as_secs_f64();
                     if started.elapsed().as_secs_f64() > due {
-                        let _ = self.on(
-                            serial,
-                            &["shell", "am", "force-stop", &self.config.package],
-                            cmd,
-                        );
+                        stop_app();
                         return Err(Error::Playback(format!(
                             "{serial}: trial {} not done after {due:.0} s",
                             pulled.len()
@@ -249,13 +318,15 @@ impl AdbPlayback {
                     let listing = self.on(serial, &["shell", "ls", &out_dir], cmd)?;
                     let mut ready: Vec<usize> = listing
                         .split_whitespace()
-                        .filter_map(trajectory_number)
+                        .filter_map(contract::trajectory_number)
+                        .filter_map(|n| n.checked_sub(first).map(|k| k as usize))
                         .filter(|k| *k < batch.len() && !pulled.contains(k))
                         .collect();
                     ready.sort_unstable();
                     for k in ready {
+                        let name = contract::trajectory_file(first + k as u32);
                         let local = pull_dir.join(format!("{safe_serial}_{k}.txt"));
-                        let remote = format!("{out_dir}/trajectory_{k}.txt");
+                        let remote = format!("{out_dir}/{name}");
                         self.on(serial, &["pull", &remote, &local.to_string_lossy()], cmd)?;
                         let text = std::fs::read_to_string(&local)
                             .map_err(|e| Error::io("cannot read", &local, e))?;
@@ -266,6 +337,24 @@ impl AdbPlayback {
                             tum: text,
                             source: format!("adb:{serial}"),
                         });
+                    }
+                    if pulled.len() < batch.len()
+                        && listing
+                            .split_whitespace()
+                            .any(|f| f == contract::STATUS_FILE)
+                    {
+                        let status = self.on(serial, &["shell", "cat", &status_file], cmd)?;
+                        if let Some(message) = contract::failure(&status) {
+                            stop_app();
+                            return Err(Error::Playback(format!(
+                                "{serial}: the playback app failed: {}",
+                                if message.is_empty() {
+                                    "(no message)"
+                                } else {
+                                    message
+                                }
+                            )));
+                        }
                     }
                 }
                 Ok(())
@@ -352,14 +441,22 @@ impl Playback for AdbPlayback {
                         })
                     })
                     .collect();
-                handles
-                    .into_iter()
-                    .any(|h| h.join().map(|r| r.is_ok()).unwrap_or(false))
+                let mut progress = false;
+                let mut why = Vec::new();
+                for h in handles {
+                    match h.join() {
+                        Ok(Ok(())) => progress = true,
+                        Ok(Err(e)) => why.push(e.to_string()),
+                        Err(_) => why.push("a phone's thread panicked".to_owned()),
+                    }
+                }
+                (progress, why)
             });
-            if !progress {
+            if !progress.0 {
                 let left = queue.lock().map(|q| q.len()).unwrap_or(0);
                 return Err(Error::Playback(format!(
-                    "{left} trial(s) unplayed: no phone could play them"
+                    "{left} trial(s) unplayed: no phone could play them ({})",
+                    progress.1.join("; ")
                 )));
             }
         }
@@ -384,15 +481,42 @@ impl Playback for AdbPlayback {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     #[test]
     fn trajectory_names_parse() {
+        use contract::{trajectory_file, trajectory_number};
         assert_eq!(trajectory_number("trajectory_0.txt"), Some(0));
         assert_eq!(trajectory_number("trajectory_12.txt\r"), Some(12));
+        assert_eq!(trajectory_number(&trajectory_file(7)), Some(7));
         assert_eq!(trajectory_number("trajectory_x.txt"), None);
+        assert_eq!(trajectory_number("trajectory_3.txt.part"), None);
         assert_eq!(trajectory_number("recording.mp4"), None);
+    }
+
+    #[test]
+    fn only_a_failed_status_is_a_failure() {
+        use contract::failure;
+        assert_eq!(
+            failure("failed cannot open /sdcard/x.mp4\n"),
+            Some("cannot open /sdcard/x.mp4")
+        );
+        assert_eq!(failure("failed\n"), Some(""));
+        assert_eq!(
+            failure("  failed   ARCore: IO_ERROR\r\nmore"),
+            Some("ARCore: IO_ERROR")
+        );
+        for other in [
+            "",
+            "starting",
+            "playing 2/5",
+            "done 5/5",
+            "failedX",
+            "not failed",
+        ] {
+            assert_eq!(failure(other), None, "{other:?}");
+        }
     }
 
     #[test]

@@ -49,17 +49,22 @@ pub struct SimConfig {
     pub devices: u32,
 }
 
-/// Settings of the `adb` backend.
+/// Settings of the `adb` backend. The defaults drive the SiTAR playback app
+/// (`android/playback`); the contract with any playback app (package, activity,
+/// extras, folders, status file) is `docs/playback-contract.md`.
 #[derive(Debug, Clone)]
 pub struct AdbConfig {
     /// The adb executable (a name looked up on `PATH`, or a path).
     pub adb_path: PathBuf,
-    /// Package of the playback app.
+    /// Package of the playback app (default [`AdbConfig::DEFAULT_PACKAGE`]).
     pub package: String,
-    /// Activity started with `am start -n package/activity`.
+    /// Activity started with `am start -S -W -n package/activity` (default
+    /// [`AdbConfig::DEFAULT_ACTIVITY`]; a leading `.` is relative to the package).
     pub activity: String,
-    /// Directory on the phone for the recording and the `trajectory_N.txt` files.
-    pub remote_dir: String,
+    /// Folder on the phone for the recording and the `trajectory_N.txt` files; `None`
+    /// (the default) is the package's app-specific external folder, which the app can
+    /// write without a storage permission: see [`AdbConfig::remote_dir`].
+    pub remote_dir: Option<String>,
     /// How often the phone is asked for new trajectory files.
     pub poll_interval: Duration,
     /// A trial taking longer than `factor × duration + slack` counts as lost.
@@ -68,6 +73,79 @@ pub struct AdbConfig {
     pub trial_timeout_slack: Duration,
     /// Duration to assume when the recording has no readable mp4 header.
     pub fallback_duration_s: f64,
+}
+
+impl AdbConfig {
+    /// Package of the SiTAR playback app (`android/playback`).
+    pub const DEFAULT_PACKAGE: &'static str = "io.github.sitar.playback";
+    /// Its activity, relative to the package.
+    pub const DEFAULT_ACTIVITY: &'static str = ".PlaybackActivity";
+
+    /// The folder on the phone: [`AdbConfig::remote_dir`] if set, else the package's
+    /// app-specific external folder `/sdcard/Android/data/PACKAGE/files` (what
+    /// `Context.getExternalFilesDir(null)` and Unity's `Application.persistentDataPath`
+    /// are; adb can read and write it, the app needs no storage permission).
+    pub fn remote_dir(&self) -> String {
+        match &self.remote_dir {
+            Some(dir) => dir.trim_end_matches('/').to_owned(),
+            None => format!("/sdcard/Android/data/{}/files", self.package),
+        }
+    }
+
+    /// Checks the names that go into `adb shell` command lines (which the phone's
+    /// shell parses): a Java package name, an activity class name, an absolute
+    /// folder of plain path characters.
+    pub fn check(&self) -> Result<(), crate::Error> {
+        let java_name = |s: &str| {
+            !s.is_empty()
+                && s.split('.').all(|part| {
+                    part.chars()
+                        .next()
+                        .is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
+                        && part.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
+                })
+        };
+        if !java_name(&self.package) || !self.package.contains('.') {
+            return Err(crate::Error::Config(format!(
+                "adb package {:?} is not an Android package name (like {})",
+                self.package,
+                Self::DEFAULT_PACKAGE
+            )));
+        }
+        if !java_name(self.activity.strip_prefix('.').unwrap_or(&self.activity)) {
+            return Err(crate::Error::Config(format!(
+                "adb activity {:?} is not an activity class name (like {} or \
+                 com.unity3d.player.UnityPlayerActivity)",
+                self.activity,
+                Self::DEFAULT_ACTIVITY
+            )));
+        }
+        let dir = self.remote_dir();
+        let plain = |c: char| c.is_ascii_alphanumeric() || "/._-".contains(c);
+        if !dir.starts_with('/') || dir.len() < 2 || !dir.chars().all(plain) || dir.contains("..") {
+            return Err(crate::Error::Config(format!(
+                "adb remote dir {dir:?} is not an absolute folder of letters, digits and /._- \
+                 (like /sdcard/Android/data/{}/files)",
+                self.package
+            )));
+        }
+        Ok(())
+    }
+}
+
+impl Default for AdbConfig {
+    fn default() -> AdbConfig {
+        AdbConfig {
+            adb_path: PathBuf::from("adb"),
+            package: Self::DEFAULT_PACKAGE.to_owned(),
+            activity: Self::DEFAULT_ACTIVITY.to_owned(),
+            remote_dir: None,
+            poll_interval: Duration::from_millis(1000),
+            trial_timeout_factor: 2.0,
+            trial_timeout_slack: Duration::from_secs(30),
+            fallback_duration_s: 60.0,
+        }
+    }
 }
 
 /// Everything `sitar serve` can be told.
@@ -140,19 +218,83 @@ impl ServerConfig {
                 speed: 1.0,
                 devices: 1,
             },
-            adb: AdbConfig {
-                adb_path: PathBuf::from("adb"),
-                package: "org.sitar.playback".to_string(),
-                activity: ".PlaybackActivity".to_string(),
-                remote_dir: "/sdcard/sitar".to_string(),
-                poll_interval: Duration::from_millis(1000),
-                trial_timeout_factor: 2.0,
-                trial_timeout_slack: Duration::from_secs(30),
-                fallback_duration_s: 60.0,
-            },
+            adb: AdbConfig::default(),
             retention: None,
             retention_sweep: Duration::from_secs(600),
             upload_idle_timeout: Duration::from_secs(60),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_remote_dir_follows_the_package_unless_set() {
+        let mut adb = AdbConfig::default();
+        assert_eq!(
+            adb.remote_dir(),
+            "/sdcard/Android/data/io.github.sitar.playback/files"
+        );
+        adb.package = "com.example.unityplayback".into();
+        assert_eq!(
+            adb.remote_dir(),
+            "/sdcard/Android/data/com.example.unityplayback/files"
+        );
+        adb.remote_dir = Some("/sdcard/Download/sitar/".into());
+        assert_eq!(adb.remote_dir(), "/sdcard/Download/sitar");
+        assert!(adb.check().is_ok());
+    }
+
+    #[test]
+    fn names_that_would_reach_the_phone_shell_are_checked() {
+        let ok = AdbConfig::default();
+        assert!(ok.check().is_ok());
+        let unity = AdbConfig {
+            package: "com.example.app".into(),
+            activity: "com.unity3d.player.UnityPlayerActivity".into(),
+            ..AdbConfig::default()
+        };
+        assert!(unity.check().is_ok());
+        for package in [
+            "",
+            "nodot",
+            "a.b;reboot",
+            "a..b",
+            "1a.b",
+            "a.b c",
+            "a.b$HOME",
+        ] {
+            let bad = AdbConfig {
+                package: package.into(),
+                ..AdbConfig::default()
+            };
+            let err = bad.check().unwrap_err().to_string();
+            assert!(err.contains("adb package"), "{package:?}: {err}");
+        }
+        // `$` too: the phone's shell would expand `Outer$Inner`.
+        for activity in ["", ".", ".Main Activity", "$(id)", "a.Outer$Inner"] {
+            let bad = AdbConfig {
+                activity: activity.into(),
+                ..AdbConfig::default()
+            };
+            let err = bad.check().unwrap_err().to_string();
+            assert!(err.contains("adb activity"), "{activity:?}: {err}");
+        }
+        for dir in [
+            "relative/dir",
+            "/",
+            "/sdcard/a b",
+            "/sdcard/../data",
+            "/x;rm",
+        ] {
+            let bad = AdbConfig {
+                remote_dir: Some(dir.into()),
+                ..AdbConfig::default()
+            };
+            let err = bad.check().unwrap_err().to_string();
+            assert!(err.contains("adb remote dir"), "{dir:?}: {err}");
         }
     }
 }

@@ -88,6 +88,7 @@ mod handlers;
 mod http;
 mod jobs;
 mod live;
+mod mp4_check;
 mod playback;
 mod published;
 mod recordings;
@@ -100,7 +101,7 @@ mod shared;
 mod status;
 mod trials;
 
-pub use adb::{AdbPlayback, mp4_duration_s};
+pub use adb::{AdbPlayback, contract as adb_contract, mp4_duration_s};
 pub use config::{AdbConfig, PlaybackKind, ServerConfig, SimConfig};
 pub use error::Error;
 pub use http::IDEMPOTENCY_HEADER;

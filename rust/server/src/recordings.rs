@@ -25,6 +25,7 @@ pub(crate) fn accept_recording(
     if temp.bytes == 0 {
         return Err(Error::BadRequest("the recording is empty".into()));
     }
+    crate::mp4_check::check_recording(session.playback, &temp.path)?;
     let (id, bytes) = (&session.id, temp.bytes);
     let dest = shared.files.recording(id);
     if session.playback == PlaybackKind::Upload {

@@ -120,7 +120,7 @@ namespace Sitar.Unity
             Clear();
             if (upload != null) { upload.Dispose(); upload = null; }
             if (session != null) session.Dispose();
-            session = new SitarSession("{\"convention\":\"unity\",\"server_url\":\"" + serverUrl + "\"}");
+            session = new SitarSession(new SitarJson().Add("convention", "unity").Add("server_url", serverUrl).ToString());
 #if UNITY_ANDROID
             if (arSession.subsystem is ARCoreSessionSubsystem sub)
             {
@@ -227,12 +227,20 @@ namespace Sitar.Unity
             session.Save(Path.Combine(Application.persistentDataPath, "sitar-session"));
             Draw();
             failedServerId = null;
-            StartUpload("");
+            StartUpload(null);
         }
 
-        void StartUpload(string sessionIdOption)
+        /// <summary>The upload options; <paramref name="serverSessionId"/> (or null) continues that server session.</summary>
+        string UploadOptions(string serverSessionId)
         {
-            upload = session.Upload(mp4Path, "{\"trials\":" + trials + ",\"setting\":\"" + setting + "\",\"playback\":\"" + playback + "\"" + sessionIdOption + "}");
+            var options = new SitarJson().Add("trials", trials).Add("setting", setting).Add("playback", playback);
+            if (!string.IsNullOrEmpty(serverSessionId)) options.Add("session_id", serverSessionId);
+            return options.ToString();
+        }
+
+        void StartUpload(string serverSessionId)
+        {
+            upload = session.Upload(mp4Path, UploadOptions(serverSessionId));
             SetStatus("Uploading…");
         }
 
@@ -241,7 +249,7 @@ namespace Sitar.Unity
         public void RetryUpload()
         {
             if (upload != null || string.IsNullOrEmpty(failedServerId)) return;
-            StartUpload(",\"session_id\":\"" + failedServerId + "\"");
+            StartUpload(failedServerId);
         }
 
         void Update()

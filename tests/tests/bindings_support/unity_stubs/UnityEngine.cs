@@ -125,6 +125,13 @@ namespace UnityEngine
     public sealed class Screen
     {
         public static ScreenOrientation orientation { get { throw null; } set { throw null; } }
+        public static int sleepTimeout { get { throw null; } set { throw null; } }
+    }
+
+    public sealed class SleepTimeout
+    {
+        public const int NeverSleep = -1;
+        public const int SystemSetting = -2;
     }
 
     public sealed class SerializeField : Attribute { }

@@ -1,0 +1,4 @@
+package android.util;
+public class AndroidException extends Exception {
+    public AndroidException() { throw new RuntimeException("Stub!"); }
+}

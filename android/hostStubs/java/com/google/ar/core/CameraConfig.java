@@ -1,0 +1,4 @@
+package com.google.ar.core;
+public class CameraConfig {
+    public String getCameraId() { throw new RuntimeException("Stub!"); }
+}

@@ -1,0 +1,2 @@
+package com.google.ar.core;
+public enum PlaybackStatus { NONE, OK, IO_ERROR, FINISHED }

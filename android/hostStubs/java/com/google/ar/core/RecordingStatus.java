@@ -1,0 +1,2 @@
+package com.google.ar.core;
+public enum RecordingStatus { NONE, OK, IO_ERROR }

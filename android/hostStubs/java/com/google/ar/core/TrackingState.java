@@ -1,0 +1,2 @@
+package com.google.ar.core;
+public enum TrackingState { TRACKING, PAUSED, STOPPED }

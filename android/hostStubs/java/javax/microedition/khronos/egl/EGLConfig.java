@@ -1,0 +1,2 @@
+package javax.microedition.khronos.egl;
+public abstract class EGLConfig {}

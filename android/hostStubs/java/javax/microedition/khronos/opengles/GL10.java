@@ -1,0 +1,2 @@
+package javax.microedition.khronos.opengles;
+public interface GL10 {}
