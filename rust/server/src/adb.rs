@@ -33,6 +33,8 @@ pub mod contract {
     /// The app's one-line status in the output folder: `starting`, `playing K/N`,
     /// `done N/N`, or `failed MESSAGE` (the backend fails the phone's share with it).
     pub const STATUS_FILE: &str = "status.txt";
+    /// The first word of the status line a playback app writes when it gives up.
+    pub const STATUS_FAILED: &str = "failed";
 
     /// The name of trial `index`'s trajectory (TUM, integer nanoseconds).
     pub fn trajectory_file(index: u32) -> String {
@@ -51,7 +53,7 @@ pub mod contract {
     /// The message of a `failed MESSAGE` status (`None` for every other state).
     pub fn failure(status: &str) -> Option<&str> {
         let line = status.lines().next()?.trim();
-        let rest = line.strip_prefix("failed")?;
+        let rest = line.strip_prefix(STATUS_FAILED)?;
         (rest.is_empty() || rest.starts_with(char::is_whitespace)).then(|| rest.trim())
     }
 }

@@ -251,8 +251,11 @@ fn only_the_lifecycle_writes_a_sessions_state() {
             let literal = format!("\"{name}\"");
             if code.contains(&literal) {
                 let jobs = module == "db" && matches!(name, "done" | "failed");
+                // The playback app's status file (docs/playback-contract.md) has a
+                // `failed MESSAGE` line of its own: a word of that contract, not a state.
+                let status_file = module == "adb" && name == "failed";
                 assert!(
-                    module == "session::state" || jobs,
+                    module == "session::state" || jobs || status_file,
                     "{module} spells the state {literal}"
                 );
             }
