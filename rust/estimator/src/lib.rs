@@ -89,8 +89,12 @@ mod align;
 mod error;
 mod estimate;
 mod evaluate;
+mod exact;
 mod formats;
+mod incremental;
 mod metrics;
+mod pairwise;
+mod sorted_runs;
 mod statistics;
 mod sync;
 mod trajectory;
@@ -105,6 +109,7 @@ pub use evaluate::{
 pub use formats::{
     parse_euroc_csv, parse_kitti, parse_tum, read_euroc_csv, read_kitti, read_tum, write_tum,
 };
+pub use incremental::IncrementalEstimate;
 pub use metrics::{
     DeltaUnit, PoseErrors, PoseRelation, RigidPose, RpeOptions, ape, delta_pairs, rotation_angle,
     rpe,
