@@ -5,7 +5,7 @@ use rayon::prelude::*;
 
 use crate::exact::{ExactSquares, ExactSum, add_values, population_std};
 use crate::pairwise::{BLOCK, PairIndex, Scratch};
-use crate::sorted_runs::{SortedRuns, Target};
+use crate::sorted_runs::{FREEZE_AT, SortedRuns, Target};
 use crate::statistics::bits::{
     inlier_range, interpolate, mean_of, median_of, median_ranks, quantile_ranks, trim_cuts,
 };
@@ -46,6 +46,22 @@ pub struct IncrementalEstimate {
     index: PairIndex,
     /// Per key of `index`: the window's values, once it has some.
     windows: Vec<Option<Box<WindowState>>>,
+    /// Per parallel task of [`IncrementalEstimate::push`]: bucket buffers kept between pushes.
+    scratch: Vec<TaskScratch>,
+}
+
+/// The buffers of one task of [`IncrementalEstimate::push`]: buckets, pair scratch, merges.
+#[derive(Debug, Clone, Default)]
+struct TaskScratch {
+    buckets: Vec<Vec<u64>>,
+    pairs: Scratch,
+    merge: Vec<u64>,
+}
+
+impl TaskScratch {
+    fn heap_bytes(&self) -> usize {
+        self.buckets.iter().map(|b| b.capacity() * 8).sum::<usize>() + self.merge.capacity() * 8
+    }
 }
 
 /// What one window keeps: the count and exact sums of all its values and, for settings with
@@ -57,6 +73,8 @@ struct WindowState {
     squares: ExactSquares,
     /// `None` for [`Setting::Mean`], which needs no order.
     order: Option<SortedRuns>,
+    /// `(statistic, spread)` after the last insertion (computed while the state is in cache).
+    result: (f64, f64),
 }
 
 /// Cursors per setting: median `[lower middle rank]`; trimmed mean `[lowercut, uppercut]`
@@ -65,9 +83,9 @@ struct WindowState {
 fn new_order(setting: Setting) -> Option<SortedRuns> {
     match setting {
         Setting::Mean => None,
-        Setting::Median => Some(SortedRuns::new(1, None)),
-        Setting::TrimMean(_) => Some(SortedRuns::new(2, Some((0, 1)))),
-        Setting::MeanInliers => Some(SortedRuns::new(4, Some((2, 3)))),
+        Setting::Median => Some(SortedRuns::new(1, None, FREEZE_AT)),
+        Setting::TrimMean(_) => Some(SortedRuns::new(2, Some((0, 1)), FREEZE_AT)),
+        Setting::MeanInliers => Some(SortedRuns::new(4, Some((2, 3)), FREEZE_AT)),
     }
 }
 
@@ -91,11 +109,12 @@ impl WindowState {
             sum: ExactSum::new(),
             squares: ExactSquares::new(),
             order: new_order(setting),
+            result: (f64::NAN, f64::NAN),
         }
     }
 
     /// Adds values (float bits, any order; `values` is sorted in place).
-    fn insert(&mut self, values: &mut [u64], setting: Setting) {
+    fn insert(&mut self, values: &mut [u64], setting: Setting, merge: &mut Vec<u64>) {
         let bound = if self.order.is_some() {
             values.sort_unstable();
             values.last().copied()
@@ -111,10 +130,15 @@ impl WindowState {
         );
         self.count += values.len();
         let n = self.count;
-        let Some(order) = &mut self.order else {
-            return;
-        };
-        order.insert(values);
+        if let Some(order) = &mut self.order {
+            order.insert(values, merge);
+            Self::move_cursors(order, setting, n);
+        }
+        self.result = self.statistics(setting);
+    }
+
+    /// Moves the cursors to the setting's ranks and fences for `n` values.
+    fn move_cursors(order: &mut SortedRuns, setting: Setting, n: usize) {
         match setting {
             Setting::Mean => {}
             Setting::Median => order.move_to(0, Target::Rank(median_ranks(n)[0])),
@@ -181,6 +205,7 @@ impl IncrementalEstimate {
             trials: Vec::new(),
             index: PairIndex::new(options.pair_options()?),
             windows: Vec::new(),
+            scratch: Vec::new(),
         })
     }
 
@@ -207,22 +232,31 @@ impl IncrementalEstimate {
         self.windows.resize_with(self.index.key_count(), || None);
         let newest = self.trials.len() - 1;
         let (index, setting) = (&self.index, self.options.setting);
+        // Contiguous groups of blocks, one per task, each with its own buffers.
+        let tasks = 2 * rayon::current_num_threads();
+        let blocks_per_task = index.blocks().div_ceil(tasks).max(1);
+        self.scratch.resize_with(tasks, Default::default);
         self.windows
-            .par_chunks_mut(BLOCK)
+            .par_chunks_mut(blocks_per_task * BLOCK)
+            .zip(self.scratch.par_iter_mut())
             .enumerate()
-            .for_each_init(
-                || (Vec::new(), Scratch::default()),
-                |(buckets, scratch), (block, windows)| {
-                    index.fill_block(block, newest, buckets, scratch);
+            .for_each(|(task, (windows, scratch))| {
+                let TaskScratch {
+                    buckets,
+                    pairs,
+                    merge,
+                } = scratch;
+                for (b, windows) in windows.chunks_mut(BLOCK).enumerate() {
+                    index.fill_block(task * blocks_per_task + b, newest, buckets, pairs);
                     for (window, values) in windows.iter_mut().zip(buckets.iter_mut()) {
                         if !values.is_empty() {
                             window
                                 .get_or_insert_with(|| Box::new(WindowState::new(setting)))
-                                .insert(values, setting);
+                                .insert(values, setting, merge);
                         }
                     }
-                },
-            );
+                }
+            });
         Ok(())
     }
 
@@ -247,7 +281,7 @@ impl IncrementalEstimate {
             .filter_map(|(key, state)| {
                 let state = state.as_ref()?;
                 let (start, end) = self.index.window(key);
-                let (error_m, spread_m) = state.statistics(setting);
+                let (error_m, spread_m) = state.result;
                 Some(WindowEstimate {
                     start,
                     end,
@@ -279,7 +313,9 @@ impl IncrementalEstimate {
             })
             .sum();
         let windows: usize = self.windows.iter().flatten().map(|w| w.heap_bytes()).sum();
+        let scratch: usize = self.scratch.iter().map(TaskScratch::heap_bytes).sum();
         size_of::<Self>()
+            + scratch
             + trials
             + self.trials.capacity() * size_of::<Trajectory>()
             + self.index.heap_bytes()

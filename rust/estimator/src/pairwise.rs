@@ -188,7 +188,7 @@ impl RelativeWindows {
 }
 
 /// Reusable per-thread buffers of [`PairIndex::fill_block`].
-#[derive(Debug, Default)]
+#[derive(Debug, Clone, Default)]
 pub(crate) struct Scratch {
     translations: Vec<DVec3>,
     rotations: Vec<DQuat>,
