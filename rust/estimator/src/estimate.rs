@@ -5,10 +5,9 @@
 //! associated poses. Every value is keyed by the reference's start stamp; per key a robust
 //! statistic over all pairs with that key is the window's error estimate.
 //!
-//! Speed: an RPE value only needs the two trials' *relative* poses over the window, so they are
-//! computed once per trial (`rel[k] = pose_k⁻¹ pose_{k+delta}`) and reused by every pair whose
-//! association keeps the window contiguous; only windows broken by a dropped frame are
-//! recomputed from the poses. Pairs and windows run in parallel (rayon).
+//! The pairs are indexed by [`crate::pairwise`] (shared with the incremental estimate) and
+//! aggregated block by block in parallel (rayon); each window's statistic is a function of
+//! the multiset of its values alone ([`crate::statistics::bits`]).
 
 use rayon::prelude::*;
 

@@ -401,7 +401,20 @@ pub(crate) mod bits {
         select_ranks(v, 0, &ranks);
         let bound = v.iter().copied().max().unwrap_or(0);
         let (mut sum, mut squares) = (ExactSum::new(), ExactSquares::new());
-        add_values(&mut sum, Some(&mut squares), v.iter().copied(), bound);
+        // A trimmed mean's middle is summed on its own and added to the rest: one pass.
+        let middle_range = match setting {
+            Setting::TrimMean(percent) => {
+                let (lowercut, uppercut) = trim_cuts(percent, n);
+                lowercut.min(uppercut)..uppercut
+            }
+            _ => 0..0,
+        };
+        let mut middle = ExactSum::new();
+        let inside = v[middle_range.clone()].iter().copied();
+        add_values(&mut middle, Some(&mut squares), inside, bound);
+        let outside = v[..middle_range.start].iter().chain(&v[middle_range.end..]);
+        add_values(&mut sum, Some(&mut squares), outside.copied(), bound);
+        sum.add_sum(&middle, false);
         let spread = population_std(n, &sum, &squares);
         let value = match setting {
             Setting::Mean => mean_of(&sum, n),
@@ -414,13 +427,6 @@ pub(crate) mod bits {
                 if lowercut >= uppercut {
                     f64::NAN
                 } else {
-                    let mut middle = ExactSum::new();
-                    add_values(
-                        &mut middle,
-                        None,
-                        v[lowercut..uppercut].iter().copied(),
-                        bound,
-                    );
                     mean_of(&middle, uppercut - lowercut)
                 }
             }
