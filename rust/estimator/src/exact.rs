@@ -50,6 +50,12 @@ struct Canonical<const N: usize> {
     negative: bool,
 }
 
+impl<const N: usize> Default for Digits<N> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
 impl<const N: usize> Digits<N> {
     fn new() -> Self {
         Self {
@@ -244,14 +250,8 @@ impl<const N: usize> Canonical<N> {
 }
 
 /// The exact sum of `f64` values (any order, any number up to 2^63), rounded once when read.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Default)]
 pub(crate) struct ExactSum(Digits<LINEAR_DIGITS>);
-
-impl Default for ExactSum {
-    fn default() -> Self {
-        Self(Digits::new())
-    }
-}
 
 impl ExactSum {
     /// Zero.
@@ -261,23 +261,17 @@ impl ExactSum {
 
     #[inline(always)]
     fn update(&mut self, bits: u64, remove: bool) {
-        let exponent = ((bits >> 52) & 0x7FF) as usize;
-        let fraction = bits & FRACTION_MASK;
-        let negative = (bits >> 63 == 1) != remove;
-        if exponent == 0x7FF {
-            self.0.add_special(fraction, bits >> 63 == 1, remove);
+        let sign = bits >> 63 == 1;
+        let magnitude = bits & !(1 << 63);
+        if magnitude >= INFINITY_BITS {
+            self.0.add_special(magnitude & FRACTION_MASK, sign, remove);
             return;
         }
-        let mantissa = if exponent == 0 {
-            fraction
-        } else {
-            fraction | 1 << 52
-        };
+        let (position, mantissa) = position_and_mantissa(magnitude);
         if mantissa == 0 {
             return;
         }
-        // The mantissa's lowest bit, in units of 2^-1074.
-        let position = exponent.max(1) - 1;
+        let negative = sign != remove;
         self.0.add_wide(
             position / 64,
             u128::from(mantissa) << (position % 64),
@@ -318,14 +312,8 @@ impl ExactSum {
 }
 
 /// The exact sum of the squares of `f64` values, for [`population_std`].
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Default)]
 pub(crate) struct ExactSquares(Digits<SQUARE_DIGITS>);
-
-impl Default for ExactSquares {
-    fn default() -> Self {
-        Self(Digits::new())
-    }
-}
 
 impl ExactSquares {
     /// Zero.
@@ -333,25 +321,21 @@ impl ExactSquares {
         Self::default()
     }
 
+    /// Adds the square of the float whose bits these are.
     #[inline(always)]
-    fn update(&mut self, bits: u64, remove: bool) {
-        let exponent = ((bits >> 52) & 0x7FF) as usize;
-        let fraction = bits & FRACTION_MASK;
-        if exponent == 0x7FF {
+    pub(crate) fn add_bits(&mut self, bits: u64) {
+        let magnitude = bits & !(1 << 63);
+        if magnitude >= INFINITY_BITS {
             // The square of ±inf is +inf; of a NaN, a NaN.
-            self.0.add_special(fraction, false, remove);
+            self.0.add_special(magnitude & FRACTION_MASK, false, false);
             return;
         }
-        let mantissa = if exponent == 0 {
-            fraction
-        } else {
-            fraction | 1 << 52
-        };
+        let (position, mantissa) = position_and_mantissa(magnitude);
         if mantissa == 0 {
             return;
         }
         let square = u128::from(mantissa) * u128::from(mantissa); // < 2^106
-        let position = 2 * (exponent.max(1) - 1); // units of 2^-2148
+        let position = 2 * position; // units of 2^-2148
         let (digit, shift) = (position / 64, position % 64);
         let low = u128::from(square as u64) << shift; // < 2^127
         let high = (square >> 64) << shift; // < 2^105
@@ -363,19 +347,9 @@ impl ExactSquares {
         ];
         let target = &mut self.0.words[digit..digit + 3];
         for (word, value) in target.iter_mut().zip(words) {
-            if remove {
-                *word -= value;
-            } else {
-                *word += value;
-            }
+            *word += value;
         }
         self.0.touch(digit, digit + 3);
-    }
-
-    /// Adds the square of the float whose bits these are.
-    #[inline(always)]
-    pub(crate) fn add_bits(&mut self, bits: u64) {
-        self.update(bits, false);
     }
 
     /// The sum of squares, correctly rounded.

@@ -5,7 +5,6 @@
 
 use std::path::Path;
 
-use glam::{DQuat, DVec3};
 use proptest::prelude::*;
 use serde_json::Value;
 use sitar_estimator::{
@@ -59,8 +58,11 @@ fn assert_bitwise_equal(got: &Estimate, want: &Estimate, what: &str) -> Result<(
     Ok(())
 }
 
-/// Trials as in the estimator's own proptest: 1 drops frames, 2 has jittered stamps (some
-/// beyond 10 ms), the others share their stamps; `order` permutes them.
+#[path = "support/trials.rs"]
+mod support;
+
+/// [`support::make_trials`], shuffled by `order` so that dropped and jittered trials also
+/// come first.
 fn make_trials(
     seed: &[f64],
     drops: &[usize],
@@ -69,49 +71,7 @@ fn make_trials(
     len: usize,
     order: u64,
 ) -> Vec<Trajectory> {
-    let mut trials = Vec::new();
-    for t in 0..n {
-        let base = &seed[t * 6 * 40..];
-        let mut trial = Trajectory {
-            stamps: (0..len as i64)
-                .map(|k| 5_000_000_000 + k * 33_333_333)
-                .collect(),
-            positions: (0..len)
-                .map(|k| {
-                    DVec3::new(
-                        k as f64 * 0.02 + base[6 * k],
-                        base[6 * k + 1],
-                        base[6 * k + 2],
-                    ) * 0.5
-                })
-                .collect(),
-            orientations: (0..len)
-                .map(|k| {
-                    DQuat::from_scaled_axis(
-                        DVec3::new(base[6 * k + 3], base[6 * k + 4], base[6 * k + 5]) * 0.3,
-                    )
-                })
-                .collect(),
-            time_unit: TimeUnit::Nanoseconds,
-        };
-        if t == 1 {
-            let keep: Vec<usize> = (0..len).filter(|k| !drops.contains(k)).collect();
-            trial = trial.reduce_to_ids(&keep);
-        }
-        if t == 2 {
-            for (k, j) in jitter.iter().enumerate() {
-                trial.stamps[3 + 7 * k % (len - 4)] += j;
-            }
-            let mut sorted: Vec<usize> = (0..trial.len()).collect();
-            sorted.sort_by_key(|&k| trial.stamps[k]);
-            trial = trial.reduce_to_ids(&sorted);
-            trial.stamps.dedup();
-            if trial.stamps.len() != trial.positions.len() {
-                continue;
-            }
-        }
-        trials.push(trial);
-    }
+    let mut trials = support::make_trials(seed, drops, jitter, n, len);
     // A deterministic shuffle, so that dropped and jittered trials also come first.
     let mut state = order | 1;
     for i in (1..trials.len()).rev() {
