@@ -282,9 +282,15 @@ mod tests {
 }
 
 /// Order statistics on non-negative floats stored as their IEEE bits (whose integer order is
-/// the float order): the estimator's fast path, selecting only the ranks it needs.
+/// the float order), with exact sums: the estimator's per-window statistic.
+///
+/// Every result depends only on the multiset of values, never on the order they lie in:
+/// ranks are selected, sums are exact ([`crate::exact`]) and rounded once. That is what lets
+/// the incremental estimate equal the one-shot one bit for bit; the rules both use (ranks,
+/// cuts, fences and the final arithmetic) are the functions of this module.
 pub(crate) mod bits {
     use super::Setting;
+    use crate::exact::{ExactSquares, ExactSum, add_values, population_std};
 
     /// Partially sorts `v` (covering absolute ranks `offset..offset + v.len()`) so that every
     /// rank in `ranks` (sorted, absolute) holds its order statistic, with smaller values
@@ -309,74 +315,81 @@ pub(crate) mod bits {
         f64::from_bits(v[rank])
     }
 
-    /// numpy's linear quantile on selected data.
-    fn quantile(v: &[u64], q: f64) -> f64 {
-        let n = v.len();
-        let position = q * (n - 1) as f64;
-        let below = (position.floor() as usize).min(n - 1);
-        let above = (below + 1).min(n - 1);
-        let t = position - below as f64;
-        let (a, b) = (at(v, below), at(v, above));
-        let diff = b - a;
-        if t >= 0.5 {
-            b - diff * (1.0 - t)
+    /// `scipy.stats.trim_mean`'s `(lowercut, uppercut)`: the mean is over ranks `lowercut..uppercut`.
+    pub(crate) fn trim_cuts(percent: u8, n: usize) -> (usize, usize) {
+        let lowercut = (f64::from(percent) / 100.0 * n as f64) as usize;
+        (lowercut, n.saturating_sub(lowercut))
+    }
+
+    /// The ranks (lower, upper) whose values give the median of `n > 0` values.
+    pub(crate) fn median_ranks(n: usize) -> [usize; 2] {
+        [(n - 1) / 2, n / 2]
+    }
+
+    /// numpy's median from the values at [`median_ranks`].
+    pub(crate) fn median_of(n: usize, lower: f64, upper: f64) -> f64 {
+        if n % 2 == 1 {
+            upper
         } else {
-            a + diff * t
+            (lower + upper) / 2.0
         }
     }
 
-    fn quantile_ranks(n: usize, q: f64) -> [usize; 2] {
+    /// The ranks (below, above) numpy's linear `q`-quantile of `n > 0` values interpolates.
+    pub(crate) fn quantile_ranks(n: usize, q: f64) -> [usize; 2] {
         let below = ((q * (n - 1) as f64).floor() as usize).min(n - 1);
         [below, (below + 1).min(n - 1)]
     }
 
-    /// Mean and population standard deviation in one pass: moments about the first value
-    /// (the shift keeps a small variance accurate against a large mean), four independent
-    /// accumulators for instruction-level parallelism.
-    fn mean_and_std(v: &[u64]) -> (f64, f64) {
-        let pivot = f64::from_bits(v[0]);
-        let (mut s1, mut s2) = ([0.0f64; 4], [0.0f64; 4]);
-        let chunks = v.chunks_exact(4);
-        let rest = chunks.remainder();
-        for chunk in chunks {
-            for lane in 0..4 {
-                let d = f64::from_bits(chunk[lane]) - pivot;
-                s1[lane] += d;
-                s2[lane] += d * d;
-            }
+    /// numpy's linear `q`-quantile from the values at [`quantile_ranks`] (its `_lerp`,
+    /// computed from the nearer end).
+    pub(crate) fn interpolate(n: usize, q: f64, below: f64, above: f64) -> f64 {
+        let position = q * (n - 1) as f64;
+        let t = position - quantile_ranks(n, q)[0] as f64;
+        let diff = above - below;
+        if t >= 0.5 {
+            above - diff * (1.0 - t)
+        } else {
+            below + diff * t
         }
-        for &b in rest {
-            let d = f64::from_bits(b) - pivot;
-            s1[0] += d;
-            s2[0] += d * d;
-        }
-        let n = v.len() as f64;
-        let (sum1, sum2) = (s1.iter().sum::<f64>(), s2.iter().sum::<f64>());
-        let shifted_mean = sum1 / n;
-        let variance = (sum2 / n - shifted_mean * shifted_mean).max(0.0);
-        (pivot + shifted_mean, variance.sqrt())
     }
 
-    fn sum(v: &[u64]) -> f64 {
-        v.iter().map(|&b| f64::from_bits(b)).sum()
+    /// The bits range `[low, high)` of the non-negative values within
+    /// [Q1 − 1.5·IQR, Q3 + 1.5·IQR]; NaN values are never inside, NaN fences keep none.
+    pub(crate) fn inlier_range(q1: f64, q3: f64) -> (u64, u64) {
+        let iqr = q3 - q1;
+        let (low, high) = (q1 - 1.5 * iqr, q3 + 1.5 * iqr + 0.0);
+        if low.is_nan() || high.is_nan() || high < 0.0 {
+            return (0, 0);
+        }
+        let low_bits = if low > 0.0 { low.to_bits() } else { 0 };
+        (low_bits, high.to_bits().min(f64::INFINITY.to_bits()) + 1)
+    }
+
+    /// A mean from an exact sum: rounded once, then divided.
+    pub(crate) fn mean_of(sum: &ExactSum, count: usize) -> f64 {
+        sum.value() / count as f64
+    }
+
+    fn quantile(v: &[u64], q: f64) -> f64 {
+        let [below, above] = quantile_ranks(v.len(), q);
+        interpolate(v.len(), q, at(v, below), at(v, above))
     }
 
     /// `(statistic, population standard deviation)` of the values; equal to
-    /// [`Setting::apply`] and numpy's `std`. `v` must be non-empty and hold non-negative floats.
+    /// [`Setting::apply`] and numpy's `std` up to rounding, and a function of the multiset
+    /// alone. `v` must be non-empty and hold non-negative floats; it is reordered.
     pub(crate) fn window_statistics(v: &mut [u64], setting: Setting) -> (f64, f64) {
         let n = v.len();
         let mut ranks = Vec::with_capacity(4);
-        let mut trim = (0, n);
         match setting {
             Setting::TrimMean(percent) => {
-                let lowercut = (f64::from(percent) / 100.0 * n as f64) as usize;
-                let uppercut = n.saturating_sub(lowercut);
+                let (lowercut, uppercut) = trim_cuts(percent, n);
                 if lowercut > 0 && lowercut < uppercut {
                     ranks.extend([lowercut, uppercut - 1]);
                 }
-                trim = (lowercut, uppercut);
             }
-            Setting::Median => ranks.extend([(n - 1) / 2, n / 2]),
+            Setting::Median => ranks.extend(median_ranks(n)),
             Setting::MeanInliers => {
                 ranks.extend(quantile_ranks(n, 0.25));
                 ranks.extend(quantile_ranks(n, 0.75));
@@ -386,37 +399,46 @@ pub(crate) mod bits {
         ranks.sort_unstable();
         ranks.dedup();
         select_ranks(v, 0, &ranks);
-        let (mean, std) = mean_and_std(v);
-        let value = match setting {
-            Setting::Mean => mean,
-            Setting::Median => {
-                if n % 2 == 1 {
-                    at(v, n / 2)
-                } else {
-                    (at(v, n / 2 - 1) + at(v, n / 2)) / 2.0
-                }
+        let bound = v.iter().copied().max().unwrap_or(0);
+        let (mut sum, mut squares) = (ExactSum::new(), ExactSquares::new());
+        // A trimmed mean's middle is summed on its own and added to the rest: one pass.
+        let middle_range = match setting {
+            Setting::TrimMean(percent) => {
+                let (lowercut, uppercut) = trim_cuts(percent, n);
+                lowercut.min(uppercut)..uppercut
             }
-            Setting::TrimMean(_) => {
-                let (lowercut, uppercut) = trim;
+            _ => 0..0,
+        };
+        let mut middle = ExactSum::new();
+        let inside = v[middle_range.clone()].iter().copied();
+        add_values(&mut middle, Some(&mut squares), inside, bound);
+        let outside = v[..middle_range.start].iter().chain(&v[middle_range.end..]);
+        add_values(&mut sum, Some(&mut squares), outside.copied(), bound);
+        sum.add_sum(&middle, false);
+        let spread = population_std(n, &sum, &squares);
+        let value = match setting {
+            Setting::Mean => mean_of(&sum, n),
+            Setting::Median => {
+                let [lower, upper] = median_ranks(n);
+                median_of(n, at(v, lower), at(v, upper))
+            }
+            Setting::TrimMean(percent) => {
+                let (lowercut, uppercut) = trim_cuts(percent, n);
                 if lowercut >= uppercut {
                     f64::NAN
                 } else {
-                    sum(&v[lowercut..uppercut]) / (uppercut - lowercut) as f64
+                    mean_of(&middle, uppercut - lowercut)
                 }
             }
             Setting::MeanInliers => {
-                let (q1, q3) = (quantile(v, 0.25), quantile(v, 0.75));
-                let iqr = q3 - q1;
-                let (low, high) = (q1 - 1.5 * iqr, q3 + 1.5 * iqr);
-                let (total, count) = v
-                    .iter()
-                    .map(|&b| f64::from_bits(b))
-                    .filter(|&x| x >= low && x <= high)
-                    .fold((0.0, 0usize), |(s, c), x| (s + x, c + 1));
-                total / count as f64
+                let (low, high) = inlier_range(quantile(v, 0.25), quantile(v, 0.75));
+                let inside = || v.iter().copied().filter(|b| (low..high).contains(b));
+                let mut inliers = ExactSum::new();
+                add_values(&mut inliers, None, inside(), bound);
+                mean_of(&inliers, inside().count())
             }
         };
-        (value, std)
+        (value, spread)
     }
 
     #[cfg(test)]
