@@ -112,7 +112,7 @@ impl Estimate {
             PoseRelation::TranslationPart => ("error_m", "spread_m"),
             PoseRelation::RotationAngleDeg => ("error_deg", "spread_deg"),
             PoseRelation::RotationAngleRad => ("error_rad", "spread_rad"),
-            PoseRelation::FullTransformation => ("error", "spread"),
+            _ => ("error", "spread"),
         };
         let translation = self.pose_relation == PoseRelation::TranslationPart;
         let windows: Vec<Window> = self
