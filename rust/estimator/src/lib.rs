@@ -123,4 +123,6 @@ pub use statistics::{
     Setting, Statistics, interquartile_range, mean, mean_inliers, median, quantile, trim_mean,
 };
 pub use sync::{associate, associate_trajectories, matching_time_indices, seconds_to_ns};
-pub use trajectory::{Plane, QUATERNION_NORM_TOLERANCE, TimeUnit, Trajectory, euler_sxyz};
+pub use trajectory::{
+    Plane, QUATERNION_NORM_TOLERANCE, TimeUnit, Trajectory, euler_sxyz, pairwise_sum,
+};

@@ -163,12 +163,15 @@ impl Trajectory {
         }
     }
 
-    /// Total path length (sum of distances between consecutive positions), metres.
+    /// Total path length (sum of distances between consecutive positions), metres, summed
+    /// as numpy's `sum` does (pairwise), so that it equals evo's `path_length` to the bit.
     pub fn path_length(&self) -> f64 {
-        self.positions
+        let steps: Vec<f64> = self
+            .positions
             .windows(2)
-            .map(|w| (w[1] - w[0]).length())
-            .sum()
+            .map(|w| (w[0] - w[1]).length())
+            .collect();
+        pairwise_sum(&steps)
     }
 
     /// Path length from the first pose to each pose, metres (evo's `distances`).
@@ -338,6 +341,33 @@ impl Trajectory {
                 .map_or_else(TimeUnit::default, |t| t.time_unit),
         }
     }
+}
+
+/// numpy's pairwise summation of float64: blocks of up to 128 values summed with eight
+/// interleaved accumulators, larger ranges split in halves (a multiple of eight first).
+pub fn pairwise_sum(values: &[f64]) -> f64 {
+    let n = values.len();
+    if n < 8 {
+        return values.iter().fold(-0.0, |sum, v| sum + v);
+    }
+    if n <= 128 {
+        let mut r = [0.0; 8];
+        r.copy_from_slice(&values[..8]);
+        let whole = n - n % 8;
+        for chunk in values[8..whole].chunks_exact(8) {
+            for (acc, v) in r.iter_mut().zip(chunk) {
+                *acc += v;
+            }
+        }
+        let mut sum = ((r[0] + r[1]) + (r[2] + r[3])) + ((r[4] + r[5]) + (r[6] + r[7]));
+        for v in &values[whole..] {
+            sum += v;
+        }
+        return sum;
+    }
+    let mut half = n / 2;
+    half -= half % 8;
+    pairwise_sum(&values[..half]) + pairwise_sum(&values[half..])
 }
 
 /// A coordinate plane (evo's `Plane`, for `--project_to_plane`).
