@@ -114,6 +114,13 @@ pub fn compute(
     let mut errors = match &metric {
         Metric::Ape(r) => ape(&reference, &estimate, *r).context("computing the APE")?,
         Metric::Rpe(options) => {
+            if options.all_pairs
+                && matches!(options.delta_unit, DeltaUnit::Degrees | DeltaUnit::Radians)
+            {
+                console.info(
+                    "Searching all pairs with matching rotation delta, this can take a while.",
+                )?;
+            }
             let all = delta_pairs(
                 if options.pairs_from_reference {
                     &reference
@@ -247,7 +254,6 @@ pub fn synchronise(
             sync.t_offset
         );
     }
-    console.debug(SEP)?;
     // evo: `if args.t_start or args.t_end` (0.0 counts as unset).
     let t_start = sync.t_start.filter(|&t| t != 0.0);
     let t_end = sync.t_end.filter(|&t| t != 0.0);
@@ -268,11 +274,6 @@ pub fn synchronise(
             bail!("{}: no poses within --t_start/--t_end", names.0);
         }
     }
-    let method = match sync.sync_method {
-        SyncMethod::NearestTime => "nearest_time",
-        SyncMethod::Interpolation => "interpolation",
-    };
-    console.debug(&format!("Synchronizing trajectories ({method} method)..."))?;
     let second_longer = estimate.len() > reference.len();
     let (short, long) = if second_longer {
         (&reference, &estimate)
@@ -396,6 +397,49 @@ fn align_estimate(
         result = (Alignment::Origin, Some(applied), Some(applied.to_matrix()));
     }
     Ok(result)
+}
+
+/// Umeyama alignment with evo's debug lines (the fit, the scale); returns the transform
+/// applied and the fit (they differ for scale only: evo saves the whole fit).
+pub fn align_logged(
+    estimate: &mut Trajectory,
+    reference: &Trajectory,
+    kind: Alignment,
+    n: Option<usize>,
+    console: &Console,
+) -> Result<(Similarity, Similarity)> {
+    console.debug(match kind {
+        Alignment::ScaleOnly => "Correcting scale...",
+        Alignment::Sim3 => "Aligning using Umeyama's method... (with scale correction)",
+        _ => "Aligning using Umeyama's method...",
+    })?;
+    let k = n
+        .unwrap_or(usize::MAX)
+        .min(estimate.len())
+        .min(reference.len());
+    let fitted = umeyama(
+        &estimate.positions[..k],
+        &reference.positions[..k],
+        kind != Alignment::Se3,
+    )
+    .context("aligning the estimate")?;
+    let applied = align_first(estimate, reference, kind, n).context("aligning the estimate")?;
+    if kind != Alignment::ScaleOnly {
+        let r = fitted.rotation;
+        let rows: Vec<Vec<f64>> = (0..3)
+            .map(|i| (0..3).map(|j| r.col(j)[i]).collect())
+            .collect();
+        console.debug(&format!(
+            "Rotation of alignment:\n{}\nTranslation of alignment:\n{}",
+            crate::pyfmt::numpy_matrix(&rows),
+            crate::pyfmt::numpy_vector(&fitted.translation.to_array())
+        ))?;
+    }
+    console.debug(&format!(
+        "Scale correction: {}",
+        crate::pyfmt::repr(fitted.scale)
+    ))?;
+    Ok((applied, fitted))
 }
 
 /// A nanosecond stamp as evo's float seconds (the correctly rounded quotient, which is

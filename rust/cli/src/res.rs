@@ -186,7 +186,8 @@ fn stat(r: &Labelled, key: &str) -> Option<f64> {
 
 /// The table as pandas prints `df.loc["stats"].T.to_string(line_width=80)`: the labels
 /// left-aligned, each column right-aligned to its widest cell, two spaces apart; columns
-/// that do not fit in 80 characters continue in blocks below, lines ending in ` \`.
+/// that do not fit in 80 characters continue in blocks below (pandas' `_binify`), the lines
+/// of a continued block ending in `  \\` (header) or three spaces.
 fn table(results: &[Labelled], keys: &[String]) -> String {
     let index_width = results
         .iter()
@@ -209,40 +210,47 @@ fn table(results: &[Labelled], keys: &[String]) -> String {
             (k.clone(), cells, width)
         })
         .collect();
-    let mut blocks: Vec<&[(String, Vec<String>, usize)]> = Vec::new();
-    let mut start = 0;
-    let mut used = index_width;
+    // pandas: each column is `width + 1` characters with its sign space, plus one to adjoin;
+    // a column wraps when the running width (+2, or +1 for the last) exceeds the line.
+    let line_width = 80 - (index_width + 1);
+    let mut bins = Vec::new();
+    let mut current = 0;
     for (i, c) in columns.iter().enumerate() {
-        if i > start && used + 2 + c.2 > 78 {
-            blocks.push(&columns[start..i]);
-            start = i;
-            used = index_width;
+        let adjoined = c.2 + 3;
+        current += adjoined;
+        let margin = if i + 1 == columns.len() { 1 } else { 2 };
+        if i > 0 && current + margin > line_width {
+            bins.push(i);
+            current = adjoined;
         }
-        used += 2 + c.2;
     }
-    blocks.push(&columns[start..]);
-    let mut out = Vec::new();
-    for (b, block) in blocks.iter().enumerate() {
-        let continued = b + 1 < blocks.len();
+    bins.push(columns.len());
+    let several = bins.len() > 1;
+    let mut blocks = Vec::new();
+    let mut start = 0;
+    for (b, &end) in bins.iter().enumerate() {
         let mut lines = vec![" ".repeat(index_width)];
-        for (i, r) in results.iter().enumerate() {
-            let _ = i;
-            lines.push(format!("{:<index_width$}", r.label));
-        }
-        for (name, cells, width) in block.iter() {
+        lines.extend(results.iter().map(|r| format!("{:<index_width$}", r.label)));
+        for (name, cells, width) in &columns[start..end] {
             lines[0] += &format!("  {name:>width$}");
             for (k, cell) in cells.iter().enumerate() {
                 lines[k + 1] += &format!("  {cell:>width$}");
             }
         }
-        if continued {
-            for line in &mut lines {
-                line.push_str("  \\");
+        if several {
+            let continued = b + 1 < bins.len();
+            for (k, line) in lines.iter_mut().enumerate() {
+                line.push_str(match (continued, k) {
+                    (true, 0) => "  \\",
+                    (true, _) => "   ",
+                    (false, _) => "  ",
+                });
             }
         }
-        out.push(lines.join("\n"));
+        blocks.push(lines.join("\n"));
+        start = end;
     }
-    out.join("\n\n")
+    blocks.join("\n\n")
 }
 
 /// evo's `--save_table` (pandas `to_csv` of the transposed stats): `,rmse,mean,…` then one

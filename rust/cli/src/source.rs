@@ -261,25 +261,26 @@ pub fn evo_read_options(unit: StampUnit) -> ReadOptions {
 /// Reads one TUM file by evo's rules, telling `console` what it met.
 pub fn read_tum_evo(path: &Path, unit: StampUnit, console: &Console) -> Result<Named> {
     let (trajectory, report) = read_tum_with(path, &evo_read_options(unit))?;
-    finish(path, trajectory, &report, console)
+    finish(path, trajectory, &report, true, console)
 }
 
 /// Reads one EuRoC ground-truth file by evo's rules.
 pub fn read_euroc_evo(path: &Path, console: &Console) -> Result<Named> {
     let (trajectory, report) = read_euroc_csv_with(path, &evo_read_options(StampUnit::Ns))?;
-    finish(path, trajectory, &report, console)
+    finish(path, trajectory, &report, true, console)
 }
 
 /// Reads one KITTI file.
 pub fn read_kitti_evo(path: &Path, console: &Console) -> Result<Named> {
     let trajectory = read_kitti(path)?;
-    finish(path, trajectory, &ReadReport::default(), console)
+    finish(path, trajectory, &ReadReport::default(), false, console)
 }
 
 fn finish(
     path: &Path,
     trajectory: Trajectory,
     report: &ReadReport,
+    timed: bool,
     console: &Console,
 ) -> Result<Named> {
     let name = path.display().to_string();
@@ -305,8 +306,9 @@ fn finish(
         ))?;
     }
     console.debug(&format!(
-        "Loaded {} stamps and poses from: {name}",
-        trajectory.len()
+        "Loaded {} {} from: {name}",
+        trajectory.len(),
+        if timed { "stamps and poses" } else { "poses" }
     ))?;
     Ok(Named { trajectory, name })
 }

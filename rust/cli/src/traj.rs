@@ -404,7 +404,8 @@ fn manipulate(bundle: &mut Bundle, kind: Kind, options: &Options, console: &Cons
                         r.len()
                     );
                 }
-                align_first(t, r, alignment, n).with_context(|| format!("aligning {name}"))?;
+                crate::metric::align_logged(t, r, alignment, n, console)
+                    .with_context(|| format!("aligning {name}"))?;
             }
         }
         if options.align_origin {
@@ -560,33 +561,6 @@ fn compact(name: &str, options: &Options) -> String {
     }
 }
 
-/// numpy's `str()` of a short float vector: `[0.14373967 1.48956924 0.52800584]`.
-fn numpy_vector(v: DVec3) -> String {
-    let cells: Vec<String> = v
-        .to_array()
-        .iter()
-        .map(|x| format!("{x:.8}").trim_end_matches('0').to_owned())
-        .collect();
-    let int_width = cells
-        .iter()
-        .map(|c| c.find('.').unwrap_or(c.len()))
-        .max()
-        .unwrap_or(0);
-    let frac_width = cells
-        .iter()
-        .map(|c| c.find('.').map_or(0, |k| c.len() - k - 1))
-        .max()
-        .unwrap_or(0);
-    let padded: Vec<String> = cells
-        .iter()
-        .map(|c| {
-            let (int, frac) = c.split_once('.').unwrap_or((c, ""));
-            format!("{int:>int_width$}.{frac:<frac_width$}")
-        })
-        .collect();
-    format!("[{}]", padded.join(" "))
-}
-
 /// evo's per-trajectory information lines.
 fn print_traj_info(
     name: &str,
@@ -613,10 +587,13 @@ fn print_traj_info(
             "path length (m)".to_owned(),
             crate::pyfmt::repr(t.path_length()),
         ),
-        ("pos_start (m)".to_owned(), numpy_vector(t.positions[0])),
+        (
+            "pos_start (m)".to_owned(),
+            crate::pyfmt::numpy_vector(&t.positions[0].to_array()),
+        ),
         (
             "pos_end (m)".to_owned(),
-            numpy_vector(t.positions[t.len() - 1]),
+            crate::pyfmt::numpy_vector(&t.positions[t.len() - 1].to_array()),
         ),
     ];
     if timed {
@@ -727,6 +704,26 @@ fn file_stem(name: &str) -> String {
 }
 
 fn export(bundle: &Bundle, options: &Options, kind: Kind, console: &Console) -> Result<()> {
+    // evo re-derives quaternions from the pose matrices once it has transformed the poses,
+    // with w ≥ 0; sitar writes the same sign.
+    let transformed = options.align
+        || options.correct_scale
+        || options.align_origin
+        || options.transform_left.is_some()
+        || options.transform_right.is_some()
+        || options.project_to_plane.is_some();
+    let canonical = |name: &String, t: &Trajectory| -> Trajectory {
+        let mut t = t.clone();
+        let is_reference = bundle.reference.as_ref().is_some_and(|(r, _)| r == name);
+        if transformed && !is_reference {
+            for q in &mut t.orientations {
+                if q.w < 0.0 {
+                    *q = -*q;
+                }
+            }
+        }
+        t
+    };
     let named = || bundle.trajectories.iter().chain(bundle.reference.iter());
     let overwrite = |path: &Path| {
         if path.exists() {
@@ -742,7 +739,7 @@ fn export(bundle: &Bundle, options: &Options, kind: Kind, console: &Console) -> 
             let dest = PathBuf::from(format!("{}.tum", file_stem(name)));
             overwrite(&dest);
             let mut out = Vec::new();
-            write_tum(t, &mut out).context("writing TUM")?;
+            write_tum(&canonical(name, t), &mut out).context("writing TUM")?;
             std::fs::write(&dest, out)
                 .with_context(|| format!("{}: cannot write", dest.display()))?;
             console.info(&format!("Trajectory saved to: {}", dest.display()))?;
@@ -941,19 +938,6 @@ struct RGBColor3(u8, u8, u8);
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn numpy_vectors_look_like_numpy() {
-        assert_eq!(
-            numpy_vector(DVec3::new(0.14373967123, 1.48956924, 0.52800584)),
-            "[0.14373967 1.48956924 0.52800584]"
-        );
-        assert_eq!(numpy_vector(DVec3::new(0.0, 1.4, 1.2)), "[0.  1.4 1.2]");
-        assert_eq!(
-            numpy_vector(DVec3::new(-1.02073399, 1.53012172, 0.3899944)),
-            "[-1.02073399  1.53012172  0.3899944 ]"
-        );
-    }
 
     #[test]
     fn transforms_left_right_and_propagated() {
