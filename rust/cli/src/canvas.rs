@@ -14,7 +14,9 @@ use crate::plot::{DrawResult, ErrorFigure, PlotMode};
 /// needs a font file, and a fresh machine may have none.
 static FONT: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
 
-fn register_font() {
+/// Registers the embedded font as plotters' "sans-serif" (once; every plotters figure of
+/// the binary needs it, since text is drawn with ab_glyph).
+pub fn register_font() {
     static ONCE: Once = Once::new();
     ONCE.call_once(|| {
         // The embedded font is a valid TrueType file; a failure would only lose text.

@@ -11,6 +11,9 @@ use crate::output::{OutputFormat, emit, json_number};
 
 /// Prints, saves and plots an outcome as the output options say.
 pub fn finish(outcome: &Outcome, output: &OutputArgs, console: &Console) -> Result<()> {
+    // SiTAR's single-file `--plot FILE` is written first: an unwritable file fails the
+    // command before anything is printed. evo's plots follow the table, as in evo.
+    crate::figures::single_file(outcome, output, console)?;
     match output.format {
         Some(format) => {
             let text = match format {
@@ -24,7 +27,7 @@ pub fn finish(outcome: &Outcome, output: &OutputArgs, console: &Console) -> Resu
             console.info(&outcome.pretty())?;
         }
     }
-    crate::figures::metric(outcome, output, console)?;
+    crate::figures::collection(outcome, output, console)?;
     if let Some(path) = &output.save_results {
         console.debug(SEP)?;
         if path.exists() {

@@ -15,7 +15,8 @@ pub fn expand(argv: Vec<OsString>, command: &clap::Command) -> Result<Vec<OsStri
     with_config(argv, command)
 }
 
-/// `sitar ape REF EST [-i FORMAT] …` → `sitar ape FORMAT REF EST …`.
+/// `sitar ape REF EST [-i FORMAT] …` → `sitar ape FORMAT REF EST … --time_unit auto`: the
+/// older form keeps SiTAR's stamp rule (integers above 10^11 are nanoseconds).
 fn legacy_format(mut argv: Vec<OsString>) -> Vec<OsString> {
     let is = |k: usize, names: &[&str]| {
         argv.get(k)
@@ -51,7 +52,15 @@ fn legacy_format(mut argv: Vec<OsString>) -> Vec<OsString> {
         }
         k += 1;
     }
+    let timed = format != "kitti";
     argv.insert(2, format);
+    let has_unit = argv.iter().any(|a| {
+        let a = a.to_string_lossy();
+        a.starts_with("--time_unit") || a.starts_with("--time-unit")
+    });
+    if timed && !has_unit {
+        argv.extend(["--time_unit".into(), "auto".into()]);
+    }
     argv
 }
 
@@ -133,7 +142,16 @@ mod tests {
     fn legacy_form_gets_a_format() {
         assert_eq!(
             legacy_format(words(&["sitar", "ape", "a.txt", "b.txt", "-a"])),
-            words(&["sitar", "ape", "tum", "a.txt", "b.txt", "-a"])
+            words(&[
+                "sitar",
+                "ape",
+                "tum",
+                "a.txt",
+                "b.txt",
+                "-a",
+                "--time_unit",
+                "auto"
+            ])
         );
         assert_eq!(
             legacy_format(words(&["sitar", "rpe", "a", "b", "-i", "kitti", "-d", "3"])),

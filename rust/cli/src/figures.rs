@@ -98,9 +98,21 @@ pub fn percentile(values: &[f64], p: f64) -> f64 {
     sorted[k] + f * (next - sorted[k])
 }
 
-/// `-p`, `--plot FILE` (SiTAR's single file) and `--save_plot` of `ape`/`rpe`.
-pub fn metric(outcome: &Outcome, output: &OutputArgs, console: &Console) -> Result<()> {
-    if output.plot.is_none() && output.save_plot.is_none() {
+/// SiTAR's `--plot FILE` of `ape`/`rpe`: both panels in one file.
+pub fn single_file(outcome: &Outcome, output: &OutputArgs, console: &Console) -> Result<()> {
+    let Some(path) = output.plot.as_ref().filter(|p| !p.is_empty()) else {
+        return Ok(());
+    };
+    let figure = error_figure(outcome, output)?;
+    let path = std::path::Path::new(path);
+    canvas::save_one(path, SIZE, &Page::Both(&figure, output.plot_mode))?;
+    console.debug(&format!("Plot saved to {}", path.display()))
+}
+
+/// evo's `-p` and `--save_plot` of `ape`/`rpe`: the "raw" and "map" figures.
+pub fn collection(outcome: &Outcome, output: &OutputArgs, console: &Console) -> Result<()> {
+    let show = output.plot.as_ref().is_some_and(|p| p.is_empty());
+    if !show && output.save_plot.is_none() {
         return Ok(());
     }
     let figure = error_figure(outcome, output)?;
@@ -108,11 +120,7 @@ pub fn metric(outcome: &Outcome, output: &OutputArgs, console: &Console) -> Resu
         ("raw", Page::Raw(&figure)),
         ("map", Page::Map(&figure, output.plot_mode)),
     ];
-    if let Some(path) = output.plot.as_ref().filter(|p| !p.is_empty()) {
-        let path = std::path::Path::new(path);
-        canvas::save_one(path, SIZE, &Page::Both(&figure, output.plot_mode))?;
-        console.debug(&format!("Plot saved to {}", path.display()))?;
-    } else if output.plot.is_some() {
+    if show {
         canvas::show(PAGE, &pages, console)?;
     }
     if let Some(path) = &output.save_plot {
@@ -230,7 +238,7 @@ fn span(values: impl Iterator<Item = f64>) -> std::ops::Range<f64> {
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
             (l.min(v), h.max(v))
         });
-    if !(lo <= hi) {
+    if lo > hi {
         return 0.0..1.0;
     }
     let pad = ((hi - lo) * 0.05).max(1e-9);

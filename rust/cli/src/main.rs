@@ -61,6 +61,7 @@ enum Command {
 }
 
 fn main() -> ExitCode {
+    canvas::register_font();
     let argv = match config::expand(
         std::env::args_os().collect(),
         &<Cli as clap::CommandFactory>::command(),

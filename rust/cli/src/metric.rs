@@ -340,6 +340,9 @@ pub fn synchronise(
     })
 }
 
+/// The alignment kind, the transform applied and evo's `alignment_transformation_sim3`.
+type AlignmentOutcome = (Alignment, Option<Similarity>, Option<[[f64; 4]; 4]>);
+
 /// evo's alignment: Umeyama (`-a`, `-s`, `--n_to_align`), then `--align_origin`. Returns the
 /// kind, the transform applied and evo's `alignment_transformation_sim3`.
 fn align_estimate(
@@ -347,7 +350,7 @@ fn align_estimate(
     estimate: &mut Trajectory,
     reference: &Trajectory,
     console: &Console,
-) -> Result<(Alignment, Option<Similarity>, Option<[[f64; 4]; 4]>)> {
+) -> Result<AlignmentOutcome> {
     let n = match algorithm.n_to_align {
         -1 => None,
         n if n > 0 => Some(n as usize),

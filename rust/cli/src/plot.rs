@@ -455,27 +455,10 @@ fn space_map<DB: DrawingBackend>(
 where
     DB::ErrorType: 'static,
 {
-    let all = figure.trajectory.iter().chain(&figure.reference);
-    let (mut low, mut high) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
-    for p in all {
-        for k in 0..3 {
-            low[k] = low[k].min(p[k]);
-            high[k] = high[k].max(p[k]);
-        }
-    }
-    if !(low[0] <= high[0]) {
-        (low, high) = ([0.0; 3], [0.0; 3]);
-    }
-    let half = (0..3).map(|k| high[k] - low[k]).fold(1e-3, f64::max) * 0.55;
-    let range = |k: usize| {
-        let c = (low[k] + high[k]) / 2.0;
-        c - half..c + half
-    };
-    let map_decimals = decimals(2.0 * half);
-    let mut chart =
-        ChartBuilder::on(map_area)
-            .margin(20)
-            .build_cartesian_3d(range(0), range(1), range(2))?;
+    let ([rx, ry, rz], map_decimals) = cube(figure.trajectory.iter().chain(&figure.reference));
+    let mut chart = ChartBuilder::on(map_area)
+        .margin(20)
+        .build_cartesian_3d(rx, ry, rz)?;
     chart.with_projection(|mut p| {
         p.pitch = 0.45;
         p.yaw = 0.6;
@@ -615,27 +598,10 @@ where
                 .draw()?;
         }
         None => {
-            let (mut low, mut high) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
-            for p in paths.iter().flat_map(|p| &p.points) {
-                for k in 0..3 {
-                    low[k] = low[k].min(p[k]);
-                    high[k] = high[k].max(p[k]);
-                }
-            }
-            if !(low[0] <= high[0]) {
-                (low, high) = ([0.0; 3], [0.0; 3]);
-            }
-            let half = (0..3).map(|k| high[k] - low[k]).fold(1e-3, f64::max) * 0.55;
-            let range = |k: usize| {
-                let c = (low[k] + high[k]) / 2.0;
-                c - half..c + half
-            };
-            let d = decimals(2.0 * half);
-            let mut chart = ChartBuilder::on(area).margin(20).build_cartesian_3d(
-                range(0),
-                range(1),
-                range(2),
-            )?;
+            let ([rx, ry, rz], d) = cube(paths.iter().flat_map(|p| &p.points));
+            let mut chart = ChartBuilder::on(area)
+                .margin(20)
+                .build_cartesian_3d(rx, ry, rz)?;
             chart.with_projection(|mut p| {
                 p.pitch = 0.45;
                 p.yaw = 0.6;
@@ -683,6 +649,26 @@ where
         }
     }
     Ok(())
+}
+
+/// A cube of equal sides around `points` (10 % margin) for 3-D plots, and tick decimals.
+fn cube<'a>(points: impl Iterator<Item = &'a [f64; 3]>) -> ([Range<f64>; 3], usize) {
+    let (mut low, mut high) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    for p in points {
+        for k in 0..3 {
+            low[k] = low[k].min(p[k]);
+            high[k] = high[k].max(p[k]);
+        }
+    }
+    if low[0] > high[0] {
+        (low, high) = ([0.0; 3], [0.0; 3]);
+    }
+    let half = (0..3).map(|k| high[k] - low[k]).fold(1e-3, f64::max) * 0.55;
+    let range = |k: usize| {
+        let c = (low[k] + high[k]) / 2.0;
+        c - half..c + half
+    };
+    ([range(0), range(1), range(2)], decimals(2.0 * half))
 }
 
 /// The range of `values` with 2 % margins; `fallback ± 1` without a spread.

@@ -239,13 +239,13 @@ impl Trajectory {
         let distances = self.distances();
         let (mut last, mut last_distance) = (0usize, 0.0);
         let mut ids = vec![0];
-        for i in 1..self.len() {
+        for (i, &distance) in distances.iter().enumerate().skip(1) {
             let turned =
                 crate::rotation_angle(self.orientations[last].conjugate() * self.orientations[i]);
-            if distances[i] - last_distance >= distance_m || turned >= angle {
+            if distance - last_distance >= distance_m || turned >= angle {
                 ids.push(i);
                 last = i;
-                last_distance = distances[i];
+                last_distance = distance;
             }
         }
         *self = self.reduce_to_ids(&ids);
