@@ -39,15 +39,19 @@ impl<'a> PdfPage<'a> {
         f64::from(self.size.1) - f64::from(y)
     }
 
+    /// Sets the colour; a translucent one is blended over the white page (PDF 1.4 without
+    /// transparency groups: the figures draw translucent fills only over white).
     fn colour(&mut self, colour: BackendColor, stroke: bool) {
         let (r, g, b) = colour.rgb;
+        let alpha = colour.alpha.clamp(0.0, 1.0);
+        let blend = |c: u8| 1.0 - alpha * (1.0 - f64::from(c) / 255.0);
         let op = if stroke { "RG" } else { "rg" };
         let _ = writeln!(
             self.content,
             "{:.3} {:.3} {:.3} {op}",
-            f64::from(r) / 255.0,
-            f64::from(g) / 255.0,
-            f64::from(b) / 255.0
+            blend(r),
+            blend(g),
+            blend(b)
         );
     }
 
