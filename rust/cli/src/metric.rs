@@ -135,11 +135,7 @@ pub fn compute(
                 delta_text(options),
                 options.delta_unit.name(),
                 reference.len(),
-                if options.all_pairs {
-                    "all"
-                } else {
-                    "consecutive"
-                }
+                pairs_word(options)
             ))?;
             let errors = rpe(&reference, &estimate, options).context("computing the RPE")?;
             if errors.errors.len() < all.len() {
@@ -153,11 +149,7 @@ pub fn compute(
                 errors.errors.len(),
                 delta_text(options),
                 options.delta_unit.name(),
-                if options.all_pairs {
-                    "all"
-                } else {
-                    "consecutive"
-                }
+                pairs_word(options)
             ))?;
             errors
         }
@@ -451,6 +443,15 @@ pub fn seconds(ns: i64) -> f64 {
     ns as f64 / 1e9
 }
 
+/// "all" or "consecutive", as evo names the pairing.
+fn pairs_word(options: &RpeOptions) -> &'static str {
+    if options.all_pairs {
+        "all"
+    } else {
+        "consecutive"
+    }
+}
+
 /// The delta as evo prints it: an integer for frames, Python's float repr otherwise.
 pub fn delta_text(options: &RpeOptions) -> String {
     if options.delta_unit == DeltaUnit::Frames {
@@ -469,11 +470,7 @@ fn title(metric: &Metric, unit: &str, algorithm: &AlgorithmArgs) -> String {
             "RPE w.r.t. {relation} ({unit})\nfor delta = {} ({}) using {} pairs",
             delta_text(options),
             options.delta_unit.name(),
-            if options.all_pairs {
-                "all"
-            } else {
-                "consecutive"
-            }
+            pairs_word(options)
         ),
     };
     let (align, scale) = (algorithm.align, algorithm.correct_scale);

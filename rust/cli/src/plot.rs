@@ -318,13 +318,7 @@ where
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], style));
     }
     if !figure.lines.is_empty() {
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .label_font(LABEL_FONT)
-            .draw()?;
+        legend(&mut chart, SeriesLabelPosition::UpperRight)?;
     }
     Ok(())
 }
@@ -455,24 +449,7 @@ fn space_map<DB: DrawingBackend>(
 where
     DB::ErrorType: 'static,
 {
-    let ([rx, ry, rz], map_decimals) = cube(figure.trajectory.iter().chain(&figure.reference));
-    let mut chart = ChartBuilder::on(map_area)
-        .margin(20)
-        .build_cartesian_3d(rx, ry, rz)?;
-    chart.with_projection(|mut p| {
-        p.pitch = 0.45;
-        p.yaw = 0.6;
-        p.scale = 0.85;
-        p.into_matrix()
-    });
-    chart
-        .configure_axes()
-        .label_style(LABEL_FONT)
-        .max_light_lines(1)
-        .x_formatter(&|&x| tick(x, map_decimals))
-        .y_formatter(&|&y| tick(y, map_decimals))
-        .z_formatter(&|&z| tick(z, map_decimals))
-        .draw()?;
+    let mut chart = space_chart(map_area, figure.trajectory.iter().chain(&figure.reference))?;
     let point = |p: &[f64; 3]| (p[0], p[1], p[2]);
     // Dashes: every other short run of the reference's segments.
     let reference: Vec<(f64, f64, f64)> = figure.reference.iter().map(point).collect();
@@ -589,33 +566,10 @@ where
                     .label(path.name.as_str())
                     .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], style));
             }
-            chart
-                .configure_series_labels()
-                .position(SeriesLabelPosition::UpperRight)
-                .background_style(WHITE.mix(0.8))
-                .border_style(BLACK)
-                .label_font(LABEL_FONT)
-                .draw()?;
+            legend(&mut chart, SeriesLabelPosition::UpperRight)?;
         }
         None => {
-            let ([rx, ry, rz], d) = cube(paths.iter().flat_map(|p| &p.points));
-            let mut chart = ChartBuilder::on(area)
-                .margin(20)
-                .build_cartesian_3d(rx, ry, rz)?;
-            chart.with_projection(|mut p| {
-                p.pitch = 0.45;
-                p.yaw = 0.6;
-                p.scale = 0.85;
-                p.into_matrix()
-            });
-            chart
-                .configure_axes()
-                .label_style(LABEL_FONT)
-                .max_light_lines(1)
-                .x_formatter(&|&x| tick(x, d))
-                .y_formatter(&|&y| tick(y, d))
-                .z_formatter(&|&z| tick(z, d))
-                .draw()?;
+            let mut chart = space_chart(area, paths.iter().flat_map(|p| &p.points))?;
             for path in paths {
                 let style = path.colour.stroke_width(if path.dashed { 1 } else { 2 });
                 let points: Vec<(f64, f64, f64)> =
@@ -639,15 +593,67 @@ where
                     }
                 }
             }
-            chart
-                .configure_series_labels()
-                .position(SeriesLabelPosition::UpperRight)
-                .background_style(WHITE.mix(0.8))
-                .border_style(BLACK)
-                .label_font(LABEL_FONT)
-                .draw()?;
+            legend(&mut chart, SeriesLabelPosition::UpperRight)?;
         }
     }
+    Ok(())
+}
+
+/// A 3-D chart on `area` over a cube around `points`, seen from above at an angle, its
+/// axes drawn.
+fn space_chart<'a, 'b, DB: DrawingBackend + 'a>(
+    area: &'a DrawingArea<DB, plotters::coord::Shift>,
+    points: impl Iterator<Item = &'b [f64; 3]>,
+) -> DrawResult<
+    ChartContext<
+        'a,
+        DB,
+        plotters::coord::cartesian::Cartesian3d<
+            plotters::coord::types::RangedCoordf64,
+            plotters::coord::types::RangedCoordf64,
+            plotters::coord::types::RangedCoordf64,
+        >,
+    >,
+>
+where
+    DB::ErrorType: 'static,
+{
+    let ([rx, ry, rz], d) = cube(points);
+    let mut chart = ChartBuilder::on(area)
+        .margin(20)
+        .build_cartesian_3d(rx, ry, rz)?;
+    chart.with_projection(|mut p| {
+        p.pitch = 0.45;
+        p.yaw = 0.6;
+        p.scale = 0.85;
+        p.into_matrix()
+    });
+    chart
+        .configure_axes()
+        .label_style(LABEL_FONT)
+        .max_light_lines(1)
+        .x_formatter(&|&x| tick(x, d))
+        .y_formatter(&|&y| tick(y, d))
+        .z_formatter(&|&z| tick(z, d))
+        .draw()?;
+    Ok(chart)
+}
+
+/// The legend of a chart's labelled series, on a translucent white box.
+pub fn legend<'a, DB: DrawingBackend + 'a, CT: plotters::coord::CoordTranslate>(
+    chart: &mut ChartContext<'a, DB, CT>,
+    position: SeriesLabelPosition,
+) -> DrawResult<()>
+where
+    DB::ErrorType: 'static,
+{
+    chart
+        .configure_series_labels()
+        .position(position)
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .label_font(LABEL_FONT)
+        .draw()?;
     Ok(())
 }
 
