@@ -128,11 +128,11 @@ macro_rules! format_subcommands {
                 #[command(flatten)]
                 options: $options,
             },
-            /// EuRoC MAV ground truth (<seq>/mav0/state_groundtruth_estimate0/data.csv) and a
+            /// EuRoC MAV ground truth (SEQ/mav0/state_groundtruth_estimate0/data.csv) and a
             /// TUM estimate.
             #[command(args_override_self = true)]
             Euroc {
-                /// Ground truth: <seq>/mav0/state_groundtruth_estimate0/data.csv.
+                /// Ground truth: SEQ/mav0/state_groundtruth_estimate0/data.csv.
                 state_gt_csv: std::path::PathBuf,
                 /// Estimated trajectory file in TUM format.
                 est_file: std::path::PathBuf,

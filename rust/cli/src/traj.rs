@@ -48,7 +48,7 @@ enum Format {
     /// EuRoC MAV ground-truth .csv files.
     #[command(args_override_self = true)]
     Euroc {
-        /// <sequence>/mav0/state_groundtruth_estimate0/data.csv
+        /// SEQUENCE/mav0/state_groundtruth_estimate0/data.csv
         #[arg(required = true)]
         state_gt_csv: Vec<PathBuf>,
         #[command(flatten)]
@@ -105,7 +105,7 @@ struct Options {
     /// Associate trajectories via matching timestamps (requires --ref).
     #[arg(long)]
     sync: bool,
-    /// File with a transformation (4x4 text or .npy, or JSON x y z qx qy qz qw [scale]) to
+    /// File with a transformation (4x4 text or .npy, or JSON x y z qx qy qz qw and optional scale) to
     /// apply to the trajectories (left multiplicative).
     #[arg(long = "transform_left", value_name = "FILE")]
     transform_left: Option<PathBuf>,
