@@ -1,61 +1,62 @@
-//! `sitar ape`: absolute pose error, as evo_ape.
+//! `sitar ape`: absolute pose error, as `evo_ape`.
 
-use anyhow::{Context, Result};
-use sitar_estimator::ape;
+use anyhow::Result;
+use sitar_estimator::PoseRelation;
 
-use crate::compare::{PairArgs, error_figure, result_json};
-use crate::output::{OutputFormat, emit};
-use crate::plot::{self, PlotArgs};
+use crate::console::{Console, UsabilityArgs};
+use crate::metric::{self, Metric};
+use crate::metric_args::{AlgorithmArgs, OutputArgs, check_supported};
+use crate::source::{self, format_subcommands};
 
-/// Absolute pose error of EST against REF, as evo_ape.
+/// Absolute pose error of an estimate against a reference, as evo_ape.
 ///
-/// Writes CSV `t,error` or JSON with the statistics; --plot also draws the errors as SVG.
-/// Trials live in their own world frame: use --align (or --align-origin).
+/// The format comes first, as in evo: `sitar ape tum REF EST -a` (euroc: EuRoC ground
+/// truth and a TUM estimate; kitti: KITTI poses). Prints evo's title and statistics table.
 #[derive(clap::Args, Debug)]
 #[command(
-    after_help = "Examples:\n  sitar ape ground_truth.txt trials/trajectory_0.txt --align --format json\n  sitar ape ground_truth.txt trials/trajectory_0.txt --align --plot ape.svg"
+    after_help = "Examples:\n  sitar ape tum ground_truth.txt trajectory_0.txt -a\n  sitar ape euroc data.csv estimate.tum -a -s --save_results ape.zip --save_plot ape.pdf\n  sitar ape kitti 00.txt 00_est.txt -r angle_deg -p"
 )]
 pub struct Args {
+    #[command(subcommand)]
+    source: Format,
+}
+
+/// `sitar ape`'s options: evo_ape's.
+#[derive(clap::Args, Debug)]
+pub struct Options {
+    /// Pose relation on which the APE is based.
+    #[arg(short = 'r', long = "pose_relation", alias = "pose-relation", default_value = "trans_part", value_parser = parse_relation)]
+    pose_relation: PoseRelation,
     #[command(flatten)]
-    pair: PairArgs,
+    algorithm: AlgorithmArgs,
     #[command(flatten)]
-    plot: PlotArgs,
+    output: OutputArgs,
+    #[command(flatten)]
+    usability: UsabilityArgs,
+}
+
+format_subcommands!(Format, Options);
+
+fn parse_relation(s: &str) -> Result<PoseRelation, String> {
+    match s.parse() {
+        Ok(PoseRelation::PointDistanceErrorRatio) | Err(_) => Err(format!(
+            "invalid choice: '{s}' (choose from 'full', 'trans_part', 'rot_part', 'angle_deg', 'angle_rad', 'point_distance')"
+        )),
+        Ok(r) => Ok(r),
+    }
 }
 
 pub fn run(args: Args) -> Result<()> {
-    let prepared = args.pair.prepare()?;
-    let errors = ape(
-        &prepared.reference,
-        &prepared.estimate,
-        args.pair.pose_relation,
-    )
-    .context("computing the APE")?;
-    if let Some(path) = &args.plot.plot {
-        let figure = error_figure("APE", &args.pair, &prepared, &errors);
-        plot::write(path, args.plot.plot_mode, &figure)?;
-    }
-    let reference = &prepared.reference;
-    let text = match args.pair.format {
-        OutputFormat::Csv => {
-            let mut out = String::with_capacity(32 * (errors.errors.len() + 1));
-            out.push_str("t,error\n");
-            for (&(i, _), e) in errors.pairs.iter().zip(&errors.errors) {
-                out.push_str(&format!(
-                    "{},{e}\n",
-                    reference.time_unit.format_stamp(reference.stamps[i])
-                ));
-            }
-            out
-        }
-        OutputFormat::Json => {
-            result_json(
-                "ape",
-                &args.pair,
-                &prepared,
-                &errors,
-                serde_json::Map::new(),
-            ) + "\n"
-        }
-    };
-    emit(args.pair.output.as_deref(), &text)
+    let (source, options) = args.source.split();
+    let console = Console::new(&options.usability)?;
+    check_supported(&options.output)?;
+    let loaded = source::load(&source, &console)?;
+    let outcome = metric::compute(
+        Metric::Ape(options.pose_relation),
+        loaded,
+        &options.algorithm,
+        options.output.plot_full_ref,
+        &console,
+    )?;
+    crate::compare::finish(&outcome, &options.output, &console)
 }

@@ -12,6 +12,7 @@ use crate::compare::{file_name, unit};
 use crate::input::{self, Format, progress_bar};
 use crate::output::{OutputFormat, emit};
 use crate::plot::{self, ErrorFigure, PlotArgs, Sample};
+use crate::source::StampUnit;
 
 /// Estimates each window's pose error from repeated trials, without ground truth.
 ///
@@ -35,14 +36,24 @@ pub struct Args {
     #[arg(short = 'd', long, default_value_t = 10)]
     delta: usize,
     /// Largest time difference (s) for associating two trials' poses.
-    #[arg(long = "t-max-diff", alias = "t_max_diff", default_value_t = 0.01)]
+    #[arg(long = "t_max_diff", alias = "t-max-diff", default_value_t = 0.01)]
     t_max_diff: f64,
     /// Pose relation of the RPE: trans (metres), angle_deg or angle_rad (rotational estimate).
-    #[arg(short = 'r', long = "pose-relation", alias = "pose_relation", default_value = "trans", value_parser = parse_relation)]
+    #[arg(short = 'r', long = "pose_relation", alias = "pose-relation", default_value = "trans_part", value_parser = parse_relation)]
     pose_relation: PoseRelation,
     /// Format of the trial files.
-    #[arg(short = 'i', long, value_enum, default_value_t)]
+    #[arg(
+        short = 'i',
+        long = "input_format",
+        alias = "input-format",
+        value_enum,
+        default_value_t
+    )]
     input_format: Format,
+    /// Unit of TUM stamps: auto (integers above 10^11 are ARCore's nanoseconds, anything
+    /// else seconds), s or ns.
+    #[arg(long = "time_unit", alias = "time-unit", value_enum, default_value_t = StampUnit::Auto)]
+    time_unit: StampUnit,
     /// Output format: csv (legacy `start,error`) or json.
     #[arg(long, value_enum, default_value_t)]
     format: OutputFormat,
@@ -65,10 +76,12 @@ fn parse_setting(s: &str) -> Result<Setting, String> {
 
 fn parse_relation(s: &str) -> Result<PoseRelation, String> {
     match s.parse() {
-        Ok(PoseRelation::FullTransformation) => {
-            Err("the estimate supports trans, angle_deg and angle_rad".into())
-        }
-        Ok(r) => Ok(r),
+        Ok(
+            r @ (PoseRelation::TranslationPart
+            | PoseRelation::RotationAngleDeg
+            | PoseRelation::RotationAngleRad),
+        ) => Ok(r),
+        Ok(_) => Err("the estimate supports trans_part, angle_deg and angle_rad".into()),
         Err(e) => Err(e.to_string()),
     }
 }
@@ -86,7 +99,7 @@ pub fn run(args: Args) -> Result<()> {
         bail!("the estimate needs at least 2 trials, got {}", files.len());
     }
     let bar = progress_bar(files.len() as u64, "reading trials");
-    let trials = input::read_all(&files, args.input_format, &bar)?;
+    let trials = input::read_all_with(&files, args.input_format, args.time_unit.rule(), &bar)?;
     bar.finish_and_clear();
     let options = EstimateOptions {
         setting: args.setting,
@@ -122,34 +135,46 @@ fn error_figure(
     for (w, p) in windows.into_iter().zip(poses) {
         positions[w] = Some(first.positions[p].to_array());
     }
+    let first_stamp = first
+        .stamps
+        .first()
+        .copied()
+        .into_iter()
+        .chain(starts.first().copied())
+        .min()
+        .unwrap_or(0);
+    let indices = args.input_format == Format::Kitti;
     ErrorFigure {
         title: format!(
             "estimated error of {} trials ({}, {}, delta {} frames)",
             result.trials, result.setting, result.pose_relation, args.delta
         ),
         metric: "estimated error",
-        unit: unit(args.pose_relation),
-        first_stamp: first
-            .stamps
-            .first()
-            .copied()
-            .into_iter()
-            .chain(starts.first().copied())
-            .min()
-            .unwrap_or(0),
-        stamps_are_indices: args.input_format == Format::Kitti,
+        unit: unit(args.pose_relation).to_owned(),
+        x_label: if indices {
+            "pose index from the first".into()
+        } else {
+            "t − t₀ (s)".into()
+        },
         lines: Vec::new(),
+        std_band: None,
+        reference_name: String::new(),
+        reference: Vec::new(),
         trajectory_name: format!("first trial {}", file_name(first_file)),
         trajectory: first.positions.iter().map(|p| p.to_array()).collect(),
         samples: result
             .windows
             .iter()
             .zip(positions)
-            .map(|(w, position)| Sample {
-                stamp: w.start,
-                position,
-                error: w.error_m,
+            .map(|(w, position)| {
+                let offset = w.start.saturating_sub(first_stamp) as f64;
+                Sample {
+                    x: if indices { offset } else { offset * 1e-9 },
+                    position,
+                    error: w.error_m,
+                }
             })
             .collect(),
+        colour_range: None,
     }
 }

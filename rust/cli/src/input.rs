@@ -6,12 +6,14 @@ use anyhow::{Context, Result, bail};
 use clap::ValueEnum;
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
-use sitar_estimator::{Trajectory, read_euroc_csv, read_kitti, read_tum};
+use sitar_estimator::{
+    ReadOptions, TimeUnitRule, Trajectory, read_euroc_csv, read_kitti, read_tum_with,
+};
 
 /// Trajectory file format (evo's format subcommands).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, ValueEnum)]
 pub enum Format {
-    /// `t x y z qx qy qz qw`, stamps in seconds or integer nanoseconds.
+    /// `t x y z qx qy qz qw`, stamps in seconds, or integer nanoseconds above 10^11.
     #[default]
     Tum,
     /// EuRoC ground-truth CSV (`#timestamp [ns], px, py, pz, qw, qx, qy, qz, …`).
@@ -20,10 +22,20 @@ pub enum Format {
     Kitti,
 }
 
-/// Reads one trajectory; errors name the file (and line and column for bad content).
+/// Reads one trajectory by SiTAR's rules (TUM stamps by [`TimeUnitRule::Auto`]); errors
+/// name the file (and line and column for bad content).
 pub fn read(path: &Path, format: Format) -> Result<Trajectory> {
+    read_with(path, format, TimeUnitRule::Auto)
+}
+
+/// [`read`] with an explicit rule for TUM stamps (`--time_unit`).
+pub fn read_with(path: &Path, format: Format, time_unit: TimeUnitRule) -> Result<Trajectory> {
+    let options = ReadOptions {
+        time_unit,
+        ..ReadOptions::SITAR
+    };
     let trajectory = match format {
-        Format::Tum => read_tum(path),
+        Format::Tum => read_tum_with(path, &options).map(|(t, _)| t),
         Format::Euroc => read_euroc_csv(path),
         Format::Kitti => read_kitti(path),
     }?;
@@ -89,10 +101,20 @@ pub fn read_all(
     format: Format,
     progress: &ProgressBar,
 ) -> Result<Vec<Trajectory>> {
+    read_all_with(paths, format, TimeUnitRule::Auto, progress)
+}
+
+/// [`read_all`] with an explicit rule for TUM stamps (`--time_unit`).
+pub fn read_all_with(
+    paths: &[PathBuf],
+    format: Format,
+    time_unit: TimeUnitRule,
+    progress: &ProgressBar,
+) -> Result<Vec<Trajectory>> {
     paths
         .par_iter()
         .map(|p| {
-            let t = read(p, format);
+            let t = read_with(p, format, time_unit);
             progress.inc(1);
             t
         })

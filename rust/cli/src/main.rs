@@ -6,22 +6,38 @@
 #![forbid(unsafe_code)]
 
 mod ape;
+mod archive;
+mod canvas;
 mod compare;
+mod config;
+mod console;
 mod demo;
 mod estimate;
 mod evaluate;
+mod figures;
 mod input;
+mod metric;
+mod metric_args;
 mod output;
+mod pdf;
 mod plot;
+mod pyfmt;
+mod res;
 mod rpe;
 mod serve;
+mod shell;
 mod simulate;
+mod source;
+mod traj;
 
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
 /// SiTAR: situated trajectory analysis for AR — pose error without ground truth.
+///
+/// `ape`, `rpe`, `traj` and `res` take evo's command lines (`evo_ape tum REF EST -a` is
+/// `sitar ape tum REF EST -a`).
 #[derive(Parser)]
 #[command(name = "sitar", version, propagate_version = true)]
 struct Cli {
@@ -33,6 +49,10 @@ struct Cli {
 enum Command {
     Rpe(rpe::Args),
     Ape(ape::Args),
+    Traj(traj::Args),
+    Res(res::Args),
+    Completions(shell::CompletionsArgs),
+    Man(shell::ManArgs),
     Estimate(estimate::Args),
     Evaluate(evaluate::Args),
     Simulate(simulate::Args),
@@ -41,9 +61,26 @@ enum Command {
 }
 
 fn main() -> ExitCode {
-    let result = match Cli::parse().command {
+    canvas::register_font();
+    let argv = match config::expand(
+        std::env::args_os().collect(),
+        &<Cli as clap::CommandFactory>::command(),
+    ) {
+        Ok(argv) => argv,
+        Err(error) => {
+            eprintln!("sitar: error: {}", one_line(&error));
+            return ExitCode::FAILURE;
+        }
+    };
+    let result = match Cli::parse_from(argv).command {
         Command::Rpe(args) => rpe::run(args),
         Command::Ape(args) => ape::run(args),
+        Command::Traj(args) => traj::run(args),
+        Command::Res(args) => res::run(args),
+        Command::Completions(args) => {
+            shell::completions(args, &mut <Cli as clap::CommandFactory>::command())
+        }
+        Command::Man(args) => shell::man(args, <Cli as clap::CommandFactory>::command()),
         Command::Estimate(args) => estimate::run(args),
         Command::Evaluate(args) => evaluate::run(args),
         Command::Simulate(args) => simulate::run(args),
@@ -52,6 +89,8 @@ fn main() -> ExitCode {
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        // `sitar … | head`: the reader has gone, which is no error of ours.
+        Err(error) if output::is_broken_pipe(&error) => ExitCode::SUCCESS,
         Err(error) => {
             eprintln!("sitar: error: {}", one_line(&error));
             ExitCode::FAILURE

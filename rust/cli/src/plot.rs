@@ -5,19 +5,19 @@
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::ValueEnum;
 use plotters::prelude::*;
 
-/// The `--plot` and `--plot-mode` flags.
+/// The `--plot` and `--plot-mode` flags of `sitar estimate`.
 #[derive(clap::Args, Debug)]
 pub struct PlotArgs {
-    /// Draw an SVG figure here: the error over time, and the trajectory in the --plot-mode
-    /// plane with each error as a dot coloured by its size (as evo's --plot).
+    /// Draw the figure here, SVG, PNG or PDF by the extension: the error over time, and the
+    /// trajectory in the --plot-mode plane with each error as a dot coloured by its size.
     #[arg(long, value_name = "FILE.svg")]
     pub plot: Option<PathBuf>,
     /// Plane of the trajectory panel, horizontal axis first, with equal scales on both axes
-    /// (evo's --plot_mode); xz looks down on ARCore/Unity poses, whose y is up.
+    /// (evo's --plot_mode; xyz: 3-D); xz looks down on ARCore/Unity poses, whose y is up.
     #[arg(
         long = "plot-mode",
         alias = "plot_mode",
@@ -28,7 +28,7 @@ pub struct PlotArgs {
     pub plot_mode: PlotMode,
 }
 
-/// Plane of the trajectory panel: horizontal axis, then vertical axis.
+/// Plane of the trajectory panel: horizontal axis, then vertical axis; or 3-D.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, ValueEnum)]
 pub enum PlotMode {
     /// x horizontal, y vertical.
@@ -44,27 +44,30 @@ pub enum PlotMode {
     Zy,
     /// y horizontal, x vertical.
     Yx,
+    /// 3-D, x, y and z (evo's default).
+    Xyz,
 }
 
 impl PlotMode {
-    /// Indices of the horizontal and the vertical coordinate.
-    fn axes(self) -> [usize; 2] {
+    /// Indices of the horizontal and the vertical coordinate (`None` for 3-D).
+    fn axes(self) -> Option<[usize; 2]> {
         match self {
-            PlotMode::Xy => [0, 1],
-            PlotMode::Xz => [0, 2],
-            PlotMode::Yz => [1, 2],
-            PlotMode::Zx => [2, 0],
-            PlotMode::Zy => [2, 1],
-            PlotMode::Yx => [1, 0],
+            PlotMode::Xy => Some([0, 1]),
+            PlotMode::Xz => Some([0, 2]),
+            PlotMode::Yz => Some([1, 2]),
+            PlotMode::Zx => Some([2, 0]),
+            PlotMode::Zy => Some([2, 1]),
+            PlotMode::Yx => Some([1, 0]),
+            PlotMode::Xyz => None,
         }
     }
 }
 
-/// One error to draw: when, where on the trajectory, and how large.
+/// One error to draw: where on the x-axis, where on the trajectory, and how large.
 pub struct Sample {
-    /// Stamp (ns) of the pose or of the window's first pose.
-    pub stamp: i64,
-    /// Position (m) on the figure's trajectory; `None`: not drawn on the trajectory panel.
+    /// Position on the x-axis of the error panel (seconds from start, index or metres).
+    pub x: f64,
+    /// Position (m) on the coloured trajectory; `None`: not drawn on the trajectory panel.
     pub position: Option<[f64; 3]>,
     /// The error.
     pub error: f64,
@@ -72,24 +75,30 @@ pub struct Sample {
 
 /// What the error figure shows.
 pub struct ErrorFigure {
-    /// Title above both panels.
+    /// Title above the panels.
     pub title: String,
     /// Name of the error ("APE", "RPE", "estimated error").
     pub metric: &'static str,
     /// Unit of the error ("m", "deg", "rad", or "" for full transformations).
-    pub unit: &'static str,
-    /// Stamp (ns) the time axis counts from.
-    pub first_stamp: i64,
-    /// Stamps are pose indices (KITTI), not nanoseconds.
-    pub stamps_are_indices: bool,
+    pub unit: String,
+    /// Label of the error panel's x-axis.
+    pub x_label: String,
     /// Horizontal lines with a legend on the error panel (`("mean", value)`, …).
     pub lines: Vec<(&'static str, f64)>,
-    /// Name of the trajectory of the lower panel ("reference", "trial 0").
+    /// A band (low, high) drawn behind the error, labelled "std" (evo: mean ± std).
+    pub std_band: Option<(f64, f64)>,
+    /// Name of the dashed trajectory (the reference), if any.
+    pub reference_name: String,
+    /// Every position (m) of the dashed reference; empty: none.
+    pub reference: Vec<[f64; 3]>,
+    /// Name of the trajectory carrying the coloured errors ("estimate", "trial 0").
     pub trajectory_name: String,
-    /// Every position (m) of that trajectory, drawn as a grey line.
+    /// Every position (m) of that trajectory, drawn as a grey line under the dots.
     pub trajectory: Vec<[f64; 3]>,
-    /// The errors, in time order; non-finite ones are left out of both panels.
+    /// The errors, in order; non-finite ones are left out of both panels.
     pub samples: Vec<Sample>,
+    /// Colour-map limits (default: the smallest and largest error drawn).
+    pub colour_range: Option<(f64, f64)>,
 }
 
 /// Colour of the error line (matplotlib's first colour, as evo's).
@@ -101,14 +110,23 @@ const LINE_COLOURS: [RGBColor; 4] = [
     RGBColor(0xFF, 0x7F, 0x0E),
     RGBColor(0x94, 0x67, 0xBD),
 ];
+/// Colour of the dashed reference (evo's `plot_reference_color`).
+const REFERENCE_COLOUR: RGBColor = RGBColor(0x44, 0x44, 0x44);
+/// Colour of the line under the coloured errors.
+const TRAJECTORY_COLOUR: RGBColor = RGBColor(160, 160, 160);
 /// Font of tick labels and axis descriptions (plotters' default shrinks with the panel).
 const LABEL_FONT: (&str, u32) = ("sans-serif", 13);
-/// Figure size in pixels.
-const SIZE: (u32, u32) = (1000, 1150);
+/// Size of the two-panel figure, pixels.
+pub const SIZE: (u32, u32) = (1000, 1150);
+/// Size of one evo figure ("raw", "map"), pixels.
+pub const PAGE: (u32, u32) = (1000, 760);
+
+/// The result of drawing.
+pub type DrawResult<T> = Result<T, Box<dyn std::error::Error>>;
 /// Height of the error-over-time panel.
 const ERROR_PANEL_HEIGHT: u32 = 400;
 /// Width of the colour bar beside the trajectory panel.
-const COLOUR_BAR_WIDTH: u32 = 110;
+const COLOUR_BAR_WIDTH: u32 = 140;
 
 /// Matplotlib's viridis at 0, 1/8, …, 1 (perceptually uniform, readable in grey and with
 /// colour-vision deficiencies); linearly interpolated in between.
@@ -135,77 +153,129 @@ fn viridis(t: f64) -> RGBColor {
     RGBColor(lerp(a.0, b.0), lerp(a.1, b.1), lerp(a.2, b.2))
 }
 
-/// Draws `figure` and writes it to `path` as SVG; the error names the file.
+/// Draws `figure` (both panels) and writes it to `path`, SVG, PNG or PDF by the extension;
+/// the error names the file.
 pub fn write(path: &Path, mode: PlotMode, figure: &ErrorFigure) -> Result<()> {
-    let svg = render(mode, figure)
-        .map_err(|e| anyhow::anyhow!("{}: cannot draw the plot: {e}", path.display()))?;
-    std::fs::write(path, svg).with_context(|| format!("{}: cannot write the plot", path.display()))
+    crate::canvas::save_one(path, SIZE, &crate::canvas::Page::Both(figure, mode))
 }
 
-type DrawResult<T> = Result<T, Box<dyn std::error::Error>>;
+/// Both panels on one page: the title, the error over time, the trajectory coloured by error.
+pub fn both<DB: DrawingBackend>(
+    root: &DrawingArea<DB, plotters::coord::Shift>,
+    mode: PlotMode,
+    figure: &ErrorFigure,
+) -> DrawResult<()>
+where
+    DB::ErrorType: 'static,
+{
+    root.fill(&WHITE)?;
+    let (title, body) = root.split_vertically(40);
+    title.titled(&figure.title.replace('\n', " "), ("sans-serif", 20))?;
+    let (upper, lower) = body.split_vertically(ERROR_PANEL_HEIGHT);
+    error_over_time(&upper, figure)?;
+    trajectory_by_error(&lower, mode, figure)?;
+    Ok(())
+}
 
-/// The figure as SVG text.
-fn render(mode: PlotMode, figure: &ErrorFigure) -> DrawResult<String> {
-    let mut svg = String::new();
-    {
-        let root = SVGBackend::with_string(&mut svg, SIZE).into_drawing_area();
-        root.fill(&WHITE)?;
-        let (title, body) = root.split_vertically(40);
-        title.titled(&figure.title, ("sans-serif", 20))?;
-        let (upper, lower) = body.split_vertically(ERROR_PANEL_HEIGHT);
-        let samples: Vec<&Sample> = figure
-            .samples
-            .iter()
-            .filter(|s| s.error.is_finite())
-            .collect();
-        error_over_time(&upper, figure, &samples)?;
-        trajectory_by_error(&lower, mode, figure, &samples)?;
-        root.present()?;
+/// evo's "raw" figure alone: the error over the x dimension, titled.
+pub fn raw<DB: DrawingBackend>(
+    root: &DrawingArea<DB, plotters::coord::Shift>,
+    figure: &ErrorFigure,
+) -> DrawResult<()>
+where
+    DB::ErrorType: 'static,
+{
+    root.fill(&WHITE)?;
+    let (title, body) = root.split_vertically(60);
+    title_lines(&title, &figure.title)?;
+    error_over_time(&body, figure)
+}
+
+/// evo's "map" figure alone: the trajectories, the errors coloured, a colour bar.
+pub fn map<DB: DrawingBackend>(
+    root: &DrawingArea<DB, plotters::coord::Shift>,
+    mode: PlotMode,
+    figure: &ErrorFigure,
+) -> DrawResult<()>
+where
+    DB::ErrorType: 'static,
+{
+    root.fill(&WHITE)?;
+    let (title, body) = root.split_vertically(60);
+    title_lines(&title, &figure.title)?;
+    trajectory_by_error(&body, mode, figure)
+}
+
+/// A title of one or more lines, centred.
+pub fn title_lines<DB: DrawingBackend>(
+    area: &DrawingArea<DB, plotters::coord::Shift>,
+    title: &str,
+) -> DrawResult<()>
+where
+    DB::ErrorType: 'static,
+{
+    let lines: Vec<&str> = title.lines().collect();
+    let (w, h) = area.dim_in_pixel();
+    let step = (h as usize / lines.len().max(1)).min(22) as i32;
+    for (k, line) in lines.iter().enumerate() {
+        let style = TextStyle::from(("sans-serif", 16).into_font()).pos(
+            plotters::style::text_anchor::Pos::new(
+                plotters::style::text_anchor::HPos::Center,
+                plotters::style::text_anchor::VPos::Top,
+            ),
+        );
+        area.draw_text(line, &style, ((w / 2) as i32, 6 + k as i32 * step))?;
     }
-    Ok(svg)
+    Ok(())
+}
+
+/// The errors to draw: the finite ones.
+fn finite(figure: &ErrorFigure) -> Vec<&Sample> {
+    figure
+        .samples
+        .iter()
+        .filter(|s| s.error.is_finite())
+        .collect()
 }
 
 /// `metric (unit)`, or the metric alone without a unit.
 fn with_unit(figure: &ErrorFigure) -> String {
-    if figure.unit.is_empty() {
+    if figure.unit.is_empty() || figure.unit == "unit-less" {
         figure.metric.to_owned()
     } else {
         format!("{} ({})", figure.metric, figure.unit)
     }
 }
 
-/// Upper panel: the error against time, with the horizontal lines and their legend.
+/// Error panel: the error against the x dimension, the statistics lines, the std band.
 fn error_over_time<DB: DrawingBackend>(
     area: &DrawingArea<DB, plotters::coord::Shift>,
     figure: &ErrorFigure,
-    samples: &[&Sample],
 ) -> DrawResult<()>
 where
     DB::ErrorType: 'static,
 {
-    let time = |stamp: i64| {
-        let offset = stamp.saturating_sub(figure.first_stamp) as f64;
-        if figure.stamps_are_indices {
-            offset
-        } else {
-            offset * 1e-9
-        }
-    };
-    let points: Vec<(f64, f64)> = samples.iter().map(|s| (time(s.stamp), s.error)).collect();
+    let samples = finite(figure);
+    let points: Vec<(f64, f64)> = samples.iter().map(|s| (s.x, s.error)).collect();
     let x_range = padded(points.iter().map(|p| p.0), 0.0);
     let lines = figure.lines.iter().filter(|(_, v)| v.is_finite());
     let y_max = points
         .iter()
         .map(|p| p.1)
         .chain(lines.clone().map(|&(_, v)| v))
+        .chain(figure.std_band.map(|b| b.1))
         .fold(0.0f64, f64::max);
-    let y_range = 0.0..if y_max > 0.0 { y_max * 1.05 } else { 1.0 };
+    let y_min = points.iter().map(|p| p.1).fold(0.0f64, f64::min);
+    let y_range = y_min..if y_max > 0.0 { y_max * 1.05 } else { 1.0 };
     let (x_decimals, y_decimals) = (
         decimals(x_range.end - x_range.start),
         decimals(y_range.end - y_range.start),
     );
     let mut chart = ChartBuilder::on(area)
-        .caption(format!("{} over time", figure.metric), ("sans-serif", 16))
+        .caption(
+            format!("{} over {}", figure.metric, figure.x_label),
+            ("sans-serif", 16),
+        )
         .margin(10)
         .x_label_area_size(40)
         .y_label_area_size(60)
@@ -213,17 +283,26 @@ where
     chart
         .configure_mesh()
         .max_light_lines(1)
-        .x_desc(if figure.stamps_are_indices {
-            "pose index from the first"
-        } else {
-            "t − t₀ (s)"
-        })
+        .x_desc(figure.x_label.as_str())
         .y_desc(with_unit(figure))
         .label_style(LABEL_FONT)
         .axis_desc_style(LABEL_FONT)
         .x_label_formatter(&|&x| tick(x, x_decimals))
         .y_label_formatter(&|&y| tick(y, y_decimals))
         .draw()?;
+    if let Some((low, high)) = figure
+        .std_band
+        .filter(|b| b.0.is_finite() && b.1.is_finite())
+    {
+        let band = LINE_COLOURS[3].mix(0.2).filled();
+        chart
+            .draw_series([Rectangle::new(
+                [(x_range.start, low), (x_range.end, high)],
+                band,
+            )])?
+            .label("std")
+            .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 20, y + 5)], band));
+    }
     chart
         .draw_series(LineSeries::new(points, ERROR_COLOUR.stroke_width(1)))?
         .label(figure.metric)
@@ -239,39 +318,39 @@ where
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], style));
     }
     if !figure.lines.is_empty() {
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .draw()?;
+        legend(&mut chart, SeriesLabelPosition::UpperRight)?;
     }
     Ok(())
 }
 
-/// Lower panel: the trajectory in the plane of `mode` with equal scales, each sample's
-/// position a dot coloured by its error, and a colour bar.
+/// Map panel: the dashed reference, the trajectory carrying the errors with each error a
+/// dot coloured by its size (equal scales), and a colour bar; 3-D in the xyz mode.
 fn trajectory_by_error<DB: DrawingBackend>(
     area: &DrawingArea<DB, plotters::coord::Shift>,
     mode: PlotMode,
     figure: &ErrorFigure,
-    samples: &[&Sample],
 ) -> DrawResult<()>
 where
     DB::ErrorType: 'static,
 {
-    let [a, b] = mode.axes();
-    const NAMES: [&str; 3] = ["x", "y", "z"];
-    let project = |p: &[f64; 3]| (p[a], p[b]);
-    let placed: Vec<((f64, f64), f64)> = samples
+    let samples = finite(figure);
+    let placed: Vec<([f64; 3], f64)> = samples
         .iter()
-        .filter_map(|s| s.position.as_ref().map(|p| (project(p), s.error)))
+        .filter_map(|s| s.position.map(|p| (p, s.error)))
         .collect();
     let hidden = samples.len() - placed.len();
+    const NAMES: [&str; 3] = ["x", "y", "z"];
+    let plane = match mode.axes() {
+        Some([a, b]) => format!("the {}{} plane", NAMES[a], NAMES[b]),
+        None => "3-D".to_owned(),
+    };
     let mut caption = format!(
-        "{} in the {}{} plane, coloured by {}",
-        figure.trajectory_name, NAMES[a], NAMES[b], figure.metric
+        "{} in {plane}, coloured by {}",
+        figure.trajectory_name, figure.metric
     );
+    if !figure.reference.is_empty() {
+        caption.push_str(&format!(", {} dashed", figure.reference_name));
+    }
     if hidden > 0 {
         caption.push_str(&format!(
             " ({hidden} of {} not drawn: no pose here)",
@@ -281,19 +360,45 @@ where
     let area = area.titled(&caption, ("sans-serif", 16))?;
     let (map_area, bar_area) = area.split_horizontally(area.dim_in_pixel().0 - COLOUR_BAR_WIDTH);
 
-    let errors = placed.iter().map(|p| p.1);
-    let low = errors.clone().fold(f64::INFINITY, f64::min);
-    let high = errors.fold(f64::NEG_INFINITY, f64::max);
-    let normalise = |e: f64| {
+    let (low, high) = figure.colour_range.unwrap_or_else(|| {
+        placed
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), p| {
+                (l.min(p.1), h.max(p.1))
+            })
+    });
+    let normalise = move |e: f64| {
         if high > low {
             (e - low) / (high - low)
         } else {
             0.5
         }
     };
+    match mode.axes() {
+        Some(axes) => plane_map(&map_area, axes, figure, &placed, &normalise)?,
+        None => space_map(&map_area, figure, &placed, &normalise)?,
+    }
+    if placed.is_empty() || !(low.is_finite() && high.is_finite()) {
+        return Ok(());
+    }
+    colour_bar(&bar_area, figure, low, high)
+}
 
+/// The map in a coordinate plane, equal metres per pixel on both axes.
+fn plane_map<DB: DrawingBackend>(
+    map_area: &DrawingArea<DB, plotters::coord::Shift>,
+    [a, b]: [usize; 2],
+    figure: &ErrorFigure,
+    placed: &[([f64; 3], f64)],
+    normalise: &dyn Fn(f64) -> f64,
+) -> DrawResult<()>
+where
+    DB::ErrorType: 'static,
+{
+    const NAMES: [&str; 3] = ["x", "y", "z"];
+    let project = |p: &[f64; 3]| (p[a], p[b]);
     let build = |x: Range<f64>, y: Range<f64>| {
-        ChartBuilder::on(&map_area)
+        ChartBuilder::on(map_area)
             .margin(10)
             .x_label_area_size(40)
             .y_label_area_size(60)
@@ -302,7 +407,9 @@ where
     // Building a chart without a caption draws nothing: a probe gives the plotting area's size.
     let pixels = build(0.0..1.0, 0.0..1.0)?.plotting_area().dim_in_pixel();
     let path: Vec<(f64, f64)> = figure.trajectory.iter().map(project).collect();
-    let (x_range, y_range) = equal_scale(&path, pixels);
+    let reference: Vec<(f64, f64)> = figure.reference.iter().map(project).collect();
+    let all: Vec<(f64, f64)> = path.iter().chain(&reference).copied().collect();
+    let (x_range, y_range) = equal_scale(&all, pixels);
     let map_decimals = decimals((x_range.end - x_range.start).max(y_range.end - y_range.start));
     let mut chart = build(x_range, y_range)?;
     chart
@@ -315,30 +422,77 @@ where
         .x_label_formatter(&|&x| tick(x, map_decimals))
         .y_label_formatter(&|&y| tick(y, map_decimals))
         .draw()?;
+    if !reference.is_empty() {
+        chart.draw_series(DashedLineSeries::new(
+            reference,
+            6,
+            4,
+            REFERENCE_COLOUR.stroke_width(1),
+        ))?;
+    }
+    chart.draw_series(LineSeries::new(path, TRAJECTORY_COLOUR.stroke_width(1)))?;
+    chart.draw_series(
+        placed
+            .iter()
+            .map(|(p, e)| Circle::new(project(p), 3, viridis(normalise(*e)).filled())),
+    )?;
+    Ok(())
+}
+
+/// The map in 3-D (evo's xyz mode): a cube of equal scales around every position.
+fn space_map<DB: DrawingBackend>(
+    map_area: &DrawingArea<DB, plotters::coord::Shift>,
+    figure: &ErrorFigure,
+    placed: &[([f64; 3], f64)],
+    normalise: &dyn Fn(f64) -> f64,
+) -> DrawResult<()>
+where
+    DB::ErrorType: 'static,
+{
+    let mut chart = space_chart(map_area, figure.trajectory.iter().chain(&figure.reference))?;
+    let point = |p: &[f64; 3]| (p[0], p[1], p[2]);
+    // Dashes: every other short run of the reference's segments.
+    let reference: Vec<(f64, f64, f64)> = figure.reference.iter().map(point).collect();
+    let dash = (reference.len() / 150).max(1);
+    for run in reference.chunks(dash + 1).step_by(2) {
+        chart.draw_series(LineSeries::new(
+            run.to_vec(),
+            REFERENCE_COLOUR.stroke_width(1),
+        ))?;
+    }
     chart.draw_series(LineSeries::new(
-        path,
-        RGBColor(160, 160, 160).stroke_width(1),
+        figure.trajectory.iter().map(point),
+        TRAJECTORY_COLOUR.stroke_width(1),
     ))?;
     chart.draw_series(
         placed
             .iter()
-            .map(|&(p, e)| Circle::new(p, 3, viridis(normalise(e)).filled())),
+            .map(|(p, e)| Circle::new(point(p), 3, viridis(normalise(*e)).filled())),
     )?;
+    Ok(())
+}
 
-    if placed.is_empty() {
-        return Ok(());
-    }
+/// The colour bar from `low` to `high`.
+fn colour_bar<DB: DrawingBackend>(
+    bar_area: &DrawingArea<DB, plotters::coord::Shift>,
+    figure: &ErrorFigure,
+    low: f64,
+    high: f64,
+) -> DrawResult<()>
+where
+    DB::ErrorType: 'static,
+{
     let bar_range = if high > low {
         low..high
     } else {
         low - 0.5..low + 0.5
     };
     let bar_decimals = decimals(bar_range.end - bar_range.start);
-    let mut bar = ChartBuilder::on(&bar_area)
+    let mut bar = ChartBuilder::on(bar_area)
         .margin(10)
         .margin_right(0)
         .x_label_area_size(40)
-        .right_y_label_area_size(70)
+        .right_y_label_area_size(100)
         .build_cartesian_2d(0.0..1.0, bar_range.clone())?;
     const STEPS: usize = 64;
     let span = bar_range.end - bar_range.start;
@@ -359,6 +513,168 @@ where
         .y_label_formatter(&|&y| tick(y, bar_decimals))
         .draw()?;
     Ok(())
+}
+
+/// Several named trajectories in a plane (equal scales) or in 3-D, with a legend; dashed
+/// ones in evo's reference style.
+pub fn paths<DB: DrawingBackend>(
+    area: &DrawingArea<DB, plotters::coord::Shift>,
+    mode: PlotMode,
+    paths: &[crate::figures::Path3],
+) -> DrawResult<()>
+where
+    DB::ErrorType: 'static,
+{
+    const NAMES: [&str; 3] = ["x", "y", "z"];
+    match mode.axes() {
+        Some([a, b]) => {
+            let project = |p: &[f64; 3]| (p[a], p[b]);
+            let build = |x: Range<f64>, y: Range<f64>| {
+                ChartBuilder::on(area)
+                    .margin(10)
+                    .x_label_area_size(40)
+                    .y_label_area_size(60)
+                    .build_cartesian_2d(x, y)
+            };
+            let pixels = build(0.0..1.0, 0.0..1.0)?.plotting_area().dim_in_pixel();
+            let all: Vec<(f64, f64)> = paths
+                .iter()
+                .flat_map(|p| p.points.iter().map(project))
+                .collect();
+            let (x_range, y_range) = equal_scale(&all, pixels);
+            let d = decimals((x_range.end - x_range.start).max(y_range.end - y_range.start));
+            let mut chart = build(x_range, y_range)?;
+            chart
+                .configure_mesh()
+                .max_light_lines(1)
+                .x_desc(format!("{} (m)", NAMES[a]))
+                .y_desc(format!("{} (m)", NAMES[b]))
+                .label_style(LABEL_FONT)
+                .axis_desc_style(LABEL_FONT)
+                .x_label_formatter(&|&x| tick(x, d))
+                .y_label_formatter(&|&y| tick(y, d))
+                .draw()?;
+            for path in paths {
+                let style = path.colour.stroke_width(if path.dashed { 1 } else { 2 });
+                let points: Vec<(f64, f64)> = path.points.iter().map(project).collect();
+                let series = if path.dashed {
+                    chart.draw_series(DashedLineSeries::new(points, 6, 4, style))?
+                } else {
+                    chart.draw_series(LineSeries::new(points, style))?
+                };
+                series
+                    .label(path.name.as_str())
+                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], style));
+            }
+            legend(&mut chart, SeriesLabelPosition::UpperRight)?;
+        }
+        None => {
+            let mut chart = space_chart(area, paths.iter().flat_map(|p| &p.points))?;
+            for path in paths {
+                let style = path.colour.stroke_width(if path.dashed { 1 } else { 2 });
+                let points: Vec<(f64, f64, f64)> =
+                    path.points.iter().map(|p| (p[0], p[1], p[2])).collect();
+                let dash = if path.dashed {
+                    (points.len() / 150).max(1)
+                } else {
+                    points.len().max(1)
+                };
+                let mut first = true;
+                for run in points
+                    .chunks(dash + 1)
+                    .step_by(if path.dashed { 2 } else { 1 })
+                {
+                    let series = chart.draw_series(LineSeries::new(run.to_vec(), style))?;
+                    if first {
+                        series.label(path.name.as_str()).legend(move |(x, y)| {
+                            PathElement::new(vec![(x, y), (x + 20, y)], style)
+                        });
+                        first = false;
+                    }
+                }
+            }
+            legend(&mut chart, SeriesLabelPosition::UpperRight)?;
+        }
+    }
+    Ok(())
+}
+
+/// A 3-D chart on `area` over a cube around `points`, seen from above at an angle, its
+/// axes drawn.
+fn space_chart<'a, 'b, DB: DrawingBackend + 'a>(
+    area: &'a DrawingArea<DB, plotters::coord::Shift>,
+    points: impl Iterator<Item = &'b [f64; 3]>,
+) -> DrawResult<
+    ChartContext<
+        'a,
+        DB,
+        plotters::coord::cartesian::Cartesian3d<
+            plotters::coord::types::RangedCoordf64,
+            plotters::coord::types::RangedCoordf64,
+            plotters::coord::types::RangedCoordf64,
+        >,
+    >,
+>
+where
+    DB::ErrorType: 'static,
+{
+    let ([rx, ry, rz], d) = cube(points);
+    let mut chart = ChartBuilder::on(area)
+        .margin(20)
+        .build_cartesian_3d(rx, ry, rz)?;
+    chart.with_projection(|mut p| {
+        p.pitch = 0.45;
+        p.yaw = 0.6;
+        p.scale = 0.85;
+        p.into_matrix()
+    });
+    chart
+        .configure_axes()
+        .label_style(LABEL_FONT)
+        .max_light_lines(1)
+        .x_formatter(&|&x| tick(x, d))
+        .y_formatter(&|&y| tick(y, d))
+        .z_formatter(&|&z| tick(z, d))
+        .draw()?;
+    Ok(chart)
+}
+
+/// The legend of a chart's labelled series, on a translucent white box.
+pub fn legend<'a, DB: DrawingBackend + 'a, CT: plotters::coord::CoordTranslate>(
+    chart: &mut ChartContext<'a, DB, CT>,
+    position: SeriesLabelPosition,
+) -> DrawResult<()>
+where
+    DB::ErrorType: 'static,
+{
+    chart
+        .configure_series_labels()
+        .position(position)
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .label_font(LABEL_FONT)
+        .draw()?;
+    Ok(())
+}
+
+/// A cube of equal sides around `points` (10 % margin) for 3-D plots, and tick decimals.
+fn cube<'a>(points: impl Iterator<Item = &'a [f64; 3]>) -> ([Range<f64>; 3], usize) {
+    let (mut low, mut high) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    for p in points {
+        for k in 0..3 {
+            low[k] = low[k].min(p[k]);
+            high[k] = high[k].max(p[k]);
+        }
+    }
+    if low[0] > high[0] {
+        (low, high) = ([0.0; 3], [0.0; 3]);
+    }
+    let half = (0..3).map(|k| high[k] - low[k]).fold(1e-3, f64::max) * 0.55;
+    let range = |k: usize| {
+        let c = (low[k] + high[k]) / 2.0;
+        c - half..c + half
+    };
+    ([range(0), range(1), range(2)], decimals(2.0 * half))
 }
 
 /// The range of `values` with 2 % margins; `fallback ± 1` without a spread.
@@ -474,11 +790,12 @@ mod tests {
     #[test]
     fn plot_modes_pick_evo_axes() {
         assert_eq!(PlotMode::default(), PlotMode::Xz);
-        assert_eq!(PlotMode::Xz.axes(), [0, 2]);
-        assert_eq!(PlotMode::Zy.axes(), [2, 1]);
+        assert_eq!(PlotMode::Xz.axes(), Some([0, 2]));
+        assert_eq!(PlotMode::Zy.axes(), Some([2, 1]));
+        assert_eq!(PlotMode::Xyz.axes(), None);
         assert_eq!(
             PlotMode::from_str("yx", false).map(PlotMode::axes),
-            Ok([1, 0])
+            Ok(Some([1, 0]))
         );
     }
 }

@@ -1,100 +1,111 @@
-//! `sitar rpe`: relative pose error, as evo_rpe.
+//! `sitar rpe`: relative pose error, as `evo_rpe`.
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::ValueEnum;
-use sitar_estimator::{DeltaUnit, RpeOptions, rpe};
+use sitar_estimator::{DeltaUnit, PoseRelation, RpeOptions};
 
-use crate::compare::{PairArgs, error_figure, result_json};
-use crate::output::{OutputFormat, emit};
-use crate::plot::{self, PlotArgs};
+use crate::console::{Console, UsabilityArgs};
+use crate::metric::{self, Metric};
+use crate::metric_args::{AlgorithmArgs, OutputArgs, check_supported};
+use crate::source::{self, format_subcommands};
 
-/// Relative pose error of EST against REF, as evo_rpe.
+/// Relative pose error of an estimate against a reference, as evo_rpe.
 ///
-/// Writes CSV `start,end,error` (one row per pose pair, times in the input's unit) or JSON
-/// with the statistics; --plot also draws each pair's error at its start as SVG.
+/// The format comes first, as in evo: `sitar rpe tum REF EST -d 10 --all_pairs`. Defaults
+/// as evo: delta 1 frame, consecutive pairs, translation part.
 #[derive(clap::Args, Debug)]
 #[command(
-    after_help = "Examples:\n  sitar rpe ground_truth.txt trials/trajectory_0.txt --all-pairs --format json\n  sitar rpe ground_truth.txt trials/trajectory_0.txt --plot rpe.svg --plot-mode xz"
+    after_help = "Examples:\n  sitar rpe tum ground_truth.txt trajectory_0.txt\n  sitar rpe tum ground_truth.txt trajectory_0.txt -r angle_deg -d 10 --all_pairs --save_results rpe.zip\n  sitar rpe tum gt.txt est.txt -d 1 -u m -a --save_plot rpe.png"
 )]
 pub struct Args {
-    #[command(flatten)]
-    pair: PairArgs,
-    /// Delta between the poses of a pair, in --delta-unit.
-    #[arg(short = 'd', long, default_value_t = 10.0)]
-    delta: f64,
-    /// Unit of --delta: f (frames) or m (metres of path).
-    #[arg(short = 'u', long = "delta-unit", alias = "delta_unit", value_enum, default_value_t = Unit::F)]
-    delta_unit: Unit,
-    /// Use every start pose, not only consecutive, non-overlapping pairs.
-    #[arg(long = "all-pairs", alias = "all_pairs")]
-    all_pairs: bool,
-    /// Relative tolerance of a metre delta.
-    #[arg(long = "delta-tol", alias = "delta_tol", default_value_t = 0.1)]
-    delta_tol: f64,
-    /// Choose pose pairs on the reference instead of the estimate.
-    #[arg(long = "pairs-from-reference", alias = "pairs_from_reference")]
-    pairs_from_reference: bool,
-    #[command(flatten)]
-    plot: PlotArgs,
+    #[command(subcommand)]
+    source: Format,
 }
 
-/// RPE delta unit, as evo's `-u f|m`.
+/// `sitar rpe`'s options: evo_rpe's.
+#[derive(clap::Args, Debug)]
+pub struct Options {
+    /// Pose relation on which the RPE is based.
+    #[arg(short = 'r', long = "pose_relation", alias = "pose-relation", default_value = "trans_part", value_parser = parse_relation)]
+    pose_relation: PoseRelation,
+    /// Delta between relative poses, in --delta_unit.
+    #[arg(short = 'd', long, default_value_t = 1.0)]
+    delta: f64,
+    /// Relative delta tolerance for all_pairs mode.
+    #[arg(
+        short = 't',
+        long = "delta_tol",
+        alias = "delta-tol",
+        default_value_t = 0.1
+    )]
+    delta_tol: f64,
+    /// Unit of delta: f (frames), d (deg), r (rad), m (metres).
+    #[arg(short = 'u', long = "delta_unit", alias = "delta-unit", value_enum, default_value_t = Unit::F)]
+    delta_unit: Unit,
+    /// Use all pairs instead of consecutive pairs.
+    #[arg(long = "all_pairs", alias = "all-pairs")]
+    all_pairs: bool,
+    /// Determine the pose pairs from the reference trajectory.
+    #[arg(long = "pairs_from_reference", alias = "pairs-from-reference")]
+    pairs_from_reference: bool,
+    #[command(flatten)]
+    algorithm: AlgorithmArgs,
+    #[command(flatten)]
+    output: OutputArgs,
+    #[command(flatten)]
+    usability: UsabilityArgs,
+}
+
+format_subcommands!(Format, Options);
+
+/// evo's `-u f|d|r|m`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 enum Unit {
     /// Frames.
     F,
+    /// Degrees.
+    D,
+    /// Radians.
+    R,
     /// Metres of travelled path.
     M,
 }
 
+fn parse_relation(s: &str) -> Result<PoseRelation, String> {
+    s.parse().map_err(|_| {
+        format!(
+            "invalid choice: '{s}' (choose from 'full', 'trans_part', 'rot_part', 'angle_deg', 'angle_rad', 'point_distance', 'point_distance_error_ratio')"
+        )
+    })
+}
+
 pub fn run(args: Args) -> Result<()> {
-    let prepared = args.pair.prepare()?;
-    let options = RpeOptions {
-        pose_relation: args.pair.pose_relation,
-        delta: args.delta,
-        delta_unit: match args.delta_unit {
+    let (source, options) = args.source.split();
+    let console = Console::new(&options.usability)?;
+    check_supported(&options.output)?;
+    if !(options.delta >= 0.0 && options.delta.is_finite()) {
+        anyhow::bail!("delta must be a positive number, got {}", options.delta);
+    }
+    let rpe = RpeOptions {
+        pose_relation: options.pose_relation,
+        delta: options.delta,
+        delta_unit: match options.delta_unit {
             Unit::F => DeltaUnit::Frames,
+            Unit::D => DeltaUnit::Degrees,
+            Unit::R => DeltaUnit::Radians,
             Unit::M => DeltaUnit::Meters,
         },
-        all_pairs: args.all_pairs,
-        rel_delta_tol: args.delta_tol,
-        pairs_from_reference: args.pairs_from_reference,
+        all_pairs: options.all_pairs,
+        rel_delta_tol: options.delta_tol,
+        pairs_from_reference: options.pairs_from_reference,
     };
-    let errors =
-        rpe(&prepared.reference, &prepared.estimate, &options).context("computing the RPE")?;
-    if let Some(path) = &args.plot.plot {
-        let figure = error_figure("RPE", &args.pair, &prepared, &errors);
-        plot::write(path, args.plot.plot_mode, &figure)?;
-    }
-    let reference = &prepared.reference;
-    let text = match args.pair.format {
-        OutputFormat::Csv => {
-            let mut out = String::with_capacity(48 * (errors.errors.len() + 1));
-            out.push_str("start,end,error\n");
-            for (&(i, j), e) in errors.pairs.iter().zip(&errors.errors) {
-                let unit = reference.time_unit;
-                out.push_str(&format!(
-                    "{},{},{e}\n",
-                    unit.format_stamp(reference.stamps[i]),
-                    unit.format_stamp(reference.stamps[j])
-                ));
-            }
-            out
-        }
-        OutputFormat::Json => {
-            let mut extra = serde_json::Map::new();
-            extra.insert("delta".into(), args.delta.into());
-            extra.insert(
-                "delta_unit".into(),
-                match args.delta_unit {
-                    Unit::F => "f",
-                    Unit::M => "m",
-                }
-                .into(),
-            );
-            extra.insert("all_pairs".into(), args.all_pairs.into());
-            result_json("rpe", &args.pair, &prepared, &errors, extra) + "\n"
-        }
-    };
-    emit(args.pair.output.as_deref(), &text)
+    let loaded = source::load(&source, &console)?;
+    let outcome = metric::compute(
+        Metric::Rpe(rpe),
+        loaded,
+        &options.algorithm,
+        options.output.plot_full_ref,
+        &console,
+    )?;
+    crate::compare::finish(&outcome, &options.output, &console)
 }

@@ -115,6 +115,8 @@ fn simulate_seconds_and_dropped_frames() {
         "rpe",
         p(&gt),
         p(&dir.path().join("trials/trajectory_1.txt")),
+        "--format",
+        "csv",
     ]);
     assert!(
         out.lines()
@@ -130,7 +132,7 @@ fn rpe_and_ape_match_the_library() {
     let dir = simulate(&[]);
     let gt = dir.path().join("ground_truth.txt");
     let est = dir.path().join("trials/trajectory_0.txt");
-    let out = ok(&["rpe", p(&gt), p(&est)]);
+    let out = ok(&["rpe", p(&gt), p(&est), "-d", "10", "--format", "csv"]);
     assert!(out.starts_with("start,end,error\n"));
     let rows = csv_rows(&out);
     // 150 poses, delta 10 without --all-pairs: starts 0, 10, …, 130.
@@ -150,8 +152,43 @@ fn rpe_and_ape_match_the_library() {
     for (row, value) in rows.iter().zip(&lib.errors) {
         assert_eq!(row[2].parse::<f64>().unwrap(), *value);
     }
-    let all = csv_rows(&ok(&["rpe", p(&gt), p(&est), "--all-pairs"]));
+    let all = csv_rows(&ok(&[
+        "rpe",
+        p(&gt),
+        p(&est),
+        "-d",
+        "10",
+        "--all-pairs",
+        "--format",
+        "csv",
+    ]));
     assert_eq!(all.len(), 140);
+    // evo's form and defaults (delta 1, consecutive pairs), evo's table on stdout.
+    let table = ok(&["rpe", "tum", p(&gt), p(&est), "--time_unit", "ns"]);
+    assert!(
+        table.starts_with(
+            "RPE w.r.t. translation part (m)\nfor delta = 1 (frames) using consecutive pairs\n(not aligned)\n\n       max\t"
+        ),
+        "{table}"
+    );
+    let names: Vec<&str> = table
+        .lines()
+        .skip(4)
+        .filter(|l| !l.is_empty())
+        .filter_map(|l| l.split('\t').next())
+        .collect();
+    assert_eq!(
+        names,
+        [
+            "       max",
+            "      mean",
+            "    median",
+            "       min",
+            "      rmse",
+            "       sse",
+            "       std"
+        ]
+    );
 
     let json: serde_json::Value = serde_json::from_str(&ok(&[
         "ape",
@@ -171,7 +208,7 @@ fn rpe_and_ape_match_the_library() {
     let unaligned: serde_json::Value =
         serde_json::from_str(&ok(&["ape", p(&gt), p(&est), "--format", "json"])).unwrap();
     assert!(unaligned["statistics"]["rmse"].as_f64().unwrap() > 2.0 * rmse);
-    let csv = ok(&["ape", p(&gt), p(&est), "-a"]);
+    let csv = ok(&["ape", p(&gt), p(&est), "-a", "--format", "csv"]);
     assert!(csv.starts_with("t,error\n1000000000000,"));
 }
 
@@ -341,20 +378,38 @@ fn evaluate_reports_every_setting_and_draws_the_plot() {
 #[test]
 fn every_subcommand_has_help() {
     for (cmd, flag) in [
-        ("rpe", "--delta-unit"),
-        ("rpe", "--plot-mode"),
-        ("ape", "--align-origin"),
-        ("ape", "--plot <FILE.svg>"),
-        ("estimate", "--setting"),
-        ("estimate", "--plot-mode"),
-        ("simulate", "--trials"),
-        ("evaluate", "--trials-b"),
+        (vec!["rpe", "tum"], "--delta_unit"),
+        (vec!["rpe", "euroc"], "--plot_mode"),
+        (vec!["rpe", "kitti"], "--all_pairs"),
+        (vec!["ape", "tum"], "--align_origin"),
+        (vec!["ape", "tum"], "--plot [<FILE>]"),
+        (vec!["ape", "tum"], "--save_results"),
+        (vec!["ape"], "euroc"),
+        (vec!["traj", "tum"], "--full_check"),
+        (vec!["res"], "--use_filenames"),
+        (vec!["estimate"], "--setting"),
+        (vec!["estimate"], "--time_unit"),
+        (vec!["estimate"], "--plot-mode"),
+        (vec!["simulate"], "--trials"),
+        (vec!["evaluate"], "--trials-b"),
     ] {
-        let help = ok(&[cmd, "--help"]);
-        assert!(help.contains(flag), "{cmd}: {help}");
+        let mut args = cmd.clone();
+        args.push("--help");
+        let help = ok(&args);
+        assert!(help.contains(flag), "{cmd:?}: {help}");
     }
     let top = ok(&["--help"]);
-    for cmd in ["rpe", "ape", "estimate", "evaluate", "simulate"] {
+    for cmd in [
+        "rpe",
+        "ape",
+        "traj",
+        "res",
+        "estimate",
+        "evaluate",
+        "simulate",
+        "completions",
+        "man",
+    ] {
         assert!(top.contains(cmd));
     }
 }
@@ -441,18 +496,22 @@ fn rpe_plot_draws_each_window_over_time_and_on_the_reference() {
         "rpe",
         p(&gt),
         p(&est),
+        "-d",
+        "10",
         "--format",
         "json",
         "--plot",
         p(&svg_path),
+        "--plot_mode",
+        "xz",
     ]))
     .unwrap();
-    // 150 poses, delta 10: 14 windows on the 150-pose reference.
+    // 150 poses, delta 10: 14 windows, each drawn at its end pose on the estimate.
     assert_eq!(json["errors"].as_array().unwrap().len(), 14);
     let svg = check_figure(&svg_path, 14, 14, 150);
     let texts = svg_texts(&svg);
     for text in [
-        "RPE over time",
+        "RPE over t (s)",
         "RPE (m)",
         "rmse",
         "mean",
@@ -467,15 +526,19 @@ fn rpe_plot_draws_each_window_over_time_and_on_the_reference() {
     for colour in ["#D62728", "#2CA02C", "#FF7F0E"] {
         assert!(polyline_lengths(&svg, colour).contains(&2), "{colour}");
     }
-    // Another plane: same dots, other caption (evo's underscore spelling works too).
+    // The reference is dashed: many short runs of evo's reference colour.
+    assert!(polyline_lengths(&svg, "#444444").len() > 20);
+    // Another plane: same dots, other caption (the older hyphen spelling works too).
     ok(&[
         "rpe",
         p(&gt),
         p(&est),
+        "-d",
+        "10",
         "--all-pairs",
         "--plot",
         p(&svg_path),
-        "--plot_mode",
+        "--plot-mode",
         "zy",
     ]);
     let svg = check_figure(&svg_path, 140, 140, 150);
@@ -504,15 +567,22 @@ fn ape_plot_colours_every_reference_pose() {
         p(&svg_path),
         "--plot-mode",
         "xy",
+        "--format",
+        "csv",
     ]);
     assert_eq!(csv_rows(&csv).len(), 150);
     let svg = check_figure(&svg_path, 150, 150, 150);
     let texts = svg_texts(&svg);
-    for text in ["APE over time", "APE (deg)", "x (m)", "y (m)"] {
+    for text in ["APE over t (s)", "APE (deg)", "x (m)", "y (m)"] {
         assert!(texts.contains(&text), "{text}: {texts:?}");
     }
     assert!(texts.iter().any(|t| t.contains("in the xy plane")));
-    assert!(texts.iter().any(|t| t.contains("angle_deg, alignment se3")));
+    assert!(
+        texts
+            .iter()
+            .any(|t| t.contains("rotation angle in degrees (deg) (with SE(3) Umeyama alignment)")),
+        "{texts:?}"
+    );
 }
 
 /// `sitar estimate TRIALS --format json --plot SVG`, parsed.
@@ -603,13 +673,14 @@ fn plot_errors_are_clear() {
     assert_eq!(out.status.code(), Some(2));
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(
-        stderr.contains("invalid value 'xx' for '--plot-mode")
-            && stderr.contains("xy, xz, yz, zx, zy, yx"),
+        stderr.contains("invalid value 'xx' for '--plot_mode")
+            && stderr.contains("xy, xz, yz, zx, zy, yx, xyz"),
         "{stderr}"
     );
     assert!(!d.join("x.svg").exists());
-    // A plane without a figure is a mistake, not silently ignored.
-    let out = sitar(&["ape", p(&gt), p(&est), "--plot-mode", "xy"]);
+    // For the estimate, a plane without a figure is a mistake, not silently ignored (evo's
+    // ape and rpe take --plot_mode alone, and so do sitar's).
+    let out = sitar(&["estimate", p(&trials), "--plot-mode", "xy"]);
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("--plot <FILE.svg>"));
 }

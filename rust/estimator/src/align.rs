@@ -22,6 +22,20 @@ impl Similarity {
     pub fn apply(&self, x: DVec3) -> DVec3 {
         self.scale * (self.rotation * x) + self.translation
     }
+
+    /// The 4×4 matrix `[[s·R, t], [0, 0, 0, 1]]`, row by row (evo's `lie.sim3`).
+    pub fn to_matrix(&self) -> [[f64; 4]; 4] {
+        let r = self.rotation;
+        let mut m = [[0.0; 4]; 4];
+        for (i, row) in m.iter_mut().take(3).enumerate() {
+            for (j, value) in row.iter_mut().take(3).enumerate() {
+                *value = self.scale * r.col(j)[i];
+            }
+            row[3] = self.translation[i];
+        }
+        m[3][3] = 1.0;
+        m
+    }
 }
 
 /// How to align an estimate onto a reference.
@@ -122,6 +136,17 @@ pub fn align(
     reference: &Trajectory,
     alignment: Alignment,
 ) -> Result<Similarity, Error> {
+    align_first(estimate, reference, alignment, None)
+}
+
+/// [`align`] with the Umeyama fit on the first `n` poses only (evo's `--n_to_align`; `None`
+/// or more than there are: all), applied to every pose.
+pub fn align_first(
+    estimate: &mut Trajectory,
+    reference: &Trajectory,
+    alignment: Alignment,
+    n: Option<usize>,
+) -> Result<Similarity, Error> {
     if estimate.len() != reference.len() {
         return Err(Error::InvalidArgument(format!(
             "trajectories must be associated (same number of poses): {} vs {}",
@@ -140,7 +165,12 @@ pub fn align(
         Alignment::None => return Ok(identity),
         Alignment::Se3 | Alignment::Sim3 | Alignment::ScaleOnly => {
             let with_scale = alignment != Alignment::Se3;
-            let found = umeyama(&estimate.positions, &reference.positions, with_scale)?;
+            let n = n.unwrap_or(usize::MAX).min(estimate.len());
+            let found = umeyama(
+                &estimate.positions[..n],
+                &reference.positions[..n],
+                with_scale,
+            )?;
             if alignment == Alignment::ScaleOnly {
                 Similarity {
                     scale: found.scale,
@@ -193,6 +223,39 @@ mod tests {
             umeyama(&[], &[], false),
             Err(Error::DegenerateAlignment(_))
         ));
+    }
+
+    #[test]
+    fn matrix_and_first_n_poses() {
+        let t = Similarity {
+            rotation: DMat3::from_rotation_z(0.5),
+            translation: DVec3::new(1.0, 2.0, 3.0),
+            scale: 2.0,
+        };
+        let m = t.to_matrix();
+        let x = DVec3::new(0.3, -0.7, 1.1);
+        let y = t.apply(x);
+        for (i, row) in m.iter().take(3).enumerate() {
+            let v = row[0] * x.x + row[1] * x.y + row[2] * x.z + row[3];
+            assert!((v - y[i]).abs() < 1e-12);
+        }
+        assert_eq!(m[3], [0.0, 0.0, 0.0, 1.0]);
+        // Fitting on the first poses only: later poses that disagree do not move the fit.
+        let positions: Vec<DVec3> = (0..12)
+            .map(|i| DVec3::new(f64::from(i), f64::from(i * i % 5), f64::from(i % 3)))
+            .collect();
+        let mut reference = Trajectory {
+            stamps: (0..12).collect(),
+            positions: positions.clone(),
+            orientations: vec![DQuat::IDENTITY; 12],
+            time_unit: crate::TimeUnit::Nanoseconds,
+        };
+        let mut estimate = reference.clone();
+        estimate.positions = positions.iter().map(|p| *p + DVec3::X).collect();
+        reference.positions[11] += DVec3::new(0.0, 9.0, 0.0);
+        let found = align_first(&mut estimate, &reference, Alignment::Se3, Some(8)).unwrap();
+        assert!(found.translation.abs_diff_eq(-DVec3::X, 1e-9), "{found:?}");
+        assert!(estimate.positions[3].abs_diff_eq(positions[3], 1e-9));
     }
 
     #[test]

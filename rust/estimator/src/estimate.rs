@@ -119,7 +119,7 @@ impl Estimate {
             PoseRelation::TranslationPart => ("error_m", "spread_m", "m"),
             PoseRelation::RotationAngleDeg => ("error_deg", "spread_deg", "deg"),
             PoseRelation::RotationAngleRad => ("error_rad", "spread_rad", "rad"),
-            PoseRelation::FullTransformation => ("error", "spread", "unit-less"),
+            _ => ("error", "spread", "unit-less"),
         };
         let classified = matches!(
             self.pose_relation,

@@ -1,4 +1,11 @@
 //! Trajectory file formats: TUM, EuRoC ground-truth CSV and KITTI poses.
+//!
+//! Every reader accepts what evo reads: a UTF-8 byte-order mark, `\n`, `\r\n` and `\r` line
+//! ends, blank lines and `#` comments. Fields are separated by spaces or tabs; any other
+//! control character (a NUL byte, say) is an error naming its line and column. How stamps and
+//! quaternions are taken is a [`ReadOptions`]: the default is SiTAR's (integer nanoseconds by
+//! [`TimeUnitRule::Auto`], increasing stamps, unit quaternions); [`ReadOptions::EVO`] is evo's
+//! (seconds, stamps as written — repeated or unsorted —, any quaternion normalised).
 
 use std::io::Write;
 use std::path::Path;
@@ -7,24 +14,138 @@ use glam::{DMat3, DQuat, DVec3};
 
 use crate::{Error, TimeUnit, Trajectory};
 
-/// Reads a TUM trajectory file (`t x y z qx qy qz qw`); see [`parse_tum`].
+/// Integer TUM stamps above this magnitude are nanoseconds under [`TimeUnitRule::Auto`]:
+/// 10¹¹ seconds since 1970 is the year 5138, so such a stamp cannot be seconds, while
+/// ARCore's nanoseconds since boot pass it after 100 s of uptime.
+pub const NANOSECOND_STAMP_THRESHOLD: i64 = 100_000_000_000;
+
+/// How TUM stamps are read.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum TimeUnitRule {
+    /// Nanoseconds when every stamp is an integer token and one exceeds
+    /// [`NANOSECOND_STAMP_THRESHOLD`] in magnitude (ARCore's trials); seconds otherwise.
+    #[default]
+    Auto,
+    /// Always seconds, as evo reads TUM files (integers are whole seconds).
+    Seconds,
+    /// Always integer nanoseconds; a decimal stamp is an error.
+    Nanoseconds,
+}
+
+impl std::str::FromStr for TimeUnitRule {
+    type Err = Error;
+
+    fn from_str(s: &str) -> Result<Self, Error> {
+        match s {
+            "auto" => Ok(TimeUnitRule::Auto),
+            "s" => Ok(TimeUnitRule::Seconds),
+            "ns" => Ok(TimeUnitRule::Nanoseconds),
+            other => Err(Error::InvalidArgument(format!(
+                "unknown time unit '{other}' (expected s, ns or auto)"
+            ))),
+        }
+    }
+}
+
+/// Which stamp orders a reader accepts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum StampOrder {
+    /// Strictly increasing; a repeated or decreasing stamp is an error naming its line.
+    #[default]
+    Increasing,
+    /// As written, repeated and decreasing stamps included (evo keeps them); the
+    /// [`ReadReport`] counts them.
+    AsWritten,
+}
+
+/// How a reader takes stamps and quaternions.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub struct ReadOptions {
+    /// The unit of TUM stamps (EuRoC stamps are always nanoseconds, KITTI has none).
+    pub time_unit: TimeUnitRule,
+    /// Accepted stamp orders.
+    pub stamp_order: StampOrder,
+    /// Normalise any finite, non-zero quaternion (evo does); otherwise a norm further than
+    /// [`crate::QUATERNION_NORM_TOLERANCE`] from 1 is an error.
+    pub normalise_quaternions: bool,
+}
+
+impl ReadOptions {
+    /// SiTAR's rules: [`TimeUnitRule::Auto`], increasing stamps, unit quaternions.
+    pub const SITAR: ReadOptions = ReadOptions {
+        time_unit: TimeUnitRule::Auto,
+        stamp_order: StampOrder::Increasing,
+        normalise_quaternions: false,
+    };
+    /// evo's rules: seconds, stamps as written, quaternions normalised.
+    pub const EVO: ReadOptions = ReadOptions {
+        time_unit: TimeUnitRule::Seconds,
+        stamp_order: StampOrder::AsWritten,
+        normalise_quaternions: true,
+    };
+}
+
+/// What a reader met that a caller may want to warn about.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct ReadReport {
+    /// Poses whose stamp equals the previous pose's.
+    pub repeated_stamps: usize,
+    /// Line of the first repeated stamp.
+    pub first_repeated_line: Option<usize>,
+    /// Poses whose stamp is below the previous pose's.
+    pub decreasing_stamps: usize,
+    /// Line of the first decreasing stamp.
+    pub first_decreasing_line: Option<usize>,
+    /// Quaternions whose norm was further than [`crate::QUATERNION_NORM_TOLERANCE`] from 1
+    /// and that were normalised.
+    pub normalised_quaternions: usize,
+    /// The text started with a UTF-8 byte-order mark (skipped).
+    pub byte_order_mark: bool,
+}
+
+/// Reads a TUM trajectory file (`t x y z qx qy qz qw`) by SiTAR's rules; see [`parse_tum`].
 pub fn read_tum(path: &Path) -> Result<Trajectory, Error> {
     parse_tum(&read_text(path)?, &path.display().to_string())
 }
 
-/// Parses TUM text. `#` starts a comment; blank lines are skipped. Timestamps that are all
-/// integer tokens are nanoseconds, otherwise decimal seconds (scientific notation accepted).
-/// Errors name `source`, the line and the column of the offending token.
+/// Reads a TUM trajectory file with `options`; see [`parse_tum_with`].
+pub fn read_tum_with(
+    path: &Path,
+    options: &ReadOptions,
+) -> Result<(Trajectory, ReadReport), Error> {
+    parse_tum_with(&read_text(path)?, &path.display().to_string(), options)
+}
+
+/// Parses TUM text by SiTAR's rules ([`ReadOptions::SITAR`]): `#` starts a comment, blank
+/// lines are skipped; integer stamps above [`NANOSECOND_STAMP_THRESHOLD`] are nanoseconds,
+/// anything else is seconds (scientific notation accepted), converted exactly; stamps must
+/// increase. Errors name `source`, the line and the column of the offending token.
 pub fn parse_tum(text: &str, source: &str) -> Result<Trajectory, Error> {
-    let mut rows = Rows::with_capacity(text.len() / 64);
+    parse_tum_with(text, source, &ReadOptions::SITAR).map(|(t, _)| t)
+}
+
+/// Parses TUM text with `options`, returning what it met on the way.
+pub fn parse_tum_with(
+    text: &str,
+    source: &str,
+    options: &ReadOptions,
+) -> Result<(Trajectory, ReadReport), Error> {
+    let (text, bom) = strip_bom(text);
+    let mut rows = Rows::with_capacity(text.len() / 64, options);
+    rows.report.byte_order_mark = bom;
     let mut all_integer = true;
-    for (line_index, line) in text.lines().enumerate() {
-        let mut tokens = Tokens::new(line, source, line_index + 1);
-        let Some(first) = tokens.next_token() else {
+    let mut largest = 0u64;
+    for (line_no, line) in numbered_lines(text) {
+        let mut tokens = Tokens::new(line, source, line_no);
+        let Some(first) = tokens.next_token()? else {
             continue;
         };
         let stamp = parse_stamp(first, &tokens)?;
-        all_integer &= matches!(stamp, Stamp::Integer(_));
+        if let Stamp::Integer(v) = stamp {
+            largest = largest.max(v.unsigned_abs());
+        } else {
+            all_integer = false;
+        }
         let mut values = [0.0; 7];
         for value in &mut values {
             *value = tokens.expect_f64(8)?;
@@ -38,19 +159,36 @@ pub fn parse_tum(text: &str, source: &str) -> Result<Trajectory, Error> {
             &tokens,
         )?;
     }
-    let unit = if all_integer {
-        TimeUnit::Nanoseconds
-    } else {
-        TimeUnit::Seconds
+    let unit = match options.time_unit {
+        TimeUnitRule::Auto if all_integer && largest > NANOSECOND_STAMP_THRESHOLD as u64 => {
+            TimeUnit::Nanoseconds
+        }
+        TimeUnitRule::Auto | TimeUnitRule::Seconds => TimeUnit::Seconds,
+        TimeUnitRule::Nanoseconds => TimeUnit::Nanoseconds,
     };
     let mut stamps = Vec::with_capacity(rows.stamps.len());
     for (stamp, line) in rows.stamps.iter().zip(&rows.lines) {
         let ns = match (*stamp, unit) {
             (Stamp::Integer(v), TimeUnit::Nanoseconds) => Some(v),
             (Stamp::Integer(v), TimeUnit::Seconds) => v.checked_mul(1_000_000_000),
-            (Stamp::Seconds(ns), _) => Some(ns),
+            (Stamp::Seconds(ns), TimeUnit::Seconds) => Some(ns),
+            (Stamp::Seconds(_), TimeUnit::Nanoseconds) => {
+                return Err(parse_error(
+                    source,
+                    *line,
+                    1,
+                    "the stamp is not an integer, but the time unit is ns",
+                ));
+            }
         };
-        let ns = ns.ok_or_else(|| parse_error(source, *line, 1, "timestamp out of range"))?;
+        let ns = ns.ok_or_else(|| {
+            parse_error(
+                source,
+                *line,
+                1,
+                "timestamp out of range as seconds (integer nanoseconds? read them as ns)",
+            )
+        })?;
         stamps.push(ns);
     }
     rows.finish(stamps, unit, source)
@@ -83,15 +221,34 @@ pub fn read_euroc_csv(path: &Path) -> Result<Trajectory, Error> {
     parse_euroc_csv(&read_text(path)?, &path.display().to_string())
 }
 
+/// Reads a EuRoC ground-truth CSV with `options` (its stamps are always nanoseconds).
+pub fn read_euroc_csv_with(
+    path: &Path,
+    options: &ReadOptions,
+) -> Result<(Trajectory, ReadReport), Error> {
+    parse_euroc_csv_with(&read_text(path)?, &path.display().to_string(), options)
+}
+
 /// Parses EuRoC ground-truth CSV text: integer-ns stamps, position, quaternion `w x y z`;
 /// further columns (velocities, biases) are ignored. Lines starting with `#` are comments.
 pub fn parse_euroc_csv(text: &str, source: &str) -> Result<Trajectory, Error> {
-    let mut rows = Rows::with_capacity(text.len() / 128);
-    for (line_index, raw) in text.lines().enumerate() {
-        let line_no = line_index + 1;
+    parse_euroc_csv_with(text, source, &ReadOptions::SITAR).map(|(t, _)| t)
+}
+
+/// [`parse_euroc_csv`] with `options` (only the stamp order and quaternion rule apply).
+pub fn parse_euroc_csv_with(
+    text: &str,
+    source: &str,
+    options: &ReadOptions,
+) -> Result<(Trajectory, ReadReport), Error> {
+    let (text, bom) = strip_bom(text);
+    let mut rows = Rows::with_capacity(text.len() / 128, options);
+    rows.report.byte_order_mark = bom;
+    for (line_no, raw) in numbered_lines(text) {
         if raw.trim_start().starts_with('#') || raw.trim().is_empty() {
             continue;
         }
+        check_controls(raw, source, line_no, b',')?;
         let mut fields = Vec::with_capacity(17);
         let mut offset = 0;
         for field in raw.split(',') {
@@ -150,15 +307,19 @@ pub fn read_kitti(path: &Path) -> Result<Trajectory, Error> {
 /// Parses KITTI poses. KITTI has no time: stamp `i` is the line's pose index (as nanoseconds),
 /// so two KITTI paths associate index by index.
 pub fn parse_kitti(text: &str, source: &str) -> Result<Trajectory, Error> {
-    let mut rows = Rows::with_capacity(text.len() / 128);
-    for (line_index, raw) in text.lines().enumerate() {
-        let line = raw.split('#').next().unwrap_or("");
-        let mut tokens = Tokens::new(line, source, line_index + 1);
-        if line.trim().is_empty() {
+    let (text, _) = strip_bom(text);
+    let mut rows = Rows::with_capacity(text.len() / 128, &ReadOptions::SITAR);
+    for (line_no, line) in numbered_lines(text) {
+        let mut tokens = Tokens::new(line, source, line_no);
+        let Some(first) = tokens.next_token()? else {
             continue;
-        }
+        };
         let mut m = [0.0; 12];
-        for value in &mut m {
+        m[0] = match first.parse::<f64>() {
+            Ok(v) if v.is_finite() => v,
+            _ => parse_finite(first, source, line_no, tokens.column_of(first))?,
+        };
+        for value in &mut m[1..] {
             *value = tokens.expect_f64(12)?;
         }
         tokens.expect_end(12)?;
@@ -173,7 +334,7 @@ pub fn parse_kitti(text: &str, source: &str) -> Result<Trajectory, Error> {
         if orthonormality.iter().any(|&e| e > 1e-3) || rotation.determinant() <= 0.0 {
             return Err(parse_error(
                 source,
-                line_index + 1,
+                line_no,
                 1,
                 "rotation part is not a rotation matrix",
             ));
@@ -184,6 +345,7 @@ pub fn parse_kitti(text: &str, source: &str) -> Result<Trajectory, Error> {
     }
     let stamps = (0..rows.stamps.len() as i64).collect();
     rows.finish(stamps, TimeUnit::Nanoseconds, source)
+        .map(|(t, _)| t)
 }
 
 fn read_text(path: &Path) -> Result<String, Error> {
@@ -191,6 +353,65 @@ fn read_text(path: &Path) -> Result<String, Error> {
         path: path.to_path_buf(),
         source,
     })
+}
+
+/// The text without a leading UTF-8 byte-order mark, and whether it had one.
+fn strip_bom(text: &str) -> (&str, bool) {
+    match text.strip_prefix('\u{feff}') {
+        Some(rest) => (rest, true),
+        None => (text, false),
+    }
+}
+
+/// Lines with their 1-based numbers; `\n`, `\r\n` and a lone `\r` all end a line (as
+/// Python's universal newlines, which evo reads with).
+fn numbered_lines(text: &str) -> impl Iterator<Item = (usize, &str)> {
+    let has_cr = text.as_bytes().contains(&b'\r');
+    let mut rest = text;
+    let mut number = 0;
+    std::iter::from_fn(move || {
+        if rest.is_empty() {
+            return None;
+        }
+        number += 1;
+        let bytes = rest.as_bytes();
+        let end = if has_cr {
+            bytes.iter().position(|&b| b == b'\n' || b == b'\r')
+        } else {
+            bytes.iter().position(|&b| b == b'\n')
+        };
+        let (line, next) = match end {
+            None => (rest, ""),
+            Some(k) if bytes[k] == b'\r' && bytes.get(k + 1) == Some(&b'\n') => {
+                (&rest[..k], &rest[k + 2..])
+            }
+            Some(k) => (&rest[..k], &rest[k + 1..]),
+        };
+        rest = next;
+        Some((number, line))
+    })
+}
+
+/// An error for the first control character in `line` that is not a separator (`sep`, space
+/// or tab): a NUL byte or a stray escape is never a field separator.
+fn check_controls(line: &str, file: &str, line_no: usize, sep: u8) -> Result<(), Error> {
+    match line
+        .bytes()
+        .position(|b| (b < b' ' || b == 0x7f) && b != b'\t' && b != sep)
+    {
+        None => Ok(()),
+        Some(k) => Err(control_error(line, k, file, line_no)),
+    }
+}
+
+fn control_error(line: &str, byte: usize, file: &str, line_no: usize) -> Error {
+    let c = line.as_bytes()[byte];
+    parse_error(
+        file,
+        line_no,
+        line[..byte].chars().count() + 1,
+        &format!("control character U+{c:04X} is not a field separator"),
+    )
 }
 
 fn parse_error(file: &str, line: usize, column: usize, message: &str) -> Error {
@@ -222,7 +443,7 @@ fn parse_finite(token: &str, file: &str, line: usize, column: usize) -> Result<f
 
 #[derive(Debug, Clone, Copy)]
 enum Stamp {
-    /// An integer token (nanoseconds if all stamps are integers, else whole seconds).
+    /// An integer token (nanoseconds or whole seconds, by the [`TimeUnitRule`]).
     Integer(i64),
     /// A decimal-seconds token, already converted to nanoseconds.
     Seconds(i64),
@@ -299,26 +520,34 @@ impl<'a> Tokens<'a> {
         }
     }
 
-    /// The next whitespace-separated token before any `#` (a hand-rolled scan: this is the
-    /// hot loop of reading 100 trials).
-    fn next_token(&mut self) -> Option<&'a str> {
+    /// The next space- or tab-separated token before any `#` (a hand-rolled scan: this is
+    /// the hot loop of reading 100 trials). Any other control character is an error.
+    fn next_token(&mut self) -> Result<Option<&'a str>, Error> {
         let bytes = self.line_text.as_bytes();
         let mut i = self.position;
-        // Any control byte or space separates (one compare instead of five); a stray control
-        // byte inside a number still ends in an error (a wrong value count).
-        while i < bytes.len() && bytes[i] <= b' ' {
+        while i < bytes.len() && (bytes[i] == b' ' || bytes[i] == b'\t') {
             i += 1;
         }
         if i == bytes.len() || bytes[i] == b'#' {
             self.position = bytes.len();
-            return None;
+            return Ok(None);
+        }
+        if bytes[i] < b' ' {
+            return Err(control_error(self.line_text, i, self.file, self.line));
         }
         let start = i;
-        let i = token_end(bytes, i);
-        self.position = i;
+        let end = token_end(bytes, i);
+        if let Some(&b) = bytes.get(end)
+            && b != b' '
+            && b != b'\t'
+            && b != b'#'
+        {
+            return Err(control_error(self.line_text, end, self.file, self.line));
+        }
+        self.position = end;
         self.count += 1;
         // Both ends are ASCII bytes or the string's ends, so they are char boundaries.
-        Some(&self.line_text[start..i])
+        Ok(Some(&self.line_text[start..end]))
     }
 
     fn column_of(&self, token: &str) -> usize {
@@ -327,7 +556,7 @@ impl<'a> Tokens<'a> {
     }
 
     fn expect_f64(&mut self, expected: usize) -> Result<f64, Error> {
-        match self.next_token() {
+        match self.next_token()? {
             Some(token) => match token.parse::<f64>() {
                 Ok(v) if v.is_finite() => Ok(v),
                 // Slow path only on error: find the column.
@@ -350,7 +579,7 @@ impl<'a> Tokens<'a> {
     }
 
     fn expect_end(&mut self, expected: usize) -> Result<(), Error> {
-        match self.next_token() {
+        match self.next_token()? {
             Some(token) => Err(parse_error(
                 self.file,
                 self.line,
@@ -394,30 +623,40 @@ struct Rows {
     positions: Vec<DVec3>,
     orientations: Vec<DQuat>,
     lines: Vec<usize>,
+    options: ReadOptions,
+    report: ReadReport,
 }
 
 impl Rows {
-    fn with_capacity(n: usize) -> Self {
+    fn with_capacity(n: usize, options: &ReadOptions) -> Self {
         Self {
             stamps: Vec::with_capacity(n),
             positions: Vec::with_capacity(n),
             orientations: Vec::with_capacity(n),
             lines: Vec::with_capacity(n),
+            options: *options,
+            report: ReadReport::default(),
         }
     }
 
     fn push(&mut self, stamp: Stamp, p: DVec3, q: DQuat, tokens: &Tokens<'_>) -> Result<(), Error> {
         let norm = q.length();
-        if (norm - 1.0).abs() > crate::trajectory::QUATERNION_NORM_TOLERANCE {
-            return Err(parse_error(
-                tokens.file,
-                tokens.line,
-                1,
-                &format!(
-                    "quaternion norm {norm} is not 1 (tolerance {})",
-                    crate::trajectory::QUATERNION_NORM_TOLERANCE
-                ),
-            ));
+        let tolerance = crate::trajectory::QUATERNION_NORM_TOLERANCE;
+        if (norm - 1.0).abs() > tolerance {
+            if !(self.options.normalise_quaternions && norm > f64::EPSILON && norm.is_finite()) {
+                let rule = if self.options.normalise_quaternions {
+                    "a quaternion must not be zero".to_owned()
+                } else {
+                    format!("tolerance {tolerance}")
+                };
+                return Err(parse_error(
+                    tokens.file,
+                    tokens.line,
+                    1,
+                    &format!("quaternion norm {norm} is not 1 ({rule})"),
+                ));
+            }
+            self.report.normalised_quaternions += 1;
         }
         self.stamps.push(stamp);
         self.positions.push(p);
@@ -426,26 +665,46 @@ impl Rows {
         Ok(())
     }
 
-    fn finish(self, stamps: Vec<i64>, unit: TimeUnit, source: &str) -> Result<Trajectory, Error> {
-        if let Some(i) = stamps.windows(2).position(|w| w[1] <= w[0]) {
-            let what = if stamps[i + 1] == stamps[i] {
-                "duplicate"
+    fn finish(
+        mut self,
+        stamps: Vec<i64>,
+        unit: TimeUnit,
+        source: &str,
+    ) -> Result<(Trajectory, ReadReport), Error> {
+        for (i, w) in stamps.windows(2).enumerate() {
+            if w[1] > w[0] {
+                continue;
+            }
+            let line = self.lines[i + 1];
+            if self.options.stamp_order == StampOrder::Increasing {
+                let what = if w[1] == w[0] {
+                    "duplicate"
+                } else {
+                    "decreasing"
+                };
+                return Err(parse_error(
+                    source,
+                    line,
+                    1,
+                    &format!("{what} timestamp (previous pose on line {})", self.lines[i]),
+                ));
+            }
+            let report = &mut self.report;
+            if w[1] == w[0] {
+                report.repeated_stamps += 1;
+                report.first_repeated_line.get_or_insert(line);
             } else {
-                "decreasing"
-            };
-            return Err(parse_error(
-                source,
-                self.lines[i + 1],
-                1,
-                &format!("{what} timestamp (previous pose on line {})", self.lines[i]),
-            ));
+                report.decreasing_stamps += 1;
+                report.first_decreasing_line.get_or_insert(line);
+            }
         }
-        Ok(Trajectory {
+        let trajectory = Trajectory {
             stamps,
             positions: self.positions,
             orientations: self.orientations,
             time_unit: unit,
-        })
+        };
+        Ok((trajectory, self.report))
     }
 }
 
@@ -468,12 +727,49 @@ mod tests {
         }
     }
 
+    fn evo(text: &str) -> (Trajectory, ReadReport) {
+        parse_tum_with(text, "x", &ReadOptions::EVO).unwrap()
+    }
+
     #[test]
-    fn integer_stamps_are_nanoseconds() {
-        let t = parse_tum("# hdr\n100 0 0 0 0 0 0 1\n\n200 1 2 3 0 0 0 1 # c\n", "x").unwrap();
+    fn large_integer_stamps_are_nanoseconds() {
+        let text = "# hdr\n1000000000100 0 0 0 0 0 0 1\n\n1000000000200 1 2 3 0 0 0 1 # c\n";
+        let t = parse_tum(text, "x").unwrap();
         assert_eq!(t.time_unit, TimeUnit::Nanoseconds);
-        assert_eq!(t.stamps, vec![100, 200]);
+        assert_eq!(t.stamps, vec![1_000_000_000_100, 1_000_000_000_200]);
         assert_eq!(t.positions[1], DVec3::new(1.0, 2.0, 3.0));
+        // Small integers are whole seconds (evo's reading), by the rule or explicitly.
+        let t = parse_tum("100 0 0 0 0 0 0 1\n101 0 0 0 0 0 0 1\n", "x").unwrap();
+        assert_eq!(t.time_unit, TimeUnit::Seconds);
+        assert_eq!(t.stamps, vec![100_000_000_000, 101_000_000_000]);
+        // evo reads them as seconds, beyond i64 nanoseconds: an error that says what to do.
+        let err = parse_tum_with(text, "x", &ReadOptions::EVO)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("x:2:1: timestamp out of range") && err.contains("ns"),
+            "{err}"
+        );
+        let ns = ReadOptions {
+            time_unit: TimeUnitRule::Nanoseconds,
+            ..ReadOptions::SITAR
+        };
+        let (t, _) = parse_tum_with("100 0 0 0 0 0 0 1\n", "x", &ns).unwrap();
+        assert_eq!((t.stamps[0], t.time_unit), (100, TimeUnit::Nanoseconds));
+        assert!(parse_tum_with("1.5 0 0 0 0 0 0 1\n", "x", &ns).is_err());
+        // The threshold itself is still seconds; one above is nanoseconds.
+        let at = format!("{NANOSECOND_STAMP_THRESHOLD} 0 0 0 0 0 0 1\n");
+        assert!(parse_tum(&at, "x").is_err(), "10^11 s overflows i64 ns");
+        let above = format!("{} 0 0 0 0 0 0 1\n", NANOSECOND_STAMP_THRESHOLD + 1);
+        assert_eq!(
+            parse_tum(&above, "x").unwrap().time_unit,
+            TimeUnit::Nanoseconds
+        );
+        assert_eq!(
+            "ns".parse::<TimeUnitRule>().unwrap(),
+            TimeUnitRule::Nanoseconds
+        );
+        assert!("min".parse::<TimeUnitRule>().is_err());
     }
 
     #[test]
@@ -517,6 +813,95 @@ mod tests {
     }
 
     #[test]
+    fn a_nul_byte_is_not_a_separator() {
+        for (text, column) in [
+            ("1 0 0 0 0 0 0 1\n2\x000 0 0 0 0 0 1\n", 2),
+            ("1 0 0 0 0 0 0 1\n2 0 0\x00 0 0 0 0 1\n", 6),
+            ("1 0 0 0 0 0 0 1\n\x002 0 0 0 0 0 0 1\n", 1),
+            ("1 0 0 0 0 0 0 1\n2 0 0 0 0 0 0 1\x1b\n", 16),
+        ] {
+            let (line, col, msg) = parse_err(text);
+            assert_eq!((line, col), (2, column), "{text:?}: {msg}");
+            assert!(msg.contains("control character U+00"), "{msg}");
+        }
+        assert!(parse_euroc_csv("10,1,2,3\x00,1,0,0,0\n", "gt.csv").is_err());
+        assert!(parse_kitti("1 0 0 5 0 1 0 6 0 0 1\x007\n", "k").is_err());
+        // Tabs separate, as spaces do.
+        assert_eq!(parse_tum("1\t0 0 0\t0 0 0 1\n", "x").unwrap().len(), 1);
+    }
+
+    #[test]
+    fn bom_and_every_line_end() {
+        let lf = "# c\n1 0 0 0 0 0 0 1\n2 1 0 0 0 0 0 1\n\n3 2 0 0 0 0 0 1\n";
+        let want = parse_tum(lf, "x").unwrap();
+        for text in [
+            lf.to_owned(),
+            lf.replace('\n', "\r\n"),
+            lf.replace('\n', "\r"),
+            format!("\u{feff}{lf}"),
+            format!("\u{feff}{}", lf.replace('\n', "\r")),
+        ] {
+            let (t, report) = evo(&text);
+            assert_eq!(t.stamps, want.stamps, "{text:?}");
+            assert_eq!(t.positions, want.positions);
+            assert_eq!(report.byte_order_mark, text.starts_with('\u{feff}'));
+        }
+        // Line numbers count CR-only and CRLF lines once each.
+        let err = parse_tum(
+            "1 0 0 0 0 0 0 1\r\n2 0 0 0 0 0 0 1\r\n3 0 x 0 0 0 0 1\r\n",
+            "x",
+        );
+        assert!(
+            matches!(
+                err,
+                Err(Error::Parse {
+                    line: 3,
+                    column: 5,
+                    ..
+                })
+            ),
+            "{err:?}"
+        );
+        let err = parse_tum("1 0 0 0 0 0 0 1\r2 0 x 0 0 0 0 1\r", "x");
+        assert!(
+            matches!(
+                err,
+                Err(Error::Parse {
+                    line: 2,
+                    column: 5,
+                    ..
+                })
+            ),
+            "{err:?}"
+        );
+        let csv = "\u{feff}#t,x,y,z,qw,qx,qy,qz\r10,1,2,3,1,0,0,0\r20,1,2,3,1,0,0,0\r";
+        assert_eq!(parse_euroc_csv(csv, "gt.csv").unwrap().stamps, vec![10, 20]);
+    }
+
+    #[test]
+    fn evo_rules_keep_repeated_and_unsorted_stamps() {
+        let (t, report) =
+            evo("1 0 0 0 0 0 0 1\n2 1 0 0 0 0 0 1\n2 2 0 0 0 0 0 1\n1.5 3 0 0 0 0 0 1\n");
+        assert_eq!(
+            t.stamps,
+            vec![1_000_000_000, 2_000_000_000, 2_000_000_000, 1_500_000_000]
+        );
+        assert_eq!(
+            (report.repeated_stamps, report.first_repeated_line),
+            (1, Some(3))
+        );
+        assert_eq!(
+            (report.decreasing_stamps, report.first_decreasing_line),
+            (1, Some(4))
+        );
+        // Any quaternion norm is normalised, as evo's rotation matrices are; zero is not.
+        let (t, report) = evo("1 0 0 0 0 0 0 1.01\n2 0 0 0 0.1 0 0 0.995\n");
+        assert!((t.orientations[0].length() - 1.0).abs() < 1e-15);
+        assert_eq!(report.normalised_quaternions, 1);
+        assert!(parse_tum_with("1 0 0 0 0 0 0 0\n", "x", &ReadOptions::EVO).is_err());
+    }
+
+    #[test]
     fn normalises_quaternions_within_tolerance() {
         let t = parse_tum("1 0 0 0 0 0 0 1.0004\n", "x").unwrap();
         assert!((t.orientations[0].length() - 1.0).abs() < 1e-15);
@@ -527,6 +912,7 @@ mod tests {
         for text in [
             "1403636579.763555527 0.1 -2 3e-7 0 0 0.6 0.8\n",
             "17 0.1 -2 3e-7 0 0.6 0 0.8\n",
+            "1000000000017 0.1 -2 3e-7 0 0.6 0 0.8\n",
         ] {
             let t = parse_tum(text, "x").unwrap();
             let mut out = Vec::new();
@@ -563,6 +949,7 @@ mod tests {
         let expected = DQuat::from_rotation_z(std::f64::consts::FRAC_PI_2);
         assert!(t.orientations[1].angle_between(expected) < 1e-12);
         assert!(parse_kitti("2 0 0 5 0 1 0 6 0 0 1 7\n", "k").is_err());
+        assert!(parse_kitti("x 0 0 5 0 1 0 6 0 0 1 7\n", "k").is_err());
     }
 
     proptest::proptest! {
@@ -578,8 +965,9 @@ mod tests {
         }
 
         #[test]
-        fn never_panics_on_garbage(text in "[0-9 .eE+#\\-na,\n]{0,200}") {
+        fn never_panics_on_garbage(text in "[0-9 .eE+#\\-na,\n\r\t\u{0}\u{feff}]{0,200}") {
             let _ = parse_tum(&text, "fuzz");
+            let _ = parse_tum_with(&text, "fuzz", &ReadOptions::EVO);
             let _ = parse_euroc_csv(&text, "fuzz");
             let _ = parse_kitti(&text, "fuzz");
         }

@@ -13,7 +13,7 @@
 //! let make = |drift: f64| {
 //!     let mut text = String::from("# t x y z qx qy qz qw\n");
 //!     for i in 0..30 {
-//!         let t = 1_000_000_000i64 + i * 33_333_333; // integer stamps: nanoseconds
+//!         let t = 1_000_000_000_000i64 + i * 33_333_333; // integers > 10^11: nanoseconds
 //!         let x = i as f64 * 0.02 + drift * (i as f64).powi(2);
 //!         text += &format!("{t} {x} 0 0 0 0 0 1\n");
 //!     }
@@ -23,21 +23,27 @@
 //! let result = estimate(&trials, &EstimateOptions { setting: Setting::Median, ..Default::default() })?;
 //! assert_eq!(result.windows.len(), 20); // one window per start frame with 10 frames after it
 //! assert_eq!(result.windows[0].pairs, 3); // n(n-1)/2 pairs
-//! assert!(result.to_legacy_csv().starts_with("start,error\n1000000000,"));
+//! assert!(result.to_legacy_csv().starts_with("start,error\n1000000000000,"));
 //! assert!(result.to_json(Thresholds::default()).contains("\"class\":\"low\""));
 //! # Ok::<(), sitar_estimator::Error>(())
 //! ```
 //!
 //! ## Trajectories and formats
 //!
-//! A [`Trajectory`] holds strictly increasing `i64` nanosecond stamps, positions and unit
-//! quaternions (world-from-camera), and the [`TimeUnit`] it was read in, which output keeps.
-//! [`read_tum`]/[`parse_tum`] read `t x y z qx qy qz qw` (`#` comments; all-integer stamps are
-//! nanoseconds, otherwise decimal seconds, converted exactly; scientific notation accepted);
+//! A [`Trajectory`] holds `i64` nanosecond stamps, positions and unit quaternions
+//! (world-from-camera), and the [`TimeUnit`] it was read in, which output keeps.
+//! [`read_tum`]/[`parse_tum`] read `t x y z qx qy qz qw` by SiTAR's rules
+//! ([`ReadOptions::SITAR`]): `#` comments; stamps that are all integer tokens, one of them
+//! above [`NANOSECOND_STAMP_THRESHOLD`] (10¹¹: too large to be seconds since 1970), are
+//! nanoseconds — ARCore's trials —, anything else is seconds, converted exactly (scientific
+//! notation accepted); stamps must increase and quaternions be unit to
+//! [`QUATERNION_NORM_TOLERANCE`]. [`parse_tum_with`] takes a [`ReadOptions`]: an explicit
+//! [`TimeUnitRule`], or [`ReadOptions::EVO`], evo's reading (seconds, repeated and unsorted
+//! stamps kept, any quaternion normalised) with a [`ReadReport`] of what it met.
 //! [`write_tum`] writes it back losslessly. [`read_euroc_csv`] reads EuRoC ground truth,
-//! [`read_kitti`] KITTI poses (stamp = pose index). Every error names the file, line and
-//! column; NaN/inf, a quaternion norm off by more than [`QUATERNION_NORM_TOLERANCE`], and
-//! duplicate or decreasing stamps are errors.
+//! [`read_kitti`] KITTI poses (stamp = pose index). Every reader skips a UTF-8 byte-order
+//! mark and takes `\n`, `\r\n` and `\r` line ends; every error names the file, line and
+//! column (NaN/inf, a control character such as NUL between fields, a bad column count).
 //!
 //! ## evo semantics
 //!
@@ -153,7 +159,7 @@ mod statistics;
 mod sync;
 mod trajectory;
 
-pub use align::{Alignment, Similarity, align, umeyama};
+pub use align::{Alignment, Similarity, align, align_first, umeyama};
 pub use error::Error;
 pub use estimate::{Estimate, EstimateOptions, PairwiseValues, WindowEstimate, estimate};
 pub use evaluate::{
@@ -161,7 +167,9 @@ pub use evaluate::{
     classification_scores, evaluate, ground_truth_errors,
 };
 pub use formats::{
-    parse_euroc_csv, parse_kitti, parse_tum, read_euroc_csv, read_kitti, read_tum, write_tum,
+    NANOSECOND_STAMP_THRESHOLD, ReadOptions, ReadReport, StampOrder, TimeUnitRule, parse_euroc_csv,
+    parse_euroc_csv_with, parse_kitti, parse_tum, parse_tum_with, read_euroc_csv,
+    read_euroc_csv_with, read_kitti, read_tum, read_tum_with, write_tum,
 };
 pub use incremental::IncrementalEstimate;
 pub use metrics::{
@@ -174,4 +182,6 @@ pub use statistics::{
     Setting, Statistics, interquartile_range, mean, mean_inliers, median, quantile, trim_mean,
 };
 pub use sync::{associate, associate_trajectories, matching_time_indices, seconds_to_ns};
-pub use trajectory::{QUATERNION_NORM_TOLERANCE, TimeUnit, Trajectory};
+pub use trajectory::{
+    Plane, QUATERNION_NORM_TOLERANCE, TimeUnit, Trajectory, euler_sxyz, pairwise_sum,
+};

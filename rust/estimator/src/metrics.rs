@@ -7,27 +7,75 @@ use glam::{DQuat, DVec3};
 
 use crate::{Error, Statistics, Trajectory};
 
-/// Which part of the error pose is measured.
+/// Which part of the error pose is measured (evo's `PoseRelation`, `-r`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub enum PoseRelation {
     /// Norm of the translation part, metres (evo `trans_part`).
     #[default]
     TranslationPart,
+    /// Frobenius norm of `R − I₃` of the error pose, unit-less (evo `rot_part`).
+    RotationPart,
     /// Rotation angle of the error pose, degrees (evo `angle_deg`).
     RotationAngleDeg,
     /// Rotation angle of the error pose, radians (evo `angle_rad`).
     RotationAngleRad,
     /// Frobenius norm of `E − I₄` (evo `full`).
     FullTransformation,
+    /// APE: distance of the positions; RPE: difference of the distances travelled by the
+    /// pair's poses on both trajectories, metres (evo `point_distance`).
+    PointDistance,
+    /// RPE only: the point distance in percent of the reference's distance; pairs whose
+    /// reference distance is zero are left out (evo `point_distance_error_ratio`).
+    PointDistanceErrorRatio,
+}
+
+impl PoseRelation {
+    /// Every relation, in evo's order.
+    pub const ALL: [PoseRelation; 7] = [
+        PoseRelation::FullTransformation,
+        PoseRelation::TranslationPart,
+        PoseRelation::RotationPart,
+        PoseRelation::RotationAngleRad,
+        PoseRelation::RotationAngleDeg,
+        PoseRelation::PointDistance,
+        PoseRelation::PointDistanceErrorRatio,
+    ];
+
+    /// evo's description, as its titles print it ("translation part", …).
+    pub fn description(self) -> &'static str {
+        match self {
+            PoseRelation::TranslationPart => "translation part",
+            PoseRelation::RotationPart => "rotation part",
+            PoseRelation::RotationAngleDeg => "rotation angle in degrees",
+            PoseRelation::RotationAngleRad => "rotation angle in radians",
+            PoseRelation::FullTransformation => "full transformation",
+            PoseRelation::PointDistance => "point distance",
+            PoseRelation::PointDistanceErrorRatio => "point distance error ratio",
+        }
+    }
+
+    /// evo's unit of the values: `m`, `deg`, `rad`, `%` or `unit-less`.
+    pub fn unit(self) -> &'static str {
+        match self {
+            PoseRelation::TranslationPart | PoseRelation::PointDistance => "m",
+            PoseRelation::RotationAngleDeg => "deg",
+            PoseRelation::RotationAngleRad => "rad",
+            PoseRelation::PointDistanceErrorRatio => "%",
+            PoseRelation::RotationPart | PoseRelation::FullTransformation => "unit-less",
+        }
+    }
 }
 
 impl fmt::Display for PoseRelation {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(match self {
             PoseRelation::TranslationPart => "trans_part",
+            PoseRelation::RotationPart => "rot_part",
             PoseRelation::RotationAngleDeg => "angle_deg",
             PoseRelation::RotationAngleRad => "angle_rad",
             PoseRelation::FullTransformation => "full",
+            PoseRelation::PointDistance => "point_distance",
+            PoseRelation::PointDistanceErrorRatio => "point_distance_error_ratio",
         })
     }
 }
@@ -36,15 +84,18 @@ impl FromStr for PoseRelation {
     type Err = Error;
 
     fn from_str(s: &str) -> Result<Self, Error> {
-        match s {
-            "trans" | "trans_part" => Ok(PoseRelation::TranslationPart),
-            "angle_deg" => Ok(PoseRelation::RotationAngleDeg),
-            "angle_rad" => Ok(PoseRelation::RotationAngleRad),
-            "full" => Ok(PoseRelation::FullTransformation),
-            other => Err(Error::InvalidArgument(format!(
-                "unknown pose relation '{other}' (expected trans, angle_deg, angle_rad or full)"
-            ))),
+        if s == "trans" {
+            return Ok(PoseRelation::TranslationPart);
         }
+        PoseRelation::ALL
+            .into_iter()
+            .find(|r| r.to_string() == s)
+            .ok_or_else(|| {
+                Error::InvalidArgument(format!(
+                    "unknown pose relation '{other}' (expected full, trans_part, rot_part, angle_deg, angle_rad, point_distance or point_distance_error_ratio)",
+                    other = s
+                ))
+            })
     }
 }
 
@@ -68,11 +119,17 @@ impl RigidPose {
         }
     }
 
-    /// The error value of this error pose under `relation`.
+    /// The error value of this error pose under `relation` (the point distance of an error
+    /// pose is its translation's length; its error ratio is undefined: NaN).
     #[inline]
     pub fn error(&self, relation: PoseRelation) -> f64 {
         match relation {
-            PoseRelation::TranslationPart => self.translation.length(),
+            PoseRelation::TranslationPart | PoseRelation::PointDistance => {
+                self.translation.length()
+            }
+            PoseRelation::PointDistanceErrorRatio => f64::NAN,
+            // ‖R − I‖_F = √8·sin(θ/2) = √8·‖q.xyz‖ for a unit quaternion.
+            PoseRelation::RotationPart => 8f64.sqrt() * self.rotation.xyz().length(),
             PoseRelation::RotationAngleRad => rotation_angle(self.rotation),
             PoseRelation::RotationAngleDeg => rotation_angle(self.rotation).to_degrees(),
             PoseRelation::FullTransformation => {
@@ -101,7 +158,7 @@ impl Trajectory {
     }
 }
 
-/// Unit of the RPE delta.
+/// Unit of the RPE delta (evo's `-u f|m|d|r`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub enum DeltaUnit {
     /// Index distance in frames.
@@ -109,6 +166,23 @@ pub enum DeltaUnit {
     Frames,
     /// Travelled path length in metres.
     Meters,
+    /// Rotation in degrees: accumulated along the path for consecutive pairs, the direct
+    /// angle between the two poses for all pairs.
+    Degrees,
+    /// As [`DeltaUnit::Degrees`], in radians.
+    Radians,
+}
+
+impl DeltaUnit {
+    /// evo's name of the unit, as its titles print it.
+    pub fn name(self) -> &'static str {
+        match self {
+            DeltaUnit::Frames => "frames",
+            DeltaUnit::Meters => "m",
+            DeltaUnit::Degrees => "deg",
+            DeltaUnit::Radians => "rad",
+        }
+    }
 }
 
 /// RPE options (evo's defaults except `delta`, which SiTAR uses as 10 frames).
@@ -190,18 +264,68 @@ pub fn delta_pairs(traj: &Trajectory, opts: &RpeOptions) -> Result<Vec<(usize, u
             opts.delta * opts.rel_delta_tol,
             opts.all_pairs,
         ),
+        DeltaUnit::Degrees | DeltaUnit::Radians => {
+            let degrees = opts.delta_unit == DeltaUnit::Degrees;
+            let bound = if degrees { 180.0 } else { std::f64::consts::PI };
+            if opts.delta > bound {
+                return Err(Error::InvalidArgument(format!(
+                    "delta angle must be within [0, {bound}] ({})",
+                    opts.delta_unit.name()
+                )));
+            }
+            let to_rad = |v: f64| if degrees { v.to_radians() } else { v };
+            pairs_by_angle(
+                &traj.orientations,
+                to_rad(opts.delta),
+                to_rad(opts.delta * opts.rel_delta_tol),
+                opts.all_pairs,
+            )
+        }
     };
     if pairs.is_empty() {
         return Err(Error::NoPairs(format!(
-            "delta {} ({}) produced no pairs among {n} poses",
+            "delta = {} ({}) produced an empty index list among {n} poses - try lower values or a less strict tolerance",
             opts.delta,
-            match opts.delta_unit {
-                DeltaUnit::Frames => "frames",
-                DeltaUnit::Meters => "m",
-            }
+            opts.delta_unit.name()
         )));
     }
     Ok(pairs)
+}
+
+/// evo's `filter_pairs_by_angle` (radians): consecutive pairs where the angle accumulated
+/// pose by pose reaches `delta`; all pairs whose direct angle is within `delta ± tol`.
+fn pairs_by_angle(
+    orientations: &[DQuat],
+    delta: f64,
+    tol: f64,
+    all_pairs: bool,
+) -> Vec<(usize, usize)> {
+    let n = orientations.len();
+    let angle = |i: usize, j: usize| rotation_angle(orientations[i].conjugate() * orientations[j]);
+    if all_pairs {
+        use rayon::prelude::*;
+        let (low, high) = (delta - tol, delta + tol);
+        (0..n.saturating_sub(1))
+            .into_par_iter()
+            .flat_map_iter(|i| {
+                (i + 1..n)
+                    .filter(move |&j| (low..=high).contains(&angle(i, j)))
+                    .map(move |j| (i, j))
+            })
+            .collect()
+    } else {
+        let mut pairs = Vec::new();
+        let (mut accumulated, mut start) = (0.0, 0);
+        for i in 0..n.saturating_sub(1) {
+            accumulated += angle(i, i + 1);
+            if accumulated >= delta {
+                pairs.push((start, i + 1));
+                accumulated = 0.0;
+                start = i + 1;
+            }
+        }
+        pairs
+    }
 }
 
 /// evo's `filter_pairs_by_path`.
@@ -279,6 +403,36 @@ pub fn rpe(
         },
         opts,
     )?;
+    if matches!(
+        opts.pose_relation,
+        PoseRelation::PointDistance | PoseRelation::PointDistanceErrorRatio
+    ) {
+        let distance =
+            |t: &Trajectory, i: usize, j: usize| (t.positions[i] - t.positions[j]).length();
+        let mut kept = Vec::with_capacity(pairs.len());
+        let mut errors = Vec::with_capacity(pairs.len());
+        for (i, j) in pairs {
+            let (d_ref, d_est) = (distance(reference, i, j), distance(estimate, i, j));
+            let error = (d_ref - d_est).abs();
+            if opts.pose_relation == PoseRelation::PointDistance {
+                errors.push(error);
+            } else if d_ref != 0.0 {
+                errors.push(error / d_ref * 100.0);
+            } else {
+                continue;
+            }
+            kept.push((i, j));
+        }
+        if kept.is_empty() {
+            return Err(Error::NoPairs(
+                "every pair's reference distance is zero: no error ratio".into(),
+            ));
+        }
+        return Ok(PoseErrors {
+            pairs: kept,
+            errors,
+        });
+    }
     let errors = pairs
         .iter()
         .map(|&(i, j)| {
@@ -301,9 +455,14 @@ pub fn ape(
     if reference.is_empty() {
         return Err(Error::NoPairs("empty trajectories".into()));
     }
+    if relation == PoseRelation::PointDistanceErrorRatio {
+        return Err(Error::InvalidArgument(
+            "point_distance_error_ratio is a relative pose error: use rpe".into(),
+        ));
+    }
     let errors = (0..reference.len())
         .map(|i| match relation {
-            PoseRelation::TranslationPart => {
+            PoseRelation::TranslationPart | PoseRelation::PointDistance => {
                 (estimate.positions[i] - reference.positions[i]).length()
             }
             _ => RigidPose::relative(estimate.pose(i), reference.pose(i)).error(relation),
@@ -393,6 +552,80 @@ mod tests {
             delta_pairs(&t, &opts).unwrap(),
             vec![(0, 3), (3, 6), (6, 9)]
         );
+    }
+
+    #[test]
+    fn angle_pairs_point_distances_and_rot_part() {
+        // A trajectory turning 10 degrees per pose about z, moving 1 m per pose along x.
+        let mut t = line(10, 1.0);
+        t.orientations = (0..10)
+            .map(|i| DQuat::from_rotation_z((10.0 * i as f64).to_radians()))
+            .collect();
+        let opts = RpeOptions {
+            delta: 25.0,
+            delta_unit: DeltaUnit::Degrees,
+            all_pairs: false,
+            ..RpeOptions::default()
+        };
+        assert_eq!(
+            delta_pairs(&t, &opts).unwrap(),
+            vec![(0, 3), (3, 6), (6, 9)]
+        );
+        let all = RpeOptions {
+            delta: 30.0,
+            all_pairs: true,
+            ..opts
+        };
+        let pairs = delta_pairs(&t, &all).unwrap();
+        // |angle − 30| ≤ 3 degrees: exactly the pairs three poses apart.
+        assert_eq!(pairs, (0..7).map(|i| (i, i + 3)).collect::<Vec<_>>());
+        let radians = RpeOptions {
+            delta: 30f64.to_radians(),
+            delta_unit: DeltaUnit::Radians,
+            ..all
+        };
+        assert_eq!(delta_pairs(&t, &radians).unwrap(), pairs);
+        assert!(
+            delta_pairs(
+                &t,
+                &RpeOptions {
+                    delta: 181.0,
+                    ..all
+                }
+            )
+            .is_err()
+        );
+
+        // Point distance: |‖Δref‖ − ‖Δest‖|; the ratio in percent of ‖Δref‖.
+        let (reference, estimate) = (line(21, 0.1), line(21, 0.11));
+        let point = RpeOptions {
+            pose_relation: PoseRelation::PointDistance,
+            ..RpeOptions::default()
+        };
+        let r = rpe(&reference, &estimate, &point).unwrap();
+        assert!(r.errors.iter().all(|e| (e - 0.1).abs() < 1e-12));
+        let ratio = RpeOptions {
+            pose_relation: PoseRelation::PointDistanceErrorRatio,
+            ..point
+        };
+        let r = rpe(&reference, &estimate, &ratio).unwrap();
+        assert!(
+            r.errors.iter().all(|e| (e - 10.0).abs() < 1e-9),
+            "{:?}",
+            r.errors
+        );
+        // A standing reference has no ratio.
+        assert!(rpe(&line(21, 0.0), &estimate, &ratio).is_err());
+        assert!(ape(&reference, &estimate, PoseRelation::PointDistanceErrorRatio).is_err());
+
+        // rot_part = ‖R − I‖_F = 2√2·sin(θ/2).
+        let mut turned = reference.clone();
+        turned.orientations[3] = DQuat::from_rotation_x(0.7);
+        let a = ape(&reference, &turned, PoseRelation::RotationPart).unwrap();
+        assert!((a.errors[3] - 2.0 * 2f64.sqrt() * 0.35f64.sin()).abs() < 1e-12);
+        for r in PoseRelation::ALL {
+            assert_eq!(r.to_string().parse::<PoseRelation>().unwrap(), r);
+        }
     }
 
     fn random_trajectory(seed: &[f64]) -> Trajectory {

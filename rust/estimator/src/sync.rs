@@ -10,7 +10,8 @@ pub fn seconds_to_ns(seconds: f64) -> i64 {
 /// Indices of the best-matching stamps, as evo's `matching_time_indices`: for every stamp of
 /// `stamps_1` (in order) the nearest of `stamps_2 + offset_2_ns`, kept if within
 /// `max_diff_ns`; on an exact tie the earlier stamp of `stamps_2` wins. Indices of
-/// `stamps_2` may repeat. `stamps_2` must be sorted.
+/// `stamps_2` may repeat. Unsorted `stamps_2` are searched linearly (evo's fallback, for
+/// which it warns "Timestamps aren't sorted"); repeated stamps count as sorted.
 pub fn matching_time_indices(
     stamps_1: &[i64],
     stamps_2: &[i64],
@@ -24,6 +25,18 @@ pub fn matching_time_indices(
         return (ids_1, ids_2);
     }
     let shifted = |k: usize| stamps_2[k].saturating_add(offset_2_ns);
+    if (1..n2).any(|k| shifted(k) < shifted(k - 1)) {
+        for (index_1, &stamp_1) in stamps_1.iter().enumerate() {
+            let (best, diff) = (0..n2)
+                .map(|k| (k, shifted(k).abs_diff(stamp_1)))
+                .fold((0, u64::MAX), |acc, x| if x.1 < acc.1 { x } else { acc });
+            if diff <= max_diff_ns.unsigned_abs() {
+                ids_1.push(index_1);
+                ids_2.push(best);
+            }
+        }
+        return (ids_1, ids_2);
+    }
     let (first, last) = (shifted(0), shifted(n2 - 1));
     // `upper` is numpy's searchsorted(side="right"): the first k with stamps_2[k] > stamp_1.
     let mut upper = 0usize;
@@ -64,14 +77,15 @@ pub fn matching_time_indices(
 /// Matched index lists `(ids_1, ids_2)` of two trajectories as evo's `associate_trajectories`:
 /// the trajectory with fewer poses (the second one on equal length) is walked and matched
 /// into the other; `offset_s` shifts the second trajectory's stamps. Errors if nothing matches.
+/// Stamps may repeat or be unsorted, as evo allows (see [`matching_time_indices`]).
 pub fn associate(
     traj_1: &Trajectory,
     traj_2: &Trajectory,
     max_diff_s: f64,
     offset_s: f64,
 ) -> Result<(Vec<usize>, Vec<usize>), Error> {
-    traj_1.validate()?;
-    traj_2.validate()?;
+    traj_1.validate_poses()?;
+    traj_2.validate_poses()?;
     associate_named(
         traj_1,
         traj_2,
@@ -166,6 +180,23 @@ mod tests {
                                  max in 0i64..20, off in -20i64..20) {
             s1.sort_unstable(); s1.dedup(); s2.sort_unstable(); s2.dedup();
             proptest::prop_assert_eq!(matching_time_indices(&s1, &s2, max, off), brute(&s1, &s2, max, off));
+        }
+
+        /// Repeated and unsorted stamps on either side (evo keeps both): still the linear
+        /// search's answer, except that a repeated stamp of a sorted `stamps_2` matches its
+        /// last copy (numpy's searchsorted right side), not the first.
+        #[test]
+        fn repeated_and_unsorted_stamps(s1 in proptest::collection::vec(-50i64..50, 0..30),
+                                        mut s2 in proptest::collection::vec(-50i64..50, 1..30),
+                                        sort in proptest::bool::ANY, max in 0i64..20) {
+            if sort { s2.sort_unstable(); }
+            let (a, b) = matching_time_indices(&s1, &s2, max, 0);
+            let (ba, bb) = brute(&s1, &s2, max, 0);
+            proptest::prop_assert_eq!(&a, &ba);
+            for (k, (&got, &want)) in b.iter().zip(&bb).enumerate() {
+                proptest::prop_assert_eq!((s2[got] - s1[a[k]]).abs(), (s2[want] - s1[a[k]]).abs());
+                if !s2.windows(2).all(|w| w[0] <= w[1]) { proptest::prop_assert_eq!(got, want); }
+            }
         }
     }
 

@@ -1,0 +1,355 @@
+//! evo's format subcommands (`tum`, `euroc`, `kitti`; `bag`/`bag2`/`mcap` are refused) and
+//! reading REF and EST the way evo does.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Result, bail};
+use clap::ValueEnum;
+use sitar_estimator::{
+    ReadOptions, ReadReport, StampOrder, TimeUnitRule, Trajectory, read_euroc_csv_with, read_kitti,
+    read_tum_with,
+};
+
+use crate::console::{Console, SEP};
+
+/// evo's time-sync options of the `tum`, `euroc` and `bag` formats.
+#[derive(clap::Args, Debug, Clone)]
+pub struct SyncArgs {
+    /// Maximum timestamp difference (s) for data association.
+    #[arg(long = "t_max_diff", alias = "t-max-diff", default_value_t = 0.01)]
+    pub t_max_diff: f64,
+    /// Constant timestamp offset (s) added to the estimate for data association.
+    #[arg(
+        long = "t_offset",
+        alias = "t-offset",
+        default_value_t = 0.0,
+        allow_negative_numbers = true
+    )]
+    pub t_offset: f64,
+    /// nearest_time associates the closest stamps (see --t_max_diff); interpolation resamples
+    /// the denser trajectory at the stamps of the sparser one.
+    #[arg(long = "sync_method", value_enum, default_value_t = SyncMethod::NearestTime)]
+    pub sync_method: SyncMethod,
+    /// Only use reference poses with stamps >= this start time (s).
+    #[arg(long = "t_start", allow_negative_numbers = true)]
+    pub t_start: Option<f64>,
+    /// Only use reference poses with stamps <= this end time (s).
+    #[arg(long = "t_end", allow_negative_numbers = true)]
+    pub t_end: Option<f64>,
+    /// Unit of TUM stamps: s (evo's reading) or ns (ARCore's integer nanoseconds).
+    #[arg(long = "time_unit", alias = "time-unit", value_enum, default_value_t = StampUnit::S)]
+    pub time_unit: StampUnit,
+}
+
+impl Default for SyncArgs {
+    fn default() -> Self {
+        Self {
+            t_max_diff: 0.01,
+            t_offset: 0.0,
+            sync_method: SyncMethod::NearestTime,
+            t_start: None,
+            t_end: None,
+            time_unit: StampUnit::S,
+        }
+    }
+}
+
+/// evo's `--sync_method`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum SyncMethod {
+    /// The nearest stamp within --t_max_diff.
+    #[value(name = "nearest_time")]
+    NearestTime,
+    /// Interpolate the trajectory with more poses at the matched stamps of the other.
+    Interpolation,
+}
+
+/// `--time_unit`: how TUM stamps are read.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum StampUnit {
+    /// Seconds (integers are whole seconds), as evo reads TUM files.
+    S,
+    /// Integer nanoseconds (ARCore).
+    Ns,
+    /// Nanoseconds when all stamps are integers above 10^11, else seconds (SiTAR's rule).
+    Auto,
+}
+
+impl StampUnit {
+    /// The library's rule.
+    pub fn rule(self) -> TimeUnitRule {
+        match self {
+            StampUnit::S => TimeUnitRule::Seconds,
+            StampUnit::Ns => TimeUnitRule::Nanoseconds,
+            StampUnit::Auto => TimeUnitRule::Auto,
+        }
+    }
+}
+
+/// The two inputs of `ape`/`rpe`, by format.
+#[derive(Debug, Clone)]
+pub enum Source {
+    /// Two TUM files.
+    Tum {
+        reference: PathBuf,
+        estimate: PathBuf,
+        sync: SyncArgs,
+    },
+    /// EuRoC ground-truth CSV and a TUM estimate.
+    Euroc {
+        reference: PathBuf,
+        estimate: PathBuf,
+        sync: SyncArgs,
+    },
+    /// Two KITTI pose files (no stamps: poses pair by index).
+    Kitti {
+        reference: PathBuf,
+        estimate: PathBuf,
+    },
+    /// A ROS bag format (not supported).
+    Bag(&'static str),
+}
+
+/// Defines a clap subcommand enum of evo's formats whose variants carry `$options`.
+macro_rules! format_subcommands {
+    ($name:ident, $options:ty) => {
+        /// The input format, as evo's subcommands.
+        #[derive(clap::Subcommand, Debug)]
+        pub enum $name {
+            /// TUM trajectory files (`t x y z qx qy qz qw`, stamps in seconds).
+            #[command(args_override_self = true)]
+            Tum {
+                /// Reference trajectory file.
+                ref_file: std::path::PathBuf,
+                /// Estimated trajectory file.
+                est_file: std::path::PathBuf,
+                #[command(flatten)]
+                sync: crate::source::SyncArgs,
+                #[command(flatten)]
+                options: $options,
+            },
+            /// EuRoC MAV ground truth (SEQ/mav0/state_groundtruth_estimate0/data.csv) and a
+            /// TUM estimate.
+            #[command(args_override_self = true)]
+            Euroc {
+                /// Ground truth: SEQ/mav0/state_groundtruth_estimate0/data.csv.
+                state_gt_csv: std::path::PathBuf,
+                /// Estimated trajectory file in TUM format.
+                est_file: std::path::PathBuf,
+                #[command(flatten)]
+                sync: crate::source::SyncArgs,
+                #[command(flatten)]
+                options: $options,
+            },
+            /// KITTI pose files (12 numbers per line; poses pair by index).
+            #[command(args_override_self = true)]
+            Kitti {
+                /// Reference pose file (ground truth).
+                ref_file: std::path::PathBuf,
+                /// Estimated pose file.
+                est_file: std::path::PathBuf,
+                #[command(flatten)]
+                options: $options,
+            },
+            /// ROS bag files: not supported by sitar (convert the topics to TUM first).
+            Bag {
+                /// ROS bag file.
+                bag: String,
+                /// Reference trajectory topic.
+                ref_topic: String,
+                /// Estimated trajectory topic.
+                est_topic: String,
+                #[command(flatten)]
+                sync: crate::source::SyncArgs,
+                #[command(flatten)]
+                options: $options,
+            },
+            /// ROS 2 bag / MCAP files: not supported by sitar.
+            #[command(alias = "mcap")]
+            Bag2 {
+                /// ROS 2 bag file.
+                bag: String,
+                /// Reference trajectory topic.
+                ref_topic: String,
+                /// Estimated trajectory topic.
+                est_topic: String,
+                #[command(flatten)]
+                sync: crate::source::SyncArgs,
+                #[command(flatten)]
+                options: $options,
+            },
+        }
+
+        impl $name {
+            /// The inputs and the options.
+            pub fn split(self) -> (crate::source::Source, $options) {
+                use crate::source::Source;
+                match self {
+                    Self::Tum {
+                        ref_file,
+                        est_file,
+                        sync,
+                        options,
+                    } => (
+                        Source::Tum {
+                            reference: ref_file,
+                            estimate: est_file,
+                            sync,
+                        },
+                        options,
+                    ),
+                    Self::Euroc {
+                        state_gt_csv,
+                        est_file,
+                        sync,
+                        options,
+                    } => (
+                        Source::Euroc {
+                            reference: state_gt_csv,
+                            estimate: est_file,
+                            sync,
+                        },
+                        options,
+                    ),
+                    Self::Kitti {
+                        ref_file,
+                        est_file,
+                        options,
+                    } => (
+                        Source::Kitti {
+                            reference: ref_file,
+                            estimate: est_file,
+                        },
+                        options,
+                    ),
+                    Self::Bag { options, .. } => (Source::Bag("bag"), options),
+                    Self::Bag2 { options, .. } => (Source::Bag("bag2"), options),
+                }
+            }
+        }
+    };
+}
+pub(crate) use format_subcommands;
+
+/// What evo knows of a loaded trajectory: its poses and its name (the path as given).
+pub struct Named {
+    /// The poses.
+    pub trajectory: Trajectory,
+    /// The path as given on the command line (evo's `name`).
+    pub name: String,
+}
+
+/// Reference and estimate as read, with whether they have stamps (KITTI has none).
+pub struct Loaded {
+    /// The reference.
+    pub reference: Named,
+    /// The estimate.
+    pub estimate: Named,
+    /// The sync options (None for KITTI).
+    pub sync: Option<SyncArgs>,
+}
+
+/// evo's reading options with the stamp unit of `--time_unit`.
+pub fn evo_read_options(unit: StampUnit) -> ReadOptions {
+    ReadOptions {
+        time_unit: unit.rule(),
+        stamp_order: StampOrder::AsWritten,
+        normalise_quaternions: true,
+    }
+}
+
+/// Reads one TUM file by evo's rules, telling `console` what it met.
+pub fn read_tum_evo(path: &Path, unit: StampUnit, console: &Console) -> Result<Named> {
+    let (trajectory, report) = read_tum_with(path, &evo_read_options(unit))?;
+    finish(path, trajectory, &report, true, console)
+}
+
+/// Reads one EuRoC ground-truth file by evo's rules.
+pub fn read_euroc_evo(path: &Path, console: &Console) -> Result<Named> {
+    let (trajectory, report) = read_euroc_csv_with(path, &evo_read_options(StampUnit::Ns))?;
+    finish(path, trajectory, &report, true, console)
+}
+
+/// Reads one KITTI file.
+pub fn read_kitti_evo(path: &Path, console: &Console) -> Result<Named> {
+    let trajectory = read_kitti(path)?;
+    finish(path, trajectory, &ReadReport::default(), false, console)
+}
+
+fn finish(
+    path: &Path,
+    trajectory: Trajectory,
+    report: &ReadReport,
+    timed: bool,
+    console: &Console,
+) -> Result<Named> {
+    let name = path.display().to_string();
+    if trajectory.is_empty() {
+        bail!("{name}: no poses");
+    }
+    if let Some(line) = report.first_repeated_line {
+        console.warn(&format!(
+            "{name}: {} repeated timestamp(s), the first on line {line}; both poses are kept, as evo keeps them",
+            report.repeated_stamps
+        ));
+    }
+    if let Some(line) = report.first_decreasing_line {
+        console.warn(&format!(
+            "{name}: {} timestamp(s) below the previous one, the first on line {line}; the poses are kept in file order, as evo keeps them",
+            report.decreasing_stamps
+        ));
+    }
+    if report.normalised_quaternions > 0 {
+        console.debug(&format!(
+            "{name}: normalised {} quaternion(s) whose norm was not 1",
+            report.normalised_quaternions
+        ))?;
+    }
+    console.debug(&format!(
+        "Loaded {} {} from: {name}",
+        trajectory.len(),
+        if timed { "stamps and poses" } else { "poses" }
+    ))?;
+    Ok(Named { trajectory, name })
+}
+
+/// Reads both inputs of `ape`/`rpe`.
+pub fn load(source: &Source, console: &Console) -> Result<Loaded> {
+    console.debug(SEP)?;
+    match source {
+        Source::Tum {
+            reference,
+            estimate,
+            sync,
+        } => Ok(Loaded {
+            reference: read_tum_evo(reference, sync.time_unit, console)?,
+            estimate: read_tum_evo(estimate, sync.time_unit, console)?,
+            sync: Some(sync.clone()),
+        }),
+        Source::Euroc {
+            reference,
+            estimate,
+            sync,
+        } => Ok(Loaded {
+            reference: read_euroc_evo(reference, console)?,
+            estimate: read_tum_evo(estimate, sync.time_unit, console)?,
+            sync: Some(sync.clone()),
+        }),
+        Source::Kitti {
+            reference,
+            estimate,
+        } => Ok(Loaded {
+            reference: read_kitti_evo(reference, console)?,
+            estimate: read_kitti_evo(estimate, console)?,
+            sync: None,
+        }),
+        Source::Bag(kind) => bail!(not_supported_bag(kind)),
+    }
+}
+
+/// The error for a ROS bag format.
+pub fn not_supported_bag(kind: &str) -> String {
+    format!(
+        "the {kind} format (ROS bags) is not supported by sitar: export the topics to TUM files (for example with evo_traj {kind} BAG TOPIC --save_as_tum) and use the tum format"
+    )
+}

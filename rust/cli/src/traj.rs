@@ -1,0 +1,963 @@
+//! `sitar traj`: trajectory information and manipulation, as `evo_traj`: per-trajectory
+//! information, checks and statistics; synchronisation with and alignment to `--ref`;
+//! merge, time offset, transformations, projection; TUM/KITTI export, a statistics table and
+//! the plots.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, bail};
+use glam::{DMat3, DMat4, DQuat, DVec3};
+use sitar_estimator::{Alignment, Trajectory, align_first, write_tum};
+
+use crate::canvas::{self, Page};
+use crate::console::{Console, SEP, UsabilityArgs};
+use crate::figures::{Drawing, PALETTE, Path3, Series};
+use crate::metric::seconds;
+use crate::metric_args::PlaneArg;
+use crate::plot::{PAGE, PlotMode};
+use crate::source::{
+    StampUnit, SyncMethod, not_supported_bag, read_euroc_evo, read_kitti_evo, read_tum_evo,
+};
+
+/// Trajectory analysis and manipulation, as evo_traj.
+///
+/// `sitar traj tum A.txt B.txt --ref GT.txt -a -p`: information on every trajectory, with
+/// --ref synchronised and aligned to the reference; --save_as_tum/--save_as_kitti write the
+/// result into the current directory as evo does.
+#[derive(clap::Args, Debug)]
+#[command(
+    after_help = "Examples:\n  sitar traj tum trajectory_0.txt trajectory_1.txt --ref ground_truth.txt -a --full_check\n  sitar traj euroc data.csv --save_as_tum\n  sitar traj tum a.txt b.txt --merge --save_as_kitti"
+)]
+pub struct Args {
+    #[command(subcommand)]
+    format: Format,
+}
+
+#[derive(clap::Subcommand, Debug)]
+enum Format {
+    /// TUM trajectory files.
+    #[command(args_override_self = true)]
+    Tum {
+        /// One or multiple trajectory files.
+        #[arg(required = true)]
+        traj_files: Vec<PathBuf>,
+        #[command(flatten)]
+        options: Options,
+    },
+    /// EuRoC MAV ground-truth .csv files.
+    #[command(args_override_self = true)]
+    Euroc {
+        /// SEQUENCE/mav0/state_groundtruth_estimate0/data.csv
+        #[arg(required = true)]
+        state_gt_csv: Vec<PathBuf>,
+        #[command(flatten)]
+        options: Options,
+    },
+    /// KITTI pose files.
+    #[command(args_override_self = true)]
+    Kitti {
+        /// One or multiple pose files.
+        #[arg(required = true)]
+        pose_files: Vec<PathBuf>,
+        #[command(flatten)]
+        options: Options,
+    },
+    /// ROS bag files: not supported by sitar.
+    Bag {
+        /// ROS bag file.
+        bag: String,
+        /// Trajectory topics.
+        topics: Vec<String>,
+        /// Use all compatible topics in the bag.
+        #[arg(long = "all_topics")]
+        all_topics: bool,
+        #[command(flatten)]
+        options: Options,
+    },
+    /// ROS 2 bag / MCAP files: not supported by sitar.
+    #[command(alias = "mcap")]
+    Bag2 {
+        /// ROS 2 bag file.
+        bag: String,
+        /// Trajectory topics.
+        topics: Vec<String>,
+        /// Use all compatible topics in the bag.
+        #[arg(long = "all_topics", alias = "all_channels")]
+        all_topics: bool,
+        #[command(flatten)]
+        options: Options,
+    },
+}
+
+/// evo_traj's options.
+#[derive(clap::Args, Debug)]
+struct Options {
+    /// Run all checks and print all stats.
+    #[arg(short = 'f', long = "full_check")]
+    full_check: bool,
+    /// Scale correction with Umeyama's method (requires --ref).
+    #[arg(short = 's', long = "correct_scale", alias = "correct-scale")]
+    correct_scale: bool,
+    /// The number of poses to use for Umeyama alignment, counted from the start (-1: all).
+    #[arg(long = "n_to_align", default_value_t = -1, allow_negative_numbers = true)]
+    n_to_align: i64,
+    /// Associate trajectories via matching timestamps (requires --ref).
+    #[arg(long)]
+    sync: bool,
+    /// File with a transformation (4x4 text or .npy, or JSON x y z qx qy qz qw and optional scale) to
+    /// apply to the trajectories (left multiplicative).
+    #[arg(long = "transform_left", value_name = "FILE")]
+    transform_left: Option<PathBuf>,
+    /// As --transform_left, right multiplicative.
+    #[arg(
+        long = "transform_right",
+        value_name = "FILE",
+        conflicts_with = "transform_left"
+    )]
+    transform_right: Option<PathBuf>,
+    /// With --transform_right: transform each pose and propagate the drift to the next.
+    #[arg(long = "propagate_transform")]
+    propagate_transform: bool,
+    /// Invert the transformation of the file.
+    #[arg(long = "invert_transform")]
+    invert_transform: bool,
+    /// Trajectory that will be marked/used as the reference.
+    #[arg(long = "ref", value_name = "FILE")]
+    reference: Option<PathBuf>,
+    /// Add a constant timestamp offset (s) to the trajectories (not to --ref).
+    #[arg(
+        long = "t_offset",
+        alias = "t-offset",
+        default_value_t = 0.0,
+        allow_negative_numbers = true
+    )]
+    t_offset: f64,
+    /// Maximum timestamp difference (s) for data association.
+    #[arg(long = "t_max_diff", alias = "t-max-diff", default_value_t = 0.01)]
+    t_max_diff: f64,
+    /// Method of the time synchronization.
+    #[arg(long = "sync_method", value_enum, default_value_t = SyncMethod::NearestTime)]
+    sync_method: SyncMethod,
+    /// Merge the trajectories in a single trajectory.
+    #[arg(long)]
+    merge: bool,
+    /// Projects the trajectories to 2D in the desired plane (after alignment).
+    #[arg(long = "project_to_plane", value_enum)]
+    project_to_plane: Option<PlaneArg>,
+    /// Downsample trajectories to max N poses.
+    #[arg(long, value_name = "N")]
+    downsample: Option<usize>,
+    /// Filters out poses if the distance (m) or angle (degrees) to the previous one is below
+    /// the threshold.
+    #[arg(long = "motion_filter", num_args = 2, value_names = ["DISTANCE", "ANGLE_DEGREES"])]
+    motion_filter: Option<Vec<f64>>,
+    /// Alignment with Umeyama's method (no scale; requires --ref).
+    #[arg(short = 'a', long)]
+    align: bool,
+    /// Align the trajectory origin to the origin of the reference trajectory.
+    #[arg(
+        long = "align_origin",
+        alias = "align-origin",
+        conflicts_with = "align"
+    )]
+    align_origin: bool,
+    /// Show the plots (evo's -p); without a display sitar says so and shows nothing.
+    #[arg(short = 'p', long)]
+    plot: bool,
+    /// Show timestamps relative to the start of the reference.
+    #[arg(long = "plot_relative_time")]
+    plot_relative_time: bool,
+    /// The axes for plot projection (xyz: 3-D).
+    #[arg(long = "plot_mode", alias = "plot-mode", value_enum, default_value_t = PlotMode::Xyz)]
+    plot_mode: PlotMode,
+    /// ROS map image yaml (not supported by sitar).
+    #[arg(long = "ros_map_yaml")]
+    ros_map_yaml: Option<String>,
+    /// Map tile layer (not supported by sitar).
+    #[arg(long = "map_tile")]
+    map_tile: Option<String>,
+    /// Path to save the plots: PNG, SVG or PDF by the extension (FILE_trajectories.png,
+    /// FILE_xyz.png, FILE_rpy.png, FILE_speeds.png; one PDF with every page).
+    #[arg(long = "save_plot", value_name = "FILE")]
+    save_plot: Option<PathBuf>,
+    /// Send visualization data to Rerun (not supported by sitar).
+    #[arg(long)]
+    rerun: bool,
+    /// Rerun recording ID (not supported by sitar).
+    #[arg(long = "rerun_rec_id")]
+    rerun_rec_id: Option<String>,
+    /// Path to save a table with the trajectories' statistics (CSV).
+    #[arg(long = "save_table", value_name = "FILE")]
+    save_table: Option<PathBuf>,
+    /// Save the trajectories in TUM format (as NAME.tum in the current directory).
+    #[arg(long = "save_as_tum")]
+    save_as_tum: bool,
+    /// Save the poses in KITTI format (as NAME.kitti in the current directory).
+    #[arg(long = "save_as_kitti")]
+    save_as_kitti: bool,
+    /// Save in a ROS bag (not supported by sitar).
+    #[arg(long = "save_as_bag")]
+    save_as_bag: bool,
+    /// Save in a ROS 2 bag (not supported by sitar).
+    #[arg(long = "save_as_bag2")]
+    save_as_bag2: bool,
+    /// Don't shorten input file paths when displaying trajectory names.
+    #[arg(long = "show_full_names")]
+    show_full_names: bool,
+    /// Unit of TUM stamps: s (evo's reading) or ns (ARCore's integer nanoseconds).
+    #[arg(long = "time_unit", alias = "time-unit", value_enum, default_value_t = StampUnit::S)]
+    time_unit: StampUnit,
+    #[command(flatten)]
+    usability: UsabilityArgs,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Kind {
+    Tum,
+    Euroc,
+    Kitti,
+}
+
+/// The bundle: named trajectories (in the order given), the reference and, after a sync,
+/// each trajectory's synchronised reference.
+struct Bundle {
+    trajectories: Vec<(String, Trajectory)>,
+    reference: Option<(String, Trajectory)>,
+    synced_refs: BTreeMap<String, Trajectory>,
+    synced: bool,
+}
+
+pub fn run(args: Args) -> Result<()> {
+    let (kind, files, options) = match args.format {
+        Format::Tum {
+            traj_files,
+            options,
+        } => (Kind::Tum, traj_files, options),
+        Format::Euroc {
+            state_gt_csv,
+            options,
+        } => (Kind::Euroc, state_gt_csv, options),
+        Format::Kitti {
+            pose_files,
+            options,
+        } => (Kind::Kitti, pose_files, options),
+        Format::Bag { .. } => bail!(not_supported_bag("bag")),
+        Format::Bag2 { .. } => bail!(not_supported_bag("bag2")),
+    };
+    let console = Console::new(&options.usability)?;
+    for (used, flag) in [
+        (options.rerun || options.rerun_rec_id.is_some(), "--rerun"),
+        (options.map_tile.is_some(), "--map_tile"),
+        (options.ros_map_yaml.is_some(), "--ros_map_yaml"),
+        (options.save_as_bag, "--save_as_bag"),
+        (options.save_as_bag2, "--save_as_bag2"),
+    ] {
+        if used {
+            bail!("{flag} is not supported by sitar (it needs ROS or evo's optional viewers)");
+        }
+    }
+    console.debug(SEP)?;
+    let read = |path: &Path| -> Result<(String, Trajectory)> {
+        let named = match kind {
+            Kind::Tum => read_tum_evo(path, options.time_unit, &console)?,
+            Kind::Euroc => read_euroc_evo(path, &console)?,
+            Kind::Kitti => read_kitti_evo(path, &console)?,
+        };
+        Ok((named.name, named.trajectory))
+    };
+    let mut bundle = Bundle {
+        trajectories: Vec::new(),
+        reference: None,
+        synced_refs: BTreeMap::new(),
+        synced: false,
+    };
+    for file in &files {
+        if options.reference.as_ref() == Some(file) {
+            continue;
+        }
+        let (name, trajectory) = read(file)?;
+        match bundle.trajectories.iter_mut().find(|(n, _)| *n == name) {
+            Some(entry) => entry.1 = trajectory,
+            None => bundle.trajectories.push((name, trajectory)),
+        }
+    }
+    if let Some(path) = &options.reference {
+        bundle.reference = Some(read(path)?);
+    }
+    manipulate(&mut bundle, kind, &options, &console)?;
+    print_infos(&bundle, &options, kind, &console)?;
+    if options.plot || options.save_plot.is_some() {
+        plot(&bundle, &options, kind, &console)?;
+    }
+    export(&bundle, &options, kind, &console)
+}
+
+/// evo_traj's steps in its order: downsample, motion filter, merge, time offset, sync,
+/// alignment, transformation, projection.
+fn manipulate(bundle: &mut Bundle, kind: Kind, options: &Options, console: &Console) -> Result<()> {
+    let all =
+        |bundle: &mut Bundle, f: &mut dyn FnMut(&mut Trajectory) -> Result<()>| -> Result<()> {
+            for (_, t) in &mut bundle.trajectories {
+                f(t)?;
+            }
+            if let Some((_, t)) = &mut bundle.reference {
+                f(t)?;
+            }
+            Ok(())
+        };
+    if let Some(n) = options.downsample {
+        console.debug(SEP)?;
+        console.info(&format!("Downsampling trajectories to max {n} poses."))?;
+        all(bundle, &mut |t| Ok(t.downsample(n)?))?;
+    }
+    if let Some(filter) = &options.motion_filter {
+        console.debug(SEP)?;
+        console.info(&format!(
+            "Filtering trajectories with motion filter thresholds: {:.6} m, {:.6} deg",
+            filter[0], filter[1]
+        ))?;
+        all(bundle, &mut |t| Ok(t.motion_filter(filter[0], filter[1])?))?;
+    }
+    if options.merge {
+        if kind == Kind::Kitti {
+            bail!("Can't merge KITTI files.");
+        }
+        if bundle.trajectories.is_empty() {
+            bail!("No trajectories to merge.");
+        }
+        let parts: Vec<Trajectory> = bundle.trajectories.iter().map(|(_, t)| t.clone()).collect();
+        bundle.trajectories = vec![("merged_trajectory".into(), Trajectory::merge(&parts))];
+    }
+    if options.t_offset != 0.0 {
+        console.debug(SEP)?;
+        let offset = sitar_estimator::seconds_to_ns(options.t_offset);
+        for (name, t) in &mut bundle.trajectories {
+            if kind == Kind::Kitti {
+                bail!("{name} doesn't have timestamps - can't add time offset.");
+            }
+            console.info(&format!(
+                "Adding time offset to {name}: {} (s)",
+                crate::pyfmt::repr(options.t_offset)
+            ))?;
+            for s in &mut t.stamps {
+                *s += offset;
+            }
+        }
+    }
+    if options.n_to_align != -1 && !(options.align || options.correct_scale) {
+        bail!("--n_to_align is useless without --align or/and --correct_scale");
+    }
+    let needs_sync = (kind == Kind::Kitti && bundle.reference.is_some())
+        || options.sync
+        || options.align
+        || options.correct_scale
+        || options.align_origin;
+    if needs_sync {
+        let Some((ref_name, reference)) = bundle.reference.clone() else {
+            bail!("Can't align or sync without a reference! (--ref)  *grunt*");
+        };
+        bundle.synced = true;
+        if kind == Kind::Kitti {
+            for (name, _) in &bundle.trajectories {
+                bundle.synced_refs.insert(name.clone(), reference.clone());
+            }
+        } else {
+            console.debug(SEP)?;
+            let sync = crate::source::SyncArgs {
+                t_max_diff: options.t_max_diff,
+                sync_method: options.sync_method,
+                ..Default::default()
+            };
+            for (name, t) in &mut bundle.trajectories {
+                console.debug(&format!("Syncing {name} with reference."))?;
+                let (r, e) = crate::metric::synchronise(
+                    reference.clone(),
+                    t.clone(),
+                    &sync,
+                    (&ref_name, name),
+                    console,
+                )?;
+                *t = e;
+                bundle.synced_refs.insert(name.clone(), r);
+            }
+        }
+        let n = match options.n_to_align {
+            -1 => None,
+            n if n > 0 => Some(n as usize),
+            n => bail!("--n_to_align must be -1 (all poses) or positive, got {n}"),
+        };
+        if options.align || options.correct_scale {
+            console.debug(SEP)?;
+            let alignment = match (options.align, options.correct_scale) {
+                (true, true) => Alignment::Sim3,
+                (true, false) => Alignment::Se3,
+                _ => Alignment::ScaleOnly,
+            };
+            for (name, t) in &mut bundle.trajectories {
+                console.debug(&format!("Aligning {name} to reference."))?;
+                let r = &bundle.synced_refs[name];
+                if r.len() != t.len() {
+                    bail!(
+                        "{name}: {} poses, the reference {}: align needs equal numbers (KITTI poses pair by index)",
+                        t.len(),
+                        r.len()
+                    );
+                }
+                crate::metric::align_logged(t, r, alignment, n, console)
+                    .with_context(|| format!("aligning {name}"))?;
+            }
+        }
+        if options.align_origin {
+            console.debug(SEP)?;
+            for (name, t) in &mut bundle.trajectories {
+                console.debug(&format!("Aligning {name}'s origin to reference."))?;
+                let r = &bundle.synced_refs[name];
+                align_first(t, r, Alignment::Origin, None)
+                    .with_context(|| format!("aligning {name}'s origin"))?;
+            }
+        }
+    }
+    if let Some(path) = options
+        .transform_left
+        .as_ref()
+        .or(options.transform_right.as_ref())
+    {
+        let mut transform = load_transform(path)?;
+        if options.invert_transform {
+            transform = transform.inverse();
+        }
+        let right = options.transform_right.is_some();
+        console.debug(SEP)?;
+        console.debug(&format!(
+            "Applying a {}-multiplicative transformation:\n{transform}",
+            if right { "right" } else { "left" }
+        ))?;
+        for (_, t) in &mut bundle.trajectories {
+            apply_transform(t, transform, right, options.propagate_transform)?;
+        }
+    }
+    if let Some(plane) = options.project_to_plane {
+        console.debug(SEP)?;
+        console.debug(&format!(
+            "Projecting trajectories to {} plane.",
+            plane.name()
+        ))?;
+        all(bundle, &mut |t| {
+            t.project(plane.plane());
+            Ok(())
+        })?;
+        for r in bundle.synced_refs.values_mut() {
+            r.project(plane.plane());
+        }
+    }
+    Ok(())
+}
+
+/// evo's `load_transform`: a 4×4 matrix as text or `.npy`, or JSON with `x y z qx qy qz qw`
+/// (and optionally `scale`); it must be an SE(3) or Sim(3) matrix.
+fn load_transform(path: &Path) -> Result<DMat4> {
+    let bytes = std::fs::read(path)
+        .with_context(|| format!("{}: cannot read the transformation", path.display()))?;
+    let name = path.display();
+    let rows: Vec<f64> = if bytes.starts_with(b"\x93NUMPY") {
+        let array = crate::archive::parse_npy(&bytes).with_context(|| format!("{name}"))?;
+        if array.shape != [4, 4] {
+            bail!(
+                "{name} doesn't contain a 4x4 matrix (shape {:?})",
+                array.shape
+            );
+        }
+        array.data
+    } else if bytes.trim_ascii_start().starts_with(b"{") {
+        let json: serde_json::Value =
+            serde_json::from_slice(&bytes).with_context(|| format!("{name}: not JSON"))?;
+        let get = |k: &str| json[k].as_f64();
+        let keys = ["x", "y", "z", "qx", "qy", "qz", "qw"];
+        let values: Option<Vec<f64>> = keys.iter().map(|k| get(k)).collect();
+        let Some(v) = values else {
+            bail!("invalid transform file {name} - expected keys {keys:?}");
+        };
+        let scale = get("scale").unwrap_or(1.0);
+        let q = DQuat::from_xyzw(v[3], v[4], v[5], v[6]).normalize();
+        let m = DMat4::from_scale_rotation_translation(
+            DVec3::splat(scale),
+            q,
+            DVec3::new(v[0], v[1], v[2]),
+        );
+        return Ok(m);
+    } else {
+        let text = String::from_utf8_lossy(&bytes);
+        text.lines()
+            .filter(|l| !l.trim_start().starts_with('#'))
+            .flat_map(str::split_whitespace)
+            .map(|t| {
+                t.parse::<f64>()
+                    .with_context(|| format!("{name}: '{t}' is not a number"))
+            })
+            .collect::<Result<_>>()?
+    };
+    if rows.len() != 16 {
+        bail!(
+            "{name} doesn't contain a valid Sim(3) or SE(3) matrix ({} values, 16 expected)",
+            rows.len()
+        );
+    }
+    let m = DMat4::from_cols_slice(&rows).transpose();
+    let linear = DMat3::from_mat4(m);
+    let scale = linear.determinant().cbrt();
+    let rotation = linear * (1.0 / scale);
+    let orthonormal = (rotation * rotation.transpose() - DMat3::IDENTITY)
+        .to_cols_array()
+        .iter()
+        .all(|e| e.abs() < 1e-6);
+    if !(scale > 0.0 && orthonormal && m.row(3).abs_diff_eq(glam::DVec4::W, 1e-9)) {
+        bail!("{name} doesn't contain a valid Sim(3) or SE(3) matrix");
+    }
+    Ok(m)
+}
+
+/// A pose as a 4×4 matrix.
+fn pose_matrix(t: &Trajectory, i: usize) -> DMat4 {
+    DMat4::from_rotation_translation(t.orientations[i], t.positions[i])
+}
+
+/// Applies `m` to every pose: `m·P` (left), `P·m` (right) or, with `propagate`, the
+/// relative motions right-multiplied and chained from the first pose (evo's `transform`).
+fn apply_transform(t: &mut Trajectory, m: DMat4, right: bool, propagate: bool) -> Result<()> {
+    let poses: Vec<DMat4> = (0..t.len()).map(|i| pose_matrix(t, i)).collect();
+    let new: Vec<DMat4> = if right && propagate {
+        let mut out = vec![poses[0]];
+        for w in poses.windows(2) {
+            let relative = w[0].inverse() * w[1] * m;
+            let last = *out.last().unwrap_or(&poses[0]);
+            out.push(last * relative);
+        }
+        out
+    } else if right {
+        poses.iter().map(|p| *p * m).collect()
+    } else {
+        poses.iter().map(|p| m * *p).collect()
+    };
+    for (i, p) in new.iter().enumerate() {
+        let (scale, rotation, translation) = p.to_scale_rotation_translation();
+        if !(scale - DVec3::ONE).abs().max_element().is_finite() {
+            bail!("the transformation gives a non-finite pose");
+        }
+        t.positions[i] = translation;
+        t.orientations[i] = rotation.normalize();
+    }
+    Ok(())
+}
+
+/// evo's compact name: the file stem unless --show_full_names.
+fn compact(name: &str, options: &Options) -> String {
+    if options.show_full_names {
+        name.to_owned()
+    } else {
+        Path::new(name)
+            .file_stem()
+            .map_or_else(|| name.to_owned(), |s| s.to_string_lossy().into_owned())
+    }
+}
+
+/// evo's per-trajectory information lines.
+fn print_traj_info(
+    name: &str,
+    t: &Trajectory,
+    options: &Options,
+    kind: Kind,
+    console: &Console,
+) -> Result<()> {
+    console.info(SEP)?;
+    console.info(&format!("name:\t{name}"))?;
+    let timed = kind != Kind::Kitti;
+    let repr = |v: f64| crate::pyfmt::repr(v);
+    if !(console.is_verbose() || options.full_check) {
+        let mut line = format!("{} poses, {:.3}m path length", t.len(), t.path_length());
+        if timed {
+            let duration = seconds(t.stamps[t.len() - 1]) - seconds(t.stamps[0]);
+            line += &format!(", {duration:.3}s duration");
+        }
+        return console.info(&format!("infos:\t{line}"));
+    }
+    let mut infos = vec![
+        ("nr. of poses".to_owned(), t.len().to_string()),
+        (
+            "path length (m)".to_owned(),
+            crate::pyfmt::repr(t.path_length()),
+        ),
+        (
+            "pos_start (m)".to_owned(),
+            crate::pyfmt::numpy_vector(&t.positions[0].to_array()),
+        ),
+        (
+            "pos_end (m)".to_owned(),
+            crate::pyfmt::numpy_vector(&t.positions[t.len() - 1].to_array()),
+        ),
+    ];
+    if timed {
+        let (first, last) = (t.stamps[0], t.stamps[t.len() - 1]);
+        infos.push(("duration (s)".into(), repr(seconds(last) - seconds(first))));
+        infos.push(("t_start (s)".into(), repr(seconds(first))));
+        infos.push(("t_end (s)".into(), repr(seconds(last))));
+    }
+    infos.sort();
+    console.info(&dict("infos", &infos))?;
+    if options.full_check {
+        let mut checks = vec![
+            ("array shapes".to_owned(), "ok".to_owned()),
+            ("SE(3) conform".to_owned(), "yes".to_owned()),
+            ("quaternions".to_owned(), "ok".to_owned()),
+        ];
+        if timed {
+            checks.push(("nr. of stamps".into(), "ok".into()));
+            let ascending = t.stamps.windows(2).all(|w| w[0] < w[1]);
+            checks.push((
+                "timestamps".into(),
+                if ascending {
+                    "ok"
+                } else {
+                    "wrong, not ascending or duplicates"
+                }
+                .into(),
+            ));
+        }
+        checks.sort();
+        console.info(&dict("checks", &checks))?;
+        let mut text = "stats:".to_owned();
+        match statistics(t, timed) {
+            Ok(stats) => {
+                let mut stats: Vec<_> = stats.into_iter().collect();
+                stats.sort_by(|a, b| a.0.cmp(&b.0));
+                for (k, v) in stats {
+                    text += &format!("\n\t{k}\t{v:.6}");
+                }
+            }
+            Err(e) => console.warn(&format!("Failed to compute all trajectory stats: {e}")),
+        }
+        console.info(&text)?;
+    }
+    Ok(())
+}
+
+fn dict(title: &str, entries: &[(String, String)]) -> String {
+    let mut text = format!("{title}:");
+    for (k, v) in entries {
+        text += &format!("\n\t{k}\t{v}");
+    }
+    text
+}
+
+/// evo's `get_statistics`: speeds between poses and stamp steps (empty without stamps or
+/// with fewer than two poses); a repeated or decreasing stamp is an error, as in evo.
+fn statistics(t: &Trajectory, timed: bool) -> Result<Vec<(String, f64)>> {
+    if !timed || t.len() < 2 {
+        return Ok(Vec::new());
+    }
+    let mut speeds = Vec::with_capacity(t.len() - 1);
+    let mut steps = Vec::with_capacity(t.len() - 1);
+    for i in 0..t.len() - 1 {
+        let dt = seconds(t.stamps[i + 1]) - seconds(t.stamps[i]);
+        if dt <= 0.0 {
+            bail!(
+                "bad timestamps: {} & {}",
+                crate::pyfmt::repr(seconds(t.stamps[i])),
+                crate::pyfmt::repr(seconds(t.stamps[i + 1]))
+            );
+        }
+        speeds.push((t.positions[i + 1] - t.positions[i]).length() / dt);
+        steps.push(dt);
+    }
+    let max = |v: &[f64]| v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let min = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+    let (vmax, vmin, vmean) = (max(&speeds), min(&speeds), mean(&speeds));
+    Ok(vec![
+        ("v_max (m/s)".into(), vmax),
+        ("v_min (m/s)".into(), vmin),
+        ("v_avg (m/s)".into(), vmean),
+        ("v_max (km/h)".into(), vmax * 3.6),
+        ("v_min (km/h)".into(), vmin * 3.6),
+        ("v_avg (km/h)".into(), vmean * 3.6),
+        ("dt_max (s)".into(), max(&steps)),
+        ("dt_min (s)".into(), min(&steps)),
+        ("dt_avg (s)".into(), mean(&steps)),
+    ])
+}
+
+fn print_infos(bundle: &Bundle, options: &Options, kind: Kind, console: &Console) -> Result<()> {
+    for (name, t) in &bundle.trajectories {
+        print_traj_info(&compact(name, options), t, options, kind, console)?;
+    }
+    if let Some((name, t)) = &bundle.reference {
+        print_traj_info(&compact(name, options), t, options, kind, console)?;
+    }
+    Ok(())
+}
+
+/// The file stem evo exports a trajectory under.
+fn file_stem(name: &str) -> String {
+    Path::new(name)
+        .file_stem()
+        .map_or_else(|| name.to_owned(), |s| s.to_string_lossy().into_owned())
+}
+
+fn export(bundle: &Bundle, options: &Options, kind: Kind, console: &Console) -> Result<()> {
+    // evo re-derives quaternions from the pose matrices once it has transformed the poses,
+    // with w ≥ 0; sitar writes the same sign.
+    let transformed = options.align
+        || options.correct_scale
+        || options.align_origin
+        || options.transform_left.is_some()
+        || options.transform_right.is_some()
+        || options.project_to_plane.is_some();
+    let canonical = |name: &String, t: &Trajectory| -> Trajectory {
+        let mut t = t.clone();
+        let is_reference = bundle.reference.as_ref().is_some_and(|(r, _)| r == name);
+        if transformed && !is_reference {
+            for q in &mut t.orientations {
+                if q.w < 0.0 {
+                    *q = -*q;
+                }
+            }
+        }
+        t
+    };
+    let named = || bundle.trajectories.iter().chain(bundle.reference.iter());
+    let overwrite = |path: &Path| {
+        if path.exists() {
+            console.warn(&format!("{} exists, overwriting", path.display()));
+        }
+    };
+    if options.save_as_tum {
+        console.info(SEP)?;
+        if kind == Kind::Kitti {
+            bail!("KITTI poses have no timestamps: --save_as_tum needs tum or euroc input");
+        }
+        for (name, t) in named() {
+            let dest = PathBuf::from(format!("{}.tum", file_stem(name)));
+            overwrite(&dest);
+            let mut out = Vec::new();
+            write_tum(&canonical(name, t), &mut out).context("writing TUM")?;
+            std::fs::write(&dest, out)
+                .with_context(|| format!("{}: cannot write", dest.display()))?;
+            console.info(&format!("Trajectory saved to: {}", dest.display()))?;
+        }
+    }
+    if options.save_as_kitti {
+        console.info(SEP)?;
+        for (name, t) in named() {
+            let dest = PathBuf::from(format!("{}.kitti", file_stem(name)));
+            overwrite(&dest);
+            std::fs::write(&dest, kitti_text(t))
+                .with_context(|| format!("{}: cannot write", dest.display()))?;
+            console.info(&format!("Poses saved to: {}", dest.display()))?;
+        }
+    }
+    if let Some(path) = &options.save_table {
+        console.debug(SEP)?;
+        overwrite(path);
+        std::fs::write(path, stats_table(bundle, kind)?)
+            .with_context(|| format!("{}: cannot write the table", path.display()))?;
+    }
+    Ok(())
+}
+
+/// KITTI lines: the first three rows of each pose matrix, full precision.
+fn kitti_text(t: &Trajectory) -> String {
+    let mut out = String::with_capacity(t.len() * 200);
+    for i in 0..t.len() {
+        let r = DMat3::from_quat(t.orientations[i]);
+        let p = t.positions[i];
+        let row = |k: usize| [r.col(0)[k], r.col(1)[k], r.col(2)[k], p[k]];
+        let values: Vec<String> = (0..3).flat_map(row).map(|v| format!("{v:e}")).collect();
+        out += &values.join(" ");
+        out.push('\n');
+    }
+    out
+}
+
+/// evo's `--save_table` CSV: one column per trajectory, one row per number (transposed, as
+/// evo's default `table_export_transpose`).
+fn stats_table(bundle: &Bundle, kind: Kind) -> Result<String> {
+    let timed = kind != Kind::Kitti;
+    let mut columns = Vec::new();
+    for (name, t) in &bundle.trajectories {
+        let mut rows = vec![
+            ("nr. of poses".to_owned(), t.len() as f64),
+            ("path length (m)".to_owned(), t.path_length()),
+        ];
+        if timed {
+            let (first, last) = (t.stamps[0], t.stamps[t.len() - 1]);
+            rows.push(("duration (s)".into(), seconds(last) - seconds(first)));
+            rows.push(("t_start (s)".into(), seconds(first)));
+            rows.push(("t_end (s)".into(), seconds(last)));
+        }
+        rows.extend(statistics(t, timed).unwrap_or_default());
+        columns.push((name.clone(), rows));
+    }
+    let mut out = String::from(",");
+    out += &columns
+        .iter()
+        .map(|c| c.0.clone())
+        .collect::<Vec<_>>()
+        .join(",");
+    out.push('\n');
+    let keys: Vec<String> = columns
+        .first()
+        .map(|c| c.1.iter().map(|r| r.0.clone()).collect())
+        .unwrap_or_default();
+    for key in keys {
+        out += &key;
+        for (_, rows) in &columns {
+            out.push(',');
+            if let Some((_, v)) = rows.iter().find(|r| r.0 == key) {
+                out += &crate::pyfmt::repr(*v);
+            }
+        }
+        out.push('\n');
+    }
+    Ok(out)
+}
+
+/// evo_traj's figures: trajectories, xyz, rpy and (with stamps) speeds.
+fn plot(bundle: &Bundle, options: &Options, kind: Kind, console: &Console) -> Result<()> {
+    let timed = kind != Kind::Kitti;
+    let start = if options.plot_relative_time && timed {
+        bundle
+            .reference
+            .as_ref()
+            .map(|(_, r)| r.stamps[0])
+            .or_else(|| bundle.trajectories.iter().map(|(_, t)| t.stamps[0]).min())
+    } else {
+        None
+    };
+    let x = |t: &Trajectory, i: usize| -> f64 {
+        if timed {
+            seconds(t.stamps[i]) - seconds(start.unwrap_or(0))
+        } else {
+            i as f64
+        }
+    };
+    let mut all: Vec<(String, &Trajectory, RGBColor3, bool)> = Vec::new();
+    if let Some((name, r)) = &bundle.reference {
+        all.push((compact(name, options), r, RGBColor3(0x44, 0x44, 0x44), true));
+    }
+    for (k, (name, t)) in bundle.trajectories.iter().enumerate() {
+        let c = PALETTE[k % PALETTE.len()];
+        all.push((compact(name, options), t, RGBColor3(c.0, c.1, c.2), false));
+    }
+    let colour = |c: &RGBColor3| plotters::style::RGBColor(c.0, c.1, c.2);
+    let trajectories = Drawing::Trajectories {
+        title: "evo_traj - trajectory plot".into(),
+        mode: options.plot_mode,
+        paths: all
+            .iter()
+            .map(|(name, t, c, dashed)| Path3 {
+                name: name.clone(),
+                points: t.positions.iter().map(|p| p.to_array()).collect(),
+                colour: colour(c),
+                dashed: *dashed,
+            })
+            .collect(),
+    };
+    let x_label = if timed { "t (s)" } else { "index" };
+    let panel = |label: &str, value: &dyn Fn(&Trajectory, usize) -> f64| -> (String, Vec<Series>) {
+        (
+            label.to_owned(),
+            all.iter()
+                .map(|(name, t, c, dashed)| Series {
+                    name: name.clone(),
+                    points: (0..t.len()).map(|i| (x(t, i), value(t, i))).collect(),
+                    colour: colour(c),
+                    dashed: *dashed,
+                })
+                .collect(),
+        )
+    };
+    let xyz = Drawing::Panels {
+        title: "xyz".into(),
+        x_label: x_label.into(),
+        panels: vec![
+            panel("x (m)", &|t, i| t.positions[i].x),
+            panel("y (m)", &|t, i| t.positions[i].y),
+            panel("z (m)", &|t, i| t.positions[i].z),
+        ],
+    };
+    let euler = |t: &Trajectory, i: usize, k: usize| {
+        sitar_estimator::euler_sxyz(DMat3::from_quat(t.orientations[i]))[k].to_degrees()
+    };
+    let rpy = Drawing::Panels {
+        title: "rpy (euler_angle_sequence: sxyz)".into(),
+        x_label: x_label.into(),
+        panels: vec![
+            panel("roll (deg)", &|t, i| euler(t, i, 0)),
+            panel("pitch (deg)", &|t, i| euler(t, i, 1)),
+            panel("yaw (deg)", &|t, i| euler(t, i, 2)),
+        ],
+    };
+    let speed = |t: &Trajectory, i: usize| {
+        let j = i.min(t.len().saturating_sub(2));
+        let dt = seconds(t.stamps[j + 1]) - seconds(t.stamps[j]);
+        if dt > 0.0 {
+            (t.positions[j + 1] - t.positions[j]).length() / dt
+        } else {
+            f64::NAN
+        }
+    };
+    let speeds = Drawing::Panels {
+        title: "speeds".into(),
+        x_label: x_label.into(),
+        panels: vec![panel("v (m/s)", &speed)],
+    };
+    let mut pages = vec![
+        ("trajectories", Page::Other(&trajectories)),
+        ("xyz", Page::Other(&xyz)),
+        ("rpy", Page::Other(&rpy)),
+    ];
+    if timed && all.iter().all(|(_, t, _, _)| t.len() >= 2) {
+        pages.push(("speeds", Page::Other(&speeds)));
+    }
+    if options.plot {
+        canvas::show(PAGE, &pages, console)?;
+    }
+    if let Some(path) = &options.save_plot {
+        console.info(SEP)?;
+        for file in canvas::save_collection(path, PAGE, &pages)? {
+            console.info(&format!("Plot saved to {}", file.display()))?;
+        }
+    }
+    Ok(())
+}
+
+/// A colour as three bytes (copyable into closures).
+#[derive(Clone, Copy)]
+struct RGBColor3(u8, u8, u8);
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn transforms_left_right_and_propagated() {
+        let mut t = Trajectory {
+            stamps: vec![0, 1, 2],
+            positions: vec![DVec3::ZERO, DVec3::X, DVec3::X * 2.0],
+            orientations: vec![DQuat::IDENTITY; 3],
+            time_unit: sitar_estimator::TimeUnit::Seconds,
+        };
+        let shift = DMat4::from_translation(DVec3::Y);
+        let mut left = t.clone();
+        apply_transform(&mut left, shift, false, false).unwrap();
+        assert!(left.positions[2].abs_diff_eq(DVec3::new(2.0, 1.0, 0.0), 1e-12));
+        let turn = DMat4::from_rotation_z(std::f64::consts::FRAC_PI_2);
+        apply_transform(&mut t, turn, true, true).unwrap();
+        // Each unit step turns a further quarter: (0,0) → (1,0) → (1,1).
+        assert!(
+            t.positions[2].abs_diff_eq(DVec3::new(1.0, 1.0, 0.0), 1e-12),
+            "{}",
+            t.positions[2]
+        );
+    }
+}

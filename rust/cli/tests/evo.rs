@@ -1,0 +1,372 @@
+//! `sitar ape|rpe|traj|res` with evo's own command lines against evo 1.38's output on
+//! real-format files with dataset quirks (`scripts/golden/make_evo_cli_goldens.py` made the
+//! files and the goldens): the printed text (numbers to their printed precision), the
+//! archives' info, stats and arrays (1e-9), the saved files, evo's warnings; and, when evo is
+//! installed, evo's own `evo_res` reading sitar's archives.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use serde_json::Value;
+
+fn golden() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/golden/evo")
+}
+
+fn cases() -> Vec<Value> {
+    let text = std::fs::read_to_string(golden().join("expected.json")).unwrap();
+    serde_json::from_str::<Value>(&text)
+        .unwrap()
+        .as_array()
+        .unwrap()
+        .clone()
+}
+
+fn strings(v: &Value) -> Vec<String> {
+    v.as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s.as_str().unwrap().to_owned())
+        .collect()
+}
+
+/// A fresh directory holding copies of the files of `from`.
+fn workdir(from: &Path) -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    for entry in std::fs::read_dir(from).unwrap() {
+        let path = entry.unwrap().path();
+        std::fs::copy(&path, dir.path().join(path.file_name().unwrap())).unwrap();
+    }
+    dir
+}
+
+/// evo's stdout without its warnings (sitar writes those to stderr) and without the
+/// progress percentages of its all-pairs angle search.
+fn evo_lines(stdout: &str) -> (Vec<String>, Vec<String>) {
+    let mut lines = Vec::new();
+    let mut warnings = Vec::new();
+    for line in stdout.lines() {
+        if let Some(w) = line.strip_prefix("[WARNING] ") {
+            warnings.push(w.to_owned());
+        } else if !(line.ends_with(" %") && line[..line.len() - 2].parse::<u32>().is_ok()) {
+            lines.push(line.to_owned());
+        }
+    }
+    (lines, warnings)
+}
+
+fn tokens(line: &str) -> Vec<&str> {
+    line.split(|c: char| c.is_whitespace() || "[](),".contains(c))
+        .filter(|t| !t.is_empty())
+        .collect()
+}
+
+/// Two printed lines agree: the same words, numbers equal to `tolerance` (relative above 1).
+fn same_line(got: &str, want: &str, tolerance: f64) -> bool {
+    let (a, b) = (tokens(got), tokens(want));
+    a.len() == b.len()
+        && a.iter()
+            .zip(&b)
+            .all(|(x, y)| match (x.parse::<f64>(), y.parse::<f64>()) {
+                (Ok(x), Ok(y)) => (x - y).abs() <= tolerance * y.abs().max(1.0),
+                _ => x == y,
+            })
+}
+
+fn assert_text(name: &str, got: &str, want: &[String], tolerance: f64) {
+    let got: Vec<&str> = got.lines().collect();
+    assert_eq!(
+        got.len(),
+        want.len(),
+        "{name}: {} lines, evo printed {}:\n{}\n---\n{}",
+        got.len(),
+        want.len(),
+        got.join("\n"),
+        want.join("\n")
+    );
+    for (k, (g, w)) in got.iter().zip(want).enumerate() {
+        assert!(
+            same_line(g, w, tolerance),
+            "{name} line {}: '{g}' vs evo '{w}'",
+            k + 1
+        );
+    }
+}
+
+fn close(name: &str, what: &str, got: f64, want: f64, tolerance: f64) {
+    assert!(
+        (got - want).abs() <= tolerance * want.abs().max(1.0) || (got.is_nan() && want.is_nan()),
+        "{name} {what}: {got} vs evo {want}"
+    );
+}
+
+/// The float64 values of a `.npy` written by sitar (format 1.0, `<f8`).
+fn npy_values(bytes: &[u8]) -> Vec<f64> {
+    assert_eq!(&bytes[..8], b"\x93NUMPY\x01\x00");
+    let header = u16::from_le_bytes([bytes[8], bytes[9]]) as usize;
+    assert!(
+        std::str::from_utf8(&bytes[10..10 + header])
+            .unwrap()
+            .contains("'<f8'")
+    );
+    bytes[10 + header..]
+        .chunks_exact(8)
+        .map(|c| f64::from_le_bytes(c.try_into().unwrap()))
+        .collect()
+}
+
+/// Entries of a zip archive, in order.
+fn zip_entries(path: &Path) -> Vec<(String, Vec<u8>)> {
+    let mut archive = zip::ZipArchive::new(std::fs::File::open(path).unwrap()).unwrap();
+    (0..archive.len())
+        .map(|i| {
+            let mut file = archive.by_index(i).unwrap();
+            let mut bytes = Vec::new();
+            std::io::Read::read_to_end(&mut file, &mut bytes).unwrap();
+            (file.name().to_owned(), bytes)
+        })
+        .collect()
+}
+
+/// The entries of a JSON object in the order written.
+fn ordered(bytes: &[u8]) -> Vec<(String, Value)> {
+    let text = std::str::from_utf8(bytes).unwrap();
+    let map: serde_json::Map<String, Value> = serde_json::from_str(text).unwrap();
+    let mut keys: Vec<(usize, String)> = map
+        .keys()
+        .map(|k| (text.find(&format!("\"{k}\":")).unwrap(), k.clone()))
+        .collect();
+    keys.sort();
+    keys.into_iter()
+        .map(|(_, k)| (k.clone(), map[&k].clone()))
+        .collect()
+}
+
+fn check_archive(name: &str, path: &Path, want: &Value) {
+    let entries = zip_entries(path);
+    let names: Vec<&str> = entries.iter().map(|(n, _)| n.as_str()).collect();
+    assert_eq!(names, strings(&want["entries"]), "{name}: archive entries");
+    let entry = |n: &str| &entries.iter().find(|(k, _)| k == n).unwrap().1;
+    let info = ordered(entry("info.json"));
+    let want_info = want["info"].as_object().unwrap();
+    assert_eq!(info.len(), want_info.len(), "{name}: info.json");
+    for (k, v) in &info {
+        assert_eq!(v, &want_info[k], "{name}: info {k}");
+    }
+    let stats = ordered(entry("stats.json"));
+    let want_stats: Vec<&String> = want["stats"].as_object().unwrap().keys().collect();
+    let order = ["rmse", "mean", "median", "std", "min", "max", "sse"];
+    assert_eq!(
+        stats.iter().map(|(k, _)| k.as_str()).collect::<Vec<_>>(),
+        order,
+        "{name}"
+    );
+    assert_eq!(want_stats.len(), 7);
+    for (k, v) in &stats {
+        close(
+            name,
+            k,
+            v.as_f64().unwrap(),
+            want["stats"][k].as_f64().unwrap(),
+            1e-9,
+        );
+    }
+    for (array, values) in want["arrays"].as_object().unwrap() {
+        let got = npy_values(entry(&format!("{array}.npy")));
+        let want: Vec<f64> = values
+            .as_array()
+            .unwrap()
+            .iter()
+            .flat_map(|v| match v {
+                Value::Array(row) => row.iter().map(|x| x.as_f64().unwrap()).collect(),
+                x => vec![x.as_f64().unwrap()],
+            })
+            .collect();
+        assert_eq!(got.len(), want.len(), "{name}: {array} length");
+        // Stamps are 1e9-sized seconds (float rounding ~1e-7 s after interpolation).
+        let tolerance = if array.contains("second") || array == "timestamps" {
+            1e-6
+        } else {
+            1e-9
+        };
+        for (k, (g, w)) in got.iter().zip(&want).enumerate() {
+            close(name, &format!("{array}[{k}]"), *g, *w, tolerance);
+        }
+    }
+}
+
+/// Files saved by evo (`%.18e` numbers) and by sitar agree word by word, numbers to 1e-9.
+fn check_saved(name: &str, dir: &Path, saved: &serde_json::Map<String, Value>) {
+    for (file, want) in saved {
+        let got = std::fs::read_to_string(dir.join(file))
+            .unwrap_or_else(|e| panic!("{name}: sitar did not write {file}: {e}"));
+        let want: Vec<&str> = want
+            .as_str()
+            .unwrap()
+            .lines()
+            .filter(|l| !l.is_empty())
+            .collect();
+        let got_lines: Vec<&str> = got.lines().filter(|l| !l.is_empty()).collect();
+        assert_eq!(got_lines.len(), want.len(), "{name}: {file} lines");
+        for (g, w) in got_lines.iter().zip(&want) {
+            assert!(same_line(g, w, 1e-9), "{name}: {file}: '{g}' vs evo '{w}'");
+        }
+    }
+}
+
+fn sitar(args: &[String], dir: &Path) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_sitar"))
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .expect("run sitar")
+}
+
+#[test]
+fn sitar_prints_saves_and_warns_as_evo_does() {
+    let cases = cases();
+    let tools: Vec<&str> = cases.iter().map(|c| c["tool"].as_str().unwrap()).collect();
+    for tool in ["ape", "rpe", "traj", "res"] {
+        assert!(
+            tools.iter().filter(|t| **t == tool).count() >= 5,
+            "{tool} cases"
+        );
+    }
+    assert!(cases.len() >= 30);
+    let evo_archives = golden().join("archives");
+    let ours = tempfile::tempdir().unwrap();
+    for case in &cases {
+        let name = case["name"].as_str().unwrap();
+        let tool = case["tool"].as_str().unwrap();
+        let source = if tool == "res" {
+            evo_archives.clone()
+        } else {
+            golden().join("data")
+        };
+        let dir = workdir(&source);
+        let mut args = vec![tool.to_owned()];
+        args.extend(strings(&case["args"]));
+        if case.get("archive").is_some() {
+            args.extend(["--save_results".into(), "result.zip".into()]);
+        }
+        let out = sitar(&args, dir.path());
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            out.status.success(),
+            "{name}: sitar {args:?} failed: {stderr}"
+        );
+        let (want, warnings) = evo_lines(case["stdout"].as_str().unwrap());
+        // Printed statistics have 6 decimals; longer numbers (traj) agree far closer.
+        assert_text(name, &String::from_utf8_lossy(&out.stdout), &want, 1e-6);
+        for w in warnings {
+            assert!(
+                stderr.lines().any(|l| l == format!("[WARNING] {w}")),
+                "{name}: evo warned '{w}', sitar's stderr: {stderr}"
+            );
+        }
+        if let Some(archive) = case.get("archive") {
+            check_archive(name, &dir.path().join("result.zip"), archive);
+            std::fs::copy(
+                dir.path().join("result.zip"),
+                ours.path().join(format!("{name}.zip")),
+            )
+            .unwrap();
+        }
+        check_saved(name, dir.path(), case["saved"].as_object().unwrap());
+    }
+    evo_res_reads_sitar_archives(ours.path(), &evo_archives);
+}
+
+/// evo's `evo_res` reads every archive sitar wrote and prints the statistics it prints for
+/// evo's own archives of the same cases.
+fn evo_res_reads_sitar_archives(ours: &Path, theirs: &Path) {
+    let probe = Command::new("evo_res").arg("--help").output();
+    if !probe.is_ok_and(|o| o.status.success()) {
+        println!(
+            "SKIPPED evo_res on sitar's archives: evo_res is not on PATH (pip install evo==1.38.1)"
+        );
+        return;
+    }
+    let mut names: Vec<String> = std::fs::read_dir(ours)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert!(names.len() >= 30, "{} archives", names.len());
+    let run = |dir: &Path| {
+        let out = Command::new("evo_res")
+            .args(&names)
+            .args(["--use_filenames", "--ignore_title", "--no_warnings"])
+            .current_dir(dir)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "evo_res in {}: {}",
+            dir.display(),
+            String::from_utf8_lossy(&out.stdout)
+        );
+        String::from_utf8(out.stdout).unwrap()
+    };
+    let (on_ours, on_theirs) = (run(ours), run(theirs));
+    let want: Vec<String> = on_theirs.lines().map(str::to_owned).collect();
+    assert_text("evo_res on sitar's archives", &on_ours, &want, 1e-6);
+    for name in &names {
+        assert!(
+            on_ours.contains(name.as_str()),
+            "evo_res did not list {name}"
+        );
+    }
+}
+
+#[test]
+fn bag_formats_and_viewers_are_refused_clearly() {
+    let dir = workdir(&golden().join("data"));
+    for (args, message) in [
+        (vec!["ape", "bag", "x.bag", "/a", "/b"], "not supported"),
+        (vec!["rpe", "bag2", "x", "/a", "/b"], "not supported"),
+        (vec!["rpe", "mcap", "x", "/a", "/b"], "not supported"),
+        (vec!["traj", "bag", "x.bag", "/a"], "not supported"),
+        (
+            vec!["ape", "tum", "gt.txt", "est_a.txt", "--rerun"],
+            "--rerun is not supported",
+        ),
+        (
+            vec!["traj", "tum", "est_a.txt", "--save_as_bag"],
+            "--save_as_bag is not supported",
+        ),
+        (
+            vec!["ape", "tum", "gt.txt", "est_a.txt", "--save_plot", "x.gif"],
+            ".png, .svg or .pdf",
+        ),
+    ] {
+        let args: Vec<String> = args.iter().map(|s| (*s).to_owned()).collect();
+        let out = sitar(&args, dir.path());
+        assert_eq!(out.status.code(), Some(1), "{args:?}");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            stderr.starts_with("sitar: error: ") && stderr.contains(message),
+            "{args:?}: {stderr}"
+        );
+    }
+    // A NUL byte is no separator: the error names file, line and column.
+    std::fs::write(
+        dir.path().join("nul.txt"),
+        "1 0 0 0 0 0 0 1\n2 0\x000 0 0 0 0 1\n",
+    )
+    .unwrap();
+    let out = sitar(
+        &[
+            "ape".into(),
+            "tum".into(),
+            "nul.txt".into(),
+            "est_a.txt".into(),
+        ],
+        dir.path(),
+    );
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("nul.txt:2:4: control character U+0000"),
+        "{stderr}"
+    );
+}
