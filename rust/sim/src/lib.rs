@@ -45,6 +45,10 @@
 
 mod camera;
 mod error;
+mod observations;
+mod p3p;
+mod pnp;
+mod ransac_tracker;
 mod recording;
 mod room;
 mod trial;
@@ -52,7 +56,8 @@ mod walk;
 
 pub use camera::{DepthCamera, Intrinsics, View};
 pub use error::Error;
-pub use recording::{RECORDING_MAGIC, RECORDING_VERSION, Recording};
+pub use ransac_tracker::RansacModel;
+pub use recording::{RECORDING_MAGIC, RECORDING_VERSION, Recording, Tracker};
 pub use room::{Hit, Room, Surface, SurfaceKind};
 pub use trial::{DriftModel, TrialOptions, play_trial, play_trial_with, simulate_trials};
 pub use walk::{FIRST_STAMP_NS, Walk, look_rotation};

@@ -228,6 +228,17 @@ pub fn play_trial(rec: &Recording, trial_index: u32) -> Trajectory {
 /// trial starts in its own world frame (random yaw and offset) when
 /// [`DriftModel::world_offset`] is set. Timestamps equal the recording's.
 pub fn play_trial_with(rec: &Recording, trial_index: u32, options: &TrialOptions) -> Trajectory {
+    let trial = match rec.ransac_parts() {
+        Some((model, observations)) => {
+            crate::ransac_tracker::play(rec, model, observations, trial_index)
+        }
+        None => play_model_trial(rec, trial_index),
+    };
+    drop_frames(rec, trial_index, trial, options)
+}
+
+/// The error model's trial (see [`play_trial_with`]).
+fn play_model_trial(rec: &Recording, trial_index: u32) -> Trajectory {
     let model = rec.drift();
     let gt = &rec.walk().ground_truth;
     let n = gt.len();
@@ -288,12 +299,22 @@ pub fn play_trial_with(rec: &Recording, trial_index: u32, options: &TrialOptions
         positions.push(position);
         orientations.push(rotation);
     }
-    let mut trial = Trajectory {
+    Trajectory {
         stamps: gt.stamps.clone(),
         positions,
         orientations,
         time_unit: gt.time_unit,
-    };
+    }
+}
+
+/// Drops frames of `trial` as `options` ask (never the first or last).
+fn drop_frames(
+    rec: &Recording,
+    trial_index: u32,
+    mut trial: Trajectory,
+    options: &TrialOptions,
+) -> Trajectory {
+    let n = trial.len();
     if options.drop_probability > 0.0 && n > 2 {
         let p = options.drop_probability.clamp(0.0, 1.0);
         let mut drop_rng = rng_for(
