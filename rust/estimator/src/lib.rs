@@ -86,21 +86,24 @@
 #![deny(missing_docs)]
 
 mod align;
+mod bootstrap;
 mod error;
 mod estimate;
 mod evaluate;
 mod formats;
 mod metrics;
+mod ranking;
 mod statistics;
 mod sync;
 mod trajectory;
 
 pub use align::{Alignment, Similarity, align, umeyama};
+pub use bootstrap::{MeanInterval, bootstrap_mean};
 pub use error::Error;
 pub use estimate::{Estimate, EstimateOptions, PairwiseValues, WindowEstimate, estimate};
 pub use evaluate::{
-    ClassificationScores, Evaluation, EvaluationOptions, EvaluationRow, PAPER_CLASSIFIERS,
-    classification_scores, evaluate, ground_truth_errors,
+    ClassificationScores, Evaluation, EvaluationOptions, EvaluationRow, MatchedWindows,
+    PAPER_CLASSIFIERS, classification_scores, evaluate, ground_truth_errors, matched_windows,
 };
 pub use formats::{
     parse_euroc_csv, parse_kitti, parse_tum, read_euroc_csv, read_kitti, read_tum, write_tum,
@@ -109,6 +112,7 @@ pub use metrics::{
     DeltaUnit, PoseErrors, PoseRelation, RigidPose, RpeOptions, ape, delta_pairs, rotation_angle,
     rpe,
 };
+pub use ranking::{SweepPoint, ThresholdSweep, fit_scale, median_ratio, spearman, threshold_sweep};
 /// The class rule and its defaults, shared with the phone and the backend.
 pub use sitar_core::{DEFAULT_SETTING, ErrorClass, Thresholds};
 pub use statistics::{

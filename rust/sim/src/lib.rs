@@ -51,6 +51,7 @@ mod pnp;
 mod ransac_tracker;
 mod recording;
 mod room;
+mod scenes;
 mod trial;
 mod walk;
 
