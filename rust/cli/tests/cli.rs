@@ -335,7 +335,7 @@ fn evaluate_reports_every_setting_and_draws_the_plot() {
 
     let mut args = vec!["evaluate", "--trial-counts", "7", "--no-plot"];
     args.extend(common);
-    assert!(fails(&args).contains("--trial-counts: 7 is not between 2 and the 6 trials of set B"));
+    assert!(fails(&args).contains("--trial_counts: 7 is not between 2 and the 6 trials of set B"));
 }
 
 #[test]
@@ -348,7 +348,7 @@ fn every_subcommand_has_help() {
         ("estimate", "--setting"),
         ("estimate", "--plot-mode"),
         ("simulate", "--trials"),
-        ("evaluate", "--trials-b"),
+        ("evaluate", "--trials_b"),
     ] {
         let help = ok(&[cmd, "--help"]);
         assert!(help.contains(flag), "{cmd}: {help}");
