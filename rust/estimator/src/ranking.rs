@@ -80,19 +80,24 @@ pub fn spearman(truth: &[f64], estimate: &[f64]) -> Result<f64, Error> {
     Ok(cov / (va * vb).sqrt())
 }
 
+/// Errors below this (metres) are rounding noise — trials that coast identically give pair
+/// errors of 0 or 1e-17 depending on the arithmetic — and are left out of [`fit_scale`].
+pub const MIN_FIT_ERROR_M: f64 = 1e-6;
+
 /// The one scale factor `c` that best turns estimates into true errors in log space:
-/// `exp(mean(ln truth − ln estimate))` over windows where both are positive.
+/// `exp(mean(ln truth − ln estimate))` over windows where both are at least
+/// [`MIN_FIT_ERROR_M`].
 pub fn fit_scale(truth: &[f64], estimate: &[f64]) -> Result<f64, Error> {
     check(truth, estimate)?;
     let logs: Vec<f64> = truth
         .iter()
         .zip(estimate)
-        .filter(|(t, e)| **t > 0.0 && **e > 0.0)
+        .filter(|(t, e)| **t >= MIN_FIT_ERROR_M && **e >= MIN_FIT_ERROR_M)
         .map(|(t, e)| t.ln() - e.ln())
         .collect();
     if logs.is_empty() {
         return Err(Error::InvalidArgument(
-            "no window has positive true and estimated errors".into(),
+            "no window has true and estimated errors of at least a micrometre".into(),
         ));
     }
     Ok((logs.iter().sum::<f64>() / logs.len() as f64).exp())
