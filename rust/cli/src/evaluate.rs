@@ -424,12 +424,12 @@ struct Computed {
 }
 
 /// The windows of every sequence for one (window-frames index, setting, trials).
-fn windows_of<'a>(
-    evaluated: &'a [Evaluated],
+fn windows_of(
+    evaluated: &[Evaluated],
     w: usize,
     setting: Setting,
     trials: usize,
-) -> Vec<&'a MatchedWindows> {
+) -> Vec<&MatchedWindows> {
     evaluated
         .iter()
         .filter_map(|e| {
