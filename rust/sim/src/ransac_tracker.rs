@@ -25,7 +25,7 @@ use crate::pnp::{Gate, LocateOptions, Match, locate};
 const RANSAC_STREAM_BASE: u64 = 3 << 32;
 
 /// Every knob of the RANSAC tracker and of the camera and IMU it replays
-/// ([`crate::Recording::with_ransac_tracker`]).
+/// ([`crate::Recording::with_ransac_model`]).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RansacModel {
