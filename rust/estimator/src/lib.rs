@@ -112,7 +112,9 @@ pub use metrics::{
     DeltaUnit, PoseErrors, PoseRelation, RigidPose, RpeOptions, ape, delta_pairs, rotation_angle,
     rpe,
 };
-pub use ranking::{SweepPoint, ThresholdSweep, fit_scale, median_ratio, spearman, threshold_sweep};
+pub use ranking::{
+    MIN_FIT_ERROR_M, SweepPoint, ThresholdSweep, fit_scale, median_ratio, spearman, threshold_sweep,
+};
 /// The class rule and its defaults, shared with the phone and the backend.
 pub use sitar_core::{DEFAULT_SETTING, ErrorClass, Thresholds};
 pub use statistics::{
