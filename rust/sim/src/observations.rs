@@ -273,7 +273,7 @@ fn spurious(
             expected += kind.spurious_per_view();
         }
     }
-    expected /= f64::from(cols * rows) * model.lighting;
+    expected *= model.spurious_scale / (f64::from(cols * rows) * model.lighting);
     let count = Poisson::new(expected).map_or(0, |p| p.sample(rng) as usize);
     for _ in 0..count {
         let u: f64 = rng.random_range(0.0..model.width_px);

@@ -40,6 +40,8 @@ pub struct RansacModel {
     /// Light level, 1 = normal: landmark density scales with it, noise and spurious corners
     /// with its inverse.
     pub lighting: f64,
+    /// Scale of every surface's spurious corners ([`crate::SurfaceKind::spurious_per_view`]).
+    pub spurious_scale: f64,
     /// Probability that a visible landmark is detected in a frame.
     pub detection_probability: f64,
     /// Probability that a reflection in glass is matched to the real landmark it mirrors.
@@ -84,6 +86,7 @@ impl Default for RansacModel {
             height_px: 480.0,
             pixel_noise_scale: 1.0,
             lighting: 1.0,
+            spurious_scale: 1.0,
             detection_probability: 0.85,
             reflection_match_probability: 0.3,
             features_per_frame: 40,
@@ -124,6 +127,7 @@ impl RansacModel {
         }
         let non_negative = [
             ("pixel_noise_scale", self.pixel_noise_scale),
+            ("spurious_scale", self.spurious_scale),
             ("min_parallax_deg", self.min_parallax_deg),
             ("gyro_noise_deg", self.gyro_noise_deg),
             ("accel_noise_mps", self.accel_noise_mps),
