@@ -44,6 +44,7 @@
 #![deny(missing_docs)]
 
 mod camera;
+mod checks;
 mod error;
 mod observations;
 mod p3p;

@@ -16,10 +16,10 @@ use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 use sitar_estimator::Trajectory;
 
-use crate::Recording;
 use crate::observations::{ARCORE_TO_CV, Observations, camera_from_world};
 use crate::p3p::CameraPose;
 use crate::pnp::{Gate, LocateOptions, Match, locate};
+use crate::{Recording, checks};
 
 /// RNG stream of the RANSAC trial `i` is `RANSAC_STREAM_BASE + i`.
 const RANSAC_STREAM_BASE: u64 = 3 << 32;
@@ -109,7 +109,7 @@ impl Default for RansacModel {
 impl RansacModel {
     /// Checks every parameter; the error names the field.
     pub fn validate(&self) -> Result<(), (String, String)> {
-        let positive = [
+        checks::positive(&[
             ("focal_px", self.focal_px),
             ("width_px", self.width_px),
             ("height_px", self.height_px),
@@ -119,39 +119,23 @@ impl RansacModel {
             ("gate_m", self.gate_m),
             ("gate_deg", self.gate_deg),
             ("gate_growth_frames", self.gate_growth_frames),
-        ];
-        for (name, v) in positive {
-            if !(v.is_finite() && v > 0.0) {
-                return Err((name.into(), format!("must be a positive number, got {v}")));
-            }
-        }
-        let non_negative = [
+        ])?;
+        checks::non_negative(&[
             ("pixel_noise_scale", self.pixel_noise_scale),
             ("spurious_scale", self.spurious_scale),
             ("min_parallax_deg", self.min_parallax_deg),
             ("gyro_noise_deg", self.gyro_noise_deg),
             ("accel_noise_mps", self.accel_noise_mps),
             ("accel_bias_mps2", self.accel_bias_mps2),
-        ];
-        for (name, v) in non_negative {
-            if !(v.is_finite() && v >= 0.0) {
-                return Err((
-                    name.into(),
-                    format!("must be a non-negative number, got {v}"),
-                ));
-            }
-        }
-        for (name, v) in [
-            ("detection_probability", self.detection_probability),
+        ])?;
+        checks::unit_range(&[
+            ("detection_probability", self.detection_probability, 1.0),
             (
                 "reflection_match_probability",
                 self.reflection_match_probability,
+                1.0,
             ),
-        ] {
-            if !(v.is_finite() && (0.0..=1.0).contains(&v)) {
-                return Err((name.into(), format!("must be in [0, 1], got {v}")));
-            }
-        }
+        ])?;
         if self.lighting > 10.0 || self.width_px > 1e5 || self.height_px > 1e5 {
             return Err((
                 "lighting".into(),

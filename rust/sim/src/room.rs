@@ -118,6 +118,27 @@ pub struct Surface {
 }
 
 impl Surface {
+    /// A rectangle named `name` (geometry is checked by [`Room::new`]).
+    pub fn new(
+        name: &str,
+        kind: SurfaceKind,
+        centre: DVec3,
+        normal: DVec3,
+        axis_u: DVec3,
+        half_u: f64,
+        half_v: f64,
+    ) -> Self {
+        Self {
+            name: name.to_owned(),
+            kind,
+            centre,
+            normal,
+            axis_u,
+            half_u,
+            half_v,
+        }
+    }
+
     /// The second in-plane axis, `normal × axis_u`.
     pub fn axis_v(&self) -> DVec3 {
         self.normal.cross(self.axis_u)
@@ -257,15 +278,7 @@ impl Room {
         let x = DVec3::X;
         let y = DVec3::Y;
         let z = DVec3::Z;
-        let s = |name: &str, kind, centre, normal: DVec3, axis_u: DVec3, half_u, half_v| Surface {
-            name: name.to_owned(),
-            kind,
-            centre,
-            normal,
-            axis_u,
-            half_u,
-            half_v,
-        };
+        let s = Surface::new;
         let surfaces = vec![
             s("floor", SurfaceKind::Textured, DVec3::ZERO, y, x, hx, hz),
             s("ceiling", SurfaceKind::Plain, y * h, -y, x, hx, hz),

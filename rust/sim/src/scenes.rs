@@ -30,7 +30,7 @@ impl Room {
             ("west wall", DVec3::new(-hx, h / 2.0, 0.0), DVec3::X, hz),
         ];
         let mut surfaces = vec![
-            plane(
+            Surface::new(
                 "floor",
                 SurfaceKind::Textured,
                 DVec3::ZERO,
@@ -39,7 +39,7 @@ impl Room {
                 hx,
                 hz,
             ),
-            plane(
+            Surface::new(
                 "ceiling",
                 SurfaceKind::Plain,
                 DVec3::Y * h,
@@ -52,7 +52,7 @@ impl Room {
         for ((name, centre, normal, half_width), role) in walls.into_iter().zip(roles) {
             let axis_u = DVec3::Y.cross(normal);
             if role == "blank wall" {
-                surfaces.push(plane(
+                surfaces.push(Surface::new(
                     role,
                     SurfaceKind::Blank,
                     centre,
@@ -63,7 +63,7 @@ impl Room {
                 ));
                 continue;
             }
-            surfaces.push(plane(
+            surfaces.push(Surface::new(
                 name,
                 SurfaceKind::Plain,
                 centre,
@@ -80,7 +80,9 @@ impl Room {
             let slack = half_width - half_u - 0.2;
             let along = rng.random_range(-slack..=slack);
             let centre = DVec3::new(centre.x, height, centre.z) + axis_u * along + normal * 0.01;
-            surfaces.push(plane(role, kind, centre, normal, axis_u, half_u, half_v));
+            surfaces.push(Surface::new(
+                role, kind, centre, normal, axis_u, half_u, half_v,
+            ));
         }
         Self { surfaces }
     }
@@ -100,26 +102,6 @@ impl Room {
             }
         }
         room
-    }
-}
-
-fn plane(
-    name: &str,
-    kind: SurfaceKind,
-    centre: DVec3,
-    normal: DVec3,
-    axis_u: DVec3,
-    half_u: f64,
-    half_v: f64,
-) -> Surface {
-    Surface {
-        name: name.to_owned(),
-        kind,
-        centre,
-        normal,
-        axis_u,
-        half_u,
-        half_v,
     }
 }
 

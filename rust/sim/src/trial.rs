@@ -9,7 +9,7 @@ use rand_distr::{Distribution, LogNormal, Pareto, StudentT};
 use serde::{Deserialize, Serialize};
 use sitar_estimator::Trajectory;
 
-use crate::Recording;
+use crate::{Recording, checks};
 
 /// RNG stream of the error all trials share (the recording's own systematic error).
 const SHARED_STREAM: u64 = 2;
@@ -77,44 +77,26 @@ impl Default for DriftModel {
 impl DriftModel {
     /// Checks every parameter; the error names the field.
     pub fn validate(&self) -> Result<(), (String, String)> {
-        let positive = [
+        checks::positive(&[
             ("window_error_m", self.window_error_m),
             ("jump_scale_m", self.jump_scale_m),
             (
                 "difficulty_time_constant_s",
                 self.difficulty_time_constant_s,
             ),
-        ];
-        for (name, v) in positive {
-            if !(v.is_finite() && v > 0.0) {
-                return Err((name.into(), format!("must be a positive number, got {v}")));
-            }
-        }
-        let non_negative = [
+        ])?;
+        checks::non_negative(&[
             ("hard_gain", self.hard_gain),
             ("rotation_noise_deg", self.rotation_noise_deg),
             ("trial_quality_sigma", self.trial_quality_sigma),
-        ];
-        for (name, v) in non_negative {
-            if !(v.is_finite() && v >= 0.0) {
-                return Err((
-                    name.into(),
-                    format!("must be a non-negative number, got {v}"),
-                ));
-            }
-        }
-        let unit = [
+        ])?;
+        checks::unit_range(&[
             ("correlation", self.correlation, 0.999),
             ("shared_share", self.shared_share, 1.0),
             ("jump_rate", self.jump_rate, 1.0),
             ("jump_rate_hard", self.jump_rate_hard, 1.0),
             ("jump_rate_reflective", self.jump_rate_reflective, 1.0),
-        ];
-        for (name, v, max) in unit {
-            if !(v.is_finite() && (0.0..=max).contains(&v)) {
-                return Err((name.into(), format!("must be in [0, {max}], got {v}")));
-            }
-        }
+        ])?;
         if !(self.tail_dof.is_finite() && self.tail_dof > 2.0) {
             return Err((
                 "tail_dof".into(),
