@@ -153,7 +153,7 @@ impl Observations {
                 noise: accel_error * dt,
             });
         }
-        let direction = uniform_direction(&mut rng);
+        let direction = crate::trial::uniform_direction(&mut rng);
         Self {
             landmarks,
             frames,
@@ -165,13 +165,6 @@ impl Observations {
 
 fn gaussian2(noise: &Normal<f64>, rng: &mut ChaCha8Rng) -> DVec2 {
     DVec2::new(noise.sample(rng), noise.sample(rng))
-}
-
-fn uniform_direction(rng: &mut ChaCha8Rng) -> DVec3 {
-    let z: f64 = rng.random_range(-1.0..1.0);
-    let phi: f64 = rng.random_range(0.0..std::f64::consts::TAU);
-    let r = (1.0 - z * z).sqrt();
-    DVec3::new(r * phi.cos(), r * phi.sin(), z)
 }
 
 /// Landmarks scattered uniformly on every surface, as many as its texture and the light give.

@@ -10,8 +10,8 @@
 //! are dropped and triangulated again.
 
 use glam::{DMat3, DQuat, DVec3};
+use rand::SeedableRng;
 use rand::seq::index::sample;
-use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 use sitar_estimator::Trajectory;
@@ -289,17 +289,7 @@ pub(crate) fn play(
     let n = gt.len();
     let mut rng = ChaCha8Rng::seed_from_u64(rec.seed());
     rng.set_stream(RANSAC_STREAM_BASE + u64::from(trial_index));
-    let (world_rotation, world_offset) = if model.world_offset {
-        let yaw: f64 = rng.random_range(-std::f64::consts::PI..std::f64::consts::PI);
-        let offset = DVec3::new(
-            rng.random_range(-1.0..1.0),
-            rng.random_range(-0.2..0.2),
-            rng.random_range(-1.0..1.0),
-        );
-        (DQuat::from_rotation_y(yaw), offset)
-    } else {
-        (DQuat::IDENTITY, DVec3::ZERO)
-    };
+    let (world_rotation, world_offset) = crate::trial::world_frame(model.world_offset, &mut rng);
     let mut options = LocateOptions {
         hypotheses: model.ransac_hypotheses,
         threshold: model.inlier_threshold_px / model.focal_px,

@@ -187,7 +187,23 @@ fn gaussian3(rng: &mut ChaCha8Rng, sigma: f64) -> DVec3 {
     DVec3::new(g(), g(), g()) * sigma
 }
 
-fn uniform_direction(rng: &mut ChaCha8Rng) -> DVec3 {
+/// A trial's own world frame (random yaw about +Y and offset), or the identity when not
+/// `enabled`; separate SLAM runs start in frames of their own.
+pub(crate) fn world_frame(enabled: bool, rng: &mut ChaCha8Rng) -> (DQuat, DVec3) {
+    if !enabled {
+        return (DQuat::IDENTITY, DVec3::ZERO);
+    }
+    let yaw: f64 = rng.random_range(-std::f64::consts::PI..std::f64::consts::PI);
+    let offset = DVec3::new(
+        rng.random_range(-1.0..1.0),
+        rng.random_range(-0.2..0.2),
+        rng.random_range(-1.0..1.0),
+    );
+    (DQuat::from_rotation_y(yaw), offset)
+}
+
+/// A direction uniform on the unit sphere.
+pub(crate) fn uniform_direction(rng: &mut ChaCha8Rng) -> DVec3 {
     let z: f64 = rng.random_range(-1.0..1.0);
     let phi: f64 = rng.random_range(0.0..TAU);
     let r = (1.0 - z * z).sqrt();
@@ -234,17 +250,7 @@ fn play_model_trial(rec: &Recording, trial_index: u32) -> Trajectory {
     let quality = LogNormal::new(0.0, model.trial_quality_sigma)
         .map(|d| d.sample(&mut rng))
         .unwrap_or(1.0);
-    let (world_rot, world_offset) = if model.world_offset {
-        let yaw: f64 = rng.random_range(-std::f64::consts::PI..std::f64::consts::PI);
-        let offset = DVec3::new(
-            rng.random_range(-1.0..1.0),
-            rng.random_range(-0.2..0.2),
-            rng.random_range(-1.0..1.0),
-        );
-        (DQuat::from_rotation_y(yaw), offset)
-    } else {
-        (DQuat::IDENTITY, DVec3::ZERO)
-    };
+    let (world_rot, world_offset) = world_frame(model.world_offset, &mut rng);
     let jump_size = Pareto::new(model.jump_scale_m, 2.0).ok();
 
     let mut shared = Ar1::new(model);
