@@ -8,7 +8,7 @@ use anyhow::{Context, Result, bail};
 use clap::ValueEnum;
 use rayon::prelude::*;
 use sitar_estimator::{TimeUnit, Trajectory, write_tum};
-use sitar_sim::{Recording, TrialOptions, play_trial_with};
+use sitar_sim::{Recording, Tracker, TrialOptions, play_trial_with};
 
 use crate::input::progress_bar;
 
@@ -19,10 +19,12 @@ use crate::input::progress_bar;
 ///
 /// Writes into DIR: ground_truth.txt, trials/trajectory_0.txt … (TUM), scene.json (room,
 /// hard surfaces, surface faced and tracking difficulty per frame) and recording.sitarsim
-/// (what the phone would upload; the backend's `sim` playback replays it).
+/// (what the phone would upload; the backend's `sim` playback replays it). With
+/// `--sequences N`: DIR/seq_00 … DIR/seq_{N-1}, each like the above with both trial sets
+/// (trials = set A, trials-b = set B), and DIR/sequences.json listing them.
 #[derive(clap::Args, Debug)]
 #[command(
-    after_help = "Example: sitar simulate --out sim --trials 20 && sitar estimate sim/trials"
+    after_help = "Examples:\n  sitar simulate --out sim --trials 20 && sitar estimate sim/trials\n  sitar simulate --out eval --sequences 8 --trials 100 --seconds 30 --tracker ransac\n  sitar evaluate eval --trial_counts 5,10,20,30,100"
 )]
 pub struct Args {
     /// Output directory (created if missing).
@@ -41,15 +43,45 @@ pub struct Args {
     #[arg(long, default_value_t = 1)]
     seed: u64,
     /// Probability that a trial misses a frame's pose (never the first or last).
-    #[arg(long = "drop-frames", default_value_t = 0.0)]
+    #[arg(long = "drop_frames", alias = "drop-frames", default_value_t = 0.0)]
     drop_frames: f64,
     /// Also write as many further, disjoint trials to DIR/trials-b (for `sitar evaluate`).
-    #[arg(long = "second-set")]
+    #[arg(long = "second_set", alias = "second-set")]
     second_set: bool,
     /// Timestamps in the TUM files: ns (integers, as ARCore) or s (9 decimals).
-    #[arg(long = "time-unit", value_enum, default_value_t = Unit::Ns)]
+    #[arg(long = "time_unit", alias = "time-unit", value_enum, default_value_t = Unit::Ns)]
     time_unit: Unit,
+    /// Who plays the trials: `model` (the fast error model) or `ransac` (the mechanistic
+    /// RANSAC visual-inertial tracker).
+    #[arg(long, value_enum, default_value_t = TrackerArg::Model)]
+    tracker: TrackerArg,
+    /// Write N sequences (different rooms, walks, light and seeds), each with sets A and B.
+    #[arg(long, value_name = "N")]
+    sequences: Option<u32>,
+    /// The room: `demo`, or `dark-wall` (the consistently-wrong scene: every trial coasts
+    /// alike on the IMU while facing an unlit wall; implies the RANSAC tracker).
+    #[arg(long, value_enum, default_value_t = SceneArg::Demo)]
+    scene: SceneArg,
 }
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum TrackerArg {
+    /// The error model: drift whose size and spread follow the view's difficulty.
+    Model,
+    /// The RANSAC visual-inertial tracker: the spread arises from its random sampling.
+    Ransac,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum SceneArg {
+    /// The demo room (blank wall, glass pane, painting, bookshelf).
+    Demo,
+    /// The demo room with the blank wall unlit.
+    DarkWall,
+}
+
+/// The largest `--sequences`: each sequence is a full set of files.
+const MAX_SEQUENCES: u32 = 1000;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 enum Unit {
@@ -61,33 +93,80 @@ enum Unit {
 
 pub fn run(args: Args) -> Result<()> {
     if !(0.0..1.0).contains(&args.drop_frames) {
-        bail!("--drop-frames must be in [0, 1), got {}", args.drop_frames);
+        bail!("--drop_frames must be in [0, 1), got {}", args.drop_frames);
     }
-    let recording =
-        Recording::demo(args.seconds, args.fps, args.seed).context("simulating the walk")?;
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("{}: cannot create", args.out.display()))?;
+    let tracker = match args.tracker {
+        TrackerArg::Model => Tracker::Model,
+        TrackerArg::Ransac => Tracker::Ransac,
+    };
     let unit = match args.time_unit {
         Unit::Ns => TimeUnit::Nanoseconds,
         Unit::S => TimeUnit::Seconds,
     };
+    let Some(count) = args.sequences else {
+        let recording = match args.scene {
+            SceneArg::Demo => {
+                Recording::demo(args.seconds, args.fps, args.seed).map(|r| r.with_tracker(tracker))
+            }
+            SceneArg::DarkWall => Recording::dark_wall(args.seconds, args.fps, args.seed),
+        }
+        .context("simulating the walk")?;
+        write_sequence(&args, &recording, &args.out, args.second_set, unit)?;
+        return Ok(());
+    };
+    if !(1..=MAX_SEQUENCES).contains(&count) {
+        bail!("--sequences must be between 1 and {MAX_SEQUENCES}, got {count}");
+    }
+    if args.scene != SceneArg::Demo {
+        bail!("--scene picks the room of a single sequence; --sequences makes its own rooms");
+    }
+    let mut names = Vec::new();
+    for index in 0..count {
+        let recording = Recording::sequence(index, args.seconds, args.fps, args.seed, tracker)
+            .with_context(|| format!("simulating sequence {index}"))?;
+        let name = format!("seq_{index:02}");
+        write_sequence(&args, &recording, &args.out.join(&name), true, unit)?;
+        names.push(name);
+    }
+    let index = serde_json::json!({
+        "format": "sitar-sequences",
+        "version": 1,
+        "tracker": tracker,
+        "seed": args.seed,
+        "trials_per_set": args.trials,
+        "seconds": args.seconds,
+        "fps": args.fps,
+        "sequences": names,
+    });
+    write_file(
+        &args.out.join("sequences.json"),
+        format!("{index:#}\n").as_bytes(),
+    )
+}
+
+/// One sequence's files: ground truth, scene, recording, set A and (optionally) set B.
+fn write_sequence(
+    args: &Args,
+    recording: &Recording,
+    out: &Path,
+    second_set: bool,
+    unit: TimeUnit,
+) -> Result<()> {
+    std::fs::create_dir_all(out).with_context(|| format!("{}: cannot create", out.display()))?;
     write_trajectory(
         &recording.walk().ground_truth,
         unit,
-        &args.out.join("ground_truth.txt"),
+        &out.join("ground_truth.txt"),
     )?;
-    write_file(
-        &args.out.join("scene.json"),
-        recording.scene_json().as_bytes(),
-    )?;
-    write_file(&args.out.join("recording.sitarsim"), &recording.to_bytes())?;
+    write_file(&out.join("scene.json"), recording.scene_json().as_bytes())?;
+    write_file(&out.join("recording.sitarsim"), &recording.to_bytes())?;
 
     let options = TrialOptions {
         drop_probability: args.drop_frames,
     };
-    let mut sets = vec![(args.out.join("trials"), 0u32)];
-    if args.second_set {
-        sets.push((args.out.join("trials-b"), args.trials));
+    let mut sets = vec![(out.join("trials"), 0u32)];
+    if second_set {
+        sets.push((out.join("trials-b"), args.trials));
     }
     let bar = progress_bar(
         u64::from(args.trials) * sets.len() as u64,
@@ -97,7 +176,7 @@ pub fn run(args: Args) -> Result<()> {
         std::fs::create_dir_all(dir)
             .with_context(|| format!("{}: cannot create", dir.display()))?;
         (0..args.trials).into_par_iter().try_for_each(|k| {
-            let trial = play_trial_with(&recording, first_index + k, &options);
+            let trial = play_trial_with(recording, first_index + k, &options);
             bar.inc(1);
             write_trajectory(&trial, unit, &dir.join(format!("trajectory_{k}.txt")))
         })?;
@@ -108,8 +187,8 @@ pub fn run(args: Args) -> Result<()> {
         recording.frames(),
         recording.duration_s(),
         args.trials,
-        if args.second_set { " per set" } else { "" },
-        args.out.display()
+        if second_set { " per set" } else { "" },
+        out.display()
     );
     Ok(())
 }

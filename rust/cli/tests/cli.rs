@@ -372,7 +372,7 @@ fn evaluate_reports_every_setting_and_draws_the_plot() {
 
     let mut args = vec!["evaluate", "--trial-counts", "7", "--no-plot"];
     args.extend(common);
-    assert!(fails(&args).contains("--trial-counts: 7 is not between 2 and the 6 trials of set B"));
+    assert!(fails(&args).contains("--trial_counts: 7 is not between 2 and the 6 trials of set B"));
 }
 
 #[test]
@@ -391,7 +391,7 @@ fn every_subcommand_has_help() {
         (vec!["estimate"], "--time_unit"),
         (vec!["estimate"], "--plot-mode"),
         (vec!["simulate"], "--trials"),
-        (vec!["evaluate"], "--trials-b"),
+        (vec!["evaluate"], "--trials_b"),
     ] {
         let mut args = cmd.clone();
         args.push("--help");

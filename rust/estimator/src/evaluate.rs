@@ -228,19 +228,36 @@ impl Evaluation {
     }
 }
 
-/// Runs the paper's evaluation protocol on one sequence. Estimate windows are matched to the
-/// ground-truth window with the nearest start stamp within `t_max_diff_s`; unmatched windows
-/// are not scored.
-pub fn evaluate(
+/// The windows of one sequence scored for one setting and trial count: the true error and
+/// the estimate of every estimate window matched to a ground-truth window.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct MatchedWindows {
+    /// The statistic.
+    #[serde(serialize_with = "serialize_display")]
+    pub setting: Setting,
+    /// Number of B trials used.
+    pub trials: usize,
+    /// Start stamps (ns) of the matched ground-truth windows.
+    pub starts: Vec<i64>,
+    /// True error per window (mean RPE of set A against the ground truth), metres.
+    pub truth: Vec<f64>,
+    /// The estimate per window, metres.
+    pub estimate: Vec<f64>,
+}
+
+/// The protocol's matched windows for every trial count and setting of `opts` (counts
+/// outside 2..=|B| are skipped). Estimate windows are matched to the ground-truth window with
+/// the nearest start stamp within `t_max_diff_s`; unmatched windows are left out.
+pub fn matched_windows(
     ground_truth: &Trajectory,
     trials_a: &[Trajectory],
     trials_b: &[Trajectory],
     opts: &EvaluationOptions,
-) -> Result<Evaluation, Error> {
+) -> Result<(usize, Vec<MatchedWindows>), Error> {
     let truth = ground_truth_errors(ground_truth, trials_a, &opts.estimate)?;
     let truth_keys: Vec<i64> = truth.iter().map(|&(k, _)| k).collect();
     let tolerance = seconds_to_ns(opts.estimate.t_max_diff_s);
-    let mut rows = Vec::new();
+    let mut out = Vec::new();
     for &count in &opts.trial_counts {
         if count < 2 || count > trials_b.len() {
             continue;
@@ -248,38 +265,60 @@ pub fn evaluate(
         let values = PairwiseValues::compute(&trials_b[..count], &opts.estimate)?;
         for &setting in &opts.settings {
             let estimate = values.estimate(setting);
-            let (mut true_errors, mut predicted) = (Vec::new(), Vec::new());
+            let mut matched = MatchedWindows {
+                setting,
+                trials: count,
+                starts: Vec::new(),
+                truth: Vec::new(),
+                estimate: Vec::new(),
+            };
             for window in &estimate.windows {
                 if let Some(index) = nearest(&truth_keys, window.start, tolerance) {
-                    true_errors.push(truth[index].1);
-                    predicted.push(window.error_m);
+                    matched.starts.push(truth[index].0);
+                    matched.truth.push(truth[index].1);
+                    matched.estimate.push(window.error_m);
                 }
             }
-            if predicted.is_empty() {
+            if matched.estimate.is_empty() {
                 return Err(Error::NoPairs(
                     "no estimate window matches a ground-truth window".into(),
                 ));
             }
-            for &boundaries in &opts.boundaries {
-                let scores = classification_scores(&true_errors, &predicted, boundaries)?;
-                rows.push(EvaluationRow {
-                    setting,
-                    trials: count,
-                    boundaries,
-                    scores,
-                });
-            }
+            out.push(matched);
         }
     }
-    if rows.is_empty() {
+    if out.is_empty() {
         return Err(Error::InvalidArgument(format!(
             "no trial count in {:?} is between 2 and the {} trials of set B",
             opts.trial_counts,
             trials_b.len()
         )));
     }
+    Ok((truth.len(), out))
+}
+
+/// Runs the paper's evaluation protocol on one sequence ([`matched_windows`], then
+/// [`classification_scores`] per classifier).
+pub fn evaluate(
+    ground_truth: &Trajectory,
+    trials_a: &[Trajectory],
+    trials_b: &[Trajectory],
+    opts: &EvaluationOptions,
+) -> Result<Evaluation, Error> {
+    let (ground_truth_windows, matched) = matched_windows(ground_truth, trials_a, trials_b, opts)?;
+    let mut rows = Vec::new();
+    for m in &matched {
+        for &boundaries in &opts.boundaries {
+            rows.push(EvaluationRow {
+                setting: m.setting,
+                trials: m.trials,
+                boundaries,
+                scores: classification_scores(&m.truth, &m.estimate, boundaries)?,
+            });
+        }
+    }
     Ok(Evaluation {
-        ground_truth_windows: truth.len(),
+        ground_truth_windows,
         rows,
     })
 }

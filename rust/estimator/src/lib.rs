@@ -146,6 +146,7 @@
 #![deny(missing_docs)]
 
 mod align;
+mod bootstrap;
 mod error;
 mod estimate;
 mod evaluate;
@@ -154,17 +155,19 @@ mod formats;
 mod incremental;
 mod metrics;
 mod pairwise;
+mod ranking;
 mod sorted_runs;
 mod statistics;
 mod sync;
 mod trajectory;
 
 pub use align::{Alignment, Similarity, align, align_first, umeyama};
+pub use bootstrap::{MeanInterval, bootstrap_mean};
 pub use error::Error;
 pub use estimate::{Estimate, EstimateOptions, PairwiseValues, WindowEstimate, estimate};
 pub use evaluate::{
-    ClassificationScores, Evaluation, EvaluationOptions, EvaluationRow, PAPER_CLASSIFIERS,
-    classification_scores, evaluate, ground_truth_errors,
+    ClassificationScores, Evaluation, EvaluationOptions, EvaluationRow, MatchedWindows,
+    PAPER_CLASSIFIERS, classification_scores, evaluate, ground_truth_errors, matched_windows,
 };
 pub use formats::{
     NANOSECOND_STAMP_THRESHOLD, ReadOptions, ReadReport, StampOrder, TimeUnitRule, parse_euroc_csv,
@@ -175,6 +178,9 @@ pub use incremental::IncrementalEstimate;
 pub use metrics::{
     DeltaUnit, PoseErrors, PoseRelation, RigidPose, RpeOptions, ape, delta_pairs, rotation_angle,
     rpe,
+};
+pub use ranking::{
+    MIN_FIT_ERROR_M, SweepPoint, ThresholdSweep, fit_scale, median_ratio, spearman, threshold_sweep,
 };
 /// The class rule and its defaults, shared with the phone and the backend.
 pub use sitar_core::{DEFAULT_SETTING, ErrorClass, Thresholds};

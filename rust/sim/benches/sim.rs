@@ -1,7 +1,8 @@
-//! Simulator speed: building a recording, playing trials, rendering depth images.
+//! Simulator speed: building a recording, playing trials (error model and RANSAC tracker),
+//! recording the RANSAC front end's observations, rendering depth images.
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use sitar_sim::{DepthCamera, Recording, play_trial};
+use sitar_sim::{DepthCamera, Recording, Tracker, play_trial};
 use std::hint::black_box;
 
 fn bench(c: &mut Criterion) {
@@ -11,6 +12,13 @@ fn bench(c: &mut Criterion) {
     let short = Recording::demo(15.0, 30.0, 1).unwrap();
     c.bench_function("play_trial_450_frames", |b| {
         b.iter(|| play_trial(&short, black_box(3)))
+    });
+    let ransac = short.clone().with_tracker(Tracker::Ransac);
+    c.bench_function("play_trial_ransac_450_frames", |b| {
+        b.iter(|| play_trial(&ransac, black_box(3)))
+    });
+    c.bench_function("record_ransac_observations_450_frames", |b| {
+        b.iter(|| short.clone().with_tracker(black_box(Tracker::Ransac)))
     });
     let long = Recording::demo(94.0, 30.0, 1).unwrap();
     c.bench_function("play_trial_2820_frames", |b| {

@@ -1,10 +1,13 @@
 //! The recording a simulated phone uploads, and its byte format.
 
+use std::sync::Arc;
+
 use glam::{DQuat, DVec3};
 use serde::{Deserialize, Serialize};
 use sitar_estimator::{TimeUnit, Trajectory};
 
-use crate::{DriftModel, Error, Room, View, Walk};
+use crate::observations::Observations;
+use crate::{DriftModel, Error, RansacModel, Room, View, Walk};
 
 /// First bytes of every serialised recording.
 pub const RECORDING_MAGIC: &[u8; 8] = b"SITARSIM";
@@ -23,6 +26,35 @@ pub struct Recording {
     views: Vec<View>,
     difficulty: Vec<f64>,
     reflectivity: Vec<f64>,
+    ransac: Option<(RansacModel, Arc<Observations>)>,
+}
+
+/// Which tracker plays a recording's trials.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+#[non_exhaustive]
+pub enum Tracker {
+    /// The fast error model ([`DriftModel`]): drift whose size and spread follow the view's
+    /// difficulty by construction.
+    #[default]
+    Model,
+    /// The mechanistic RANSAC visual-inertial tracker ([`RansacModel`]): the spread arises
+    /// from its random sampling.
+    Ransac,
+}
+
+impl std::str::FromStr for Tracker {
+    type Err = Error;
+
+    fn from_str(s: &str) -> Result<Self, Error> {
+        match s {
+            "model" => Ok(Self::Model),
+            "ransac" => Ok(Self::Ransac),
+            other => Err(Error::InvalidArgument(format!(
+                "unknown tracker {other:?} (model or ransac)"
+            ))),
+        }
+    }
 }
 
 /// The JSON body after the header.
@@ -37,6 +69,9 @@ struct Body {
     stamps: Vec<i64>,
     /// `[x, y, z, qx, qy, qz, qw]` per frame.
     poses: Vec<[f64; 7]>,
+    /// Present when the RANSAC tracker plays the trials.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    ransac: Option<RansacModel>,
 }
 
 /// Per-frame facts of a scene description.
@@ -61,7 +96,10 @@ struct Scene<'a> {
     duration_s: f64,
     room: &'a Room,
     hard_surfaces: Vec<&'a str>,
+    tracker: Tracker,
     drift: &'a DriftModel,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    ransac: Option<&'a RansacModel>,
     per_frame: Vec<SceneFrame<'a>>,
 }
 
@@ -91,9 +129,55 @@ impl Recording {
             views,
             difficulty: Vec::new(),
             reflectivity: Vec::new(),
+            ransac: None,
         };
         rec.smooth();
         rec
+    }
+
+    /// The same recording played back by `tracker` with its default settings.
+    pub fn with_tracker(self, tracker: Tracker) -> Self {
+        match tracker {
+            Tracker::Model => Self {
+                ransac: None,
+                ..self
+            },
+            Tracker::Ransac => {
+                let model = self.ransac_model().copied().unwrap_or_default();
+                self.with_ransac_model(model)
+                    .expect("the default RANSAC model is valid")
+            }
+        }
+    }
+
+    /// The same recording played back by the RANSAC tracker with `model`: records the
+    /// front end's observations once (landmarks, matches, IMU) for every trial to share.
+    pub fn with_ransac_model(mut self, model: RansacModel) -> Result<Self, Error> {
+        model.validate().map_err(|(field, message)| {
+            Error::InvalidArgument(format!("ransac.{field}: {message}"))
+        })?;
+        let observations =
+            Observations::record(&self.room, &self.walk.ground_truth, &model, self.seed);
+        self.ransac = Some((model, Arc::new(observations)));
+        Ok(self)
+    }
+
+    /// The tracker that plays the trials.
+    pub fn tracker(&self) -> Tracker {
+        if self.ransac.is_some() {
+            Tracker::Ransac
+        } else {
+            Tracker::Model
+        }
+    }
+
+    /// The RANSAC tracker's settings, when it plays the trials.
+    pub fn ransac_model(&self) -> Option<&RansacModel> {
+        self.ransac.as_ref().map(|(model, _)| model)
+    }
+
+    pub(crate) fn ransac_parts(&self) -> Option<(&RansacModel, &Observations)> {
+        self.ransac.as_ref().map(|(m, o)| (m, o.as_ref()))
     }
 
     /// The demo room, a handheld walk of `seconds` at `fps`, all from `seed`.
@@ -181,7 +265,8 @@ impl Recording {
     }
 
     /// The upload format: [`RECORDING_MAGIC`], [`RECORDING_VERSION`] as u32 little-endian,
-    /// then a JSON body (seed, fps, room, drift model, stamps, poses).
+    /// then a JSON body (seed, fps, room, drift model, stamps, poses, and the RANSAC tracker's
+    /// settings under `ransac` when it plays the trials).
     pub fn to_bytes(&self) -> Vec<u8> {
         let gt = &self.walk.ground_truth;
         let body = Body {
@@ -196,6 +281,7 @@ impl Recording {
                 .zip(&gt.orientations)
                 .map(|(p, q)| [p.x, p.y, p.z, q.x, q.y, q.z, q.w])
                 .collect(),
+            ransac: self.ransac_model().copied(),
         };
         let mut bytes = Vec::with_capacity(12 + 160 * gt.len() + 4096);
         bytes.extend_from_slice(RECORDING_MAGIC);
@@ -277,9 +363,20 @@ impl Recording {
                 time_unit: TimeUnit::Nanoseconds,
             },
         };
-        Self::new(body.room, walk, body.seed)
+        if let Some(model) = &body.ransac {
+            model
+                .validate()
+                .map_err(|(field, message)| invalid(format!("ransac.{field}"), message))?;
+        }
+        let rec = Self::new(body.room, walk, body.seed)
             .with_drift(body.drift)
-            .map_err(|e| invalid("drift", e.to_string()))
+            .map_err(|e| invalid("drift", e.to_string()))?;
+        match body.ransac {
+            Some(model) => rec
+                .with_ransac_model(model)
+                .map_err(|e| invalid("ransac", e.to_string())),
+            None => Ok(rec),
+        }
     }
 
     /// A JSON description of the scene: room, hard surfaces, drift model and, per frame, the
@@ -301,7 +398,9 @@ impl Recording {
                 .iter()
                 .map(|s| s.name.as_str())
                 .collect(),
+            tracker: self.tracker(),
             drift: &self.drift,
+            ransac: self.ransac_model(),
             per_frame: (0..self.frames())
                 .map(|i| SceneFrame {
                     t_ns: gt.stamps[i],

@@ -18,6 +18,9 @@ pub enum SurfaceKind {
     Blank,
     /// A glass pane: few features of its own and reflections that move with the camera.
     Glass,
+    /// An unlit wall or doorway: nothing at all to detect, so a tracker coasts on its
+    /// inertial sensors alone (see the crate docs: the consistently-wrong scene).
+    Dark,
 }
 
 impl SurfaceKind {
@@ -28,6 +31,7 @@ impl SurfaceKind {
             Self::Plain => 0.3,
             Self::Blank => 1.0,
             Self::Glass => 0.85,
+            Self::Dark => 1.0,
         }
     }
 
@@ -41,7 +45,54 @@ impl SurfaceKind {
 
     /// Whether SLAM is expected to struggle when the camera faces this surface.
     pub fn is_hard(self) -> bool {
-        matches!(self, Self::Blank | Self::Glass)
+        matches!(self, Self::Blank | Self::Glass | Self::Dark)
+    }
+
+    /// Landmarks (trackable corners) per square metre at normal lighting: what the RANSAC
+    /// tracker's feature density follows.
+    pub fn landmark_density_m2(self) -> f64 {
+        match self {
+            Self::Textured => 60.0,
+            Self::Plain => 5.0,
+            Self::Blank => 12.0,
+            Self::Glass => 4.0,
+            Self::Dark => 0.0,
+        }
+    }
+
+    /// Spurious detections (unstable corners in image noise, matched to some unrelated
+    /// landmark) per frame when this surface fills the view, at normal lighting.
+    pub fn spurious_per_view(self) -> f64 {
+        match self {
+            Self::Textured => 1.0,
+            Self::Plain => 3.0,
+            Self::Blank => 10.0,
+            Self::Glass => 8.0,
+            Self::Dark => 0.0,
+        }
+    }
+
+    /// Standard deviation (pixels, at normal lighting) of where a feature on this surface is
+    /// found: sharp corners on texture, weak blobs on a blank wall or behind glass.
+    pub fn feature_noise_px(self) -> f64 {
+        match self {
+            Self::Textured => 0.6,
+            Self::Plain => 1.0,
+            Self::Blank => 3.0,
+            Self::Glass => 2.5,
+            Self::Dark => 0.0,
+        }
+    }
+
+    /// Probability that a real feature on this surface is matched to the wrong landmark
+    /// (similar-looking corners).
+    pub fn mismatch_probability(self) -> f64 {
+        match self {
+            Self::Textured => 0.05,
+            Self::Plain => 0.1,
+            Self::Blank | Self::Glass => 0.2,
+            Self::Dark => 0.0,
+        }
     }
 }
 
@@ -67,6 +118,27 @@ pub struct Surface {
 }
 
 impl Surface {
+    /// A rectangle named `name` (geometry is checked by [`Room::new`]).
+    pub fn new(
+        name: &str,
+        kind: SurfaceKind,
+        centre: DVec3,
+        normal: DVec3,
+        axis_u: DVec3,
+        half_u: f64,
+        half_v: f64,
+    ) -> Self {
+        Self {
+            name: name.to_owned(),
+            kind,
+            centre,
+            normal,
+            axis_u,
+            half_u,
+            half_v,
+        }
+    }
+
     /// The second in-plane axis, `normal × axis_u`.
     pub fn axis_v(&self) -> DVec3 {
         self.normal.cross(self.axis_u)
@@ -90,7 +162,7 @@ impl Surface {
     }
 
     /// Distance along `dir` (unit) from `origin` to the rectangle, if the ray hits it in front.
-    fn intersect(&self, origin: DVec3, dir: DVec3) -> Option<f64> {
+    pub(crate) fn intersect(&self, origin: DVec3, dir: DVec3) -> Option<f64> {
         let denom = dir.dot(self.normal);
         if denom.abs() < 1e-12 {
             return None;
@@ -206,15 +278,7 @@ impl Room {
         let x = DVec3::X;
         let y = DVec3::Y;
         let z = DVec3::Z;
-        let s = |name: &str, kind, centre, normal: DVec3, axis_u: DVec3, half_u, half_v| Surface {
-            name: name.to_owned(),
-            kind,
-            centre,
-            normal,
-            axis_u,
-            half_u,
-            half_v,
-        };
+        let s = Surface::new;
         let surfaces = vec![
             s("floor", SurfaceKind::Textured, DVec3::ZERO, y, x, hx, hz),
             s("ceiling", SurfaceKind::Plain, y * h, -y, x, hx, hz),

@@ -9,7 +9,7 @@ use rand_distr::{Distribution, LogNormal, Pareto, StudentT};
 use serde::{Deserialize, Serialize};
 use sitar_estimator::Trajectory;
 
-use crate::Recording;
+use crate::{Recording, checks};
 
 /// RNG stream of the error all trials share (the recording's own systematic error).
 const SHARED_STREAM: u64 = 2;
@@ -77,44 +77,26 @@ impl Default for DriftModel {
 impl DriftModel {
     /// Checks every parameter; the error names the field.
     pub fn validate(&self) -> Result<(), (String, String)> {
-        let positive = [
+        checks::positive(&[
             ("window_error_m", self.window_error_m),
             ("jump_scale_m", self.jump_scale_m),
             (
                 "difficulty_time_constant_s",
                 self.difficulty_time_constant_s,
             ),
-        ];
-        for (name, v) in positive {
-            if !(v.is_finite() && v > 0.0) {
-                return Err((name.into(), format!("must be a positive number, got {v}")));
-            }
-        }
-        let non_negative = [
+        ])?;
+        checks::non_negative(&[
             ("hard_gain", self.hard_gain),
             ("rotation_noise_deg", self.rotation_noise_deg),
             ("trial_quality_sigma", self.trial_quality_sigma),
-        ];
-        for (name, v) in non_negative {
-            if !(v.is_finite() && v >= 0.0) {
-                return Err((
-                    name.into(),
-                    format!("must be a non-negative number, got {v}"),
-                ));
-            }
-        }
-        let unit = [
+        ])?;
+        checks::unit_range(&[
             ("correlation", self.correlation, 0.999),
             ("shared_share", self.shared_share, 1.0),
             ("jump_rate", self.jump_rate, 1.0),
             ("jump_rate_hard", self.jump_rate_hard, 1.0),
             ("jump_rate_reflective", self.jump_rate_reflective, 1.0),
-        ];
-        for (name, v, max) in unit {
-            if !(v.is_finite() && (0.0..=max).contains(&v)) {
-                return Err((name.into(), format!("must be in [0, {max}], got {v}")));
-            }
-        }
+        ])?;
         if !(self.tail_dof.is_finite() && self.tail_dof > 2.0) {
             return Err((
                 "tail_dof".into(),
@@ -205,7 +187,23 @@ fn gaussian3(rng: &mut ChaCha8Rng, sigma: f64) -> DVec3 {
     DVec3::new(g(), g(), g()) * sigma
 }
 
-fn uniform_direction(rng: &mut ChaCha8Rng) -> DVec3 {
+/// A trial's own world frame (random yaw about +Y and offset), or the identity when not
+/// `enabled`; separate SLAM runs start in frames of their own.
+pub(crate) fn world_frame(enabled: bool, rng: &mut ChaCha8Rng) -> (DQuat, DVec3) {
+    if !enabled {
+        return (DQuat::IDENTITY, DVec3::ZERO);
+    }
+    let yaw: f64 = rng.random_range(-std::f64::consts::PI..std::f64::consts::PI);
+    let offset = DVec3::new(
+        rng.random_range(-1.0..1.0),
+        rng.random_range(-0.2..0.2),
+        rng.random_range(-1.0..1.0),
+    );
+    (DQuat::from_rotation_y(yaw), offset)
+}
+
+/// A direction uniform on the unit sphere.
+pub(crate) fn uniform_direction(rng: &mut ChaCha8Rng) -> DVec3 {
     let z: f64 = rng.random_range(-1.0..1.0);
     let phi: f64 = rng.random_range(0.0..TAU);
     let r = (1.0 - z * z).sqrt();
@@ -228,6 +226,17 @@ pub fn play_trial(rec: &Recording, trial_index: u32) -> Trajectory {
 /// trial starts in its own world frame (random yaw and offset) when
 /// [`DriftModel::world_offset`] is set. Timestamps equal the recording's.
 pub fn play_trial_with(rec: &Recording, trial_index: u32, options: &TrialOptions) -> Trajectory {
+    let trial = match rec.ransac_parts() {
+        Some((model, observations)) => {
+            crate::ransac_tracker::play(rec, model, observations, trial_index)
+        }
+        None => play_model_trial(rec, trial_index),
+    };
+    drop_frames(rec, trial_index, trial, options)
+}
+
+/// The error model's trial (see [`play_trial_with`]).
+fn play_model_trial(rec: &Recording, trial_index: u32) -> Trajectory {
     let model = rec.drift();
     let gt = &rec.walk().ground_truth;
     let n = gt.len();
@@ -241,17 +250,7 @@ pub fn play_trial_with(rec: &Recording, trial_index: u32, options: &TrialOptions
     let quality = LogNormal::new(0.0, model.trial_quality_sigma)
         .map(|d| d.sample(&mut rng))
         .unwrap_or(1.0);
-    let (world_rot, world_offset) = if model.world_offset {
-        let yaw: f64 = rng.random_range(-std::f64::consts::PI..std::f64::consts::PI);
-        let offset = DVec3::new(
-            rng.random_range(-1.0..1.0),
-            rng.random_range(-0.2..0.2),
-            rng.random_range(-1.0..1.0),
-        );
-        (DQuat::from_rotation_y(yaw), offset)
-    } else {
-        (DQuat::IDENTITY, DVec3::ZERO)
-    };
+    let (world_rot, world_offset) = world_frame(model.world_offset, &mut rng);
     let jump_size = Pareto::new(model.jump_scale_m, 2.0).ok();
 
     let mut shared = Ar1::new(model);
@@ -288,12 +287,22 @@ pub fn play_trial_with(rec: &Recording, trial_index: u32, options: &TrialOptions
         positions.push(position);
         orientations.push(rotation);
     }
-    let mut trial = Trajectory {
+    Trajectory {
         stamps: gt.stamps.clone(),
         positions,
         orientations,
         time_unit: gt.time_unit,
-    };
+    }
+}
+
+/// Drops frames of `trial` as `options` ask (never the first or last).
+fn drop_frames(
+    rec: &Recording,
+    trial_index: u32,
+    mut trial: Trajectory,
+    options: &TrialOptions,
+) -> Trajectory {
+    let n = trial.len();
     if options.drop_probability > 0.0 && n > 2 {
         let p = options.drop_probability.clamp(0.0, 1.0);
         let mut drop_rng = rng_for(
