@@ -95,6 +95,7 @@ mod error;
 mod markers;
 mod persist;
 mod playback;
+mod relation;
 mod render;
 mod results;
 mod session;
@@ -107,6 +108,7 @@ pub use depth::{DepthImage, DepthSample, Intrinsics, sample_surface};
 pub use error::{Error, InvalidDepth};
 pub use markers::{Marker, MarkerCandidate, select_markers, warning_sign_rotation};
 pub use playback::PlaybackLogger;
+pub use relation::{ErrorUnit, PoseRelation};
 pub use render::{Frustum, Joint, RenderPlan, Segment};
 pub use results::{ResultWindow, Results};
 pub use session::{
