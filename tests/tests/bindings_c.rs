@@ -1166,6 +1166,8 @@ fn a_job_for_an_existing_server_session_resumes_its_upload() {
             trials: 3,
             setting: "median".into(),
             playback: "upload".into(),
+            window_frames: None,
+            pose_relation: None,
         })
         .unwrap();
     let rec = dir.path().join("big.mp4");

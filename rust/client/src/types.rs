@@ -9,6 +9,13 @@ pub struct NewSession {
     pub setting: String,
     /// Playback backend: `adb`, `sim` or `upload`.
     pub playback: String,
+    /// Frames per estimate window (the RPE's delta); `None` leaves the server's default (10).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub window_frames: Option<u32>,
+    /// What the estimate measures: `"trans_part"` (metres) or `"angle_deg"`; `None` leaves
+    /// the server's default (`trans_part`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pose_relation: Option<String>,
 }
 
 /// Optional per-session extras beyond [`NewSession`].
