@@ -36,7 +36,12 @@
 
 mod bridge;
 mod c_api;
+#[doc(hidden)]
+pub mod decl;
+mod declare;
 mod error;
+mod exports;
+mod flat;
 mod guard;
 mod jni_api;
 mod logging;
@@ -46,7 +51,10 @@ mod types;
 mod upload;
 
 pub use bridge::*;
-pub use c_api::*;
+pub use c_api::sitar_last_error;
 pub use error::{Error, SitarStatus};
+pub use exports::*;
+#[doc(hidden)]
+pub use flat::FLAT_LAYOUTS;
 pub use registry::SitarHandle;
 pub use types::*;
