@@ -485,80 +485,52 @@ mod tests {
         assert!(seen.iter().all(|s| s.method != "PUT" && s.method != "HEAD"));
     }
 
-    #[test]
-    fn failures_say_why_a_refused_final_result_a_failed_session_and_a_panic() {
-        let dir = tempfile::tempdir().unwrap();
-        let rec = recording(&dir);
-        let started = [
+    /// Runs a job against a server that creates `s1`, takes the recording and then gives
+    /// `after`, and returns the finished job's snapshot.
+    fn failed_with(
+        after: &[Reply],
+        sink: impl FnMut(&str) -> Result<(), Refused> + Send + 'static,
+    ) -> JobProgress {
+        let replies = [
             Reply::Answer(201, r#"{"id":"s1"}"#),
             Reply::Offset(0),
             Reply::Answer(202, "{}"),
         ];
-        // The sink refuses the final results.
-        let (base, _) = serve(
-            started
-                .iter()
-                .map(Reply::clone)
-                .chain([
-                    Reply::Answer(200, DONE),
-                    Reply::Answer(200, "final"),
-                    Reply::Answer(200, DONE),
-                ])
-                .collect(),
-        );
-        let job = UploadJob::start(client(&base), &rec, options(None, None), |t: &str| {
-            Err(Refused(t.to_owned()))
-        })
-        .unwrap();
+        let (base, _) = serve(replies.iter().chain(after).cloned().collect());
+        let dir = tempfile::tempdir().unwrap();
+        let job =
+            UploadJob::start(client(&base), &recording(&dir), options(None, None), sink).unwrap();
         let p = finished(&job);
-        assert_eq!((p.state, p.results_revision), (JobState::Failed, 0));
-        let message = p.error.as_ref().unwrap().to_string();
-        assert_eq!(message, "sink refused: final");
+        assert_eq!(p.state, JobState::Failed, "{p:?}");
+        p
+    }
+
+    #[test]
+    fn failures_say_why_a_refused_final_result_a_failed_session_and_a_panic() {
+        let done = [
+            Reply::Answer(200, DONE),
+            Reply::Answer(200, "final"),
+            Reply::Answer(200, DONE),
+        ];
+        // The sink refuses the final results.
+        let p = failed_with(&done, |t: &str| Err(Refused(t.to_owned())));
+        assert_eq!(p.results_revision, 0);
+        assert_eq!(p.error.as_ref().unwrap().to_string(), "sink refused: final");
         assert!(matches!(p.error.as_deref(), Some(Error::Results(e)) if e.is::<Refused>()));
 
         // The server failed the session.
-        let (base, _) = serve(
-            started
-                .iter()
-                .map(Reply::clone)
-                .chain([Reply::Answer(
-                    200,
-                    r#"{"id":"s1","state":"failed","progress":0.3,"eta_s":null,"trials_done":1,"trials_total":3,"error":"adb: no device"}"#,
-                )])
-                .collect(),
-        );
-        let job = UploadJob::start(client(&base), &rec, options(None, None), |_: &str| {
-            Ok::<(), Refused>(())
-        })
-        .unwrap();
-        let p = finished(&job);
-        assert_eq!(p.state, JobState::Failed);
+        let failed = [Reply::Answer(
+            200,
+            r#"{"id":"s1","state":"failed","progress":0.3,"eta_s":null,"trials_done":1,"trials_total":3,"error":"adb: no device"}"#,
+        )];
+        let p = failed_with(&failed, |_: &str| Ok(()));
         assert_eq!(
             p.error.as_ref().unwrap().to_string(),
             "the server failed session s1: adb: no device"
         );
 
         // A panic in the sink fails the job instead of leaving it running forever.
-        let (base, _) = serve(
-            started
-                .iter()
-                .map(Reply::clone)
-                .chain([
-                    Reply::Answer(200, DONE),
-                    Reply::Answer(200, "final"),
-                    Reply::Answer(200, DONE),
-                ])
-                .collect(),
-        );
-        let job = UploadJob::start(client(&base), &rec, options(None, None), |_: &str| {
-            if true {
-                panic!("sink broke");
-            }
-            Ok::<(), Refused>(())
-        })
-        .unwrap();
-        let p = finished(&job);
-        assert_eq!(p.state, JobState::Failed);
+        let p = failed_with(&done, |_: &str| panic!("sink broke"));
         assert!(matches!(p.error.as_deref(), Some(Error::Panicked(m)) if m == "sink broke"));
     }
 

@@ -6,31 +6,19 @@
 //!
 //! Not a stable API: only the generator reads it.
 
-/// One C entry point.
+/// One entry point: a C function (`sitar_…`) or a JNI method of `io.github.sitar.Native`
+/// (`Java_io_github_sitar_Native_<name>`).
 #[derive(Debug, Clone, Copy)]
-pub struct CExport {
-    /// The C name (`sitar_…`).
+pub struct Export {
+    /// The C name, or the Kotlin method name.
     pub name: &'static str,
     /// The doc comment, one line per line.
     pub doc: &'static str,
-    /// Parameters: name and Rust type as written (`*const SitarPose`).
+    /// Parameters: name (snake_case) and type — the Rust type as written for C
+    /// (`*const SitarPose`), the Kotlin type for JNI (`Double`).
     pub params: &'static [(&'static str, &'static str)],
-    /// The Rust return type (`i32`, or `*const c_char` for the version).
-    pub returns: &'static str,
-    /// The cargo feature it needs, if any.
-    pub feature: Option<&'static str>,
-}
-
-/// One JNI entry point `Java_io_github_sitar_Native_<name>`.
-#[derive(Debug, Clone, Copy)]
-pub struct JniExport {
-    /// The Kotlin method name of `io.github.sitar.Native`.
-    pub name: &'static str,
-    /// The doc comment.
-    pub doc: &'static str,
-    /// Kotlin parameters: Rust-style (snake_case) name and Kotlin type.
-    pub params: &'static [(&'static str, &'static str)],
-    /// The Kotlin return type (`Unit` for none).
+    /// The return type: Rust for C (`i32`, or `*const c_char` for the version), Kotlin for
+    /// JNI (`Unit` for none).
     pub returns: &'static str,
     /// The cargo feature it needs, if any.
     pub feature: Option<&'static str>,

@@ -58,11 +58,11 @@ macro_rules! exports {
 
         /// Every C entry point, for the header and the C# bindings.
         #[doc(hidden)]
-        pub const C_EXPORTS: &[$crate::decl::CExport] = &[$($( $cname::DECL, )?)*];
+        pub const C_EXPORTS: &[$crate::decl::Export] = &[$($( $cname::DECL, )?)*];
 
         /// Every JNI entry point, for `Native.kt`.
         #[doc(hidden)]
-        pub const JNI_EXPORTS: &[$crate::decl::JniExport] = &[$($( $jname::DECL, )?)*];
+        pub const JNI_EXPORTS: &[$crate::decl::Export] = &[$($( $jname::DECL, )?)*];
     };
 
     // ---- C ---------------------------------------------------------------------------
@@ -248,7 +248,7 @@ macro_rules! exports {
         [$ret:ty]) => {
         #[doc(hidden)]
         pub(crate) mod $cname {
-            pub(crate) const DECL: $crate::decl::CExport = $crate::decl::CExport {
+            pub(crate) const DECL: $crate::decl::Export = $crate::decl::Export {
                 name: stringify!($cname),
                 doc: concat!($($doc, "\n",)*),
                 params: &[$( (stringify!($p), stringify!($t)), )*],
@@ -404,7 +404,7 @@ macro_rules! exports {
         pub(crate) mod $jname {
             #[allow(unused_imports)]
             use super::*;
-            pub(crate) const DECL: $crate::decl::JniExport = $crate::decl::JniExport {
+            pub(crate) const DECL: $crate::decl::Export = $crate::decl::Export {
                 name: stringify!($jname),
                 doc: concat!($($doc, "\n",)*),
                 params: &[$($kt)*],
