@@ -3,7 +3,7 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use sitar_core::Results;
+use sitar_core::{Results, Thresholds};
 
 fuzz_target!(|data: &[u8]| {
     let Ok(text) = std::str::from_utf8(data) else {
@@ -19,9 +19,9 @@ fuzz_target!(|data: &[u8]| {
         results
             .windows
             .iter()
-            .all(|w| w.error_m.is_finite() && w.error_m >= 0.0)
+            .all(|w| w.error.is_finite() && w.error >= 0.0)
     );
-    let json = results.to_json(sitar_core::Thresholds::DEFAULT_M);
+    let json = results.to_json(Thresholds::DEFAULT_M);
     assert_eq!(Results::parse(&json).ok(), Some(results.clone()));
     let mut times: Vec<i64> = results.windows.iter().map(|w| w.start).collect();
     times.extend([i64::MIN, -1, 0, 1, i64::MAX]);
@@ -31,5 +31,5 @@ fuzz_target!(|data: &[u8]| {
             let _ = results.lookup(t, tolerance);
         }
     }
-    let _ = results.mean_error_m();
+    let _ = results.mean_error();
 });

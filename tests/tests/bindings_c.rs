@@ -1166,6 +1166,8 @@ fn a_job_for_an_existing_server_session_resumes_its_upload() {
             trials: 3,
             setting: "median".into(),
             playback: "upload".into(),
+            window_frames: None,
+            pose_relation: None,
         })
         .unwrap();
     let rec = dir.path().join("big.mp4");
@@ -1254,4 +1256,202 @@ fn a_job_for_an_existing_server_session_resumes_its_upload() {
         "session_id",
     );
     server.stop();
+}
+
+/// Results JSON as the backend writes it, one window per 10-frame sub-trajectory.
+fn results_json(window_frames: u32, relation: &str, unit: &str, errors: &[f64]) -> String {
+    let key = if unit == "deg" {
+        "error_deg"
+    } else {
+        "error_m"
+    };
+    let windows: Vec<String> = errors
+        .iter()
+        .enumerate()
+        .map(|(k, e)| {
+            format!(
+                r#"{{"start":{},"{key}":{e},"pairs":3}}"#,
+                10 * k as i64 * FRAME_NS
+            )
+        })
+        .collect();
+    format!(
+        r#"{{"version":1,"trials":3,"window_frames":{window_frames},"pose_relation":"{relation}","unit":"{unit}","windows":[{}]}}"#,
+        windows.join(",")
+    )
+}
+
+#[test]
+fn angle_deg_results_use_the_degree_thresholds_and_unfit_results_are_refused() {
+    let a = api();
+    let h = new_session(r#"{"convention":"unity","pose_relation":"angle_deg"}"#);
+    record(h);
+    let degrees = [1.0, 5.0, 3.0, 0.5, 8.0, 2.5];
+    let json = c(&results_json(10, "angle_deg", "deg", &degrees));
+    assert_eq!(
+        (a.load_results)(h, json.as_ptr().cast()),
+        OK,
+        "{}",
+        last_error()
+    );
+    for (k, e) in degrees.iter().enumerate() {
+        let (mut class, mut err) = (0, 0.0);
+        assert_eq!(
+            (a.error_at)(h, 10 * k as i64 * FRAME_NS, &mut class, &mut err),
+            OK
+        );
+        let expected = if *e >= 4.0 {
+            3
+        } else if *e >= 2.0 {
+            2
+        } else {
+            1
+        };
+        assert_eq!((class, err), (expected, *e), "sub-trajectory {k}");
+    }
+    // Markers search 4° then 2°: subs 1 and 4, then 2 (in metres all six pass 0.10).
+    let mut markers = [Marker::default(); 8];
+    let mut len = 0;
+    assert_eq!((a.markers)(h, markers.as_mut_ptr(), 8, &mut len), OK);
+    let mut found: Vec<(u32, i32, f64)> = markers[..len]
+        .iter()
+        .map(|m| (m.subtrajectory, m.error_class, m.error_m))
+        .collect();
+    found.sort_by_key(|m| m.0);
+    assert_eq!(found, [(1, 3, 5.0), (2, 2, 3.0), (4, 3, 8.0)]);
+    let mut unreliable = -1;
+    assert_eq!((a.unreliable)(h, &mut unreliable), OK);
+    assert_eq!(unreliable, 0, "a mean of 3.3° is below 8°");
+
+    // Other windows, another relation, legacy CSV (metres): refused naming both values.
+    for (text, needles) in [
+        (
+            results_json(20, "angle_deg", "deg", &degrees),
+            ["window_frames 20", "subtrajectory_frames 10"],
+        ),
+        (
+            results_json(10, "trans_part", "m", &ERRORS),
+            ["pose_relation trans_part", "pose_relation angle_deg"],
+        ),
+        (
+            results_csv(FRAME_NS, &ERRORS),
+            ["pose_relation trans_part", "pose_relation angle_deg"],
+        ),
+    ] {
+        let status = (a.load_results)(h, c(&text).as_ptr().cast());
+        for needle in needles {
+            expect_err(status, ERR_INVALID_ARGUMENT, needle);
+        }
+    }
+    // The degree results stay.
+    let (mut class, mut err) = (0, 0.0);
+    assert_eq!((a.error_at)(h, 40 * FRAME_NS, &mut class, &mut err), OK);
+    assert_eq!((class, err), (3, 8.0));
+    // Config keys: wrong values name the key.
+    let mut other = 0;
+    for (config, key) in [
+        (r#"{"pose_relation":"angle_rad"}"#, "pose_relation"),
+        (r#"{"thresholds_deg":[4,"2"]}"#, "thresholds_deg"),
+        (r#"{"medium_threshold_deg":5}"#, "medium_threshold_deg"),
+    ] {
+        expect_err(
+            (a.session_new)(c(config).as_ptr().cast(), &mut other),
+            ERR_PARSE,
+            key,
+        );
+    }
+    assert_eq!((a.session_free)(h), OK);
+}
+
+/// A server that answers the session request with a 400 and hands over its body.
+fn capture_session_request() -> (String, std::sync::mpsc::Receiver<String>) {
+    use std::io::{BufRead, BufReader, Read, Write};
+    let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+    let url = format!("http://{}", listener.local_addr().unwrap());
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let Ok((mut stream, _)) = listener.accept() else {
+            return;
+        };
+        let mut reader = BufReader::new(stream.try_clone().unwrap());
+        let mut length = 0;
+        let mut line = String::new();
+        while reader.read_line(&mut line).map(|n| n > 2).unwrap_or(false) {
+            if let Some(v) = line.to_ascii_lowercase().strip_prefix("content-length:") {
+                length = v.trim().parse().unwrap();
+            }
+            line.clear();
+        }
+        let mut body = vec![0u8; length];
+        reader.read_exact(&mut body).unwrap();
+        let answer = r#"{"error":{"code":"bad_request","message":"captured"}}"#;
+        let _ = write!(
+            stream,
+            "HTTP/1.1 400 Bad Request\r\ncontent-type: application/json\r\ncontent-length: {}\r\nconnection: close\r\n\r\n{answer}",
+            answer.len()
+        );
+        let _ = tx.send(String::from_utf8(body).unwrap());
+    });
+    (url, rx)
+}
+
+#[test]
+fn an_upload_asks_the_backend_for_the_session_window_settings() {
+    let a = api();
+    let dir = tempfile::tempdir().unwrap();
+    let rec = dir.path().join("rec.mp4");
+    std::fs::write(&rec, b"not really an mp4").unwrap();
+    for (config, options, expected) in [
+        (
+            r#"{"subtrajectory_frames":20,"pose_relation":"angle_deg"}"#,
+            r#""trials":4"#,
+            serde_json::json!({"trials":4,"setting":"trim_mean_30","playback":"adb",
+                               "window_frames":20,"pose_relation":"angle_deg"}),
+        ),
+        // Equal to the backend's defaults: not sent, so older backends take the session.
+        (
+            "{}",
+            r#""trials":4,"window_frames":10,"pose_relation":"trans_part""#,
+            serde_json::json!({"trials":4,"setting":"trim_mean_30","playback":"adb"}),
+        ),
+    ] {
+        let h = new_session(config);
+        let (url, body) = capture_session_request();
+        let options = c(&format!(r#"{{"server_url":"{url}",{options}}}"#));
+        let job = start_upload(h, &rec, &options);
+        let body = body
+            .recv_timeout(Duration::from_secs(20))
+            .expect("a session request");
+        let body: serde_json::Value = serde_json::from_str(&body).unwrap();
+        assert_eq!(body, expected, "{config}");
+        let p = wait_for_state(job, JOB_FAILED, Duration::from_secs(20));
+        assert_eq!(p.state, JOB_FAILED, "{p:?}");
+        assert!(message(job).contains("captured"), "{}", message(job));
+        assert_eq!((a.upload_free)(job), OK);
+        assert_eq!((a.session_free)(h), OK);
+    }
+    // Options that do not fit the session config are refused at once, naming both values.
+    let h = new_session(r#"{"subtrajectory_frames":20}"#);
+    let mut job = 0;
+    for (options, needles) in [
+        (
+            r#"{"server_url":"http://127.0.0.1:9","window_frames":10}"#,
+            ["window_frames 10", "subtrajectory_frames 20"],
+        ),
+        (
+            r#"{"server_url":"http://127.0.0.1:9","pose_relation":"angle_deg"}"#,
+            ["pose_relation angle_deg", "pose_relation trans_part"],
+        ),
+    ] {
+        let status = (a.upload_start)(
+            h,
+            c(rec.to_str().unwrap()).as_ptr().cast(),
+            c(options).as_ptr().cast(),
+            &mut job,
+        );
+        for needle in needles {
+            expect_err(status, ERR_INVALID_ARGUMENT, needle);
+        }
+    }
+    assert_eq!((a.session_free)(h), OK);
 }

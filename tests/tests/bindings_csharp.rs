@@ -1,5 +1,5 @@
-//! Compiles `SitarSession.cs` and the generated `NativeMethods.g.cs` with
-//! `mcs`, plus the host test main (`unity-plugin/Tests~/HostTest.cs`), and
+//! Compiles `SitarSession.cs` and the generated `NativeMethods.g.cs` and
+//! `SitarStatus.g.cs` with `mcs`, plus the host test main (`unity-plugin/Tests~/HostTest.cs`), and
 //! runs it with `mono` against the host-built `libsitar.so`: the same session
 //! and error cases as the Kotlin test. Skipped, loudly, where `mcs` or `mono`
 //! is missing.
@@ -31,6 +31,7 @@ fn csharp_wrapper_runs_a_session_and_maps_every_error() {
             .arg("-warnaserror")
             .arg(format!("-out:{}", exe.display()))
             .arg(plugin.join("Runtime/NativeMethods.g.cs"))
+            .arg(plugin.join("Runtime/SitarStatus.g.cs"))
             .arg(plugin.join("Runtime/SitarSession.cs"))
             .arg(plugin.join("Tests~/HostTest.cs")),
         "mcs",

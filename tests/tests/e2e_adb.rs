@@ -83,6 +83,8 @@ fn adb_playback_with_fake_phones() {
         trials,
         setting: "trim_mean_30".into(),
         playback: "adb".into(),
+        window_frames: None,
+        pose_relation: None,
     };
 
     // One phone: trials arrive in order, so the numbers equal the estimator's.

@@ -116,6 +116,8 @@ fn bad_inputs_are_json_4xx_and_write_nothing_outside_the_data_dir() {
         trials: 3,
         setting: "mean".into(),
         playback: "sim".into(),
+        window_frames: None,
+        pose_relation: None,
     };
     let id = client.create_session(&sim).unwrap();
     let rec_url = format!("{base}/v1/sessions/{id}/recording");
@@ -183,6 +185,8 @@ fn bad_inputs_are_json_4xx_and_write_nothing_outside_the_data_dir() {
             trials: 3,
             setting: "mean".into(),
             playback: "upload".into(),
+            window_frames: None,
+            pose_relation: None,
         })
         .unwrap();
     let trials_url = format!("/v1/sessions/{up}/trials");

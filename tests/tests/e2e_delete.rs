@@ -25,6 +25,8 @@ fn finished_and_waiting_sessions_are_deleted_whole_and_running_ones_refused() {
             trials: 3,
             setting: "median".into(),
             playback: "sim".into(),
+            window_frames: None,
+            pose_relation: None,
         })
         .unwrap();
     client
@@ -52,6 +54,8 @@ fn finished_and_waiting_sessions_are_deleted_whole_and_running_ones_refused() {
             trials: 4,
             setting: "median".into(),
             playback: "upload".into(),
+            window_frames: None,
+            pose_relation: None,
         })
         .unwrap();
     let trial = sitar_sim::simulate_trials(&sitar_sim::Recording::demo(3.0, 30.0, 5).unwrap(), 1);
@@ -100,6 +104,8 @@ fn finished_and_waiting_sessions_are_deleted_whole_and_running_ones_refused() {
             trials: 2,
             setting: "median".into(),
             playback: "sim".into(),
+            window_frames: None,
+            pose_relation: None,
         })
         .unwrap();
     client
@@ -127,6 +133,8 @@ fn past_the_retention_sessions_go_by_themselves_but_never_in_flight() {
                 trials,
                 setting: "median".into(),
                 playback: playback.into(),
+                window_frames: None,
+                pose_relation: None,
             })
             .unwrap()
     };

@@ -23,6 +23,8 @@ fn the_list_and_the_page_show_the_newest_sessions_with_their_links() {
             trials: 2,
             setting: "median".into(),
             playback: "sim".into(),
+            window_frames: None,
+            pose_relation: None,
         })
         .unwrap();
     let rec = sim_recording(dir.path(), "walk.rec", 3.0, 5);
@@ -36,6 +38,8 @@ fn the_list_and_the_page_show_the_newest_sessions_with_their_links() {
             trials: 3,
             setting: "mean".into(),
             playback: "upload".into(),
+            window_frames: None,
+            pose_relation: None,
         })
         .unwrap();
 

@@ -21,6 +21,8 @@ fn upload_session(client: &sitar_client::Client, setting: Setting) -> String {
         trials: 4,
         setting: setting.to_string(),
         playback: "upload".into(),
+        window_frames: None,
+        pose_relation: None,
     };
     client.create_session(&new).unwrap()
 }

@@ -17,6 +17,8 @@ fn a_restart_mid_playback_resumes_and_a_missing_recording_fails_with_a_reason() 
         trials: 8,
         setting: "trim_mean_30".into(),
         playback: "sim".into(),
+        window_frames: None,
+        pose_relation: None,
     };
     let id = client.create_session(&new).unwrap();
     let doomed = client.create_session(&new).unwrap();

@@ -17,6 +17,8 @@ fn upload_session(client: &sitar_client::Client) -> String {
             trials: 2,
             setting: "median".into(),
             playback: "upload".into(),
+            window_frames: None,
+            pose_relation: None,
         })
         .unwrap()
 }

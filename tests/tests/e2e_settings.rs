@@ -42,15 +42,13 @@ fn an_upload_session_with_20_frame_angle_windows_is_estimated_recorded_and_repor
     let dir = tempfile::tempdir().unwrap();
     let server = start(sim_config(&dir.path().join("data"), 20.0, 1));
     let client = client(&server);
-    let options = SessionOptions {
-        window_frames: Some(20),
-        pose_relation: Some("angle_deg".into()),
-        ..SessionOptions::default()
-    };
+    let options = SessionOptions::default();
     let new = NewSession {
         trials: 3,
         setting: "median".into(),
         playback: "upload".into(),
+        window_frames: Some(20),
+        pose_relation: Some("angle_deg".into()),
     };
     let id = client.create_session_with(&new, &options).unwrap();
     let status_url = format!("{}/v1/sessions/{id}", server.url());
@@ -121,13 +119,14 @@ fn a_sim_session_plays_and_stops_adaptively_on_its_own_windows() {
     let options = SessionOptions {
         adaptive_min_trials: Some(4),
         adaptive_k: Some(3),
-        window_frames: Some(15),
         ..SessionOptions::default()
     };
     let new = NewSession {
         trials: 30,
         setting: "trim_mean_30".into(),
         playback: "sim".into(),
+        window_frames: Some(15),
+        pose_relation: None,
     };
     let id = client.create_session_with(&new, &options).unwrap();
     client

@@ -11,6 +11,8 @@ fn sim_session(trials: u32) -> NewSession {
         trials,
         setting: "trim_mean_30".into(),
         playback: "sim".into(),
+        window_frames: None,
+        pose_relation: None,
     }
 }
 

@@ -15,6 +15,8 @@ fn uploaded_trials_are_estimated_exactly_and_never_duplicated() {
             trials: 5,
             setting: "median".into(),
             playback: "upload".into(),
+            window_frames: None,
+            pose_relation: None,
         })
         .unwrap();
     let rec = sitar_sim::Recording::demo(4.0, 30.0, 11).unwrap();

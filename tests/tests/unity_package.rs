@@ -50,6 +50,7 @@ fn unity_package_type_checks_against_the_unity_api_shapes() {
     let runtime = cs_files(&workspace_root().join("unity-plugin/Runtime"));
     for expected in [
         "Runtime/NativeMethods.g.cs",
+        "Runtime/SitarStatus.g.cs",
         "Runtime/SitarSession.cs",
         "Runtime/Components/SitarRecorder.cs",
         "Runtime/Components/SitarPlaybackLogger.cs",

@@ -26,17 +26,17 @@ namespace Sitar
 
 
         /// <summary>
-        ///  The library version as a static NUL-terminated string (never freed).
-        /// </summary>
-        [DllImport(__DllName, EntryPoint = "sitar_version", CallingConvention = CallingConvention.Cdecl, ExactSpelling = true)]
-        internal static extern byte* sitar_version();
-
-        /// <summary>
         ///  Copies the calling thread's last error message (see the text-output
         ///  convention). It never changes the stored message itself; "" if none yet.
         /// </summary>
         [DllImport(__DllName, EntryPoint = "sitar_last_error", CallingConvention = CallingConvention.Cdecl, ExactSpelling = true)]
         internal static extern int sitar_last_error(byte* buf, System.UIntPtr cap, System.UIntPtr* out_len);
+
+        /// <summary>
+        ///  The library version as a static NUL-terminated string (never freed).
+        /// </summary>
+        [DllImport(__DllName, EntryPoint = "sitar_version", CallingConvention = CallingConvention.Cdecl, ExactSpelling = true)]
+        internal static extern byte* sitar_version();
 
         /// <summary>
         ///  Creates a session from a JSON config (every key optional; "" = defaults).
@@ -83,14 +83,16 @@ namespace Sitar
         internal static extern int sitar_session_summary(ulong h, SitarSummary* @out);
 
         /// <summary>
-        ///  Loads results: legacy CSV (`start,error`) or JSON, autodetected.
+        ///  Loads results: legacy CSV (`start,error`) or JSON, autodetected. Results for
+        ///  another window length than `subtrajectory_frames`, or another `pose_relation`
+        ///  than the config's, are refused (`SITAR_ERR_INVALID_ARGUMENT`).
         /// </summary>
         [DllImport(__DllName, EntryPoint = "sitar_session_load_results", CallingConvention = CallingConvention.Cdecl, ExactSpelling = true)]
         internal static extern int sitar_session_load_results(ulong h, byte* csv_or_json);
 
         /// <summary>
         ///  The error class at `t_ns` (0 unknown, 1 low, 2 medium, 3 high) and the
-        ///  error in metres (NaN when unknown).
+        ///  error in the results' unit, metres or degrees (NaN when unknown).
         /// </summary>
         [DllImport(__DllName, EntryPoint = "sitar_session_error_at", CallingConvention = CallingConvention.Cdecl, ExactSpelling = true)]
         internal static extern int sitar_session_error_at(ulong h, long t_ns, int* out_class, double* out_error_m);
@@ -103,7 +105,7 @@ namespace Sitar
 
         /// <summary>
         ///  `*out` = 1 if the loaded results are unreliable (mean error at or above
-        ///  `unreliable_mean_error_m`), else 0.
+        ///  `unreliable_mean_error_m`, or `_deg`), else 0.
         /// </summary>
         [DllImport(__DllName, EntryPoint = "sitar_session_results_unreliable", CallingConvention = CallingConvention.Cdecl, ExactSpelling = true)]
         internal static extern int sitar_session_results_unreliable(ulong h, int* @out);
@@ -189,7 +191,7 @@ namespace Sitar
         internal static extern int sitar_playback_tum(ulong h, byte* buf, System.UIntPtr cap, System.UIntPtr* out_len);
 
         /// <summary>
-        ///  Writes `&lt;dir&gt;/trajectory_&lt;index&gt;.txt` (creating `dir`).
+        ///  Writes `&lt;dir&gt;/trajectory_&lt;index&gt;.txt` (creating `dir`); JNI returns the path.
         /// </summary>
         [DllImport(__DllName, EntryPoint = "sitar_playback_write", CallingConvention = CallingConvention.Cdecl, ExactSpelling = true)]
         internal static extern int sitar_playback_write(ulong h, byte* dir, uint index);
@@ -205,7 +207,9 @@ namespace Sitar
         ///  is done, loads the results into session `h`. `options_json` (NULL or ""
         ///  = defaults): `server_url`, `trials` (10), `setting` ("trim_mean_30"),
         ///  `playback` ("adb"), `poll_interval_ms` (500), `session_id` (continue that
-        ///  server session, e.g. a failed job's: the upload resumes or is skipped).
+        ///  server session, e.g. a failed job's: the upload resumes or is skipped),
+        ///  `window_frames` and `pose_relation` (the session config's
+        ///  `subtrajectory_frames` and `pose_relation`; other values are refused).
         /// </summary>
         [DllImport(__DllName, EntryPoint = "sitar_upload_start", CallingConvention = CallingConvention.Cdecl, ExactSpelling = true)]
         internal static extern int sitar_upload_start(ulong h, byte* recording_path, byte* options_json, ulong* out_job);
@@ -401,7 +405,7 @@ namespace Sitar
         /// </summary>
         public uint subtrajectory;
         /// <summary>
-        ///  Estimated error (metres).
+        ///  Estimated error, in the results' unit (metres; degrees for `angle_deg`).
         /// </summary>
         public double error_m;
     }
@@ -509,7 +513,8 @@ namespace Sitar
     internal unsafe partial struct SitarSubtrajectoryResult
     {
         /// <summary>
-        ///  Estimated error (metres); NaN when no result window is near its start.
+        ///  Estimated error in the results' unit (metres; degrees for `angle_deg`); NaN when no
+        ///  result window is near its start.
         /// </summary>
         public double error_m;
         /// <summary>
@@ -572,45 +577,6 @@ namespace Sitar
 
 
     /// <summary>
-    ///  States of a background upload job (`SitarJobProgress.state`).
-    /// </summary>
-    internal enum SitarJobState : int
-    {
-        /// <summary>
-        ///  Creating the server session.
-        /// </summary>
-        SITAR_JOB_STARTING = 0,
-        /// <summary>
-        ///  Sending the recording.
-        /// </summary>
-        SITAR_JOB_UPLOADING = 1,
-        /// <summary>
-        ///  Playback trials running on the server.
-        /// </summary>
-        SITAR_JOB_PLAYING = 2,
-        /// <summary>
-        ///  The server computes the final estimate.
-        /// </summary>
-        SITAR_JOB_ESTIMATING = 3,
-        /// <summary>
-        ///  Fetching the final results.
-        /// </summary>
-        SITAR_JOB_DOWNLOADING = 4,
-        /// <summary>
-        ///  Final results are loaded into the session.
-        /// </summary>
-        SITAR_JOB_DONE = 5,
-        /// <summary>
-        ///  Failed: see `error_code` and `sitar_upload_message`.
-        /// </summary>
-        SITAR_JOB_FAILED = 6,
-        /// <summary>
-        ///  Cancelled by `sitar_upload_cancel`.
-        /// </summary>
-        SITAR_JOB_CANCELLED = 7,
-    }
-
-    /// <summary>
     ///  Status codes of every C ABI function (`int32_t`); negative is an error.
     ///
     ///  JNI reports the same codes as `SitarException.code`.
@@ -657,6 +623,45 @@ namespace Sitar
         ///  A panic inside the library was caught (a bug; please report it).
         /// </summary>
         SITAR_ERR_PANIC = -99,
+    }
+
+    /// <summary>
+    ///  States of a background upload job (`SitarJobProgress.state`).
+    /// </summary>
+    internal enum SitarJobState : int
+    {
+        /// <summary>
+        ///  Creating the server session.
+        /// </summary>
+        SITAR_JOB_STARTING = 0,
+        /// <summary>
+        ///  Sending the recording.
+        /// </summary>
+        SITAR_JOB_UPLOADING = 1,
+        /// <summary>
+        ///  Playback trials running on the server.
+        /// </summary>
+        SITAR_JOB_PLAYING = 2,
+        /// <summary>
+        ///  The server computes the final estimate.
+        /// </summary>
+        SITAR_JOB_ESTIMATING = 3,
+        /// <summary>
+        ///  Fetching the final results.
+        /// </summary>
+        SITAR_JOB_DOWNLOADING = 4,
+        /// <summary>
+        ///  Final results are loaded into the session.
+        /// </summary>
+        SITAR_JOB_DONE = 5,
+        /// <summary>
+        ///  Failed: see `error_code` and `sitar_upload_message`.
+        /// </summary>
+        SITAR_JOB_FAILED = 6,
+        /// <summary>
+        ///  Cancelled by `sitar_upload_cancel`.
+        /// </summary>
+        SITAR_JOB_CANCELLED = 7,
     }
 
 

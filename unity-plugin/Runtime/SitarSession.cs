@@ -10,20 +10,8 @@ using System.Text;
 
 namespace Sitar
 {
-    /// <summary>Status codes of the C ABI (SITAR_OK, SITAR_ERR_*).</summary>
-    public enum SitarErrorCode
-    {
-        Ok = 0,
-        Null = -1,
-        InvalidArgument = -2,
-        InvalidHandle = -3,
-        InvalidState = -4,
-        Parse = -5,
-        Io = -6,
-        Network = -7,
-        BufferTooSmall = -8,
-        Panic = -99,
-    }
+    // SitarErrorCode and UploadState are generated from the library's declarations
+    // (SitarStatus.g.cs).
 
     /// <summary>An error reported by the native library; <see cref="Code"/> says which kind.</summary>
     public sealed class SitarException : Exception
@@ -98,7 +86,10 @@ namespace Sitar
         }
     }
 
-    /// <summary>A marker: position, warning-sign rotation (local +Y along the normal), surface normal.</summary>
+    /// <summary>
+    /// A marker: position, warning-sign rotation (local +Y along the normal), surface normal;
+    /// ErrorM is in the results' unit (metres, or degrees with pose_relation angle_deg).
+    /// </summary>
     public struct Marker
     {
         public double Px, Py, Pz, Qx, Qy, Qz, Qw, Nx, Ny, Nz;
@@ -107,7 +98,7 @@ namespace Sitar
         public double ErrorM;
     }
 
-    /// <summary>The result of one sub-trajectory: error (metres; null when no result window is near) and class.</summary>
+    /// <summary>The result of one sub-trajectory: error (in the results' unit; null when no result window is near) and class.</summary>
     public struct SubtrajectoryResult
     {
         public uint Subtrajectory;
@@ -147,19 +138,6 @@ namespace Sitar
         public Frustum[] Frustums;
         public Pose? Start;
         public Pose? Stop;
-    }
-
-    /// <summary>States of a background upload (SitarJobState).</summary>
-    public enum UploadState
-    {
-        Starting = 0,
-        Uploading = 1,
-        Playing = 2,
-        Estimating = 3,
-        Downloading = 4,
-        Done = 5,
-        Failed = 6,
-        Cancelled = 7,
     }
 
     /// <summary>A snapshot of an upload job.</summary>
@@ -374,7 +352,11 @@ namespace Sitar
             return Summary.FromNative(s);
         }
 
-        /// <summary>Loads results: legacy CSV (start,error) or JSON.</summary>
+        /// <summary>
+        /// Loads results: legacy CSV (start,error) or JSON. Results for another window length
+        /// than the config's subtrajectory_frames, or another pose_relation, are refused
+        /// (InvalidArgument).
+        /// </summary>
         public void LoadResults(string csvOrJson)
         {
             fixed (byte* t = Native.Utf8(csvOrJson))
@@ -383,7 +365,7 @@ namespace Sitar
             }
         }
 
-        /// <summary>Class and error (metres; null if no result window is near) at a timestamp.</summary>
+        /// <summary>Class and error (in the results' unit; null if no result window is near) at a timestamp.</summary>
         public ErrorClass ErrorAt(long tNs, out double? errorM)
         {
             int cls;
@@ -517,7 +499,9 @@ namespace Sitar
         /// Uploads the recording in the background; results are loaded into this
         /// session when the server is done. Options JSON: server_url (else the
         /// config's), trials, setting, playback, poll_interval_ms, session_id (continue
-        /// that server session, e.g. a failed job's ServerId(): the upload resumes).
+        /// that server session, e.g. a failed job's ServerId(): the upload resumes),
+        /// window_frames and pose_relation (default: the config's subtrajectory_frames and
+        /// pose_relation; other values are refused).
         /// </summary>
         public UploadJob Upload(string recordingPath, string optionsJson = null)
         {

@@ -62,6 +62,14 @@ static class HostTest
         return sb.ToString();
     }
 
+    /// <summary>Results JSON as the backend writes it, one window per 10-frame sub-trajectory.</summary>
+    static string ResultsJson(int windowFrames, string relation, string unit, double[] errors)
+    {
+        string key = unit == "deg" ? "error_deg" : "error_m";
+        var windows = errors.Select((e, k) => "{\"start\":" + (10L * k * FrameNs) + ",\"" + key + "\":" + e.ToString(System.Globalization.CultureInfo.InvariantCulture) + ",\"pairs\":3}");
+        return "{\"version\":1,\"trials\":3,\"window_frames\":" + windowFrames + ",\"pose_relation\":\"" + relation + "\",\"unit\":\"" + unit + "\",\"windows\":[" + string.Join(",", windows) + "]}";
+    }
+
     static Summary Record(SitarSession s)
     {
         var depth = Enumerable.Repeat((ushort)2000, W * H).ToArray();
@@ -211,6 +219,55 @@ static class HostTest
         }
     }
 
+    static ErrorClass DegreeClassOf(double e)
+    {
+        return e >= 4.0 ? ErrorClass.High : e >= 2.0 ? ErrorClass.Medium : ErrorClass.Low;
+    }
+
+    static void WindowSettings(string tmp)
+    {
+        // angle_deg: classes from the degree thresholds (2°, 4°), markers from thresholds_deg.
+        using (var s = new SitarSession("{\"convention\":\"unity\",\"pose_relation\":\"angle_deg\"}"))
+        {
+            Record(s);
+            double[] degrees = { 1.0, 5.0, 3.0, 0.5, 8.0, 2.5 };
+            s.LoadResults(ResultsJson(10, "angle_deg", "deg", degrees));
+            double? err;
+            for (int k = 0; k < degrees.Length; k++)
+            {
+                Check(s.ErrorAt(10L * k * FrameNs, out err) == DegreeClassOf(degrees[k]) && err == degrees[k], "degrees at sub " + k);
+            }
+            // ≥ 4° first (subs 1, 4), then ≥ 2° (sub 2); in metres all six would pass 0.10.
+            Marker[] markers = s.Markers().OrderBy(m => m.Subtrajectory).ToArray();
+            Check(markers.Select(m => m.Subtrajectory).SequenceEqual(new uint[] { 1, 2, 4 }), "degree markers");
+            Check(markers.Select(m => m.ErrorClass).SequenceEqual(new[] { ErrorClass.High, ErrorClass.Medium, ErrorClass.High }), "degree marker classes");
+            Check(!s.ResultsUnreliable(), "a mean of 3.3° is below 8°");
+            // Results that cannot be looked up here are refused, naming both values; the old ones stay.
+            ExpectSitar(SitarErrorCode.InvalidArgument, "window_frames 20", () => s.LoadResults(ResultsJson(20, "angle_deg", "deg", degrees)));
+            ExpectSitar(SitarErrorCode.InvalidArgument, "pose_relation trans_part", () => s.LoadResults(ResultsCsv()));
+            Check(s.ErrorAt(10 * FrameNs, out err) == ErrorClass.High && err == 5.0, "earlier results kept");
+            // Upload options must fit the session config.
+            string rec = Path.Combine(tmp, "window.mp4");
+            File.WriteAllText(rec, "not really an mp4");
+            ExpectSitar(SitarErrorCode.InvalidArgument, "subtrajectory_frames 10", () => s.Upload(rec, "{\"server_url\":\"http://127.0.0.1:9\",\"window_frames\":20}"));
+            ExpectSitar(SitarErrorCode.Parse, "angle_rad", () => s.Upload(rec, "{\"server_url\":\"http://127.0.0.1:9\",\"pose_relation\":\"angle_rad\"}"));
+        }
+        ExpectSitar(SitarErrorCode.Parse, "pose_relation", () => new SitarSession("{\"pose_relation\":\"angle_rad\"}"));
+        ExpectSitar(SitarErrorCode.Parse, "medium_threshold_deg", () => new SitarSession("{\"medium_threshold_deg\":\"2\"}"));
+
+        // 20-frame sub-trajectories take 20-frame windows.
+        using (var s = new SitarSession("{\"subtrajectory_frames\":20}"))
+        {
+            s.Start(0, PoseAt(0));
+            for (long i = 1; i <= 40; i++) s.Frame(i * FrameNs, PoseAt(i));
+            s.Stop(41 * FrameNs, PoseAt(41));
+            string windows = "{\"start\":0,\"error_m\":0.02},{\"start\":" + (20 * FrameNs) + ",\"error_m\":0.3}";
+            s.LoadResults("{\"window_frames\":20,\"windows\":[" + windows + "]}");
+            Check(s.Results().Select(r => r.ErrorClass).SequenceEqual(new[] { ErrorClass.Low, ErrorClass.High }), "20-frame results");
+            ExpectSitar(SitarErrorCode.InvalidArgument, "subtrajectory_frames 20", () => s.LoadResults("{\"window_frames\":10,\"windows\":[" + windows + "]}"));
+        }
+    }
+
     static int Main(string[] args)
     {
         Check(SitarSession.Version == args[0], "version " + SitarSession.Version);
@@ -218,6 +275,7 @@ static class HostTest
         ErrorPaths();
         Playback(args[1]);
         Upload(args[1]);
+        WindowSettings(args[1]);
         Console.WriteLine("PASSED " + checks + " checks");
         return 0;
     }

@@ -105,6 +105,8 @@ pub fn run(args: Args) -> Result<()> {
         trials: args.trials,
         setting: sitar_core::DEFAULT_SETTING.into(),
         playback: "sim".into(),
+        window_frames: None,
+        pose_relation: None,
     };
     let options = SessionOptions {
         adaptive_min_trials: args.adaptive,

@@ -83,6 +83,8 @@ fn serve_listens_and_logs_every_request_that_changes_or_fails() {
             trials: 3,
             setting: "median".into(),
             playback: "upload".into(),
+            window_frames: None,
+            pose_relation: None,
         })
         .unwrap();
     let err = client
@@ -90,6 +92,8 @@ fn serve_listens_and_logs_every_request_that_changes_or_fails() {
             trials: 3,
             setting: "median".into(),
             playback: "floppy".into(),
+            window_frames: None,
+            pose_relation: None,
         })
         .unwrap_err();
     assert_eq!(err.status(), Some(400), "{err}");

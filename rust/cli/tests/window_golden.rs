@@ -47,12 +47,10 @@ fn backend_cli_and_evo_agree_on_20_frame_angle_windows() {
                 trials: 8,
                 setting: golden["setting"].as_str().unwrap().into(),
                 playback: "upload".into(),
-            },
-            &SessionOptions {
                 window_frames: Some(20),
                 pose_relation: Some("angle_deg".into()),
-                ..SessionOptions::default()
             },
+            &SessionOptions::default(),
         )
         .unwrap();
     for path in &trials {

@@ -46,6 +46,24 @@ pub enum Error {
         /// The underlying error.
         source: std::io::Error,
     },
+    /// The thread of an [`crate::UploadJob`] could not be started.
+    #[error("cannot start the upload thread: {0}")]
+    Thread(std::io::Error),
+    /// The server reported the session of an [`crate::UploadJob`] as failed.
+    #[error("the server failed session {id}: {reason}")]
+    SessionFailed {
+        /// The server's session id.
+        id: String,
+        /// The server's reason.
+        reason: String,
+    },
+    /// The results sink of an [`crate::UploadJob`] refused the final results; the sink's
+    /// own error (downcast it to get it back).
+    #[error(transparent)]
+    Results(crate::job::SinkError),
+    /// An [`crate::UploadJob`]'s thread panicked (a bug; the message is the panic's).
+    #[error("internal panic in the upload job: {0}")]
+    Panicked(String),
     /// The caller cancelled the call (see [`crate::Client::upload_recording_cancellable`]).
     #[error("cancelled")]
     Cancelled,

@@ -12,6 +12,12 @@
 //! [`Client::upload_recording_cancellable`] stops a recording upload mid-transfer
 //! when its flag is set (the app's cancel button).
 //!
+//! [`UploadJob`] is the phone's whole round trip on a thread of its own: create (or
+//! continue) a session, send the recording resumably, poll, ask for the estimate of an
+//! `upload` session once all trials arrived, and hand every published result (progressive,
+//! then final) to a sink; the app polls [`JobProgress`] snapshots and may cancel. The native
+//! library bridges it one-to-one (`sitar_upload_*`).
+//!
 //! ```
 //! use sitar_client::{Client, Error, NewSession};
 //!
@@ -28,6 +34,8 @@
 //!     trials: 5,
 //!     setting: "trim_mean_30".into(),
 //!     playback: "sim".into(),
+//!     window_frames: None,
+//!     pose_relation: None,
 //! })?;
 //! client.upload_recording(&id, path, &mut |sent, total| eprintln!("{sent}/{total}"))?;
 //! let status = client.wait(&id, std::time::Duration::from_millis(200),
@@ -41,8 +49,13 @@
 
 mod client;
 mod error;
+mod job;
+mod job_run;
+#[cfg(test)]
+mod test_server;
 mod types;
 
 pub use client::{Client, IDEMPOTENCY_HEADER, UPLOAD_OFFSET_HEADER, check_session_id};
 pub use error::Error;
+pub use job::{JobOptions, JobProgress, JobState, SinkError, UPLOAD_SHARE, UploadJob};
 pub use types::{NewSession, SessionOptions, SessionState, SessionStatus};

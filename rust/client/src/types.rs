@@ -9,9 +9,17 @@ pub struct NewSession {
     pub setting: String,
     /// Playback backend: `adb`, `sim` or `upload`.
     pub playback: String,
+    /// Frames per estimate window (the RPE's delta); `None` leaves the server's default (10).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub window_frames: Option<u32>,
+    /// What the estimate measures: `"trans_part"` (metres) or `"angle_deg"`; `None` leaves
+    /// the server's default (`trans_part`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pose_relation: Option<String>,
 }
 
-/// Optional per-session extras beyond [`NewSession`]; `None` takes the server's default.
+/// Optional per-session extras beyond [`NewSession`] (adaptive stopping); `None` takes the
+/// server's default.
 /// Build one with `..SessionOptions::default()` so later options need no change.
 #[derive(Debug, Clone, PartialEq, Eq, Default, Serialize, Deserialize)]
 pub struct SessionOptions {
@@ -21,12 +29,6 @@ pub struct SessionOptions {
     pub adaptive_min_trials: Option<u32>,
     /// Window of finished trials over which classes must be stable (server default 3).
     pub adaptive_k: Option<u32>,
-    /// Frames per results window, the RPE delta (2–1000, server default 10): the phone's
-    /// `subtrajectory_frames`.
-    pub window_frames: Option<u32>,
-    /// Pose relation of the estimate, evo's names: `trans_part` (metres, the default) or
-    /// `angle_deg` (degrees).
-    pub pose_relation: Option<String>,
 }
 
 /// Life cycle of a session on the server.

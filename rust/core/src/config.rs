@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
-use crate::{Convention, Error, Thresholds};
+use crate::{Convention, Error, ErrorUnit, PoseRelation, Thresholds};
 
 /// Settings of one session. Parse with [`SessionConfig::from_json`]; see the field docs for
 /// the defaults (those of ARCHITECTURE.md).
@@ -21,16 +21,30 @@ pub struct SessionConfig {
     pub dedup_radius_m: f64,
     /// Most markers to place (default 3).
     pub max_regions: usize,
+    /// Which error the results measure (default `"trans_part"`, metres; or `"angle_deg"`):
+    /// results of another relation are refused, and classes and markers use the thresholds
+    /// of its unit.
+    pub pose_relation: PoseRelation,
     /// Error thresholds searched in order for markers (default `[0.10, 0.05, 0.02, 0.01]` m).
     pub thresholds_m: Vec<f64>,
     /// Errors at or above this are class high (default 0.10 m).
     pub high_threshold_m: f64,
     /// Errors at or above this (and below high) are class medium (default 0.05 m).
     pub medium_threshold_m: f64,
+    /// Marker thresholds for `angle_deg` results (default `[4, 2, 0.8, 0.4]` degrees: the
+    /// metric list scaled by the ratio of the class boundaries, 40° per metre).
+    pub thresholds_deg: Vec<f64>,
+    /// `angle_deg` errors at or above this are class high (default 4°,
+    /// [`Thresholds::DEFAULT_DEG`]).
+    pub high_threshold_deg: f64,
+    /// `angle_deg` errors at or above this (and below high) are class medium (default 2°).
+    pub medium_threshold_deg: f64,
     /// A camera frustum is drawn at the first midpoint after every this much path (default 0.5 m).
     pub frustum_spacing_m: f64,
     /// Mean error at or above which results "may be unreliable" (default 0.20 m).
     pub unreliable_mean_error_m: f64,
+    /// The same for `angle_deg` results (default 8°: 0.20 m at 40° per metre).
+    pub unreliable_mean_error_deg: f64,
     /// Folder where the app keeps session folders, if any (default none).
     pub data_dir: Option<PathBuf>,
 }
@@ -43,27 +57,47 @@ impl Default for SessionConfig {
             subtrajectory_frames: 10,
             dedup_radius_m: 0.5,
             max_regions: 3,
+            pose_relation: PoseRelation::TransPart,
             thresholds_m: vec![0.10, 0.05, 0.02, 0.01],
             high_threshold_m: Thresholds::DEFAULT_M.high,
             medium_threshold_m: Thresholds::DEFAULT_M.medium,
+            thresholds_deg: DEFAULT_MARKER_THRESHOLDS_DEG.to_vec(),
+            high_threshold_deg: Thresholds::DEFAULT_DEG.high,
+            medium_threshold_deg: Thresholds::DEFAULT_DEG.medium,
             frustum_spacing_m: 0.5,
             unreliable_mean_error_m: 0.20,
+            unreliable_mean_error_deg: 0.20 * DEG_PER_M,
             data_dir: None,
         }
     }
 }
 
+/// Degrees per metre between the two class rules: [`Thresholds::DEFAULT_DEG`] over
+/// [`Thresholds::DEFAULT_M`] (4° / 0.10 m, and 2° / 0.05 m). The degree defaults of the marker
+/// search and of the unreliable mean are the metric ones at this ratio, so the phone behaves
+/// the same for either relation (a rotation error θ moves a surface 1.5 m away by about
+/// θ · 1.5 m, i.e. 38° per metre; see [`Thresholds::DEFAULT_DEG`]).
+const DEG_PER_M: f64 = 40.0;
+
+/// `[0.10, 0.05, 0.02, 0.01]` m at [`DEG_PER_M`].
+const DEFAULT_MARKER_THRESHOLDS_DEG: [f64; 4] = [4.0, 2.0, 0.8, 0.4];
+
 const KEYS: &[&str] = &[
     "convention",
     "server_url",
     "subtrajectory_frames",
+    "pose_relation",
     "dedup_radius_m",
     "max_regions",
     "thresholds_m",
     "high_threshold_m",
     "medium_threshold_m",
+    "thresholds_deg",
+    "high_threshold_deg",
+    "medium_threshold_deg",
     "frustum_spacing_m",
     "unreliable_mean_error_m",
+    "unreliable_mean_error_deg",
     "data_dir",
 ];
 
@@ -98,13 +132,18 @@ impl SessionConfig {
                 "convention" => config.convention = field(k, value)?,
                 "server_url" => config.server_url = field(k, value)?,
                 "subtrajectory_frames" => config.subtrajectory_frames = field(k, value)?,
+                "pose_relation" => config.pose_relation = field(k, value)?,
                 "dedup_radius_m" => config.dedup_radius_m = field(k, value)?,
                 "max_regions" => config.max_regions = field(k, value)?,
                 "thresholds_m" => config.thresholds_m = field(k, value)?,
                 "high_threshold_m" => config.high_threshold_m = field(k, value)?,
                 "medium_threshold_m" => config.medium_threshold_m = field(k, value)?,
+                "thresholds_deg" => config.thresholds_deg = field(k, value)?,
+                "high_threshold_deg" => config.high_threshold_deg = field(k, value)?,
+                "medium_threshold_deg" => config.medium_threshold_deg = field(k, value)?,
                 "frustum_spacing_m" => config.frustum_spacing_m = field(k, value)?,
                 "unreliable_mean_error_m" => config.unreliable_mean_error_m = field(k, value)?,
+                "unreliable_mean_error_deg" => config.unreliable_mean_error_deg = field(k, value)?,
                 "data_dir" => config.data_dir = field(k, value)?,
                 _ => {
                     return Err(config_err(
@@ -118,9 +157,37 @@ impl SessionConfig {
         Ok(config)
     }
 
-    /// The class boundaries of `medium_threshold_m` and `high_threshold_m`.
+    /// The class boundaries of the configured `pose_relation`'s unit.
     pub fn class_thresholds(&self) -> Thresholds {
-        Thresholds::new(self.medium_threshold_m, self.high_threshold_m)
+        self.thresholds_for(self.pose_relation.unit())
+    }
+
+    /// The class boundaries for errors in `unit`: `medium_threshold_m`/`high_threshold_m`
+    /// or `medium_threshold_deg`/`high_threshold_deg`.
+    pub fn thresholds_for(&self, unit: ErrorUnit) -> Thresholds {
+        match unit {
+            ErrorUnit::Metres => Thresholds::new(self.medium_threshold_m, self.high_threshold_m),
+            ErrorUnit::Degrees => {
+                Thresholds::new(self.medium_threshold_deg, self.high_threshold_deg)
+            }
+        }
+    }
+
+    /// The marker search thresholds of the configured `pose_relation`'s unit
+    /// (`thresholds_m` or `thresholds_deg`).
+    pub fn marker_thresholds(&self) -> &[f64] {
+        match self.pose_relation.unit() {
+            ErrorUnit::Metres => &self.thresholds_m,
+            ErrorUnit::Degrees => &self.thresholds_deg,
+        }
+    }
+
+    /// The mean error from which results "may be unreliable", for errors in `unit`.
+    pub fn unreliable_mean_error(&self, unit: ErrorUnit) -> f64 {
+        match unit {
+            ErrorUnit::Metres => self.unreliable_mean_error_m,
+            ErrorUnit::Degrees => self.unreliable_mean_error_deg,
+        }
     }
 
     /// The config as pretty JSON (every key, `null` for absent options); parses back equal.
@@ -147,29 +214,49 @@ impl SessionConfig {
         non_negative("dedup_radius_m", self.dedup_radius_m)?;
         non_negative("high_threshold_m", self.high_threshold_m)?;
         non_negative("medium_threshold_m", self.medium_threshold_m)?;
+        non_negative("high_threshold_deg", self.high_threshold_deg)?;
+        non_negative("medium_threshold_deg", self.medium_threshold_deg)?;
         non_negative("unreliable_mean_error_m", self.unreliable_mean_error_m)?;
+        non_negative("unreliable_mean_error_deg", self.unreliable_mean_error_deg)?;
         if !(self.frustum_spacing_m.is_finite() && self.frustum_spacing_m > 0.0) {
             return Err(config_err(
                 "frustum_spacing_m",
                 format!("{} is not a finite number > 0", self.frustum_spacing_m),
             ));
         }
-        for (i, t) in self.thresholds_m.iter().enumerate() {
-            if !(t.is_finite() && *t >= 0.0) {
-                return Err(config_err(
-                    "thresholds_m",
-                    format!("element {i} ({t}) is not a finite number ≥ 0"),
-                ));
+        for (key, list) in [
+            ("thresholds_m", &self.thresholds_m),
+            ("thresholds_deg", &self.thresholds_deg),
+        ] {
+            for (i, t) in list.iter().enumerate() {
+                if !(t.is_finite() && *t >= 0.0) {
+                    return Err(config_err(
+                        key,
+                        format!("element {i} ({t}) is not a finite number ≥ 0"),
+                    ));
+                }
             }
         }
-        if self.medium_threshold_m > self.high_threshold_m {
-            return Err(config_err(
+        for (medium_key, medium, high_key, high) in [
+            (
                 "medium_threshold_m",
-                format!(
-                    "{} is above high_threshold_m ({})",
-                    self.medium_threshold_m, self.high_threshold_m
-                ),
-            ));
+                self.medium_threshold_m,
+                "high_threshold_m",
+                self.high_threshold_m,
+            ),
+            (
+                "medium_threshold_deg",
+                self.medium_threshold_deg,
+                "high_threshold_deg",
+                self.high_threshold_deg,
+            ),
+        ] {
+            if medium > high {
+                return Err(config_err(
+                    medium_key,
+                    format!("{medium} is above {high_key} ({high})"),
+                ));
+            }
         }
         Ok(())
     }
@@ -210,6 +297,56 @@ mod tests {
                 d.unreliable_mean_error_m
             ),
             (0.10, 0.05, 0.20)
+        );
+        assert_eq!(d.pose_relation, PoseRelation::TransPart);
+        assert_eq!(d.thresholds_deg, vec![4.0, 2.0, 0.8, 0.4]);
+        assert_eq!(
+            (
+                d.high_threshold_deg,
+                d.medium_threshold_deg,
+                d.unreliable_mean_error_deg
+            ),
+            (4.0, 2.0, 8.0)
+        );
+        assert_eq!(d.class_thresholds(), Thresholds::DEFAULT_M);
+        assert_eq!(
+            d.thresholds_for(ErrorUnit::Degrees),
+            Thresholds::DEFAULT_DEG
+        );
+    }
+
+    #[test]
+    fn degree_defaults_are_the_metric_ones_at_the_class_ratio() {
+        let d = SessionConfig::default();
+        let ratio = Thresholds::DEFAULT_DEG.high / Thresholds::DEFAULT_M.high;
+        assert_eq!(ratio, DEG_PER_M);
+        assert_eq!(
+            Thresholds::DEFAULT_DEG.medium / Thresholds::DEFAULT_M.medium,
+            ratio
+        );
+        for (deg, m) in d.thresholds_deg.iter().zip(&d.thresholds_m) {
+            assert!((deg - m * ratio).abs() < 1e-12, "{deg} vs {m}");
+        }
+        assert!((d.unreliable_mean_error_deg - d.unreliable_mean_error_m * ratio).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_relation_chooses_thresholds() {
+        let c = SessionConfig::from_json(
+            r#"{"pose_relation":"angle_deg","thresholds_deg":[3,1],"medium_threshold_deg":1,
+            "high_threshold_deg":3,"unreliable_mean_error_deg":5}"#,
+        )
+        .unwrap();
+        assert_eq!(c.pose_relation, PoseRelation::AngleDeg);
+        assert_eq!(c.class_thresholds(), Thresholds::new(1.0, 3.0));
+        assert_eq!(c.marker_thresholds(), &[3.0, 1.0]);
+        assert_eq!(c.unreliable_mean_error(ErrorUnit::Degrees), 5.0);
+        assert_eq!(c.unreliable_mean_error(ErrorUnit::Metres), 0.20);
+        assert_eq!(c.thresholds_for(ErrorUnit::Metres), Thresholds::DEFAULT_M);
+        assert_eq!(SessionConfig::from_json(&c.to_json()).unwrap(), c);
+        assert_eq!(
+            SessionConfig::default().marker_thresholds(),
+            &[0.10, 0.05, 0.02, 0.01]
         );
     }
 
@@ -260,6 +397,24 @@ mod tests {
             key_of(SessionConfig::from_json(r#"{"dedup_radius_m":null}"#).unwrap_err()),
             "dedup_radius_m"
         );
+        for (text, key) in [
+            (r#"{"pose_relation":"angle_rad"}"#, "pose_relation"),
+            (r#"{"pose_relation":1}"#, "pose_relation"),
+            (r#"{"thresholds_deg":[1,"x"]}"#, "thresholds_deg"),
+            (r#"{"thresholds_deg":[-1]}"#, "thresholds_deg"),
+            (r#"{"high_threshold_deg":"4"}"#, "high_threshold_deg"),
+            (r#"{"medium_threshold_deg":5}"#, "medium_threshold_deg"),
+            (
+                r#"{"unreliable_mean_error_deg":-1}"#,
+                "unreliable_mean_error_deg",
+            ),
+        ] {
+            assert_eq!(
+                key_of(SessionConfig::from_json(text).unwrap_err()),
+                key,
+                "{text}"
+            );
+        }
         let msg = SessionConfig::from_json(r#"{"max_regions":-1}"#)
             .unwrap_err()
             .to_string();

@@ -69,6 +69,12 @@
 //!   `max_regions`, never within `dedup_radius_m`; spatial hash for neighbour queries.
 //! * [`Results::parse`]: legacy CSV `start,error` or JSON; [`Session::error_at`] finds the
 //!   nearest window start within half the median frame interval.
+//! * Window settings: results name their window length and [`PoseRelation`]
+//!   (`trans_part` in metres or `angle_deg` in degrees); [`Session::load_results`] refuses
+//!   results that do not fit the config's `subtrajectory_frames` and `pose_relation`, and
+//!   classes and markers use the thresholds of the results' unit
+//!   ([`SessionConfig::thresholds_for`]; degree defaults 2°/4° and markers `[4, 2, 0.8,
+//!   0.4]`°, the metric ones at 40° per metre).
 //! * [`RenderPlan`]: cylinders, joints, frustums every `frustum_spacing_m`, start/stop.
 //! * [`PlaybackLogger`]: the playback device's per-frame TUM log.
 //!
@@ -95,6 +101,7 @@ mod error;
 mod markers;
 mod persist;
 mod playback;
+mod relation;
 mod render;
 mod results;
 mod session;
@@ -107,6 +114,7 @@ pub use depth::{DepthImage, DepthSample, Intrinsics, sample_surface};
 pub use error::{Error, InvalidDepth};
 pub use markers::{Marker, MarkerCandidate, select_markers, warning_sign_rotation};
 pub use playback::PlaybackLogger;
+pub use relation::{ErrorUnit, PoseRelation};
 pub use render::{Frustum, Joint, RenderPlan, Segment};
 pub use results::{ResultWindow, Results};
 pub use session::{

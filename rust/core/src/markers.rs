@@ -163,7 +163,7 @@ impl SpatialHash {
 }
 
 /// Selects marker regions as the original app did: for each threshold of
-/// `config.thresholds_m` in order, walk the candidates in time order and accept one whose
+/// `config.thresholds_m` (`thresholds_deg` for `angle_deg`) in order, walk the candidates in time order and accept one whose
 /// error is ≥ the threshold and which lies strictly farther than `dedup_radius_m` from every
 /// accepted marker, until `max_regions` are placed. Candidates with a non-finite position,
 /// normal or error are skipped. Markers come out in acceptance order.
@@ -177,7 +177,7 @@ pub fn select_markers(candidates: &[MarkerCandidate], config: &SessionConfig) ->
     let mut hash = SpatialHash::new(radius);
     // Once too close to an accepted marker, always too close: the accepted set only grows.
     let mut done = vec![false; candidates.len()];
-    for &threshold in &config.thresholds_m {
+    for &threshold in config.marker_thresholds() {
         for (i, c) in candidates.iter().enumerate() {
             // NaN errors fail the comparison and are never taken.
             if done[i] || c.error_m.partial_cmp(&threshold).is_none_or(|o| o.is_lt()) {

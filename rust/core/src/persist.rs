@@ -7,7 +7,7 @@ use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
 use crate::session::{DepthStatus, LoggedPose, SessionState, SubTrajectory};
-use crate::{DepthSample, Error, InvalidDepth, Pose, Results, Session, SessionConfig};
+use crate::{DepthSample, Error, ErrorUnit, InvalidDepth, Pose, Results, Session, SessionConfig};
 
 #[derive(Debug, Clone, Copy, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -37,6 +37,11 @@ struct SessionFile {
 
 const HEADER: &str = "index,start_ns,mid_ns,end_ns,depth,pixel_x,pixel_y,depth_m,distance_m,cam_x,cam_y,cam_z,cam_nx,cam_ny,cam_nz,x,y,z,nx,ny,nz,error_m,class";
 
+/// The header of a session whose results are in degrees: the error column is `error_deg`.
+fn header(unit: ErrorUnit) -> String {
+    HEADER.replace(",error_m,", &format!(",{},", unit.error_key()))
+}
+
 fn write_file(path: &Path, text: &str) -> Result<(), Error> {
     std::fs::write(path, text).map_err(|e| Error::io(path, e))
 }
@@ -61,11 +66,12 @@ impl Session {
     /// | `session.json` | recorder state: `version`, `state`, `frames`, `start`/`stop` (`{t_ns, pose}`), `last_t_ns`, `last_position`, `length_m`, `sub_start_ns`, `frame_intervals_ns`, `path_m` (per logged pose), `lookup_tolerance_ns` (only if set) |
     ///
     /// `subtrajectories.csv` columns: `index,start_ns,mid_ns,end_ns,depth,pixel_x,pixel_y,
-    /// depth_m,distance_m,cam_x,cam_y,cam_z,cam_nx,cam_ny,cam_nz,x,y,z,nx,ny,nz,error_m,class`;
+    /// depth_m,distance_m,cam_x,cam_y,cam_z,cam_nx,cam_ny,cam_nz,x,y,z,nx,ny,nz,error_m,class`
+    /// (`error_deg` instead of `error_m` when the session's `pose_relation` is `angle_deg`);
     /// `depth` is `valid`, `missing`, `no_depth`, `out_of_bounds` or `no_valid_neighbours`;
     /// empty cells where a value does not apply; `x…nz` are the world point and normal, `cam_*`
-    /// the display-oriented camera frame; `error_m`/`class` are informational (recomputed from
-    /// the results on load). Numbers are written in Rust's shortest round-trip form, so a
+    /// the display-oriented camera frame; the error and `class` are informational (recomputed
+    /// from the results on load). Numbers are written in Rust's shortest round-trip form, so a
     /// save/load round trip is exact.
     pub fn save(&self, dir: &Path) -> Result<(), Error> {
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
@@ -90,7 +96,7 @@ impl Session {
         write_file(&dir.join("session.json"), &json)?;
 
         let errors = self.subtrajectory_errors();
-        let mut csv = String::from(HEADER);
+        let mut csv = header(self.config.pose_relation.unit());
         csv.push('\n');
         for (s, e) in self.subs.iter().zip(errors) {
             let _ = write!(
@@ -234,6 +240,9 @@ impl Session {
         session.frame_intervals_ns = file.frame_intervals_ns;
         session.logged = logged;
         session.subs = subs;
+        if let Some(r) = &results {
+            session.check_results(r)?;
+        }
         session.results = results;
         session.tolerance_ns = None;
         session
@@ -251,7 +260,7 @@ fn parse_table(text: &str) -> Result<Vec<SubTrajectory>, Error> {
     let columns: Vec<&str> = HEADER.split(',').collect();
     let mut lines = text.lines().enumerate();
     match lines.next() {
-        Some((_, h)) if h.trim() == HEADER => {}
+        Some((_, h)) if h.trim() == HEADER || h.trim() == header(ErrorUnit::Degrees) => {}
         _ => {
             return Err(Error::parse(
                 SRC,
@@ -427,6 +436,50 @@ mod tests {
                 rows[5]
             );
         }
+    }
+
+    #[test]
+    fn degree_results_round_trip_and_unfit_results_are_refused_on_load() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut config = recorded("unity").config().clone();
+        config.pose_relation = crate::PoseRelation::AngleDeg;
+        let mut s = recorded("unity");
+        s.config = config;
+        s.stop(1_700_000_000_000_000_000 + 48 * 33_333_334, Pose::IDENTITY)
+            .unwrap();
+        let windows: Vec<String> = s
+            .subtrajectories()
+            .iter()
+            .enumerate()
+            .map(|(i, x)| {
+                format!(
+                    r#"{{"start":{},"error_deg":{}}}"#,
+                    x.start_ns,
+                    1.5 * i as f64
+                )
+            })
+            .collect();
+        let json = format!(
+            r#"{{"window_frames":10,"pose_relation":"angle_deg","windows":[{}]}}"#,
+            windows.join(",")
+        );
+        s.load_results(&json).unwrap();
+        s.save(dir.path()).unwrap();
+        let back = Session::load(dir.path()).unwrap();
+        assert_eq!(back, s);
+        let table = std::fs::read_to_string(dir.path().join("subtrajectories.csv")).unwrap();
+        assert!(table.lines().next().unwrap().ends_with(",error_deg,class"));
+        // 4 × 1.5° = 6°: high from 4°.
+        assert!(
+            table.lines().nth(5).unwrap().ends_with(",6,high"),
+            "{table}"
+        );
+
+        // A results.json edited to another window length no longer fits the session.
+        let edited = json.replace(r#""window_frames":10"#, r#""window_frames":20"#);
+        std::fs::write(dir.path().join("results.json"), edited).unwrap();
+        let err = Session::load(dir.path()).unwrap_err();
+        assert!(err.to_string().contains("window_frames 20"), "{err}");
     }
 
     #[test]

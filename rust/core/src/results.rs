@@ -3,17 +3,18 @@
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
-use crate::{Error, Thresholds};
+use crate::{Error, ErrorUnit, PoseRelation, Thresholds};
 
-/// One RPE window: the estimated error of the 10 frames starting at `start`.
+/// One RPE window: the estimated error of the frames starting at `start`.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct ResultWindow {
     /// Start timestamp (ns).
     pub start: i64,
     /// End timestamp (ns), when known (JSON form only).
     pub end: Option<i64>,
-    /// Estimated error (metres), finite and ≥ 0.
-    pub error_m: f64,
+    /// Estimated error in the results' unit ([`Results::unit`]: metres, or degrees for
+    /// `angle_deg`), finite and ≥ 0.
+    pub error: f64,
     /// Number of trial pairs that had this window, when known (JSON form only).
     pub pairs: Option<u32>,
 }
@@ -27,6 +28,11 @@ pub struct Results {
     pub setting: Option<String>,
     /// Number of trials, when the JSON form gives it.
     pub trials: Option<u32>,
+    /// Frames per window (the RPE's delta), when the JSON form gives it (`"window_frames"`);
+    /// legacy CSV never does.
+    pub window_frames: Option<u32>,
+    /// What the errors measure (`"pose_relation"`; legacy CSV is always `trans_part`).
+    pub relation: PoseRelation,
 }
 
 /// Parses a decimal-seconds token exactly into nanoseconds (no f64 rounding of large stamps).
@@ -155,17 +161,27 @@ impl Results {
             windows.push(ResultWindow {
                 start: start_ns,
                 end: None,
-                error_m,
+                error: error_m,
                 pairs: None,
             });
         }
-        Ok(Self::sorted(windows, None, None))
+        Ok(Self::sorted(
+            windows,
+            None,
+            None,
+            None,
+            PoseRelation::TransPart,
+        ))
     }
 
-    /// Parses the JSON form `{"version":1,"setting":…,"trials":n,"windows":[{"start":…,
+    /// Parses the JSON form `{"version":1,"setting":…,"trials":n,"window_frames":n,
+    /// "pose_relation":"trans_part"|"angle_deg","unit":"m"|"deg","windows":[{"start":…,
     /// "end":…,"error_m":…,"pairs":…,"class":…}]}`. `start`/`end` integers are nanoseconds;
-    /// numbers with a fraction (or strings) are decimal seconds. `class` is ignored
-    /// (recomputed from the session's thresholds).
+    /// numbers with a fraction (or strings) are decimal seconds. `window_frames`,
+    /// `pose_relation` and `unit` are optional (`trans_part` and `m` when both are absent;
+    /// either implies the other, and they must agree); with `deg` the windows carry
+    /// `error_deg` instead of `error_m`. `class` is ignored (recomputed from the session's
+    /// thresholds), as are keys this parser does not know.
     pub fn parse_json(text: &str) -> Result<Self, Error> {
         const SRC: &str = "results.json";
         let value: Value = serde_json::from_str(text)
@@ -202,6 +218,24 @@ impl Results {
                     || Error::parse(SRC, 0, "trials", format!("expected a count, found {v}")),
                 )?),
             };
+        let window_frames = match obj.get("window_frames") {
+            None | Some(Value::Null) => None,
+            Some(v) => Some(
+                v.as_u64()
+                    .and_then(|n| u32::try_from(n).ok())
+                    .filter(|&n| n > 0)
+                    .ok_or_else(|| {
+                        Error::parse(
+                            SRC,
+                            0,
+                            "window_frames",
+                            format!("expected a positive frame count, found {v}"),
+                        )
+                    })?,
+            ),
+        };
+        let relation = relation_and_unit(obj)?;
+        let error_key = relation.unit().error_key();
         let list = obj
             .get("windows")
             .and_then(Value::as_array)
@@ -258,11 +292,11 @@ impl Results {
             };
             let start = stamp("start", true)?.unwrap_or_default();
             let end = stamp("end", false)?;
-            let error_m = w
-                .get("error_m")
+            let error = w
+                .get(error_key)
                 .and_then(Value::as_f64)
-                .ok_or_else(|| Error::parse(SRC, 0, path("error_m"), "missing or not a number"))?;
-            let error_m = check_error(SRC, 0, &path("error_m"), error_m)?;
+                .ok_or_else(|| Error::parse(SRC, 0, path(error_key), "missing or not a number"))?;
+            let error = check_error(SRC, 0, &path(error_key), error)?;
             let pairs = match w.get("pairs") {
                 None | Some(Value::Null) => None,
                 Some(v) => Some(v.as_u64().and_then(|p| u32::try_from(p).ok()).ok_or_else(
@@ -279,17 +313,25 @@ impl Results {
             windows.push(ResultWindow {
                 start,
                 end,
-                error_m,
+                error,
                 pairs,
             });
         }
-        Ok(Self::sorted(windows, setting, trials))
+        Ok(Self::sorted(
+            windows,
+            setting,
+            trials,
+            window_frames,
+            relation,
+        ))
     }
 
     fn sorted(
         mut windows: Vec<ResultWindow>,
         setting: Option<String>,
         trials: Option<u32>,
+        window_frames: Option<u32>,
+        relation: PoseRelation,
     ) -> Self {
         // Stable: among equal starts the first row wins the lookup.
         windows.sort_by_key(|w| w.start);
@@ -297,28 +339,40 @@ impl Results {
             windows,
             setting,
             trials,
+            window_frames,
+            relation,
         }
     }
 
-    /// Writes the JSON form (starts and ends in integer nanoseconds), classes from the thresholds.
+    /// The unit of the errors: metres for `trans_part`, degrees for `angle_deg`.
+    pub fn unit(&self) -> ErrorUnit {
+        self.relation.unit()
+    }
+
+    /// Writes the JSON form (starts and ends in integer nanoseconds, the error under the
+    /// key of its unit), classes from the thresholds (which must be in that unit).
     pub fn to_json(&self, thresholds: Thresholds) -> String {
+        let error_key = self.unit().error_key();
         let windows: Vec<Value> = self
             .windows
             .iter()
             .map(|w| {
-                serde_json::json!({
-                    "start": w.start,
-                    "end": w.end,
-                    "error_m": w.error_m,
-                    "pairs": w.pairs,
-                    "class": thresholds.classify(w.error_m).name(),
-                })
+                let mut o = serde_json::Map::new();
+                o.insert("start".into(), w.start.into());
+                o.insert("end".into(), w.end.into());
+                o.insert(error_key.into(), w.error.into());
+                o.insert("pairs".into(), w.pairs.into());
+                o.insert("class".into(), thresholds.classify(w.error).name().into());
+                Value::Object(o)
             })
             .collect();
         let doc = serde_json::json!({
             "version": 1,
             "setting": self.setting,
             "trials": self.trials,
+            "window_frames": self.window_frames,
+            "pose_relation": self.relation.name(),
+            "unit": self.unit().name(),
             "windows": windows,
         });
         serde_json::to_string_pretty(&doc).unwrap_or_default()
@@ -378,11 +432,62 @@ impl Results {
         out
     }
 
-    /// Mean error over all windows, `None` without windows.
-    pub fn mean_error_m(&self) -> Option<f64> {
-        (!self.windows.is_empty()).then(|| {
-            self.windows.iter().map(|w| w.error_m).sum::<f64>() / self.windows.len() as f64
+    /// Mean error over all windows (in [`Results::unit`]), `None` without windows.
+    pub fn mean_error(&self) -> Option<f64> {
+        (!self.windows.is_empty())
+            .then(|| self.windows.iter().map(|w| w.error).sum::<f64>() / self.windows.len() as f64)
+    }
+}
+
+/// The document's `pose_relation` and `unit`: either implies the other; both absent is
+/// `trans_part` in metres (what results had before they named it); they must agree.
+fn relation_and_unit(obj: &serde_json::Map<String, Value>) -> Result<PoseRelation, Error> {
+    const SRC: &str = "results.json";
+    let text = |key: &str| -> Result<Option<&str>, Error> {
+        match obj.get(key) {
+            None | Some(Value::Null) => Ok(None),
+            Some(Value::String(s)) => Ok(Some(s)),
+            Some(other) => Err(Error::parse(
+                SRC,
+                0,
+                key,
+                format!("expected a string, found {other}"),
+            )),
+        }
+    };
+    let relation = text("pose_relation")?
+        .map(|name| {
+            PoseRelation::from_name(name).ok_or_else(|| {
+                Error::parse(
+                    SRC,
+                    0,
+                    "pose_relation",
+                    format!("`{name}` is not a relation the phone shows (trans_part or angle_deg)"),
+                )
+            })
         })
+        .transpose()?;
+    let unit = text("unit")?
+        .map(|name| {
+            ErrorUnit::from_name(name).ok_or_else(|| {
+                Error::parse(SRC, 0, "unit", format!("`{name}` is not a unit (m or deg)"))
+            })
+        })
+        .transpose()?;
+    match (relation, unit) {
+        (Some(r), Some(u)) if r.unit() != u => Err(Error::parse(
+            SRC,
+            0,
+            "unit",
+            format!(
+                "`{}` does not fit pose_relation `{r}` (its unit is `{}`)",
+                u.name(),
+                r.unit().name()
+            ),
+        )),
+        (Some(r), _) => Ok(r),
+        (None, Some(ErrorUnit::Degrees)) => Ok(PoseRelation::AngleDeg),
+        (None, _) => Ok(PoseRelation::TransPart),
     }
 }
 
@@ -399,8 +504,12 @@ mod tests {
         .unwrap();
         assert_eq!(r.windows.len(), 2);
         assert_eq!(r.windows[0].start, 1_700_000_000_100_000_000);
-        assert_eq!(r.windows[0].error_m, 0.03);
-        assert_eq!(r.windows[1].error_m, 0.12);
+        assert_eq!(r.windows[0].error, 0.03);
+        assert_eq!(r.windows[1].error, 0.12);
+        assert_eq!(
+            (r.relation, r.window_frames),
+            (PoseRelation::TransPart, None)
+        );
     }
 
     #[test]
@@ -449,7 +558,7 @@ mod tests {
             ResultWindow {
                 start: 1000,
                 end: Some(2000),
-                error_m: 0.01,
+                error: 0.01,
                 pairs: Some(9)
             }
         );
@@ -490,7 +599,7 @@ mod tests {
         let r = Results::parse(text).unwrap();
         assert_eq!(r.windows[0].start, 1_700_000_000_000_000_000);
         assert_eq!(r.windows[0].end, Some(1_700_000_000_333_333_333));
-        assert_eq!((r.windows[0].error_m, r.windows[0].pairs), (0.031, Some(3)));
+        assert_eq!((r.windows[0].error, r.windows[0].pairs), (0.031, Some(3)));
         // A rotation-error document has no error_m: refused rather than misread.
         let rot = r#"{"version":1,"windows":[{"start":1,"end":2,"error_deg":1.5,"pairs":3}]}"#;
         assert!(
@@ -500,10 +609,81 @@ mod tests {
     }
 
     #[test]
+    fn window_settings_and_degrees() {
+        // What the backend and `sitar estimate -r angle_deg --delta 20` write.
+        let text = r#"{"version":1,"setting":"median","trials":4,"window_frames":20,
+            "pose_relation":"angle_deg","unit":"deg","windows":[
+            {"start":2000,"end":3000,"error_deg":4.5,"pairs":6,"spread_deg":0.2},
+            {"start":1000,"end":2000,"error_deg":0.5,"pairs":6,"spread_deg":0.1}]}"#;
+        let r = Results::parse(text).unwrap();
+        assert_eq!(r.window_frames, Some(20));
+        assert_eq!(
+            (r.relation, r.unit()),
+            (PoseRelation::AngleDeg, ErrorUnit::Degrees)
+        );
+        assert_eq!(
+            r.windows.iter().map(|w| w.error).collect::<Vec<_>>(),
+            [0.5, 4.5]
+        );
+        let json = r.to_json(Thresholds::DEFAULT_DEG);
+        assert!(
+            json.contains("\"error_deg\": 4.5") && !json.contains("error_m"),
+            "{json}"
+        );
+        assert!(json.contains("\"class\": \"high\""), "{json}");
+        assert_eq!(Results::parse(&json).unwrap(), r);
+        // Either key implies the other.
+        let unit_only =
+            Results::parse(r#"{"unit":"deg","windows":[{"start":1,"error_deg":1}]}"#).unwrap();
+        assert_eq!(unit_only.relation, PoseRelation::AngleDeg);
+        let relation_only =
+            Results::parse(r#"{"pose_relation":"trans_part","windows":[{"start":1,"error_m":1}]}"#)
+                .unwrap();
+        assert_eq!(relation_only.unit(), ErrorUnit::Metres);
+        // Metric results name their window length too and round-trip it.
+        let m = Results::parse(r#"{"window_frames":10,"windows":[{"start":1,"error_m":0.1}]}"#)
+            .unwrap();
+        assert_eq!(m.window_frames, Some(10));
+        assert_eq!(
+            Results::parse(&m.to_json(Thresholds::DEFAULT_M)).unwrap(),
+            m
+        );
+    }
+
+    #[test]
+    fn bad_window_settings_name_the_key() {
+        let cases = [
+            (r#"{"window_frames":0,"windows":[]}"#, "window_frames"),
+            (r#"{"window_frames":"10","windows":[]}"#, "window_frames"),
+            (r#"{"window_frames":2.5,"windows":[]}"#, "window_frames"),
+            (
+                r#"{"pose_relation":"angle_rad","windows":[]}"#,
+                "pose_relation",
+            ),
+            (r#"{"pose_relation":7,"windows":[]}"#, "pose_relation"),
+            (r#"{"unit":"rad","windows":[]}"#, "unit"),
+            (
+                r#"{"pose_relation":"angle_deg","unit":"m","windows":[]}"#,
+                "unit",
+            ),
+            (
+                r#"{"pose_relation":"angle_deg","windows":[{"start":1,"error_m":0.1}]}"#,
+                "windows[0].error_deg",
+            ),
+        ];
+        for (text, want) in cases {
+            match Results::parse(text) {
+                Err(Error::Parse { field, .. }) => assert_eq!(field, want, "{text}"),
+                other => panic!("{text}: {other:?}"),
+            }
+        }
+    }
+
+    #[test]
     fn classes_and_mean() {
         let r = Results::parse("start,error\n1,0.1\n2,0.3\n").unwrap();
-        assert!((r.mean_error_m().unwrap() - 0.2).abs() < 1e-15);
-        assert_eq!(Results::default().mean_error_m(), None);
+        assert!((r.mean_error().unwrap() - 0.2).abs() < 1e-15);
+        assert_eq!(Results::default().mean_error(), None);
     }
 
     #[test]
@@ -525,7 +705,7 @@ mod tests {
         ) {
             starts.sort_unstable();
             starts.dedup();
-            let r = Results { windows: starts.iter().map(|&s| ResultWindow { start: s, end: None, error_m: 0.0, pairs: None }).collect(), ..Default::default() };
+            let r = Results { windows: starts.iter().map(|&s| ResultWindow { start: s, end: None, error: 0.0, pairs: None }).collect(), ..Default::default() };
             let best = starts.iter().map(|s| s.abs_diff(t)).min().unwrap();
             match r.lookup(t, tol) {
                 Some(w) => {
@@ -545,7 +725,7 @@ mod tests {
         ) {
             starts.sort_unstable();
             if sort_times { times.sort_unstable(); }
-            let r = Results { windows: starts.iter().map(|&s| ResultWindow { start: s, end: None, error_m: 0.0, pairs: None }).collect(), ..Default::default() };
+            let r = Results { windows: starts.iter().map(|&s| ResultWindow { start: s, end: None, error: 0.0, pairs: None }).collect(), ..Default::default() };
             let many = r.lookup_many(&times, tol);
             for (t, got) in times.iter().zip(many) {
                 prop_assert_eq!(got.map(|w| w.start), r.lookup(*t, tol).map(|w| w.start));

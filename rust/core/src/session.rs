@@ -422,9 +422,45 @@ impl Session {
     }
 
     /// Parses and attaches results (legacy CSV or JSON, see [`Results::parse`]); replaces
-    /// earlier ones.
+    /// earlier ones. Results that cannot be looked up for this session are refused with
+    /// [`Error::InvalidArgument`] naming both values, and the earlier results stay: windows
+    /// of another length than `subtrajectory_frames` (`window_frames`), or errors of another
+    /// `pose_relation` than the config's (legacy CSV is `trans_part`).
     pub fn load_results(&mut self, csv_or_json: &str) -> Result<(), Error> {
-        self.results = Some(Results::parse(csv_or_json)?);
+        let results = Results::parse(csv_or_json)?;
+        self.check_results(&results)?;
+        self.results = Some(results);
+        Ok(())
+    }
+
+    /// Whether `results` fit this session (see [`Session::load_results`]).
+    pub(crate) fn check_results(&self, results: &Results) -> Result<(), Error> {
+        let frames = self.config.subtrajectory_frames;
+        if let Some(window) = results.window_frames
+            && window != frames
+        {
+            return Err(Error::arg(
+                "results",
+                format!(
+                    "the results are for {window}-frame windows (window_frames {window}), but \
+                     this session's sub-trajectories have {frames} frames \
+                     (subtrajectory_frames {frames}): they would be looked up wrong"
+                ),
+            ));
+        }
+        let configured = self.config.pose_relation;
+        if results.relation != configured {
+            return Err(Error::arg(
+                "results",
+                format!(
+                    "the results are pose_relation {} (errors in {}), but this session is \
+                     configured for pose_relation {configured} (errors in {})",
+                    results.relation,
+                    results.unit().name(),
+                    configured.unit().name()
+                ),
+            ));
+        }
         Ok(())
     }
 
@@ -475,13 +511,15 @@ impl Session {
             .as_ref()
             .and_then(|r| r.lookup(t_ns, tolerance_ns))
         {
-            Some(w) => (self.classify(w.error_m), Some(w.error_m)),
+            Some(w) => (self.classify(w.error), Some(w.error)),
             None => (ErrorClass::Unknown, None),
         }
     }
 
-    fn classify(&self, error_m: f64) -> ErrorClass {
-        self.config.class_thresholds().classify(error_m)
+    /// The class of an error of the loaded results, with the thresholds of their unit.
+    fn classify(&self, error: f64) -> ErrorClass {
+        let unit = self.results.as_ref().map(Results::unit).unwrap_or_default();
+        self.config.thresholds_for(unit).classify(error)
     }
 
     /// Estimated error of sub-trajectory `k` (looked up by its start timestamp).
@@ -507,7 +545,7 @@ impl Session {
         results
             .lookup_many(&starts, self.lookup_tolerance_ns())
             .into_iter()
-            .map(|w| w.map(|w| w.error_m))
+            .map(|w| w.map(|w| w.error))
             .collect()
     }
 
@@ -535,13 +573,14 @@ impl Session {
         Ok(select_markers(&candidates, &self.config))
     }
 
-    /// Whether the mean error over all result windows is ≥ `unreliable_mean_error_m`
-    /// ("results may be unreliable"); false without results.
+    /// Whether the mean error over all result windows is ≥ `unreliable_mean_error_m` (or
+    /// `unreliable_mean_error_deg` for `angle_deg` results): "results may be unreliable";
+    /// false without results.
     pub fn results_unreliable(&self) -> bool {
-        self.results
-            .as_ref()
-            .and_then(Results::mean_error_m)
-            .is_some_and(|m| m >= self.config.unreliable_mean_error_m)
+        self.results.as_ref().is_some_and(|r| {
+            r.mean_error()
+                .is_some_and(|m| m >= self.config.unreliable_mean_error(r.unit()))
+        })
     }
 
     /// The render plan of the logged trajectory.
@@ -574,6 +613,15 @@ mod tests {
 
     /// Runs `frames` frames; midpoints get depth unless `skip_depth(k)`.
     fn record(frames: i64, skip_depth: impl Fn(u32) -> bool) -> (Session, Vec<FrameFlags>) {
+        record_with(SessionConfig::default(), frames, skip_depth)
+    }
+
+    /// [`record`] with another config.
+    fn record_with(
+        config: SessionConfig,
+        frames: i64,
+        skip_depth: impl Fn(u32) -> bool,
+    ) -> (Session, Vec<FrameFlags>) {
         let wall = vec![2000u16; 256 * 192];
         let image = DepthImage::new(&wall, 256, 192, 512).unwrap();
         let k = Intrinsics {
@@ -581,7 +629,7 @@ mod tests {
             cy: 96.0,
             ..phone_k()
         };
-        let mut s = Session::new(SessionConfig::default());
+        let mut s = Session::new(config);
         s.start(1_000, pose(0)).unwrap();
         let mut flags = Vec::new();
         for i in 1..=frames {
@@ -773,6 +821,119 @@ mod tests {
             .unwrap();
         assert!(s.results_unreliable());
         assert!(s.load_results("start,error\n1,x\n").is_err());
+    }
+
+    /// A recorded session of `frames` frames with `config`, stopped, and its
+    /// sub-trajectories' start stamps.
+    fn stopped(config: &str, frames: i64) -> (Session, Vec<i64>) {
+        let config = SessionConfig::from_json(config).unwrap();
+        let (mut s, _) = record_with(config, frames, |_| false);
+        s.stop(1_000 + (frames + 1) * DT, pose(frames + 1)).unwrap();
+        let starts = s.subtrajectories().iter().map(|x| x.start_ns).collect();
+        (s, starts)
+    }
+
+    fn results_json(header: &str, key: &str, starts: &[i64], errors: &[f64]) -> String {
+        let windows: Vec<String> = starts
+            .iter()
+            .zip(errors)
+            .map(|(t, e)| format!(r#"{{"start":{t},"{key}":{e}}}"#))
+            .collect();
+        format!(r#"{{{header}"windows":[{}]}}"#, windows.join(","))
+    }
+
+    #[test]
+    fn angle_deg_results_use_the_degree_thresholds() {
+        let (mut s, starts) = stopped(r#"{"pose_relation":"angle_deg"}"#, 40);
+        let json = results_json(
+            r#""window_frames":10,"pose_relation":"angle_deg","unit":"deg","#,
+            "error_deg",
+            &starts,
+            &[1.9, 2.0, 3.9, 4.0],
+        );
+        s.load_results(&json).unwrap();
+        // Medium from 2°, high from 4° (in metres all four would be high).
+        assert_eq!(
+            (0..4).map(|k| s.subtrajectory_class(k)).collect::<Vec<_>>(),
+            [
+                ErrorClass::Low,
+                ErrorClass::Medium,
+                ErrorClass::Medium,
+                ErrorClass::High
+            ]
+        );
+        assert_eq!(s.error_at(starts[3]), (ErrorClass::High, Some(4.0)));
+        // Markers search 4°, then 2° (thresholds_deg): sub 3, then subs 1 and 2; with the
+        // metric list all four would pass 0.10 and subs 0, 1, 2 would be taken.
+        let markers = s.markers().unwrap();
+        assert_eq!(
+            markers
+                .iter()
+                .map(|m| (m.subtrajectory, m.class))
+                .collect::<Vec<_>>(),
+            [
+                (3, ErrorClass::High),
+                (1, ErrorClass::Medium),
+                (2, ErrorClass::Medium)
+            ]
+        );
+        // Mean 2.95° is below the unreliable 8°; 0.20 m would have flagged it.
+        assert!(!s.results_unreliable());
+        let loud = results_json(r#""unit":"deg","#, "error_deg", &starts, &[9.0; 4]);
+        s.load_results(&loud).unwrap();
+        assert!(s.results_unreliable());
+    }
+
+    #[test]
+    fn results_that_do_not_fit_the_session_are_refused_naming_both_values() {
+        let (mut s, starts) = stopped(r#"{"subtrajectory_frames":20}"#, 40);
+        let good = results_json(r#""window_frames":20,"#, "error_m", &starts, &[0.01, 0.2]);
+        s.load_results(&good).unwrap();
+        let cases = [
+            (
+                results_json(r#""window_frames":10,"#, "error_m", &starts, &[0.3, 0.3]),
+                ["window_frames 10", "subtrajectory_frames 20"],
+            ),
+            (
+                results_json(
+                    r#""window_frames":20,"pose_relation":"angle_deg","#,
+                    "error_deg",
+                    &starts,
+                    &[0.3, 0.3],
+                ),
+                ["pose_relation angle_deg", "pose_relation trans_part"],
+            ),
+        ];
+        for (text, needles) in cases {
+            let err = s.load_results(&text).unwrap_err();
+            let message = err.to_string();
+            assert!(
+                matches!(
+                    err,
+                    Error::InvalidArgument {
+                        name: "results",
+                        ..
+                    }
+                ),
+                "{err:?}"
+            );
+            for needle in needles {
+                assert!(message.contains(needle), "{message:?} lacks {needle:?}");
+            }
+            // The earlier results stay.
+            assert_eq!(s.subtrajectory_errors(), vec![Some(0.01), Some(0.2)]);
+        }
+        // Legacy CSV has no window length: it is taken as it is (but it is metres).
+        s.load_results(&format!("start,error\n{},0.05\n", starts[0]))
+            .unwrap();
+        let (mut deg, starts) = stopped(r#"{"pose_relation":"angle_deg"}"#, 20);
+        let err = deg
+            .load_results(&format!("start,error\n{},0.05\n", starts[0]))
+            .unwrap_err();
+        assert!(
+            err.to_string().contains("pose_relation trans_part"),
+            "{err}"
+        );
     }
 
     #[test]

@@ -167,13 +167,14 @@ typedef struct {
   int32_t error_class;
   // Sub-trajectory number (from 0).
   uint32_t subtrajectory;
-  // Estimated error (metres).
+  // Estimated error, in the results' unit (metres; degrees for `angle_deg`).
   double error_m;
 } SitarMarker;
 
 // The result of one sub-trajectory.
 typedef struct {
-  // Estimated error (metres); NaN when no result window is near its start.
+  // Estimated error in the results' unit (metres; degrees for `angle_deg`); NaN when no
+  // result window is near its start.
   double error_m;
   // Sub-trajectory number (from 0).
   uint32_t subtrajectory;
@@ -257,12 +258,12 @@ typedef struct {
 extern "C" {
 #endif // __cplusplus
 
-// The library version as a static NUL-terminated string (never freed).
-const char *sitar_version(void);
-
 // Copies the calling thread's last error message (see the text-output
 // convention). It never changes the stored message itself; "" if none yet.
 int32_t sitar_last_error(char *buf, size_t cap, size_t *out_len);
+
+// The library version as a static NUL-terminated string (never freed).
+const char *sitar_version(void);
 
 // Creates a session from a JSON config (every key optional; "" = defaults).
 int32_t sitar_session_new(const char *config_json, SitarHandle *out);
@@ -296,11 +297,13 @@ int32_t sitar_session_stop(SitarHandle h, int64_t t_ns, const SitarPose *pose, S
 // The summary of a stopped recording (`SITAR_ERR_INVALID_STATE` before stop).
 int32_t sitar_session_summary(SitarHandle h, SitarSummary *out);
 
-// Loads results: legacy CSV (`start,error`) or JSON, autodetected.
+// Loads results: legacy CSV (`start,error`) or JSON, autodetected. Results for
+// another window length than `subtrajectory_frames`, or another `pose_relation`
+// than the config's, are refused (`SITAR_ERR_INVALID_ARGUMENT`).
 int32_t sitar_session_load_results(SitarHandle h, const char *csv_or_json);
 
 // The error class at `t_ns` (0 unknown, 1 low, 2 medium, 3 high) and the
-// error in metres (NaN when unknown).
+// error in the results' unit, metres or degrees (NaN when unknown).
 int32_t sitar_session_error_at(SitarHandle h,
                                int64_t t_ns,
                                int32_t *out_class,
@@ -310,7 +313,7 @@ int32_t sitar_session_error_at(SitarHandle h,
 int32_t sitar_session_markers(SitarHandle h, SitarMarker *out, size_t capacity, size_t *out_len);
 
 // `*out` = 1 if the loaded results are unreliable (mean error at or above
-// `unreliable_mean_error_m`), else 0.
+// `unreliable_mean_error_m`, or `_deg`), else 0.
 int32_t sitar_session_results_unreliable(SitarHandle h, int32_t *out);
 
 // The class of sub-trajectory `k` (0 unknown, 1 low, 2 medium, 3 high).
@@ -360,7 +363,7 @@ int32_t sitar_playback_len(SitarHandle h, size_t *out);
 // The logged poses as TUM text (text-output convention).
 int32_t sitar_playback_tum(SitarHandle h, char *buf, size_t cap, size_t *out_len);
 
-// Writes `<dir>/trajectory_<index>.txt` (creating `dir`).
+// Writes `<dir>/trajectory_<index>.txt` (creating `dir`); JNI returns the path.
 int32_t sitar_playback_write(SitarHandle h, const char *dir, uint32_t index);
 
 // Frees a playback logger.
@@ -370,7 +373,9 @@ int32_t sitar_playback_free(SitarHandle h);
 // is done, loads the results into session `h`. `options_json` (NULL or ""
 // = defaults): `server_url`, `trials` (10), `setting` ("trim_mean_30"),
 // `playback` ("adb"), `poll_interval_ms` (500), `session_id` (continue that
-// server session, e.g. a failed job's: the upload resumes or is skipped).
+// server session, e.g. a failed job's: the upload resumes or is skipped),
+// `window_frames` and `pose_relation` (the session config's
+// `subtrajectory_frames` and `pose_relation`; other values are refused).
 int32_t sitar_upload_start(SitarHandle h,
                            const char *recording_path,
                            const char *options_json,

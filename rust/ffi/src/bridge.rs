@@ -1,10 +1,13 @@
-//! The one safe API of the library. The C ABI and JNI entry points are thin
-//! wrappers around these functions.
+//! The one safe API of the library. The C ABI and JNI entry points are generated around
+//! these functions from their declarations in `exports.rs`.
 
+use std::ffi::CStr;
 use std::path::{Path, PathBuf};
 use std::sync::{LazyLock, Mutex, MutexGuard};
 
 use sitar_core::{DepthImage, DisplayRotation, PlaybackLogger, Session, SessionConfig};
+
+use sitar_client::UploadJob;
 
 use crate::error::Error;
 use crate::registry::{Registry, SitarHandle};
@@ -12,7 +15,6 @@ use crate::types::{
     SitarFrustum, SitarIntrinsics, SitarJobProgress, SitarJoint, SitarMarker, SitarPose,
     SitarSegment, SitarSubtrajectoryResult, SitarSummary,
 };
-use crate::upload::UploadJob;
 
 static SESSIONS: LazyLock<Registry<Mutex<Session>>> = LazyLock::new(|| Registry::new("session"));
 static PLAYBACKS: LazyLock<Registry<Mutex<PlaybackLogger>>> =
@@ -28,18 +30,78 @@ pub struct RenderPlanC {
     pub joints: Vec<SitarJoint>,
     /// Camera frustums.
     pub frustums: Vec<SitarFrustum>,
+    /// Start and stop poses, if recorded.
+    pub ends: PlanEnds,
+}
+
+/// The start and stop poses of a render plan.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct PlanEnds {
     /// Start pose, if recorded.
     pub start: Option<SitarPose>,
     /// Stop pose, if recorded.
     pub stop: Option<SitarPose>,
 }
 
-/// The library version (`CARGO_PKG_VERSION`).
-pub fn version() -> &'static str {
-    env!("CARGO_PKG_VERSION")
+/// The class and error at a timestamp.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct SitarErrorAt {
+    /// 0 unknown, 1 low, 2 medium, 3 high.
+    pub error_class: i32,
+    /// The error in the results' unit (metres; degrees for `angle_deg`); NaN when unknown.
+    pub error_m: f64,
 }
 
-fn lock<T>(m: &Mutex<T>) -> Result<MutexGuard<'_, T>, Error> {
+/// A depth image borrowed from the caller: 16-bit millimetres, any row stride.
+#[derive(Debug, Clone, Copy)]
+pub struct DepthView<'a> {
+    data: &'a [u16],
+    width: u32,
+    height: u32,
+    row_stride_bytes: u32,
+}
+
+impl<'a> DepthView<'a> {
+    /// Checks the geometry (positive size, even stride ≥ 2·width) and that `data` holds
+    /// the image.
+    pub fn new(
+        data: &'a [u16],
+        width: i32,
+        height: i32,
+        row_stride_bytes: i32,
+    ) -> Result<Self, Error> {
+        let needed = depth_len(width, height, row_stride_bytes)?;
+        if data.len() < needed {
+            return Err(Error::invalid(
+                "depth_mm",
+                format!(
+                    "{} samples; a {width}x{height} image with row stride {row_stride_bytes} bytes needs {needed}",
+                    data.len()
+                ),
+            ));
+        }
+        // depth_len checked that all three are positive.
+        Ok(DepthView {
+            data: &data[..needed],
+            width: width as u32,
+            height: height as u32,
+            row_stride_bytes: row_stride_bytes as u32,
+        })
+    }
+}
+
+/// The library version (`CARGO_PKG_VERSION`), NUL-terminated; never fails (a `Result` like
+/// every export).
+pub fn version() -> Result<&'static CStr, Error> {
+    const VERSION: &CStr =
+        match CStr::from_bytes_with_nul(concat!(env!("CARGO_PKG_VERSION"), "\0").as_bytes()) {
+            Ok(v) => v,
+            Err(_) => panic!("the crate version contains a NUL byte"),
+        };
+    Ok(VERSION)
+}
+
+pub(crate) fn lock<T>(m: &Mutex<T>) -> Result<MutexGuard<'_, T>, Error> {
     m.lock()
         .map_err(|_| Error::Panic("an earlier panic left this object unusable; free it".to_owned()))
 }
@@ -81,17 +143,18 @@ pub fn session_frame(h: SitarHandle, t_ns: i64, pose: &SitarPose) -> Result<u32,
 }
 
 /// The depth image for the last midpoint.
-#[allow(clippy::too_many_arguments)]
 pub fn session_depth(
     h: SitarHandle,
-    depth_mm: &[u16],
-    width: u32,
-    height: u32,
-    row_stride_bytes: u32,
+    image: DepthView<'_>,
     k: &SitarIntrinsics,
     display_rotation_deg: i32,
 ) -> Result<(), Error> {
-    let image = DepthImage::new(depth_mm, width, height, row_stride_bytes)?;
+    let image = DepthImage::new(
+        image.data,
+        image.width,
+        image.height,
+        image.row_stride_bytes,
+    )?;
     let rotation = DisplayRotation::from_degrees(display_rotation_deg)?;
     let k = k.to_core();
     with_session(h, |s| Ok(s.depth(&image, &k, rotation)?))
@@ -147,10 +210,13 @@ pub fn session_load_results(h: SitarHandle, csv_or_json: &str) -> Result<(), Err
 }
 
 /// Class (0 unknown … 3 high) and error (NaN when unknown) at a timestamp.
-pub fn session_error_at(h: SitarHandle, t_ns: i64) -> Result<(i32, f64), Error> {
+pub fn session_error_at(h: SitarHandle, t_ns: i64) -> Result<SitarErrorAt, Error> {
     with_session(h, |s| {
         let (class, error) = s.error_at(t_ns);
-        Ok((class as i32, error.unwrap_or(f64::NAN)))
+        Ok(SitarErrorAt {
+            error_class: class as i32,
+            error_m: error.unwrap_or(f64::NAN),
+        })
     })
 }
 
@@ -232,10 +298,32 @@ pub fn session_render_plan(h: SitarHandle) -> Result<RenderPlanC, Error> {
                     error_class: class(f.subtrajectory),
                 })
                 .collect(),
-            start: plan.start.as_ref().map(SitarPose::from_core),
-            stop: plan.stop.as_ref().map(SitarPose::from_core),
+            ends: PlanEnds {
+                start: plan.start.as_ref().map(SitarPose::from_core),
+                stop: plan.stop.as_ref().map(SitarPose::from_core),
+            },
         })
     })
+}
+
+/// Render plan: the path segments.
+pub fn session_segments(h: SitarHandle) -> Result<Vec<SitarSegment>, Error> {
+    Ok(session_render_plan(h)?.segments)
+}
+
+/// Render plan: the joints between segments.
+pub fn session_joints(h: SitarHandle) -> Result<Vec<SitarJoint>, Error> {
+    Ok(session_render_plan(h)?.joints)
+}
+
+/// Render plan: the camera frustums.
+pub fn session_frustums(h: SitarHandle) -> Result<Vec<SitarFrustum>, Error> {
+    Ok(session_render_plan(h)?.frustums)
+}
+
+/// Render plan: the start and stop poses.
+pub fn session_plan_ends(h: SitarHandle) -> Result<PlanEnds, Error> {
+    Ok(session_render_plan(h)?.ends)
 }
 
 /// The logged poses as TUM text (integer nanoseconds).
@@ -305,35 +393,38 @@ pub fn playback_free(h: SitarHandle) -> Result<(), Error> {
     PLAYBACKS.remove(h).map(drop)
 }
 
-/// Starts the background upload of `recording` and download of the results
-/// into session `h`. `options_json` keys (all optional): `server_url` (else
-/// the session config's), `trials` (10), `setting` ("trim_mean_30"),
-/// `playback` ("adb"), `poll_interval_ms` (500), `session_id` (continue that
-/// server session, e.g. a failed job's: the upload resumes or is skipped).
+/// Starts the background upload of `recording` and download of the results into session
+/// `h` (a [`sitar_client::UploadJob`]). `options_json` (`None` or "" = defaults) keys, all
+/// optional: `server_url` (else the session config's), `trials` (10), `setting`
+/// ("trim_mean_30"), `playback` ("adb"), `poll_interval_ms` (500), `session_id` (continue
+/// that server session, e.g. a failed job's: the upload resumes or is skipped),
+/// `window_frames` and `pose_relation` (the session config's `subtrajectory_frames` and
+/// `pose_relation`; other values are refused, as their results could not be shown).
 pub fn upload_start(
     h: SitarHandle,
     recording: &Path,
-    options_json: &str,
+    options_json: Option<&str>,
 ) -> Result<SitarHandle, Error> {
     let session = SESSIONS.get(h)?;
-    let default_url = lock(&session)?.config().server_url.clone();
-    let job = UploadJob::start(session, recording, options_json, default_url)?;
+    let job = crate::upload::start(session, recording, options_json.unwrap_or(""))?;
     Ok(UPLOADS.insert(job))
 }
 
 /// A snapshot of an upload job.
 pub fn upload_progress(job: SitarHandle) -> Result<SitarJobProgress, Error> {
-    Ok(UPLOADS.get(job)?.progress())
+    let job = UPLOADS.get(job)?;
+    Ok(crate::upload::progress(&job))
 }
 
 /// Why the job failed ("" otherwise).
 pub fn upload_message(job: SitarHandle) -> Result<String, Error> {
-    Ok(UPLOADS.get(job)?.message())
+    let job = UPLOADS.get(job)?;
+    Ok(crate::upload::message(&job))
 }
 
 /// The server's session id ("" until created).
 pub fn upload_server_id(job: SitarHandle) -> Result<String, Error> {
-    Ok(UPLOADS.get(job)?.server_id())
+    Ok(UPLOADS.get(job)?.server_id().unwrap_or_default())
 }
 
 /// Cancels the job: its state becomes cancelled at once and no more results

@@ -1,6 +1,6 @@
-//! The C ABI: thin `extern "C"` wrappers over the bridge. Every function
-//! returns a `SitarStatus` code (0 ok, negative error) and goes through the
-//! guard; outputs go through pointers that must be valid for the call.
+//! What the C entry points (`sitar_*`, generated from `exports.rs`) are made of: argument
+//! checks and output conventions, plus `sitar_last_error`, the one function written by hand
+//! (it reads the guard's message and must not change it, so it is outside the guard).
 //!
 //! Conventions beyond ARCHITECTURE.md, applied everywhere:
 //! - Array outputs `(out, capacity, out_len)`: `*out_len` always receives the
@@ -19,18 +19,13 @@
 #![allow(clippy::not_unsafe_ptr_arg_deref)]
 
 use std::ffi::{c_char, CStr};
-use std::path::Path;
 
-use crate::bridge;
+use crate::bridge::{DepthView, PlanEnds, SitarErrorAt};
 use crate::error::Error;
-use crate::guard::{run_ffi_safe, with_last_error};
-use crate::registry::SitarHandle;
-use crate::types::{
-    SitarFrustum, SitarIntrinsics, SitarJobProgress, SitarJoint, SitarMarker, SitarPose,
-    SitarSegment, SitarSubtrajectoryResult, SitarSummary,
-};
+use crate::guard::with_last_error;
+use crate::types::SitarPose;
 
-fn text_arg<'a>(p: *const c_char, name: &'static str) -> Result<&'a str, Error> {
+pub(crate) fn text_arg<'a>(p: *const c_char, name: &'static str) -> Result<&'a str, Error> {
     if p.is_null() {
         return Err(Error::Null(name));
     }
@@ -41,18 +36,53 @@ fn text_arg<'a>(p: *const c_char, name: &'static str) -> Result<&'a str, Error> 
         .map_err(|source| Error::Utf8 { name, source })
 }
 
-fn arg<'a, T>(p: *const T, name: &'static str) -> Result<&'a T, Error> {
+/// A string argument that may be NULL (`None`).
+pub(crate) fn optional_text_arg<'a>(
+    p: *const c_char,
+    name: &'static str,
+) -> Result<Option<&'a str>, Error> {
+    if p.is_null() {
+        Ok(None)
+    } else {
+        text_arg(p, name).map(Some)
+    }
+}
+
+pub(crate) fn arg<'a, T>(p: *const T, name: &'static str) -> Result<&'a T, Error> {
     // SAFETY: NULL is rejected; otherwise the caller passes a valid, aligned pointer.
     unsafe { p.as_ref() }.ok_or(Error::Null(name))
 }
 
-fn out<'a, T>(p: *mut T, name: &'static str) -> Result<&'a mut T, Error> {
+pub(crate) fn out<'a, T>(p: *mut T, name: &'static str) -> Result<&'a mut T, Error> {
     // SAFETY: NULL is rejected; otherwise the caller passes a valid, aligned pointer.
     unsafe { p.as_mut() }.ok_or(Error::Null(name))
 }
 
+/// A depth image from a pointer that must hold `(height-1)*row_stride_bytes + width*2` bytes.
+pub(crate) fn depth_arg<'a>(
+    depth_mm: *const u16,
+    width: i32,
+    height: i32,
+    row_stride_bytes: i32,
+) -> Result<DepthView<'a>, Error> {
+    if depth_mm.is_null() {
+        return Err(Error::Null("depth_mm"));
+    }
+    if !depth_mm.is_aligned() {
+        return Err(Error::invalid("depth_mm", "pointer is not 2-byte aligned"));
+    }
+    let len = crate::bridge::depth_len(width, height, row_stride_bytes)?;
+    // SAFETY: non-NULL, aligned; the caller guarantees the documented size.
+    let data = unsafe { std::slice::from_raw_parts(depth_mm, len) };
+    DepthView::new(data, width, height, row_stride_bytes)
+}
+
 /// Checks an array output before the work that fills it.
-fn check_array_out<T>(out_ptr: *mut T, capacity: usize, out_len: *mut usize) -> Result<(), Error> {
+pub(crate) fn check_array_out<T>(
+    out_ptr: *mut T,
+    capacity: usize,
+    out_len: *mut usize,
+) -> Result<(), Error> {
     if out_len.is_null() {
         return Err(Error::Null("out_len"));
     }
@@ -62,7 +92,7 @@ fn check_array_out<T>(out_ptr: *mut T, capacity: usize, out_len: *mut usize) -> 
     Ok(())
 }
 
-fn copy_items<T: Copy>(
+pub(crate) fn copy_items<T: Copy>(
     items: &[T],
     out_ptr: *mut T,
     capacity: usize,
@@ -84,7 +114,12 @@ fn copy_items<T: Copy>(
     Ok(())
 }
 
-fn copy_text(text: &str, buf: *mut c_char, cap: usize, out_len: *mut usize) -> Result<(), Error> {
+pub(crate) fn copy_text(
+    text: &str,
+    buf: *mut c_char,
+    cap: usize,
+    out_len: *mut usize,
+) -> Result<(), Error> {
     check_array_out(buf, cap, out_len)?;
     *out(out_len, "out_len")? = text.len();
     let n = text.len().min(cap.saturating_sub(1));
@@ -104,10 +139,30 @@ fn copy_text(text: &str, buf: *mut c_char, cap: usize, out_len: *mut usize) -> R
     Ok(())
 }
 
-/// The library version as a static NUL-terminated string (never freed).
-#[no_mangle]
-pub extern "C" fn sitar_version() -> *const c_char {
-    concat!(env!("CARGO_PKG_VERSION"), "\0").as_ptr().cast()
+/// A result written to several output pointers (checked non-NULL beforehand).
+pub(crate) trait WriteOuts<Outs> {
+    fn write_outs(self, outs: Outs);
+}
+
+impl WriteOuts<(&mut i32, &mut f64)> for SitarErrorAt {
+    fn write_outs(self, (class, error): (&mut i32, &mut f64)) {
+        (*class, *error) = (self.error_class, self.error_m);
+    }
+}
+
+/// `*out_mask` bit 1: the start was written; bit 2: the stop was.
+impl WriteOuts<(&mut SitarPose, &mut SitarPose, &mut u32)> for PlanEnds {
+    fn write_outs(self, (start, stop, mask): (&mut SitarPose, &mut SitarPose, &mut u32)) {
+        *mask = 0;
+        if let Some(p) = self.start {
+            *start = p;
+            *mask |= 1;
+        }
+        if let Some(p) = self.stop {
+            *stop = p;
+            *mask |= 2;
+        }
+    }
 }
 
 /// Copies the calling thread's last error message (see the text-output
@@ -119,437 +174,6 @@ pub extern "C" fn sitar_last_error(buf: *mut c_char, cap: usize, out_len: *mut u
         Ok(Err(e)) => e.code(),
         Err(_) => crate::SitarStatus::SITAR_ERR_PANIC as i32,
     }
-}
-
-/// Creates a session from a JSON config (every key optional; "" = defaults).
-#[no_mangle]
-pub extern "C" fn sitar_session_new(config_json: *const c_char, out: *mut SitarHandle) -> i32 {
-    run_ffi_safe(|| {
-        let out = self::out(out, "out")?;
-        *out = bridge::session_new(text_arg(config_json, "config_json")?)?;
-        Ok(())
-    })
-}
-
-/// Frees a session; any later use of the handle is `SITAR_ERR_INVALID_HANDLE`.
-#[no_mangle]
-pub extern "C" fn sitar_session_free(h: SitarHandle) -> i32 {
-    run_ffi_safe(|| bridge::session_free(h))
-}
-
-/// Starts recording at `t_ns` with `pose` (frame 0).
-#[no_mangle]
-pub extern "C" fn sitar_session_start(h: SitarHandle, t_ns: i64, pose: *const SitarPose) -> i32 {
-    run_ffi_safe(|| bridge::session_start(h, t_ns, arg(pose, "pose")?))
-}
-
-/// One camera frame. `*out_flags`: 1 = midpoint (give depth), 2 = endpoint.
-/// Allocation-free on non-logging frames.
-#[no_mangle]
-pub extern "C" fn sitar_session_frame(
-    h: SitarHandle,
-    t_ns: i64,
-    pose: *const SitarPose,
-    out_flags: *mut u32,
-) -> i32 {
-    run_ffi_safe(|| {
-        let out_flags = out(out_flags, "out_flags")?;
-        *out_flags = bridge::session_frame(h, t_ns, arg(pose, "pose")?)?;
-        Ok(())
-    })
-}
-
-/// The depth image (16-bit millimetres, sensor orientation) for the last
-/// midpoint. `depth_mm` must hold `(height-1)*row_stride_bytes + width*2` bytes.
-#[no_mangle]
-pub extern "C" fn sitar_session_depth(
-    h: SitarHandle,
-    depth_mm: *const u16,
-    width: i32,
-    height: i32,
-    row_stride_bytes: i32,
-    k: *const SitarIntrinsics,
-    display_rotation: i32,
-) -> i32 {
-    run_ffi_safe(|| {
-        if depth_mm.is_null() {
-            return Err(Error::Null("depth_mm"));
-        }
-        if !depth_mm.is_aligned() {
-            return Err(Error::invalid("depth_mm", "pointer is not 2-byte aligned"));
-        }
-        let k = arg(k, "k")?;
-        let len = bridge::depth_len(width, height, row_stride_bytes)?;
-        // SAFETY: non-NULL, aligned; the caller guarantees the documented size.
-        let data = unsafe { std::slice::from_raw_parts(depth_mm, len) };
-        bridge::session_depth(
-            h,
-            data,
-            width as u32,
-            height as u32,
-            row_stride_bytes as u32,
-            k,
-            display_rotation,
-        )
-    })
-}
-
-/// Stops recording and writes the summary.
-#[no_mangle]
-pub extern "C" fn sitar_session_stop(
-    h: SitarHandle,
-    t_ns: i64,
-    pose: *const SitarPose,
-    out: *mut SitarSummary,
-) -> i32 {
-    run_ffi_safe(|| {
-        let out = self::out(out, "out")?;
-        *out = bridge::session_stop(h, t_ns, arg(pose, "pose")?)?;
-        Ok(())
-    })
-}
-
-/// The summary of a stopped recording (`SITAR_ERR_INVALID_STATE` before stop).
-#[no_mangle]
-pub extern "C" fn sitar_session_summary(h: SitarHandle, out: *mut SitarSummary) -> i32 {
-    run_ffi_safe(|| {
-        let out = self::out(out, "out")?;
-        *out = bridge::session_summary(h)?;
-        Ok(())
-    })
-}
-
-/// Loads results: legacy CSV (`start,error`) or JSON, autodetected.
-#[no_mangle]
-pub extern "C" fn sitar_session_load_results(h: SitarHandle, csv_or_json: *const c_char) -> i32 {
-    run_ffi_safe(|| bridge::session_load_results(h, text_arg(csv_or_json, "csv_or_json")?))
-}
-
-/// The error class at `t_ns` (0 unknown, 1 low, 2 medium, 3 high) and the
-/// error in metres (NaN when unknown).
-#[no_mangle]
-pub extern "C" fn sitar_session_error_at(
-    h: SitarHandle,
-    t_ns: i64,
-    out_class: *mut i32,
-    out_error_m: *mut f64,
-) -> i32 {
-    run_ffi_safe(|| {
-        let out_class = out(out_class, "out_class")?;
-        let out_error_m = out(out_error_m, "out_error_m")?;
-        (*out_class, *out_error_m) = bridge::session_error_at(h, t_ns)?;
-        Ok(())
-    })
-}
-
-/// The markers (array-output convention; needs results loaded).
-#[no_mangle]
-pub extern "C" fn sitar_session_markers(
-    h: SitarHandle,
-    out: *mut SitarMarker,
-    capacity: usize,
-    out_len: *mut usize,
-) -> i32 {
-    run_ffi_safe(|| {
-        check_array_out(out, capacity, out_len)?;
-        copy_items(&bridge::session_markers(h)?, out, capacity, out_len)
-    })
-}
-
-/// `*out` = 1 if the loaded results are unreliable (mean error at or above
-/// `unreliable_mean_error_m`), else 0.
-#[no_mangle]
-pub extern "C" fn sitar_session_results_unreliable(h: SitarHandle, out: *mut i32) -> i32 {
-    run_ffi_safe(|| {
-        let out = self::out(out, "out")?;
-        *out = i32::from(bridge::session_results_unreliable(h)?);
-        Ok(())
-    })
-}
-
-/// The class of sub-trajectory `k` (0 unknown, 1 low, 2 medium, 3 high).
-#[no_mangle]
-pub extern "C" fn sitar_session_subtrajectory_class(
-    h: SitarHandle,
-    k: u32,
-    out_class: *mut i32,
-) -> i32 {
-    run_ffi_safe(|| {
-        let out_class = out(out_class, "out_class")?;
-        *out_class = bridge::session_subtrajectory_class(h, k)?;
-        Ok(())
-    })
-}
-
-/// Every sub-trajectory's error (NaN if unknown) and class, in order
-/// (array-output convention).
-#[no_mangle]
-pub extern "C" fn sitar_session_subtrajectory_results(
-    h: SitarHandle,
-    out: *mut SitarSubtrajectoryResult,
-    capacity: usize,
-    out_len: *mut usize,
-) -> i32 {
-    run_ffi_safe(|| {
-        check_array_out(out, capacity, out_len)?;
-        copy_items(
-            &bridge::session_subtrajectory_results(h)?,
-            out,
-            capacity,
-            out_len,
-        )
-    })
-}
-
-/// Render plan: path segments (array-output convention).
-#[no_mangle]
-pub extern "C" fn sitar_session_segments(
-    h: SitarHandle,
-    out: *mut SitarSegment,
-    capacity: usize,
-    out_len: *mut usize,
-) -> i32 {
-    run_ffi_safe(|| {
-        check_array_out(out, capacity, out_len)?;
-        copy_items(
-            &bridge::session_render_plan(h)?.segments,
-            out,
-            capacity,
-            out_len,
-        )
-    })
-}
-
-/// Render plan: joints between segments (array-output convention).
-#[no_mangle]
-pub extern "C" fn sitar_session_joints(
-    h: SitarHandle,
-    out: *mut SitarJoint,
-    capacity: usize,
-    out_len: *mut usize,
-) -> i32 {
-    run_ffi_safe(|| {
-        check_array_out(out, capacity, out_len)?;
-        copy_items(
-            &bridge::session_render_plan(h)?.joints,
-            out,
-            capacity,
-            out_len,
-        )
-    })
-}
-
-/// Render plan: camera frustums (array-output convention).
-#[no_mangle]
-pub extern "C" fn sitar_session_frustums(
-    h: SitarHandle,
-    out: *mut SitarFrustum,
-    capacity: usize,
-    out_len: *mut usize,
-) -> i32 {
-    run_ffi_safe(|| {
-        check_array_out(out, capacity, out_len)?;
-        copy_items(
-            &bridge::session_render_plan(h)?.frustums,
-            out,
-            capacity,
-            out_len,
-        )
-    })
-}
-
-/// Render plan: start and stop poses. `*out_mask` bit 1 = start written,
-/// bit 2 = stop written.
-#[no_mangle]
-pub extern "C" fn sitar_session_plan_ends(
-    h: SitarHandle,
-    out_start: *mut SitarPose,
-    out_stop: *mut SitarPose,
-    out_mask: *mut u32,
-) -> i32 {
-    run_ffi_safe(|| {
-        let out_start = out(out_start, "out_start")?;
-        let out_stop = out(out_stop, "out_stop")?;
-        let out_mask = out(out_mask, "out_mask")?;
-        let plan = bridge::session_render_plan(h)?;
-        *out_mask = 0;
-        if let Some(p) = plan.start {
-            *out_start = p;
-            *out_mask |= 1;
-        }
-        if let Some(p) = plan.stop {
-            *out_stop = p;
-            *out_mask |= 2;
-        }
-        Ok(())
-    })
-}
-
-/// The logged poses as TUM text (text-output convention).
-#[no_mangle]
-pub extern "C" fn sitar_session_trajectory_tum(
-    h: SitarHandle,
-    buf: *mut c_char,
-    cap: usize,
-    out_len: *mut usize,
-) -> i32 {
-    run_ffi_safe(|| {
-        check_array_out(buf, cap, out_len)?;
-        copy_text(&bridge::session_trajectory_tum(h)?, buf, cap, out_len)
-    })
-}
-
-/// Saves the session into folder `dir` (created if missing).
-#[no_mangle]
-pub extern "C" fn sitar_session_save(h: SitarHandle, dir: *const c_char) -> i32 {
-    run_ffi_safe(|| bridge::session_save(h, Path::new(text_arg(dir, "dir")?)))
-}
-
-/// Loads a saved session folder as a new session.
-#[no_mangle]
-pub extern "C" fn sitar_session_load(dir: *const c_char, out: *mut SitarHandle) -> i32 {
-    run_ffi_safe(|| {
-        let out = self::out(out, "out")?;
-        *out = bridge::session_load(Path::new(text_arg(dir, "dir")?))?;
-        Ok(())
-    })
-}
-
-/// Creates a playback-device logger (uses the config's `convention`).
-#[no_mangle]
-pub extern "C" fn sitar_playback_new(config_json: *const c_char, out: *mut SitarHandle) -> i32 {
-    run_ffi_safe(|| {
-        let out = self::out(out, "out")?;
-        *out = bridge::playback_new(text_arg(config_json, "config_json")?)?;
-        Ok(())
-    })
-}
-
-/// Logs one playback frame's pose.
-#[no_mangle]
-pub extern "C" fn sitar_playback_log(h: SitarHandle, t_ns: i64, pose: *const SitarPose) -> i32 {
-    run_ffi_safe(|| bridge::playback_log(h, t_ns, arg(pose, "pose")?))
-}
-
-/// Number of poses logged.
-#[no_mangle]
-pub extern "C" fn sitar_playback_len(h: SitarHandle, out: *mut usize) -> i32 {
-    run_ffi_safe(|| {
-        let out = self::out(out, "out")?;
-        *out = bridge::playback_len(h)?;
-        Ok(())
-    })
-}
-
-/// The logged poses as TUM text (text-output convention).
-#[no_mangle]
-pub extern "C" fn sitar_playback_tum(
-    h: SitarHandle,
-    buf: *mut c_char,
-    cap: usize,
-    out_len: *mut usize,
-) -> i32 {
-    run_ffi_safe(|| {
-        check_array_out(buf, cap, out_len)?;
-        copy_text(&bridge::playback_tum(h)?, buf, cap, out_len)
-    })
-}
-
-/// Writes `<dir>/trajectory_<index>.txt` (creating `dir`).
-#[no_mangle]
-pub extern "C" fn sitar_playback_write(h: SitarHandle, dir: *const c_char, index: u32) -> i32 {
-    run_ffi_safe(|| bridge::playback_write(h, Path::new(text_arg(dir, "dir")?), index).map(drop))
-}
-
-/// Frees a playback logger.
-#[no_mangle]
-pub extern "C" fn sitar_playback_free(h: SitarHandle) -> i32 {
-    run_ffi_safe(|| bridge::playback_free(h))
-}
-
-/// Starts uploading `recording_path` in the background and, when the server
-/// is done, loads the results into session `h`. `options_json` (NULL or ""
-/// = defaults): `server_url`, `trials` (10), `setting` ("trim_mean_30"),
-/// `playback` ("adb"), `poll_interval_ms` (500), `session_id` (continue that
-/// server session, e.g. a failed job's: the upload resumes or is skipped).
-#[no_mangle]
-pub extern "C" fn sitar_upload_start(
-    h: SitarHandle,
-    recording_path: *const c_char,
-    options_json: *const c_char,
-    out_job: *mut SitarHandle,
-) -> i32 {
-    run_ffi_safe(|| {
-        let out_job = out(out_job, "out_job")?;
-        let options = if options_json.is_null() {
-            ""
-        } else {
-            text_arg(options_json, "options_json")?
-        };
-        *out_job = bridge::upload_start(
-            h,
-            Path::new(text_arg(recording_path, "recording_path")?),
-            options,
-        )?;
-        Ok(())
-    })
-}
-
-/// A snapshot of the job's progress (never blocks on the network).
-#[no_mangle]
-pub extern "C" fn sitar_upload_progress(job: SitarHandle, out: *mut SitarJobProgress) -> i32 {
-    run_ffi_safe(|| {
-        let out = self::out(out, "out")?;
-        *out = bridge::upload_progress(job)?;
-        Ok(())
-    })
-}
-
-/// Why the job failed, "" otherwise (text-output convention).
-#[no_mangle]
-pub extern "C" fn sitar_upload_message(
-    job: SitarHandle,
-    buf: *mut c_char,
-    cap: usize,
-    out_len: *mut usize,
-) -> i32 {
-    run_ffi_safe(|| {
-        check_array_out(buf, cap, out_len)?;
-        copy_text(&bridge::upload_message(job)?, buf, cap, out_len)
-    })
-}
-
-/// The server's session id, "" until created (text-output convention).
-#[no_mangle]
-pub extern "C" fn sitar_upload_server_id(
-    job: SitarHandle,
-    buf: *mut c_char,
-    cap: usize,
-    out_len: *mut usize,
-) -> i32 {
-    run_ffi_safe(|| {
-        check_array_out(buf, cap, out_len)?;
-        copy_text(&bridge::upload_server_id(job)?, buf, cap, out_len)
-    })
-}
-
-/// Cancels the job: its state is `SITAR_JOB_CANCELLED` at once.
-#[no_mangle]
-pub extern "C" fn sitar_upload_cancel(job: SitarHandle) -> i32 {
-    run_ffi_safe(|| bridge::upload_cancel(job))
-}
-
-/// Frees the job handle (cancelling it if still running).
-#[no_mangle]
-pub extern "C" fn sitar_upload_free(job: SitarHandle) -> i32 {
-    run_ffi_safe(|| bridge::upload_free(job))
-}
-
-/// Panics on purpose; returns `SITAR_ERR_PANIC` (feature `testing` only).
-#[cfg(feature = "testing")]
-#[no_mangle]
-pub extern "C" fn sitar_testing_panic() -> i32 {
-    run_ffi_safe(bridge::testing_panic)
 }
 
 #[cfg(test)]
@@ -605,14 +229,46 @@ mod tests {
 
     #[test]
     fn depth_geometry_is_checked() {
-        assert_eq!(bridge::depth_len(160, 120, 320).unwrap(), 160 * 120);
-        assert_eq!(bridge::depth_len(3, 2, 8).unwrap(), 4 + 3);
+        assert_eq!(crate::bridge::depth_len(160, 120, 320).unwrap(), 160 * 120);
+        assert_eq!(crate::bridge::depth_len(3, 2, 8).unwrap(), 4 + 3);
         for (w, h, s) in [(0, 1, 2), (1, 0, 2), (4, 4, 6), (4, 4, 9), (-1, 4, 8)] {
             assert_eq!(
-                bridge::depth_len(w, h, s).unwrap_err().status(),
+                crate::bridge::depth_len(w, h, s).unwrap_err().status(),
                 SITAR_ERR_INVALID_ARGUMENT,
                 "{w}x{h} stride {s}"
             );
         }
+        let short = [0u16; 5];
+        assert_eq!(
+            DepthView::new(&short, 3, 2, 8).unwrap_err().status(),
+            SITAR_ERR_INVALID_ARGUMENT
+        );
+        assert!(depth_arg(std::ptr::null(), 3, 2, 8).is_err());
+    }
+
+    #[test]
+    fn several_outputs_are_written_and_absent_ends_left_alone() {
+        let (mut class, mut error) = (0, 0.0);
+        SitarErrorAt {
+            error_class: 3,
+            error_m: 0.2,
+        }
+        .write_outs((&mut class, &mut error));
+        assert_eq!((class, error), (3, 0.2));
+        let marker = SitarPose {
+            px: -7.0,
+            ..SitarPose::default()
+        };
+        let (mut start, mut stop, mut mask) = (marker, marker, 9);
+        let stop_pose = SitarPose {
+            qw: 1.0,
+            ..SitarPose::default()
+        };
+        PlanEnds {
+            start: None,
+            stop: Some(stop_pose),
+        }
+        .write_outs((&mut start, &mut stop, &mut mask));
+        assert_eq!((start, stop, mask), (marker, stop_pose, 2));
     }
 }

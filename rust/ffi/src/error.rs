@@ -1,32 +1,31 @@
 use std::str::Utf8Error;
 
-/// Status codes of every C ABI function (`int32_t`); negative is an error.
-///
-/// JNI reports the same codes as `SitarException.code`.
-#[repr(i32)]
-#[allow(non_camel_case_types)]
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum SitarStatus {
-    /// Success.
-    SITAR_OK = 0,
-    /// A required pointer argument was NULL.
-    SITAR_ERR_NULL = -1,
-    /// An argument is out of range, malformed or not valid UTF-8.
-    SITAR_ERR_INVALID_ARGUMENT = -2,
-    /// A NULL, stale, freed or garbage handle, or a handle of another kind.
-    SITAR_ERR_INVALID_HANDLE = -3,
-    /// The call is not valid in the object's current state.
-    SITAR_ERR_INVALID_STATE = -4,
-    /// Text (JSON config, results CSV/JSON) could not be parsed.
-    SITAR_ERR_PARSE = -5,
-    /// A file could not be read or written.
-    SITAR_ERR_IO = -6,
-    /// The backend could not be reached or answered with an error.
-    SITAR_ERR_NETWORK = -7,
-    /// An output buffer is too small; the needed length was written to `*out_len`.
-    SITAR_ERR_BUFFER_TOO_SMALL = -8,
-    /// A panic inside the library was caught (a bug; please report it).
-    SITAR_ERR_PANIC = -99,
+crate::decl::c_enum! {
+    /// Status codes of every C ABI function (`int32_t`); negative is an error.
+    ///
+    /// JNI reports the same codes as `SitarException.code`.
+    pub enum SitarStatus as kotlin SitarStatus, csharp SitarErrorCode {
+        /// Success.
+        SITAR_OK = 0,
+        /// A required pointer argument was NULL.
+        SITAR_ERR_NULL = -1,
+        /// An argument is out of range, malformed or not valid UTF-8.
+        SITAR_ERR_INVALID_ARGUMENT = -2,
+        /// A NULL, stale, freed or garbage handle, or a handle of another kind.
+        SITAR_ERR_INVALID_HANDLE = -3,
+        /// The call is not valid in the object's current state.
+        SITAR_ERR_INVALID_STATE = -4,
+        /// Text (JSON config, results CSV/JSON) could not be parsed.
+        SITAR_ERR_PARSE = -5,
+        /// A file could not be read or written.
+        SITAR_ERR_IO = -6,
+        /// The backend could not be reached or answered with an error.
+        SITAR_ERR_NETWORK = -7,
+        /// An output buffer is too small; the needed length was written to `*out_len`.
+        SITAR_ERR_BUFFER_TOO_SMALL = -8,
+        /// A panic inside the library was caught (a bug; please report it).
+        SITAR_ERR_PANIC = -99,
+    }
 }
 
 /// Everything a bridge call can fail with; each maps to one [`SitarStatus`].
@@ -146,7 +145,18 @@ fn client_status(e: &sitar_client::Error) -> SitarStatus {
     use SitarStatus::*;
     match e {
         E::InvalidUrl(_) | E::InvalidArgument(_) => SITAR_ERR_INVALID_ARGUMENT,
-        E::Io { .. } => SITAR_ERR_IO,
+        E::Io { .. } | E::Thread(_) => SITAR_ERR_IO,
+        E::SessionFailed { .. } => SITAR_ERR_INVALID_STATE,
+        E::Panicked(_) => SITAR_ERR_PANIC,
+        // An upload job's results sink is ours: its error keeps its own code.
+        E::Results(sink) => sink
+            .downcast_ref::<Error>()
+            .map_or(SITAR_ERR_INVALID_ARGUMENT, Error::status),
         _ => SITAR_ERR_NETWORK,
     }
+}
+
+/// The status code of a client error (an upload job's failure).
+pub(crate) fn client_code(e: &sitar_client::Error) -> i32 {
+    client_status(e) as i32
 }

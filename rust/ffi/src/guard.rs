@@ -26,17 +26,6 @@ where
     }
 }
 
-/// Like [`run_ffi_safe`] but for bridges that need the error itself (JNI).
-pub(crate) fn catch<T, F>(f: F) -> Result<T, Error>
-where
-    F: FnOnce() -> Result<T, Error>,
-{
-    match catch_unwind(AssertUnwindSafe(f)) {
-        Ok(result) => result,
-        Err(payload) => Err(Error::Panic(panic_message(payload.as_ref()))),
-    }
-}
-
 /// Stores `e` as the thread's last error and returns its code.
 pub(crate) fn record(e: &Error) -> i32 {
     log::debug!("sitar error: {e}");

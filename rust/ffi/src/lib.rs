@@ -7,7 +7,13 @@
 //! - the **C ABI** (`sitar_*` functions, header `include/sitar.h`, C# bindings
 //!   `unity-plugin/Runtime/NativeMethods.g.cs`) used by Unity, and
 //! - **JNI** entry points `Java_io_github_sitar_Native_*` used by the Kotlin
-//!   library in `android/`.
+//!   library in `android/` (`Native.kt`).
+//!
+//! Both are made from one declaration per export (`src/exports.rs`, the `exports!` macro
+//! of `src/declare.rs`), which also describes each entry point ([`C_EXPORTS`],
+//! [`JNI_EXPORTS`], [`FLAT_LAYOUTS`]) so that the header, the C# bindings, `Native.kt`, the
+//! Kotlin array layouts and the Kotlin and C# status enums are generated from the same
+//! place (`tests/generated_bindings.rs`, which fails when a committed file differs).
 //!
 //! Every entry point goes through one guard: panics are caught, errors become
 //! a [`SitarStatus`] code (C) or a `SitarException` (Kotlin), and the message
@@ -36,7 +42,12 @@
 
 mod bridge;
 mod c_api;
+#[doc(hidden)]
+pub mod decl;
+mod declare;
 mod error;
+mod exports;
+mod flat;
 mod guard;
 mod jni_api;
 mod logging;
@@ -46,7 +57,10 @@ mod types;
 mod upload;
 
 pub use bridge::*;
-pub use c_api::*;
+pub use c_api::sitar_last_error;
 pub use error::{Error, SitarStatus};
+pub use exports::*;
+#[doc(hidden)]
+pub use flat::FLAT_LAYOUTS;
 pub use registry::SitarHandle;
 pub use types::*;

@@ -83,7 +83,7 @@ pub struct SitarMarker {
     pub error_class: i32,
     /// Sub-trajectory number (from 0).
     pub subtrajectory: u32,
-    /// Estimated error (metres).
+    /// Estimated error, in the results' unit (metres; degrees for `angle_deg`).
     pub error_m: f64,
 }
 
@@ -145,7 +145,8 @@ pub struct SitarFrustum {
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct SitarSubtrajectoryResult {
-    /// Estimated error (metres); NaN when no result window is near its start.
+    /// Estimated error in the results' unit (metres; degrees for `angle_deg`); NaN when no
+    /// result window is near its start.
     pub error_m: f64,
     /// Sub-trajectory number (from 0).
     pub subtrajectory: u32,
@@ -153,27 +154,26 @@ pub struct SitarSubtrajectoryResult {
     pub error_class: i32,
 }
 
-/// States of a background upload job (`SitarJobProgress.state`).
-#[repr(i32)]
-#[allow(non_camel_case_types)]
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum SitarJobState {
-    /// Creating the server session.
-    SITAR_JOB_STARTING = 0,
-    /// Sending the recording.
-    SITAR_JOB_UPLOADING = 1,
-    /// Playback trials running on the server.
-    SITAR_JOB_PLAYING = 2,
-    /// The server computes the final estimate.
-    SITAR_JOB_ESTIMATING = 3,
-    /// Fetching the final results.
-    SITAR_JOB_DOWNLOADING = 4,
-    /// Final results are loaded into the session.
-    SITAR_JOB_DONE = 5,
-    /// Failed: see `error_code` and `sitar_upload_message`.
-    SITAR_JOB_FAILED = 6,
-    /// Cancelled by `sitar_upload_cancel`.
-    SITAR_JOB_CANCELLED = 7,
+crate::decl::c_enum! {
+    /// States of a background upload job (`SitarJobProgress.state`).
+    pub enum SitarJobState as kotlin UploadState, csharp UploadState {
+        /// Creating the server session.
+        SITAR_JOB_STARTING = 0,
+        /// Sending the recording.
+        SITAR_JOB_UPLOADING = 1,
+        /// Playback trials running on the server.
+        SITAR_JOB_PLAYING = 2,
+        /// The server computes the final estimate.
+        SITAR_JOB_ESTIMATING = 3,
+        /// Fetching the final results.
+        SITAR_JOB_DOWNLOADING = 4,
+        /// Final results are loaded into the session.
+        SITAR_JOB_DONE = 5,
+        /// Failed: see `error_code` and `sitar_upload_message`.
+        SITAR_JOB_FAILED = 6,
+        /// Cancelled by `sitar_upload_cancel`.
+        SITAR_JOB_CANCELLED = 7,
+    }
 }
 
 /// A snapshot of a background upload job.

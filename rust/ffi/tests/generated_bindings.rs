@@ -1,85 +1,358 @@
-//! The committed C header and C# bindings must equal what the generators
-//! produce from the sources now; CI fails on a difference. Regenerate with
+//! Every committed file generated from the export declarations (`src/exports.rs`,
+//! `src/flat.rs`, the `c_enum!`s) must equal what the generators produce now; CI fails on a
+//! difference. Regenerate with
 //! `SITAR_REGENERATE=1 cargo test -p sitar-ffi --test generated_bindings`.
+//!
+//! | file | from |
+//! |---|---|
+//! | `include/sitar.h` | cbindgen, over the C declarations (a Rust stub written from `sitar::C_EXPORTS` and the enums) and the `#[repr(C)]` types |
+//! | `unity-plugin/Runtime/NativeMethods.g.cs` | csbindgen, over the same |
+//! | `unity-plugin/Runtime/SitarStatus.g.cs` | `SitarErrorCode` and `UploadState` |
+//! | `android/…/Native.kt` | `sitar::JNI_EXPORTS` |
+//! | `android/…/Layouts.kt` | `sitar::FLAT_LAYOUTS` |
+//! | `android/…/SitarStatus.kt` | `SitarStatus` and `UploadState` |
 
+use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
+
+use sitar::decl::CEnum;
+use sitar::{SitarJobState, SitarStatus, C_EXPORTS, FLAT_LAYOUTS, JNI_EXPORTS};
+
+const REGENERATE: &str = "SITAR_REGENERATE=1 cargo test -p sitar-ffi --test generated_bindings";
 
 fn crate_dir() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
-/// The Rust files that hold the C ABI: functions, structs, enums, aliases.
-fn abi_sources() -> Vec<PathBuf> {
-    [
-        "src/c_api.rs",
-        "src/types.rs",
-        "src/error.rs",
-        "src/registry.rs",
+fn kotlin_dir() -> PathBuf {
+    crate_dir().join("../../android/src/main/kotlin/io/github/sitar")
+}
+
+fn unity_dir() -> PathBuf {
+    crate_dir().join("../../unity-plugin/Runtime")
+}
+
+const ENUMS: [CEnum; 2] = [SitarStatus::DECL, SitarJobState::DECL];
+
+fn doc_lines(doc: &str) -> impl Iterator<Item = &str> {
+    doc.lines().map(|l| l.strip_prefix(' ').unwrap_or(l))
+}
+
+/// `///` comments of a doc, indented.
+fn rust_doc(s: &mut String, indent: &str, doc: &str) {
+    for line in doc_lines(doc) {
+        let sep = if line.is_empty() { "" } else { " " };
+        let _ = writeln!(s, "{indent}///{sep}{line}");
+    }
+}
+
+/// The C declarations as Rust source, for cbindgen and csbindgen (which cannot see
+/// functions a macro makes): the enums and one prototype per C export.
+fn c_stub() -> String {
+    let mut s = String::from("// Written by tests/generated_bindings.rs from the declarations.\n");
+    for e in ENUMS {
+        rust_doc(&mut s, "", e.doc);
+        let _ = writeln!(s, "#[repr(i32)]\npub enum {} {{", e.name);
+        for (name, value, doc) in e.variants {
+            rust_doc(&mut s, "    ", doc);
+            let _ = writeln!(s, "    {name} = {value},");
+        }
+        s.push_str("}\n\n");
+    }
+    for f in C_EXPORTS {
+        rust_doc(&mut s, "", f.doc);
+        if let Some(feature) = f.feature {
+            let _ = writeln!(s, "#[cfg(feature = \"{feature}\")]");
+        }
+        let params: Vec<String> = f.params.iter().map(|(n, t)| format!("{n}: {t}")).collect();
+        let _ = writeln!(
+            s,
+            "#[no_mangle]\npub extern \"C\" fn {}({}) -> {} {{}}\n",
+            f.name,
+            params.join(", "),
+            f.returns
+        );
+    }
+    s
+}
+
+/// The Rust files the generators read: the hand-written `sitar_last_error`, the stub, the
+/// `#[repr(C)]` structs and the handle type.
+fn abi_sources(stub: &Path) -> Vec<PathBuf> {
+    vec![
+        crate_dir().join("src/c_api.rs"),
+        stub.to_path_buf(),
+        crate_dir().join("src/types.rs"),
+        crate_dir().join("src/registry.rs"),
     ]
-    .iter()
-    .map(|f| crate_dir().join(f))
-    .collect()
+}
+
+fn with_stub(f: impl FnOnce(&[PathBuf])) {
+    let dir = tempfile::tempdir().unwrap();
+    let stub = dir.path().join("exports_stub.rs");
+    std::fs::write(&stub, c_stub()).unwrap();
+    f(&abi_sources(&stub));
 }
 
 fn generate_header(out: &Path) {
-    let config =
-        cbindgen::Config::from_file(crate_dir().join("cbindgen.toml")).expect("cbindgen.toml");
-    let mut builder = cbindgen::Builder::new().with_config(config);
-    for src in abi_sources() {
-        builder = builder.with_src(src);
-    }
-    builder.generate().expect("cbindgen").write_to_file(out);
+    with_stub(|sources| {
+        let config =
+            cbindgen::Config::from_file(crate_dir().join("cbindgen.toml")).expect("cbindgen.toml");
+        let mut builder = cbindgen::Builder::new().with_config(config);
+        for src in sources {
+            builder = builder.with_src(src);
+        }
+        builder.generate().expect("cbindgen").write_to_file(out);
+    });
 }
 
 fn generate_csharp(out: &Path) {
-    let mut builder = csbindgen::Builder::default();
-    for src in abi_sources() {
-        builder = builder.input_extern_file(src);
+    with_stub(|sources| {
+        let mut builder = csbindgen::Builder::default();
+        for src in sources {
+            builder = builder.input_extern_file(src);
+        }
+        builder
+            .csharp_namespace("Sitar")
+            .csharp_class_name("NativeMethods")
+            .csharp_dll_name("sitar")
+            .csharp_dll_name_if("UNITY_IOS && !UNITY_EDITOR", "__Internal")
+            .csharp_use_function_pointer(false)
+            .csharp_use_nint_types(false)
+            .always_included_types(["SitarStatus", "SitarJobState"])
+            .csharp_file_header(format!(
+                "// Generated by csbindgen from rust/ffi/src; do not edit.\n// Regenerate: {REGENERATE}"
+            ))
+            .generate_csharp_file(out)
+            .expect("csbindgen");
+    });
+}
+
+/// `row_stride_bytes` → `rowStrideBytes`.
+fn camel(snake: &str) -> String {
+    let mut out = String::new();
+    let mut upper = false;
+    for c in snake.chars() {
+        if c == '_' {
+            upper = true;
+        } else if upper {
+            out.extend(c.to_uppercase());
+            upper = false;
+        } else {
+            out.push(c);
+        }
     }
-    builder
-        .csharp_namespace("Sitar")
-        .csharp_class_name("NativeMethods")
-        .csharp_dll_name("sitar")
-        .csharp_dll_name_if("UNITY_IOS && !UNITY_EDITOR", "__Internal")
-        .csharp_use_function_pointer(false)
-        .csharp_use_nint_types(false)
-        .always_included_types(["SitarStatus", "SitarJobState"])
-        .csharp_file_header("// Generated by csbindgen from rust/ffi/src; do not edit.\n// Regenerate: SITAR_REGENERATE=1 cargo test -p sitar-ffi --test generated_bindings")
-        .generate_csharp_file(out)
-        .expect("csbindgen");
+    out
+}
+
+/// `invalid_argument` → `InvalidArgument`.
+fn pascal(snake: &str) -> String {
+    let lower = snake.to_ascii_lowercase();
+    let c = camel(&lower);
+    let mut chars = c.chars();
+    chars
+        .next()
+        .map(|f| f.to_uppercase().chain(chars).collect())
+        .unwrap_or_default()
+}
+
+/// `SITAR_ERR_INVALID_ARGUMENT` → `INVALID_ARGUMENT`, `SITAR_JOB_DONE` → `DONE`.
+fn short_variant(name: &str) -> &str {
+    ["SITAR_ERR_", "SITAR_JOB_", "SITAR_"]
+        .iter()
+        .find_map(|p| name.strip_prefix(p))
+        .unwrap_or(name)
+}
+
+fn kotlin_header(from: &str) -> String {
+    format!(
+        "// Generated from {from} by rust/ffi/tests/generated_bindings.rs; do not edit.\n\
+         // Regenerate: {REGENERATE}\npackage io.github.sitar\n"
+    )
+}
+
+fn kdoc(s: &mut String, indent: &str, doc: &str) {
+    let lines: Vec<&str> = doc_lines(doc).collect();
+    match lines.as_slice() {
+        [] => {}
+        [one] => {
+            let _ = writeln!(s, "{indent}/** {one} */");
+        }
+        many => {
+            let _ = writeln!(s, "{indent}/**");
+            for line in many {
+                let _ = writeln!(
+                    s,
+                    "{indent} *{}{line}",
+                    if line.is_empty() { "" } else { " " }
+                );
+            }
+            let _ = writeln!(s, "{indent} */");
+        }
+    }
+}
+
+fn native_kt() -> String {
+    let mut s = kotlin_header("rust/ffi/src/exports.rs");
+    let buffers = JNI_EXPORTS
+        .iter()
+        .any(|f| f.params.iter().any(|p| p.1 == "ByteBuffer"));
+    if buffers {
+        s.push_str("\nimport java.nio.ByteBuffer\n");
+    }
+    s.push_str(
+        "\n/**\n * The JNI entry points of `libsitar.so` (`Java_io_github_sitar_Native_*`, declared\n \
+         * once in `rust/ffi/src/exports.rs`). Errors arrive as [SitarException]. Structs come\n \
+         * back as flat `DoubleArray`s whose offsets are in `Layouts.kt`. Use [SitarSession].\n \
+         */\ninternal object Native {\n    init {\n        System.loadLibrary(\"sitar\")\n    }\n",
+    );
+    let group = |name: &str| {
+        name.chars()
+            .take_while(|c| c.is_lowercase())
+            .collect::<String>()
+    };
+    let mut last = String::new();
+    for f in JNI_EXPORTS {
+        if group(f.name) != last {
+            s.push('\n');
+            last = group(f.name);
+        }
+        if let Some(feature) = f.feature {
+            let _ = writeln!(s, "    /** Only in builds with the `{feature}` feature. */");
+        }
+        let params: Vec<String> = f
+            .params
+            .iter()
+            .map(|(n, t)| format!("{}: {t}", camel(n)))
+            .collect();
+        let returns = if f.returns == "Unit" {
+            String::new()
+        } else {
+            format!(": {}", f.returns)
+        };
+        let _ = writeln!(
+            s,
+            "    @JvmStatic external fun {}({}){returns}",
+            f.name,
+            params.join(", ")
+        );
+    }
+    s.push_str("}\n");
+    s
+}
+
+fn layouts_kt() -> String {
+    let mut s = kotlin_header("rust/ffi/src/flat.rs");
+    for l in FLAT_LAYOUTS {
+        let _ = write!(
+            s,
+            "\n/** Offsets into the flat `DoubleArray` of a `{}` (`rust/ffi/src/flat.rs`). */\n\
+             internal object {}Layout {{\n",
+            l.rust, l.kotlin
+        );
+        let mut offset = 0;
+        for (name, width) in l.fields {
+            let _ = writeln!(s, "    const val {} = {offset}", name.to_ascii_uppercase());
+            offset += width;
+        }
+        let _ = writeln!(
+            s,
+            "    /** Doubles per item. */\n    const val SIZE = {offset}\n}}"
+        );
+    }
+    s
+}
+
+fn status_kt() -> String {
+    let mut s = kotlin_header("rust/ffi/src (c_enum!)");
+    for e in ENUMS {
+        s.push('\n');
+        kdoc(&mut s, "", e.doc);
+        let _ = writeln!(s, "enum class {}(val code: Int) {{", e.kotlin);
+        for (i, (name, value, doc)) in e.variants.iter().enumerate() {
+            kdoc(&mut s, "    ", doc);
+            let end = if i + 1 == e.variants.len() { ";" } else { "," };
+            let _ = writeln!(s, "    {}({value}){end}", short_variant(name));
+        }
+        let _ = write!(
+            s,
+            "\n    companion object {{\n        \
+             /** The constant with this code, or null for a code this library does not know. */\n        \
+             @JvmStatic fun of(code: Int): {0}? = values().firstOrNull {{ it.code == code }}\n    }}\n}}\n",
+            e.kotlin
+        );
+    }
+    s
+}
+
+fn xml(text: &str) -> String {
+    text.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+}
+
+fn status_cs() -> String {
+    let mut s = format!(
+        "// Generated from rust/ffi/src (c_enum!) by rust/ffi/tests/generated_bindings.rs; do not edit.\n\
+         // Regenerate: {REGENERATE}\nnamespace Sitar\n{{\n"
+    );
+    for (i, e) in ENUMS.iter().enumerate() {
+        if i > 0 {
+            s.push('\n');
+        }
+        s.push_str("    /// <summary>\n");
+        for line in doc_lines(e.doc) {
+            let sep = if line.is_empty() { "" } else { " " };
+            let _ = writeln!(s, "    ///{sep}{}", xml(line));
+        }
+        let _ = writeln!(
+            s,
+            "    /// </summary>\n    public enum {}\n    {{",
+            e.csharp
+        );
+        for (name, value, doc) in e.variants {
+            let summary: Vec<String> = doc_lines(doc).map(xml).collect();
+            let _ = writeln!(
+                s,
+                "        /// <summary>{}</summary>\n        {} = {value},",
+                summary.join(" "),
+                pascal(short_variant(name))
+            );
+        }
+        s.push_str("    }\n");
+    }
+    s.push_str("}\n");
+    s
+}
+
+/// Compares (or with `SITAR_REGENERATE` rewrites) a committed file.
+fn check_text(committed: &Path, fresh: &str) {
+    if std::env::var_os("SITAR_REGENERATE").is_some() {
+        std::fs::write(committed, fresh).unwrap();
+        return;
+    }
+    let committed_text = std::fs::read_to_string(committed).unwrap_or_default();
+    if committed_text != fresh {
+        let line = committed_text
+            .lines()
+            .zip(fresh.lines())
+            .position(|(a, b)| a != b)
+            .map_or_else(
+                || committed_text.lines().count().min(fresh.lines().count()) + 1,
+                |i| i + 1,
+            );
+        panic!(
+            "{} is out of date (first difference at line {line}); regenerate with {REGENERATE}",
+            committed.display()
+        );
+    }
 }
 
 fn check(committed: &Path, generate: fn(&Path)) {
     let dir = tempfile::tempdir().unwrap();
     let fresh = dir.path().join(committed.file_name().unwrap());
     generate(&fresh);
-    let fresh_text = std::fs::read_to_string(&fresh).unwrap();
-    if std::env::var_os("SITAR_REGENERATE").is_some() {
-        std::fs::write(committed, &fresh_text).unwrap();
-        return;
-    }
-    let committed_text = std::fs::read_to_string(committed).unwrap_or_default();
-    if committed_text != fresh_text {
-        let line = committed_text
-            .lines()
-            .zip(fresh_text.lines())
-            .position(|(a, b)| a != b)
-            .map_or_else(
-                || {
-                    committed_text
-                        .lines()
-                        .count()
-                        .min(fresh_text.lines().count())
-                        + 1
-                },
-                |i| i + 1,
-            );
-        panic!(
-            "{} is out of date (first difference at line {line}); regenerate with \
-             SITAR_REGENERATE=1 cargo test -p sitar-ffi --test generated_bindings",
-            committed.display()
-        );
-    }
+    check_text(committed, &std::fs::read_to_string(&fresh).unwrap());
 }
 
 #[test]
@@ -89,27 +362,68 @@ fn c_header_is_up_to_date() {
 
 #[test]
 fn csharp_bindings_are_up_to_date() {
-    check(
-        &crate_dir().join("../../unity-plugin/Runtime/NativeMethods.g.cs"),
-        generate_csharp,
-    );
+    check(&unity_dir().join("NativeMethods.g.cs"), generate_csharp);
+}
+
+#[test]
+fn csharp_status_enums_are_up_to_date() {
+    check_text(&unity_dir().join("SitarStatus.g.cs"), &status_cs());
+}
+
+#[test]
+fn kotlin_native_declarations_are_up_to_date() {
+    check_text(&kotlin_dir().join("Native.kt"), &native_kt());
+}
+
+#[test]
+fn kotlin_layouts_are_up_to_date() {
+    check_text(&kotlin_dir().join("Layouts.kt"), &layouts_kt());
+}
+
+#[test]
+fn kotlin_status_enums_are_up_to_date() {
+    check_text(&kotlin_dir().join("SitarStatus.kt"), &status_kt());
 }
 
 #[test]
 fn generation_is_deterministic() {
     let dir = tempfile::tempdir().unwrap();
-    let (a, b) = (dir.path().join("a.cs"), dir.path().join("b.cs"));
-    generate_csharp(&a);
-    generate_csharp(&b);
+    for (ext, generate) in [
+        ("cs", generate_csharp as fn(&Path)),
+        ("h", generate_header as fn(&Path)),
+    ] {
+        let (a, b) = (
+            dir.path().join(format!("a.{ext}")),
+            dir.path().join(format!("b.{ext}")),
+        );
+        generate(&a);
+        generate(&b);
+        assert_eq!(
+            std::fs::read_to_string(a).unwrap(),
+            std::fs::read_to_string(b).unwrap()
+        );
+    }
+    assert_eq!(native_kt(), native_kt());
+}
+
+#[test]
+fn names_are_derived_as_the_bindings_spell_them() {
+    assert_eq!(camel("row_stride_bytes"), "rowStrideBytes");
+    assert_eq!(camel("h"), "h");
     assert_eq!(
-        std::fs::read_to_string(a).unwrap(),
-        std::fs::read_to_string(b).unwrap()
+        pascal(short_variant("SITAR_ERR_INVALID_ARGUMENT")),
+        "InvalidArgument"
     );
-    let (a, b) = (dir.path().join("a.h"), dir.path().join("b.h"));
-    generate_header(&a);
-    generate_header(&b);
-    assert_eq!(
-        std::fs::read_to_string(a).unwrap(),
-        std::fs::read_to_string(b).unwrap()
-    );
+    assert_eq!(pascal(short_variant("SITAR_OK")), "Ok");
+    assert_eq!(short_variant("SITAR_JOB_CANCELLED"), "CANCELLED");
+    // Every C entry point is named sitar_*, every declared one appears once.
+    let mut names: Vec<&str> = C_EXPORTS.iter().map(|f| f.name).collect();
+    assert!(names.iter().all(|n| n.starts_with("sitar_")));
+    names.sort_unstable();
+    names.dedup();
+    assert_eq!(names.len(), C_EXPORTS.len());
+    let mut jni: Vec<&str> = JNI_EXPORTS.iter().map(|f| f.name).collect();
+    jni.sort_unstable();
+    jni.dedup();
+    assert_eq!(jni.len(), JNI_EXPORTS.len());
 }

@@ -23,6 +23,8 @@ fn run_session(client: &Client, recording: &Path, trials: u32) -> Duration {
             trials,
             setting: "trim_mean_30".into(),
             playback: "sim".into(),
+            window_frames: None,
+            pose_relation: None,
         })
         .unwrap();
     client
@@ -86,6 +88,8 @@ fn upload_throughput(c: &mut Criterion) {
             trials: 2,
             setting: "mean".into(),
             playback: "upload".into(),
+            window_frames: None,
+            pose_relation: None,
         })
         .unwrap();
     let mut group = c.benchmark_group("server");

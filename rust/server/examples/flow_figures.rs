@@ -27,6 +27,8 @@ fn run(client: &Client, recording: &std::path::Path, trials: u32, adaptive: Opti
                 trials,
                 setting: "trim_mean_30".into(),
                 playback: "sim".into(),
+                window_frames: None,
+                pose_relation: None,
             },
             &SessionOptions {
                 adaptive_min_trials: adaptive,

@@ -125,6 +125,8 @@ fn run_session(texts: &[String], progressive: bool) -> (f64, f64, f64, u32) {
             trials: texts.len() as u32,
             setting: "trim_mean_30".into(),
             playback: "upload".into(),
+            window_frames: None,
+            pose_relation: None,
         })
         .unwrap();
     let mut polls = 0;

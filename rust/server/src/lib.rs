@@ -48,17 +48,18 @@
 //!
 //! // A session with 20-frame windows and the rotational estimate.
 //! use sitar_client::{NewSession, SessionOptions};
-//! let new = NewSession { trials: 2, setting: "median".into(), playback: "upload".into() };
-//! let options = SessionOptions {
+//! let new = NewSession {
+//!     trials: 2,
+//!     setting: "median".into(),
+//!     playback: "upload".into(),
 //!     window_frames: Some(20),
 //!     pose_relation: Some("angle_deg".into()),
-//!     ..SessionOptions::default()
 //! };
-//! let id = client.create_session_with(&new, &options)?;
+//! let id = client.create_session_with(&new, &SessionOptions::default())?;
 //! assert_eq!(client.status(&id)?.window_frames, Some(20));
 //! // A window of 1 frame is refused with a 400 that names the key.
-//! let bad = SessionOptions { window_frames: Some(1), ..SessionOptions::default() };
-//! let err = client.create_session_with(&new, &bad).unwrap_err();
+//! let bad = NewSession { window_frames: Some(1), ..new.clone() };
+//! let err = client.create_session(&bad).unwrap_err();
 //! assert_eq!(err.status(), Some(400));
 //! assert!(err.to_string().contains("window_frames"), "{err}");
 //! server.stop();

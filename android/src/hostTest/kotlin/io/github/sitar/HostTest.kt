@@ -18,15 +18,15 @@ private fun check(condition: Boolean, what: String) {
 
 private fun near(a: Double, b: Double, what: String, eps: Double = 1e-9) = check(Math.abs(a - b) <= eps, "$what: $a vs $b")
 
-private fun expectSitar(code: Int, needle: String, block: () -> Unit) {
+private fun expectSitar(status: SitarStatus, needle: String, block: () -> Unit) {
     try {
         block()
     } catch (e: SitarException) {
-        check(e.code == code, "expected code $code, got ${e.code}: ${e.message}")
+        check(e.status == status && e.code == status.code, "expected $status, got ${e.code}: ${e.message}")
         check((e.message ?: "").contains(needle), "message '${e.message}' should mention '$needle'")
         return
     }
-    throw AssertionError("expected SitarException($code) mentioning '$needle'")
+    throw AssertionError("expected SitarException($status) mentioning '$needle'")
 }
 
 private const val FRAME_NS = 33_333_333L
@@ -44,6 +44,13 @@ private fun resultsCsv(): String {
     val sb = StringBuilder("start,error\n")
     for (k in ERRORS.indices) sb.append(10L * k * FRAME_NS).append(',').append(ERRORS[k]).append('\n')
     return sb.toString()
+}
+
+/** Results JSON as the backend writes it, one window per 10-frame sub-trajectory. */
+private fun resultsJson(windowFrames: Int, relation: String, unit: String, errors: DoubleArray): String {
+    val key = if (unit == "deg") "error_deg" else "error_m"
+    val windows = errors.indices.joinToString(",") { k -> """{"start":${10L * k * FRAME_NS},"$key":${errors[k]},"pairs":3}""" }
+    return """{"version":1,"setting":"trim_mean_30","trials":3,"window_frames":$windowFrames,"pose_relation":"$relation","unit":"$unit","windows":[$windows]}"""
 }
 
 private fun record(s: SitarSession): Summary {
@@ -75,7 +82,7 @@ private fun wholeSession(tmp: File) {
     near(summary.meanDepthM, 2.0, "mean depth")
     check(s.summary() == summary, "summary again")
 
-    expectSitar(SitarException.INVALID_STATE, "") { s.markers() }
+    expectSitar(SitarStatus.INVALID_STATE, "") { s.markers() }
     check(s.results().all { it.errorM == null && it.errorClass == ErrorClass.UNKNOWN } && s.results().size == 6, "unknown before results")
     check(s.progress() == null, "no upload yet")
     check(s.errorAt(10 * FRAME_NS) == ErrorAt(ErrorClass.UNKNOWN, null), "no results yet")
@@ -120,28 +127,28 @@ private fun wholeSession(tmp: File) {
 
     s.close()
     s.close() // harmless
-    expectSitar(SitarException.INVALID_HANDLE, "handle 0") { s.summary() }
-    expectSitar(SitarException.INVALID_HANDLE, "handle 0") { s.frame(1, poseAt(1)) }
+    expectSitar(SitarStatus.INVALID_HANDLE, "handle 0") { s.summary() }
+    expectSitar(SitarStatus.INVALID_HANDLE, "handle 0") { s.frame(1, poseAt(1)) }
 }
 
 private fun errorPaths() {
-    expectSitar(SitarException.PARSE, "") { SitarSession("{") }
-    expectSitar(SitarException.PARSE, "bogus") { SitarSession("""{"bogus": 1}""") }
+    expectSitar(SitarStatus.PARSE, "") { SitarSession("{") }
+    expectSitar(SitarStatus.PARSE, "bogus") { SitarSession("""{"bogus": 1}""") }
     val s = SitarSession()
-    expectSitar(SitarException.INVALID_STATE, "start") { s.frame(FRAME_NS, poseAt(1)) }
+    expectSitar(SitarStatus.INVALID_STATE, "start") { s.frame(FRAME_NS, poseAt(1)) }
     s.start(0, poseAt(0))
-    expectSitar(SitarException.INVALID_ARGUMENT, "pose") { s.frame(FRAME_NS, Pose(Double.NaN, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0)) }
+    expectSitar(SitarStatus.INVALID_ARGUMENT, "pose") { s.frame(FRAME_NS, Pose(Double.NaN, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0)) }
     for (i in 1L..5L) s.frame(i * FRAME_NS, poseAt(i))
-    expectSitar(SitarException.INVALID_ARGUMENT, "needs") { s.depth(ShortArray(W * H - 1), W, H, W * 2, K, 0) }
-    expectSitar(SitarException.INVALID_ARGUMENT, "direct") { s.depth(ByteBuffer.allocate(W * H * 2), W, H, W * 2, K, 0) }
-    expectSitar(SitarException.INVALID_ARGUMENT, "needs") { s.depth(ByteBuffer.allocateDirect(100), W, H, W * 2, K, 0) }
-    expectSitar(SitarException.INVALID_ARGUMENT, "45") { s.depth(ShortArray(W * H), W, H, W * 2, K, 45) }
-    expectSitar(SitarException.PARSE, "line 2") { s.loadResults("start,error\n12,abc\n") }
-    expectSitar(SitarException.PANIC, "on purpose") { Native.testingPanic() }
+    expectSitar(SitarStatus.INVALID_ARGUMENT, "needs") { s.depth(ShortArray(W * H - 1), W, H, W * 2, K, 0) }
+    expectSitar(SitarStatus.INVALID_ARGUMENT, "direct") { s.depth(ByteBuffer.allocate(W * H * 2), W, H, W * 2, K, 0) }
+    expectSitar(SitarStatus.INVALID_ARGUMENT, "needs") { s.depth(ByteBuffer.allocateDirect(100), W, H, W * 2, K, 0) }
+    expectSitar(SitarStatus.INVALID_ARGUMENT, "45") { s.depth(ShortArray(W * H), W, H, W * 2, K, 45) }
+    expectSitar(SitarStatus.PARSE, "line 2") { s.loadResults("start,error\n12,abc\n") }
+    expectSitar(SitarStatus.PANIC, "on purpose") { Native.testingPanic() }
     // Still usable after the panic.
     check(s.frame(6 * FRAME_NS, poseAt(6)) == 0, "frame after a panic")
     s.close()
-    expectSitar(SitarException.INVALID_HANDLE, "session handle") { Native.sessionFree(12345) }
+    expectSitar(SitarStatus.INVALID_HANDLE, "session handle") { Native.sessionFree(12345) }
 }
 
 private fun playback(tmp: File) {
@@ -153,14 +160,14 @@ private fun playback(tmp: File) {
     check(File(path).readLines().size == 3, "3 lines in $path")
     p.close()
     p.close()
-    expectSitar(SitarException.INVALID_HANDLE, "playback handle") { p.tum() }
+    expectSitar(SitarStatus.INVALID_HANDLE, "playback handle") { p.tum() }
 }
 
 private fun upload(tmp: File) {
     val s = SitarSession()
     val rec = File(tmp, "rec.mp4")
     rec.writeText("not really an mp4")
-    expectSitar(SitarException.INVALID_ARGUMENT, "server_url") { s.upload(rec.path) }
+    expectSitar(SitarStatus.INVALID_ARGUMENT, "server_url") { s.upload(rec.path) }
     val closed = ServerSocket(0)
     val port = closed.localPort
     closed.close()
@@ -171,7 +178,7 @@ private fun upload(tmp: File) {
         Thread.sleep(20)
         p = job.progress()
     }
-    check(p.state == UploadState.FAILED && p.errorCode == SitarException.NETWORK, "upload to a closed port: $p")
+    check(p.state == UploadState.FAILED && p.errorCode == SitarStatus.NETWORK.code, "upload to a closed port: $p")
     check(job.message().contains("127.0.0.1"), job.message())
     check(s.progress() == p, "session progress is the latest job's")
     job.close()
@@ -186,6 +193,46 @@ private fun upload(tmp: File) {
     s.close()
 }
 
+private fun windowSettings(tmp: File) {
+    // angle_deg: classes from the degree thresholds (2°, 4°), markers from thresholds_deg.
+    val s = SitarSession("""{"convention":"unity","pose_relation":"angle_deg"}""")
+    record(s)
+    val degrees = doubleArrayOf(1.0, 5.0, 3.0, 0.5, 8.0, 2.5)
+    s.loadResults(resultsJson(10, "angle_deg", "deg", degrees))
+    val degClass = { e: Double -> if (e >= 4.0) ErrorClass.HIGH else if (e >= 2.0) ErrorClass.MEDIUM else ErrorClass.LOW }
+    for (k in degrees.indices) check(s.errorAt(10L * k * FRAME_NS) == ErrorAt(degClass(degrees[k]), degrees[k]), "degrees at sub $k")
+    // ≥ 4° first (subs 1, 4), then ≥ 2° (sub 2); in metres all six would pass 0.10.
+    val markers = s.markers().sortedBy { it.subtrajectory }
+    check(markers.map { it.subtrajectory } == listOf(1, 2, 4), "degree markers ${markers.map { it.subtrajectory }}")
+    check(markers.map { it.errorClass } == listOf(ErrorClass.HIGH, ErrorClass.MEDIUM, ErrorClass.HIGH), "degree marker classes")
+    check(!s.resultsUnreliable(), "a mean of 3.3° is below 8°")
+    // Results that cannot be looked up here are refused, naming both values; the old ones stay.
+    expectSitar(SitarStatus.INVALID_ARGUMENT, "window_frames 20") { s.loadResults(resultsJson(20, "angle_deg", "deg", degrees)) }
+    expectSitar(SitarStatus.INVALID_ARGUMENT, "pose_relation trans_part") { s.loadResults(resultsCsv()) }
+    check(s.errorAt(10 * FRAME_NS).errorM == 5.0, "earlier results kept")
+    // Upload options must fit the session config.
+    val rec = File(tmp, "window.mp4")
+    rec.writeText("not really an mp4")
+    expectSitar(SitarStatus.INVALID_ARGUMENT, "subtrajectory_frames 10") {
+        s.upload(rec.path, """{"server_url":"http://127.0.0.1:9","window_frames":20}""")
+    }
+    expectSitar(SitarStatus.PARSE, "angle_rad") { s.upload(rec.path, """{"server_url":"http://127.0.0.1:9","pose_relation":"angle_rad"}""") }
+    s.close()
+    expectSitar(SitarStatus.PARSE, "pose_relation") { SitarSession("""{"pose_relation":"angle_rad"}""") }
+    expectSitar(SitarStatus.PARSE, "medium_threshold_deg") { SitarSession("""{"medium_threshold_deg":"2"}""") }
+
+    // 20-frame sub-trajectories take 20-frame windows.
+    val long = SitarSession("""{"subtrajectory_frames":20}""")
+    long.start(0, poseAt(0))
+    for (i in 1L..40L) long.frame(i * FRAME_NS, poseAt(i))
+    long.stop(41 * FRAME_NS, poseAt(41))
+    val windows = """{"start":0,"error_m":0.02},{"start":${20 * FRAME_NS},"error_m":0.3}"""
+    long.loadResults("""{"window_frames":20,"windows":[$windows]}""")
+    check(long.results().map { it.errorClass } == listOf(ErrorClass.LOW, ErrorClass.HIGH), "20-frame results ${long.results()}")
+    expectSitar(SitarStatus.INVALID_ARGUMENT, "subtrajectory_frames 20") { long.loadResults("""{"window_frames":10,"windows":[$windows]}""") }
+    long.close()
+}
+
 fun main(args: Array<String>) {
     val tmp = File(args[1])
     check(SitarSession.version() == args[0], "version ${SitarSession.version()}")
@@ -193,5 +240,6 @@ fun main(args: Array<String>) {
     errorPaths()
     playback(tmp)
     upload(tmp)
+    windowSettings(tmp)
     println("PASSED $checks checks")
 }

@@ -1,11 +1,13 @@
+// Generated from rust/ffi/src/exports.rs by rust/ffi/tests/generated_bindings.rs; do not edit.
+// Regenerate: SITAR_REGENERATE=1 cargo test -p sitar-ffi --test generated_bindings
 package io.github.sitar
 
 import java.nio.ByteBuffer
 
 /**
- * The JNI entry points of `libsitar.so` (`Java_io_github_sitar_Native_*` in
- * `rust/ffi/src/jni_api.rs`). Errors arrive as [SitarException]. Structs come
- * back as flat `DoubleArray`s, decoded in `Types.kt`. Use [SitarSession].
+ * The JNI entry points of `libsitar.so` (`Java_io_github_sitar_Native_*`, declared
+ * once in `rust/ffi/src/exports.rs`). Errors arrive as [SitarException]. Structs come
+ * back as flat `DoubleArray`s whose offsets are in `Layouts.kt`. Use [SitarSession].
  */
 internal object Native {
     init {
@@ -47,6 +49,6 @@ internal object Native {
     @JvmStatic external fun uploadCancel(job: Long)
     @JvmStatic external fun uploadFree(job: Long)
 
-    /** Panics inside the library on purpose; only in builds with the `testing` feature. */
+    /** Only in builds with the `testing` feature. */
     @JvmStatic external fun testingPanic()
 }

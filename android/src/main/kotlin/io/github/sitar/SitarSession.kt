@@ -6,13 +6,13 @@ import java.nio.ByteBuffer
  * One recording session on the user's AR device: record (start, frame,
  * depth, stop), upload, then visualise results (error at a time, markers,
  * render plan). Every method throws [SitarException] on error; after
- * [close] every call throws one with code [SitarException.INVALID_HANDLE].
+ * [close] every call throws one with status [SitarStatus.INVALID_HANDLE].
  * Safe to use from several threads.
  */
 class SitarSession private constructor(handle: Long) : AutoCloseable {
     @Volatile private var handle: Long = handle
 
-    /** A new session from its JSON config (every key optional; "{}" = defaults). */
+    /** A new session from its JSON config (every key optional; "{}" = defaults; keys in `rust/core/README.md`). */
     constructor(configJson: String = "{}") : this(Native.sessionNew(configJson))
 
     /** Starts recording (frame 0). */
@@ -44,32 +44,24 @@ class SitarSession private constructor(handle: Long) : AutoCloseable {
     /** The summary of a stopped recording. */
     fun summary(): Summary = Summary.of(Native.sessionSummary(handle))
 
-    /** Loads results: legacy CSV (`start,error`) or JSON. */
+    /**
+     * Loads results: legacy CSV (`start,error`) or JSON. Results for another window length
+     * than the config's `subtrajectory_frames`, or another `pose_relation`, are refused
+     * ([SitarStatus.INVALID_ARGUMENT]).
+     */
     fun loadResults(csvOrJson: String) = Native.sessionLoadResults(handle, csvOrJson)
 
     /** Class and error at a timestamp (nearest result window within tolerance). */
-    fun errorAt(tNs: Long): ErrorAt {
-        val v = Native.sessionErrorAt(handle, tNs)
-        return ErrorAt(ErrorClass.of(v[0].toInt()), if (v[1].isNaN()) null else v[1])
-    }
+    fun errorAt(tNs: Long): ErrorAt = ErrorAt.of(Native.sessionErrorAt(handle, tNs))
 
     /** The class of sub-trajectory [k]. */
     fun subtrajectoryClass(k: Int): ErrorClass = ErrorClass.of(Native.sessionSubtrajectoryClass(handle, k))
 
     /** The markers (needs results). */
-    fun markers(): List<Marker> {
-        val v = Native.sessionMarkers(handle)
-        return (0 until v.size / Marker.STRIDE).map { Marker.at(v, it * Marker.STRIDE) }
-    }
+    fun markers(): List<Marker> = Marker.list(Native.sessionMarkers(handle))
 
     /** Every sub-trajectory's error and class, in order (all unknown before results arrive). */
-    fun results(): List<SubtrajectoryResult> {
-        val v = Native.sessionSubtrajectoryResults(handle)
-        return (0 until v.size / 3).map {
-            val e = v[3 * it]
-            SubtrajectoryResult(v[3 * it + 1].toInt(), if (e.isNaN()) null else e, ErrorClass.of(v[3 * it + 2].toInt()))
-        }
-    }
+    fun results(): List<SubtrajectoryResult> = SubtrajectoryResult.list(Native.sessionSubtrajectoryResults(handle))
 
     /** Whether the loaded results are too noisy to trust (show a warning). */
     fun resultsUnreliable(): Boolean = Native.sessionResultsUnreliable(handle)
@@ -88,7 +80,9 @@ class SitarSession private constructor(handle: Long) : AutoCloseable {
      * results are loaded into this session ([UploadJob.progress] tells).
      * [optionsJson]: `server_url` (else the config's), `trials`, `setting`,
      * `playback`, `poll_interval_ms`, `session_id` (continue that server session, e.g. a
-     * failed job's [UploadJob.serverId]: the upload resumes where the server's copy ends).
+     * failed job's [UploadJob.serverId]: the upload resumes where the server's copy ends),
+     * `window_frames` and `pose_relation` (default: the config's `subtrajectory_frames` and
+     * `pose_relation`; other values are refused).
      */
     fun upload(recordingPath: String, optionsJson: String = ""): UploadJob {
         val job = UploadJob(Native.uploadStart(handle, recordingPath, optionsJson))

@@ -9,7 +9,10 @@ data class Pose(
         /** The identity pose at the origin. */
         @JvmField val IDENTITY = Pose(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0)
 
-        internal fun at(v: DoubleArray, i: Int) = Pose(v[i], v[i + 1], v[i + 2], v[i + 3], v[i + 4], v[i + 5], v[i + 6])
+        internal fun at(v: DoubleArray, i: Int) = Pose(
+            v[i + PoseLayout.PX], v[i + PoseLayout.PY], v[i + PoseLayout.PZ],
+            v[i + PoseLayout.QX], v[i + PoseLayout.QY], v[i + PoseLayout.QZ], v[i + PoseLayout.QW]
+        )
     }
 }
 
@@ -31,29 +34,66 @@ data class Summary(
     val durationS: Double, val lengthM: Double, val meanDepthM: Double
 ) {
     internal companion object {
-        fun of(v: DoubleArray) = Summary(v[0].toInt(), v[1].toInt(), v[2].toInt(), v[3].toInt(), v[4], v[5], v[6])
+        fun of(v: DoubleArray) = Summary(
+            v[SummaryLayout.FRAMES].toInt(), v[SummaryLayout.MIDPOINTS].toInt(),
+            v[SummaryLayout.SUBTRAJECTORIES].toInt(), v[SummaryLayout.DEPTH_SAMPLES].toInt(),
+            v[SummaryLayout.DURATION_S], v[SummaryLayout.LENGTH_M], v[SummaryLayout.MEAN_DEPTH_M]
+        )
     }
 }
 
-/** The class and error (metres; null when no result window is near) at a timestamp. */
-data class ErrorAt(val errorClass: ErrorClass, val errorM: Double?)
+/**
+ * The class and error at a timestamp; the error is in the results' unit (metres, or degrees
+ * with `pose_relation` `angle_deg`), null when no result window is near.
+ */
+data class ErrorAt(val errorClass: ErrorClass, val errorM: Double?) {
+    internal companion object {
+        fun of(v: DoubleArray): ErrorAt {
+            val e = v[ErrorAtLayout.ERROR_M]
+            return ErrorAt(ErrorClass.of(v[ErrorAtLayout.ERROR_CLASS].toInt()), if (e.isNaN()) null else e)
+        }
+    }
+}
 
-/** A marker: position, warning-sign rotation (local +Y along the normal), surface normal. */
+/**
+ * A marker: position, warning-sign rotation (local +Y along the normal), surface normal; the
+ * error is in the results' unit (metres, or degrees for `angle_deg`).
+ */
 data class Marker(
     val position: Vec3, val rotation: Quat, val normal: Vec3,
     val errorClass: ErrorClass, val subtrajectory: Int, val errorM: Double
 ) {
     internal companion object {
-        const val STRIDE = 13
         fun at(v: DoubleArray, i: Int) = Marker(
-            Vec3(v[i], v[i + 1], v[i + 2]), Quat(v[i + 3], v[i + 4], v[i + 5], v[i + 6]),
-            Vec3(v[i + 7], v[i + 8], v[i + 9]), ErrorClass.of(v[i + 10].toInt()), v[i + 11].toInt(), v[i + 12]
+            Vec3(v[i + MarkerLayout.PX], v[i + MarkerLayout.PY], v[i + MarkerLayout.PZ]),
+            Quat(v[i + MarkerLayout.QX], v[i + MarkerLayout.QY], v[i + MarkerLayout.QZ], v[i + MarkerLayout.QW]),
+            Vec3(v[i + MarkerLayout.NX], v[i + MarkerLayout.NY], v[i + MarkerLayout.NZ]),
+            ErrorClass.of(v[i + MarkerLayout.ERROR_CLASS].toInt()), v[i + MarkerLayout.SUBTRAJECTORY].toInt(),
+            v[i + MarkerLayout.ERROR_M]
         )
+
+        fun list(v: DoubleArray) = (0 until v.size / MarkerLayout.SIZE).map { at(v, it * MarkerLayout.SIZE) }
     }
 }
 
-/** The result of one sub-trajectory: error (metres; null when no result window is near) and class. */
-data class SubtrajectoryResult(val subtrajectory: Int, val errorM: Double?, val errorClass: ErrorClass)
+/**
+ * The result of one sub-trajectory: error (in the results' unit; null when no result window is
+ * near) and class.
+ */
+data class SubtrajectoryResult(val subtrajectory: Int, val errorM: Double?, val errorClass: ErrorClass) {
+    internal companion object {
+        fun at(v: DoubleArray, i: Int): SubtrajectoryResult {
+            val e = v[i + SubtrajectoryResultLayout.ERROR_M]
+            return SubtrajectoryResult(
+                v[i + SubtrajectoryResultLayout.SUBTRAJECTORY].toInt(), if (e.isNaN()) null else e,
+                ErrorClass.of(v[i + SubtrajectoryResultLayout.ERROR_CLASS].toInt())
+            )
+        }
+
+        fun list(v: DoubleArray) =
+            (0 until v.size / SubtrajectoryResultLayout.SIZE).map { at(v, it * SubtrajectoryResultLayout.SIZE) }
+    }
+}
 
 /** A 3-vector (metres). */
 data class Vec3(val x: Double, val y: Double, val z: Double)
@@ -76,34 +116,48 @@ data class RenderPlan(
     val start: Pose?, val stop: Pose?
 ) {
     internal companion object {
-        /** Decodes the layout of `flatten_render_plan` in `jni_api.rs`. */
+        /** Decodes `Native.sessionRenderPlan`: `RenderPlanLayout` counts, the items, the present ends. */
         fun of(v: DoubleArray): RenderPlan {
-            val ns = v[0].toInt()
-            val nj = v[1].toInt()
-            val nf = v[2].toInt()
-            var i = 5
-            val segments = ArrayList<Segment>(ns)
-            for (n in 0 until ns) {
-                segments.add(Segment(Vec3(v[i], v[i + 1], v[i + 2]), Quat(v[i + 3], v[i + 4], v[i + 5], v[i + 6]), v[i + 7], v[i + 8].toInt(), ErrorClass.of(v[i + 9].toInt())))
-                i += 10
+            var i = RenderPlanLayout.SIZE
+            val segments = ArrayList<Segment>()
+            for (n in 0 until v[RenderPlanLayout.SEGMENTS].toInt()) {
+                segments.add(
+                    Segment(
+                        Vec3(v[i + SegmentLayout.CX], v[i + SegmentLayout.CY], v[i + SegmentLayout.CZ]),
+                        Quat(v[i + SegmentLayout.QX], v[i + SegmentLayout.QY], v[i + SegmentLayout.QZ], v[i + SegmentLayout.QW]),
+                        v[i + SegmentLayout.LENGTH], v[i + SegmentLayout.SUBTRAJECTORY].toInt(),
+                        ErrorClass.of(v[i + SegmentLayout.ERROR_CLASS].toInt())
+                    )
+                )
+                i += SegmentLayout.SIZE
             }
-            val joints = ArrayList<Joint>(nj)
-            for (n in 0 until nj) {
-                joints.add(Joint(Vec3(v[i], v[i + 1], v[i + 2]), v[i + 3].toInt(), ErrorClass.of(v[i + 4].toInt())))
-                i += 5
+            val joints = ArrayList<Joint>()
+            for (n in 0 until v[RenderPlanLayout.JOINTS].toInt()) {
+                joints.add(
+                    Joint(
+                        Vec3(v[i + JointLayout.PX], v[i + JointLayout.PY], v[i + JointLayout.PZ]),
+                        v[i + JointLayout.SUBTRAJECTORY].toInt(), ErrorClass.of(v[i + JointLayout.ERROR_CLASS].toInt())
+                    )
+                )
+                i += JointLayout.SIZE
             }
-            val frustums = ArrayList<Frustum>(nf)
-            for (n in 0 until nf) {
-                frustums.add(Frustum(Pose.at(v, i), v[i + 7].toInt(), ErrorClass.of(v[i + 8].toInt())))
-                i += 9
+            val frustums = ArrayList<Frustum>()
+            for (n in 0 until v[RenderPlanLayout.FRUSTUMS].toInt()) {
+                frustums.add(
+                    Frustum(
+                        Pose.at(v, i + FrustumLayout.POSE), v[i + FrustumLayout.SUBTRAJECTORY].toInt(),
+                        ErrorClass.of(v[i + FrustumLayout.ERROR_CLASS].toInt())
+                    )
+                )
+                i += FrustumLayout.SIZE
             }
             var start: Pose? = null
             var stop: Pose? = null
-            if (v[3] != 0.0) {
+            if (v[RenderPlanLayout.HAS_START] != 0.0) {
                 start = Pose.at(v, i)
-                i += 7
+                i += PoseLayout.SIZE
             }
-            if (v[4] != 0.0) {
+            if (v[RenderPlanLayout.HAS_STOP] != 0.0) {
                 stop = Pose.at(v, i)
             }
             return RenderPlan(segments, joints, frustums, start, stop)
@@ -111,17 +165,8 @@ data class RenderPlan(
     }
 }
 
-/** States of a background upload (`SitarJobState`). */
-enum class UploadState(val code: Int) {
-    STARTING(0), UPLOADING(1), PLAYING(2), ESTIMATING(3), DOWNLOADING(4), DONE(5), FAILED(6), CANCELLED(7);
-
-    /** Whether the job will not change any more. */
-    val finished: Boolean get() = code >= 5
-
-    companion object {
-        @JvmStatic fun of(code: Int): UploadState = values().firstOrNull { it.code == code } ?: FAILED
-    }
-}
+/** Whether the job will not change any more (`UploadState` is generated in `SitarStatus.kt`). */
+val UploadState.finished: Boolean get() = code >= UploadState.DONE.code
 
 /** A snapshot of an upload job. */
 data class UploadProgress(
@@ -132,9 +177,15 @@ data class UploadProgress(
     val resultsTrials: Int
 ) {
     internal companion object {
-        fun of(v: DoubleArray) = UploadProgress(
-            UploadState.of(v[0].toInt()), v[1].toInt(), v[2], if (v[3] < 0) null else v[3],
-            v[4].toLong(), v[5].toLong(), v[6].toInt(), v[7].toInt(), v[8].toInt(), v[9].toInt()
-        )
+        fun of(v: DoubleArray): UploadProgress {
+            val eta = v[UploadProgressLayout.ETA_S]
+            return UploadProgress(
+                UploadState.of(v[UploadProgressLayout.STATE].toInt()) ?: UploadState.FAILED,
+                v[UploadProgressLayout.ERROR_CODE].toInt(), v[UploadProgressLayout.PROGRESS], if (eta < 0) null else eta,
+                v[UploadProgressLayout.BYTES_SENT].toLong(), v[UploadProgressLayout.BYTES_TOTAL].toLong(),
+                v[UploadProgressLayout.TRIALS_DONE].toInt(), v[UploadProgressLayout.TRIALS_TOTAL].toInt(),
+                v[UploadProgressLayout.RESULTS_REVISION].toInt(), v[UploadProgressLayout.RESULTS_TRIALS].toInt()
+            )
+        }
     }
 }

@@ -1,0 +1,596 @@
+//! A background upload job: create (or continue) a server session, send the recording, poll
+//! while the playback devices work, and hand every published result (progressive, then
+//! final) to the caller. The app polls a snapshot and may cancel.
+
+use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
+use std::time::Duration;
+
+use crate::{Client, Error, NewSession, check_session_id};
+
+/// What an [`UploadJob`] does.
+#[derive(Debug, Clone, PartialEq)]
+pub struct JobOptions {
+    /// The server session to create (trials, statistic, playback, window settings). Ignored
+    /// when [`JobOptions::session_id`] is set: that session's own settings hold.
+    pub session: NewSession,
+    /// An existing server session to continue (e.g. a failed job's
+    /// [`UploadJob::server_id`]): no new session is created, its recording upload resumes
+    /// from the bytes the server kept, or is skipped once the server has it all.
+    pub session_id: Option<String>,
+    /// How often the server's status is asked for while it works (at least 10 ms).
+    pub poll_interval: Duration,
+}
+
+impl JobOptions {
+    /// A job that creates `session`, polling every 500 ms.
+    pub fn new(session: NewSession) -> Self {
+        JobOptions {
+            session,
+            session_id: None,
+            poll_interval: Duration::from_millis(500),
+        }
+    }
+
+    /// Checks what can be checked before anything is sent.
+    fn validate(&self) -> Result<(), Error> {
+        match &self.session_id {
+            Some(id) => check_session_id(id).map(drop).map_err(|_| {
+                Error::InvalidArgument(format!(
+                    "session_id {id:?} is not a server-made id ([A-Za-z0-9_-], 1 to 64 bytes)"
+                ))
+            }),
+            None if self.session.trials < 2 => Err(Error::InvalidArgument(format!(
+                "trials must be at least 2 (an estimate compares pairs of trials), not {}",
+                self.session.trials
+            ))),
+            None => Ok(()),
+        }
+    }
+}
+
+/// Where a job is; the order is the life cycle (`Done`, `Failed` and `Cancelled` are final).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default)]
+pub enum JobState {
+    /// Creating (or looking up) the server session.
+    #[default]
+    Starting,
+    /// Sending the recording.
+    Uploading,
+    /// Playback trials running on the server.
+    Playing,
+    /// The server computes the final estimate.
+    Estimating,
+    /// Fetching the final results.
+    Downloading,
+    /// The final results were delivered.
+    Done,
+    /// Failed: [`JobProgress::error`] says why.
+    Failed,
+    /// Cancelled by [`UploadJob::cancel`] (or by dropping the job).
+    Cancelled,
+}
+
+impl JobState {
+    /// Whether the job will not change any more.
+    pub fn is_finished(self) -> bool {
+        self >= JobState::Done
+    }
+}
+
+/// What a results sink may fail with (any error: the job keeps it as [`Error::Results`]).
+pub type SinkError = Box<dyn std::error::Error + Send + Sync>;
+
+/// A snapshot of a job.
+#[derive(Debug, Clone, Default)]
+pub struct JobProgress {
+    /// Where the job is.
+    pub state: JobState,
+    /// Overall progress 0 … 1 (sending the recording is the first [`UPLOAD_SHARE`]); it never
+    /// goes back, also when a resumed upload restarts below an earlier byte count.
+    pub progress: f64,
+    /// Seconds until done as the server estimates them, when it does.
+    pub eta_s: Option<f64>,
+    /// Recording bytes sent so far (a resume restarts at what the server kept).
+    pub bytes_sent: u64,
+    /// Recording size in bytes.
+    pub bytes_total: u64,
+    /// Playback trials finished on the server.
+    pub trials_done: u32,
+    /// Playback trials planned.
+    pub trials_total: u32,
+    /// How many times results were delivered to the sink (progressive and final).
+    pub results_revision: u32,
+    /// Trials behind the results delivered last (0 = none yet).
+    pub results_trials: u32,
+    /// Why the job failed, once it has: a client error, [`Error::SessionFailed`],
+    /// [`Error::Results`] (the sink refused the final results) or [`Error::Panicked`].
+    pub error: Option<Arc<Error>>,
+}
+
+/// Share of [`JobProgress::progress`] given to sending the recording; the server's work is
+/// the rest.
+pub const UPLOAD_SHARE: f64 = 0.2;
+
+/// The job's state, shared by the handle and the worker thread.
+pub(crate) struct Shared {
+    status: Mutex<Status>,
+    pub(crate) cancelled: AtomicBool,
+}
+
+struct Status {
+    progress: JobProgress,
+    server_id: Option<String>,
+}
+
+impl Shared {
+    fn lock(&self) -> MutexGuard<'_, Status> {
+        self.status.lock().unwrap_or_else(PoisonError::into_inner)
+    }
+
+    /// Applies `f` to the progress unless the job already finished (e.g. was cancelled).
+    pub(crate) fn update(&self, f: impl FnOnce(&mut JobProgress)) {
+        let mut s = self.lock();
+        if !s.progress.state.is_finished() {
+            f(&mut s.progress);
+        }
+    }
+
+    pub(crate) fn set_state(&self, state: JobState) {
+        self.update(|p| p.state = state);
+    }
+
+    pub(crate) fn set_server_id(&self, id: &str) {
+        self.lock().server_id = Some(id.to_owned());
+    }
+
+    pub(crate) fn is_cancelled(&self) -> bool {
+        self.cancelled.load(Ordering::Acquire)
+    }
+
+    /// Hands `text` to `sink` unless the job finished; the status lock is held throughout,
+    /// so a concurrent cancel either wins entirely (nothing delivered) or comes after.
+    /// `done` finishes the job with these results. Returns whether they were delivered.
+    pub(crate) fn deliver(
+        &self,
+        sink: &mut dyn FnMut(&str) -> Result<(), SinkError>,
+        text: &str,
+        trials: u32,
+        done: bool,
+    ) -> Result<bool, SinkError> {
+        let mut s = self.lock();
+        if s.progress.state.is_finished() {
+            return Ok(false);
+        }
+        sink(text)?;
+        let p = &mut s.progress;
+        p.results_revision += 1;
+        p.results_trials = trials;
+        if done {
+            p.state = JobState::Done;
+            p.progress = 1.0;
+            p.eta_s = Some(0.0);
+        }
+        Ok(true)
+    }
+
+    fn fail(&self, error: Error) {
+        self.update(|p| {
+            p.state = JobState::Failed;
+            p.error = Some(Arc::new(error));
+        });
+    }
+}
+
+/// A running (or finished) upload job; dropping it cancels it.
+///
+/// ```no_run
+/// use sitar_client::{Client, JobOptions, NewSession, UploadJob};
+///
+/// # fn show(_: &str) {}
+/// let client = Client::new("http://127.0.0.1:8000")?;
+/// let options = JobOptions::new(NewSession {
+///     trials: 5,
+///     setting: "trim_mean_30".into(),
+///     playback: "sim".into(),
+///     window_frames: None,
+///     pose_relation: None,
+/// });
+/// // The sink gets every published result: progressive ones, then the final one.
+/// let job = UploadJob::start(client, "walk.mp4".as_ref(), options, |results: &str| {
+///     show(results);
+///     Ok::<(), std::convert::Infallible>(())
+/// })?;
+/// while !job.progress().state.is_finished() {
+///     std::thread::sleep(std::time::Duration::from_millis(200));
+/// }
+/// # Ok::<(), sitar_client::Error>(())
+/// ```
+pub struct UploadJob {
+    shared: Arc<Shared>,
+}
+
+impl UploadJob {
+    /// Starts the job on its own thread: creates the server session (or continues
+    /// `options.session_id`), sends `recording` (resumably; a cancel cuts the transfer off
+    /// within one read buffer), polls every `options.poll_interval`, asks for the estimate
+    /// once all trials of an `upload` session arrived, and calls `sink` with every results
+    /// JSON the server publishes (progressive ones when their trial count grows, the final
+    /// one last; `results.csv` if the JSON cannot be had). A sink error on progressive
+    /// results is ignored (the final results decide); on the final results it fails the job.
+    ///
+    /// Fails at once only for what is wrong before anything is sent: `trials` below 2, a
+    /// `session_id` that is not server-made, or a thread that cannot be started.
+    pub fn start<F, E>(
+        client: Client,
+        recording: &Path,
+        options: JobOptions,
+        mut sink: F,
+    ) -> Result<Self, Error>
+    where
+        F: FnMut(&str) -> Result<(), E> + Send + 'static,
+        E: Into<SinkError>,
+    {
+        options.validate()?;
+        let shared = Arc::new(Shared {
+            status: Mutex::new(Status {
+                progress: JobProgress {
+                    trials_total: options.session.trials,
+                    ..JobProgress::default()
+                },
+                server_id: None,
+            }),
+            cancelled: AtomicBool::new(false),
+        });
+        let worker = Arc::clone(&shared);
+        let recording: PathBuf = recording.to_path_buf();
+        let mut sink = move |text: &str| sink(text).map_err(Into::into);
+        std::thread::Builder::new()
+            .name("sitar-upload".into())
+            .spawn(move || {
+                let outcome = catch_unwind(AssertUnwindSafe(|| {
+                    crate::job_run::run(&worker, &client, &recording, &options, &mut sink)
+                }));
+                match outcome {
+                    Ok(Ok(())) => {}
+                    Ok(Err(e)) => worker.fail(e),
+                    Err(payload) => worker.fail(Error::Panicked(panic_message(&*payload))),
+                }
+            })
+            .map_err(Error::Thread)?;
+        Ok(UploadJob { shared })
+    }
+
+    /// A snapshot (never blocks on the network).
+    pub fn progress(&self) -> JobProgress {
+        self.shared.lock().progress.clone()
+    }
+
+    /// The server's session id, once known.
+    pub fn server_id(&self) -> Option<String> {
+        self.shared.lock().server_id.clone()
+    }
+
+    /// Cancels the job: its state is [`JobState::Cancelled`] at once (unless it had already
+    /// finished), a transfer in flight stops within one read buffer, and no results are
+    /// delivered afterwards.
+    pub fn cancel(&self) {
+        self.shared.cancelled.store(true, Ordering::Release);
+        self.shared.set_state(JobState::Cancelled);
+    }
+}
+
+impl Drop for UploadJob {
+    fn drop(&mut self) {
+        self.shared.cancelled.store(true, Ordering::Release);
+        self.shared.update(|p| p.state = JobState::Cancelled);
+    }
+}
+
+fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
+    if let Some(s) = payload.downcast_ref::<&str>() {
+        (*s).to_owned()
+    } else if let Some(s) = payload.downcast_ref::<String>() {
+        s.clone()
+    } else {
+        "panic with a non-string payload".to_owned()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::test_server::{Reply, serve};
+    use std::time::Instant;
+
+    #[derive(Debug, thiserror::Error)]
+    #[error("sink refused: {0}")]
+    struct Refused(String);
+
+    fn options(window: Option<u32>, relation: Option<&str>) -> JobOptions {
+        JobOptions {
+            poll_interval: Duration::from_millis(10),
+            ..JobOptions::new(NewSession {
+                trials: 3,
+                setting: "median".into(),
+                playback: "sim".into(),
+                window_frames: window,
+                pose_relation: relation.map(str::to_owned),
+            })
+        }
+    }
+
+    fn recording(dir: &tempfile::TempDir) -> PathBuf {
+        let path = dir.path().join("rec.mp4");
+        std::fs::write(&path, b"0123456789").unwrap();
+        path
+    }
+
+    fn client(base: &str) -> Client {
+        Client::new(base)
+            .unwrap()
+            .with_retries(0, Duration::from_millis(10))
+    }
+
+    /// Polls until the job finished (10 s at most).
+    fn finished(job: &UploadJob) -> JobProgress {
+        let deadline = Instant::now() + Duration::from_secs(10);
+        loop {
+            let p = job.progress();
+            if p.state.is_finished() || Instant::now() > deadline {
+                return p;
+            }
+            std::thread::sleep(Duration::from_millis(5));
+        }
+    }
+
+    type Collected = Arc<Mutex<Vec<String>>>;
+
+    /// A collecting sink and what it collected.
+    fn collector() -> (
+        Collected,
+        impl FnMut(&str) -> Result<(), Refused> + Send + 'static,
+    ) {
+        let got = Arc::new(Mutex::new(Vec::new()));
+        let log = Arc::clone(&got);
+        (got, move |text: &str| {
+            log.lock().unwrap().push(text.to_owned());
+            Ok(())
+        })
+    }
+
+    const PLAYING: &str = r#"{"id":"s1","state":"playing","progress":0.5,"eta_s":2.0,"trials_done":2,"trials_total":3,"error":null,"results_trials":2}"#;
+    const DONE: &str = r#"{"id":"s1","state":"done","progress":1.0,"eta_s":0.0,"trials_done":3,"trials_total":3,"error":null,"results_trials":3}"#;
+
+    #[test]
+    fn a_job_creates_uploads_and_delivers_progressive_then_final_results() {
+        let (base, seen) = serve(vec![
+            Reply::Answer(201, r#"{"id":"s1"}"#),
+            Reply::Offset(0),
+            Reply::Answer(202, "{}"),
+            Reply::Answer(200, PLAYING),
+            Reply::Answer(200, "progressive, 2 trials"),
+            Reply::Answer(200, DONE),
+            Reply::Answer(200, "final, 3 trials"),
+            Reply::Answer(200, DONE),
+        ]);
+        let dir = tempfile::tempdir().unwrap();
+        let (got, sink) = collector();
+        let job = UploadJob::start(
+            client(&base),
+            &recording(&dir),
+            options(Some(20), Some("angle_deg")),
+            sink,
+        )
+        .unwrap();
+        let p = finished(&job);
+        assert_eq!(p.state, JobState::Done, "{:?}", p.error);
+        assert_eq!((p.results_revision, p.results_trials), (2, 3));
+        assert_eq!((p.bytes_sent, p.bytes_total), (10, 10));
+        assert_eq!((p.trials_done, p.trials_total, p.progress), (3, 3, 1.0));
+        assert_eq!(job.server_id().as_deref(), Some("s1"));
+        assert_eq!(
+            *got.lock().unwrap(),
+            ["progressive, 2 trials", "final, 3 trials"]
+        );
+        let seen = seen.lock().unwrap();
+        let paths: Vec<String> = seen
+            .iter()
+            .map(|s| format!("{} {}", s.method, s.path))
+            .collect();
+        assert_eq!(
+            paths,
+            [
+                "POST /v1/sessions",
+                "HEAD /v1/sessions/s1/recording",
+                "PUT /v1/sessions/s1/recording",
+                "GET /v1/sessions/s1",
+                "GET /v1/sessions/s1/results.json",
+                "GET /v1/sessions/s1",
+                "GET /v1/sessions/s1/results.json",
+                "GET /v1/sessions/s1",
+            ]
+        );
+        // The window settings travel with the session request.
+        let body: serde_json::Value = serde_json::from_slice(&seen[0].body).unwrap();
+        assert_eq!(
+            body,
+            serde_json::json!({"trials":3,"setting":"median","playback":"sim",
+                               "window_frames":20,"pose_relation":"angle_deg"})
+        );
+        assert_eq!(seen[2].body, b"0123456789");
+    }
+
+    #[test]
+    fn unset_window_settings_are_not_sent() {
+        let (base, seen) = serve(vec![Reply::Answer(500, "{}")]);
+        let dir = tempfile::tempdir().unwrap();
+        let job = UploadJob::start(
+            client(&base),
+            &recording(&dir),
+            options(None, None),
+            |_: &str| Ok::<(), Refused>(()),
+        )
+        .unwrap();
+        let p = finished(&job);
+        assert_eq!(p.state, JobState::Failed);
+        assert!(matches!(
+            p.error.as_deref(),
+            Some(Error::Server { status: 500, .. })
+        ));
+        let body: serde_json::Value =
+            serde_json::from_slice(&seen.lock().unwrap()[0].body).unwrap();
+        assert_eq!(
+            body,
+            serde_json::json!({"trials":3,"setting":"median","playback":"sim"})
+        );
+    }
+
+    #[test]
+    fn a_continued_upload_session_skips_the_sent_recording_and_asks_for_the_estimate() {
+        let (base, seen) = serve(vec![
+            Reply::Answer(
+                200,
+                r#"{"id":"s2","state":"uploaded","progress":0.0,"eta_s":null,"trials_done":0,"trials_total":2,"error":null,"playback":"upload"}"#,
+            ),
+            Reply::Answer(
+                200,
+                r#"{"id":"s2","state":"playing","progress":0.9,"eta_s":null,"trials_done":2,"trials_total":2,"error":null}"#,
+            ),
+            Reply::Answer(202, "{}"),
+            Reply::Answer(
+                200,
+                r#"{"id":"s2","state":"done","progress":1.0,"eta_s":0.0,"trials_done":2,"trials_total":2,"error":null,"results_trials":2}"#,
+            ),
+            Reply::Answer(200, "final"),
+            Reply::Answer(
+                200,
+                r#"{"id":"s2","state":"done","progress":1.0,"eta_s":0.0,"trials_done":2,"trials_total":2,"error":null,"results_trials":2}"#,
+            ),
+        ]);
+        let dir = tempfile::tempdir().unwrap();
+        let (got, sink) = collector();
+        let mut o = options(None, None);
+        o.session_id = Some("s2".into());
+        let job = UploadJob::start(client(&base), &recording(&dir), o, sink).unwrap();
+        let p = finished(&job);
+        assert_eq!(p.state, JobState::Done, "{:?}", p.error);
+        assert_eq!((p.bytes_sent, p.trials_total), (10, 2));
+        assert_eq!(*got.lock().unwrap(), ["final"]);
+        let seen = seen.lock().unwrap();
+        assert_eq!(seen[2].method, "POST");
+        assert_eq!(seen[2].path, "/v1/sessions/s2/estimate");
+        assert!(seen.iter().all(|s| s.method != "PUT" && s.method != "HEAD"));
+    }
+
+    /// Runs a job against a server that creates `s1`, takes the recording and then gives
+    /// `after`, and returns the finished job's snapshot.
+    fn failed_with(
+        after: &[Reply],
+        sink: impl FnMut(&str) -> Result<(), Refused> + Send + 'static,
+    ) -> JobProgress {
+        let replies = [
+            Reply::Answer(201, r#"{"id":"s1"}"#),
+            Reply::Offset(0),
+            Reply::Answer(202, "{}"),
+        ];
+        let (base, _) = serve(replies.iter().chain(after).cloned().collect());
+        let dir = tempfile::tempdir().unwrap();
+        let job =
+            UploadJob::start(client(&base), &recording(&dir), options(None, None), sink).unwrap();
+        let p = finished(&job);
+        assert_eq!(p.state, JobState::Failed, "{p:?}");
+        p
+    }
+
+    #[test]
+    fn failures_say_why_a_refused_final_result_a_failed_session_and_a_panic() {
+        let done = [
+            Reply::Answer(200, DONE),
+            Reply::Answer(200, "final"),
+            Reply::Answer(200, DONE),
+        ];
+        // The sink refuses the final results.
+        let p = failed_with(&done, |t: &str| Err(Refused(t.to_owned())));
+        assert_eq!(p.results_revision, 0);
+        assert_eq!(p.error.as_ref().unwrap().to_string(), "sink refused: final");
+        assert!(matches!(p.error.as_deref(), Some(Error::Results(e)) if e.is::<Refused>()));
+
+        // The server failed the session.
+        let failed = [Reply::Answer(
+            200,
+            r#"{"id":"s1","state":"failed","progress":0.3,"eta_s":null,"trials_done":1,"trials_total":3,"error":"adb: no device"}"#,
+        )];
+        let p = failed_with(&failed, |_: &str| Ok(()));
+        assert_eq!(
+            p.error.as_ref().unwrap().to_string(),
+            "the server failed session s1: adb: no device"
+        );
+
+        // A panic in the sink fails the job instead of leaving it running forever.
+        let p = failed_with(&done, |_: &str| panic!("sink broke"));
+        assert!(matches!(p.error.as_deref(), Some(Error::Panicked(m)) if m == "sink broke"));
+    }
+
+    #[test]
+    fn a_cancel_is_at_once_and_nothing_is_delivered_after_it() {
+        let (base, _) = serve(vec![Reply::Hang, Reply::Hang]);
+        let dir = tempfile::tempdir().unwrap();
+        let (got, sink) = collector();
+        let job =
+            UploadJob::start(client(&base), &recording(&dir), options(None, None), sink).unwrap();
+        job.cancel();
+        assert_eq!(job.progress().state, JobState::Cancelled);
+        std::thread::sleep(Duration::from_millis(100));
+        assert_eq!(job.progress().state, JobState::Cancelled);
+        assert!(got.lock().unwrap().is_empty());
+        // Dropping a running job cancels it too.
+        let shared = {
+            let job = UploadJob::start(
+                client(&base),
+                &recording(&dir),
+                options(None, None),
+                |_: &str| Ok::<(), Refused>(()),
+            )
+            .unwrap();
+            Arc::clone(&job.shared)
+        };
+        assert!(shared.is_cancelled());
+        assert_eq!(shared.lock().progress.state, JobState::Cancelled);
+    }
+
+    #[test]
+    fn bad_options_are_refused_before_anything_is_sent() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut o = options(None, None);
+        o.session.trials = 1;
+        let err = UploadJob::start(
+            client("http://127.0.0.1:9"),
+            &recording(&dir),
+            o,
+            |_: &str| Ok::<(), Refused>(()),
+        )
+        .err()
+        .unwrap();
+        assert!(
+            err.to_string().contains("trials must be at least 2"),
+            "{err}"
+        );
+        let mut o = options(None, None);
+        o.session_id = Some("../x".into());
+        let err = UploadJob::start(
+            client("http://127.0.0.1:9"),
+            &recording(&dir),
+            o,
+            |_: &str| Ok::<(), Refused>(()),
+        )
+        .err()
+        .unwrap();
+        assert!(
+            matches!(&err, Error::InvalidArgument(m) if m.contains("session_id")),
+            "{err}"
+        );
+    }
+}

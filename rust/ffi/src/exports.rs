@@ -1,0 +1,191 @@
+//! Every export of `libsitar.so`, declared once (the syntax: [`crate::declare`]). Each
+//! line makes the C entry point `sitar_*` (header `include/sitar.h`, C#
+//! `NativeMethods.g.cs`) and/or the JNI entry point `Java_io_github_sitar_Native_*`
+//! (`Native.kt`) around the safe function of the same name in `bridge.rs`.
+
+// The C functions are called from C and C#, where `unsafe fn` means nothing; each checks
+// its pointers for NULL (`c_api.rs`) and documents what else it needs.
+#![allow(clippy::not_unsafe_ptr_arg_deref)]
+
+use std::ffi::c_char;
+
+use jni::objects::{JByteBuffer, JClass, JShortArray, JString};
+use jni::sys::{jdouble, jint, jlong};
+use jni::EnvUnowned;
+
+use crate::bridge::{PlanEnds, RenderPlanC, SitarErrorAt};
+use crate::registry::SitarHandle;
+use crate::types::{
+    SitarFrustum, SitarIntrinsics, SitarJobProgress, SitarJoint, SitarMarker, SitarPose,
+    SitarSegment, SitarSubtrajectoryResult, SitarSummary,
+};
+
+crate::declare::exports! {
+    /// The library version as a static NUL-terminated string (never freed).
+    fn version() -> &'static std::ffi::CStr
+        => c sitar_version(static) jni version;
+
+    /// Creates a session from a JSON config (every key optional; "" = defaults).
+    fn session_new(config_json: &str) -> SitarHandle
+        => c sitar_session_new(out: SitarHandle) jni sessionNew;
+
+    /// Frees a session; any later use of the handle is `SITAR_ERR_INVALID_HANDLE`.
+    fn session_free(h: SitarHandle)
+        => c sitar_session_free() jni sessionFree;
+
+    /// Starts recording at `t_ns` with `pose` (frame 0).
+    fn session_start(h: SitarHandle, t_ns: i64, pose: &SitarPose)
+        => c sitar_session_start() jni sessionStart;
+
+    /// One camera frame. `*out_flags`: 1 = midpoint (give depth), 2 = endpoint.
+    /// Allocation-free on non-logging frames.
+    fn session_frame(h: SitarHandle, t_ns: i64, pose: &SitarPose) -> u32
+        => c sitar_session_frame(out_flags: u32) jni sessionFrame;
+
+    /// The depth image (16-bit millimetres, sensor orientation) for the last
+    /// midpoint. `depth_mm` must hold `(height-1)*row_stride_bytes + width*2` bytes.
+    fn session_depth(h: SitarHandle, depth_mm: DepthPointer, k: &SitarIntrinsics,
+        display_rotation: i32)
+        => c sitar_session_depth();
+
+    /// The depth image from a direct `ByteBuffer` (ARCore's `Image.planes[0].buffer`).
+    fn session_depth(h: SitarHandle, buffer: DirectBuffer, k: &SitarIntrinsics,
+        display_rotation: i32)
+        => jni sessionDepthBuffer;
+
+    /// The depth image from a `ShortArray` (row stride in bytes).
+    fn session_depth(h: SitarHandle, data: ShortArray, k: &SitarIntrinsics,
+        display_rotation: i32)
+        => jni sessionDepthArray;
+
+    /// Stops recording and writes the summary.
+    fn session_stop(h: SitarHandle, t_ns: i64, pose: &SitarPose) -> SitarSummary
+        => c sitar_session_stop(out: SitarSummary) jni sessionStop;
+
+    /// The summary of a stopped recording (`SITAR_ERR_INVALID_STATE` before stop).
+    fn session_summary(h: SitarHandle) -> SitarSummary
+        => c sitar_session_summary(out: SitarSummary) jni sessionSummary;
+
+    /// Loads results: legacy CSV (`start,error`) or JSON, autodetected. Results for
+    /// another window length than `subtrajectory_frames`, or another `pose_relation`
+    /// than the config's, are refused (`SITAR_ERR_INVALID_ARGUMENT`).
+    fn session_load_results(h: SitarHandle, csv_or_json: &str)
+        => c sitar_session_load_results() jni sessionLoadResults;
+
+    /// The error class at `t_ns` (0 unknown, 1 low, 2 medium, 3 high) and the
+    /// error in the results' unit, metres or degrees (NaN when unknown).
+    fn session_error_at(h: SitarHandle, t_ns: i64) -> SitarErrorAt
+        => c sitar_session_error_at(out_class: i32, out_error_m: f64) jni sessionErrorAt;
+
+    /// The markers (array-output convention; needs results loaded).
+    fn session_markers(h: SitarHandle) -> Vec<SitarMarker>
+        => c sitar_session_markers(items: SitarMarker) jni sessionMarkers;
+
+    /// `*out` = 1 if the loaded results are unreliable (mean error at or above
+    /// `unreliable_mean_error_m`, or `_deg`), else 0.
+    fn session_results_unreliable(h: SitarHandle) -> bool
+        => c sitar_session_results_unreliable(out: i32) jni sessionResultsUnreliable;
+
+    /// The class of sub-trajectory `k` (0 unknown, 1 low, 2 medium, 3 high).
+    fn session_subtrajectory_class(h: SitarHandle, k: u32) -> i32
+        => c sitar_session_subtrajectory_class(out_class: i32) jni sessionSubtrajectoryClass;
+
+    /// Every sub-trajectory's error (NaN if unknown) and class, in order
+    /// (array-output convention).
+    fn session_subtrajectory_results(h: SitarHandle) -> Vec<SitarSubtrajectoryResult>
+        => c sitar_session_subtrajectory_results(items: SitarSubtrajectoryResult)
+           jni sessionSubtrajectoryResults;
+
+    /// Render plan: path segments (array-output convention).
+    fn session_segments(h: SitarHandle) -> Vec<SitarSegment>
+        => c sitar_session_segments(items: SitarSegment);
+
+    /// Render plan: joints between segments (array-output convention).
+    fn session_joints(h: SitarHandle) -> Vec<SitarJoint>
+        => c sitar_session_joints(items: SitarJoint);
+
+    /// Render plan: camera frustums (array-output convention).
+    fn session_frustums(h: SitarHandle) -> Vec<SitarFrustum>
+        => c sitar_session_frustums(items: SitarFrustum);
+
+    /// Render plan: start and stop poses. `*out_mask` bit 1 = start written,
+    /// bit 2 = stop written.
+    fn session_plan_ends(h: SitarHandle) -> PlanEnds
+        => c sitar_session_plan_ends(out_start: SitarPose, out_stop: SitarPose, out_mask: u32);
+
+    /// The whole render plan in one flat array (`RenderPlanLayout`).
+    fn session_render_plan(h: SitarHandle) -> RenderPlanC
+        => jni sessionRenderPlan;
+
+    /// The logged poses as TUM text (text-output convention).
+    fn session_trajectory_tum(h: SitarHandle) -> String
+        => c sitar_session_trajectory_tum(text) jni sessionTrajectoryTum;
+
+    /// Saves the session into folder `dir` (created if missing).
+    fn session_save(h: SitarHandle, dir: &Path)
+        => c sitar_session_save() jni sessionSave;
+
+    /// Loads a saved session folder as a new session.
+    fn session_load(dir: &Path) -> SitarHandle
+        => c sitar_session_load(out: SitarHandle) jni sessionLoad;
+
+    /// Creates a playback-device logger (uses the config's `convention`).
+    fn playback_new(config_json: &str) -> SitarHandle
+        => c sitar_playback_new(out: SitarHandle) jni playbackNew;
+
+    /// Logs one playback frame's pose.
+    fn playback_log(h: SitarHandle, t_ns: i64, pose: &SitarPose)
+        => c sitar_playback_log() jni playbackLog;
+
+    /// Number of poses logged.
+    fn playback_len(h: SitarHandle) -> usize
+        => c sitar_playback_len(out: usize) jni playbackLen;
+
+    /// The logged poses as TUM text (text-output convention).
+    fn playback_tum(h: SitarHandle) -> String
+        => c sitar_playback_tum(text) jni playbackTum;
+
+    /// Writes `<dir>/trajectory_<index>.txt` (creating `dir`); JNI returns the path.
+    fn playback_write(h: SitarHandle, dir: &Path, index: u32) -> std::path::PathBuf
+        => c sitar_playback_write() jni playbackWrite;
+
+    /// Frees a playback logger.
+    fn playback_free(h: SitarHandle)
+        => c sitar_playback_free() jni playbackFree;
+
+    /// Starts uploading `recording_path` in the background and, when the server
+    /// is done, loads the results into session `h`. `options_json` (NULL or ""
+    /// = defaults): `server_url`, `trials` (10), `setting` ("trim_mean_30"),
+    /// `playback` ("adb"), `poll_interval_ms` (500), `session_id` (continue that
+    /// server session, e.g. a failed job's: the upload resumes or is skipped),
+    /// `window_frames` and `pose_relation` (the session config's
+    /// `subtrajectory_frames` and `pose_relation`; other values are refused).
+    fn upload_start(h: SitarHandle, recording_path: &Path, options_json: Option<&str>)
+        -> SitarHandle
+        => c sitar_upload_start(out_job: SitarHandle) jni uploadStart;
+
+    /// A snapshot of the job's progress (never blocks on the network).
+    fn upload_progress(job: SitarHandle) -> SitarJobProgress
+        => c sitar_upload_progress(out: SitarJobProgress) jni uploadProgress;
+
+    /// Why the job failed, "" otherwise (text-output convention).
+    fn upload_message(job: SitarHandle) -> String
+        => c sitar_upload_message(text) jni uploadMessage;
+
+    /// The server's session id, "" until created (text-output convention).
+    fn upload_server_id(job: SitarHandle) -> String
+        => c sitar_upload_server_id(text) jni uploadServerId;
+
+    /// Cancels the job: its state is `SITAR_JOB_CANCELLED` at once.
+    fn upload_cancel(job: SitarHandle)
+        => c sitar_upload_cancel() jni uploadCancel;
+
+    /// Frees the job handle (cancelling it if still running).
+    fn upload_free(job: SitarHandle)
+        => c sitar_upload_free() jni uploadFree;
+
+    /// Panics on purpose; returns `SITAR_ERR_PANIC` (feature `testing` only).
+    #[cfg(feature = "testing")]
+    fn testing_panic()
+        => c sitar_testing_panic() jni testingPanic;
+}
