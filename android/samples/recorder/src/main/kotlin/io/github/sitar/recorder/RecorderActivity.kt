@@ -34,6 +34,7 @@ import io.github.sitar.RenderPlan
 import io.github.sitar.SitarException
 import io.github.sitar.SitarSession
 import io.github.sitar.UploadJob
+import io.github.sitar.finished
 import io.github.sitar.UploadState
 import java.io.File
 import javax.microedition.khronos.egl.EGLConfig
