@@ -33,6 +33,7 @@ fn unity_playback_logic_and_json_run_on_mono_with_the_real_library() {
             .args(["-unsafe", "-warnaserror", "-r:System.Core"])
             .arg(format!("-out:{}", exe.display()))
             .arg(plugin.join("Runtime/NativeMethods.g.cs"))
+            .arg(plugin.join("Runtime/SitarStatus.g.cs"))
             .arg(plugin.join("Runtime/SitarSession.cs"))
             .arg(plugin.join("Runtime/SitarJson.cs"))
             .arg(plugin.join("Runtime/SitarPlaybackRun.cs"))
