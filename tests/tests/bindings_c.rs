@@ -1069,8 +1069,11 @@ fn upload_against_a_sim_server_loads_progressive_then_final_results() {
     let server = sitar_tests::start(sitar_tests::sim_config(&dir.path().join("data"), 10.0, 1));
     let h = new_session(&format!(r#"{{"server_url":"{}"}}"#, server.url()));
     record(h);
-    let options =
-        c(r#"{"trials":6,"setting":"trim_mean_30","playback":"sim","poll_interval_ms":10}"#);
+    // The backend's token goes with the upload options.
+    let options = c(&format!(
+        r#"{{"trials":6,"setting":"trim_mean_30","playback":"sim","poll_interval_ms":10,"server_token":"{}"}}"#,
+        sitar_tests::APP_TOKEN
+    ));
     let job = start_upload(h, &rec, &options);
     let start = Instant::now();
     let mut progressive = false;
@@ -1175,8 +1178,9 @@ fn a_job_for_an_existing_server_session_resumes_its_upload() {
     std::fs::File::create(&rec).unwrap().set_len(total).unwrap();
     let h = new_session("{}");
     let options = c(&format!(
-        r#"{{"server_url":"{}","session_id":"{id}","poll_interval_ms":10}}"#,
-        server.url()
+        r#"{{"server_url":"{}","session_id":"{id}","poll_interval_ms":10,"server_token":"{}"}}"#,
+        server.url(),
+        sitar_tests::ADMIN_TOKEN
     ));
     let session_dir = data.join("sessions").join(&id);
 
