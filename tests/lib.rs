@@ -23,7 +23,38 @@ pub fn sim_config(data: &Path, speed: f64, devices: u32) -> ServerConfig {
     config
 }
 
+/// The admin token every test server knows (see [`with_test_tokens`]).
+pub const ADMIN_TOKEN: &str = "sitar_test_admin_5f0c2a9e81d34b7a9c1e6d20";
+/// An app token every test server knows.
+pub const APP_TOKEN: &str = "sitar_test_app_one_7b3e91c04a2f4d8e9a6b1c55";
+/// A second app token, for "another app's session" checks.
+pub const APP2_TOKEN: &str = "sitar_test_app_two_d41e8f2b6c9a4e0f8b3d7a19";
+
+/// `config` with the test tokens registered: `test-admin` ([`ADMIN_TOKEN`]), `test-app`
+/// ([`APP_TOKEN`]) and `test-app-2` ([`APP2_TOKEN`]).
+pub fn with_test_tokens(mut config: ServerConfig) -> ServerConfig {
+    use sitar_server::{PresetToken, Role};
+    for (name, role, token) in [
+        ("test-admin", Role::Admin, ADMIN_TOKEN),
+        ("test-app", Role::App, APP_TOKEN),
+        ("test-app-2", Role::App, APP2_TOKEN),
+    ] {
+        config.preset_tokens.push(PresetToken {
+            name: name.into(),
+            role,
+            token: token.into(),
+        });
+    }
+    config
+}
+
+/// Starts `config` on a free loopback port, with the test tokens (unless it has its own).
 pub fn start(config: ServerConfig) -> ServerHandle {
+    let config = if config.preset_tokens.is_empty() {
+        with_test_tokens(config)
+    } else {
+        config
+    };
     sitar_server::Server::spawn(config, "127.0.0.1:0".parse().unwrap()).expect("server starts")
 }
 
@@ -39,18 +70,55 @@ pub fn wait_done(client: &sitar_client::Client, id: &str) -> sitar_client::Sessi
         .expect("the session finishes")
 }
 
+/// A client of `server` with the admin token.
 pub fn client(server: &ServerHandle) -> sitar_client::Client {
+    client_with(server, ADMIN_TOKEN)
+}
+
+/// A client of `server` with `token`.
+pub fn client_with(server: &ServerHandle, token: &str) -> sitar_client::Client {
     sitar_client::Client::new(&server.url())
         .unwrap()
         .with_timeout(Duration::from_secs(20))
+        .with_server_token(token)
+        .unwrap()
+}
+
+/// Adds `Authorization: Bearer ADMIN_TOKEN` to a request that carries none.
+struct AdminUnlessSaidOtherwise;
+
+impl ureq::middleware::Middleware for AdminUnlessSaidOtherwise {
+    fn handle(
+        &self,
+        mut request: ureq::http::Request<ureq::SendBody<'_>>,
+        next: ureq::middleware::MiddlewareNext<'_>,
+    ) -> Result<ureq::http::Response<ureq::Body>, ureq::Error> {
+        let headers = request.headers_mut();
+        if !headers.contains_key("authorization") {
+            let value = format!("Bearer {ADMIN_TOKEN}");
+            headers.insert("authorization", value.parse().expect("header value"));
+        }
+        next.handle(request)
+    }
 }
 
 /// A plain HTTP agent for requests the typed client never sends: statuses are answers,
-/// not errors; 20 s at most.
+/// not errors; 20 s at most; the admin token unless a request sets `Authorization` itself.
 pub fn agent() -> ureq::Agent {
     ureq::Agent::config_builder()
         .http_status_as_error(false)
         .timeout_global(Some(Duration::from_secs(20)))
+        .middleware(AdminUnlessSaidOtherwise)
+        .build()
+        .into()
+}
+
+/// Like [`agent`], without any token: for the access-control tests.
+pub fn bare_agent() -> ureq::Agent {
+    ureq::Agent::config_builder()
+        .http_status_as_error(false)
+        .timeout_global(Some(Duration::from_secs(20)))
+        .max_redirects(0)
         .build()
         .into()
 }

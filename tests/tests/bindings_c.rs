@@ -24,6 +24,7 @@ const ERR_PANIC: i32 = -99;
 
 const JOB_UPLOADING: i32 = 1;
 const JOB_PLAYING: i32 = 2;
+const JOB_DONE: i32 = 5;
 const JOB_FAILED: i32 = 6;
 const JOB_CANCELLED: i32 = 7;
 
@@ -1069,8 +1070,11 @@ fn upload_against_a_sim_server_loads_progressive_then_final_results() {
     let server = sitar_tests::start(sitar_tests::sim_config(&dir.path().join("data"), 10.0, 1));
     let h = new_session(&format!(r#"{{"server_url":"{}"}}"#, server.url()));
     record(h);
-    let options =
-        c(r#"{"trials":6,"setting":"trim_mean_30","playback":"sim","poll_interval_ms":10}"#);
+    // The backend's token goes with the upload options.
+    let options = c(&format!(
+        r#"{{"trials":6,"setting":"trim_mean_30","playback":"sim","poll_interval_ms":10,"server_token":"{}"}}"#,
+        sitar_tests::APP_TOKEN
+    ));
     let job = start_upload(h, &rec, &options);
     let start = Instant::now();
     let mut progressive = false;
@@ -1175,8 +1179,9 @@ fn a_job_for_an_existing_server_session_resumes_its_upload() {
     std::fs::File::create(&rec).unwrap().set_len(total).unwrap();
     let h = new_session("{}");
     let options = c(&format!(
-        r#"{{"server_url":"{}","session_id":"{id}","poll_interval_ms":10}}"#,
-        server.url()
+        r#"{{"server_url":"{}","session_id":"{id}","poll_interval_ms":10,"server_token":"{}"}}"#,
+        server.url(),
+        sitar_tests::ADMIN_TOKEN
     ));
     let session_dir = data.join("sessions").join(&id);
 
@@ -1454,4 +1459,61 @@ fn an_upload_asks_the_backend_for_the_session_window_settings() {
         }
     }
     assert_eq!((a.session_free)(h), OK);
+}
+
+/// The upload options' `server_token` and `server_cert_sha256` against a real HTTPS backend:
+/// the pinned job uploads and finishes; another fingerprint fails the job with
+/// SITAR_ERR_NETWORK and a message naming both fingerprints; no token is a 401 failure.
+#[test]
+fn an_upload_pins_the_backends_certificate_and_sends_its_token() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = sitar_tests::sim_recording(dir.path(), "walk.rec", 3.0, 5);
+    let mut config = sitar_tests::sim_config(&dir.path().join("data"), 20.0, 1);
+    config.tls = Some(sitar_server::TlsConfig {
+        names: vec!["127.0.0.1".into()],
+        ..sitar_server::TlsConfig::default()
+    });
+    let server = sitar_tests::start(config);
+    let url = server.url();
+    assert!(url.starts_with("https://"), "{url}");
+    let pin = server.tls_fingerprint().unwrap().to_owned();
+    let h = new_session(&format!(r#"{{"server_url":"{url}"}}"#));
+    record(h);
+    let run = |options: String| {
+        let job = start_upload(h, &rec, &c(&options));
+        let p = wait_for_state_any(job, &[JOB_DONE, JOB_FAILED], Duration::from_secs(60));
+        let text = message(job);
+        assert_eq!((api().upload_free)(job), OK);
+        (p, text)
+    };
+    let token = sitar_tests::APP_TOKEN;
+    let (p, text) = run(format!(
+        r#"{{"trials":2,"playback":"sim","poll_interval_ms":10,"server_token":"{token}","server_cert_sha256":"{pin}"}}"#
+    ));
+    assert_eq!(p.state, JOB_DONE, "{text}");
+    let other = "AA:".repeat(31) + "AA";
+    let (p, text) = run(format!(
+        r#"{{"trials":2,"playback":"sim","server_token":"{token}","server_cert_sha256":"{other}"}}"#
+    ));
+    assert_eq!(p.state, JOB_FAILED);
+    assert_eq!(p.error_code, -7, "SITAR_ERR_NETWORK: {text}");
+    assert!(text.contains(&pin) && text.contains(&other), "{text}");
+    let (p, text) = run(format!(
+        r#"{{"trials":2,"playback":"sim","server_cert_sha256":"{pin}"}}"#
+    ));
+    assert_eq!(p.state, JOB_FAILED);
+    assert!(text.contains("401"), "{text}");
+    assert_eq!((api().session_free)(h), OK);
+}
+
+fn wait_for_state_any(job: H, wanted: &[i32], timeout: Duration) -> JobProgress {
+    let start = Instant::now();
+    loop {
+        let mut p = JobProgress::default();
+        assert_eq!((api().upload_progress)(job, &mut p), OK);
+        if wanted.contains(&p.state) || start.elapsed() > timeout {
+            return p;
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    }
 }

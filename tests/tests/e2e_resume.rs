@@ -67,6 +67,7 @@ fn open_put(url: &str, key: &str, announced: usize) -> TcpStream {
     write!(
         stream,
         "PUT {path} HTTP/1.1\r\nhost: {host}\r\ncontent-type: application/octet-stream\r\n\
+         authorization: Bearer {ADMIN_TOKEN}\r\n\
          idempotency-key: {key}\r\ncontent-length: {announced}\r\n\r\n"
     )
     .unwrap();
@@ -271,7 +272,9 @@ fn the_client_resumes_a_cut_upload_and_sends_only_the_rest() {
     let through_proxy = sitar_client::Client::new(&proxy.url)
         .unwrap()
         .with_timeout(Duration::from_secs(20))
-        .with_retries(3, Duration::from_millis(20));
+        .with_retries(3, Duration::from_millis(20))
+        .with_server_token(ADMIN_TOKEN)
+        .unwrap();
     let mut reports = Vec::new();
     through_proxy
         .upload_recording(&id, &path, &mut |sent, total| reports.push((sent, total)))
@@ -314,7 +317,9 @@ fn a_later_call_for_the_same_file_resumes_what_a_failed_one_left() {
     let impatient = sitar_client::Client::new(&proxy.url)
         .unwrap()
         .with_timeout(Duration::from_secs(20))
-        .with_retries(0, Duration::from_millis(20));
+        .with_retries(0, Duration::from_millis(20))
+        .with_server_token(ADMIN_TOKEN)
+        .unwrap();
     let err = impatient
         .upload_recording(&id, &path, &mut |_, _| {})
         .unwrap_err();

@@ -141,7 +141,11 @@ fn check_report(html: &str, base: &str, id: &str) {
     let out = std::process::Command::new(chromium)
         .args(["--headless", "--no-sandbox", "--disable-gpu", "--dump-dom"])
         .arg(format!("--user-data-dir={}", profile.path().display()))
-        .arg(format!("{base}/v1/sessions/{id}/report"))
+        // The token in the address: the server sets its cookie and redirects, so this also
+        // checks that a real browser follows the page-cookie step.
+        .arg(format!(
+            "{base}/v1/sessions/{id}/report?token={ADMIN_TOKEN}"
+        ))
         .output()
         .expect("chromium runs");
     let dom = String::from_utf8_lossy(&out.stdout);
@@ -205,7 +209,10 @@ fn concurrent_sessions_do_not_interfere() {
             let (url, dir) = (url.clone(), dir.path().to_path_buf());
             std::thread::spawn(move || {
                 let recording = sim_recording(&dir, &format!("r{seed}.rec"), 3.0, seed);
-                let client = sitar_client::Client::new(&url).unwrap();
+                let client = sitar_client::Client::new(&url)
+                    .unwrap()
+                    .with_server_token(ADMIN_TOKEN)
+                    .unwrap();
                 let n = 3 + (seed % 3) as u32;
                 let id = client.create_session(&sim_session(n)).unwrap();
                 client

@@ -205,7 +205,9 @@ namespace Sitar
         /// <summary>
         ///  Starts uploading `recording_path` in the background and, when the server
         ///  is done, loads the results into session `h`. `options_json` (NULL or ""
-        ///  = defaults): `server_url`, `trials` (10), `setting` ("trim_mean_30"),
+        ///  = defaults): `server_url`, `server_token` (the backend's access token),
+        ///  `server_cert_sha256` (pin the backend's TLS certificate: its SHA-256
+        ///  fingerprint as `openssl x509 -fingerprint -sha256` prints it), `trials` (10), `setting` ("trim_mean_30"),
         ///  `playback` ("adb"), `poll_interval_ms` (500), `session_id` (continue that
         ///  server session, e.g. a failed job's: the upload resumes or is skipped),
         ///  `window_frames` and `pose_relation` (the session config's

@@ -498,7 +498,9 @@ namespace Sitar
         /// <summary>
         /// Uploads the recording in the background; results are loaded into this
         /// session when the server is done. Options JSON: server_url (else the
-        /// config's), trials, setting, playback, poll_interval_ms, session_id (continue
+        /// config's), server_token (the backend's access token), server_cert_sha256 (pins
+        /// the backend's TLS certificate by its SHA-256 fingerprint; a different one fails
+        /// the job with SITAR_ERR_NETWORK), trials, setting, playback, poll_interval_ms, session_id (continue
         /// that server session, e.g. a failed job's ServerId(): the upload resumes),
         /// window_frames and pose_relation (default: the config's subtrajectory_frames and
         /// pose_relation; other values are refused).

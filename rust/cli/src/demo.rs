@@ -6,7 +6,7 @@ use std::time::{Duration, Instant};
 use anyhow::{Context, Result, bail};
 use sitar_client::{Client, NewSession, SessionOptions, SessionState};
 use sitar_core::{DepthImage, DisplayRotation, ErrorClass, Pose, Session, SessionConfig};
-use sitar_server::{PlaybackKind, Server, ServerConfig};
+use sitar_server::{PlaybackKind, PresetToken, Role, Server, ServerConfig};
 use sitar_sim::{DepthCamera, Recording};
 
 /// Runs the whole system in one process: a simulated user walks a room with a blank wall and
@@ -70,6 +70,13 @@ pub fn run(args: Args) -> Result<()> {
     config.playback = PlaybackKind::Sim;
     config.sim.speed = args.speed;
     config.sim.devices = args.devices;
+    // The demo's own token, fresh each run (a new hash under the same name).
+    let token = sitar_server::new_token()?;
+    config.preset_tokens = vec![PresetToken {
+        name: "demo".into(),
+        role: Role::Admin,
+        token: token.clone(),
+    }];
     let server = Server::spawn(config, "127.0.0.1:0".parse()?)
         .context("cannot start the in-process server")?;
     println!(
@@ -100,7 +107,7 @@ pub fn run(args: Args) -> Result<()> {
     let rec_path = data.join("demo-recording.sitarsim");
     std::fs::write(&rec_path, recording.to_bytes())
         .with_context(|| format!("cannot write {}", rec_path.display()))?;
-    let client = Client::new(&server.url())?;
+    let client = Client::new(&server.url())?.with_server_token(&token)?;
     let request = NewSession {
         trials: args.trials,
         setting: sitar_core::DEFAULT_SETTING.into(),

@@ -16,6 +16,7 @@ mod estimate;
 mod evaluate;
 mod figures;
 mod input;
+mod logging;
 mod metric;
 mod metric_args;
 mod output;
@@ -28,6 +29,7 @@ mod serve;
 mod shell;
 mod simulate;
 mod source;
+mod token;
 mod traj;
 
 use std::process::ExitCode;
@@ -57,6 +59,7 @@ enum Command {
     Evaluate(evaluate::Args),
     Simulate(simulate::Args),
     Serve(serve::Args),
+    Token(token::Args),
     Demo(demo::Args),
 }
 
@@ -85,6 +88,7 @@ fn main() -> ExitCode {
         Command::Evaluate(args) => evaluate::run(args),
         Command::Simulate(args) => simulate::run(args),
         Command::Serve(args) => serve::run(args),
+        Command::Token(args) => token::run(args),
         Command::Demo(args) => demo::run(args),
     };
     match result {

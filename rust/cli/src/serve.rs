@@ -6,7 +6,7 @@ use std::time::Duration;
 
 use anyhow::{Context, Result};
 use clap::ValueEnum;
-use sitar_server::{AdbConfig, PlaybackKind, Server, ServerConfig};
+use sitar_server::{AdbConfig, Limits, PlaybackKind, Server, ServerConfig, TlsConfig};
 
 /// Runs the SiTAR backend: HTTP API (versioned and the original app's legacy routes),
 /// SQLite storage in DIR, playback on phones over adb (or the simulator), estimation.
@@ -58,6 +58,36 @@ pub struct Args {
     /// after they were created. Without it everything is kept (DELETE frees one).
     #[arg(long, value_name = "DAYS")]
     keep_days: Option<u32>,
+    /// Log level: error, warn, info, debug or trace [default: RUST_LOG's, else info]. Every
+    /// line starts with an RFC 3339 time stamp (UTC).
+    #[arg(long, value_name = "LEVEL")]
+    log_level: Option<log::LevelFilter>,
+    /// Sessions one token may create per hour (429 beyond).
+    #[arg(long, value_name = "N", default_value_t = Limits::default().sessions_per_hour)]
+    max_sessions_per_hour: u32,
+    /// GiB one token may upload per 24 hours (429 beyond).
+    #[arg(long, value_name = "GIB", default_value_t = Limits::default().upload_bytes_per_day >> 30)]
+    max_upload_gib_per_day: u64,
+    /// Uploads one token may send at once (429 beyond).
+    #[arg(long, value_name = "N", default_value_t = Limits::default().concurrent_uploads)]
+    max_concurrent_uploads: u32,
+    /// No tokens at all: every request is allowed. Refused unless --addr is loopback.
+    #[arg(long)]
+    insecure_no_auth: bool,
+    /// Serve HTTPS (rustls). Without --cert/--key a self-signed certificate is made once into
+    /// DIR/tls/; its SHA-256 fingerprint is printed at start and shown on the overview page.
+    #[arg(long)]
+    tls: bool,
+    /// PEM certificate chain for --tls (with --key).
+    #[arg(long, value_name = "PEM", requires = "tls", requires = "key")]
+    cert: Option<PathBuf>,
+    /// PEM private key for --tls (with --cert).
+    #[arg(long, value_name = "PEM", requires = "tls", requires = "cert")]
+    key: Option<PathBuf>,
+    /// A host name or address the self-signed certificate is made for (repeat it)
+    /// [default: localhost, 127.0.0.1, ::1, this machine's LAN address and host name].
+    #[arg(long = "tls-name", value_name = "NAME", requires = "tls")]
+    tls_names: Vec<String>,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -66,29 +96,8 @@ enum Playback {
     Sim,
 }
 
-/// Prints the server's log lines (info and above) to stderr.
-struct StderrLog;
-
-impl log::Log for StderrLog {
-    fn enabled(&self, metadata: &log::Metadata<'_>) -> bool {
-        metadata.level() <= log::Level::Info && metadata.target().starts_with("sitar")
-    }
-    fn log(&self, record: &log::Record<'_>) {
-        if self.enabled(record.metadata()) {
-            eprintln!(
-                "sitar serve: {}: {}",
-                record.level().as_str().to_lowercase(),
-                record.args()
-            );
-        }
-    }
-    fn flush(&self) {}
-}
-
 pub fn run(args: Args) -> Result<()> {
-    if log::set_logger(&StderrLog).is_ok() {
-        log::set_max_level(log::LevelFilter::Info);
-    }
+    crate::logging::init(args.log_level);
     let mut config = ServerConfig::new(&args.data);
     config.playback = match args.playback {
         Playback::Adb => PlaybackKind::Adb,
@@ -108,11 +117,22 @@ pub fn run(args: Args) -> Result<()> {
     config.default_trials = args.trials;
     config.max_recording_bytes = args.max_recording_mib << 20;
     config.max_trajectory_bytes = args.max_trajectory_mib << 20;
+    config.insecure_no_auth = args.insecure_no_auth;
+    config.tls = args.tls.then_some(TlsConfig {
+        cert: args.cert,
+        key: args.key,
+        names: args.tls_names,
+    });
+    config.limits = Limits {
+        sessions_per_hour: args.max_sessions_per_hour,
+        upload_bytes_per_day: args.max_upload_gib_per_day.saturating_mul(1 << 30),
+        concurrent_uploads: args.max_concurrent_uploads,
+    };
     config.retention = args
         .keep_days
         .map(|days| Duration::from_secs(u64::from(days) * 86_400));
     eprintln!(
-        "sitar serve: data {}, playback {}; Ctrl-C stops",
+        "sitar serve: data {}, playback {}; Ctrl-C or SIGTERM stops",
         args.data.display(),
         config.playback.as_str()
     );

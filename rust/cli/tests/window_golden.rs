@@ -40,7 +40,11 @@ fn backend_cli_and_evo_agree_on_20_frame_angle_windows() {
     let mut config = sitar_server::ServerConfig::new(data.path());
     config.playback = sitar_server::PlaybackKind::Upload;
     let server = sitar_server::Server::spawn(config, "127.0.0.1:0".parse().unwrap()).unwrap();
-    let client = Client::new(&server.url()).unwrap();
+    let admin = std::fs::read_to_string(data.path().join(sitar_server::ADMIN_TOKEN_FILE)).unwrap();
+    let client = Client::new(&server.url())
+        .unwrap()
+        .with_server_token(&admin)
+        .unwrap();
     let id = client
         .create_session_with(
             &NewSession {

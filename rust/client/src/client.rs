@@ -3,6 +3,7 @@ use std::hash::{BuildHasher, Hasher};
 use std::io::{Read, Seek, SeekFrom};
 use std::path::Path;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
 use ureq::Agent;
@@ -29,6 +30,13 @@ pub struct Client {
     timeout: Duration,
     retries: u32,
     backoff: Duration,
+    /// `Authorization: Bearer …` on every request, when set.
+    server_token: Option<String>,
+    /// The pinned certificate's SHA-256 (`server_cert_sha256`), when set.
+    cert_pin: Option<crate::pin::Fingerprint>,
+    /// With a pin: the agents that trust exactly the pinned certificate, made on the first
+    /// call (shared by the clones of this client).
+    pinned: Arc<Mutex<Option<(Agent, Agent)>>>,
 }
 
 enum Payload<'a> {
@@ -58,12 +66,15 @@ impl Client {
         }
         let timeout = Duration::from_secs(30);
         Ok(Client {
-            agent: make_agent(timeout, false),
-            upload_agent: make_agent(timeout, true),
+            agent: make_agent(timeout, false, None, None),
+            upload_agent: make_agent(timeout, true, None, None),
             base,
             timeout,
             retries: 3,
             backoff: Duration::from_millis(200),
+            server_token: None,
+            cert_pin: None,
+            pinned: Arc::new(Mutex::new(None)),
         })
     }
 
@@ -71,9 +82,72 @@ impl Client {
     /// uploads may take longer but no single read or write may stall longer.
     pub fn with_timeout(mut self, timeout: Duration) -> Client {
         self.timeout = timeout;
-        self.agent = make_agent(timeout, false);
-        self.upload_agent = make_agent(timeout, true);
+        self.rebuild_agents();
         self
+    }
+
+    /// The same client sending `Authorization: Bearer TOKEN` with every request (a token from
+    /// `sitar token create`; the server answers 401 without one). A token that could not be
+    /// a header value is refused here, naming it.
+    pub fn with_server_token(mut self, token: &str) -> Result<Client, Error> {
+        let token = token.trim();
+        if token.is_empty()
+            || !token
+                .bytes()
+                .all(|b| b.is_ascii_alphanumeric() || b == b'_' || b == b'-')
+        {
+            return Err(Error::InvalidArgument(
+                "server_token: expected the letters, digits, '_' and '-' of a sitar token".into(),
+            ));
+        }
+        self.server_token = Some(token.to_owned());
+        self.rebuild_agents();
+        Ok(self)
+    }
+
+    /// The same client accepting only the TLS certificate whose SHA-256 fingerprint is
+    /// `fingerprint` (`AB:CD:…` as `sitar serve --tls` and `openssl x509 -fingerprint -sha256`
+    /// print it): for a self-signed certificate. The URL must be `https://`. A server showing
+    /// another certificate fails every call with [`Error::CertificateMismatch`]; without a
+    /// pin, an `https://` server needs a certificate from a well-known authority (Mozilla's
+    /// roots, bundled).
+    pub fn with_server_cert_sha256(mut self, fingerprint: &str) -> Result<Client, Error> {
+        if !self.base.starts_with("https://") {
+            return Err(Error::InvalidArgument(format!(
+                "server_cert_sha256 needs an https:// server URL, not {}",
+                self.base
+            )));
+        }
+        self.cert_pin = Some(crate::pin::parse_fingerprint(fingerprint)?);
+        self.pinned = Arc::new(Mutex::new(None));
+        Ok(self)
+    }
+
+    fn rebuild_agents(&mut self) {
+        let token = self.server_token.as_deref();
+        self.agent = make_agent(self.timeout, false, token, None);
+        self.upload_agent = make_agent(self.timeout, true, token, None);
+        self.pinned = Arc::new(Mutex::new(None));
+    }
+
+    /// (plain, upload) agents: with a pin, those trusting only the pinned certificate,
+    /// fetched on first use.
+    fn agents(&self) -> Result<(Agent, Agent), Error> {
+        let Some(pin) = &self.cert_pin else {
+            return Ok((self.agent.clone(), self.upload_agent.clone()));
+        };
+        let mut pinned = self.pinned.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(agents) = pinned.as_ref() {
+            return Ok(agents.clone());
+        }
+        let cert = crate::pin::fetch_pinned(&self.base, pin, self.timeout)?;
+        let token = self.server_token.as_deref();
+        let agents = (
+            make_agent(self.timeout, false, token, Some(&cert)),
+            make_agent(self.timeout, true, token, Some(&cert)),
+        );
+        *pinned = Some(agents.clone());
+        Ok(agents)
     }
 
     /// The same client with `retries` extra attempts and an initial `backoff`
@@ -213,7 +287,9 @@ impl Client {
     /// server kept. `None` when the server does not say (an older server, or unreachable).
     fn kept_offset(&self, url: &str, key: &str) -> Option<u64> {
         let response = self
-            .agent
+            .agents()
+            .ok()?
+            .0
             .head(url)
             .header(IDEMPOTENCY_HEADER, key)
             .call()
@@ -339,10 +415,11 @@ impl Client {
         payload: &mut Payload<'_>,
         idempotency: Option<&str>,
     ) -> Result<String, Error> {
+        let (plain, upload) = self.agents()?;
         let agent = if matches!(payload, Payload::File { .. }) {
-            &self.upload_agent
+            &upload
         } else {
-            &self.agent
+            &plain
         };
         let with_key = |b: ureq::RequestBuilder<ureq::typestate::WithBody>| match idempotency {
             Some(key) => b.header(IDEMPOTENCY_HEADER, key),
@@ -439,10 +516,46 @@ fn with_attempts(e: Error, attempts: u32) -> Error {
     }
 }
 
-fn make_agent(timeout: Duration, streaming: bool) -> Agent {
-    let builder = Agent::config_builder()
+/// Puts `Authorization: Bearer TOKEN` on every request of an agent.
+struct BearerAuth(ureq::http::HeaderValue);
+
+impl ureq::middleware::Middleware for BearerAuth {
+    fn handle(
+        &self,
+        mut request: ureq::http::Request<ureq::SendBody<'_>>,
+        next: ureq::middleware::MiddlewareNext<'_>,
+    ) -> Result<ureq::http::Response<ureq::Body>, ureq::Error> {
+        request
+            .headers_mut()
+            .insert(ureq::http::header::AUTHORIZATION, self.0.clone());
+        next.handle(request)
+    }
+}
+
+fn make_agent(
+    timeout: Duration,
+    streaming: bool,
+    token: Option<&str>,
+    only_root: Option<&rustls::pki_types::CertificateDer<'static>>,
+) -> Agent {
+    let mut builder = Agent::config_builder()
         .http_status_as_error(false)
         .timeout_connect(Some(timeout.min(Duration::from_secs(10))));
+    if let Some(value) =
+        token.and_then(|t| ureq::http::HeaderValue::from_str(&format!("Bearer {t}")).ok())
+    {
+        let mut value = value;
+        value.set_sensitive(true);
+        builder = builder.middleware(BearerAuth(value));
+    }
+    if let Some(cert) = only_root {
+        let root = ureq::tls::Certificate::from_der(cert.as_ref()).to_owned();
+        builder = builder.tls_config(
+            ureq::tls::TlsConfig::builder()
+                .root_certs(ureq::tls::RootCerts::new_with_certs(&[root]))
+                .build(),
+        );
+    }
     let builder = if streaming {
         // Bigger writes: fewer syscalls and server wake-ups per GiB uploaded.
         builder

@@ -20,6 +20,20 @@ pub enum Error {
         /// The last transport error.
         message: String,
     },
+    /// The server's TLS certificate is not the pinned one (`server_cert_sha256`): nothing was
+    /// sent. Not retried.
+    #[error(
+        "the TLS certificate of {url} has SHA-256 fingerprint {found}, not the pinned {expected}: \
+         refusing to talk to it (a different server, or a new certificate?)"
+    )]
+    CertificateMismatch {
+        /// The URL that was called.
+        url: String,
+        /// The pinned fingerprint (`AB:CD:…`).
+        expected: String,
+        /// The fingerprint of the certificate the server showed.
+        found: String,
+    },
     /// A call did not finish within its timeout on every attempt.
     #[error("{url} timed out after {attempts} attempt(s)")]
     Timeout {

@@ -51,6 +51,7 @@ mod client;
 mod error;
 mod job;
 mod job_run;
+mod pin;
 #[cfg(test)]
 mod test_server;
 mod types;

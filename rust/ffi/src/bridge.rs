@@ -395,7 +395,10 @@ pub fn playback_free(h: SitarHandle) -> Result<(), Error> {
 
 /// Starts the background upload of `recording` and download of the results into session
 /// `h` (a [`sitar_client::UploadJob`]). `options_json` (`None` or "" = defaults) keys, all
-/// optional: `server_url` (else the session config's), `trials` (10), `setting`
+/// optional: `server_url` (else the session config's), `server_token` (the backend's access
+/// token, sent as `Authorization: Bearer …`), `server_cert_sha256` (pins the backend's TLS
+/// certificate by its SHA-256 fingerprint; a different certificate fails the job with
+/// `SITAR_ERR_NETWORK`), `trials` (10), `setting`
 /// ("trim_mean_30"), `playback` ("adb"), `poll_interval_ms` (500), `session_id` (continue
 /// that server session, e.g. a failed job's: the upload resumes or is skipped),
 /// `window_frames` and `pose_relation` (the session config's `subtrajectory_frames` and

@@ -17,6 +17,11 @@ use crate::types::{SitarJobProgress, SitarJobState};
 #[serde(deny_unknown_fields, default)]
 struct UploadOptions {
     server_url: Option<String>,
+    /// The backend's access token (`sitar token create --role app`), sent as
+    /// `Authorization: Bearer …`.
+    server_token: Option<String>,
+    /// Pins the backend's TLS certificate: its SHA-256 fingerprint (`AB:CD:…`).
+    server_cert_sha256: Option<String>,
     session_id: Option<String>,
     trials: u32,
     setting: String,
@@ -30,6 +35,8 @@ impl Default for UploadOptions {
     fn default() -> Self {
         UploadOptions {
             server_url: None,
+            server_token: None,
+            server_cert_sha256: None,
             session_id: None,
             trials: 10,
             setting: sitar_core::DEFAULT_SETTING.to_owned(),
@@ -100,7 +107,13 @@ pub(crate) fn start(
         session_id: o.session_id,
         poll_interval: Duration::from_millis(o.poll_interval_ms),
     };
-    let client = Client::new(&url)?;
+    let mut client = Client::new(&url)?;
+    if let Some(token) = &o.server_token {
+        client = client.with_server_token(token)?;
+    }
+    if let Some(fingerprint) = &o.server_cert_sha256 {
+        client = client.with_server_cert_sha256(fingerprint)?;
+    }
     let job = UploadJob::start(client, recording, options, move |text: &str| {
         let _trace = crate::trace::section("sitar load results");
         crate::bridge::lock(&session)?.load_results(text)?;

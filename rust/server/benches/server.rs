@@ -7,14 +7,34 @@ use std::time::{Duration, Instant};
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use sitar_client::{Client, NewSession, SessionState};
-use sitar_server::{PlaybackKind, Server, ServerConfig, ServerHandle};
+use sitar_server::{Limits, PlaybackKind, PresetToken, Role, Server, ServerConfig, ServerHandle};
 
 fn sim_server(data: &Path, speed: f64, devices: u32) -> ServerHandle {
     let mut config = ServerConfig::new(data);
     config.playback = PlaybackKind::Sim;
     config.sim.speed = speed;
     config.sim.devices = devices;
+    config.preset_tokens = vec![PresetToken {
+        name: "bench".into(),
+        role: Role::App,
+        token: BENCH_TOKEN.into(),
+    }];
+    // 50 sessions at once, many times over: no per-token limit in the way.
+    config.limits = Limits {
+        sessions_per_hour: u32::MAX,
+        upload_bytes_per_day: u64::MAX,
+        concurrent_uploads: u32::MAX,
+    };
     Server::spawn(config, "127.0.0.1:0".parse().unwrap()).unwrap()
+}
+
+const BENCH_TOKEN: &str = "sitar_bench_0123456789abcdef0123456789";
+
+fn client(url: &str) -> Client {
+    Client::new(url)
+        .unwrap()
+        .with_server_token(BENCH_TOKEN)
+        .unwrap()
 }
 
 fn run_session(client: &Client, recording: &Path, trials: u32) -> Duration {
@@ -55,7 +75,7 @@ fn overhead_beyond_playback(c: &mut Criterion) {
     let speed = 300.0;
     let playback = Duration::from_secs_f64(rec.duration_s() / speed * 20.0);
     let server = sim_server(&dir.path().join("data"), speed, 1);
-    let client = Client::new(&server.url()).unwrap();
+    let client = client(&server.url());
     let mut group = c.benchmark_group("server");
     group.sample_size(10);
     group.bench_function("overhead_beyond_playback_20x450", |b| {
@@ -82,7 +102,7 @@ fn upload_throughput(c: &mut Criterion) {
         }
     }
     let server = sim_server(&dir.path().join("data"), 1.0, 1);
-    let client = Client::new(&server.url()).unwrap();
+    let client = client(&server.url());
     let id = client
         .create_session(&NewSession {
             trials: 2,
@@ -123,7 +143,7 @@ fn concurrent_sessions(c: &mut Criterion) {
                     for _ in 0..50 {
                         let (url, recording) = (&url, &recording);
                         scope.spawn(move || {
-                            let client = Client::new(url).unwrap();
+                            let client = client(url);
                             run_session(&client, recording, 5);
                         });
                     }

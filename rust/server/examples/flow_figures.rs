@@ -86,7 +86,13 @@ fn main() {
     config.playback = PlaybackKind::Sim;
     config.sim.speed = SPEED;
     let server = Server::spawn(config, "127.0.0.1:0".parse().unwrap()).unwrap();
-    let client = Client::new(&server.url()).unwrap();
+    let admin =
+        std::fs::read_to_string(dir.path().join("data").join(sitar_server::ADMIN_TOKEN_FILE))
+            .unwrap();
+    let client = Client::new(&server.url())
+        .unwrap()
+        .with_server_token(&admin)
+        .unwrap();
 
     println!("Progressive results (one phone, 15 s walk, real-time seconds):");
     println!("| seed | trials | first results | all trials done | first / done |");

@@ -117,9 +117,12 @@ impl Backend {
 fn run_session(texts: &[String], progressive: bool) -> (f64, f64, f64, u32) {
     let data = tempfile::tempdir().unwrap();
     let backend = Backend::start(data.path(), progressive);
+    let admin = std::fs::read_to_string(data.path().join(sitar_server::ADMIN_TOKEN_FILE)).unwrap();
     let client = Client::new(&backend.url)
         .unwrap()
-        .with_timeout(Duration::from_secs(600));
+        .with_timeout(Duration::from_secs(600))
+        .with_server_token(&admin)
+        .unwrap();
     let id = client
         .create_session(&NewSession {
             trials: texts.len() as u32,

@@ -196,6 +196,16 @@ pub struct ServerConfig {
     /// An upload body that sends nothing for this long is taken as broken off: what
     /// arrived is kept for a resume and the request ends (default 60 s).
     pub upload_idle_timeout: Duration,
+    /// Turns access control off: every request is allowed (default false). The server
+    /// refuses to start with it on an address that is not loopback.
+    pub insecure_no_auth: bool,
+    /// Tokens registered at start, replacing the hash of a token of the same name (the demo
+    /// and the tests; an operator uses `sitar token create`).
+    pub preset_tokens: Vec<crate::auth::PresetToken>,
+    /// Limits per token (sessions per hour, upload bytes per day, concurrent uploads).
+    pub limits: crate::auth::Limits,
+    /// HTTPS with rustls (`sitar serve --tls`); `None` (the default): plain HTTP.
+    pub tls: Option<crate::tls::TlsConfig>,
 }
 
 impl ServerConfig {
@@ -222,6 +232,10 @@ impl ServerConfig {
             retention: None,
             retention_sweep: Duration::from_secs(600),
             upload_idle_timeout: Duration::from_secs(60),
+            insecure_no_auth: false,
+            preset_tokens: Vec::new(),
+            limits: crate::auth::Limits::default(),
+            tls: None,
         }
     }
 }

@@ -55,7 +55,8 @@ CREATE TABLE IF NOT EXISTS sessions (
     legacy INTEGER NOT NULL DEFAULT 0,
     finished_ms INTEGER,
     window_frames INTEGER NOT NULL DEFAULT 10,
-    pose_relation TEXT NOT NULL DEFAULT 'trans_part'
+    pose_relation TEXT NOT NULL DEFAULT 'trans_part',
+    owner INTEGER
 );
 CREATE TABLE IF NOT EXISTS trials (
     session_id TEXT NOT NULL REFERENCES sessions(id),
@@ -83,6 +84,29 @@ CREATE TABLE IF NOT EXISTS devices (
     session_id TEXT,
     last_seen_ms INTEGER NOT NULL
 );
+CREATE TABLE IF NOT EXISTS tokens (
+    id INTEGER PRIMARY KEY AUTOINCREMENT,
+    name TEXT NOT NULL UNIQUE,
+    role TEXT NOT NULL,
+    lookup BLOB NOT NULL,
+    hash BLOB NOT NULL UNIQUE,
+    created_ms INTEGER NOT NULL,
+    last_used_ms INTEGER
+);
+CREATE INDEX IF NOT EXISTS tokens_lookup ON tokens (lookup);
+CREATE TABLE IF NOT EXISTS share_links (
+    lookup BLOB NOT NULL,
+    hash BLOB PRIMARY KEY,
+    session_id TEXT NOT NULL,
+    created_ms INTEGER NOT NULL
+);
+CREATE INDEX IF NOT EXISTS share_links_lookup ON share_links (lookup);
+CREATE TABLE IF NOT EXISTS upload_usage (
+    token_id INTEGER NOT NULL,
+    hour INTEGER NOT NULL,
+    bytes INTEGER NOT NULL,
+    PRIMARY KEY (token_id, hour)
+);
 ";
 
 pub(crate) fn now_ms() -> i64 {
@@ -101,6 +125,7 @@ const ADDED_COLUMNS: &[(&str, &str, &str)] = &[
         "pose_relation",
         "TEXT NOT NULL DEFAULT 'trans_part'",
     ),
+    ("sessions", "owner", "INTEGER"),
 ];
 
 /// Adds the [`ADDED_COLUMNS`] a database made by an older version lacks.

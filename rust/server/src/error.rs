@@ -14,6 +14,20 @@ pub enum Error {
     /// The request is malformed (bad JSON, bad multipart, missing field): 400 `bad_request`.
     #[error("{0}")]
     BadRequest(String),
+    /// No token, or an unknown or revoked one: 401 `unauthorized` with `WWW-Authenticate: Bearer`.
+    #[error("{0}")]
+    Unauthorized(String),
+    /// The token's role does not allow this route: 403 `forbidden`.
+    #[error("{0}")]
+    Forbidden(String),
+    /// Over one of the token's limits: 429 `too_many_requests` with `Retry-After`.
+    #[error("{message}; retry in {retry_after_s} s")]
+    TooManyRequests {
+        /// Which limit, and how far it is used.
+        message: String,
+        /// Seconds until the request would go through.
+        retry_after_s: u64,
+    },
     /// The request body has a content type this route does not take: 415 `unsupported_media_type`.
     #[error("{0}")]
     UnsupportedMediaType(String),
@@ -87,6 +101,9 @@ impl Error {
         match self {
             Error::NotFound(_) => (StatusCode::NOT_FOUND, "not_found"),
             Error::BadRequest(_) => (StatusCode::BAD_REQUEST, "bad_request"),
+            Error::Unauthorized(_) => (StatusCode::UNAUTHORIZED, "unauthorized"),
+            Error::Forbidden(_) => (StatusCode::FORBIDDEN, "forbidden"),
+            Error::TooManyRequests { .. } => (StatusCode::TOO_MANY_REQUESTS, "too_many_requests"),
             Error::UnsupportedMediaType(_) => {
                 (StatusCode::UNSUPPORTED_MEDIA_TYPE, "unsupported_media_type")
             }
@@ -120,6 +137,20 @@ impl IntoResponse for Error {
             axum::http::header::CONTENT_TYPE,
             axum::http::HeaderValue::from_static("application/json"),
         );
+        match &self {
+            Error::Unauthorized(_) => {
+                response.headers_mut().insert(
+                    axum::http::header::WWW_AUTHENTICATE,
+                    axum::http::HeaderValue::from_static("Bearer"),
+                );
+            }
+            Error::TooManyRequests { retry_after_s, .. } => {
+                response
+                    .headers_mut()
+                    .insert(axum::http::header::RETRY_AFTER, (*retry_after_s).into());
+            }
+            _ => {}
+        }
         response
     }
 }

@@ -9,6 +9,7 @@ use axum::http::{HeaderMap, StatusCode, header};
 use axum::response::{IntoResponse, Response};
 
 use crate::Error;
+use crate::auth::Caller;
 use crate::session::Session;
 use crate::shared::Shared;
 
@@ -91,7 +92,8 @@ pub(crate) fn check_declared_length(
 }
 
 /// The session a route's `{id}` names, looked up before the handler runs: a handler that
-/// takes it never sees an unknown or malformed id (404).
+/// takes it never sees an unknown or malformed id, nor another app token's session (both
+/// 404, with the same message: its existence is not revealed).
 pub(crate) struct Found(pub Session);
 
 impl FromRequestParts<Arc<Shared>> for Found {
@@ -101,6 +103,12 @@ impl FromRequestParts<Arc<Shared>> for Found {
         let Path(id) = Path::<String>::from_request_parts(parts, shared)
             .await
             .map_err(|e| Error::NotFound(format!("no session: {e}")))?;
-        shared.session(&id).map(Found)
+        let caller = Caller::from_request_parts(parts, shared).await?;
+        let session = shared.session(&id)?;
+        if caller.may_see(&session) {
+            Ok(Found(session))
+        } else {
+            Err(Error::NotFound(format!("no session {id:?}")))
+        }
     }
 }

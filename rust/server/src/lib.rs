@@ -39,7 +39,9 @@
 //! let mut config = ServerConfig::new(dir.path());
 //! config.playback = PlaybackKind::Sim;
 //! let server = Server::spawn(config, "127.0.0.1:0".parse()?)?;
-//! let client = sitar_client::Client::new(&server.url())?;
+//! // A new data directory gets an admin token, in a file only its owner reads.
+//! let admin = std::fs::read_to_string(dir.path().join(sitar_server::ADMIN_TOKEN_FILE))?;
+//! let client = sitar_client::Client::new(&server.url())?.with_server_token(&admin)?;
 //! client.health()?;
 //! // Unknown sessions are a JSON 404.
 //! let err = client.status("s0000000000000000").unwrap_err();
@@ -75,10 +77,13 @@
 // estimation, live, playback, adb               — estimates over trials held in memory
 // shared, published, trials, status, report     — what handlers and jobs share
 // jobs, recordings, deletion                    — work on sessions
+// auth                                          — tokens, callers, limits (middleware)
 // http                                          — helpers below every handler
 // handlers/*                                    — one file per resource
+// tls                                           — certificate and HTTPS listener
 // router, server                                — route table and middleware; serving
 mod adb;
+mod auth;
 mod config;
 mod db;
 mod deletion;
@@ -90,6 +95,7 @@ mod http;
 mod jobs;
 mod live;
 mod mp4_check;
+mod netinfo;
 mod playback;
 mod published;
 mod recordings;
@@ -100,9 +106,14 @@ mod session;
 mod settings;
 mod shared;
 mod status;
+mod tls;
 mod trials;
 
 pub use adb::{AdbPlayback, contract as adb_contract, mp4_duration_s};
+pub use auth::{
+    ADMIN_TOKEN_FILE, Limits, PresetToken, Role, TokenInfo, create_token, list_tokens, new_token,
+    revoke_token,
+};
 pub use config::{AdbConfig, PlaybackKind, ServerConfig, SimConfig};
 pub use error::Error;
 pub use http::IDEMPOTENCY_HEADER;
@@ -110,3 +121,4 @@ pub use playback::{
     DeviceInfo, Playback, PlaybackJob, PlaybackPlan, SimPlayback, TrialOutput, UploadPlayback,
 };
 pub use server::{Server, ServerHandle};
+pub use tls::TlsConfig;

@@ -10,7 +10,10 @@ use axum::response::Response;
 use axum::routing::{get, post, put};
 
 use crate::Error;
-use crate::handlers::{devices, health, legacy, pages, recording, results, sessions, trials};
+use crate::auth::{self, CallerName};
+use crate::handlers::{
+    devices, health, legacy, pages, recording, results, sessions, share, trials,
+};
 use crate::http::json_response;
 use crate::shared::Shared;
 
@@ -34,6 +37,11 @@ pub(crate) fn router(shared: Arc<Shared>) -> Router {
         .route("/v1/sessions/{id}/results.csv", get(results::csv))
         .route("/v1/sessions/{id}/results.json", get(results::json))
         .route("/v1/sessions/{id}/report", get(pages::report))
+        .route(
+            "/v1/sessions/{id}/share",
+            post(share::create).delete(share::revoke),
+        )
+        .route("/share/{token}", get(share::view))
         .route("/v1/devices", get(devices::list))
         .route("/recording", post(legacy::recording))
         .route("/timestamps", post(legacy::timestamps))
@@ -48,18 +56,34 @@ pub(crate) fn router(shared: Arc<Shared>) -> Router {
         // Middleware, innermost first. Body limits are ours, per route, checked while
         // streaming.
         .layer(DefaultBodyLimit::disable())
+        .layer(axum::middleware::from_fn_with_state(
+            shared.clone(),
+            auth::limit_uploads,
+        ))
+        .layer(axum::middleware::from_fn_with_state(
+            shared.clone(),
+            auth::authenticate,
+        ))
         .layer(axum::middleware::from_fn(log_request))
         .with_state(shared)
 }
 
-/// One log line per request: method, path (server-made ids only, no query), status, time.
+/// One log line per request: method, path (server-made ids only, no query, share tokens
+/// hidden), the caller's token name (never the token), status, time.
 /// Successful `GET`/`HEAD`s log at debug: phones poll their status every half second.
 async fn log_request(request: axum::extract::Request, next: axum::middleware::Next) -> Response {
     let method = request.method().clone();
-    let path = request.uri().path().to_owned();
+    let path = match request.uri().path() {
+        p if p.starts_with("/share/") => "/share/…".to_owned(),
+        p => p.to_owned(),
+    };
     let started = std::time::Instant::now();
     let response = next.run(request).await;
     let status = response.status();
+    let caller = response
+        .extensions()
+        .get::<CallerName>()
+        .map_or("-", |c| c.0.as_str());
     let quiet =
         matches!(method, axum::http::Method::GET | axum::http::Method::HEAD) && status.is_success();
     let level = if quiet {
@@ -69,7 +93,7 @@ async fn log_request(request: axum::extract::Request, next: axum::middleware::Ne
     };
     log::log!(
         level,
-        "{method} {path} → {} in {:.1} ms",
+        "{method} {path} [{caller}] → {} in {:.1} ms",
         status.as_u16(),
         started.elapsed().as_secs_f64() * 1e3
     );

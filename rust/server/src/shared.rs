@@ -32,6 +32,12 @@ pub(crate) struct Shared {
     pub config: ServerConfig,
     pub db: Db,
     pub files: Files,
+    /// Per-token counters of sessions created and bytes uploaded.
+    pub limiter: Arc<crate::auth::UploadLimiter>,
+    /// Whether the page cookie carries `Secure` (served over TLS).
+    pub secure_cookies: bool,
+    /// The TLS certificate's SHA-256 fingerprint (`AB:CD:…`), shown on the overview page.
+    pub tls_fingerprint: Option<String>,
     /// Parsed trials of the sessions in flight.
     pub live: LiveSessions,
     sim: Arc<dyn Playback>,
@@ -54,6 +60,9 @@ impl Shared {
             sim: Arc::new(SimPlayback::new(config.sim.clone())),
             adb: Arc::new(AdbPlayback::new(config.adb.clone())),
             upload: Arc::new(UploadPlayback),
+            limiter: Arc::new(crate::auth::UploadLimiter::new(config.limits)),
+            secure_cookies: false,
+            tls_fingerprint: None,
             live: LiveSessions::new(config.live_session_bytes, config.live_total_bytes),
             config,
             db,

@@ -33,7 +33,13 @@ fn a_previous_versions_data_directory_is_served_with_the_default_window_settings
             "127.0.0.1:0".parse().unwrap(),
         )
         .unwrap();
-        let client = sitar_client::Client::new(&server.url()).unwrap();
+        // An old data directory gets its admin token on the first start.
+        let admin =
+            std::fs::read_to_string(dir.path().join(sitar_server::ADMIN_TOKEN_FILE)).unwrap();
+        let client = sitar_client::Client::new(&server.url())
+            .unwrap()
+            .with_server_token(&admin)
+            .unwrap();
         let status = client.status(id).unwrap();
         assert_eq!(status.state, sitar_client::SessionState::Done);
         assert_eq!(client.results_csv(id).unwrap(), "start,error\n1,0.5\n");

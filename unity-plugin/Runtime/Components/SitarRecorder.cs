@@ -37,6 +37,10 @@ namespace Sitar.Unity
 
         [Header("Backend")]
         public string serverUrl = "http://192.168.0.10:8000";
+        [Tooltip("The backend's app token: `sitar token create --data DIR --role app --name NAME`.")]
+        public string serverToken = "";
+        [Tooltip("With an https:// server URL and a self-signed certificate: the SHA-256 fingerprint `sitar serve --tls` prints (AB:CD:…). Empty: the platform's roots.")]
+        public string serverCertSha256 = "";
         public int trials = 10;
         public string setting = "trim_mean_30";
         public string playback = "adb";
@@ -234,6 +238,8 @@ namespace Sitar.Unity
         string UploadOptions(string serverSessionId)
         {
             var options = new SitarJson().Add("trials", trials).Add("setting", setting).Add("playback", playback);
+            if (!string.IsNullOrEmpty(serverToken)) options.Add("server_token", serverToken);
+            if (!string.IsNullOrEmpty(serverCertSha256)) options.Add("server_cert_sha256", serverCertSha256);
             if (!string.IsNullOrEmpty(serverSessionId)) options.Add("session_id", serverSessionId);
             return options.ToString();
         }

@@ -5,9 +5,11 @@ use axum::response::{IntoResponse, Response};
 use serde_json::json;
 
 use crate::Error;
+use crate::auth::Admin;
 use crate::http::AppState;
 
-pub(crate) async fn list(State(shared): AppState) -> Result<Response, Error> {
+/// Admin only: devices are the lab's, not an app's.
+pub(crate) async fn list(State(shared): AppState, _: Admin) -> Result<Response, Error> {
     let backend = shared.backend(shared.config.playback);
     let list = tokio::task::spawn_blocking(move || backend.devices())
         .await

@@ -8,6 +8,7 @@ use axum::response::{IntoResponse, Response};
 use serde_json::json;
 
 use crate::Error;
+use crate::auth::Caller;
 use crate::files::TempFile;
 use crate::http::{AppState, check_declared_length, content_type, json_value};
 use crate::published::{self, Form};
@@ -55,6 +56,7 @@ async fn multipart_field(
 /// `POST /recording`: a new session with the server's defaults; playback starts.
 pub(crate) async fn recording(
     State(shared): AppState,
+    caller: Caller,
     headers: HeaderMap,
     multipart: Result<Multipart, MultipartRejection>,
 ) -> Result<Response, Error> {
@@ -75,6 +77,7 @@ pub(crate) async fn recording(
         adaptive_min: None,
         adaptive_k: shared.config.default_adaptive_k,
         legacy: true,
+        owner: caller.owner(),
     })?;
     accept_recording(&shared, &shared.session(&id)?, temp)?;
     // The original app treats this answer as "evaluation complete" and then
@@ -105,9 +108,10 @@ pub(crate) async fn recording(
     }
 }
 
-/// `POST /timestamps`: stored with the latest legacy session.
+/// `POST /timestamps`: stored with the caller's latest legacy session.
 pub(crate) async fn timestamps(
     State(shared): AppState,
+    caller: Caller,
     headers: HeaderMap,
     multipart: Result<Multipart, MultipartRejection>,
 ) -> Result<Response, Error> {
@@ -120,9 +124,12 @@ pub(crate) async fn timestamps(
         "timestamps",
     )
     .await?;
-    let id = shared.db.latest_session(false, true)?.ok_or_else(|| {
-        Error::Conflict("no recording uploaded yet: POST /recording first".into())
-    })?;
+    let id = shared
+        .db
+        .latest_session(false, true, caller.scope())?
+        .ok_or_else(|| {
+            Error::Conflict("no recording uploaded yet: POST /recording first".into())
+        })?;
     let lock = shared.session_lock(&id);
     let _held = lock.lock().await;
     shared.session(&id)?;
@@ -130,11 +137,11 @@ pub(crate) async fn timestamps(
     Ok(json_value(StatusCode::OK, &json!({"id": id})))
 }
 
-/// `GET /results.csv`: the results of the latest finished session.
-pub(crate) async fn results(State(shared): AppState) -> Result<Response, Error> {
+/// `GET /results.csv`: the results of the caller's latest finished session.
+pub(crate) async fn results(State(shared): AppState, caller: Caller) -> Result<Response, Error> {
     let id = shared
         .db
-        .latest_session(true, false)?
+        .latest_session(true, false, caller.scope())?
         .ok_or_else(|| Error::NotFound("no finished session yet".into()))?;
     let text = published::read(&shared, &shared.session(&id)?, Form::Csv)?;
     Ok(([(header::CONTENT_TYPE, "text/csv; charset=utf-8")], text).into_response())

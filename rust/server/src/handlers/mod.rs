@@ -8,4 +8,5 @@ pub(crate) mod pages;
 pub(crate) mod recording;
 pub(crate) mod results;
 pub(crate) mod sessions;
+pub(crate) mod share;
 pub(crate) mod trials;

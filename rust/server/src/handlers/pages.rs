@@ -8,6 +8,7 @@ use axum::extract::State;
 use axum::response::{Html, IntoResponse, Response};
 
 use crate::Error;
+use crate::auth::Admin;
 use crate::http::{AppState, Found};
 use crate::published::{self, Form};
 use crate::report::{self, escape};
@@ -17,8 +18,8 @@ use crate::status::status_json;
 const PAGE_SESSIONS: u32 = 50;
 
 /// `GET /`: the newest sessions and the known playback devices as one HTML page.
-pub(crate) async fn overview(State(shared): AppState) -> Result<Response, Error> {
-    let rows = shared.db.recent_sessions(PAGE_SESSIONS)?;
+pub(crate) async fn overview(State(shared): AppState, _: Admin) -> Result<Response, Error> {
+    let rows = shared.db.recent_sessions(None, PAGE_SESSIONS)?;
     let mut sessions = String::new();
     for row in &rows {
         let status = status_json(&shared, row)?;
@@ -80,7 +81,15 @@ pub(crate) async fn overview(State(shared): AppState) -> Result<Response, Error>
          <th>playback</th><th>setting</th><th>links</th><th>note</th></tr></thead>\
          <tbody>\n{sessions}</tbody></table>\
          <h2>Playback devices</h2><ul>{devices}</ul>\
-         <p id=\"memory\">Trials in memory: {held:.1} of {bound:.0} MiB.</p></body></html>\n",
+         <p id=\"memory\">Trials in memory: {held:.1} of {bound:.0} MiB.</p>{tls}</body></html>\n",
+        tls = shared
+            .tls_fingerprint
+            .as_deref()
+            .map(|f| format!(
+                "<p id=\"tls\">TLS certificate SHA-256: <code>{}</code></p>",
+                escape(f)
+            ))
+            .unwrap_or_default(),
         playback = escape(shared.config.playback.as_str()),
         n = rows.len(),
         held = shared.live.held_bytes() as f64 / (1 << 20) as f64,

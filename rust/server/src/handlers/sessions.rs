@@ -8,6 +8,7 @@ use serde::Deserialize;
 use serde_json::json;
 
 use crate::Error;
+use crate::auth::Caller;
 use crate::config::PlaybackKind;
 use crate::deletion;
 use crate::http::{AppState, Found, content_type, idempotency_key, json_value};
@@ -45,6 +46,7 @@ struct CreateRequest {
 /// `POST /v1/sessions`: a new session, its settings checked and stored typed.
 pub(crate) async fn create(
     State(shared): AppState,
+    caller: Caller,
     headers: HeaderMap,
     body: axum::body::Bytes,
 ) -> Result<Response, Error> {
@@ -88,7 +90,11 @@ pub(crate) async fn create(
             "adaptive_min_trials: {min} is below 2"
         )));
     }
-    let key = idempotency_key(&headers)?;
+    // Keys are per token: another token's key never returns (or reveals) its session.
+    let key = idempotency_key(&headers)?.map(|key| match caller.owner() {
+        Some(owner) => format!("{owner}/{key}"),
+        None => key,
+    });
     let (id, _created) = shared.create_session(&NewSession {
         idempotency_key: key.as_deref(),
         trials_total: trials,
@@ -97,6 +103,7 @@ pub(crate) async fn create(
         adaptive_min: req.adaptive_min_trials,
         adaptive_k: req.adaptive_k.unwrap_or(shared.config.default_adaptive_k),
         legacy: false,
+        owner: caller.owner(),
     })?;
     // A replayed request (same Idempotency-Key) gets the answer of the first one.
     Ok((
@@ -138,15 +145,17 @@ fn limit(query: Option<&str>) -> Result<u32, Error> {
     Ok(limit)
 }
 
-/// `GET /v1/sessions[?limit=N]`: the newest sessions, newest first, each as its status.
+/// `GET /v1/sessions[?limit=N]`: the newest sessions, newest first, each as its status (an
+/// app token's own only).
 pub(crate) async fn list(
     State(shared): AppState,
+    caller: Caller,
     RawQuery(query): RawQuery,
 ) -> Result<Response, Error> {
     let limit = limit(query.as_deref())?;
     let sessions = shared
         .db
-        .recent_sessions(limit)?
+        .recent_sessions(caller.scope(), limit)?
         .iter()
         .map(|session| status_json(&shared, session))
         .collect::<Result<Vec<_>, _>>()?;

@@ -146,6 +146,7 @@ mod tests {
             adaptive_min: None,
             adaptive_k: 3,
             legacy: false,
+            owner: None,
         };
         db.insert_session("a", &new).unwrap();
         (dir, db)
@@ -172,7 +173,7 @@ mod tests {
         life.finish("a").unwrap();
         assert_eq!(db.session("a").unwrap().unwrap().state, SessionState::Done);
         assert_eq!(
-            db.latest_session(true, false).unwrap().as_deref(),
+            db.latest_session(true, false, None).unwrap().as_deref(),
             Some("a")
         );
     }

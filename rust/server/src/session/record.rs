@@ -31,6 +31,8 @@ pub(crate) struct Session {
     pub results_trials: u32,
     /// Created by the legacy `POST /recording`.
     pub legacy: bool,
+    /// The token that created it (`None`: made without authentication).
+    pub owner: Option<i64>,
 }
 
 impl Session {
@@ -75,4 +77,6 @@ pub(crate) struct NewSession<'a> {
     pub adaptive_min: Option<u32>,
     pub adaptive_k: u32,
     pub legacy: bool,
+    /// The token that created it (`None`: made without authentication).
+    pub owner: Option<i64>,
 }

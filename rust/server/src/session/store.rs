@@ -12,7 +12,7 @@ use crate::session::state::SessionState;
 use crate::settings::{self, EstimateSettings};
 
 const COLUMNS: &str = "id, trials_total, setting, playback, state, error, stop_reason, adaptive_min, \
-     adaptive_k, recording_bytes, results_trials, legacy, window_frames, pose_relation";
+     adaptive_k, recording_bytes, results_trials, legacy, window_frames, pose_relation, owner";
 
 /// A text column parsed into its type; a value no version of the server writes is an error
 /// that names the column.
@@ -52,6 +52,7 @@ fn session_from_row(r: &rusqlite::Row<'_>) -> rusqlite::Result<Session> {
         recording_bytes: r.get::<_, Option<i64>>(9)?.map(|b| b as u64),
         results_trials: r.get(10)?,
         legacy: r.get::<_, i64>(11)? != 0,
+        owner: r.get(14)?,
     })
 }
 
@@ -74,8 +75,8 @@ impl Db {
             }
             tx.execute(
                 "INSERT INTO sessions (id, idempotency_key, created_ms, trials_total, setting, playback, \
-                 state, adaptive_min, adaptive_k, legacy, window_frames, pose_relation) \
-                 VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12)",
+                 state, adaptive_min, adaptive_k, legacy, window_frames, pose_relation, owner) \
+                 VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13)",
                 params![
                     id,
                     new.idempotency_key,
@@ -89,6 +90,7 @@ impl Db {
                     new.legacy as i64,
                     new.settings.window_frames,
                     new.settings.pose_relation.to_string(),
+                    new.owner,
                 ],
             )?;
             Ok((id.to_string(), true))
@@ -106,13 +108,14 @@ impl Db {
         })
     }
 
-    /// The newest `limit` sessions, newest first.
-    pub fn recent_sessions(&self, limit: u32) -> Result<Vec<Session>, Error> {
+    /// The newest `limit` sessions, newest first; of token `owner` only when given.
+    pub fn recent_sessions(&self, owner: Option<i64>, limit: u32) -> Result<Vec<Session>, Error> {
         self.with(|c| {
             let mut stmt = c.prepare(&format!(
-                "SELECT {COLUMNS} FROM sessions ORDER BY rowid DESC LIMIT ?1"
+                "SELECT {COLUMNS} FROM sessions WHERE ?1 IS NULL OR owner = ?1 \
+                 ORDER BY rowid DESC LIMIT ?2"
             ))?;
-            let rows = stmt.query_map([limit], session_from_row)?;
+            let rows = stmt.query_map(params![owner, limit], session_from_row)?;
             rows.collect()
         })
     }
@@ -158,26 +161,30 @@ impl Db {
     }
 
     /// The newest session (by finish time when `done_only`), of the legacy routes when
-    /// `legacy_only`.
+    /// `legacy_only`, of token `owner` when given.
     pub fn latest_session(
         &self,
         done_only: bool,
         legacy_only: bool,
+        owner: Option<i64>,
     ) -> Result<Option<String>, Error> {
         let legacy = if legacy_only { " AND legacy = 1" } else { "" };
         self.with(|c| {
             if done_only {
                 let sql = format!(
-                    "SELECT id FROM sessions WHERE state = ?1{legacy} \
+                    "SELECT id FROM sessions WHERE state = ?1{legacy} AND (?2 IS NULL OR owner = ?2) \
                      ORDER BY finished_ms DESC, rowid DESC LIMIT 1"
                 );
-                c.query_row(&sql, [SessionState::Done.as_str()], |r| r.get(0))
+                c.query_row(&sql, params![SessionState::Done.as_str(), owner], |r| {
+                    r.get(0)
+                })
                     .optional()
             } else {
                 let sql = format!(
-                    "SELECT id FROM sessions WHERE 1 = 1{legacy} ORDER BY rowid DESC LIMIT 1"
+                    "SELECT id FROM sessions WHERE (?1 IS NULL OR owner = ?1){legacy} \
+                     ORDER BY rowid DESC LIMIT 1"
                 );
-                c.query_row(&sql, [], |r| r.get(0)).optional()
+                c.query_row(&sql, [owner], |r| r.get(0)).optional()
             }
         })
     }
@@ -188,6 +195,7 @@ impl Db {
         self.transaction(|tx| {
             tx.execute("DELETE FROM trials WHERE session_id = ?1", [id])?;
             tx.execute("DELETE FROM jobs WHERE session_id = ?1", [id])?;
+            tx.execute("DELETE FROM share_links WHERE session_id = ?1", [id])?;
             tx.execute(
                 "UPDATE devices SET session_id = NULL WHERE session_id = ?1",
                 [id],
@@ -215,6 +223,7 @@ mod tests {
             adaptive_min: None,
             adaptive_k: 3,
             legacy: false,
+            owner: None,
         }
     }
 
@@ -238,10 +247,10 @@ mod tests {
         assert_eq!(db.sessions_in(&[SessionState::Created]).unwrap().len(), 1);
         assert!(db.sessions_in(&[SessionState::Done]).unwrap().is_empty());
         assert_eq!(
-            db.latest_session(false, false).unwrap().as_deref(),
+            db.latest_session(false, false, None).unwrap().as_deref(),
             Some("a")
         );
-        assert_eq!(db.latest_session(true, false).unwrap(), None);
+        assert_eq!(db.latest_session(true, false, None).unwrap(), None);
         assert!(db.delete_session("a").unwrap());
         assert!(!db.delete_session("a").unwrap());
     }

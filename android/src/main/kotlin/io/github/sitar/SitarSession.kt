@@ -78,7 +78,9 @@ class SitarSession private constructor(handle: Long) : AutoCloseable {
     /**
      * Uploads the recording in the background; when the server is done the
      * results are loaded into this session ([UploadJob.progress] tells).
-     * [optionsJson]: `server_url` (else the config's), `trials`, `setting`,
+     * [optionsJson]: `server_url` (else the config's), `server_token` (the backend's access
+     * token), `server_cert_sha256` (pins the backend's TLS certificate by its SHA-256
+     * fingerprint; a different one fails the job with `SITAR_ERR_NETWORK`), `trials`, `setting`,
      * `playback`, `poll_interval_ms`, `session_id` (continue that server session, e.g. a
      * failed job's [UploadJob.serverId]: the upload resumes where the server's copy ends),
      * `window_frames` and `pose_relation` (default: the config's `subtrajectory_frames` and

@@ -264,7 +264,10 @@ class RecorderActivity : Activity(), GLSurfaceView.Renderer {
         }
         val summary = s.stop(stop.tNs, stop.pose)
         plan = s.renderPlan()
-        val options = Json.obj("trials" to TRIALS, "setting" to "trim_mean_30", "playback" to "adb")
+        val fields = mutableListOf<Pair<String, Any>>("trials" to TRIALS, "setting" to "trim_mean_30", "playback" to "adb")
+        if (SERVER_TOKEN.isNotEmpty()) fields += "server_token" to SERVER_TOKEN
+        if (SERVER_CERT_SHA256.isNotEmpty()) fields += "server_cert_sha256" to SERVER_CERT_SHA256
+        val options = Json.obj(*fields.toTypedArray())
         upload?.close()
         upload = s.upload(mp4.path, options)
         val why = if (stop.reason == StopReason.PAUSE) "the app was paused, so the recording ended" else "stopped"
@@ -314,6 +317,11 @@ class RecorderActivity : Activity(), GLSurfaceView.Renderer {
         const val TAG = "SitarRecorder"
         /** Where `sitar serve` listens (the phone and the backend on one network). */
         const val SERVER_URL = "http://192.168.0.10:8000"
+        /** The backend's app token: `sitar token create --data DIR --role app --name NAME`. */
+        const val SERVER_TOKEN = ""
+        /** With an https:// URL and `sitar serve --tls`'s self-signed certificate: the SHA-256
+         *  fingerprint it prints (AB:CD:…); empty: the platform's roots. */
+        const val SERVER_CERT_SHA256 = ""
         const val TRIALS = 10
         const val CAMERA_REQUEST = 1
         const val POLL_MS = 500L

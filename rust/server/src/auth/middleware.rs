@@ -1,0 +1,159 @@
+//! The authentication middleware: finds the caller of every request (or answers 401), turns a
+//! page visit with `?token=` into a cookie and a redirect, and names the caller to the request
+//! log.
+
+use std::sync::Arc;
+
+use axum::extract::{Request, State};
+use axum::http::{HeaderValue, Method, StatusCode, header};
+use axum::middleware::Next;
+use axum::response::{IntoResponse, Response};
+
+use crate::Error;
+use crate::auth::caller::Caller;
+use crate::auth::secret::{self, COOKIE_NAME};
+use crate::shared::Shared;
+
+/// The caller's name, put on the response for the request log.
+#[derive(Debug, Clone)]
+pub(crate) struct CallerName(pub String);
+
+/// Routes open to everyone: the health check, and share links (their own token is the path).
+fn is_open(path: &str) -> bool {
+    path == "/healthz" || path.starts_with("/share/")
+}
+
+/// The HTML pages, which take `?token=` once and then live on the cookie.
+fn is_page(method: &Method, path: &str) -> bool {
+    method == Method::GET
+        && (path == "/"
+            || path
+                .strip_prefix("/v1/sessions/")
+                .and_then(|rest| rest.strip_suffix("/report"))
+                .is_some_and(|id| !id.contains('/')))
+}
+
+/// The original Unity app's routes: it can only add `?token=` to its hard-coded address.
+fn is_legacy(path: &str) -> bool {
+    matches!(path, "/recording" | "/timestamps" | "/results.csv")
+}
+
+pub(crate) async fn authenticate(
+    State(shared): State<Arc<Shared>>,
+    mut request: Request,
+    next: Next,
+) -> Response {
+    if is_open(request.uri().path()) {
+        return next.run(request).await;
+    }
+    let caller = if shared.config.insecure_no_auth {
+        Caller::Open
+    } else {
+        match identify(&shared, &request) {
+            Ok(Found::Caller(caller)) => caller,
+            Ok(Found::PageVisit(token)) => return redirect_with_cookie(&shared, &request, token),
+            Err(e) => return e.into_response(),
+        }
+    };
+    let name = caller.name().to_owned();
+    request.extensions_mut().insert(caller);
+    let mut response = next.run(request).await;
+    response.extensions_mut().insert(CallerName(name));
+    response
+}
+
+enum Found<'a> {
+    Caller(Caller),
+    /// A page opened with a valid `?token=`: set the cookie, redirect.
+    PageVisit(&'a str),
+}
+
+fn identify<'a>(shared: &Shared, request: &'a Request) -> Result<Found<'a>, Error> {
+    let path = request.uri().path();
+    let method = request.method();
+    let query = request.uri().query().unwrap_or("");
+    let unknown = || Error::Unauthorized("unknown or revoked token".into());
+    if is_page(method, path) && secret::has_param(query, "token") {
+        let token = secret::query_param(query, "token").ok_or_else(unknown)?;
+        shared.db.caller(token)?.ok_or_else(unknown)?;
+        return Ok(Found::PageVisit(token));
+    }
+    let headers = request.headers();
+    let presented = if let Some(value) = headers.get(header::AUTHORIZATION) {
+        let value = value.to_str().unwrap_or("");
+        Some(secret::bearer(value).ok_or_else(|| {
+            Error::Unauthorized("the Authorization header is not `Bearer TOKEN`".into())
+        })?)
+    } else if matches!(*method, Method::GET | Method::HEAD)
+        && let Some(cookie) = headers
+            .get_all(header::COOKIE)
+            .iter()
+            .filter_map(|v| v.to_str().ok())
+            .find_map(|v| secret::cookie(v, COOKIE_NAME))
+    {
+        // Cookies only for reading: SameSite=Strict already keeps other sites' forms out,
+        // and no write goes by a cookie at all.
+        Some(cookie)
+    } else if is_legacy(path) {
+        secret::query_param(query, "token")
+    } else {
+        None
+    };
+    let token = presented.ok_or_else(|| {
+        Error::Unauthorized("no token: send `Authorization: Bearer TOKEN`".into())
+    })?;
+    shared
+        .db
+        .caller(token)?
+        .map(Found::Caller)
+        .ok_or_else(unknown)
+}
+
+/// 303 to the same page without `token=`, setting the HttpOnly, SameSite=Strict cookie.
+fn redirect_with_cookie(shared: &Shared, request: &Request, token: &str) -> Response {
+    let rest = secret::without_param(request.uri().query().unwrap_or(""), "token");
+    let path = request.uri().path();
+    let location = if rest.is_empty() {
+        path.to_owned()
+    } else {
+        format!("{path}?{rest}")
+    };
+    let secure = if shared.secure_cookies {
+        "; Secure"
+    } else {
+        ""
+    };
+    let cookie = format!("{COOKIE_NAME}={token}; Path=/; HttpOnly; SameSite=Strict{secure}");
+    let mut response = StatusCode::SEE_OTHER.into_response();
+    let headers = response.headers_mut();
+    if let (Ok(location), Ok(cookie)) = (
+        HeaderValue::from_str(&location),
+        HeaderValue::from_str(&cookie),
+    ) {
+        headers.insert(header::LOCATION, location);
+        headers.insert(header::SET_COOKIE, cookie);
+        headers.insert(header::CACHE_CONTROL, HeaderValue::from_static("no-store"));
+        response
+    } else {
+        Error::BadRequest("the page address cannot be redirected to".into()).into_response()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pages_legacy_and_open_routes_are_told_apart() {
+        assert!(is_page(&Method::GET, "/"));
+        assert!(is_page(&Method::GET, "/v1/sessions/s0123/report"));
+        assert!(!is_page(&Method::GET, "/v1/sessions/s0123/x/report"));
+        assert!(!is_page(&Method::POST, "/"));
+        assert!(!is_page(&Method::GET, "/v1/sessions"));
+        assert!(is_legacy("/results.csv"));
+        assert!(!is_legacy("/v1/sessions/s0/results.csv"));
+        assert!(is_open("/healthz"));
+        assert!(is_open("/share/sitar_x"));
+        assert!(!is_open("/healthz/x"));
+    }
+}

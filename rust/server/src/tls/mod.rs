@@ -1,0 +1,10 @@
+//! HTTPS with rustls: the certificate (given as PEM, or self-signed once into `DATA/tls/`),
+//! its SHA-256 fingerprint as `openssl x509 -fingerprint -sha256` prints it, and the listener
+//! that does the handshakes.
+
+mod certificate;
+mod listener;
+
+pub use certificate::TlsConfig;
+pub(crate) use certificate::{Tls, load};
+pub(crate) use listener::TlsListener;
