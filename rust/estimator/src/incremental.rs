@@ -213,18 +213,18 @@ impl IncrementalEstimate {
     /// already there and adds the values of those pairs only. On error (an invalid trial, or
     /// one that shares no stamp with an earlier trial) nothing changes.
     pub fn push(&mut self, trial: Trajectory) -> Result<(), Error> {
-        self.try_push(trial).map_err(|(e, _)| e)
+        self.try_push(trial).map_err(|rejected| rejected.0)
     }
 
     /// [`push`](Self::push) that gives the trial back with the error, for a caller that
     /// keeps it (a server estimating over every trial it received, valid or not).
-    pub fn try_push(&mut self, trial: Trajectory) -> Result<(), (Error, Trajectory)> {
+    pub fn try_push(&mut self, trial: Trajectory) -> Result<(), Box<(Error, Trajectory)>> {
         self.trials.push(trial);
         let remap = match self.index.extend(&self.trials) {
             Ok(remap) => remap,
             Err(e) => {
                 let trial = self.trials.pop().expect("pushed above");
-                return Err((e, trial));
+                return Err(Box::new((e, trial)));
             }
         };
         if let Some(remap) = remap {

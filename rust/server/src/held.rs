@@ -119,19 +119,20 @@ impl HeldTrials {
         budget: &dyn StateBudget,
     ) -> Result<(Estimate, &Trajectory), Error> {
         self.bring_in(purpose);
-        let now = self.state_bytes();
+        let mut now = self.state_bytes();
         if now > self.counted {
             match budget.grow(now - self.counted) {
                 Ok(()) => self.counted = now,
                 Err(e) => {
                     log::info!("incremental estimate given up: {e}");
-                    self.to_one_shot();
+                    self.give_up_state();
+                    now = 0;
                 }
             }
         }
-        if self.state_bytes() < self.counted {
-            budget.shrink(self.counted - self.state_bytes());
-            self.counted = self.state_bytes();
+        if now < self.counted {
+            budget.shrink(self.counted - now);
+            self.counted = now;
         }
         let (estimate, trials) = match &self.estimator {
             Estimator::Incremental(state) => (state.estimate(), state.trajectories()),
@@ -154,7 +155,7 @@ impl HeldTrials {
         };
         let nothing_yet = self.order.is_empty();
         if !in_order || (purpose == Purpose::Final && nothing_yet) {
-            self.to_one_shot();
+            self.give_up_state();
         }
         for held in waiting {
             let at = self.order.partition_point(|o| *o < held.order);
@@ -162,9 +163,10 @@ impl HeldTrials {
             match &mut self.estimator {
                 Estimator::OneShot(trials) => trials.insert(at, held.trial),
                 Estimator::Incremental(state) => {
-                    if let Err((e, trial)) = state.try_push(held.trial) {
+                    if let Err(rejected) = state.try_push(held.trial) {
+                        let (e, trial) = *rejected;
                         log::info!("incremental estimate given up: {e}");
-                        self.to_one_shot();
+                        self.give_up_state();
                         if let Estimator::OneShot(trials) = &mut self.estimator {
                             trials.push(trial);
                         }
@@ -176,7 +178,7 @@ impl HeldTrials {
 
     /// Drops the incremental state, keeping its trials (its counted bytes are released by
     /// [`estimate`](Self::estimate)).
-    fn to_one_shot(&mut self) {
+    fn give_up_state(&mut self) {
         let trials = match std::mem::replace(&mut self.estimator, Estimator::OneShot(Vec::new())) {
             Estimator::Incremental(state) => state.into_trajectories(),
             Estimator::OneShot(trials) => trials,

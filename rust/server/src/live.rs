@@ -6,7 +6,7 @@
 //! orientation) plus about 100 bytes: 2 820 poses are 180 kB, 100 such trials 18 MB. The
 //! incremental state (every window's pair values, sums and cursors; the pairwise index and
 //! relative poses) comes on top, as `IncrementalEstimate::memory_bytes` reports it: about
-//! 150 MB more for 100 × 2 820 poses with 10-frame windows (it grows with the square of the
+//! 155 MB more for 100 × 2 820 poses with 10-frame windows (it grows with the square of the
 //! trial count). [`ServerConfig::live_session_bytes`](crate::ServerConfig::live_session_bytes)
 //! bounds one session (default 256 MiB), [`ServerConfig::live_total_bytes`](crate::ServerConfig::live_total_bytes)
 //! all of them together (default 1 GiB), trials and state alike. A trial that would pass
