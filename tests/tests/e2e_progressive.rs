@@ -1,9 +1,11 @@
-//! Progressive estimates of `upload` sessions: after every trial from the 2nd on, exactly
-//! (bitwise) the one-shot estimate over the trials so far, for every setting; rebuilt from
-//! the trial files after a restart; and bounded in memory.
+//! Progressive estimates of `upload` sessions (the server's incremental estimator: each trial
+//! adds only its pairs): after every trial from the 2nd on, exactly (bitwise) the one-shot
+//! estimate over the trials so far, for every setting, both pose relations and a window
+//! length other than the default; rebuilt from the trial files after a restart; and bounded
+//! in memory.
 
 use sitar_client::{NewSession, SessionState};
-use sitar_estimator::{EstimateOptions, Setting, Thresholds, Trajectory};
+use sitar_estimator::{EstimateOptions, PoseRelation, Setting, Thresholds, Trajectory};
 use sitar_tests::*;
 
 /// Four trials of one walk, the third with every 7th frame dropped (so its pairs need a real
@@ -17,24 +19,36 @@ fn trials() -> Vec<Trajectory> {
 }
 
 fn upload_session(client: &sitar_client::Client, setting: Setting) -> String {
+    windowed_session(client, setting, None)
+}
+
+/// An `upload` session of 4 trials; `window` names its window frames and pose relation.
+fn windowed_session(
+    client: &sitar_client::Client,
+    setting: Setting,
+    window: Option<(u32, PoseRelation)>,
+) -> String {
     let new = NewSession {
         trials: 4,
         setting: setting.to_string(),
         playback: "upload".into(),
-        window_frames: None,
-        pose_relation: None,
+        window_frames: window.map(|(frames, _)| frames),
+        pose_relation: window.map(|(_, relation)| relation.to_string()),
     };
     client.create_session(&new).unwrap()
 }
 
-/// The f64 bits of every window's error in a results JSON text.
+/// The f64 bits of every window's error (`error_m` or `error_deg`) in a results JSON text.
 fn error_bits(json: &str) -> Vec<u64> {
     let doc: serde_json::Value = serde_json::from_str(json).unwrap();
     doc["windows"]
         .as_array()
         .unwrap()
         .iter()
-        .map(|w| w["error_m"].as_f64().unwrap().to_bits())
+        .map(|w| {
+            let error = w.get("error_m").or_else(|| w.get("error_deg"));
+            error.and_then(|e| e.as_f64()).unwrap().to_bits()
+        })
         .collect()
 }
 
@@ -44,8 +58,26 @@ fn progressive_results_equal_a_one_shot_estimate_bitwise_for_every_setting() {
     let server = start(sim_config(&dir.path().join("data"), 20.0, 1));
     let client = client(&server);
     let trials = trials();
-    for setting in Setting::ALL {
-        let id = upload_session(&client, setting);
+    let windows = [None, Some((7, PoseRelation::RotationAngleDeg))];
+    for (setting, window) in Setting::ALL
+        .into_iter()
+        .flat_map(|s| windows.map(|w| (s, w)))
+    {
+        let id = windowed_session(&client, setting, window);
+        let (delta, pose_relation) = window
+            .map_or((10, PoseRelation::TranslationPart), |(f, r)| {
+                (f as usize, r)
+            });
+        let options = EstimateOptions {
+            setting,
+            delta,
+            pose_relation,
+            ..EstimateOptions::default()
+        };
+        let thresholds = match pose_relation {
+            PoseRelation::RotationAngleDeg => Thresholds::DEFAULT_DEG,
+            _ => Thresholds::DEFAULT_M,
+        };
         for n in 1..=trials.len() {
             client.upload_trial(&id, &tum_text(&trials[n - 1])).unwrap();
             if n < 2 {
@@ -53,20 +85,14 @@ fn progressive_results_equal_a_one_shot_estimate_bitwise_for_every_setting() {
             }
             wait_results(&client, &id, n as u32);
             let got = client.results_json(&id).unwrap();
-            let one_shot = direct_estimate(
-                &trials[..n],
-                &EstimateOptions {
-                    setting,
-                    ..EstimateOptions::default()
-                },
-            );
-            assert_same_results(&got, &one_shot.to_json(Thresholds::DEFAULT_M));
+            let one_shot = direct_estimate(&trials[..n], &options);
+            assert_same_results(&got, &one_shot.to_json(thresholds));
             let bits: Vec<u64> = one_shot
                 .windows
                 .iter()
                 .map(|w| w.error_m.to_bits())
                 .collect();
-            assert_eq!(error_bits(&got), bits, "{setting}, {n} trials");
+            assert_eq!(error_bits(&got), bits, "{setting} {window:?}, {n} trials");
             assert_same_results(&client.results_csv(&id).unwrap(), &one_shot.to_legacy_csv());
         }
         // The final estimate over trials the last progressive one already covered is that one.

@@ -102,19 +102,6 @@ impl Estimate {
     /// evo names them. `class` comes from `thresholds`, which are in that unit; it is given for
     /// `trans_part` and `angle_deg` windows (the two the phone colours) and omitted otherwise.
     pub fn to_json(&self, thresholds: Thresholds) -> String {
-        /// One window: the stamps as exact number text, the rest as values.
-        #[derive(serde::Serialize)]
-        struct Window {
-            start: Box<serde_json::value::RawValue>,
-            end: Box<serde_json::value::RawValue>,
-            #[serde(flatten)]
-            values: serde_json::Map<String, serde_json::Value>,
-        }
-        let stamp = |t: i64| {
-            // A plain decimal number is always valid JSON number text.
-            serde_json::value::RawValue::from_string(self.time_unit.format_stamp(t))
-                .expect("a formatted stamp is a JSON number")
-        };
         let (error_key, spread_key, unit) = match self.pose_relation {
             PoseRelation::TranslationPart => ("error_m", "spread_m", "m"),
             PoseRelation::RotationAngleDeg => ("error_deg", "spread_deg", "deg"),
@@ -125,27 +112,20 @@ impl Estimate {
             self.pose_relation,
             PoseRelation::TranslationPart | PoseRelation::RotationAngleDeg
         );
-        let windows: Vec<Window> = self
+        let windows: Vec<WindowJson<'_>> = self
             .windows
             .iter()
-            .map(|w| {
-                let mut o = serde_json::Map::new();
-                o.insert(error_key.into(), json_number(w.error_m));
-                o.insert("pairs".into(), w.pairs.into());
-                o.insert(spread_key.into(), json_number(w.spread_m));
-                if classified {
-                    o.insert("class".into(), thresholds.classify(w.error_m).name().into());
-                }
-                Window {
-                    start: stamp(w.start),
-                    end: stamp(w.end),
-                    values: o,
-                }
+            .map(|window| WindowJson {
+                start: self.time_unit.format_stamp(window.start),
+                end: self.time_unit.format_stamp(window.end),
+                window,
+                keys: (error_key, spread_key),
+                class: classified.then(|| thresholds.classify(window.error_m).name()),
             })
             .collect();
         // Serialized as a struct: through a `Value` the raw stamps would become floats again.
         #[derive(serde::Serialize)]
-        struct Document {
+        struct Document<'a> {
             version: u32,
             setting: String,
             trials: usize,
@@ -153,7 +133,7 @@ impl Estimate {
             pose_relation: String,
             window_frames: usize,
             unit: &'static str,
-            windows: Vec<Window>,
+            windows: Vec<WindowJson<'a>>,
         }
         let document = Document {
             version: 1,
@@ -172,8 +152,43 @@ impl Estimate {
     }
 }
 
-fn json_number(v: f64) -> serde_json::Value {
-    serde_json::Number::from_f64(v).map_or(serde_json::Value::Null, serde_json::Value::Number)
+/// One window of the JSON: `start` and `end` as exact number text, then the values in
+/// alphabetical key order (`class`, error, `pairs`, spread), written straight from the window
+/// (a progressive server writes thousands of them after every trial).
+struct WindowJson<'a> {
+    start: String,
+    end: String,
+    window: &'a WindowEstimate,
+    /// The error's and the spread's keys in the estimate's unit.
+    keys: (&'static str, &'static str),
+    class: Option<&'static str>,
+}
+
+impl serde::Serialize for WindowJson<'_> {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        /// A number that is not finite is `null` (JSON has no NaN).
+        fn finite(v: f64) -> Option<f64> {
+            v.is_finite().then_some(v)
+        }
+        /// A plain decimal number is always valid JSON number text.
+        fn raw(text: &str) -> Result<&serde_json::value::RawValue, serde_json::Error> {
+            serde_json::from_str(text)
+        }
+        let mut map = serializer.serialize_map(None)?;
+        map.serialize_entry(
+            "start",
+            raw(&self.start).map_err(serde::ser::Error::custom)?,
+        )?;
+        map.serialize_entry("end", raw(&self.end).map_err(serde::ser::Error::custom)?)?;
+        if let Some(class) = self.class {
+            map.serialize_entry("class", class)?;
+        }
+        map.serialize_entry(self.keys.0, &finite(self.window.error_m))?;
+        map.serialize_entry("pairs", &self.window.pairs)?;
+        map.serialize_entry(self.keys.1, &finite(self.window.spread_m))?;
+        map.end()
+    }
 }
 
 /// Estimates the per-window pose error of `trials` (at least 2) without ground truth.
@@ -309,6 +324,39 @@ mod tests {
         for (w, v) in e.windows.iter().zip(&r.errors) {
             assert!((w.error_m - v).abs() < 1e-12);
         }
+    }
+
+    #[test]
+    fn json_text_is_exact_with_keys_in_alphabetical_order_and_null_for_nan() {
+        let window = |start: i64, error_m: f64, pairs: usize, spread_m: f64| WindowEstimate {
+            start,
+            end: start + 1000,
+            error_m,
+            pairs,
+            spread_m,
+        };
+        let mut e = Estimate {
+            setting: Setting::Median,
+            trials: 2,
+            time_unit: TimeUnit::Nanoseconds,
+            pose_relation: PoseRelation::TranslationPart,
+            delta: 10,
+            windows: vec![
+                window(1000, 0.25, 3, 0.5),
+                window(2000, f64::NAN, 1, f64::NAN),
+            ],
+        };
+        assert_eq!(
+            e.to_json(Thresholds::new(0.1, 0.2)),
+            r#"{"version":1,"setting":"median","trials":2,"time_unit":"ns","pose_relation":"trans_part","window_frames":10,"unit":"m","windows":[{"start":1000,"end":2000,"class":"high","error_m":0.25,"pairs":3,"spread_m":0.5},{"start":2000,"end":3000,"class":"low","error_m":null,"pairs":1,"spread_m":null}]}"#
+        );
+        e.pose_relation = PoseRelation::RotationAngleRad;
+        e.time_unit = TimeUnit::Seconds;
+        e.windows.truncate(1);
+        assert_eq!(
+            e.to_json(Thresholds::new(0.1, 0.2)),
+            r#"{"version":1,"setting":"median","trials":2,"time_unit":"s","pose_relation":"angle_rad","window_frames":10,"unit":"rad","windows":[{"start":0.000001000,"end":0.000002000,"error_rad":0.25,"pairs":3,"spread_rad":0.5}]}"#
+        );
     }
 
     #[test]

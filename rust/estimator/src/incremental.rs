@@ -213,12 +213,18 @@ impl IncrementalEstimate {
     /// already there and adds the values of those pairs only. On error (an invalid trial, or
     /// one that shares no stamp with an earlier trial) nothing changes.
     pub fn push(&mut self, trial: Trajectory) -> Result<(), Error> {
+        self.try_push(trial).map_err(|rejected| rejected.0)
+    }
+
+    /// [`push`](Self::push) that gives the trial back with the error, for a caller that
+    /// keeps it (a server estimating over every trial it received, valid or not).
+    pub fn try_push(&mut self, trial: Trajectory) -> Result<(), Box<(Error, Trajectory)>> {
         self.trials.push(trial);
         let remap = match self.index.extend(&self.trials) {
             Ok(remap) => remap,
             Err(e) => {
-                self.trials.pop();
-                return Err(e);
+                let trial = self.trials.pop().expect("pushed above");
+                return Err(Box::new((e, trial)));
             }
         };
         if let Some(remap) = remap {
@@ -263,6 +269,16 @@ impl IncrementalEstimate {
     /// Number of trials pushed.
     pub fn trials(&self) -> usize {
         self.trials.len()
+    }
+
+    /// The trials pushed, in order.
+    pub fn trajectories(&self) -> &[Trajectory] {
+        &self.trials
+    }
+
+    /// The trials pushed, in order; the rest of the state is dropped.
+    pub fn into_trajectories(self) -> Vec<Trajectory> {
+        self.trials
     }
 
     /// The estimate over the trials pushed so far (at least 2).

@@ -9,6 +9,7 @@ use crate::Error;
 use crate::config::PlaybackKind;
 use crate::db::JobEnd;
 use crate::estimation::{self, Published};
+use crate::held::Purpose;
 use crate::live::LiveSession;
 use crate::playback::{PlaybackJob, TrialOutput};
 use crate::session::{SessionState, Step};
@@ -36,10 +37,13 @@ async fn publish(
     shared: &Arc<Shared>,
     live: &Arc<LiveSession>,
     id: &str,
+    purpose: Purpose,
 ) -> Result<Option<Published>, Error> {
     let (shared, id) = (shared.clone(), id.to_string());
-    live.publish(move |published| crate::published::write(&shared, &id, published))
-        .await
+    live.publish(purpose, move |published| {
+        crate::published::write(&shared, &id, published)
+    })
+    .await
 }
 
 /// Ends a job's session: a failure is recorded (unless the server is stopping, which leaves
@@ -92,7 +96,7 @@ pub(crate) fn spawn_estimate(shared: Arc<Shared>, id: String) {
             let session = shared.session(&id)?;
             let live = trials::live_session(&shared, &session).await?;
             // Nothing new since the last progressive estimate: it is the final one.
-            publish(&shared, &live, &id).await?;
+            publish(&shared, &live, &id, Purpose::Final).await?;
             shared.lifecycle().finish(&id)?;
             Ok(Outcome::Done)
         }
@@ -110,7 +114,7 @@ pub(crate) fn spawn_progressive(shared: Arc<Shared>, live: Arc<LiveSession>, id:
     }
     tokio::spawn(async move {
         loop {
-            if let Err(e) = publish(&shared, &live, &id).await
+            if let Err(e) = publish(&shared, &live, &id, Purpose::Progressive).await
                 && !shared.stopping()
             {
                 log::warn!("session {id}: progressive estimate: {e}");
@@ -177,7 +181,7 @@ async fn play_and_estimate(shared: &Arc<Shared>, id: &str, begin: Begin) -> Resu
         Ok(())
     };
     if done_before >= 2
-        && let Some(p) = publish(shared, &live, id).await?
+        && let Some(p) = publish(shared, &live, id, Purpose::Progressive).await?
     {
         history.push((p.trials, p.classes));
     }
@@ -218,7 +222,7 @@ async fn play_and_estimate(shared: &Arc<Shared>, id: &str, begin: Begin) -> Resu
             continue;
         }
         // Progressive results: a first picture from the 2nd trial on.
-        let Some(p) = publish(shared, &live, id).await? else {
+        let Some(p) = publish(shared, &live, id, Purpose::Progressive).await? else {
             continue;
         };
         history.push((p.trials, p.classes));
@@ -267,7 +271,7 @@ async fn play_and_estimate(shared: &Arc<Shared>, id: &str, begin: Begin) -> Resu
         }
     }
     shared.lifecycle().start_estimating(id)?;
-    publish(shared, &live, id).await?;
+    publish(shared, &live, id, Purpose::Final).await?;
     shared.lifecycle().finish(id)?;
     Ok(Outcome::Done)
 }

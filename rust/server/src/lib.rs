@@ -23,7 +23,8 @@
 //! flight (bounded: [`ServerConfig::live_session_bytes`],
 //! [`ServerConfig::live_total_bytes`]); every finished trial from the 2nd on
 //! publishes a progressive estimate over them, bitwise equal to a one-shot
-//! estimate; with adaptive stopping a session ends early once no window's
+//! estimate, to which the new trial adds only its pairs (the live session keeps
+//! a `sitar_estimator::IncrementalEstimate`); with adaptive stopping a session ends early once no window's
 //! class changed over the last k trials.
 //!
 //! For the people who run it: `GET /` is an HTML overview of the newest
@@ -74,7 +75,7 @@
 // no import cycle exists):
 // error, config, settings, files, db            — vocabulary and storage
 // session (state, record, store, lifecycle)     — a session's life; the only state writer
-// estimation, live, playback, adb               — estimates over trials held in memory
+// estimation, held, live, playback, adb         — estimates over trials held in memory
 // shared, published, trials, status, report     — what handlers and jobs share
 // jobs, recordings, deletion                    — work on sessions
 // auth                                          — tokens, callers, limits (middleware)
@@ -91,6 +92,7 @@ mod error;
 mod estimation;
 mod files;
 mod handlers;
+mod held;
 mod http;
 mod jobs;
 mod live;

@@ -1,15 +1,21 @@
-//! Live sessions: the parsed trials of every session in flight, held in memory so that each
-//! progressive estimate works on them and never re-reads a file.
+//! Live sessions: the parsed trials of every session in flight, held in memory with the
+//! estimator's state, so that each progressive estimate adds only the new trials' pairs and
+//! never re-reads a file (`held.rs`).
 //!
 //! **Memory.** A trial costs 64 bytes a pose (an `i64` stamp, a `DVec3` position, a `DQuat`
-//! orientation) plus about 100 bytes: 2 820 poses are 180 kB, 100 such trials 18 MB.
-//! [`ServerConfig::live_session_bytes`](crate::ServerConfig::live_session_bytes) bounds one
-//! session (default 256 MiB), [`ServerConfig::live_total_bytes`](crate::ServerConfig::live_total_bytes)
-//! all of them together (default 1 GiB); a trial that would pass either is refused before
-//! anything of it is stored. An estimate's own working memory comes on top while it runs
-//! (the estimator's: under 60 MB for 100 × 2 820 poses). A live session is dropped, and its
-//! bytes freed, when the session finishes, fails or is deleted; after a restart it is
-//! rebuilt from the trial files when the session next needs it.
+//! orientation) plus about 100 bytes: 2 820 poses are 180 kB, 100 such trials 18 MB. The
+//! incremental state (every window's pair values, sums and cursors; the pairwise index and
+//! relative poses) comes on top, as `IncrementalEstimate::memory_bytes` reports it: about
+//! 155 MB more for 100 × 2 820 poses with 10-frame windows (it grows with the square of the
+//! trial count). [`ServerConfig::live_session_bytes`](crate::ServerConfig::live_session_bytes)
+//! bounds one session (default 256 MiB), [`ServerConfig::live_total_bytes`](crate::ServerConfig::live_total_bytes)
+//! all of them together (default 1 GiB), trials and state alike. A trial that would pass
+//! either is refused before anything of it is stored; state growth is counted after each
+//! push (one push adds one trial's pairs), and when it passes a bound the state is dropped
+//! and the session goes on with one-shot estimates (whose working memory, under 60 MB for
+//! 100 × 2 820 poses, is only held while one runs). A live session is dropped, and its bytes
+//! freed, when the session finishes, fails or is deleted; after a restart it is rebuilt
+//! from the trial files when the session next needs it (its state with the next estimate).
 //!
 //! **Estimates.** One estimate of a session runs at a time ([`LiveSession::publish`]); trials
 //! that arrive meanwhile wait in an inbox and join the next one together, in playback order.
@@ -23,18 +29,8 @@ use sitar_estimator::Trajectory;
 
 use crate::Error;
 use crate::estimation::Published;
+use crate::held::{Held, HeldTrials, Purpose, StateBudget, trial_bytes};
 use crate::settings::EstimateSettings;
-
-/// Bytes one parsed trial holds in memory.
-pub(crate) fn trial_bytes(trial: &Trajectory) -> usize {
-    fn heap<T>(v: &Vec<T>) -> usize {
-        v.capacity() * std::mem::size_of::<T>()
-    }
-    std::mem::size_of::<Trajectory>()
-        + heap(&trial.stamps)
-        + heap(&trial.positions)
-        + heap(&trial.orientations)
-}
 
 /// The live sessions of one server, with the memory bound over them all.
 pub(crate) struct LiveSessions {
@@ -90,7 +86,7 @@ impl LiveSessions {
             settings,
             thresholds,
             inbox: Mutex::new(Vec::new()),
-            held: Arc::new(tokio::sync::Mutex::new(Ordered::default())),
+            held: Arc::new(tokio::sync::Mutex::new(HeldTrials::new(&settings))),
             bytes: AtomicUsize::new(0),
             budget: self.budget.clone(),
             published: AtomicU32::new(published),
@@ -118,27 +114,6 @@ impl LiveSessions {
     }
 }
 
-/// One trial in memory, with its place in playback order: (playback index, storage index).
-struct Held {
-    order: (u32, u32),
-    trial: Trajectory,
-}
-
-/// Trials in playback order, side by side with their places (the estimator takes a slice).
-#[derive(Default)]
-struct Ordered {
-    order: Vec<(u32, u32)>,
-    trials: Vec<Trajectory>,
-}
-
-impl Ordered {
-    fn insert(&mut self, held: Held) {
-        let at = self.order.partition_point(|o| *o < held.order);
-        self.order.insert(at, held.order);
-        self.trials.insert(at, held.trial);
-    }
-}
-
 /// The trials of one session in flight.
 pub(crate) struct LiveSession {
     id: String,
@@ -146,9 +121,10 @@ pub(crate) struct LiveSession {
     thresholds: Thresholds,
     /// Trials that arrived since an estimate last took them.
     inbox: Mutex<Vec<Held>>,
-    /// Every other trial, in playback order; locked by the one estimate that runs.
-    held: Arc<tokio::sync::Mutex<Ordered>>,
-    /// Bytes of this session's trials (inbox and held).
+    /// Every other trial, in playback order, with the estimator state; locked by the one
+    /// estimate that runs.
+    held: Arc<tokio::sync::Mutex<HeldTrials>>,
+    /// Bytes of this session's trials (inbox and held) and estimator state.
     bytes: AtomicUsize,
     budget: Arc<Budget>,
     /// Trials of the latest published estimate.
@@ -259,11 +235,12 @@ impl LiveSession {
     /// start. `None` when there is nothing new to publish (fewer than 2 trials, none since
     /// the last published estimate, or the session closed).
     ///
-    /// This is the one function that calls the estimator: today the one-shot
-    /// `sitar_estimator::estimate` over the held trials; an incremental estimator would
-    /// keep its state next to `held` and push the new trials here.
+    /// This is the one function that calls the estimator: new trials join the session's
+    /// incremental state (only their pairs are computed), or a one-shot estimate when there
+    /// is none (`held.rs` says when).
     pub async fn publish(
         self: &Arc<Self>,
+        purpose: Purpose,
         write: impl FnOnce(&Published) -> Result<(), Error> + Send + 'static,
     ) -> Result<Option<Published>, Error> {
         let mut held = self.held.clone().lock_owned().await;
@@ -274,19 +251,15 @@ impl LiveSession {
             }
             let arrived =
                 std::mem::take(&mut *live.inbox.lock().unwrap_or_else(|e| e.into_inner()));
-            for trial in arrived {
-                held.insert(trial);
-            }
-            let trials = &held.trials;
-            let count = trials.len() as u32;
+            held.take(arrived);
+            let count = held.count() as u32;
             if count < 2 || count == live.published() {
                 return Ok(None);
             }
-            let estimate = sitar_estimator::estimate(trials, &live.settings.options())
-                .map_err(|e| Error::Estimate(e.to_string()))?;
+            let (estimate, reference) = held.estimate(&live.settings, purpose, live.as_ref())?;
             let published = Published::new(
                 &estimate,
-                &trials[0],
+                reference,
                 live.settings.window_frames as usize,
                 live.thresholds,
             );
@@ -297,6 +270,24 @@ impl LiveSession {
         })
         .await
         .map_err(|e| Error::Internal(format!("estimate of session {}: {e}", self.id)))?
+    }
+
+    /// Whether the session's trials are estimated incrementally (see `held.rs`).
+    #[cfg(test)]
+    async fn incremental(&self) -> bool {
+        self.held.lock().await.incremental()
+    }
+}
+
+impl StateBudget for LiveSession {
+    fn grow(&self, bytes: usize) -> Result<(), Error> {
+        // Counted until shrunk or the session is dropped.
+        std::mem::forget(self.reserve(bytes)?);
+        Ok(())
+    }
+
+    fn shrink(&self, bytes: usize) {
+        self.release(bytes);
     }
 }
 
@@ -352,46 +343,144 @@ mod tests {
             .unwrap()
     }
 
+    fn add(live: &LiveSession, play: u64, index: u32) {
+        let reservation = live.reserve(trial_bytes(&trial(play))).unwrap();
+        live.add(play as u32, index, trial(play), reservation);
+    }
+
+    /// Adds trials whose storage index is their playback index.
+    fn add_in_order(live: &LiveSession, plays: impl IntoIterator<Item = u64>) {
+        for play in plays {
+            add(live, play, play as u32);
+        }
+    }
+
+    fn one_shot(plays: &[u64]) -> String {
+        let trials: Vec<Trajectory> = plays.iter().map(|&p| trial(p)).collect();
+        let estimate = sitar_estimator::estimate(&trials, &settings().options()).unwrap();
+        estimate.to_json(Thresholds::DEFAULT_DEG)
+    }
+
+    async fn progressive(live: &Arc<LiveSession>) -> Option<Published> {
+        live.publish(Purpose::Progressive, |_| Ok(()))
+            .await
+            .unwrap()
+    }
+
     #[tokio::test]
     async fn an_estimate_takes_the_trials_in_playback_order_and_equals_the_one_shot() {
-        let sessions = LiveSessions::new(1 << 20, 1 << 20);
+        let sessions = LiveSessions::new(1 << 24, 1 << 24);
         let live = live(&sessions, "a");
-        assert!(
-            live.publish(|_| Ok(())).await.unwrap().is_none(),
-            "no trials"
-        );
-        // Trials arrive out of playback order (parallel phones).
+        assert!(progressive(&live).await.is_none(), "no trials");
+        // Trials arrive out of playback order (parallel phones), before the first estimate.
         for (play, index) in [(2, 0), (0, 1), (1, 2)] {
-            let reservation = live.reserve(trial_bytes(&trial(play))).unwrap();
-            live.add(play as u32, index, trial(play), reservation);
+            add(&live, play, index);
         }
         assert!(live.has_new());
-        let published = live.publish(|_| Ok(())).await.unwrap().unwrap();
+        let published = progressive(&live).await.unwrap();
         assert!(!live.has_new());
-        let ordered = [trial(0), trial(1), trial(2)];
-        let one_shot = sitar_estimator::estimate(&ordered, &settings().options()).unwrap();
-        assert_eq!(published.json, one_shot.to_json(Thresholds::DEFAULT_DEG));
+        assert_eq!(published.json, one_shot(&[0, 1, 2]));
         assert_eq!((published.trials, live.published()), (3, 3));
+        assert!(live.incremental().await);
+        // The state is counted on top of the trials.
+        let trials = 3 * trial_bytes(&trial(0));
+        assert!(sessions.held_bytes() > trials, "{}", sessions.held_bytes());
         // Nothing new: nothing published; a failed write publishes nothing either.
-        assert!(live.publish(|_| Ok(())).await.unwrap().is_none());
-        let reservation = live.reserve(trial_bytes(&trial(3))).unwrap();
-        live.add(3, 3, trial(3), reservation);
+        assert!(progressive(&live).await.is_none());
+        add(&live, 3, 3);
         let err = live
-            .publish(|_| Err(Error::Internal("disk".into())))
+            .publish(Purpose::Progressive, |_| {
+                Err(Error::Internal("disk".into()))
+            })
             .await
             .unwrap_err();
         assert!(err.to_string().contains("disk"));
         assert_eq!(live.published(), 3);
-        assert_eq!(live.publish(|_| Ok(())).await.unwrap().unwrap().trials, 4);
+        add(&live, 4, 4);
+        let published = progressive(&live).await.unwrap();
+        assert_eq!(published.trials, 5);
+        assert_eq!(published.json, one_shot(&[0, 1, 2, 3, 4]));
+        assert!(live.incremental().await, "in order: pushed");
         // A removed session publishes nothing more, and its bytes are freed when dropped.
-        let held = sessions.held_bytes();
-        assert_eq!(held, 4 * trial_bytes(&trial(0)));
         sessions.remove("a");
-        let reservation = live.reserve(10).unwrap();
-        live.add(4, 4, trial(4), reservation);
-        assert!(live.publish(|_| Ok(())).await.unwrap().is_none());
+        add(&live, 5, 5);
+        assert!(progressive(&live).await.is_none());
         drop(live);
         assert_eq!(sessions.held_bytes(), 0);
+    }
+
+    #[tokio::test]
+    async fn a_trial_before_one_already_estimated_ends_the_incremental_state_not_the_equality() {
+        let sessions = LiveSessions::new(1 << 24, 1 << 24);
+        let live = live(&sessions, "a");
+        add_in_order(&live, [0, 2, 3]);
+        assert_eq!(progressive(&live).await.unwrap().json, one_shot(&[0, 2, 3]));
+        assert!(live.incremental().await);
+        add(&live, 1, 4);
+        assert_eq!(
+            progressive(&live).await.unwrap().json,
+            one_shot(&[0, 1, 2, 3])
+        );
+        assert!(!live.incremental().await);
+        // Its memory is given back: only the trials are counted now.
+        assert_eq!(sessions.held_bytes(), 4 * trial_bytes(&trial(0)));
+        add(&live, 4, 5);
+        assert_eq!(
+            progressive(&live).await.unwrap().json,
+            one_shot(&[0, 1, 2, 3, 4])
+        );
+    }
+
+    #[tokio::test]
+    async fn a_final_estimate_without_state_is_one_shot_and_a_tight_bound_drops_the_state() {
+        let sessions = LiveSessions::new(1 << 24, 1 << 24);
+        let finishing = live(&sessions, "a");
+        add_in_order(&finishing, 0..4);
+        let published = finishing
+            .publish(Purpose::Final, |_| Ok(()))
+            .await
+            .unwrap()
+            .unwrap();
+        assert_eq!(published.json, one_shot(&[0, 1, 2, 3]));
+        assert!(!finishing.incremental().await);
+        assert_eq!(sessions.held_bytes(), 4 * trial_bytes(&trial(0)));
+
+        // Room for the trials, not for their pairs' values: estimates stay right, one-shot.
+        let one = trial_bytes(&trial(0));
+        let tight = LiveSessions::new(4 * one + 64, 1 << 24);
+        let bounded = live(&tight, "b");
+        add_in_order(&bounded, 0..3);
+        let published = progressive(&bounded).await.unwrap();
+        assert_eq!(published.json, one_shot(&[0, 1, 2]));
+        assert!(!bounded.incremental().await);
+        assert_eq!(tight.held_bytes(), 3 * one);
+        add(&bounded, 3, 3);
+        let published = progressive(&bounded).await.unwrap();
+        assert_eq!(published.json, one_shot(&[0, 1, 2, 3]));
+    }
+
+    #[tokio::test]
+    async fn a_trial_that_cannot_join_fails_the_estimate_as_the_one_shot_does() {
+        let sessions = LiveSessions::new(1 << 24, 1 << 24);
+        let live = live(&sessions, "a");
+        add_in_order(&live, 0..2);
+        assert!(progressive(&live).await.is_some());
+        // Stamps an hour later: no stamp shared with the trials before.
+        let mut late = trial(2);
+        late.stamps.iter_mut().for_each(|s| *s += 3_600_000_000_000);
+        let trials = [trial(0), trial(1), late.clone()];
+        let expected = sitar_estimator::estimate(&trials, &settings().options()).unwrap_err();
+        let reservation = live.reserve(trial_bytes(&late)).unwrap();
+        live.add(2, 2, late, reservation);
+        let err = live
+            .publish(Purpose::Progressive, |_| Ok(()))
+            .await
+            .unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            Error::Estimate(expected.to_string()).to_string()
+        );
+        assert_eq!(live.published(), 2);
     }
 
     #[test]

@@ -59,7 +59,7 @@ pub(crate) fn store_trial(
         play_index,
         source,
     } = arrival;
-    let reservation = live.reserve(crate::live::trial_bytes(&trial))?;
+    let reservation = live.reserve(crate::held::trial_bytes(&trial))?;
     let (index, created) =
         shared
             .db

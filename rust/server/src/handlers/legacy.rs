@@ -9,6 +9,7 @@ use serde_json::json;
 
 use crate::Error;
 use crate::auth::Caller;
+use crate::config::ServerConfig;
 use crate::files::TempFile;
 use crate::http::{AppState, check_declared_length, content_type, json_value};
 use crate::published::{self, Form};
@@ -20,15 +21,31 @@ use crate::shared::Shared;
 /// How often a held legacy `POST /recording` looks at its session's state.
 const LEGACY_POLL: std::time::Duration = std::time::Duration::from_millis(100);
 
-/// Reads the multipart field `name` of a legacy upload into a temp file.
+/// The one field of a legacy upload: its multipart name and the size limit it takes.
+struct Field {
+    name: &'static str,
+    limit: fn(&ServerConfig) -> u64,
+}
+
+const RECORDING: Field = Field {
+    name: "recording",
+    limit: |config| config.max_recording_bytes,
+};
+
+const TIMESTAMPS: Field = Field {
+    name: "timestamps",
+    limit: |config| config.max_trajectory_bytes,
+};
+
+/// Reads the multipart field `field` of a legacy upload into a temp file.
 async fn multipart_field(
     shared: &Shared,
     multipart: Result<Multipart, MultipartRejection>,
     headers: &HeaderMap,
-    name: &str,
-    limit: u64,
-    what: &'static str,
+    field: Field,
 ) -> Result<TempFile, Error> {
+    let Field { name, limit } = field;
+    let limit = limit(&shared.config);
     let mut multipart = multipart.map_err(|e| {
         if content_type(headers) != "multipart/form-data" {
             Error::UnsupportedMediaType(format!(
@@ -39,7 +56,7 @@ async fn multipart_field(
         }
     })?;
     // Multipart framing adds a little; the field itself is limited exactly.
-    check_declared_length(headers, limit.saturating_add(64 << 10), what)?;
+    check_declared_length(headers, limit.saturating_add(64 << 10), name)?;
     loop {
         let field = multipart
             .next_field()
@@ -48,7 +65,7 @@ async fn multipart_field(
             .ok_or_else(|| Error::BadRequest(format!("multipart field {name:?} is missing")))?;
         // The client's file name is ignored: it never becomes a path.
         if field.name() == Some(name) {
-            return shared.files.receive(field, limit, what).await;
+            return shared.files.receive(field, limit, name).await;
         }
     }
 }
@@ -60,15 +77,7 @@ pub(crate) async fn recording(
     headers: HeaderMap,
     multipart: Result<Multipart, MultipartRejection>,
 ) -> Result<Response, Error> {
-    let temp = multipart_field(
-        &shared,
-        multipart,
-        &headers,
-        "recording",
-        shared.config.max_recording_bytes,
-        "recording",
-    )
-    .await?;
+    let temp = multipart_field(&shared, multipart, &headers, RECORDING).await?;
     let (id, _) = shared.create_session(&NewSession {
         idempotency_key: None,
         trials_total: shared.config.default_trials,
@@ -115,15 +124,7 @@ pub(crate) async fn timestamps(
     headers: HeaderMap,
     multipart: Result<Multipart, MultipartRejection>,
 ) -> Result<Response, Error> {
-    let temp = multipart_field(
-        &shared,
-        multipart,
-        &headers,
-        "timestamps",
-        shared.config.max_trajectory_bytes,
-        "timestamps",
-    )
-    .await?;
+    let temp = multipart_field(&shared, multipart, &headers, TIMESTAMPS).await?;
     let id = shared
         .db
         .latest_session(false, true, caller.scope())?
