@@ -11,8 +11,8 @@ use crate::decl::FlatLayout;
 use crate::error::Error;
 use crate::jni_api::{doubles, IntoJava};
 use crate::types::{
-    SitarFrustum, SitarJobProgress, SitarJoint, SitarMarker, SitarPose, SitarSegment,
-    SitarSubtrajectoryResult, SitarSummary,
+    SitarEvidence, SitarFrustum, SitarJobProgress, SitarJoint, SitarMarker, SitarPose,
+    SitarSegment, SitarSubtrajectoryResult, SitarSummary,
 };
 
 /// A struct with a flat layout.
@@ -118,6 +118,11 @@ flat_layouts! {
         px, py, pz, qx, qy, qz, qw, nx, ny, nz, error_class, subtrajectory, error_m,
     }
     SitarSubtrajectoryResult as SubtrajectoryResult { error_m, subtrajectory, error_class }
+    SitarEvidence as Evidence {
+        subtrajectory, has_image, mean_brightness, contrast_std, laplacian_var, corners_per_10k,
+        saturated_share, linear_speed_m_s, angular_speed_deg_s, depth_given, depth_valid,
+        distance_m, depth_valid_share, causes, thumbnail_width, thumbnail_height,
+    }
     SitarSegment as Segment { cx, cy, cz, qx, qy, qz, qw, length, subtrajectory, error_class }
     SitarJoint as Joint { px, py, pz, subtrajectory, error_class }
     SitarFrustum as Frustum { pose: SitarPose, subtrajectory, error_class }
