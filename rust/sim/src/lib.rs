@@ -61,6 +61,7 @@
 mod camera;
 mod checks;
 mod error;
+mod luma;
 mod observations;
 mod p3p;
 mod pnp;
@@ -73,6 +74,7 @@ mod walk;
 
 pub use camera::{DepthCamera, Intrinsics, View};
 pub use error::Error;
+pub use luma::LumaCamera;
 pub use ransac_tracker::RansacModel;
 pub use recording::{RECORDING_MAGIC, RECORDING_VERSION, Recording, Tracker};
 pub use room::{Hit, Room, Surface, SurfaceKind};
