@@ -453,7 +453,7 @@ impl Session {
     }
 
     /// The evidence of every sub-trajectory: properties and likely causes, the relative rules
-    /// against this session's medians ([`crate::evidence`]).
+    /// against this session's medians ([`crate::likely_causes`], [`crate::SessionMedians`]).
     pub fn evidence(&self) -> Vec<Evidence> {
         let images: Vec<ImageProperties> = self.inputs.iter().filter_map(|i| i.image).collect();
         let motions: Vec<MotionProperties> = (0..self.subs.len() as u32)
