@@ -199,6 +199,7 @@ mod tests {
         assert_eq!(SitarMarker::WIDTH, 13);
         assert_eq!(SitarFrustum::WIDTH, 9);
         assert_eq!(SitarJobProgress::WIDTH, 10);
+        assert_eq!(SitarEvidence::WIDTH, 16);
         for l in FLAT_LAYOUTS {
             let width: usize = l.fields.iter().map(|f| f.1).sum();
             let rust = match l.kotlin {
@@ -212,6 +213,7 @@ mod tests {
                 "Frustum" => SitarFrustum::WIDTH,
                 "RenderPlan" => RenderPlanHeader::WIDTH,
                 "UploadProgress" => SitarJobProgress::WIDTH,
+                "Evidence" => SitarEvidence::WIDTH,
                 other => panic!("unknown layout {other}"),
             };
             assert_eq!(width, rust, "{}", l.kotlin);
