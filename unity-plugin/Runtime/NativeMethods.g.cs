@@ -71,6 +71,30 @@ namespace Sitar
         internal static extern int sitar_session_depth(ulong h, ushort* depth_mm, int width, int height, int row_stride_bytes, SitarIntrinsics* k, int display_rotation);
 
         /// <summary>
+        ///  The camera's luminance plane (8-bit, sensor orientation; ARCore `Image` plane 0,
+        ///  AR Foundation `XRCpuImage` Y plane) for the latest midpoint: give it when a frame
+        ///  returns the midpoint flag (1), with that frame's image. `luma` must hold
+        ///  `(height-1)*row_stride_bytes + width` bytes. Keeps a display-oriented JPEG thumbnail
+        ///  and the image properties; a no-op with `"images": false` in the config.
+        /// </summary>
+        [DllImport(__DllName, EntryPoint = "sitar_session_image", CallingConvention = CallingConvention.Cdecl, ExactSpelling = true)]
+        internal static extern int sitar_session_image(ulong h, byte* luma, int width, int height, int row_stride_bytes, int display_rotation);
+
+        /// <summary>
+        ///  Properties of what the camera saw at sub-trajectory `k`, how it moved, its depth and
+        ///  the likely causes of its error (`causes` bit set; see `SitarEvidence`).
+        /// </summary>
+        [DllImport(__DllName, EntryPoint = "sitar_session_subtrajectory_evidence", CallingConvention = CallingConvention.Cdecl, ExactSpelling = true)]
+        internal static extern int sitar_session_subtrajectory_evidence(ulong h, uint k, SitarEvidence* @out);
+
+        /// <summary>
+        ///  The greyscale JPEG thumbnail of sub-trajectory `k` (array-output convention; 0 bytes
+        ///  without an image).
+        /// </summary>
+        [DllImport(__DllName, EntryPoint = "sitar_session_thumbnail", CallingConvention = CallingConvention.Cdecl, ExactSpelling = true)]
+        internal static extern int sitar_session_thumbnail(ulong h, uint k, byte* @out, System.UIntPtr capacity, System.UIntPtr* out_len);
+
+        /// <summary>
         ///  Stops recording and writes the summary.
         /// </summary>
         [DllImport(__DllName, EntryPoint = "sitar_session_stop", CallingConvention = CallingConvention.Cdecl, ExactSpelling = true)]
@@ -527,6 +551,80 @@ namespace Sitar
         ///  0 unknown, 1 low, 2 medium, 3 high.
         /// </summary>
         public int error_class;
+    }
+
+    /// <summary>
+    ///  What the camera saw at sub-trajectory `k`'s midpoint, how it moved, its depth, and the
+    ///  likely causes of its error (`sitar_session_subtrajectory_evidence`).
+    /// </summary>
+    [StructLayout(LayoutKind.Sequential)]
+    internal unsafe partial struct SitarEvidence
+    {
+        /// <summary>
+        ///  Sub-trajectory number (from 0).
+        /// </summary>
+        public uint subtrajectory;
+        /// <summary>
+        ///  1 when a camera image was given at its midpoint (else the image fields are 0).
+        /// </summary>
+        public int has_image;
+        /// <summary>
+        ///  Mean luminance (0…255).
+        /// </summary>
+        public double mean_brightness;
+        /// <summary>
+        ///  Luminance standard deviation.
+        /// </summary>
+        public double contrast_std;
+        /// <summary>
+        ///  Variance of the Laplacian (sharpness).
+        /// </summary>
+        public double laplacian_var;
+        /// <summary>
+        ///  FAST corners per 10 000 pixels (texture).
+        /// </summary>
+        public double corners_per_10k;
+        /// <summary>
+        ///  Share of saturated pixels (0…1).
+        /// </summary>
+        public double saturated_share;
+        /// <summary>
+        ///  Linear speed (m/s).
+        /// </summary>
+        public double linear_speed_m_s;
+        /// <summary>
+        ///  Angular speed (°/s).
+        /// </summary>
+        public double angular_speed_deg_s;
+        /// <summary>
+        ///  1 when a depth image was given at its midpoint.
+        /// </summary>
+        public int depth_given;
+        /// <summary>
+        ///  1 when the depth sample was valid.
+        /// </summary>
+        public int depth_valid;
+        /// <summary>
+        ///  Distance to the surface (m; 0 when not valid).
+        /// </summary>
+        public double distance_m;
+        /// <summary>
+        ///  Share of valid depth pixels in the 5×5 sample window (0…1).
+        /// </summary>
+        public double depth_valid_share;
+        /// <summary>
+        ///  Likely causes, a bit set: 1 low_texture, 2 dark, 4 overexposed, 8 blur, 16 fast_motion,
+        ///  32 far_surface, 64 no_depth.
+        /// </summary>
+        public uint causes;
+        /// <summary>
+        ///  Thumbnail width in display orientation (0 without an image).
+        /// </summary>
+        public uint thumbnail_width;
+        /// <summary>
+        ///  Thumbnail height in display orientation (0 without an image).
+        /// </summary>
+        public uint thumbnail_height;
     }
 
     /// <summary>

@@ -106,6 +106,47 @@ namespace Sitar
         public ErrorClass ErrorClass;
     }
 
+    /// <summary>Likely causes of a sub-trajectory's error (bits of SitarEvidence.causes).</summary>
+    [Flags]
+    public enum Causes : uint
+    {
+        None = 0,
+        LowTexture = 1,
+        Dark = 2,
+        Overexposed = 4,
+        Blur = 8,
+        FastMotion = 16,
+        FarSurface = 32,
+        NoDepth = 64,
+    }
+
+    /// <summary>What the camera saw at a sub-trajectory's midpoint, how it moved, its depth, likely causes.</summary>
+    public struct Evidence
+    {
+        public uint Subtrajectory;
+        public bool HasImage;
+        public double MeanBrightness, ContrastStd, LaplacianVar, CornersPer10k, SaturatedShare;
+        public double LinearSpeedMS, AngularSpeedDegS;
+        public bool DepthGiven, DepthValid;
+        public double DistanceM, DepthValidShare;
+        public Causes Causes;
+        public uint ThumbnailWidth, ThumbnailHeight;
+
+        internal static Evidence FromNative(SitarEvidence e)
+        {
+            return new Evidence
+            {
+                Subtrajectory = e.subtrajectory, HasImage = e.has_image != 0,
+                MeanBrightness = e.mean_brightness, ContrastStd = e.contrast_std, LaplacianVar = e.laplacian_var,
+                CornersPer10k = e.corners_per_10k, SaturatedShare = e.saturated_share,
+                LinearSpeedMS = e.linear_speed_m_s, AngularSpeedDegS = e.angular_speed_deg_s,
+                DepthGiven = e.depth_given != 0, DepthValid = e.depth_valid != 0,
+                DistanceM = e.distance_m, DepthValidShare = e.depth_valid_share,
+                Causes = (Causes)e.causes, ThumbnailWidth = e.thumbnail_width, ThumbnailHeight = e.thumbnail_height,
+            };
+        }
+    }
+
     /// <summary>A path segment: a cylinder of Length centred at C, local +Y along the path.</summary>
     public struct Segment
     {
@@ -335,6 +376,49 @@ namespace Sitar
             {
                 Depth((IntPtr)p, width, height, rowStrideBytes, k, displayRotation);
             }
+        }
+
+        /// <summary>
+        /// The camera's luminance plane (XRCpuImage Y plane, sensor orientation) for the latest
+        /// midpoint: give it when Frame returns the midpoint bit, with that frame's image;
+        /// <paramref name="data"/> points at (height-1)*rowStrideBytes + width bytes. A no-op
+        /// with "images": false in the config.
+        /// </summary>
+        public void Image(IntPtr data, int width, int height, int rowStrideBytes, int displayRotation)
+        {
+            Native.Check(NativeMethods.sitar_session_image(Id, (byte*)data, width, height, rowStrideBytes, displayRotation));
+        }
+
+        /// <summary>As <see cref="Image(IntPtr,int,int,int,int)"/> from a managed array (checked for size).</summary>
+        public void Image(byte[] data, int width, int height, int rowStrideBytes, int displayRotation)
+        {
+            if (data == null) throw new SitarException(SitarErrorCode.Null, "argument `luma` is null");
+            long needed = width > 0 && height > 0 ? (long)(height - 1) * rowStrideBytes + width : 0;
+            if (data.LongLength < needed)
+            {
+                throw new SitarException(SitarErrorCode.InvalidArgument, string.Format(
+                    "invalid argument `luma`: {0} bytes; a {1}x{2} plane with row stride {3} needs {4}",
+                    data.LongLength, width, height, rowStrideBytes, needed));
+            }
+            fixed (byte* p = data)
+            {
+                Image((IntPtr)p, width, height, rowStrideBytes, displayRotation);
+            }
+        }
+
+        /// <summary>What the camera saw at sub-trajectory k, how it moved, its depth and likely causes.</summary>
+        public Evidence SubtrajectoryEvidence(uint k)
+        {
+            SitarEvidence e;
+            Native.Check(NativeMethods.sitar_session_subtrajectory_evidence(Id, k, &e));
+            return Evidence.FromNative(e);
+        }
+
+        /// <summary>The greyscale JPEG thumbnail of sub-trajectory k (empty without an image), e.g. for Texture2D.LoadImage.</summary>
+        public byte[] Thumbnail(uint k)
+        {
+            ulong id = Id;
+            return Items<byte>((b, l) => { fixed (byte* p = b) return NativeMethods.sitar_session_thumbnail(id, k, p, Native.Cap(b), l); });
         }
 
         public Summary Stop(long tNs, Pose pose)

@@ -163,6 +163,19 @@ static class HostTest
             ExpectSitar(SitarErrorCode.InvalidArgument, "needs", () => s.Depth(new ushort[W * H - 1], W, H, W * 2, K, 0));
             ExpectSitar(SitarErrorCode.Null, "depth_mm", () => s.Depth(IntPtr.Zero, W, H, W * 2, K, 0));
             ExpectSitar(SitarErrorCode.InvalidArgument, "45", () => s.Depth(new ushort[W * H], W, H, W * 2, K, 45));
+            // The camera image at the midpoint, the bad inputs, then its evidence.
+            byte[] luma = Enumerable.Range(0, W * H).Select(i => (byte)(i % W < W / 2 ? 40 : 200)).ToArray();
+            s.Image(luma, W, H, W, 270);
+            ExpectSitar(SitarErrorCode.InvalidArgument, "needs", () => s.Image(new byte[W * H - 1], W, H, W, 0));
+            ExpectSitar(SitarErrorCode.Null, "luma", () => s.Image(IntPtr.Zero, W, H, W, 0));
+            ExpectSitar(SitarErrorCode.InvalidArgument, "row_stride_bytes", () => s.Image(luma, W, H, W - 1, 0));
+            ExpectSitar(SitarErrorCode.InvalidArgument, "display_rotation", () => s.Image(luma, W, H, W, 45));
+            Evidence ev = s.SubtrajectoryEvidence(0);
+            Check(ev.HasImage && ev.ThumbnailHeight >= ev.ThumbnailWidth, "evidence of the portrait image");
+            Near(ev.MeanBrightness, 120.0, "mean brightness");
+            byte[] jpeg = s.Thumbnail(0);
+            Check(jpeg.Length > 100 && jpeg[0] == 0xFF && jpeg[1] == 0xD8, "thumbnail is a JPEG");
+            ExpectSitar(SitarErrorCode.InvalidArgument, "7", () => s.SubtrajectoryEvidence(7));
             ExpectSitar(SitarErrorCode.Parse, "line 2", () => s.LoadResults("start,error\n12,abc\n"));
             ExpectSitar(SitarErrorCode.Null, "csv_or_json", () => s.LoadResults(null));
             ExpectSitar(SitarErrorCode.Panic, "on purpose", () => Native.Check(NativeMethods.sitar_testing_panic()));

@@ -5,9 +5,11 @@ use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result, bail};
 use sitar_client::{Client, NewSession, SessionOptions, SessionState};
-use sitar_core::{DepthImage, DisplayRotation, ErrorClass, Pose, Session, SessionConfig};
+use sitar_core::{
+    DepthImage, DisplayRotation, ErrorClass, LumaImage, Pose, Session, SessionConfig,
+};
 use sitar_server::{PlaybackKind, PresetToken, Role, Server, ServerConfig};
-use sitar_sim::{DepthCamera, Recording};
+use sitar_sim::{DepthCamera, LumaCamera, Recording};
 
 /// Runs the whole system in one process: a simulated user walks a room with a blank wall and
 /// a glass pane, the phone logic (sitar-core) records the walk with depth, the recording goes
@@ -220,13 +222,22 @@ pub fn run(args: Args) -> Result<()> {
             on_hard += 1;
             found.insert(name.clone());
         }
+        let causes = session
+            .evidence_of(m.subtrajectory)
+            .map(|e| e.causes.to_string())
+            .unwrap_or_default();
         println!(
-            "  {}. sub-trajectory {:>3}: error {:5.1} cm ({class:6}) → {name} ({}, {:.2} m off)",
+            "  {}. sub-trajectory {:>3}: error {:5.1} cm ({class:6}) → {name} ({}, {:.2} m off) {}",
             i + 1,
             m.subtrajectory,
             m.error_m * 100.0,
             if kind_hard { "hard" } else { "not hard" },
-            distance
+            distance,
+            if causes.is_empty() {
+                "no cause seen"
+            } else {
+                causes.as_str()
+            }
         );
     }
     let missed: Vec<&str> = hard
@@ -256,7 +267,9 @@ pub fn run(args: Args) -> Result<()> {
     Ok(())
 }
 
-/// Feeds the ground-truth walk to the phone logic: start, every frame, depth at midpoints, stop.
+/// Feeds the ground-truth walk to the phone logic: start, every frame, the camera image and
+/// depth at midpoints (an unusable depth sample, as on glass, is recorded and the walk goes
+/// on, as on a phone), stop.
 fn record_walk(
     recording: &Recording,
     session: &mut Session,
@@ -267,6 +280,7 @@ fn record_walk(
         bail!("the walk is too short");
     }
     let camera = DepthCamera::phone();
+    let luma_camera = LumaCamera::phone();
     let k = camera.intrinsics;
     let pose = |i: usize| Pose::new(gt.positions[i], gt.orientations[i]);
     let last = gt.len() - 1;
@@ -280,8 +294,20 @@ fn record_walk(
                 &camera,
                 display,
             );
+            let luma = recording.room().render_luma_rotated(
+                gt.positions[i],
+                gt.orientations[i],
+                &luma_camera,
+                display,
+                i as u64,
+            );
+            let (w, h) = (luma_camera.width, luma_camera.height);
+            session.image(&LumaImage::new(&luma, w, h, w)?, display)?;
             let image = DepthImage::new(&depth, camera.width, camera.height, camera.width * 2)?;
-            session.depth(&image, &k, display)?;
+            match session.depth(&image, &k, display) {
+                Ok(()) | Err(sitar_core::Error::InvalidDepth(_)) => {}
+                Err(other) => return Err(other.into()),
+            }
         }
     }
     Ok(session.stop(gt.stamps[last], pose(last))?)
@@ -319,15 +345,70 @@ mod tests {
     }
 
     #[test]
-    fn the_recorded_walk_has_a_depth_sample_at_every_midpoint() {
+    fn the_recorded_walk_has_a_depth_sample_at_every_midpoint_not_facing_glass() {
         let recording = Recording::demo(4.0, 30.0, 1).unwrap();
         let mut session =
             Session::new(SessionConfig::from_json(r#"{"convention":"arcore"}"#).unwrap());
         let summary = record_walk(&recording, &mut session, DisplayRotation::Deg90).unwrap();
         assert_eq!(summary.frames as usize, recording.frames() - 2);
         assert_eq!(summary.subtrajectories, summary.frames / 10);
-        assert_eq!(summary.depth_samples, summary.midpoints);
+        let gt = &recording.walk().ground_truth;
+        let logged = session.logged();
+        for sub in session.subtrajectories() {
+            let mid = &logged[2 * sub.index as usize + 1];
+            let i = gt.stamps.iter().position(|&t| t == mid.t_ns).unwrap();
+            let facing = recording
+                .room()
+                .raycast(gt.positions[i], gt.orientations[i] * -glam::DVec3::Z)
+                .unwrap();
+            if facing.surface != sitar_sim::SurfaceKind::Glass {
+                assert!(
+                    sub.depth.sample().is_some(),
+                    "{sub:?} facing {}",
+                    facing.surface_name
+                );
+            }
+        }
+        // Every midpoint also has its camera image.
+        assert!(session.midpoint_inputs().iter().all(|m| m.image.is_some()));
         assert!(summary.mean_depth_m > 0.5 && summary.mean_depth_m < 6.0);
+    }
+
+    /// On the simulated walk, the sub-trajectories whose midpoint faces the blank wall are
+    /// `low_texture` and those facing the glass `no_depth`, while views of the painting,
+    /// bookshelf and rug are neither.
+    #[test]
+    fn the_causes_name_the_blank_wall_and_the_glass() {
+        let recording = Recording::demo(15.0, 30.0, 7).unwrap();
+        let mut session =
+            Session::new(SessionConfig::from_json(r#"{"convention":"arcore"}"#).unwrap());
+        record_walk(&recording, &mut session, DisplayRotation::Deg90).unwrap();
+        let gt = &recording.walk().ground_truth;
+        let logged = session.logged();
+        let mut by_kind: std::collections::BTreeMap<String, (usize, usize, usize)> =
+            Default::default();
+        for e in session.evidence() {
+            let mid = &logged[2 * e.index as usize + 1];
+            let i = gt.stamps.iter().position(|&t| t == mid.t_ns).unwrap();
+            let facing = recording
+                .room()
+                .raycast(gt.positions[i], gt.orientations[i] * -glam::DVec3::Z)
+                .unwrap();
+            let entry = by_kind.entry(format!("{:?}", facing.surface)).or_default();
+            entry.0 += 1;
+            entry.1 += usize::from(e.causes.contains(sitar_core::Causes::LOW_TEXTURE));
+            entry.2 += usize::from(e.causes.contains(sitar_core::Causes::NO_DEPTH));
+        }
+        println!("facing kind: (sub-trajectories, low_texture, no_depth) {by_kind:?}");
+        let share = |kind: &str, f: fn(&(usize, usize, usize)) -> usize| {
+            let c = by_kind.get(kind).copied().unwrap_or_default();
+            assert!(c.0 > 0, "the walk never faces {kind}: {by_kind:?}");
+            f(&c) as f64 / c.0 as f64
+        };
+        assert!(share("Blank", |c| c.1) >= 0.8, "{by_kind:?}");
+        assert!(share("Glass", |c| c.2) >= 0.8, "{by_kind:?}");
+        assert!(share("Textured", |c| c.1) <= 0.2, "{by_kind:?}");
+        assert!(share("Textured", |c| c.2) <= 0.2, "{by_kind:?}");
     }
 
     /// However the phone is held, the centre of the depth image is the same ray: every
@@ -342,7 +423,7 @@ mod tests {
             session
                 .subtrajectories()
                 .iter()
-                .map(|k| *k.depth.sample().unwrap())
+                .filter_map(|k| k.depth.sample().copied())
                 .collect::<Vec<_>>()
         };
         let upright = samples(DisplayRotation::Deg0);

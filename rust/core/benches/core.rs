@@ -7,8 +7,9 @@ use std::time::{Duration, Instant};
 use criterion::{Criterion, criterion_group, criterion_main};
 use glam::{DQuat, DVec3};
 use sitar_core::{
-    Convention, DepthImage, DisplayRotation, Intrinsics, MarkerCandidate, Pose, Session,
-    SessionConfig, sample_surface, select_markers,
+    Convention, DepthImage, DisplayRotation, ImageProperties, Intrinsics, LumaImage,
+    MarkerCandidate, Pose, Session, SessionConfig, downsample_rotated, encode_jpeg, sample_surface,
+    select_markers,
 };
 
 /// Deterministic pseudo-random numbers in [0, 1) (no dependency needed for benches).
@@ -174,9 +175,90 @@ fn bench_markers(c: &mut Criterion) {
     });
 }
 
+/// A 640×480 camera-like plane: smooth shading, a few hundred edges, sensor noise.
+fn camera_plane(rng: &mut Lcg) -> Vec<u8> {
+    (0..640 * 480)
+        .map(|i| {
+            let (x, y) = (i % 640, i / 640);
+            let shade = 60.0 + 0.15 * x as f64 + 0.1 * y as f64;
+            let tile = if ((x / 23) + (y / 17)) % 5 == 0 {
+                70.0
+            } else {
+                0.0
+            };
+            (shade + tile + 6.0 * rng.next()) as u8
+        })
+        .collect()
+}
+
+/// CPU time of the calling thread.
+fn thread_cpu() -> Duration {
+    let mut ts = libc::timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: a valid out-pointer; CLOCK_THREAD_CPUTIME_ID is always available on Linux.
+    unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut ts) };
+    Duration::new(ts.tv_sec as u64, ts.tv_nsec as u32)
+}
+
+fn bench_image(c: &mut Criterion) {
+    let mut rng = Lcg(7);
+    let plane = camera_plane(&mut rng);
+    let image = LumaImage::new(&plane, 640, 480, 640).unwrap();
+    c.bench_function("image/properties_640x480", |b| {
+        b.iter(|| black_box(ImageProperties::measure(black_box(&image))))
+    });
+    let mut pixels = Vec::new();
+    c.bench_function("image/thumbnail_160_jpeg_640x480", |b| {
+        b.iter(|| {
+            let (w, h) = downsample_rotated(&image, 160, DisplayRotation::Deg90, &mut pixels);
+            black_box(encode_jpeg(&pixels, w, h).unwrap())
+        })
+    });
+    // The same as thread CPU time: on a shared machine the wall clock also counts the time
+    // other processes hold the core.
+    c.bench_function("image/properties_plus_thumbnail_640x480_cpu_time", |b| {
+        b.iter_custom(|iters| {
+            let start = thread_cpu();
+            for _ in 0..iters {
+                black_box(ImageProperties::measure(black_box(&image)));
+                let (w, h) = downsample_rotated(&image, 160, DisplayRotation::Deg90, &mut pixels);
+                black_box(encode_jpeg(&pixels, w, h).unwrap());
+            }
+            thread_cpu() - start
+        })
+    });
+    // The whole midpoint call: properties + thumbnail into the session.
+    c.bench_function("image/session_image_640x480", |b| {
+        b.iter_custom(|iters| {
+            let mut total = Duration::ZERO;
+            let mut session = Session::new(SessionConfig::default());
+            session.start(0, pose_at(0)).unwrap();
+            let mut i = 0;
+            for _ in 0..iters {
+                loop {
+                    i += 1;
+                    if session
+                        .frame(i * 33_333_333, pose_at(i))
+                        .unwrap()
+                        .is_midpoint()
+                    {
+                        break;
+                    }
+                }
+                let t = Instant::now();
+                session.image(&image, DisplayRotation::Deg90).unwrap();
+                total += t.elapsed();
+            }
+            total
+        })
+    });
+}
+
 criterion_group! {
     name = benches;
     config = Criterion::default().warm_up_time(Duration::from_millis(500)).measurement_time(Duration::from_secs(2)).sample_size(30);
-    targets = bench_frame, bench_depth, bench_markers
+    targets = bench_frame, bench_depth, bench_markers, bench_image
 }
 criterion_main!(benches);

@@ -47,6 +47,21 @@ pub struct SessionConfig {
     pub unreliable_mean_error_deg: f64,
     /// Folder where the app keeps session folders, if any (default none).
     pub data_dir: Option<PathBuf>,
+    /// Whether the app gives the camera image at midpoints (`Session::image`; default true).
+    /// `false` makes the image call a no-op: no properties, no thumbnails.
+    #[serde(default = "default_images")]
+    pub images: bool,
+    /// Longest side of the midpoint thumbnails in pixels (default 160; 8…1024).
+    #[serde(default = "default_thumbnail_px")]
+    pub thumbnail_px: u32,
+}
+
+fn default_images() -> bool {
+    true
+}
+
+fn default_thumbnail_px() -> u32 {
+    160
 }
 
 impl Default for SessionConfig {
@@ -68,6 +83,8 @@ impl Default for SessionConfig {
             unreliable_mean_error_m: 0.20,
             unreliable_mean_error_deg: 0.20 * DEG_PER_M,
             data_dir: None,
+            images: true,
+            thumbnail_px: 160,
         }
     }
 }
@@ -99,6 +116,8 @@ const KEYS: &[&str] = &[
     "unreliable_mean_error_m",
     "unreliable_mean_error_deg",
     "data_dir",
+    "images",
+    "thumbnail_px",
 ];
 
 fn config_err(key: &str, message: impl Into<String>) -> Error {
@@ -145,6 +164,8 @@ impl SessionConfig {
                 "unreliable_mean_error_m" => config.unreliable_mean_error_m = field(k, value)?,
                 "unreliable_mean_error_deg" => config.unreliable_mean_error_deg = field(k, value)?,
                 "data_dir" => config.data_dir = field(k, value)?,
+                "images" => config.images = field(k, value)?,
+                "thumbnail_px" => config.thumbnail_px = field(k, value)?,
                 _ => {
                     return Err(config_err(
                         k,
@@ -218,6 +239,12 @@ impl SessionConfig {
         non_negative("medium_threshold_deg", self.medium_threshold_deg)?;
         non_negative("unreliable_mean_error_m", self.unreliable_mean_error_m)?;
         non_negative("unreliable_mean_error_deg", self.unreliable_mean_error_deg)?;
+        if !(8..=1024).contains(&self.thumbnail_px) {
+            return Err(config_err(
+                "thumbnail_px",
+                format!("{} is not between 8 and 1024", self.thumbnail_px),
+            ));
+        }
         if !(self.frustum_spacing_m.is_finite() && self.frustum_spacing_m > 0.0) {
             return Err(config_err(
                 "frustum_spacing_m",

@@ -98,6 +98,9 @@ mod config;
 mod convention;
 mod depth;
 mod error;
+mod evidence;
+mod evidence_table;
+mod image;
 mod markers;
 mod persist;
 mod playback;
@@ -105,6 +108,7 @@ mod relation;
 mod render;
 mod results;
 mod session;
+mod thumbnail;
 mod tum;
 
 pub use classes::{DEFAULT_SETTING, ErrorClass, Thresholds};
@@ -112,12 +116,24 @@ pub use config::SessionConfig;
 pub use convention::{Convention, DisplayRotation, Pose};
 pub use depth::{DepthImage, DepthSample, Intrinsics, sample_surface};
 pub use error::{Error, InvalidDepth};
+pub use evidence::{
+    BLUR_LAPLACIAN_VAR, BLUR_MIN_CONTRAST, BLUR_RELATIVE, Causes, DARK_MEAN, DepthProperties,
+    Evidence, FAR_SURFACE_M, FAST_ANGULAR_DEG_S, FAST_LINEAR_M_S, FAST_RELATIVE,
+    LOW_TEXTURE_CEILING, LOW_TEXTURE_CORNERS, LOW_TEXTURE_RELATIVE, MotionProperties,
+    NO_DEPTH_VALID_SHARE, OVEREXPOSED_SHARE, SessionMedians, likely_causes,
+};
+pub use evidence_table::EVIDENCE_HEADER;
+pub use image::{
+    FAST_THRESHOLD, ImageProperties, LumaImage, MAX_FAST_WIDTH, SATURATED_LUMA, fast_corners,
+};
 pub use markers::{Marker, MarkerCandidate, select_markers, warning_sign_rotation};
 pub use playback::PlaybackLogger;
 pub use relation::{ErrorUnit, PoseRelation};
 pub use render::{Frustum, Joint, RenderPlan, Segment};
 pub use results::{ResultWindow, Results};
 pub use session::{
-    DepthStatus, FrameFlags, LoggedPose, Session, SessionState, SubTrajectory, Summary,
+    DepthStatus, FrameFlags, LoggedPose, MidpointInput, Session, SessionState, SubTrajectory,
+    Summary,
 };
+pub use thumbnail::{THUMBNAIL_QUALITY, downsample_rotated, encode_jpeg, thumbnail_size};
 pub use tum::{parse_tum_ns, to_tum};

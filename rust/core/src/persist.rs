@@ -63,6 +63,7 @@ impl Session {
     /// | `trajectory.txt` | TUM `t x y z qx qy qz qw`, `t` integer ns: start, midpoints, endpoints |
     /// | `subtrajectories.csv` | one row per sub-trajectory, columns below |
     /// | `results.json` | the results in their JSON form (only once results were loaded) |
+    /// | `evidence.csv`, `thumbnails/<k>.jpg` | what the camera saw at each midpoint (format: [`crate::EVIDENCE_HEADER`]) |
     /// | `session.json` | recorder state: `version`, `state`, `frames`, `start`/`stop` (`{t_ns, pose}`), `last_t_ns`, `last_position`, `length_m`, `sub_start_ns`, `frame_intervals_ns`, `path_m` (per logged pose), `lookup_tolerance_ns` (only if set) |
     ///
     /// `subtrajectories.csv` columns: `index,start_ns,mid_ns,end_ns,depth,pixel_x,pixel_y,
@@ -94,6 +95,7 @@ impl Session {
         let json = serde_json::to_string_pretty(&file)
             .map_err(|e| Error::io(dir, std::io::Error::other(e)))?;
         write_file(&dir.join("session.json"), &json)?;
+        self.save_evidence(dir)?;
 
         let errors = self.subtrajectory_errors();
         let mut csv = header(self.config.pose_relation.unit());
@@ -239,6 +241,7 @@ impl Session {
         session.sub_start_ns = file.sub_start_ns;
         session.frame_intervals_ns = file.frame_intervals_ns;
         session.logged = logged;
+        session.inputs = crate::evidence_table::load_evidence(dir, subs.len())?;
         session.subs = subs;
         if let Some(r) = &results {
             session.check_results(r)?;

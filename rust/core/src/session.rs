@@ -4,10 +4,12 @@ use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
 use crate::depth::sample_surface;
+use crate::evidence::{DepthProperties, Evidence, MotionProperties, SessionMedians, likely_causes};
 use crate::markers::{MarkerCandidate, select_markers};
+use crate::thumbnail::{PixelScratch, downsample_rotated, encode_jpeg};
 use crate::{
-    DepthImage, DepthSample, DisplayRotation, Error, ErrorClass, Intrinsics, InvalidDepth, Marker,
-    Pose, RenderPlan, Results, SessionConfig,
+    DepthImage, DepthSample, DisplayRotation, Error, ErrorClass, ImageProperties, Intrinsics,
+    InvalidDepth, LumaImage, Marker, Pose, RenderPlan, Results, SessionConfig,
 };
 
 /// What a frame asks of the app (bit set; the C ABI's `out_flags`).
@@ -114,6 +116,20 @@ pub struct SubTrajectory {
     pub depth: DepthStatus,
 }
 
+/// What the app gave at a midpoint besides its pose: the camera image's properties and
+/// thumbnail, and how much of the depth window had depth.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct MidpointInput {
+    /// Properties of the camera image, if one was given.
+    pub image: Option<ImageProperties>,
+    /// Display-oriented greyscale JPEG thumbnail (empty without an image).
+    pub thumbnail: Vec<u8>,
+    /// Thumbnail size in display orientation (width, height; 0 without an image).
+    pub thumbnail_size: (u32, u32),
+    /// Share of pixels with depth in the 5×5 sample window (`None`: no depth image given).
+    pub depth_valid_share: Option<f64>,
+}
+
 /// The whole on-device session: what the C ABI / JNI wrap one-to-one.
 ///
 /// Life: [`Session::start`] → [`Session::frame`] per camera frame (with
@@ -135,6 +151,12 @@ pub struct Session {
     pub(crate) frame_intervals_ns: Vec<i64>,
     pub(crate) logged: Vec<LoggedPose>,
     pub(crate) subs: Vec<SubTrajectory>,
+    /// Image and depth-window evidence per sub-trajectory (same index as `subs`).
+    pub(crate) inputs: Vec<MidpointInput>,
+    /// An image given after start but before the first midpoint: sub-trajectory 0's frames.
+    pub(crate) pending_input: Option<MidpointInput>,
+    /// Reused buffer of the downsampled thumbnail pixels.
+    pub(crate) thumbnail_pixels: PixelScratch,
     pub(crate) results: Option<Results>,
     /// Half the median frame interval, fixed at stop (and on load).
     pub(crate) tolerance_ns: Option<i64>,
@@ -166,6 +188,9 @@ impl Session {
             frame_intervals_ns: Vec::with_capacity(RESERVE_FRAMES),
             logged: Vec::with_capacity(logged_per_frame + 1),
             subs: Vec::with_capacity(logged_per_frame / 2 + 1),
+            inputs: Vec::with_capacity(logged_per_frame / 2 + 1),
+            pending_input: None,
+            thumbnail_pixels: PixelScratch::default(),
             results: None,
             tolerance_ns: None,
             tolerance_override_ns: None,
@@ -260,6 +285,12 @@ impl Session {
                 end_ns: None,
                 depth: DepthStatus::Missing,
             });
+            let input = if self.inputs.is_empty() {
+                self.pending_input.take().unwrap_or_default()
+            } else {
+                MidpointInput::default()
+            };
+            self.inputs.push(input);
             Ok(FrameFlags::MIDPOINT)
         } else if phase == 0 {
             self.logged.push(LoggedPose {
@@ -314,6 +345,11 @@ impl Session {
             return Err(Error::InvalidState("depth: the midpoint pose is missing"));
         };
         let mid_pose = mid.pose;
+        let (px, py) = pixel.unwrap_or_else(|| image.centre());
+        let share = depth_window_share(image, px, py);
+        if let Some(input) = self.inputs.last_mut() {
+            input.depth_valid_share = Some(share);
+        }
         let result = sample_surface(image, k, rotation, self.config.convention, &mid_pose, pixel);
         let sub = self.subs.last_mut().expect("checked above");
         match result {
@@ -327,6 +363,128 @@ impl Session {
             }
             Err(other) => Err(other),
         }
+    }
+
+    /// Attaches the camera's luminance plane to the latest midpoint (call it when a frame
+    /// returns [`FrameFlags::MIDPOINT`], with the same frame's image): measures its
+    /// [`ImageProperties`] and keeps a display-oriented JPEG thumbnail (longest side
+    /// `thumbnail_px`). A second call for the same midpoint replaces the first; a call after
+    /// start but before the first midpoint is kept for sub-trajectory 0 (its frames) unless its
+    /// midpoint gets one. With
+    /// `"images": false` in the config the call does nothing. Measuring allocates nothing;
+    /// the thumbnail is one allocation per midpoint (the JPEG encoder's buffers besides).
+    pub fn image(&mut self, image: &LumaImage<'_>, rotation: DisplayRotation) -> Result<(), Error> {
+        if self.state != SessionState::Recording {
+            return Err(Error::InvalidState("image: the session is not recording"));
+        }
+        if !self.config.images {
+            return Ok(());
+        }
+        let properties = ImageProperties::measure(image);
+        let size = downsample_rotated(
+            image,
+            self.config.thumbnail_px,
+            rotation,
+            &mut self.thumbnail_pixels.0,
+        );
+        let jpeg = encode_jpeg(&self.thumbnail_pixels.0, size.0, size.1)?;
+        let input = match self.inputs.last_mut() {
+            Some(input) => input,
+            None => self.pending_input.insert(MidpointInput::default()),
+        };
+        input.image = Some(properties);
+        input.thumbnail = jpeg;
+        input.thumbnail_size = size;
+        Ok(())
+    }
+
+    /// What the app gave at each midpoint besides its pose (index = sub-trajectory).
+    pub fn midpoint_inputs(&self) -> &[MidpointInput] {
+        &self.inputs
+    }
+
+    /// The JPEG thumbnail of sub-trajectory `k`'s midpoint, if an image was given.
+    pub fn thumbnail(&self, k: u32) -> Option<&[u8]> {
+        self.inputs
+            .get(k as usize)
+            .map(|i| i.thumbnail.as_slice())
+            .filter(|t| !t.is_empty())
+    }
+
+    /// How the camera moved over sub-trajectory `k` (start → midpoint → end, or start →
+    /// midpoint while its end is not reached).
+    pub fn motion(&self, k: u32) -> Option<MotionProperties> {
+        let sub = self.subs.get(k as usize)?;
+        let first = 2 * sub.index as usize;
+        let last = if sub.end_ns.is_some() {
+            first + 2
+        } else {
+            first + 1
+        };
+        let poses = self.logged.get(first..=last)?;
+        let (a, b) = (poses.first()?, poses.last()?);
+        let dt = (b.t_ns - a.t_ns) as f64 / 1e9;
+        if dt <= 0.0 {
+            return Some(MotionProperties::default());
+        }
+        let turned: f64 = poses
+            .windows(2)
+            .map(|w| w[0].pose.rotation.angle_between(w[1].pose.rotation))
+            .sum();
+        Some(MotionProperties {
+            linear_speed_m_s: (b.path_m - a.path_m) / dt,
+            angular_speed_deg_s: turned.to_degrees() / dt,
+        })
+    }
+
+    /// The depth properties of sub-trajectory `k`'s midpoint.
+    pub fn depth_properties(&self, k: u32) -> Option<DepthProperties> {
+        let sub = self.subs.get(k as usize)?;
+        let share = self
+            .inputs
+            .get(k as usize)
+            .and_then(|i| i.depth_valid_share);
+        Some(DepthProperties {
+            given: !matches!(sub.depth, DepthStatus::Missing),
+            valid: sub.depth.sample().is_some(),
+            distance_m: sub.depth.sample().map_or(0.0, |s| s.distance_m),
+            valid_share: share.unwrap_or(0.0),
+        })
+    }
+
+    /// The evidence of every sub-trajectory: properties and likely causes, the relative rules
+    /// against this session's medians ([`crate::likely_causes`], [`crate::SessionMedians`]).
+    pub fn evidence(&self) -> Vec<Evidence> {
+        let images: Vec<ImageProperties> = self.inputs.iter().filter_map(|i| i.image).collect();
+        let motions: Vec<MotionProperties> = (0..self.subs.len() as u32)
+            .filter_map(|k| self.motion(k))
+            .collect();
+        let medians = SessionMedians::of(&images, &motions);
+        (0..self.subs.len() as u32)
+            .map(|k| {
+                let image = self.inputs.get(k as usize).and_then(|i| i.image);
+                let motion = self.motion(k).unwrap_or_default();
+                let depth = self.depth_properties(k).unwrap_or_default();
+                Evidence {
+                    index: k,
+                    image,
+                    motion,
+                    depth,
+                    causes: likely_causes(image.as_ref(), &motion, &depth, &medians),
+                }
+            })
+            .collect()
+    }
+
+    /// The evidence of sub-trajectory `k` (see [`Session::evidence`]).
+    pub fn evidence_of(&self, k: u32) -> Result<Evidence, Error> {
+        let n = self.subs.len();
+        self.evidence().get(k as usize).copied().ok_or_else(|| {
+            Error::arg(
+                "index",
+                format!("{k} is not a sub-trajectory (there are {n})"),
+            )
+        })
     }
 
     /// Stops recording and returns the summary.
@@ -597,6 +755,26 @@ impl Session {
     pub fn trajectory_tum(&self) -> String {
         crate::tum::to_tum(self.logged.iter().map(|l| (l.t_ns, &l.pose)))
     }
+}
+
+/// Share of the 5×5 window around `(x, y)` with depth (pixels outside the image count as
+/// without).
+fn depth_window_share(image: &DepthImage<'_>, x: u32, y: u32) -> f64 {
+    let mut valid = 0u32;
+    for dy in -2i64..=2 {
+        for dx in -2i64..=2 {
+            let (nx, ny) = (i64::from(x) + dx, i64::from(y) + dy);
+            if nx >= 0
+                && ny >= 0
+                && nx <= i64::from(u32::MAX)
+                && ny <= i64::from(u32::MAX)
+                && image.get(nx as u32, ny as u32).is_some_and(|d| d != 0)
+            {
+                valid += 1;
+            }
+        }
+    }
+    f64::from(valid) / 25.0
 }
 
 #[cfg(test)]

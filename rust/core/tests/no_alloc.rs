@@ -70,3 +70,16 @@ fn ten_minutes_of_frames_allocate_nothing() {
     assert_eq!(midpoints, 1_800);
     assert_eq!(after - before, 0, "frame() allocated");
 }
+
+#[test]
+fn image_properties_allocate_nothing() {
+    let plane: Vec<u8> = (0..640 * 480u64)
+        .map(|i| ((i * 7919) % 251) as u8)
+        .collect();
+    let image = sitar_core::LumaImage::new(&plane, 640, 480, 640).unwrap();
+    let before = allocations();
+    let p = sitar_core::ImageProperties::measure(&image);
+    let after = allocations();
+    assert!(p.corners_per_10k > 0.0);
+    assert_eq!(after - before, 0, "ImageProperties::measure allocated");
+}

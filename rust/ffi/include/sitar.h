@@ -123,6 +123,44 @@ typedef struct {
   double cy;
 } SitarIntrinsics;
 
+// What the camera saw at sub-trajectory `k`'s midpoint, how it moved, its depth, and the
+// likely causes of its error (`sitar_session_subtrajectory_evidence`).
+typedef struct {
+  // Sub-trajectory number (from 0).
+  uint32_t subtrajectory;
+  // 1 when a camera image was given at its midpoint (else the image fields are 0).
+  int32_t has_image;
+  // Mean luminance (0…255).
+  double mean_brightness;
+  // Luminance standard deviation.
+  double contrast_std;
+  // Variance of the Laplacian (sharpness).
+  double laplacian_var;
+  // FAST corners per 10 000 pixels (texture).
+  double corners_per_10k;
+  // Share of saturated pixels (0…1).
+  double saturated_share;
+  // Linear speed (m/s).
+  double linear_speed_m_s;
+  // Angular speed (°/s).
+  double angular_speed_deg_s;
+  // 1 when a depth image was given at its midpoint.
+  int32_t depth_given;
+  // 1 when the depth sample was valid.
+  int32_t depth_valid;
+  // Distance to the surface (m; 0 when not valid).
+  double distance_m;
+  // Share of valid depth pixels in the 5×5 sample window (0…1).
+  double depth_valid_share;
+  // Likely causes, a bit set: 1 low_texture, 2 dark, 4 overexposed, 8 blur, 16 fast_motion,
+  // 32 far_surface, 64 no_depth.
+  uint32_t causes;
+  // Thumbnail width in display orientation (0 without an image).
+  uint32_t thumbnail_width;
+  // Thumbnail height in display orientation (0 without an image).
+  uint32_t thumbnail_height;
+} SitarEvidence;
+
 // What `stop` reports about the recording.
 typedef struct {
   // Number of `frame` calls (start and stop are not frames).
@@ -290,6 +328,30 @@ int32_t sitar_session_depth(SitarHandle h,
                             int32_t row_stride_bytes,
                             const SitarIntrinsics *k,
                             int32_t display_rotation);
+
+// The camera's luminance plane (8-bit, sensor orientation; ARCore `Image` plane 0,
+// AR Foundation `XRCpuImage` Y plane) for the latest midpoint: give it when a frame
+// returns the midpoint flag (1), with that frame's image. `luma` must hold
+// `(height-1)*row_stride_bytes + width` bytes. Keeps a display-oriented JPEG thumbnail
+// and the image properties; a no-op with `"images": false` in the config.
+int32_t sitar_session_image(SitarHandle h,
+                            const uint8_t *luma,
+                            int32_t width,
+                            int32_t height,
+                            int32_t row_stride_bytes,
+                            int32_t display_rotation);
+
+// Properties of what the camera saw at sub-trajectory `k`, how it moved, its depth and
+// the likely causes of its error (`causes` bit set; see `SitarEvidence`).
+int32_t sitar_session_subtrajectory_evidence(SitarHandle h, uint32_t k, SitarEvidence *out);
+
+// The greyscale JPEG thumbnail of sub-trajectory `k` (array-output convention; 0 bytes
+// without an image).
+int32_t sitar_session_thumbnail(SitarHandle h,
+                                uint32_t k,
+                                uint8_t *out,
+                                size_t capacity,
+                                size_t *out_len);
 
 // Stops recording and writes the summary.
 int32_t sitar_session_stop(SitarHandle h, int64_t t_ns, const SitarPose *pose, SitarSummary *out);

@@ -5,15 +5,15 @@ use std::ffi::CStr;
 use std::path::{Path, PathBuf};
 use std::sync::{LazyLock, Mutex, MutexGuard};
 
-use sitar_core::{DepthImage, DisplayRotation, PlaybackLogger, Session, SessionConfig};
+use sitar_core::{DepthImage, DisplayRotation, LumaImage, PlaybackLogger, Session, SessionConfig};
 
 use sitar_client::UploadJob;
 
 use crate::error::Error;
 use crate::registry::{Registry, SitarHandle};
 use crate::types::{
-    SitarFrustum, SitarIntrinsics, SitarJobProgress, SitarJoint, SitarMarker, SitarPose,
-    SitarSegment, SitarSubtrajectoryResult, SitarSummary,
+    SitarEvidence, SitarFrustum, SitarIntrinsics, SitarJobProgress, SitarJoint, SitarMarker,
+    SitarPose, SitarSegment, SitarSubtrajectoryResult, SitarSummary,
 };
 
 static SESSIONS: LazyLock<Registry<Mutex<Session>>> = LazyLock::new(|| Registry::new("session"));
@@ -158,6 +158,102 @@ pub fn session_depth(
     let rotation = DisplayRotation::from_degrees(display_rotation_deg)?;
     let k = k.to_core();
     with_session(h, |s| Ok(s.depth(&image, &k, rotation)?))
+}
+
+/// A camera luminance plane borrowed from the caller: 8-bit, any row stride.
+#[derive(Debug, Clone, Copy)]
+pub struct LumaView<'a> {
+    data: &'a [u8],
+    width: u32,
+    height: u32,
+    row_stride_bytes: u32,
+}
+
+impl<'a> LumaView<'a> {
+    /// Checks the geometry (positive size, stride ≥ width) and that `data` holds the plane.
+    pub fn new(
+        data: &'a [u8],
+        width: i32,
+        height: i32,
+        row_stride_bytes: i32,
+    ) -> Result<Self, Error> {
+        let needed = luma_len(width, height, row_stride_bytes)?;
+        if data.len() < needed {
+            return Err(Error::invalid(
+                "luma",
+                format!(
+                    "{} bytes; a {width}x{height} plane with row stride {row_stride_bytes} needs {needed}",
+                    data.len()
+                ),
+            ));
+        }
+        // luma_len checked that all three are positive.
+        Ok(LumaView {
+            data: &data[..needed],
+            width: width as u32,
+            height: height as u32,
+            row_stride_bytes: row_stride_bytes as u32,
+        })
+    }
+}
+
+/// Number of bytes a luminance plane of this geometry occupies (the last row unpadded).
+pub fn luma_len(width: i32, height: i32, row_stride_bytes: i32) -> Result<usize, Error> {
+    if width <= 0 || height <= 0 {
+        return Err(Error::invalid(
+            "width/height",
+            format!("luma plane is {width}x{height}; both must be positive"),
+        ));
+    }
+    if row_stride_bytes < width {
+        return Err(Error::invalid(
+            "row_stride_bytes",
+            format!("{row_stride_bytes} is less than the width {width}"),
+        ));
+    }
+    Ok((height as usize - 1) * row_stride_bytes as usize + width as usize)
+}
+
+/// The camera image (luminance plane, sensor orientation) for the latest midpoint.
+pub fn session_image(
+    h: SitarHandle,
+    image: LumaView<'_>,
+    display_rotation_deg: i32,
+) -> Result<(), Error> {
+    let rotation = DisplayRotation::from_degrees(display_rotation_deg)?;
+    let image = LumaImage::new(
+        image.data,
+        image.width,
+        image.height,
+        image.row_stride_bytes,
+    )?;
+    with_session(h, |s| Ok(s.image(&image, rotation)?))
+}
+
+/// Properties and likely causes of sub-trajectory `k`.
+pub fn session_subtrajectory_evidence(h: SitarHandle, k: u32) -> Result<SitarEvidence, Error> {
+    with_session(h, |s| {
+        let evidence = s.evidence_of(k)?;
+        let size = s
+            .midpoint_inputs()
+            .get(k as usize)
+            .map_or((0, 0), |i| i.thumbnail_size);
+        Ok(SitarEvidence::new(&evidence, size))
+    })
+}
+
+/// The JPEG thumbnail of sub-trajectory `k` (empty without an image).
+pub fn session_thumbnail(h: SitarHandle, k: u32) -> Result<Vec<u8>, Error> {
+    with_session(h, |s| {
+        let n = s.subtrajectories().len();
+        if k as usize >= n {
+            return Err(Error::invalid(
+                "k",
+                format!("{k} is not a sub-trajectory (there are {n})"),
+            ));
+        }
+        Ok(s.thumbnail(k).map(<[u8]>::to_vec).unwrap_or_default())
+    })
 }
 
 /// Number of `u16` elements a depth image of this geometry occupies.

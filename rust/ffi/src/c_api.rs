@@ -77,6 +77,22 @@ pub(crate) fn depth_arg<'a>(
     DepthView::new(data, width, height, row_stride_bytes)
 }
 
+/// The C caller's luminance plane: non-NULL, positive size, stride ≥ width.
+pub(crate) fn luma_arg<'a>(
+    luma: *const u8,
+    width: i32,
+    height: i32,
+    row_stride_bytes: i32,
+) -> Result<crate::bridge::LumaView<'a>, Error> {
+    if luma.is_null() {
+        return Err(Error::Null("luma"));
+    }
+    let len = crate::bridge::luma_len(width, height, row_stride_bytes)?;
+    // SAFETY: non-NULL; the caller guarantees the documented size.
+    let data = unsafe { std::slice::from_raw_parts(luma, len) };
+    crate::bridge::LumaView::new(data, width, height, row_stride_bytes)
+}
+
 /// Checks an array output before the work that fills it.
 pub(crate) fn check_array_out<T>(
     out_ptr: *mut T,

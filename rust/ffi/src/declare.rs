@@ -30,6 +30,9 @@
 //! | `DepthPointer` (a `DepthView`) | `const uint16_t *name, int32_t width, height, row_stride_bytes` | — |
 //! | `DirectBuffer` (a `DepthView`) | — | `name: ByteBuffer` (direct), `width, height, rowStrideBytes: Int` |
 //! | `ShortArray` (a `DepthView`) | — | `name: ShortArray`, `width, height, rowStrideBytes: Int` |
+//! | `LumaPointer` (a `LumaView`) | `const uint8_t *name, int32_t width, height, row_stride_bytes` | — |
+//! | `LumaBuffer` (a `LumaView`) | — | `name: ByteBuffer` (direct), `width, height, rowStrideBytes: Int` |
+//! | `ByteArray` (a `LumaView`) | — | `name: ByteArray`, `width, height, rowStrideBytes: Int` |
 //!
 //! C outputs, in the parentheses after the C name (every pointer is checked before the call):
 //! `()` none (a result is dropped); `(name: T)` writes `*name` (via `Into`); `(a: A, b: B, …)`
@@ -133,6 +136,13 @@ macro_rules! exports {
         $crate::declare::exports!(@c_param $head
             [$($sig)* $n: *const u16, width: i32, height: i32, row_stride_bytes: i32,]
             [$($conv)* let $n = $crate::c_api::depth_arg($n, width, height, row_stride_bytes)?;]
+            [$($args)* $n,] $($($rest)*)?);
+    };
+    (@c_param $head:tt [$($sig:tt)*] [$($conv:tt)*] [$($args:tt)*]
+        $n:ident : LumaPointer $(, $($rest:tt)*)?) => {
+        $crate::declare::exports!(@c_param $head
+            [$($sig)* $n: *const u8, width: i32, height: i32, row_stride_bytes: i32,]
+            [$($conv)* let $n = $crate::c_api::luma_arg($n, width, height, row_stride_bytes)?;]
             [$($args)* $n,] $($($rest)*)?);
     };
     (@c_param [$docs:tt $feat:tt $name:ident $cname:ident $couts:tt $ret:tt] $sig:tt
@@ -369,6 +379,42 @@ macro_rules! exports {
                     row_stride_bytes)?;]
             [$($args)* $n,]
             [$($kt)* (stringify!($n), "ShortArray"), ("width", "Int"), ("height", "Int"),
+                ("row_stride_bytes", "Int"),]
+            $($($rest)*)?);
+    };
+    (@jni_param [$env:ident $($head:tt)*] [$($sig:tt)*] [$($conv:tt)*] [$($args:tt)*]
+        [$($kt:tt)*] $n:ident : LumaBuffer $(, $($rest:tt)*)?) => {
+        $crate::declare::exports!(@jni_param [$env $($head)*]
+            [$($sig)* $n: JByteBuffer<'l>, width: jint, height: jint, row_stride_bytes: jint,]
+            [$($conv)* let $n = $crate::jni_api::luma_from_buffer(
+                $env, &$n, width, height, row_stride_bytes)?;]
+            [$($args)* $n,]
+            [$($kt)* (stringify!($n), "ByteBuffer"), ("width", "Int"), ("height", "Int"),
+                ("row_stride_bytes", "Int"),]
+            $($($rest)*)?);
+    };
+    // As `ShortArray`: the elements are held in a critical section until the call returns.
+    (@jni_param [$env:ident $($head:tt)*] [$($sig:tt)*] [$($conv:tt)*] [$($args:tt)*]
+        [$($kt:tt)*] $n:ident : ByteArray $(, $($rest:tt)*)?) => {
+        $crate::declare::exports!(@jni_param [$env $($head)*]
+            [$($sig)* $n: JByteArray<'l>, width: jint, height: jint, row_stride_bytes: jint,]
+            [$($conv)*
+                let needed = $crate::jni_api::luma_array_len(
+                    $env, &$n, width, height, row_stride_bytes)?;
+                // SAFETY: read-only access; no JNI call happens while the critical
+                // section is held (see `ShortArray`).
+                let elements = unsafe {
+                    $n.get_elements_critical($env, ::jni::elements::ReleaseMode::NoCopyBack)?
+                };
+                // SAFETY: i8 and u8 have the same size and alignment; the array holds
+                // at least `needed` elements.
+                let bytes = unsafe {
+                    ::std::slice::from_raw_parts(elements.as_ptr().cast::<u8>(), needed)
+                };
+                let $n = $crate::bridge::LumaView::new(bytes, width, height,
+                    row_stride_bytes)?;]
+            [$($args)* $n,]
+            [$($kt)* (stringify!($n), "ByteArray"), ("width", "Int"), ("height", "Int"),
                 ("row_stride_bytes", "Int"),]
             $($($rest)*)?);
     };

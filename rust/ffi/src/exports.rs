@@ -9,15 +9,15 @@
 
 use std::ffi::c_char;
 
-use jni::objects::{JByteBuffer, JClass, JShortArray, JString};
+use jni::objects::{JByteArray, JByteBuffer, JClass, JShortArray, JString};
 use jni::sys::{jdouble, jint, jlong};
 use jni::EnvUnowned;
 
 use crate::bridge::{PlanEnds, RenderPlanC, SitarErrorAt};
 use crate::registry::SitarHandle;
 use crate::types::{
-    SitarFrustum, SitarIntrinsics, SitarJobProgress, SitarJoint, SitarMarker, SitarPose,
-    SitarSegment, SitarSubtrajectoryResult, SitarSummary,
+    SitarEvidence, SitarFrustum, SitarIntrinsics, SitarJobProgress, SitarJoint, SitarMarker,
+    SitarPose, SitarSegment, SitarSubtrajectoryResult, SitarSummary,
 };
 
 crate::declare::exports! {
@@ -57,6 +57,33 @@ crate::declare::exports! {
     fn session_depth(h: SitarHandle, data: ShortArray, k: &SitarIntrinsics,
         display_rotation: i32)
         => jni sessionDepthArray;
+
+    /// The camera's luminance plane (8-bit, sensor orientation; ARCore `Image` plane 0,
+    /// AR Foundation `XRCpuImage` Y plane) for the latest midpoint: give it when a frame
+    /// returns the midpoint flag (1), with that frame's image. `luma` must hold
+    /// `(height-1)*row_stride_bytes + width` bytes. Keeps a display-oriented JPEG thumbnail
+    /// and the image properties; a no-op with `"images": false` in the config.
+    fn session_image(h: SitarHandle, luma: LumaPointer, display_rotation: i32)
+        => c sitar_session_image();
+
+    /// The luminance plane from a direct `ByteBuffer` (ARCore's `Image.planes[0].buffer`).
+    fn session_image(h: SitarHandle, luma: LumaBuffer, display_rotation: i32)
+        => jni sessionImageBuffer;
+
+    /// The luminance plane from a `ByteArray` (row stride in bytes).
+    fn session_image(h: SitarHandle, luma: ByteArray, display_rotation: i32)
+        => jni sessionImageArray;
+
+    /// Properties of what the camera saw at sub-trajectory `k`, how it moved, its depth and
+    /// the likely causes of its error (`causes` bit set; see `SitarEvidence`).
+    fn session_subtrajectory_evidence(h: SitarHandle, k: u32) -> SitarEvidence
+        => c sitar_session_subtrajectory_evidence(out: SitarEvidence)
+           jni sessionSubtrajectoryEvidence;
+
+    /// The greyscale JPEG thumbnail of sub-trajectory `k` (array-output convention; 0 bytes
+    /// without an image).
+    fn session_thumbnail(h: SitarHandle, k: u32) -> Vec<u8>
+        => c sitar_session_thumbnail(items: u8) jni sessionThumbnail;
 
     /// Stops recording and writes the summary.
     fn session_stop(h: SitarHandle, t_ns: i64, pose: &SitarPose) -> SitarSummary

@@ -11,8 +11,8 @@ use crate::decl::FlatLayout;
 use crate::error::Error;
 use crate::jni_api::{doubles, IntoJava};
 use crate::types::{
-    SitarFrustum, SitarJobProgress, SitarJoint, SitarMarker, SitarPose, SitarSegment,
-    SitarSubtrajectoryResult, SitarSummary,
+    SitarEvidence, SitarFrustum, SitarJobProgress, SitarJoint, SitarMarker, SitarPose,
+    SitarSegment, SitarSubtrajectoryResult, SitarSummary,
 };
 
 /// A struct with a flat layout.
@@ -118,6 +118,11 @@ flat_layouts! {
         px, py, pz, qx, qy, qz, qw, nx, ny, nz, error_class, subtrajectory, error_m,
     }
     SitarSubtrajectoryResult as SubtrajectoryResult { error_m, subtrajectory, error_class }
+    SitarEvidence as Evidence {
+        subtrajectory, has_image, mean_brightness, contrast_std, laplacian_var, corners_per_10k,
+        saturated_share, linear_speed_m_s, angular_speed_deg_s, depth_given, depth_valid,
+        distance_m, depth_valid_share, causes, thumbnail_width, thumbnail_height,
+    }
     SitarSegment as Segment { cx, cy, cz, qx, qy, qz, qw, length, subtrajectory, error_class }
     SitarJoint as Joint { px, py, pz, subtrajectory, error_class }
     SitarFrustum as Frustum { pose: SitarPose, subtrajectory, error_class }
@@ -194,6 +199,7 @@ mod tests {
         assert_eq!(SitarMarker::WIDTH, 13);
         assert_eq!(SitarFrustum::WIDTH, 9);
         assert_eq!(SitarJobProgress::WIDTH, 10);
+        assert_eq!(SitarEvidence::WIDTH, 16);
         for l in FLAT_LAYOUTS {
             let width: usize = l.fields.iter().map(|f| f.1).sum();
             let rust = match l.kotlin {
@@ -207,6 +213,7 @@ mod tests {
                 "Frustum" => SitarFrustum::WIDTH,
                 "RenderPlan" => RenderPlanHeader::WIDTH,
                 "UploadProgress" => SitarJobProgress::WIDTH,
+                "Evidence" => SitarEvidence::WIDTH,
                 other => panic!("unknown layout {other}"),
             };
             assert_eq!(width, rust, "{}", l.kotlin);

@@ -9,7 +9,7 @@ use std::ffi::CStr;
 use std::path::PathBuf;
 
 use jni::errors::ErrorPolicy;
-use jni::objects::{JByteBuffer, JDoubleArray, JShortArray, JString, JThrowable};
+use jni::objects::{JByteArray, JByteBuffer, JDoubleArray, JShortArray, JString, JThrowable};
 use jni::sys::{jboolean, jint, jlong};
 use jni::{jni_sig, jni_str, Env, EnvUnowned, JValue};
 
@@ -149,6 +149,62 @@ pub(crate) fn depth_from_buffer<'a>(
     DepthView::new(data, width, height, row_stride_bytes)
 }
 
+/// The camera's luminance plane in a *direct* `ByteBuffer` (ARCore's `Image.planes[0]`).
+pub(crate) fn luma_from_buffer<'a>(
+    env: &mut Env<'_>,
+    buffer: &JByteBuffer<'_>,
+    width: jint,
+    height: jint,
+    row_stride_bytes: jint,
+) -> Result<crate::bridge::LumaView<'a>, Error> {
+    if buffer.is_null() {
+        return Err(Error::Null("luma"));
+    }
+    let address = env
+        .get_direct_buffer_address(buffer)
+        .map_err(|_| Error::invalid("luma", "the luminance ByteBuffer must be direct"))?;
+    let capacity = env.get_direct_buffer_capacity(buffer)?;
+    let len = crate::bridge::luma_len(width, height, row_stride_bytes)?;
+    if capacity < len {
+        return Err(Error::invalid(
+            "luma",
+            format!(
+                "{capacity} bytes; a {width}x{height} plane with row stride {row_stride_bytes} needs {len}"
+            ),
+        ));
+    }
+    if address.is_null() {
+        return Err(Error::invalid("luma", "buffer address is NULL"));
+    }
+    // SAFETY: a direct buffer of at least `len` bytes, alive for this JNI call.
+    let data = unsafe { std::slice::from_raw_parts(address.cast_const(), len) };
+    crate::bridge::LumaView::new(data, width, height, row_stride_bytes)
+}
+
+/// Checks a luminance `ByteArray` and returns the number of bytes the plane needs.
+pub(crate) fn luma_array_len(
+    env: &Env<'_>,
+    array: &JByteArray<'_>,
+    width: jint,
+    height: jint,
+    row_stride_bytes: jint,
+) -> Result<usize, Error> {
+    if array.is_null() {
+        return Err(Error::Null("luma"));
+    }
+    let needed = crate::bridge::luma_len(width, height, row_stride_bytes)?;
+    let available = array.len(env)?;
+    if available < needed {
+        return Err(Error::invalid(
+            "luma",
+            format!(
+                "{available} bytes; a {width}x{height} plane with row stride {row_stride_bytes} needs {needed}"
+            ),
+        ));
+    }
+    Ok(needed)
+}
+
 /// Checks a depth `ShortArray` and returns the number of samples the image needs.
 pub(crate) fn depth_array_len(
     env: &Env<'_>,
@@ -233,6 +289,14 @@ impl<'l> IntoJava<'l> for &'static CStr {
     const KOTLIN: &'static str = "String";
     fn into_java(self, env: &mut Env<'l>) -> Result<JString<'l>, Error> {
         Ok(env.new_string(self.to_string_lossy())?)
+    }
+}
+
+impl<'l> IntoJava<'l> for Vec<u8> {
+    type Java = JByteArray<'l>;
+    const KOTLIN: &'static str = "ByteArray";
+    fn into_java(self, env: &mut Env<'l>) -> Result<JByteArray<'l>, Error> {
+        Ok(env.byte_array_from_slice(&self)?)
     }
 }
 

@@ -154,6 +154,71 @@ pub struct SitarSubtrajectoryResult {
     pub error_class: i32,
 }
 
+/// What the camera saw at sub-trajectory `k`'s midpoint, how it moved, its depth, and the
+/// likely causes of its error (`sitar_session_subtrajectory_evidence`).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct SitarEvidence {
+    /// Sub-trajectory number (from 0).
+    pub subtrajectory: u32,
+    /// 1 when a camera image was given at its midpoint (else the image fields are 0).
+    pub has_image: i32,
+    /// Mean luminance (0…255).
+    pub mean_brightness: f64,
+    /// Luminance standard deviation.
+    pub contrast_std: f64,
+    /// Variance of the Laplacian (sharpness).
+    pub laplacian_var: f64,
+    /// FAST corners per 10 000 pixels (texture).
+    pub corners_per_10k: f64,
+    /// Share of saturated pixels (0…1).
+    pub saturated_share: f64,
+    /// Linear speed (m/s).
+    pub linear_speed_m_s: f64,
+    /// Angular speed (°/s).
+    pub angular_speed_deg_s: f64,
+    /// 1 when a depth image was given at its midpoint.
+    pub depth_given: i32,
+    /// 1 when the depth sample was valid.
+    pub depth_valid: i32,
+    /// Distance to the surface (m; 0 when not valid).
+    pub distance_m: f64,
+    /// Share of valid depth pixels in the 5×5 sample window (0…1).
+    pub depth_valid_share: f64,
+    /// Likely causes, a bit set: 1 low_texture, 2 dark, 4 overexposed, 8 blur, 16 fast_motion,
+    /// 32 far_surface, 64 no_depth.
+    pub causes: u32,
+    /// Thumbnail width in display orientation (0 without an image).
+    pub thumbnail_width: u32,
+    /// Thumbnail height in display orientation (0 without an image).
+    pub thumbnail_height: u32,
+}
+
+impl SitarEvidence {
+    /// From the core's evidence and the thumbnail size.
+    pub fn new(e: &sitar_core::Evidence, thumbnail: (u32, u32)) -> Self {
+        let image = e.image.unwrap_or_default();
+        Self {
+            subtrajectory: e.index,
+            has_image: i32::from(e.image.is_some()),
+            mean_brightness: image.mean_brightness,
+            contrast_std: image.contrast_std,
+            laplacian_var: image.laplacian_var,
+            corners_per_10k: image.corners_per_10k,
+            saturated_share: image.saturated_share,
+            linear_speed_m_s: e.motion.linear_speed_m_s,
+            angular_speed_deg_s: e.motion.angular_speed_deg_s,
+            depth_given: i32::from(e.depth.given),
+            depth_valid: i32::from(e.depth.valid),
+            distance_m: e.depth.distance_m,
+            depth_valid_share: e.depth.valid_share,
+            causes: e.causes.0,
+            thumbnail_width: thumbnail.0,
+            thumbnail_height: thumbnail.1,
+        }
+    }
+}
+
 crate::decl::c_enum! {
     /// States of a background upload job (`SitarJobProgress.state`).
     pub enum SitarJobState as kotlin UploadState, csharp UploadState {

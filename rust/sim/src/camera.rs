@@ -21,11 +21,19 @@ pub struct DepthCamera {
     pub height: u32,
     /// Depths beyond this are reported as 0 (no depth), like ARCore's 8 m limit.
     pub max_range_m: f64,
+    /// Share of the pixels on glass that still get a depth (speckle; the rest read 0): phone
+    /// depth fails on glass and mirrors, which the colour image shows as a surface.
+    #[serde(default = "all_pixels")]
+    pub glass_valid_share: f64,
+}
+
+fn all_pixels() -> f64 {
+    1.0
 }
 
 impl DepthCamera {
     /// A phone-like 160 × 120 depth image with a 64° horizontal field of view, principal
-    /// point at the centre pixel (80, 60), 8 m range.
+    /// point at the centre pixel (80, 60), 8 m range; 30 % of the pixels on glass have depth.
     pub fn phone() -> Self {
         let (width, height) = (160u32, 120u32);
         let f = f64::from(width) / 2.0 / (32f64.to_radians()).tan();
@@ -39,6 +47,7 @@ impl DepthCamera {
             width,
             height,
             max_range_m: 8.0,
+            glass_valid_share: 0.3,
         }
     }
 }
@@ -51,7 +60,7 @@ impl DepthCamera {
 /// screen coordinates (x right, y down) an offset `(x, y)` becomes
 /// `(x cos θ − y sin θ, x sin θ + y cos θ)`. Written here with trigonometry rather than with
 /// `sitar-core`'s exact quarter-turn tables, so a test that compares the two checks something.
-fn camera_ray(k: &Intrinsics, u: f64, v: f64, display: DisplayRotation) -> DVec3 {
+pub(crate) fn camera_ray(k: &Intrinsics, u: f64, v: f64, display: DisplayRotation) -> DVec3 {
     let (x, y) = ((u - k.cx) / k.fx, (v - k.cy) / k.fy);
     let (sin, cos) = f64::from(display.degrees()).to_radians().sin_cos();
     // Quarter turns: sin and cos are exactly 0 or ±1 (sin_cos leaves ~1e-16 residues).
@@ -81,7 +90,8 @@ impl Room {
     /// report it. The returned image is in the *sensor* orientation, as ARCore's depth API
     /// gives it: row-major, `width × height`, row 0 at the top. Each pixel holds the depth along
     /// the optical axis (z-depth, as ARCore reports it) in millimetres, rounded to nearest; 0
-    /// where the ray hits nothing or the depth exceeds `max_range_m` or 65.535 m.
+    /// where the ray hits nothing or the depth exceeds `max_range_m` or 65.535 m, and on glass
+    /// outside the camera's `glass_valid_share` of speckle pixels (fixed per sensor pixel).
     pub fn render_depth_mm_rotated(
         &self,
         position: DVec3,
@@ -97,6 +107,11 @@ impl Room {
                 let world_dir = rotation * ray;
                 let depth_m = self
                     .raycast(position, world_dir)
+                    .filter(|hit| {
+                        hit.surface != SurfaceKind::Glass
+                            || crate::luma::hash(i64::from(u), i64::from(v), 0x61A55)
+                                < camera.glass_valid_share
+                    })
                     // Distance along the unit ray / |ray| = z-depth (the ray has z = −1).
                     .map(|hit| hit.distance / ray.length())
                     .filter(|&d| d.is_finite() && d <= camera.max_range_m);
@@ -214,6 +229,27 @@ mod tests {
     }
 
     #[test]
+    fn glass_reads_as_speckle_with_the_cameras_share_of_depth() {
+        let room = Room::demo();
+        let cam = DepthCamera::phone();
+        let glass = room.surface("glass pane").unwrap();
+        let pos = glass.centre + glass.normal * 1.0;
+        let img = room.render_depth_mm(pos, crate::look_rotation(-glass.normal, 0.0), &cam);
+        // The pane fills the central part of the view: count its pixels with depth.
+        let central: Vec<u16> = (40..80)
+            .flat_map(|v| (60..100).map(move |u| (u, v)))
+            .map(|(u, v)| img[v * 160 + u])
+            .collect();
+        let share = central.iter().filter(|&&d| d != 0).count() as f64 / central.len() as f64;
+        assert!((share - 0.3).abs() < 0.06, "share {share}");
+        assert!(
+            central
+                .iter()
+                .all(|&d| d == 0 || (d as i32 - 1000).abs() <= 1)
+        );
+    }
+
+    #[test]
     fn far_and_missing_depth_is_zero() {
         let room = Room::demo();
         let mut cam = DepthCamera::phone();
@@ -305,7 +341,8 @@ mod tests {
             yaw in -3.1f64..3.1, pitch in -1.2f64..1.2, u in 0u32..160, v in 0u32..120,
         ) {
             let room = Room::demo();
-            let cam = DepthCamera::phone();
+            // Glass with full depth: this checks geometry (the speckle has its own test).
+            let cam = DepthCamera { glass_valid_share: 1.0, ..DepthCamera::phone() };
             let pos = DVec3::new(x, y, z);
             let rot = DQuat::from_rotation_y(yaw) * DQuat::from_rotation_x(pitch);
             let img = room.render_depth_mm(pos, rot, &cam);

@@ -48,7 +48,9 @@
 //! let camera = DepthCamera::phone();
 //! let depth = rec.room().render_depth_mm(gt.positions[0], gt.orientations[0], &camera);
 //! assert_eq!(depth.len(), 160 * 120);
-//! assert!(depth[60 * 160 + 80] > 0);
+//! // The walk starts facing the glass pane, where phone depth is only a speckle.
+//! let with_depth = depth.iter().filter(|&&d| d > 0).count();
+//! assert!(with_depth > 0 && with_depth < 160 * 120);
 //!
 //! // Upload format.
 //! let back = Recording::from_bytes(&rec.to_bytes())?;
@@ -61,6 +63,7 @@
 mod camera;
 mod checks;
 mod error;
+mod luma;
 mod observations;
 mod p3p;
 mod pnp;
@@ -73,6 +76,7 @@ mod walk;
 
 pub use camera::{DepthCamera, Intrinsics, View};
 pub use error::Error;
+pub use luma::LumaCamera;
 pub use ransac_tracker::RansacModel;
 pub use recording::{RECORDING_MAGIC, RECORDING_VERSION, Recording, Tracker};
 pub use room::{Hit, Room, Surface, SurfaceKind};

@@ -8,7 +8,11 @@ use sitar_sim::{DepthCamera, Recording};
 #[test]
 fn core_samples_the_surface_the_camera_faces() {
     let rec = Recording::demo(15.0, 30.0, 4).unwrap();
-    let camera = DepthCamera::phone();
+    // Glass with full depth: this checks the geometry (the phone's glass speckle has its own test).
+    let camera = DepthCamera {
+        glass_valid_share: 1.0,
+        ..DepthCamera::phone()
+    };
     let k = camera.intrinsics;
     let gt = &rec.walk().ground_truth;
     let mut angles = Vec::new();

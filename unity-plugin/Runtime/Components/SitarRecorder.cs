@@ -67,6 +67,10 @@ namespace Sitar.Unity
         public Text trajectoryDuration;
         public Text trajectoryLength;
         public Text trajectoryDepth;
+        [Tooltip("Shows the selected sub-trajectory's camera thumbnail (ShowEvidence).")]
+        public RawImage evidenceThumbnail;
+        [Tooltip("Shows the selected sub-trajectory's likely causes (ShowEvidence).")]
+        public Text evidenceCauses;
         public Text trajectoryRegions;
         [Tooltip("Shown when the results are too noisy to trust.")] public GameObject unreliableWarning;
         public VisualizationStyle style = VisualizationStyle.WarningSigns;
@@ -166,7 +170,11 @@ namespace Sitar.Unity
             try
             {
                 uint flags = session.Frame(t, CameraPose());
-                if ((flags & SitarSession.Midpoint) != 0) GiveDepth();
+                if ((flags & SitarSession.Midpoint) != 0)
+                {
+                    GiveImage();
+                    GiveDepth();
+                }
             }
             catch (SitarException e)
             {
@@ -183,6 +191,55 @@ namespace Sitar.Unity
                 case ScreenOrientation.LandscapeRight: return 180;
                 case ScreenOrientation.PortraitUpsideDown: return 270;
                 default: return 0;
+            }
+        }
+
+        /// <summary>The camera image's Y plane at a midpoint: its thumbnail and properties are the
+        /// evidence shown next to a marker (the paper's backup view).</summary>
+        unsafe void GiveImage()
+        {
+            if (cameraManager == null || !cameraManager.TryAcquireLatestCpuImage(out XRCpuImage image)) return;
+            using (image)
+            {
+                XRCpuImage.Plane plane = image.GetPlane(0);
+                var data = (IntPtr)NativeArrayUnsafeUtility.GetUnsafeReadOnlyPtr(plane.data);
+                try
+                {
+                    session.Image(data, image.width, image.height, plane.rowStride, DisplayRotation());
+                }
+                catch (SitarException e)
+                {
+                    Debug.Log("SiTAR camera image skipped: " + e.Message);
+                }
+            }
+        }
+
+        /// <summary>
+        /// Shows what the camera saw at sub-trajectory k (e.g. the selected marker's
+        /// Subtrajectory): its thumbnail in <see cref="evidenceThumbnail"/> and its likely causes
+        /// in <see cref="evidenceCauses"/>.
+        /// </summary>
+        public void ShowEvidence(uint k)
+        {
+            if (session == null) return;
+            try
+            {
+                Evidence e = session.SubtrajectoryEvidence(k);
+                if (evidenceCauses != null)
+                {
+                    evidenceCauses.text = e.Causes == Causes.None ? "no likely cause seen" : e.Causes.ToString();
+                }
+                byte[] jpeg = session.Thumbnail(k);
+                if (evidenceThumbnail != null && jpeg.Length > 0)
+                {
+                    var texture = new Texture2D(2, 2);
+                    texture.LoadImage(jpeg);
+                    evidenceThumbnail.texture = texture;
+                }
+            }
+            catch (SitarException e)
+            {
+                Debug.LogWarning("SiTAR evidence: " + e.Message);
             }
         }
 

@@ -30,6 +30,7 @@ namespace UnityEngine.XR.ARFoundation
     {
         public event Action<ARCameraFrameEventArgs> frameReceived { add { throw null; } remove { throw null; } }
         public bool TryGetIntrinsics(out XRCameraIntrinsics cameraIntrinsics) { throw null; }
+        public bool TryAcquireLatestCpuImage(out XRCpuImage cpuImage) { throw null; }
     }
 
     public sealed class AROcclusionManager : MonoBehaviour

@@ -23,6 +23,11 @@ namespace UnityEngine.UI
 
     public abstract class MaskableGraphic : Graphic { }
 
+    public class RawImage : MaskableGraphic
+    {
+        public Texture texture { get { throw null; } set { throw null; } }
+    }
+
     public class Text : MaskableGraphic
     {
         public virtual string text { get { throw null; } set { throw null; } }

@@ -56,6 +56,18 @@ namespace UnityEngine
 
     public class Material : Object { }
 
+    public class Texture : Object { }
+
+    public class Texture2D : Texture
+    {
+        public Texture2D(int width, int height) { throw null; }
+    }
+
+    public static class ImageConversion
+    {
+        public static bool LoadImage(this Texture2D tex, byte[] data) { throw null; }
+    }
+
     public struct Vector2
     {
         public float x;

@@ -143,6 +143,22 @@ private fun errorPaths() {
     expectSitar(SitarStatus.INVALID_ARGUMENT, "direct") { s.depth(ByteBuffer.allocate(W * H * 2), W, H, W * 2, K, 0) }
     expectSitar(SitarStatus.INVALID_ARGUMENT, "needs") { s.depth(ByteBuffer.allocateDirect(100), W, H, W * 2, K, 0) }
     expectSitar(SitarStatus.INVALID_ARGUMENT, "45") { s.depth(ShortArray(W * H), W, H, W * 2, K, 45) }
+    // The camera image at the midpoint: both paths, the bad inputs, then its evidence.
+    val luma = ByteArray(W * H) { i -> (if ((i % W) < W / 2) 40 else 200).toByte() }
+    s.image(luma, W, H, W, 90)
+    val lumaBuffer = ByteBuffer.allocateDirect(W * H)
+    lumaBuffer.put(luma).rewind()
+    s.image(lumaBuffer, W, H, W, 0)
+    expectSitar(SitarStatus.INVALID_ARGUMENT, "needs") { s.image(ByteArray(W * H - 1), W, H, W, 0) }
+    expectSitar(SitarStatus.INVALID_ARGUMENT, "direct") { s.image(ByteBuffer.allocate(W * H), W, H, W, 0) }
+    expectSitar(SitarStatus.INVALID_ARGUMENT, "row_stride_bytes") { s.image(luma, W, H, W - 1, 0) }
+    expectSitar(SitarStatus.INVALID_ARGUMENT, "display_rotation") { s.image(luma, W, H, W, 45) }
+    val evidence = s.evidence(0)
+    check(evidence.hasImage && evidence.thumbnailWidth >= evidence.thumbnailHeight, "$evidence")
+    near(evidence.meanBrightness, 120.0, "mean brightness")
+    val jpeg = s.thumbnail(0)
+    check(jpeg.size > 100 && jpeg[0] == 0xFF.toByte() && jpeg[1] == 0xD8.toByte(), "thumbnail is a JPEG")
+    expectSitar(SitarStatus.INVALID_ARGUMENT, "7") { s.evidence(7) }
     expectSitar(SitarStatus.PARSE, "line 2") { s.loadResults("start,error\n12,abc\n") }
     expectSitar(SitarStatus.PANIC, "on purpose") { Native.testingPanic() }
     // Still usable after the panic.

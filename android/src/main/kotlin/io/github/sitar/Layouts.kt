@@ -64,6 +64,28 @@ internal object SubtrajectoryResultLayout {
     const val SIZE = 3
 }
 
+/** Offsets into the flat `DoubleArray` of a `SitarEvidence` (`rust/ffi/src/flat.rs`). */
+internal object EvidenceLayout {
+    const val SUBTRAJECTORY = 0
+    const val HAS_IMAGE = 1
+    const val MEAN_BRIGHTNESS = 2
+    const val CONTRAST_STD = 3
+    const val LAPLACIAN_VAR = 4
+    const val CORNERS_PER_10K = 5
+    const val SATURATED_SHARE = 6
+    const val LINEAR_SPEED_M_S = 7
+    const val ANGULAR_SPEED_DEG_S = 8
+    const val DEPTH_GIVEN = 9
+    const val DEPTH_VALID = 10
+    const val DISTANCE_M = 11
+    const val DEPTH_VALID_SHARE = 12
+    const val CAUSES = 13
+    const val THUMBNAIL_WIDTH = 14
+    const val THUMBNAIL_HEIGHT = 15
+    /** Doubles per item. */
+    const val SIZE = 16
+}
+
 /** Offsets into the flat `DoubleArray` of a `SitarSegment` (`rust/ffi/src/flat.rs`). */
 internal object SegmentLayout {
     const val CX = 0

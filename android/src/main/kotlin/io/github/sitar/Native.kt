@@ -22,6 +22,10 @@ internal object Native {
     @JvmStatic external fun sessionFrame(h: Long, tNs: Long, px: Double, py: Double, pz: Double, qx: Double, qy: Double, qz: Double, qw: Double): Int
     @JvmStatic external fun sessionDepthBuffer(h: Long, buffer: ByteBuffer, width: Int, height: Int, rowStrideBytes: Int, fx: Double, fy: Double, cx: Double, cy: Double, displayRotation: Int)
     @JvmStatic external fun sessionDepthArray(h: Long, data: ShortArray, width: Int, height: Int, rowStrideBytes: Int, fx: Double, fy: Double, cx: Double, cy: Double, displayRotation: Int)
+    @JvmStatic external fun sessionImageBuffer(h: Long, luma: ByteBuffer, width: Int, height: Int, rowStrideBytes: Int, displayRotation: Int)
+    @JvmStatic external fun sessionImageArray(h: Long, luma: ByteArray, width: Int, height: Int, rowStrideBytes: Int, displayRotation: Int)
+    @JvmStatic external fun sessionSubtrajectoryEvidence(h: Long, k: Int): DoubleArray
+    @JvmStatic external fun sessionThumbnail(h: Long, k: Int): ByteArray
     @JvmStatic external fun sessionStop(h: Long, tNs: Long, px: Double, py: Double, pz: Double, qx: Double, qy: Double, qz: Double, qw: Double): DoubleArray
     @JvmStatic external fun sessionSummary(h: Long): DoubleArray
     @JvmStatic external fun sessionLoadResults(h: Long, csvOrJson: String)

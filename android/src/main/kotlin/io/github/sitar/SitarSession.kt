@@ -37,6 +37,26 @@ class SitarSession private constructor(handle: Long) : AutoCloseable {
     fun depth(data: ShortArray, width: Int, height: Int, rowStrideBytes: Int, k: Intrinsics, displayRotation: Int) =
         Native.sessionDepthArray(handle, data, width, height, rowStrideBytes, k.fx, k.fy, k.cx, k.cy, displayRotation)
 
+    /**
+     * The camera's luminance plane (ARCore `Image.planes[0].buffer`, sensor orientation) for
+     * the latest midpoint: give it when [frame] returns the midpoint bit (1), with that frame's
+     * image. Keeps a display-oriented JPEG thumbnail and the image properties; a no-op with
+     * `"images": false` in the config.
+     */
+    fun image(buffer: ByteBuffer, width: Int, height: Int, rowStrideBytes: Int, displayRotation: Int) =
+        Native.sessionImageBuffer(handle, buffer, width, height, rowStrideBytes, displayRotation)
+
+    /** As [image] with the plane in a `ByteArray` (row stride in bytes). */
+    fun image(data: ByteArray, width: Int, height: Int, rowStrideBytes: Int, displayRotation: Int) =
+        Native.sessionImageArray(handle, data, width, height, rowStrideBytes, displayRotation)
+
+    /** What the camera saw at sub-trajectory [k], how it moved, its depth and likely causes. */
+    fun evidence(k: Int): Evidence = Evidence.of(Native.sessionSubtrajectoryEvidence(handle, k))
+
+    /** The greyscale JPEG thumbnail of sub-trajectory [k] (empty without an image), e.g. for
+     * `BitmapFactory.decodeByteArray`. */
+    fun thumbnail(k: Int): ByteArray = Native.sessionThumbnail(handle, k)
+
     /** Stops recording. */
     fun stop(tNs: Long, pose: Pose): Summary =
         Summary.of(Native.sessionStop(handle, tNs, pose.px, pose.py, pose.pz, pose.qx, pose.qy, pose.qz, pose.qw))

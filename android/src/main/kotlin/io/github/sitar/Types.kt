@@ -95,6 +95,50 @@ data class SubtrajectoryResult(val subtrajectory: Int, val errorM: Double?, val 
     }
 }
 
+/** A likely cause of a sub-trajectory's error (`Causes` in sitar-core; bit in `SitarEvidence.causes`). */
+enum class Cause(val bit: Int, val key: String) {
+    LOW_TEXTURE(1, "low_texture"), DARK(2, "dark"), OVEREXPOSED(4, "overexposed"), BLUR(8, "blur"),
+    FAST_MOTION(16, "fast_motion"), FAR_SURFACE(32, "far_surface"), NO_DEPTH(64, "no_depth");
+
+    companion object {
+        /** The causes set in [bits]. */
+        fun of(bits: Int): Set<Cause> = values().filter { (bits and it.bit) != 0 }.toSet()
+    }
+}
+
+/** What the camera saw at a sub-trajectory's midpoint, how it moved, its depth, likely causes. */
+data class Evidence(
+    val subtrajectory: Int,
+    val hasImage: Boolean,
+    val meanBrightness: Double,
+    val contrastStd: Double,
+    val laplacianVar: Double,
+    val cornersPer10k: Double,
+    val saturatedShare: Double,
+    val linearSpeedMS: Double,
+    val angularSpeedDegS: Double,
+    val depthGiven: Boolean,
+    val depthValid: Boolean,
+    val distanceM: Double,
+    val depthValidShare: Double,
+    val causes: Set<Cause>,
+    val thumbnailWidth: Int,
+    val thumbnailHeight: Int
+) {
+    internal companion object {
+        fun of(v: DoubleArray) = Evidence(
+            v[EvidenceLayout.SUBTRAJECTORY].toInt(), v[EvidenceLayout.HAS_IMAGE] != 0.0,
+            v[EvidenceLayout.MEAN_BRIGHTNESS], v[EvidenceLayout.CONTRAST_STD],
+            v[EvidenceLayout.LAPLACIAN_VAR], v[EvidenceLayout.CORNERS_PER_10K],
+            v[EvidenceLayout.SATURATED_SHARE], v[EvidenceLayout.LINEAR_SPEED_M_S],
+            v[EvidenceLayout.ANGULAR_SPEED_DEG_S], v[EvidenceLayout.DEPTH_GIVEN] != 0.0,
+            v[EvidenceLayout.DEPTH_VALID] != 0.0, v[EvidenceLayout.DISTANCE_M],
+            v[EvidenceLayout.DEPTH_VALID_SHARE], Cause.of(v[EvidenceLayout.CAUSES].toInt()),
+            v[EvidenceLayout.THUMBNAIL_WIDTH].toInt(), v[EvidenceLayout.THUMBNAIL_HEIGHT].toInt()
+        )
+    }
+}
+
 /** A 3-vector (metres). */
 data class Vec3(val x: Double, val y: Double, val z: Double)
 

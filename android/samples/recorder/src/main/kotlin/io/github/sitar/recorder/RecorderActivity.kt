@@ -10,6 +10,7 @@ import android.hardware.camera2.CameraManager
 import android.net.Uri
 import android.opengl.GLES20
 import android.opengl.GLSurfaceView
+import android.graphics.BitmapFactory
 import android.os.Bundle
 import android.os.Handler
 import android.os.Looper
@@ -17,6 +18,7 @@ import android.util.Log
 import android.view.ViewGroup
 import android.widget.Button
 import android.widget.FrameLayout
+import android.widget.ImageView
 import android.widget.LinearLayout
 import android.widget.TextView
 import com.google.ar.core.Config
@@ -36,6 +38,7 @@ import io.github.sitar.SitarSession
 import io.github.sitar.UploadJob
 import io.github.sitar.finished
 import io.github.sitar.UploadState
+import io.github.sitar.finished
 import java.io.File
 import javax.microedition.khronos.egl.EGLConfig
 import javax.microedition.khronos.opengles.GL10
@@ -67,6 +70,8 @@ class RecorderActivity : Activity(), GLSurfaceView.Renderer {
     @Volatile private var plan: RenderPlan? = null
     @Volatile private var markers: List<Marker> = emptyList()
     private var drawnRevision = 0
+    private lateinit var evidenceText: TextView
+    private lateinit var evidenceImage: ImageView
     private val view = FloatArray(16)
     private val projection = FloatArray(16)
 
@@ -95,6 +100,11 @@ class RecorderActivity : Activity(), GLSurfaceView.Renderer {
         controls.addView(status, wrap)
         controls.addView(startButton, wrap)
         controls.addView(stopButton, wrap)
+        evidenceText = TextView(this)
+        evidenceText.setTextColor(-0x1)
+        evidenceImage = ImageView(this)
+        controls.addView(evidenceText, wrap)
+        controls.addView(evidenceImage, wrap)
         val root = FrameLayout(this)
         root.addView(surface, ViewGroup.LayoutParams(ViewGroup.LayoutParams.MATCH_PARENT, ViewGroup.LayoutParams.MATCH_PARENT))
         root.addView(controls, wrap)
@@ -231,7 +241,39 @@ class RecorderActivity : Activity(), GLSurfaceView.Renderer {
         val p = f.pose
         // The 8-double overload allocates nothing on the per-frame path.
         val flags = s.frame(f.tNs, p.px, p.py, p.pz, p.qx, p.qy, p.qz, p.qw)
-        if (flags and SitarSession.MIDPOINT != 0) giveDepth(s, frame)
+        if (flags and SitarSession.MIDPOINT != 0) {
+            giveImage(s, frame)
+            giveDepth(s, frame)
+        }
+    }
+
+    /** The camera image's Y plane at a midpoint: its thumbnail and properties are the evidence
+     * shown for a marker (the paper's backup view when the situated view is unreliable). */
+    private fun giveImage(s: SitarSession, frame: Frame) {
+        val image = try {
+            frame.acquireCameraImage()
+        } catch (e: NotYetAvailableException) {
+            return
+        }
+        try {
+            @Suppress("DEPRECATION")
+            val rotation = displayRotationDeg(sensorOrientation, windowManager.defaultDisplay.rotation)
+            val plane = image.planes[0]
+            s.image(plane.buffer, image.width, image.height, plane.rowStride, rotation)
+        } catch (e: SitarException) {
+            Log.w(TAG, "camera image skipped: $e")
+        } finally {
+            image.close()
+        }
+    }
+
+    /** Shows what the camera saw at the selected marker's sub-trajectory: thumbnail and causes. */
+    private fun showEvidence(s: SitarSession, marker: Marker) {
+        val evidence = s.evidence(marker.subtrajectory)
+        val causes = if (evidence.causes.isEmpty()) "no likely cause seen" else evidence.causes.joinToString(" ") { it.key }
+        evidenceText.setText("Marker at sub-trajectory ${marker.subtrajectory}: $causes")
+        val jpeg = s.thumbnail(marker.subtrajectory)
+        if (jpeg.isNotEmpty()) evidenceImage.setImageBitmap(BitmapFactory.decodeByteArray(jpeg, 0, jpeg.size))
     }
 
     private fun giveDepth(s: SitarSession, frame: Frame) {
@@ -291,6 +333,8 @@ class RecorderActivity : Activity(), GLSurfaceView.Renderer {
                     drawnRevision = p.resultsRevision
                     plan = s.renderPlan()
                     markers = s.markers()
+                    // The worst marker is the one selected by default.
+                    markers.sortedByDescending { it.errorM }.firstOrNull()?.let { showEvidence(s, it) }
                 }
                 when (p.state) {
                     UploadState.FAILED -> flow.say("Upload failed: ${job.message()}")
