@@ -24,6 +24,7 @@ mod plot;
 mod pyfmt;
 mod res;
 mod rpe;
+mod scene;
 mod serve;
 mod shell;
 mod simulate;
@@ -58,6 +59,7 @@ enum Command {
     Simulate(simulate::Args),
     Serve(serve::Args),
     Demo(demo::Args),
+    Scene(scene::Args),
 }
 
 fn main() -> ExitCode {
@@ -86,6 +88,7 @@ fn main() -> ExitCode {
         Command::Simulate(args) => simulate::run(args),
         Command::Serve(args) => serve::run(args),
         Command::Demo(args) => demo::run(args),
+        Command::Scene(args) => scene::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -95,6 +95,7 @@ mod published;
 mod recordings;
 mod report;
 mod router;
+mod scene;
 mod server;
 mod session;
 mod settings;

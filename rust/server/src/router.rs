@@ -10,7 +10,9 @@ use axum::response::Response;
 use axum::routing::{get, post, put};
 
 use crate::Error;
-use crate::handlers::{devices, health, legacy, pages, recording, results, sessions, trials};
+use crate::handlers::{
+    devices, health, legacy, pages, recording, results, scene, sessions, trials,
+};
 use crate::http::json_response;
 use crate::shared::Shared;
 
@@ -34,6 +36,7 @@ pub(crate) fn router(shared: Arc<Shared>) -> Router {
         .route("/v1/sessions/{id}/results.csv", get(results::csv))
         .route("/v1/sessions/{id}/results.json", get(results::json))
         .route("/v1/sessions/{id}/report", get(pages::report))
+        .route("/v1/sessions/{id}/scene.glb", get(scene::glb))
         .route("/v1/devices", get(devices::list))
         .route("/recording", post(legacy::recording))
         .route("/timestamps", post(legacy::timestamps))

@@ -63,6 +63,7 @@ mod checks;
 mod error;
 mod observations;
 mod p3p;
+mod phone;
 mod pnp;
 mod ransac_tracker;
 mod recording;

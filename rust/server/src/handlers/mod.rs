@@ -7,5 +7,6 @@ pub(crate) mod legacy;
 pub(crate) mod pages;
 pub(crate) mod recording;
 pub(crate) mod results;
+pub(crate) mod scene;
 pub(crate) mod sessions;
 pub(crate) mod trials;
