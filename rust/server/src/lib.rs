@@ -79,6 +79,8 @@
 // handlers/*                                    — one file per resource
 // router, server                                — route table and middleware; serving
 mod adb;
+mod assets;
+mod charts;
 mod config;
 mod db;
 mod deletion;
@@ -93,6 +95,7 @@ mod mp4_check;
 mod playback;
 mod published;
 mod recordings;
+mod regions;
 mod report;
 mod router;
 mod scene;
@@ -101,6 +104,7 @@ mod session;
 mod settings;
 mod shared;
 mod status;
+mod templates;
 mod trials;
 
 pub use adb::{AdbPlayback, contract as adb_contract, mp4_duration_s};

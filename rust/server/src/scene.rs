@@ -24,6 +24,18 @@ pub(crate) enum Source {
     ReferenceTrial,
 }
 
+impl Source {
+    /// What the page says about where the 3-D scene came from.
+    pub(crate) fn describe(self) -> &'static str {
+        match self {
+            Self::SimulatedWalk => "the recorded walk with its depth samples",
+            Self::ReferenceTrial => {
+                "the reference trial: a real recording brings no depth to the backend, so there are no surface points or markers"
+            }
+        }
+    }
+}
+
 fn config(row: &Row) -> Result<SessionConfig, Error> {
     let text = json!({
         "convention": "arcore",

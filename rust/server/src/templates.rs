@@ -1,0 +1,60 @@
+//! The HTML templates (minijinja), compiled into the binary. Templates named `*.html`
+//! escape every value unless marked `|safe` (only server-made SVG is).
+
+use std::sync::OnceLock;
+
+use axum::http::{HeaderValue, header};
+use axum::response::{Html, IntoResponse, Response};
+use minijinja::Environment;
+
+use crate::Error;
+
+fn environment() -> &'static Environment<'static> {
+    static ENV: OnceLock<Environment<'static>> = OnceLock::new();
+    ENV.get_or_init(|| {
+        let mut env = Environment::new();
+        for (name, source) in [
+            ("report.html", include_str!("../templates/report.html")),
+            ("overview.html", include_str!("../templates/overview.html")),
+        ] {
+            // A template that does not compile is a bug caught by every test of the pages.
+            if let Err(e) = env.add_template(name, source) {
+                log::error!("template {name}: {e}");
+            }
+        }
+        env
+    })
+}
+
+/// Renders template `name` with `context`.
+pub(crate) fn render(name: &str, context: &serde_json::Value) -> Result<String, Error> {
+    environment()
+        .get_template(name)
+        .and_then(|t| t.render(context))
+        .map_err(|e| Error::Internal(format!("template {name}: {e}")))
+}
+
+/// The Content-Security-Policy of every HTML answer: scripts, styles, data only from this
+/// backend; no inline script, no other origin, no framing.
+pub(crate) const CSP: &str = "default-src 'none'; script-src 'self'; style-src 'self'; \
+     img-src 'self' data:; connect-src 'self'; base-uri 'none'; form-action 'none'; \
+     frame-ancestors 'none'";
+
+/// An HTML answer with the page headers.
+pub(crate) fn page(html: String) -> Response {
+    let mut response = Html(html).into_response();
+    let headers = response.headers_mut();
+    headers.insert(
+        header::CONTENT_SECURITY_POLICY,
+        HeaderValue::from_static(CSP),
+    );
+    headers.insert(
+        header::X_CONTENT_TYPE_OPTIONS,
+        HeaderValue::from_static("nosniff"),
+    );
+    headers.insert(
+        header::REFERRER_POLICY,
+        HeaderValue::from_static("no-referrer"),
+    );
+    response
+}
