@@ -240,6 +240,8 @@ async function main() {
   });
   render();
   document.body.dataset.view = "ready";
+  // Navigation start to the first frame of the 3-D view (scripts/bench-report reads it).
+  document.body.dataset.renderMs = String(Math.round(performance.now()));
   status(`${data.subs.length} sub-trajectories, ${data.frustums.length} frustums, ${data.markers.length} markers, ${data.surface.length / 3} surface points.`);
 }
 

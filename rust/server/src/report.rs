@@ -67,7 +67,8 @@ pub(crate) fn colour(class: ErrorClass) -> &'static str {
     }
 }
 
-/// A point in glTF's frame (the 3-D view's): ARCore's convention.
+/// A point of the backend's phone session (always `arcore`, see `crate::scene`) in the 3-D
+/// view's frame, glTF's: the same frame, so this only states the conversion.
 fn view_point(p: glam::DVec3) -> glam::DVec3 {
     Convention::Arcore.convert_vector(p, Convention::Arcore)
 }
