@@ -7,6 +7,8 @@
 //! points or markers. Either is built once and kept as a `sitar_core` session folder
 //! (`sessions/ID/phone/`); the latest results are loaded into it on every request.
 
+use std::sync::{Arc, Mutex};
+
 use serde_json::json;
 use sitar_core::{DisplayRotation, Session, SessionConfig};
 
@@ -100,8 +102,38 @@ fn build(shared: &Shared, row: &Row) -> Result<(Session, Source), Error> {
     Ok((from_reference_trial(shared, row)?, Source::ReferenceTrial))
 }
 
+/// Phone sessions with results loaded, most recent last: a report and its `scene.json` (and a
+/// reload) reuse the work. Keyed by folder (data dir + id) and the results' trial count.
+type Cached = (std::path::PathBuf, u32, Arc<(Session, Source)>);
+static CACHE: Mutex<Vec<Cached>> = Mutex::new(Vec::new());
+/// Sessions kept in memory (a 10-minute walk's is a few MB).
+const CACHED_SESSIONS: usize = 4;
+
 /// The phone session of `row` with its latest results loaded. Blocking.
-pub(crate) fn load(shared: &Shared, row: &Row) -> Result<(Session, Source), Error> {
+pub(crate) fn load(shared: &Shared, row: &Row) -> Result<Arc<(Session, Source)>, Error> {
+    let key = shared.files.phone_session(&row.id);
+    let lock = || {
+        CACHE
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner())
+    };
+    if let Some((_, _, hit)) = lock()
+        .iter()
+        .find(|(k, trials, _)| *k == key && *trials == row.results_trials)
+    {
+        return Ok(hit.clone());
+    }
+    let loaded = Arc::new(load_uncached(shared, row)?);
+    let mut cache = lock();
+    cache.retain(|(k, _, _)| *k != key);
+    if cache.len() >= CACHED_SESSIONS {
+        cache.remove(0);
+    }
+    cache.push((key, row.results_trials, loaded.clone()));
+    Ok(loaded)
+}
+
+fn load_uncached(shared: &Shared, row: &Row) -> Result<(Session, Source), Error> {
     let dir = shared.files.phone_session(&row.id);
     let marker = dir.join("source.txt");
     let cached = Session::load(&dir)

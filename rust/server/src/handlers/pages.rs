@@ -171,7 +171,7 @@ pub(crate) async fn report(
             row: &session,
             results_json: &json,
             config: &shared.config,
-            phone: phone.as_ref().map(|(p, s)| (p, *s)),
+            phone: phone.as_deref().map(|(p, s)| (p, *s)),
         })
     })
     .await

@@ -11,8 +11,8 @@ use crate::scene;
 /// `GET /v1/sessions/{id}/scene.glb`: trajectory by class, frustums, markers, surface points.
 pub(crate) async fn glb(State(shared): AppState, Found(session): Found) -> Result<Response, Error> {
     let glb = tokio::task::spawn_blocking(move || {
-        let (phone, _) = scene::load(&shared, &session)?;
-        sitar_scene::to_glb(&sitar_scene::SceneParts::from_session(&phone))
+        let loaded = scene::load(&shared, &session)?;
+        sitar_scene::to_glb(&sitar_scene::SceneParts::from_session(&loaded.0))
             .map_err(|e| Error::Conflict(format!("no scene for session {}: {e}", session.id)))
     })
     .await
@@ -48,12 +48,13 @@ pub(crate) async fn json(
 ) -> Result<Response, Error> {
     let value = tokio::task::spawn_blocking(move || -> Result<serde_json::Value, Error> {
         use sitar_core::Convention;
-        let (phone, source) = scene::load(&shared, &session)?;
+        let loaded = scene::load(&shared, &session)?;
+        let (phone, source) = (&loaded.0, loaded.1);
         let conv = phone.config().convention;
         let to_view = |p: glam::DVec3| conv.convert_vector(p, Convention::Arcore);
         let thresholds = session.settings.thresholds(&shared.config);
         let unit = crate::report::Unit::of(&session);
-        let subs = crate::regions::sub_rows(&phone, thresholds);
+        let subs = crate::regions::sub_rows(phone, thresholds);
         let plan = phone.render_plan();
         let markers = phone.markers().unwrap_or_default();
         let quat = |q: glam::DQuat| {
@@ -102,7 +103,7 @@ pub(crate) async fn trajectory(
     Found(session): Found,
 ) -> Result<Response, Error> {
     let tum = tokio::task::spawn_blocking(move || {
-        scene::load(&shared, &session).map(|(phone, _)| phone.trajectory_tum())
+        scene::load(&shared, &session).map(|loaded| loaded.0.trajectory_tum())
     })
     .await
     .map_err(|e| Error::Internal(format!("trajectory: {e}")))??;
