@@ -58,3 +58,46 @@ pub(crate) fn page(html: String) -> Response {
     );
     response
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn client_strings_are_escaped_in_both_pages() {
+        let hostile = "<script>alert(1)</script>\"'&\u{7}";
+        let overview = render(
+            "overview.html",
+            &serde_json::json!({
+                "playback": hostile,
+                "sessions": [{"id": hostile, "state": "done", "setting": hostile, "note": hostile,
+                              "played_by": [{"source": hostile, "trials": "0"}]}],
+                "devices": [{"serial": hostile, "state": hostile, "session": hostile}],
+                "devices_empty_reason": hostile,
+            }),
+        )
+        .unwrap();
+        let report = render(
+            "report.html",
+            &serde_json::json!({
+                "id": hostile,
+                "settings": [["Stop reason", hostile]],
+                "regions": [{"rank": 1, "class": hostile, "cause": hostile, "thumbnail_url": hostile,
+                             "markers": hostile, "subtrajectories": hostile}],
+                "markers": [],
+                "source": hostile,
+            }),
+        )
+        .unwrap();
+        for page in [&overview, &report] {
+            assert!(!page.contains("<script>alert"), "{page}");
+            assert!(page.contains("&lt;script&gt;alert(1)&lt;"), "{page}");
+            // No inline script at all: the only script is the module from /assets.
+            assert_eq!(
+                page.matches("<script").count(),
+                page.matches("<script type=\"module\" src=\"/assets/report.js\">")
+                    .count()
+            );
+        }
+    }
+}
