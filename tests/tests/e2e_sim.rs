@@ -139,6 +139,12 @@ fn check_report(html: &str, base: &str, id: &str) {
         &html[..html.len().min(800)]
     );
     assert!(html.contains("result windows"));
+    // The progressive estimates, one row per publication, the last from all 6 trials.
+    let history = &html[html.find("<table id=\"history\">").unwrap()..];
+    let history = &history[..history.find("</table>").unwrap()];
+    let rows: Vec<&str> = history.split("<tr><td>").skip(1).collect();
+    assert!(rows.len() >= 2, "{history}");
+    assert!(rows.last().unwrap().starts_with("6<"), "{history}");
     assert!(html.contains("trim_mean_30"));
     let chromium = std::path::Path::new("/usr/bin/chromium");
     if !chromium.exists() {

@@ -197,6 +197,8 @@ pub(crate) struct ReportInput<'a> {
     /// The phone session with the results loaded, and where it came from (none without
     /// any trajectory).
     pub phone: Option<(&'a Phone, Source)>,
+    /// The published estimates in order (`published::history`).
+    pub history: Vec<serde_json::Value>,
 }
 
 pub(crate) fn render(input: &ReportInput<'_>) -> Result<String, Error> {
@@ -333,6 +335,12 @@ pub(crate) fn render(input: &ReportInput<'_>) -> Result<String, Error> {
             charts::histogram(&errors, thresholds, unit.scale, &y_label)
         },
         "settings": settings,
+        "history": input.history.iter().map(|h| json!({
+            "trials": h["trials"],
+            "mean": unit.show(h["mean"].as_f64().unwrap_or(0.0)),
+            "max": unit.show(h["max"].as_f64().unwrap_or(0.0)),
+            "high": h["high"], "medium": h["medium"], "low": h["low"],
+        })).collect::<Vec<_>>(),
         "colours": {"low": LOW, "medium": MEDIUM, "high": HIGH, "unknown": UNKNOWN},
     });
     templates::render("report.html", &context)

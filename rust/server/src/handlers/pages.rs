@@ -167,11 +167,13 @@ pub(crate) async fn report(
     let html = tokio::task::spawn_blocking(move || {
         // No trajectory (e.g. trials without a readable reference) still gets a page.
         let phone = scene::load(&shared, &session).ok();
+        let history = published::history(&shared, &session);
         report::render(&ReportInput {
             row: &session,
             results_json: &json,
             config: &shared.config,
             phone: phone.as_deref().map(|(p, s)| (p, *s)),
+            history,
         })
     })
     .await
