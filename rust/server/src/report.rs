@@ -53,8 +53,10 @@ impl Unit {
         }
     }
 
+    /// `4.2 cm`, `3.1°`.
     fn show(&self, value: f64) -> String {
-        format!("{:.1} {}", value * self.scale, self.name)
+        let space = if self.name == "°" { "" } else { " " };
+        format!("{:.1}{space}{}", value * self.scale, self.name)
     }
 }
 
@@ -261,7 +263,7 @@ pub(crate) fn render(input: &ReportInput<'_>) -> Result<String, Error> {
                 "subtrajectory": m.subtrajectory,
                 "class": m.class.name(),
                 "colour": colour(m.class),
-                "error": unit.show(m.error_m),
+                "error": format!("{:.1}", m.error_m * unit.scale),
                 "position": format!("({:.2}, {:.2}, {:.2})", p.x, p.y, p.z),
                 "region": found.iter().find(|r| r.markers.contains(&(i + 1))).map(|r| r.rank),
             })
