@@ -51,16 +51,23 @@ async function main() {
     status("No trajectory yet.");
     return;
   }
+  // The camera frames the walk; the grid also covers what it faced (surface points, markers).
   const box = new THREE.Box3().setFromPoints(joints);
+  const framed = joints.slice();
+  for (let i = 0; i + 2 < data.surface.length; i += 3) framed.push(new THREE.Vector3(data.surface[i], data.surface[i + 1], data.surface[i + 2]));
+  for (const m of data.markers) framed.push(new THREE.Vector3(...m.p));
+  const room = new THREE.Box3().setFromPoints(framed);
   const centre = box.getCenter(new THREE.Vector3());
   const size = box.getSize(new THREE.Vector3());
   const span = Math.max(size.x, size.z, 1);
 
   // Grid (1 m cells) on the floor under the walk, and axes at the origin.
   const floorY = box.min.y - 1.2;
-  const cells = Math.ceil(span + 2);
+  const roomSize = room.getSize(new THREE.Vector3());
+  const roomCentre = room.getCenter(new THREE.Vector3());
+  const cells = Math.ceil(Math.max(roomSize.x, roomSize.z, span) + 2);
   const grid = new THREE.GridHelper(cells, cells, 0x999999, 0xd0d0d0);
-  grid.position.set(Math.round(centre.x), floorY, Math.round(centre.z));
+  grid.position.set(Math.round(roomCentre.x), floorY, Math.round(roomCentre.z));
   scene.add(grid);
   const axes = new THREE.AxesHelper(1);
   axes.position.set(0, floorY, 0);
