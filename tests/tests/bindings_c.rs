@@ -143,6 +143,7 @@ struct Api {
     plan_ends: extern "C" fn(H, *mut Pose, *mut Pose, *mut u32) -> i32,
     trajectory_tum: extern "C" fn(H, *mut c_char, usize, *mut usize) -> i32,
     save: extern "C" fn(H, *const c_char) -> i32,
+    export_gltf: extern "C" fn(H, *const c_char) -> i32,
     load: extern "C" fn(*const c_char, *mut H) -> i32,
     playback_new: extern "C" fn(*const c_char, *mut H) -> i32,
     playback_log: extern "C" fn(H, i64, *const Pose) -> i32,
@@ -191,6 +192,7 @@ fn api() -> &'static Api {
             plan_ends: sym!("sitar_session_plan_ends"),
             trajectory_tum: sym!("sitar_session_trajectory_tum"),
             save: sym!("sitar_session_save"),
+            export_gltf: sym!("sitar_session_export_gltf"),
             load: sym!("sitar_session_load"),
             playback_new: sym!("sitar_playback_new"),
             playback_log: sym!("sitar_playback_log"),
@@ -524,6 +526,25 @@ fn whole_session_through_the_c_abi() {
         OK,
         "{}",
         last_error()
+    );
+    // The scene as glTF binary: a GLB header whose length is the file's.
+    let glb_path = dir.path().join("scene.glb");
+    assert_eq!(
+        (a.export_gltf)(h, c(glb_path.to_str().unwrap()).as_ptr().cast()),
+        OK,
+        "{}",
+        last_error()
+    );
+    let glb = std::fs::read(&glb_path).unwrap();
+    assert_eq!(&glb[..4], b"glTF");
+    assert_eq!(
+        u32::from_le_bytes(glb[8..12].try_into().unwrap()) as usize,
+        glb.len()
+    );
+    assert_eq!(
+        (a.export_gltf)(h, std::ptr::null()),
+        ERR_NULL,
+        "a NULL path is refused"
     );
     let mut loaded = 0;
     assert_eq!(

@@ -86,6 +86,30 @@ fn the_list_and_the_page_show_the_newest_sessions_with_their_links() {
     assert!(!waiting_row.contains("/report"), "{waiting_row}");
     assert!(waiting_row.contains("<td>created</td>") && waiting_row.contains("<td>0/3</td>"));
     assert!(page.find(&waiting).unwrap() < page.find(&played).unwrap());
+    // Creation time, ETA, which phone played which trials; why the devices table is empty.
+    assert!(played_row.contains("<td>20"), "{played_row}");
+    // Two simulated phones share the two trials: every trial is listed under a phone.
+    let played_by = &played_row[played_row.find("played-by").unwrap()..];
+    let played_by = &played_by[..played_by.find("</td>").unwrap()];
+    assert!(played_by.contains("<code>sim:"), "{played_by}");
+    assert!(
+        played_by.contains(": 0") && (played_by.contains(": 1") || played_by.contains("0–1")),
+        "{played_by}"
+    );
+    assert!(
+        page.contains("id=\"devices-empty\">None: this server plays back on simulated phones"),
+        "{page}"
+    );
+    let (_, headers) = {
+        let response = agent().get(&format!("{base}/")).call().unwrap();
+        (response.status(), response.headers().clone())
+    };
+    let csp = headers["content-security-policy"].to_str().unwrap();
+    assert!(
+        csp.contains("script-src 'self'") && csp.contains("default-src 'none'"),
+        "{csp}"
+    );
+    assert!(headers.get("access-control-allow-origin").is_none());
     // The linked report is there.
     let (status, _, report) = raw(
         "GET",

@@ -185,6 +185,14 @@ namespace Sitar
         internal static extern int sitar_session_save(ulong h, byte* dir);
 
         /// <summary>
+        ///  Writes the session's scene as a glTF 2.0 binary file at `path` (`.glb`): trajectory
+        ///  tube by class, joints, frustums, start/stop, markers and surface points, in glTF's
+        ///  frame (right-handed, +Y up, metres). `SITAR_ERR_INVALID_STATE` before `start`.
+        /// </summary>
+        [DllImport(__DllName, EntryPoint = "sitar_session_export_gltf", CallingConvention = CallingConvention.Cdecl, ExactSpelling = true)]
+        internal static extern int sitar_session_export_gltf(ulong h, byte* path);
+
+        /// <summary>
         ///  Loads a saved session folder as a new session.
         /// </summary>
         [DllImport(__DllName, EntryPoint = "sitar_session_load", CallingConvention = CallingConvention.Cdecl, ExactSpelling = true)]

@@ -580,6 +580,18 @@ namespace Sitar
         }
 
         /// <summary>
+        /// Writes the scene as a glTF 2.0 binary file (.glb): trajectory by class, frustums,
+        /// markers, surface points, in glTF's frame (glTFast converts it back to Unity's).
+        /// </summary>
+        public void ExportGltf(string path)
+        {
+            fixed (byte* p = Native.Utf8(path))
+            {
+                Native.Check(NativeMethods.sitar_session_export_gltf(Id, p));
+            }
+        }
+
+        /// <summary>
         /// Uploads the recording in the background; results are loaded into this
         /// session when the server is done. Options JSON: server_url (else the
         /// config's), server_token (the backend's access token), server_cert_sha256 (pins

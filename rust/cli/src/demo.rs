@@ -5,11 +5,9 @@ use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result, bail};
 use sitar_client::{Client, NewSession, SessionOptions, SessionState};
-use sitar_core::{
-    DepthImage, DisplayRotation, ErrorClass, LumaImage, Pose, Session, SessionConfig,
-};
+use sitar_core::{DisplayRotation, ErrorClass, SessionConfig};
 use sitar_server::{PlaybackKind, PresetToken, Role, Server, ServerConfig};
-use sitar_sim::{DepthCamera, LumaCamera, Recording};
+use sitar_sim::Recording;
 
 /// Runs the whole system in one process: a simulated user walks a room with a blank wall and
 /// a glass pane, the phone logic (sitar-core) records the walk with depth, the recording goes
@@ -92,9 +90,14 @@ pub fn run(args: Args) -> Result<()> {
     // 2. The user walks the room; the phone logic records poses and depth like on a phone.
     let recording =
         Recording::demo(args.seconds, 30.0, args.seed).context("cannot simulate the walk")?;
-    let mut session = Session::new(SessionConfig::from_json(r#"{"convention":"arcore"}"#)?);
     let display = DisplayRotation::from_degrees(args.display_rotation)?;
-    let summary = record_walk(&recording, &mut session, display)?;
+    let mut session = recording.phone_session(
+        SessionConfig::from_json(r#"{"convention":"arcore"}"#)?,
+        display,
+    )?;
+    let summary = session
+        .summary()
+        .context("the phone session has no summary after stop")?;
     println!(
         "walk        {} frames, {:.1} s, {:.1} m; {} sub-trajectories, {} depth samples (mean {:.2} m)",
         summary.frames,
@@ -267,52 +270,6 @@ pub fn run(args: Args) -> Result<()> {
     Ok(())
 }
 
-/// Feeds the ground-truth walk to the phone logic: start, every frame, the camera image and
-/// depth at midpoints (an unusable depth sample, as on glass, is recorded and the walk goes
-/// on, as on a phone), stop.
-fn record_walk(
-    recording: &Recording,
-    session: &mut Session,
-    display: DisplayRotation,
-) -> Result<sitar_core::Summary> {
-    let gt = &recording.walk().ground_truth;
-    if gt.len() < 3 {
-        bail!("the walk is too short");
-    }
-    let camera = DepthCamera::phone();
-    let luma_camera = LumaCamera::phone();
-    let k = camera.intrinsics;
-    let pose = |i: usize| Pose::new(gt.positions[i], gt.orientations[i]);
-    let last = gt.len() - 1;
-    session.start(gt.stamps[0], pose(0))?;
-    for i in 1..last {
-        let flags = session.frame(gt.stamps[i], pose(i))?;
-        if flags.is_midpoint() {
-            let depth = recording.room().render_depth_mm_rotated(
-                gt.positions[i],
-                gt.orientations[i],
-                &camera,
-                display,
-            );
-            let luma = recording.room().render_luma_rotated(
-                gt.positions[i],
-                gt.orientations[i],
-                &luma_camera,
-                display,
-                i as u64,
-            );
-            let (w, h) = (luma_camera.width, luma_camera.height);
-            session.image(&LumaImage::new(&luma, w, h, w)?, display)?;
-            let image = DepthImage::new(&depth, camera.width, camera.height, camera.width * 2)?;
-            match session.depth(&image, &k, display) {
-                Ok(()) | Err(sitar_core::Error::InvalidDepth(_)) => {}
-                Err(other) => return Err(other.into()),
-            }
-        }
-    }
-    Ok(session.stop(gt.stamps[last], pose(last))?)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -347,9 +304,13 @@ mod tests {
     #[test]
     fn the_recorded_walk_has_a_depth_sample_at_every_midpoint_not_facing_glass() {
         let recording = Recording::demo(4.0, 30.0, 1).unwrap();
-        let mut session =
-            Session::new(SessionConfig::from_json(r#"{"convention":"arcore"}"#).unwrap());
-        let summary = record_walk(&recording, &mut session, DisplayRotation::Deg90).unwrap();
+        let session = recording
+            .phone_session(
+                SessionConfig::from_json(r#"{"convention":"arcore"}"#).unwrap(),
+                DisplayRotation::Deg90,
+            )
+            .unwrap();
+        let summary = session.summary().unwrap();
         assert_eq!(summary.frames as usize, recording.frames() - 2);
         assert_eq!(summary.subtrajectories, summary.frames / 10);
         let gt = &recording.walk().ground_truth;
@@ -380,9 +341,12 @@ mod tests {
     #[test]
     fn the_causes_name_the_blank_wall_and_the_glass() {
         let recording = Recording::demo(15.0, 30.0, 7).unwrap();
-        let mut session =
-            Session::new(SessionConfig::from_json(r#"{"convention":"arcore"}"#).unwrap());
-        record_walk(&recording, &mut session, DisplayRotation::Deg90).unwrap();
+        let session = recording
+            .phone_session(
+                SessionConfig::from_json(r#"{"convention":"arcore"}"#).unwrap(),
+                DisplayRotation::Deg90,
+            )
+            .unwrap();
         let gt = &recording.walk().ground_truth;
         let logged = session.logged();
         let mut by_kind: std::collections::BTreeMap<String, (usize, usize, usize)> =
@@ -417,9 +381,12 @@ mod tests {
     fn the_walk_finds_the_same_surfaces_for_every_display_rotation() {
         let recording = Recording::demo(4.0, 30.0, 3).unwrap();
         let samples = |display| {
-            let mut session =
-                Session::new(SessionConfig::from_json(r#"{"convention":"arcore"}"#).unwrap());
-            record_walk(&recording, &mut session, display).unwrap();
+            let session = recording
+                .phone_session(
+                    SessionConfig::from_json(r#"{"convention":"arcore"}"#).unwrap(),
+                    display,
+                )
+                .unwrap();
             session
                 .subtrajectories()
                 .iter()

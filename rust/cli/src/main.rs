@@ -25,6 +25,7 @@ mod plot;
 mod pyfmt;
 mod res;
 mod rpe;
+mod scene;
 mod serve;
 mod shell;
 mod simulate;
@@ -61,6 +62,7 @@ enum Command {
     Serve(serve::Args),
     Token(token::Args),
     Demo(demo::Args),
+    Scene(scene::Args),
 }
 
 fn main() -> ExitCode {
@@ -90,6 +92,7 @@ fn main() -> ExitCode {
         Command::Serve(args) => serve::run(args),
         Command::Token(args) => token::run(args),
         Command::Demo(args) => demo::run(args),
+        Command::Scene(args) => scene::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -410,6 +410,11 @@ int32_t sitar_session_trajectory_tum(SitarHandle h, char *buf, size_t cap, size_
 // Saves the session into folder `dir` (created if missing).
 int32_t sitar_session_save(SitarHandle h, const char *dir);
 
+// Writes the session's scene as a glTF 2.0 binary file at `path` (`.glb`): trajectory
+// tube by class, joints, frustums, start/stop, markers and surface points, in glTF's
+// frame (right-handed, +Y up, metres). `SITAR_ERR_INVALID_STATE` before `start`.
+int32_t sitar_session_export_gltf(SitarHandle h, const char *path);
+
 // Loads a saved session folder as a new session.
 int32_t sitar_session_load(const char *dir, SitarHandle *out);
 

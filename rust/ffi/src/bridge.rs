@@ -433,6 +433,20 @@ pub fn session_save(h: SitarHandle, dir: &Path) -> Result<(), Error> {
     with_session(h, |s| Ok(s.save(dir)?))
 }
 
+/// Writes the session's scene as a `.glb` file (see `sitar_scene`).
+pub fn session_export_gltf(h: SitarHandle, path: &Path) -> Result<(), Error> {
+    let _trace = crate::trace::section("sitar export gltf");
+    let glb = with_session(h, |s| {
+        Ok(sitar_scene::to_glb(
+            &sitar_scene::SceneParts::from_session(s),
+        )?)
+    })?;
+    std::fs::write(path, glb).map_err(|source| Error::Io {
+        context: format!("cannot write the scene to {}", path.display()),
+        source,
+    })
+}
+
 /// Loads a saved session folder as a new session.
 pub fn session_load(dir: &Path) -> Result<SitarHandle, Error> {
     crate::logging::init();

@@ -78,6 +78,9 @@ pub enum Error {
     /// An error from the on-device logic.
     #[error(transparent)]
     Core(#[from] sitar_core::Error),
+    /// The scene export failed.
+    #[error(transparent)]
+    Scene(#[from] sitar_scene::Error),
     /// An error talking to the backend.
     #[error(transparent)]
     Client(#[from] sitar_client::Error),
@@ -110,6 +113,8 @@ impl Error {
             Error::Options(_) => SITAR_ERR_PARSE,
             Error::Core(e) => core_status(e),
             Error::Client(e) => client_status(e),
+            Error::Scene(sitar_scene::Error::NoTrajectory) => SITAR_ERR_INVALID_STATE,
+            Error::Scene(_) => SITAR_ERR_INVALID_ARGUMENT,
             Error::Io { .. } => SITAR_ERR_IO,
             Error::Panic(_) => SITAR_ERR_PANIC,
             Error::Jni(_) => SITAR_ERR_INVALID_ARGUMENT,

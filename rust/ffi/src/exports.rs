@@ -152,6 +152,12 @@ crate::declare::exports! {
     fn session_save(h: SitarHandle, dir: &Path)
         => c sitar_session_save() jni sessionSave;
 
+    /// Writes the session's scene as a glTF 2.0 binary file at `path` (`.glb`): trajectory
+    /// tube by class, joints, frustums, start/stop, markers and surface points, in glTF's
+    /// frame (right-handed, +Y up, metres). `SITAR_ERR_INVALID_STATE` before `start`.
+    fn session_export_gltf(h: SitarHandle, path: &Path)
+        => c sitar_session_export_gltf() jni sessionExportGltf;
+
     /// Loads a saved session folder as a new session.
     fn session_load(dir: &Path) -> SitarHandle
         => c sitar_session_load(out: SitarHandle) jni sessionLoad;

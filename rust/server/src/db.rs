@@ -306,6 +306,40 @@ impl Db {
         .map(|_| ())
     }
 
+    /// Which phone (trial `source`: `adb:SERIAL`, `sim:N`, or the uploaded file) played which
+    /// trials of `session`, in first-played order.
+    pub fn trial_sources(&self, session: &str) -> Result<Vec<(String, Vec<u32>)>, Error> {
+        self.with(|c| {
+            let mut stmt =
+                c.prepare("SELECT source, idx FROM trials WHERE session_id = ?1 ORDER BY idx")?;
+            let rows = stmt.query_map([session], |r| {
+                Ok((r.get::<_, String>(0)?, r.get::<_, u32>(1)?))
+            })?;
+            let mut out: Vec<(String, Vec<u32>)> = Vec::new();
+            for row in rows {
+                let (source, idx) = row?;
+                match out.iter_mut().find(|(s, _)| *s == source) {
+                    Some((_, list)) => list.push(idx),
+                    None => out.push((source, vec![idx])),
+                }
+            }
+            Ok(out)
+        })
+    }
+
+    /// When `session` was created (ms since the Unix epoch).
+    pub fn session_created_ms(&self, session: &str) -> Result<Option<i64>, Error> {
+        self.with(|c| {
+            use rusqlite::OptionalExtension;
+            c.query_row(
+                "SELECT created_ms FROM sessions WHERE id = ?1",
+                [session],
+                |r| r.get(0),
+            )
+            .optional()
+        })
+    }
+
     pub fn devices(&self) -> Result<Vec<DeviceRow>, Error> {
         self.with(|c| {
             let mut stmt = c.prepare(

@@ -143,6 +143,17 @@ impl Files {
         std::fs::create_dir_all(&dir).map_err(|e| Error::io("cannot create", &dir, e))
     }
 
+    /// The user's phone session as the backend reconstructs it (`sitar_core` session folder):
+    /// the render plan and surface samples behind the report's 3-D view and `scene.glb`.
+    pub fn phone_session(&self, id: &str) -> PathBuf {
+        self.session_dir(id).join("phone")
+    }
+
+    /// A fresh scratch folder path under `tmp/` (same file system as the sessions).
+    pub fn scratch_dir(&self) -> PathBuf {
+        self.root.join("tmp").join(format!("phone-{}", new_id()))
+    }
+
     fn temp_path(&self) -> PathBuf {
         self.root
             .join("tmp")

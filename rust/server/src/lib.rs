@@ -84,7 +84,9 @@
 // tls                                           — certificate and HTTPS listener
 // router, server                                — route table and middleware; serving
 mod adb;
+mod assets;
 mod auth;
+mod charts;
 mod config;
 mod db;
 mod deletion;
@@ -101,13 +103,16 @@ mod netinfo;
 mod playback;
 mod published;
 mod recordings;
+mod regions;
 mod report;
 mod router;
+mod scene;
 mod server;
 mod session;
 mod settings;
 mod shared;
 mod status;
+mod templates;
 mod tls;
 mod trials;
 

@@ -26,7 +26,56 @@ pub(crate) fn write(shared: &Shared, id: &str, published: &Published) -> Result<
     let files = &shared.files;
     files.write_atomic(&files.results_csv(id), published.csv.as_bytes())?;
     files.write_atomic(&files.results_json(id), published.json.as_bytes())?;
+    append_history(&files.session_dir(id).join(HISTORY), published);
     shared.lifecycle().publish(id, published.trials)
+}
+
+/// One line per published estimate (at most one per trial): how the estimate changed as
+/// trials arrived, for the report.
+pub(crate) const HISTORY: &str = "history.jsonl";
+
+/// Appends `{"trials","mean","max","high","medium","low"}` (window errors in the results'
+/// unit; sub-trajectory classes). A history that cannot be written only loses the report's
+/// history table, so the error is logged, not returned.
+fn append_history(path: &std::path::Path, published: &Published) {
+    use std::io::Write as _;
+    let doc: serde_json::Value = serde_json::from_str(&published.json).unwrap_or_default();
+    let errors: Vec<f64> = doc["windows"]
+        .as_array()
+        .map(|w| {
+            w.iter()
+                .filter_map(|w| w["error_m"].as_f64().or(w["error_deg"].as_f64()))
+                .collect()
+        })
+        .unwrap_or_default();
+    let count = |c: sitar_core::ErrorClass| published.classes.values().filter(|v| **v == c).count();
+    let line = serde_json::json!({
+        "trials": published.trials,
+        "mean": errors.iter().sum::<f64>() / errors.len().max(1) as f64,
+        "max": errors.iter().copied().fold(0.0, f64::max),
+        "high": count(sitar_core::ErrorClass::High),
+        "medium": count(sitar_core::ErrorClass::Medium),
+        "low": count(sitar_core::ErrorClass::Low),
+    });
+    let written = std::fs::OpenOptions::new()
+        .create(true)
+        .append(true)
+        .open(path)
+        .and_then(|mut f| writeln!(f, "{line}"));
+    if let Err(e) = written {
+        log::warn!("cannot append to {}: {e}", path.display());
+    }
+}
+
+/// The published estimates of `session` in order (empty when none was recorded).
+pub(crate) fn history(shared: &Shared, session: &Session) -> Vec<serde_json::Value> {
+    std::fs::read_to_string(shared.files.session_dir(&session.id).join(HISTORY))
+        .map(|text| {
+            text.lines()
+                .filter_map(|l| serde_json::from_str(l).ok())
+                .collect()
+        })
+        .unwrap_or_default()
 }
 
 /// The latest published results of `session`; a 409 naming the state when there are none.

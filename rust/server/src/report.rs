@@ -1,15 +1,26 @@
-//! The report of a session (`GET /v1/sessions/{id}/report`): one self-contained HTML page,
-//! the reference trial seen from above coloured by error, the worst windows and the
-//! settings, every error in its unit (cm for `trans_part`, degrees for `angle_deg`).
+//! The report of a session (`GET /v1/sessions/{id}/report`): one HTML page from the
+//! `templates/report.html` template (minijinja, HTML autoescape: every string from a client
+//! is escaped unless the template says otherwise, and only the numeric SVG charts do).
+//!
+//! What it shows: counts in sub-trajectories and regions (the window count labelled as
+//! such), the interactive 3-D view (`/assets/report.js`, three.js served by this backend,
+//! data from `scene.json`), a static SVG top view, the problem regions, the charts, the
+//! statistics and the downloads. Errors are in cm for `trans_part` and degrees for
+//! `angle_deg`.
 
 use std::fmt::Write;
 
 use serde::Deserialize;
-use sitar_core::{ErrorClass, Thresholds};
+use serde_json::json;
+use sitar_core::{Convention, ErrorClass, Session as Phone, Thresholds};
 
 use crate::Error;
+use crate::charts::{self, HIGH, LOW, MEDIUM, UNKNOWN};
 use crate::config::ServerConfig;
+use crate::regions::{self, SubRow};
+use crate::scene::Source;
 use crate::session::Session;
+use crate::templates;
 
 #[derive(Debug, Deserialize)]
 struct ResultsDoc {
@@ -17,178 +28,249 @@ struct ResultsDoc {
     setting: String,
     #[serde(default)]
     trials: u32,
-    windows: Vec<WindowDoc>,
-}
-
-#[derive(Debug, Deserialize)]
-struct WindowDoc {
-    start: i64,
-    #[serde(default)]
-    end: Option<i64>,
-    /// `error_m` of `trans_part` results, `error_deg` of `angle_deg` ones.
-    #[serde(rename = "error_m", alias = "error_deg")]
-    error: f64,
-    #[serde(default)]
-    pairs: Option<u32>,
-}
-
-const LOW: &str = "#2f6fde";
-const MEDIUM: &str = "#e0b100";
-const HIGH: &str = "#d62728";
-const UNKNOWN: &str = "#9a9a9a";
-
-pub(crate) fn escape(text: &str) -> String {
-    text.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-        .replace('"', "&quot;")
+    windows: Vec<serde::de::IgnoredAny>,
 }
 
 /// How the report writes errors of one unit.
-struct Unit {
-    /// Column header, e.g. `error (cm)`.
-    header: &'static str,
+pub(crate) struct Unit {
+    /// e.g. `cm`.
+    pub name: &'static str,
     /// The factor from the results' unit to the shown one.
-    scale: f64,
-    /// After a number, e.g. ` cm`.
-    suffix: &'static str,
+    pub scale: f64,
 }
 
 impl Unit {
-    fn of(session: &Session) -> Unit {
+    pub(crate) fn of(session: &Session) -> Unit {
         match session.settings.unit() {
             "deg" => Unit {
-                header: "error (°)",
+                name: "°",
                 scale: 1.0,
-                suffix: "°",
             },
             _ => Unit {
-                header: "error (cm)",
+                name: "cm",
                 scale: 100.0,
-                suffix: " cm",
             },
         }
     }
 
-    fn show(&self, value: f64, decimals: usize) -> String {
-        format!("{:.*}{}", decimals, value * self.scale, self.suffix)
+    /// `4.2 cm`, `3.1°`.
+    fn show(&self, value: f64) -> String {
+        let space = if self.name == "°" { "" } else { " " };
+        format!("{:.1}{space}{}", value * self.scale, self.name)
     }
 }
 
-fn class_of(error: f64, thresholds: Thresholds) -> (&'static str, &'static str) {
-    let class = thresholds.classify(error);
-    let colour = match class {
+pub(crate) fn colour(class: ErrorClass) -> &'static str {
+    match class {
         ErrorClass::High => HIGH,
         ErrorClass::Medium => MEDIUM,
         ErrorClass::Low => LOW,
         ErrorClass::Unknown => UNKNOWN,
-    };
-    (class.name(), colour)
+    }
 }
 
-/// The report: a top view (x right, z up) of the reference trial coloured by
-/// the error of the window starting at each pose, the worst windows and the settings.
-pub(crate) fn render(
-    row: &Session,
-    reference_tum: &str,
-    results_json: &str,
-    config: &ServerConfig,
-) -> Result<String, Error> {
-    let thresholds = row.settings.thresholds(config);
-    let unit = Unit::of(row);
-    let doc: ResultsDoc = serde_json::from_str(results_json)
-        .map_err(|e| Error::Internal(format!("results.json of {} is unreadable: {e}", row.id)))?;
-    let mut windows = doc.windows;
-    windows.sort_by_key(|w| w.start);
-    let trajectory = sitar_estimator::parse_tum(reference_tum, "trial_000.txt").ok();
-    let t0 = trajectory
-        .as_ref()
-        .and_then(|t| t.stamps.first().copied())
-        .or(windows.first().map(|w| w.start))
-        .unwrap_or(0);
-    let seconds = |t: i64| (t - t0) as f64 * 1e-9;
+/// A point of the backend's phone session (always `arcore`, see `crate::scene`) in the 3-D
+/// view's frame, glTF's: the same frame, so this only states the conversion.
+fn view_point(p: glam::DVec3) -> glam::DVec3 {
+    Convention::Arcore.convert_vector(p, Convention::Arcore)
+}
 
-    let mut svg = String::new();
-    match trajectory.as_ref().filter(|t| t.len() >= 2) {
-        Some(t) => {
-            let (mut min_x, mut max_x, mut min_z, mut max_z) =
-                (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
-            for p in &t.positions {
-                min_x = min_x.min(p.x);
-                max_x = max_x.max(p.x);
-                min_z = min_z.min(p.z);
-                max_z = max_z.max(p.z);
-            }
-            let span = (max_x - min_x).max(max_z - min_z).max(0.1);
-            let margin = span * 0.05;
-            let stroke = span / 150.0;
-            let _ = write!(
-                svg,
-                r#"<svg id="topview" xmlns="http://www.w3.org/2000/svg" width="640" height="640" viewBox="{:.4} {:.4} {:.4} {:.4}" style="background:#fafafa;border:1px solid #ccc">"#,
-                min_x - margin,
-                -max_z - margin,
-                span + 2.0 * margin,
-                span + 2.0 * margin
-            );
-            // Each segment i→i+1 takes the window starting at (or last before) pose i.
-            let mut w = 0;
-            for i in 0..t.len() - 1 {
-                while w + 1 < windows.len() && windows[w + 1].start <= t.stamps[i] {
-                    w += 1;
-                }
-                let (class, colour) = match windows.get(w) {
-                    Some(win) if win.start <= t.stamps[i] => class_of(win.error, thresholds),
-                    _ => ("unknown", UNKNOWN),
-                };
-                let (a, b) = (t.positions[i], t.positions[i + 1]);
-                let _ = write!(
-                    svg,
-                    r#"<line class="seg {class}" x1="{:.4}" y1="{:.4}" x2="{:.4}" y2="{:.4}" stroke="{colour}" stroke-width="{stroke:.4}" stroke-linecap="round"/>"#,
-                    a.x, -a.z, b.x, -b.z
-                );
-            }
-            let (s, e) = (t.positions[0], t.positions[t.len() - 1]);
-            let _ = write!(
-                svg,
-                r#"<circle id="start" cx="{:.4}" cy="{:.4}" r="{:.4}" fill="green"><title>start</title></circle><circle id="stop" cx="{:.4}" cy="{:.4}" r="{:.4}" fill="black"><title>stop</title></circle></svg>"#,
-                s.x,
-                -s.z,
-                stroke * 3.0,
-                e.x,
-                -e.z,
-                stroke * 3.0
-            );
-        }
-        None => svg.push_str(r#"<p id="no-trajectory">The reference trial is not available.</p>"#),
+/// Static top view (x right, z down the page, as the 3-D view's top view): the path coloured
+/// by class, markers and start/stop. Numbers only.
+fn top_view(phone: &Phone, subs: &[SubRow]) -> String {
+    let joints = phone.render_plan().joints;
+    if joints.len() < 2 {
+        return String::new();
     }
-
-    let mut worst: Vec<&WindowDoc> = windows.iter().collect();
-    worst.sort_by(|a, b| b.error.total_cmp(&a.error));
-    let mut rows = String::new();
-    for (rank, w) in worst.iter().take(10).enumerate() {
-        let (class, colour) = class_of(w.error, thresholds);
+    let pts: Vec<glam::DVec3> = joints.iter().map(|j| view_point(j.position)).collect();
+    let (mut lo, mut hi) = (glam::DVec3::MAX, glam::DVec3::MIN);
+    for p in &pts {
+        lo = lo.min(*p);
+        hi = hi.max(*p);
+    }
+    let span = (hi.x - lo.x).max(hi.z - lo.z).max(0.5);
+    let margin = span * 0.06;
+    let stroke = span / 160.0;
+    let mut svg = format!(
+        r##"<svg id="topview" xmlns="http://www.w3.org/2000/svg" width="520" height="520" viewBox="{:.3} {:.3} {:.3} {:.3}" role="img" aria-label="top view of the walk"><rect x="{:.3}" y="{:.3}" width="{:.3}" height="{:.3}" fill="#fafafa"/>"##,
+        lo.x - margin,
+        lo.z - margin,
+        span + 2.0 * margin,
+        span + 2.0 * margin,
+        lo.x - margin,
+        lo.z - margin,
+        span + 2.0 * margin,
+        span + 2.0 * margin,
+    );
+    // 1 m grid.
+    let mut g = (lo.x - margin).ceil();
+    while g <= lo.x + span + margin {
         let _ = write!(
-            rows,
-            r#"<tr class="{class}"><td>{}</td><td>{:.3}</td><td>{}</td><td style="color:{colour}">{:.2}</td><td>{class}</td><td>{}</td></tr>"#,
-            rank + 1,
-            seconds(w.start),
-            w.end
-                .map(|e| format!("{:.3}", seconds(e)))
-                .unwrap_or_default(),
-            w.error * unit.scale,
-            w.pairs.map(|p| p.to_string()).unwrap_or_default()
+            svg,
+            r##"<line x1="{g}" y1="{:.3}" x2="{g}" y2="{:.3}" stroke="#ddd" stroke-width="{:.4}"/>"##,
+            lo.z - margin,
+            lo.z + span + margin,
+            stroke / 3.0
+        );
+        g += 1.0;
+    }
+    let mut g = (lo.z - margin).ceil();
+    while g <= lo.z + span + margin {
+        let _ = write!(
+            svg,
+            r##"<line x1="{:.3}" y1="{g}" x2="{:.3}" y2="{g}" stroke="#ddd" stroke-width="{:.4}"/>"##,
+            lo.x - margin,
+            lo.x + span + margin,
+            stroke / 3.0
+        );
+        g += 1.0;
+    }
+    for (w, j) in pts.windows(2).zip(&joints) {
+        let class = subs
+            .get(j.subtrajectory as usize)
+            .map_or(ErrorClass::Unknown, |s| s.class);
+        let _ = write!(
+            svg,
+            r#"<line class="seg {}" x1="{:.3}" y1="{:.3}" x2="{:.3}" y2="{:.3}" stroke="{}" stroke-width="{stroke:.4}" stroke-linecap="round"/>"#,
+            class.name(),
+            w[0].x,
+            w[0].z,
+            w[1].x,
+            w[1].z,
+            colour(class)
         );
     }
-    let counts = windows.iter().fold([0usize; 3], |mut c, w| {
-        match class_of(w.error, thresholds).0 {
-            "high" => c[2] += 1,
-            "medium" => c[1] += 1,
-            _ => c[0] += 1,
+    if let Ok(markers) = phone.markers() {
+        for (i, m) in markers.iter().enumerate() {
+            let p = view_point(m.position);
+            let _ = write!(
+                svg,
+                r##"<circle class="marker" cx="{:.3}" cy="{:.3}" r="{:.3}" fill="{}" stroke="#000" stroke-width="{:.4}"><title>marker {}</title></circle>"##,
+                p.x,
+                p.z,
+                stroke * 4.0,
+                colour(m.class),
+                stroke / 2.0,
+                i + 1
+            );
         }
-        c
-    });
+    }
+    let (s, e) = (pts[0], pts[pts.len() - 1]);
+    let _ = write!(
+        svg,
+        r#"<circle id="start" cx="{:.3}" cy="{:.3}" r="{:.3}" fill="green"><title>start</title></circle><circle id="stop" cx="{:.3}" cy="{:.3}" r="{:.3}" fill="black"><title>stop</title></circle></svg>"#,
+        s.x,
+        s.z,
+        stroke * 3.0,
+        e.x,
+        e.z,
+        stroke * 3.0
+    );
+    svg
+}
 
-    let settings = [
+/// rmse, mean, median, max of `values` (none when empty).
+fn statistics(values: &[f64]) -> Option<[f64; 4]> {
+    if values.is_empty() {
+        return None;
+    }
+    let n = values.len() as f64;
+    let mut sorted = values.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    let mid = sorted.len() / 2;
+    let median = if sorted.len().is_multiple_of(2) {
+        (sorted[mid - 1] + sorted[mid]) / 2.0
+    } else {
+        sorted[mid]
+    };
+    Some([
+        (values.iter().map(|v| v * v).sum::<f64>() / n).sqrt(),
+        values.iter().sum::<f64>() / n,
+        median,
+        sorted[sorted.len() - 1],
+    ])
+}
+
+/// Everything the page needs besides the session row.
+pub(crate) struct ReportInput<'a> {
+    pub row: &'a Session,
+    pub results_json: &'a str,
+    pub config: &'a ServerConfig,
+    /// The phone session with the results loaded, and where it came from (none without
+    /// any trajectory).
+    pub phone: Option<(&'a Phone, Source)>,
+    /// The published estimates in order (`published::history`).
+    pub history: Vec<serde_json::Value>,
+}
+
+pub(crate) fn render(input: &ReportInput<'_>) -> Result<String, Error> {
+    let row = input.row;
+    let thresholds: Thresholds = row.settings.thresholds(input.config);
+    let unit = Unit::of(row);
+    let doc: ResultsDoc = serde_json::from_str(input.results_json)
+        .map_err(|e| Error::Internal(format!("results.json of {} is unreadable: {e}", row.id)))?;
+    let (subs, markers) = match input.phone {
+        Some((phone, _)) => (
+            regions::sub_rows(phone, thresholds),
+            phone.markers().unwrap_or_default(),
+        ),
+        None => (Vec::new(), Vec::new()),
+    };
+    let radius = input.phone.map_or(0.5, |(p, _)| p.config().dedup_radius_m);
+    let found = regions::regions(&subs, &markers, radius);
+    let errors: Vec<f64> = subs.iter().filter_map(|s| s.error).collect();
+    let count = |c: ErrorClass| subs.iter().filter(|s| s.class == c).count();
+    let stats = statistics(&errors);
+    let marker_times: Vec<(usize, f64)> = markers
+        .iter()
+        .enumerate()
+        .filter_map(|(i, m)| subs.get(m.subtrajectory as usize).map(|s| (i + 1, s.t0)))
+        .collect();
+    let y_label = format!("error ({})", unit.name);
+    let timeline: Vec<(f64, f64, Option<f64>)> =
+        subs.iter().map(|s| (s.t0, s.t1, s.error)).collect();
+    let region_rows: Vec<serde_json::Value> = found
+        .iter()
+        .map(|r| {
+            json!({
+                "rank": r.rank,
+                "class": r.class.name(),
+                "colour": colour(r.class),
+                "max_error": unit.show(r.max_error),
+                "mean_error": unit.show(r.mean_error),
+                "span": format!("{:.1}–{:.1} s", r.t0, r.t1),
+                "distance": format!("{:.2} m", r.distance_m),
+                "subtrajectories": summarize(&r.subtrajectories),
+                "sub_count": r.subtrajectories.len(),
+                "stretches": r.stretches,
+                "surface": r.surface.map(|p| {
+                    let p = view_point(p);
+                    format!("({:.2}, {:.2}, {:.2})", p.x, p.y, p.z)
+                }),
+                "markers": r.markers.iter().map(|m| format!("M{m}")).collect::<Vec<_>>().join(", "),
+                "thumbnail_url": r.thumbnail_url,
+                "cause": r.cause,
+            })
+        })
+        .collect();
+    let marker_rows: Vec<serde_json::Value> = markers
+        .iter()
+        .enumerate()
+        .map(|(i, m)| {
+            let p = view_point(m.position);
+            json!({
+                "number": i + 1,
+                "subtrajectory": m.subtrajectory,
+                "class": m.class.name(),
+                "colour": colour(m.class),
+                "error": format!("{:.1}", m.error_m * unit.scale),
+                "position": format!("({:.2}, {:.2}, {:.2})", p.x, p.y, p.z),
+                "region": found.iter().find(|r| r.markers.contains(&(i + 1))).map(|r| r.rank),
+            })
+        })
+        .collect();
+    let trials = doc.trials;
+    let settings = vec![
         ("Session", row.id.clone()),
         ("State", row.state.as_str().to_string()),
         (
@@ -199,20 +281,19 @@ pub(crate) fn render(
                 doc.setting.clone()
             },
         ),
-        ("Windows", format!("{} frames", row.settings.window_frames)),
+        ("Window", format!("{} frames", row.settings.window_frames)),
         (
             "Pose relation",
             format!("{} ({})", row.settings.pose_relation, row.settings.unit()),
         ),
-        ("Trials in this estimate", doc.trials.to_string()),
         ("Trials planned", row.trials_total.to_string()),
         ("Playback", row.playback.as_str().to_string()),
         (
             "Thresholds",
             format!(
                 "medium ≥ {}, high ≥ {}",
-                unit.show(thresholds.medium, 1),
-                unit.show(thresholds.high, 1)
+                unit.show(thresholds.medium),
+                unit.show(thresholds.high)
             ),
         ),
         (
@@ -228,37 +309,79 @@ pub(crate) fn render(
                 .unwrap_or_else(|| "all trials played".into()),
         ),
     ];
-    let mut settings_rows = String::new();
-    for (k, v) in settings {
-        let _ = write!(
-            settings_rows,
-            "<tr><th>{}</th><td>{}</td></tr>",
-            escape(k),
-            escape(&v)
-        );
-    }
+    let context = json!({
+        "id": row.id,
+        "unit": unit.name,
+        // Completed ones, as the phone counts them (a last one may have a midpoint only).
+        "subtrajectories": input
+            .phone
+            .and_then(|(p, _)| p.summary())
+            .map_or(subs.len(), |s| s.subtrajectories as usize),
+        "estimated": errors.len(),
+        "high": count(ErrorClass::High),
+        "medium": count(ErrorClass::Medium),
+        "low": count(ErrorClass::Low),
+        "regions": region_rows,
+        "markers": marker_rows,
+        "windows": doc.windows.len(),
+        "window_frames": row.settings.window_frames,
+        "trials": trials,
+        "pairs": trials * trials.saturating_sub(1) / 2,
+        "stats": stats.map(|s| s.map(|v| unit.show(v))),
+        "source": input.phone.map(|(_, s)| s.describe()),
+        "top_view": input.phone.map(|(p, _)| top_view(p, &subs)).unwrap_or_default(),
+        "error_chart": if subs.is_empty() { String::new() } else {
+            charts::error_over_time(&timeline, thresholds, &marker_times, unit.scale, &y_label)
+        },
+        "histogram": if errors.is_empty() { String::new() } else {
+            charts::histogram(&errors, thresholds, unit.scale, &y_label)
+        },
+        "settings": settings,
+        "history": input.history.iter().map(|h| json!({
+            "trials": h["trials"],
+            "mean": unit.show(h["mean"].as_f64().unwrap_or(0.0)),
+            "max": unit.show(h["max"].as_f64().unwrap_or(0.0)),
+            "high": h["high"], "medium": h["medium"], "low": h["low"],
+        })).collect::<Vec<_>>(),
+        "colours": {"low": LOW, "medium": MEDIUM, "high": HIGH, "unknown": UNKNOWN},
+    });
+    templates::render("report.html", &context)
+}
 
-    Ok(format!(
-        r#"<!DOCTYPE html>
-<html lang="en"><head><meta charset="utf-8"><title>SiTAR report {id}</title>
-<style>body{{font-family:sans-serif;margin:2em;color:#222}} table{{border-collapse:collapse}} td,th{{border:1px solid #ddd;padding:3px 8px;text-align:left}} .legend span{{display:inline-block;width:1em;height:1em;margin:0 .3em 0 1em;vertical-align:middle}}</style>
-</head><body>
-<h1>SiTAR report</h1>
-<p id="summary">{n} windows: <b id="count-high">{high}</b> high, <b id="count-medium">{medium}</b> medium, <b id="count-low">{low}</b> low.</p>
-<h2>Trajectory (top view, coloured by estimated error)</h2>
-<p class="legend"><span style="background:{LOW}"></span>low<span style="background:{MEDIUM}"></span>medium<span style="background:{HIGH}"></span>high<span style="background:{UNKNOWN}"></span>no estimate</p>
-{svg}
-<h2>Worst windows</h2>
-<table id="worst"><thead><tr><th>#</th><th>start (s)</th><th>end (s)</th><th>{error_header}</th><th>class</th><th>pairs</th></tr></thead><tbody>{rows}</tbody></table>
-<h2>Settings</h2>
-<table id="settings">{settings_rows}</table>
-</body></html>
-"#,
-        id = escape(&row.id),
-        error_header = unit.header,
-        n = windows.len(),
-        high = counts[2],
-        medium = counts[1],
-        low = counts[0],
-    ))
+/// `3–7, 12, 15–16`: sorted indices as ranges.
+fn summarize(indices: &[u32]) -> String {
+    let mut sorted = indices.to_vec();
+    sorted.sort_unstable();
+    let mut out = String::new();
+    let mut i = 0;
+    while i < sorted.len() {
+        let mut j = i;
+        while j + 1 < sorted.len() && sorted[j + 1] == sorted[j] + 1 {
+            j += 1;
+        }
+        if !out.is_empty() {
+            out.push_str(", ");
+        }
+        if i == j {
+            let _ = write!(out, "{}", sorted[i]);
+        } else {
+            let _ = write!(out, "{}–{}", sorted[i], sorted[j]);
+        }
+        i = j + 1;
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ranges_and_statistics() {
+        assert_eq!(summarize(&[7, 3, 4, 5, 12, 15, 16]), "3–5, 7, 12, 15–16");
+        let s = statistics(&[3.0, 4.0, 1.0, 2.0]).unwrap();
+        assert!((s[0] - (30.0f64 / 4.0).sqrt()).abs() < 1e-12);
+        assert_eq!((s[1], s[2], s[3]), (2.5, 2.5, 4.0));
+        assert!(statistics(&[]).is_none());
+    }
 }

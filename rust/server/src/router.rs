@@ -12,7 +12,7 @@ use axum::routing::{get, post, put};
 use crate::Error;
 use crate::auth::{self, CallerName};
 use crate::handlers::{
-    devices, health, legacy, pages, recording, results, sessions, share, trials,
+    devices, health, legacy, pages, recording, results, scene, sessions, share, trials,
 };
 use crate::http::json_response;
 use crate::shared::Shared;
@@ -42,6 +42,11 @@ pub(crate) fn router(shared: Arc<Shared>) -> Router {
             post(share::create).delete(share::revoke),
         )
         .route("/share/{token}", get(share::view))
+        .route("/v1/sessions/{id}/scene.glb", get(scene::glb))
+        .route("/v1/sessions/{id}/scene.json", get(scene::json))
+        .route("/v1/sessions/{id}/trajectory.tum", get(scene::trajectory))
+        .route("/v1/sessions/{id}/trials.zip", get(scene::trials_zip))
+        .route("/assets/{*name}", get(crate::assets::get))
         .route("/v1/devices", get(devices::list))
         .route("/recording", post(legacy::recording))
         .route("/timestamps", post(legacy::timestamps))

@@ -66,6 +66,7 @@ mod error;
 mod luma;
 mod observations;
 mod p3p;
+mod phone;
 mod pnp;
 mod ransac_tracker;
 mod recording;

@@ -18,9 +18,11 @@ use crate::shared::Shared;
 #[derive(Debug, Clone)]
 pub(crate) struct CallerName(pub String);
 
-/// Routes open to everyone: the health check, and share links (their own token is the path).
+/// Routes open to everyone: the health check, share links (their own token is the path),
+/// and the pages' vendored scripts and styles (a fixed table in the binary, no session data),
+/// which a share link's page loads without a cookie.
 fn is_open(path: &str) -> bool {
-    path == "/healthz" || path.starts_with("/share/")
+    path == "/healthz" || path.starts_with("/share/") || path.starts_with("/assets/")
 }
 
 /// The HTML pages, which take `?token=` once and then live on the cookie.
@@ -155,5 +157,7 @@ mod tests {
         assert!(is_open("/healthz"));
         assert!(is_open("/share/sitar_x"));
         assert!(!is_open("/healthz/x"));
+        assert!(is_open("/assets/report.js"));
+        assert!(!is_open("/v1/sessions/s0/assets/x"));
     }
 }

@@ -7,6 +7,7 @@ pub(crate) mod legacy;
 pub(crate) mod pages;
 pub(crate) mod recording;
 pub(crate) mod results;
+pub(crate) mod scene;
 pub(crate) mod sessions;
 pub(crate) mod share;
 pub(crate) mod trials;

@@ -1,101 +1,148 @@
 //! The HTML pages: `GET /` (what the server holds, for the person next to the playback
-//! phones, refreshed every few seconds, linking every session's report and results) and
-//! `GET /v1/sessions/{id}/report`.
+//! phones, refreshed every few seconds) and `GET /v1/sessions/{id}/report`. Both are
+//! minijinja templates (`templates/`, autoescaped) sent with the pages' CSP.
 
 use std::fmt::Write;
 
 use axum::extract::State;
-use axum::response::{Html, IntoResponse, Response};
+use axum::response::Response;
+use serde_json::json;
 
 use crate::Error;
 use crate::auth::Admin;
+use crate::config::PlaybackKind;
 use crate::http::{AppState, Found};
 use crate::published::{self, Form};
-use crate::report::{self, escape};
+use crate::report::{self, ReportInput};
+use crate::scene;
 use crate::status::status_json;
+use crate::templates;
 
 /// Sessions on the page (the newest).
 const PAGE_SESSIONS: u32 = 50;
 
+/// `2026-12-02 03:41:07` from milliseconds since the Unix epoch (UTC).
+fn utc(ms: i64) -> String {
+    let secs = ms.div_euclid(1000);
+    let (days, rem) = (secs.div_euclid(86_400), secs.rem_euclid(86_400));
+    // Civil date from days since 1970-01-01 (Howard Hinnant's algorithm).
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z.rem_euclid(146_097);
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let day = doy - (153 * mp + 2) / 5 + 1;
+    let month = if mp < 10 { mp + 3 } else { mp - 9 };
+    let year = yoe + era * 400 + i64::from(month <= 2);
+    format!(
+        "{year:04}-{month:02}-{day:02} {:02}:{:02}:{:02}",
+        rem / 3600,
+        rem % 3600 / 60,
+        rem % 60
+    )
+}
+
+/// Why the devices table is empty, in the operator's terms.
+fn why_no_devices(shared: &crate::shared::Shared) -> String {
+    match shared.config.playback {
+        PlaybackKind::Sim => {
+            "this server plays back on simulated phones (sim playback), not adb devices".into()
+        }
+        PlaybackKind::Upload => {
+            "upload playback: the trials come from the app, no playback phones are driven".into()
+        }
+        PlaybackKind::Adb => {
+            let adb = &shared.config.adb.adb_path;
+            let found = adb.components().count() > 1 && adb.exists()
+                || std::env::var_os("PATH").is_some_and(|paths| {
+                    std::env::split_paths(&paths).any(|dir| dir.join(adb).is_file())
+                });
+            if found {
+                "adb sees no authorised phone (plug one in over USB and accept the debugging prompt)".into()
+            } else {
+                format!(
+                    "adb was not found ({}: install Android platform-tools or set the adb path)",
+                    adb.display()
+                )
+            }
+        }
+    }
+}
+
 /// `GET /`: the newest sessions and the known playback devices as one HTML page.
 pub(crate) async fn overview(State(shared): AppState, _: Admin) -> Result<Response, Error> {
     let rows = shared.db.recent_sessions(None, PAGE_SESSIONS)?;
-    let mut sessions = String::new();
+    let mut sessions = Vec::new();
     for row in &rows {
         let status = status_json(&shared, row)?;
-        let id = escape(&row.id);
-        let mut links = format!("<a href=\"/v1/sessions/{id}\">status</a>");
-        if row.results_trials > 0 {
-            let _ = write!(
-                links,
-                " · <a href=\"/v1/sessions/{id}/report\">report</a> · \
-                 <a href=\"/v1/sessions/{id}/results.csv\">results.csv</a>"
-            );
-        }
         let note = row
             .error
             .as_deref()
             .or(row.stop_reason.as_deref())
             .unwrap_or("");
-        let _ = writeln!(
-            sessions,
-            "<tr class=\"{state}\"><td><code>{id}</code></td><td>{state}</td>\
-             <td>{progress:.0} %</td><td>{done}/{total}</td><td>{playback}</td><td>{setting}</td>\
-             <td>{links}</td><td>{note}</td></tr>",
-            state = row.state.as_str(),
-            progress = status["progress"].as_f64().unwrap_or(0.0) * 100.0,
-            done = status["trials_done"].as_u64().unwrap_or(0),
-            total = row.trials_total,
-            playback = row.playback.as_str(),
-            setting = escape(&settings_label(&row.settings)),
-            note = escape(note),
-        );
+        let played_by: Vec<serde_json::Value> = shared
+            .db
+            .trial_sources(&row.id)?
+            .into_iter()
+            .map(|(source, trials)| json!({"source": source, "trials": ranges(&trials)}))
+            .collect();
+        sessions.push(json!({
+            "id": row.id,
+            "created": shared.db.session_created_ms(&row.id)?.map(utc).unwrap_or_default(),
+            "state": row.state.as_str(),
+            "progress": format!("{:.0} %", status["progress"].as_f64().unwrap_or(0.0) * 100.0),
+            "eta": status["eta_s"].as_f64().map(|e| format!("{e:.0} s")).unwrap_or_else(|| "—".into()),
+            "done": status["trials_done"].as_u64().unwrap_or(0),
+            "total": row.trials_total,
+            "played_by": played_by,
+            "playback": row.playback.as_str(),
+            "setting": settings_label(&row.settings),
+            "has_results": row.results_trials > 0,
+            "note": note,
+        }));
     }
-    if rows.is_empty() {
-        sessions.push_str("<tr><td colspan=\"8\">No sessions yet.</td></tr>\n");
+    let devices: Vec<serde_json::Value> = shared
+        .db
+        .devices()?
+        .into_iter()
+        .map(|(serial, state, session, _seen)| json!({"serial": serial, "state": state, "session": session}))
+        .collect();
+    let html = templates::render(
+        "overview.html",
+        &json!({
+            "playback": shared.config.playback.as_str(),
+            "sessions": sessions,
+            "devices": devices,
+            "devices_empty_reason": why_no_devices(&shared),
+            "tls_fingerprint": shared.tls_fingerprint.as_deref(),
+            "held": format!("{:.1}", shared.live.held_bytes() as f64 / (1 << 20) as f64),
+            "bound": format!("{:.0}", shared.config.live_total_bytes as f64 / (1 << 20) as f64),
+        }),
+    )?;
+    Ok(templates::page(html))
+}
+
+/// `0–3, 7`: trial indices as ranges.
+fn ranges(indices: &[u32]) -> String {
+    let mut out = String::new();
+    let mut i = 0;
+    while i < indices.len() {
+        let mut j = i;
+        while j + 1 < indices.len() && indices[j + 1] == indices[j] + 1 {
+            j += 1;
+        }
+        if !out.is_empty() {
+            out.push_str(", ");
+        }
+        if i == j {
+            let _ = write!(out, "{}", indices[i]);
+        } else {
+            let _ = write!(out, "{}–{}", indices[i], indices[j]);
+        }
+        i = j + 1;
     }
-    let mut devices = String::new();
-    for (serial, state, session, _seen) in shared.db.devices()? {
-        let _ = write!(
-            devices,
-            "<li><code>{}</code> {}{}</li>",
-            escape(&serial),
-            escape(&state),
-            session
-                .map(|s| format!(" (session <code>{}</code>)", escape(&s)))
-                .unwrap_or_default()
-        );
-    }
-    if devices.is_empty() {
-        devices.push_str("<li>none seen yet (<a href=\"/v1/devices\">look now</a>)</li>");
-    }
-    let html = format!(
-        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\
-         <meta http-equiv=\"refresh\" content=\"5\"><title>SiTAR backend</title>\
-         <style>body{{font-family:sans-serif;margin:2em}}table{{border-collapse:collapse}}\
-         td,th{{border-bottom:1px solid #ddd;padding:.3em .8em;text-align:left}}\
-         tr.failed td{{color:#b00}}</style></head><body>\
-         <h1>SiTAR backend</h1><p>Playback: <b>{playback}</b>. The newest {n} sessions; \
-         this page refreshes every 5 s (JSON: <a href=\"/v1/sessions\">/v1/sessions</a>).</p>\
-         <table><thead><tr><th>session</th><th>state</th><th>progress</th><th>trials</th>\
-         <th>playback</th><th>setting</th><th>links</th><th>note</th></tr></thead>\
-         <tbody>\n{sessions}</tbody></table>\
-         <h2>Playback devices</h2><ul>{devices}</ul>\
-         <p id=\"memory\">Trials in memory: {held:.1} of {bound:.0} MiB.</p>{tls}</body></html>\n",
-        tls = shared
-            .tls_fingerprint
-            .as_deref()
-            .map(|f| format!(
-                "<p id=\"tls\">TLS certificate SHA-256: <code>{}</code></p>",
-                escape(f)
-            ))
-            .unwrap_or_default(),
-        playback = escape(shared.config.playback.as_str()),
-        n = rows.len(),
-        held = shared.live.held_bytes() as f64 / (1 << 20) as f64,
-        bound = shared.config.live_total_bytes as f64 / (1 << 20) as f64,
-    );
-    Ok(Html(html).into_response())
+    out
 }
 
 /// `trim_mean_30`, with the window and relation when they are not the defaults.
@@ -113,19 +160,45 @@ fn settings_label(settings: &crate::settings::EstimateSettings) -> String {
     label
 }
 
-/// `GET /v1/sessions/{id}/report`: the latest results drawn on the reference trial.
+/// `GET /v1/sessions/{id}/report`: the latest results on the walk (see `crate::report`).
 pub(crate) async fn report(
     State(shared): AppState,
     Found(session): Found,
 ) -> Result<Response, Error> {
+    Ok(templates::page(render_report(shared, session).await?))
+}
+
+/// The report page of `session`: for its owner and for a share link alike.
+pub(crate) async fn render_report(
+    shared: std::sync::Arc<crate::shared::Shared>,
+    session: crate::session::Session,
+) -> Result<String, Error> {
     let json = published::read(&shared, &session, Form::Json)?;
-    let first = shared
-        .db
-        .trials_in_order(&session.id)?
-        .first()
-        .map_or(0, |(index, _)| *index);
-    let reference =
-        std::fs::read_to_string(shared.files.trial(&session.id, first)).unwrap_or_default();
-    let html = report::render(&session, &reference, &json, &shared.config)?;
-    Ok(Html(html).into_response())
+    tokio::task::spawn_blocking(move || {
+        // No trajectory (e.g. trials without a readable reference) still gets a page.
+        let phone = scene::load(&shared, &session).ok();
+        let history = published::history(&shared, &session);
+        report::render(&ReportInput {
+            row: &session,
+            results_json: &json,
+            config: &shared.config,
+            phone: phone.as_deref().map(|(p, s)| (p, *s)),
+            history,
+        })
+    })
+    .await
+    .map_err(|e| Error::Internal(format!("report: {e}")))?
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn utc_dates_and_trial_ranges() {
+        assert_eq!(utc(0), "1970-01-01 00:00:00");
+        // 2024-02-29 12:34:56 UTC (a leap day).
+        assert_eq!(utc(1_709_210_096_000), "2024-02-29 12:34:56");
+        assert_eq!(ranges(&[0, 1, 2, 5, 7, 8]), "0–2, 5, 7–8");
+    }
 }

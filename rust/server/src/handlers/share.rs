@@ -4,14 +4,12 @@
 
 use axum::extract::{Path, State};
 use axum::http::{HeaderMap, StatusCode, header};
-use axum::response::{Html, IntoResponse, Response};
+use axum::response::Response;
 use serde_json::json;
 
 use crate::Error;
 use crate::auth::new_token;
 use crate::http::{AppState, Found, json_value};
-use crate::published::{self, Form};
-use crate::report;
 
 /// The `Host` the client reached us by, if it is a plain host name or address with a port.
 fn host(headers: &HeaderMap) -> Result<&str, Error> {
@@ -67,14 +65,6 @@ pub(crate) async fn view(
     let gone = || Error::NotFound("no such share link (revoked, or its session deleted)".into());
     let id = shared.db.shared_session(&token)?.ok_or_else(gone)?;
     let session = shared.session(&id).map_err(|_| gone())?;
-    let json = published::read(&shared, &session, Form::Json)?;
-    let first = shared
-        .db
-        .trials_in_order(&session.id)?
-        .first()
-        .map_or(0, |(index, _)| *index);
-    let reference =
-        std::fs::read_to_string(shared.files.trial(&session.id, first)).unwrap_or_default();
-    let html = report::render(&session, &reference, &json, &shared.config)?;
-    Ok(([(header::REFERRER_POLICY, "no-referrer")], Html(html)).into_response())
+    let html = super::pages::render_report(shared.clone(), session).await?;
+    Ok(crate::templates::page(html))
 }

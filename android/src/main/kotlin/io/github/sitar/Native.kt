@@ -37,6 +37,7 @@ internal object Native {
     @JvmStatic external fun sessionRenderPlan(h: Long): DoubleArray
     @JvmStatic external fun sessionTrajectoryTum(h: Long): String
     @JvmStatic external fun sessionSave(h: Long, dir: String)
+    @JvmStatic external fun sessionExportGltf(h: Long, path: String)
     @JvmStatic external fun sessionLoad(dir: String): Long
 
     @JvmStatic external fun playbackNew(configJson: String): Long

@@ -95,6 +95,9 @@ class SitarSession private constructor(handle: Long) : AutoCloseable {
     /** Saves the session folder [dir]. */
     fun save(dir: String) = Native.sessionSave(handle, dir)
 
+    /** Writes the scene as a glTF 2.0 binary file (.glb) at [path]: trajectory by class, frustums, markers, surface points. */
+    fun exportGltf(path: String) = Native.sessionExportGltf(handle, path)
+
     /**
      * Uploads the recording in the background; when the server is done the
      * results are loaded into this session ([UploadJob.progress] tells).

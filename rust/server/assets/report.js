@@ -1,0 +1,262 @@
+// The report's 3-D view: the walk in the room, from scene.json (glTF's frame: right-handed,
+// +Y up, metres). three.js is served by this backend (/assets/three/), so it works offline.
+import * as THREE from "./three/three.module.js";
+import { OrbitControls } from "./three/OrbitControls.js";
+
+const CLASS_COLOURS = { low: 0x2f6fde, medium: 0xe0b100, high: 0xd62728, unknown: 0x9a9a9a };
+const VIRIDIS = [[68, 1, 84], [59, 82, 139], [33, 145, 140], [94, 201, 98], [253, 231, 37]];
+
+function viridis(t) {
+  const x = Math.min(Math.max(t, 0), 1) * (VIRIDIS.length - 1);
+  const i = Math.min(Math.floor(x), VIRIDIS.length - 2);
+  const f = x - i;
+  const c = VIRIDIS[i].map((v, k) => (v + (VIRIDIS[i + 1][k] - v) * f) / 255);
+  return new THREE.Color().setRGB(c[0], c[1], c[2], THREE.SRGBColorSpace);
+}
+
+const $ = (id) => document.getElementById(id);
+
+function status(text) {
+  $("view-status").textContent = text;
+}
+
+async function main() {
+  const canvas = $("view3d");
+  let data;
+  try {
+    const response = await fetch("scene.json");
+    if (!response.ok) {
+      status("No 3-D scene: " + (await response.text()));
+      return;
+    }
+    data = await response.json();
+  } catch (e) {
+    status("No 3-D scene: " + e);
+    return;
+  }
+  const renderer = new THREE.WebGLRenderer({ canvas, antialias: true, preserveDrawingBuffer: true });
+  renderer.setPixelRatio(Math.min(window.devicePixelRatio || 1, 2));
+  const scene = new THREE.Scene();
+  scene.background = new THREE.Color(0xf4f5f7);
+  scene.add(new THREE.HemisphereLight(0xffffff, 0x666666, 2.2));
+  const sun = new THREE.DirectionalLight(0xffffff, 1.2);
+  sun.position.set(3, 6, 2);
+  scene.add(sun);
+
+  const joints = [];
+  for (let i = 0; i + 2 < data.joints.length; i += 3) {
+    joints.push(new THREE.Vector3(data.joints[i], data.joints[i + 1], data.joints[i + 2]));
+  }
+  if (joints.length < 2) {
+    status("No trajectory yet.");
+    return;
+  }
+  // The camera frames the walk; the grid also covers what it faced (surface points, markers).
+  const box = new THREE.Box3().setFromPoints(joints);
+  const framed = joints.slice();
+  for (let i = 0; i + 2 < data.surface.length; i += 3) framed.push(new THREE.Vector3(data.surface[i], data.surface[i + 1], data.surface[i + 2]));
+  for (const m of data.markers) framed.push(new THREE.Vector3(...m.p));
+  const room = new THREE.Box3().setFromPoints(framed);
+  const centre = box.getCenter(new THREE.Vector3());
+  const size = box.getSize(new THREE.Vector3());
+  const span = Math.max(size.x, size.z, 1);
+
+  // Grid (1 m cells) on the floor under the walk, and axes at the origin.
+  const floorY = box.min.y - 1.2;
+  const roomSize = room.getSize(new THREE.Vector3());
+  const roomCentre = room.getCenter(new THREE.Vector3());
+  const cells = Math.ceil(Math.max(roomSize.x, roomSize.z, span) + 2);
+  const grid = new THREE.GridHelper(cells, cells, 0x999999, 0xd0d0d0);
+  grid.position.set(Math.round(roomCentre.x), floorY, Math.round(roomCentre.z));
+  scene.add(grid);
+  const axes = new THREE.AxesHelper(1);
+  axes.position.set(0, floorY, 0);
+  scene.add(axes);
+
+  // The tube: one geometry, vertex colours per ring from the sub-trajectory of that point.
+  const subOf = data.joint_sub;
+  const cumulative = [0];
+  for (let i = 1; i < joints.length; i++) cumulative.push(cumulative[i - 1] + joints[i].distanceTo(joints[i - 1]));
+  const total = cumulative[cumulative.length - 1] || 1;
+  const curve = new THREE.CatmullRomCurve3(joints, false, "centripetal");
+  // One tube step per logged pose (every 5th frame): smooth enough, and cheap for long walks.
+  const tubular = Math.min(joints.length - 1, 8000);
+  const radial = 6;
+  const tube = new THREE.TubeGeometry(curve, tubular, 0.012 * Math.max(1, span / 8), radial, false);
+  const ringJoint = [];
+  for (let r = 0; r <= tubular; r++) {
+    const target = (r / tubular) * total;
+    let lo = 0, hi = cumulative.length - 1;
+    while (lo < hi) {
+      const mid = (lo + hi + 1) >> 1;
+      if (cumulative[mid] <= target) lo = mid; else hi = mid - 1;
+    }
+    ringJoint.push(Math.min(lo, joints.length - 1));
+  }
+  const colours = new Float32Array((tubular + 1) * (radial + 1) * 3);
+  tube.setAttribute("color", new THREE.BufferAttribute(colours, 3));
+  const errors = data.subs.map((s) => s.error).filter((e) => e !== null);
+  const maxError = Math.max(data.thresholds[1] * 1.2, ...errors);
+  function paint(byError) {
+    for (let r = 0; r <= tubular; r++) {
+      const sub = data.subs[subOf[ringJoint[r]]];
+      const c = byError
+        ? (sub && sub.error !== null ? viridis(sub.error / maxError) : new THREE.Color(CLASS_COLOURS.unknown))
+        : new THREE.Color(CLASS_COLOURS[sub ? sub.class : "unknown"]);
+      for (let k = 0; k <= radial; k++) {
+        const o = (r * (radial + 1) + k) * 3;
+        colours[o] = c.r; colours[o + 1] = c.g; colours[o + 2] = c.b;
+      }
+    }
+    tube.attributes.color.needsUpdate = true;
+    $("colourbar").hidden = !byError;
+    $("cb-min").textContent = "0 " + data.unit;
+    $("cb-max").textContent = maxError.toFixed(1) + " " + data.unit;
+  }
+  paint(false);
+  const tubeMesh = new THREE.Mesh(tube, new THREE.MeshStandardMaterial({ vertexColors: true, roughness: 0.6 }));
+  tubeMesh.userData.ringJoint = ringJoint;
+  scene.add(tubeMesh);
+
+  // Start and stop.
+  const ball = new THREE.SphereGeometry(0.05 * Math.max(1, span / 8), 16, 12);
+  for (const [p, colour] of [[data.start, 0x2ca02c], [data.stop, 0x111111]]) {
+    if (!p) continue;
+    const m = new THREE.Mesh(ball, new THREE.MeshStandardMaterial({ color: colour }));
+    m.position.set(p[0], p[1], p[2]);
+    scene.add(m);
+  }
+
+  // Frustums: apex, a 12 × 9 cm image plane 15 cm along the camera's −Z, and an up tick.
+  const corners = [[0, 0, 0], [-0.06, -0.045, -0.15], [0.06, -0.045, -0.15], [0.06, 0.045, -0.15], [-0.06, 0.045, -0.15], [0, 0.072, -0.15]];
+  const edges = [0, 1, 0, 2, 0, 3, 0, 4, 1, 2, 2, 3, 3, 4, 4, 1, 3, 5, 5, 4];
+  const fr = [];
+  const m4 = new THREE.Matrix4();
+  for (const f of data.frustums) {
+    m4.compose(new THREE.Vector3(...f.p), new THREE.Quaternion(...f.q), new THREE.Vector3(1, 1, 1));
+    for (const e of edges) fr.push(new THREE.Vector3(...corners[e]).applyMatrix4(m4));
+  }
+  const frustums = new THREE.LineSegments(new THREE.BufferGeometry().setFromPoints(fr), new THREE.LineBasicMaterial({ color: 0x555555 }));
+  scene.add(frustums);
+
+  // Surface points the depth samples hit.
+  const surfaceGeometry = new THREE.BufferGeometry();
+  surfaceGeometry.setAttribute("position", new THREE.Float32BufferAttribute(data.surface, 3));
+  const surface = new THREE.Points(surfaceGeometry, new THREE.PointsMaterial({ color: 0x8c564b, size: 0.05, sizeAttenuation: true }));
+  scene.add(surface);
+
+  // Markers: a warning sign on the surface (local +Y = normal) and an upright exclamation point.
+  const signShape = new THREE.BufferGeometry().setFromPoints([
+    new THREE.Vector3(0, 0.01, 0.15), new THREE.Vector3(0.13, 0.01, -0.075), new THREE.Vector3(-0.13, 0.01, -0.075)]);
+  signShape.computeVertexNormals();
+  const bar = new THREE.BoxGeometry(0.04, 0.24, 0.04).translate(0, 0.22, 0);
+  const dot = new THREE.BoxGeometry(0.04, 0.04, 0.04).translate(0, 0.04, 0);
+  const signs = new THREE.Group(), exclamations = new THREE.Group();
+  const pickable = [tubeMesh];
+  for (const m of data.markers) {
+    const material = new THREE.MeshStandardMaterial({ color: CLASS_COLOURS[m.class], side: THREE.DoubleSide });
+    const grow = Math.max(1.5, span / 4);
+    const sign = new THREE.Mesh(signShape, material);
+    sign.position.set(...m.p);
+    sign.quaternion.set(...m.q);
+    sign.scale.setScalar(grow);
+    sign.userData.marker = m;
+    signs.add(sign);
+    const ex = new THREE.Group();
+    ex.add(new THREE.Mesh(bar, material), new THREE.Mesh(dot, material));
+    ex.position.set(...m.p);
+    ex.scale.setScalar(grow);
+    ex.children.forEach((c) => (c.userData.marker = m));
+    exclamations.add(ex);
+    // The normal, as a short line.
+    const n = new THREE.Vector3(...m.normal).multiplyScalar(0.3).add(new THREE.Vector3(...m.p));
+    signs.add(new THREE.Line(new THREE.BufferGeometry().setFromPoints([new THREE.Vector3(...m.p), n]), new THREE.LineBasicMaterial({ color: 0x000000 })));
+  }
+  scene.add(signs, exclamations);
+  pickable.push(signs, exclamations);
+  function markerStyle(style) {
+    signs.visible = style !== "exclamation";
+    exclamations.visible = style !== "sign";
+  }
+  markerStyle("sign");
+
+  // Camera and controls.
+  const camera = new THREE.PerspectiveCamera(50, canvas.clientWidth / canvas.clientHeight || 16 / 9, 0.01, 500);
+  const controls = new OrbitControls(camera, canvas);
+  function home() {
+    camera.up.set(0, 1, 0);
+    camera.position.set(centre.x + span * 0.9, centre.y + span * 0.9, centre.z + span * 1.1);
+    controls.target.copy(centre);
+    controls.update();
+  }
+  function top() {
+    camera.position.set(centre.x, centre.y + span * 1.6, centre.z + 1e-3);
+    controls.target.copy(centre);
+    controls.update();
+  }
+  home();
+
+  function resize() {
+    const w = canvas.clientWidth, h = canvas.clientHeight;
+    if (canvas.width !== Math.round(w * renderer.getPixelRatio()) || canvas.height !== Math.round(h * renderer.getPixelRatio())) {
+      renderer.setSize(w, h, false);
+      camera.aspect = w / h;
+      camera.updateProjectionMatrix();
+    }
+  }
+  let pending = false;
+  function render() {
+    pending = false;
+    resize();
+    renderer.render(scene, camera);
+  }
+  function request() {
+    if (!pending) { pending = true; requestAnimationFrame(render); }
+  }
+  controls.addEventListener("change", request);
+  window.addEventListener("resize", request);
+
+  $("btn-top").addEventListener("click", () => { top(); request(); });
+  $("btn-reset").addEventListener("click", () => { home(); request(); });
+  $("chk-error").addEventListener("change", (e) => { paint(e.target.checked); request(); });
+  $("sel-markers").addEventListener("change", (e) => { markerStyle(e.target.value); request(); });
+  $("chk-frustums").addEventListener("change", (e) => { frustums.visible = e.target.checked; request(); });
+  $("chk-surface").addEventListener("change", (e) => { surface.visible = e.target.checked; request(); });
+
+  // Click: the sub-trajectory or marker under the pointer.
+  const ray = new THREE.Raycaster();
+  let down = null;
+  canvas.addEventListener("pointerdown", (e) => (down = [e.clientX, e.clientY]));
+  canvas.addEventListener("pointerup", (e) => {
+    if (!down || Math.hypot(e.clientX - down[0], e.clientY - down[1]) > 4) return;
+    const rect = canvas.getBoundingClientRect();
+    ray.setFromCamera(new THREE.Vector2(((e.clientX - rect.left) / rect.width) * 2 - 1, -((e.clientY - rect.top) / rect.height) * 2 + 1), camera);
+    const hit = ray.intersectObjects(pickable, true).find((h) => h.object.userData.marker || h.object === tubeMesh);
+    if (!hit) return;
+    const m = hit.object.userData.marker;
+    if (m) {
+      $("picked").textContent = `Marker M${m.number}: sub-trajectory ${m.sub}, ${m.class}, error ${m.error.toFixed(1)} ${data.unit}`;
+    } else {
+      const ring = Math.floor(hit.faceIndex / (2 * radial));
+      const k = subOf[ringJoint[Math.min(ring, ringJoint.length - 1)]];
+      const s = data.subs[k];
+      $("picked").textContent = s
+        ? `Sub-trajectory ${k}: ${s.t0.toFixed(2)}–${s.t1.toFixed(2)} s, ${s.length.toFixed(2)} m, ` +
+          (s.error === null ? "no estimate" : `error ${s.error.toFixed(1)} ${data.unit} (${s.class})`)
+        : `Sub-trajectory ${k}`;
+    }
+  });
+  render();
+  document.body.dataset.view = "ready";
+  // Navigation start to the first frame of the 3-D view (scripts/bench-report reads it).
+  document.body.dataset.renderMs = String(Math.round(performance.now()));
+  // scripts/bench-report opens the page with #bench: a request marks the first frame in
+  // Chromium's net log, on the real clock (headless virtual time also drives performance.now).
+  if (location.hash === "#bench") fetch("/healthz?rendered").catch(() => {});
+  status(`${data.subs.length} sub-trajectories, ${data.frustums.length} frustums, ${data.markers.length} markers, ${data.surface.length / 3} surface points.`);
+}
+
+main().catch((e) => {
+  status("3-D view failed: " + e);
+  console.error(e);
+});

@@ -1,0 +1,242 @@
+//! The report's charts as SVG text (numbers only: nothing from a client reaches them).
+
+use std::fmt::Write;
+
+use sitar_core::Thresholds;
+
+pub(crate) const LOW: &str = "#2f6fde";
+pub(crate) const MEDIUM: &str = "#e0b100";
+pub(crate) const HIGH: &str = "#d62728";
+pub(crate) const UNKNOWN: &str = "#9a9a9a";
+
+/// Round tick steps: 1, 2 or 5 × 10^k giving about `count` ticks over `span`.
+fn tick_step(span: f64, count: f64) -> f64 {
+    let raw = (span / count).max(1e-12);
+    let mag = 10f64.powf(raw.log10().floor());
+    [1.0, 2.0, 5.0, 10.0]
+        .into_iter()
+        .map(|m| m * mag)
+        .find(|s| *s >= raw)
+        .unwrap_or(10.0 * mag)
+}
+
+/// Plot frame: data ranges mapped into a `w × h` box with margins for the axes.
+struct Frame {
+    w: f64,
+    h: f64,
+    x0: f64,
+    x1: f64,
+    y1: f64,
+}
+
+const LEFT: f64 = 48.0;
+const BOTTOM: f64 = 30.0;
+const TOP: f64 = 10.0;
+const RIGHT: f64 = 10.0;
+
+impl Frame {
+    fn x(&self, v: f64) -> f64 {
+        LEFT + (v - self.x0) / (self.x1 - self.x0).max(1e-12) * (self.w - LEFT - RIGHT)
+    }
+    fn y(&self, v: f64) -> f64 {
+        self.h - BOTTOM - v / self.y1.max(1e-12) * (self.h - BOTTOM - TOP)
+    }
+    fn axes(&self, svg: &mut String, x_label: &str, y_label: &str, scale: f64) {
+        let step = tick_step(self.x1 - self.x0, 6.0);
+        let mut t = (self.x0 / step).ceil() * step;
+        while t <= self.x1 + 1e-9 {
+            let _ = write!(
+                svg,
+                r##"<line x1="{x:.1}" y1="{b:.1}" x2="{x:.1}" y2="{b2:.1}" stroke="#666"/><text x="{x:.1}" y="{ty:.1}" text-anchor="middle" font-size="11">{t}</text>"##,
+                x = self.x(t),
+                b = self.h - BOTTOM,
+                b2 = self.h - BOTTOM + 4.0,
+                ty = self.h - BOTTOM + 16.0,
+                t = trim(t)
+            );
+            t += step;
+        }
+        let step = tick_step(self.y1 * scale, 4.0) / scale;
+        let mut v = 0.0;
+        while v <= self.y1 + 1e-12 {
+            let _ = write!(
+                svg,
+                r##"<line x1="{l:.1}" y1="{y:.1}" x2="{r:.1}" y2="{y:.1}" stroke="#e4e4e4"/><text x="{tx:.1}" y="{ty:.1}" text-anchor="end" font-size="11">{v}</text>"##,
+                l = LEFT,
+                r = self.w - RIGHT,
+                y = self.y(v),
+                tx = LEFT - 4.0,
+                ty = self.y(v) + 4.0,
+                v = trim(v * scale)
+            );
+            v += step;
+        }
+        let _ = write!(
+            svg,
+            r##"<line x1="{l}" y1="{b:.1}" x2="{r:.1}" y2="{b:.1}" stroke="#333"/><line x1="{l}" y1="{t}" x2="{l}" y2="{b:.1}" stroke="#333"/><text x="{cx:.1}" y="{by:.1}" text-anchor="middle" font-size="12">{x_label}</text><text x="12" y="{cy:.1}" font-size="12" transform="rotate(-90 12 {cy:.1})" text-anchor="middle">{y_label}</text>"##,
+            l = LEFT,
+            r = self.w - RIGHT,
+            t = TOP,
+            b = self.h - BOTTOM,
+            cx = (self.w + LEFT) / 2.0,
+            by = self.h - 2.0,
+            cy = (self.h - BOTTOM) / 2.0,
+        );
+    }
+}
+
+/// A short number: no trailing zeros.
+fn trim(v: f64) -> String {
+    let s = format!("{v:.3}");
+    let s = s.trim_end_matches('0').trim_end_matches('.');
+    if s == "-0" { "0".into() } else { s.into() }
+}
+
+/// Error over time: class bands, one step per sub-trajectory (gaps where no window matched),
+/// dashed lines at the markers' times. `scale` turns the unit into the shown one (m → cm).
+pub(crate) fn error_over_time(
+    subs: &[(f64, f64, Option<f64>)],
+    thresholds: Thresholds,
+    markers: &[(usize, f64)],
+    scale: f64,
+    y_label: &str,
+) -> String {
+    let (w, h) = (760.0, 240.0);
+    let x1 = subs.last().map_or(1.0, |s| s.1).max(1e-3);
+    let max = subs.iter().filter_map(|s| s.2).fold(0.0, f64::max);
+    let frame = Frame {
+        w,
+        h,
+        x0: 0.0,
+        x1,
+        y1: max.max(thresholds.high * 1.25),
+    };
+    let mut svg = format!(
+        r#"<svg id="error-time" xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" viewBox="0 0 {w} {h}" role="img" aria-label="estimated error over time">"#
+    );
+    for (lo, hi, colour) in [
+        (0.0, thresholds.medium, LOW),
+        (thresholds.medium, thresholds.high, MEDIUM),
+        (thresholds.high, frame.y1, HIGH),
+    ] {
+        let _ = write!(
+            svg,
+            r#"<rect class="band" x="{x:.1}" y="{y:.1}" width="{bw:.1}" height="{bh:.1}" fill="{colour}" fill-opacity="0.10"/>"#,
+            x = LEFT,
+            y = frame.y(hi),
+            bw = w - LEFT - RIGHT,
+            bh = frame.y(lo) - frame.y(hi),
+        );
+    }
+    frame.axes(&mut svg, "time (s)", y_label, scale);
+    let mut path = String::new();
+    let mut pen_down = false;
+    for &(t0, t1, e) in subs {
+        match e {
+            Some(e) => {
+                let op = if pen_down { 'L' } else { 'M' };
+                let _ = write!(
+                    path,
+                    "{op}{:.1} {:.1}L{:.1} {:.1}",
+                    frame.x(t0),
+                    frame.y(e),
+                    frame.x(t1),
+                    frame.y(e)
+                );
+                pen_down = true;
+            }
+            None => pen_down = false,
+        }
+    }
+    let _ = write!(
+        svg,
+        r##"<path id="error-line" d="{path}" fill="none" stroke="#222" stroke-width="1.2"/>"##
+    );
+    for &(number, t) in markers {
+        let x = frame.x(t);
+        let _ = write!(
+            svg,
+            r##"<line class="marker-time" x1="{x:.1}" y1="{t:.1}" x2="{x:.1}" y2="{b:.1}" stroke="#7b2cbf" stroke-dasharray="4 3"/><text x="{tx:.1}" y="{ty:.1}" font-size="11" fill="#7b2cbf">M{number}</text>"##,
+            t = TOP,
+            b = h - BOTTOM,
+            tx = x + 3.0,
+            ty = TOP + 12.0,
+        );
+    }
+    svg.push_str("</svg>");
+    svg
+}
+
+/// The distribution of sub-trajectory errors: 20 bins, each coloured by its class.
+pub(crate) fn histogram(
+    errors: &[f64],
+    thresholds: Thresholds,
+    scale: f64,
+    x_label: &str,
+) -> String {
+    let (w, h) = (420.0, 240.0);
+    let max = errors.iter().copied().fold(thresholds.high, f64::max) * 1.02;
+    const BINS: usize = 20;
+    let width = max / BINS as f64;
+    let mut counts = [0usize; BINS];
+    for e in errors {
+        counts[((e / width) as usize).min(BINS - 1)] += 1;
+    }
+    let top = counts.iter().copied().max().unwrap_or(1).max(1) as f64;
+    let frame = Frame {
+        w,
+        h,
+        x0: 0.0,
+        x1: max * scale,
+        y1: top,
+    };
+    let mut svg = format!(
+        r#"<svg id="error-histogram" xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" viewBox="0 0 {w} {h}" role="img" aria-label="distribution of sub-trajectory errors">"#
+    );
+    frame.axes(&mut svg, x_label, "sub-trajectories", 1.0);
+    for (i, c) in counts.iter().enumerate() {
+        let lo = i as f64 * width;
+        let colour = match thresholds.classify(lo + width / 2.0) {
+            sitar_core::ErrorClass::High => HIGH,
+            sitar_core::ErrorClass::Medium => MEDIUM,
+            _ => LOW,
+        };
+        let (xa, xb) = (frame.x(lo * scale), frame.x((lo + width) * scale));
+        let _ = write!(
+            svg,
+            r#"<rect class="bin" x="{xa:.1}" y="{y:.1}" width="{bw:.1}" height="{bh:.1}" fill="{colour}"><title>{c}</title></rect>"#,
+            y = frame.y(*c as f64),
+            bw = (xb - xa - 1.0).max(0.5),
+            bh = frame.y(0.0) - frame.y(*c as f64),
+        );
+    }
+    svg.push_str("</svg>");
+    svg
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ticks_are_round() {
+        assert_eq!(tick_step(10.0, 5.0), 2.0);
+        assert_eq!(tick_step(0.3, 4.0), 0.1);
+        assert_eq!(tick_step(700.0, 6.0), 200.0);
+    }
+
+    #[test]
+    fn the_histogram_counts_every_error() {
+        let t = Thresholds {
+            medium: 0.05,
+            high: 0.1,
+        };
+        let svg = histogram(&[0.01, 0.02, 0.07, 0.5], t, 100.0, "error (cm)");
+        let total: usize = svg
+            .split("<title>")
+            .skip(1)
+            .map(|s| s.split('<').next().unwrap().parse::<usize>().unwrap())
+            .sum();
+        assert_eq!(total, 4);
+    }
+}

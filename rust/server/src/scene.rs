@@ -1,0 +1,183 @@
+//! A session as the user's phone saw it — render plan, depth-sampled surfaces, markers — for
+//! the report's 3-D view and `GET /v1/sessions/{id}/scene.glb`.
+//!
+//! A simulated recording (`sitar-sim`) holds the walk and the room, so the phone session is
+//! rebuilt exactly as the phone logic recorded it (depth images included). A real recording
+//! holds no depth: the reference trial's poses give the render plan, without surface
+//! points or markers. Either is built once and kept as a `sitar_core` session folder
+//! (`sessions/ID/phone/`); the latest results are loaded into it on every request.
+
+use std::sync::{Arc, Mutex};
+
+use serde_json::json;
+use sitar_core::{DisplayRotation, Session, SessionConfig};
+
+use crate::Error;
+use crate::published::{self, Form};
+use crate::session::Session as Row;
+use crate::shared::Shared;
+
+/// Where the scene's poses came from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Source {
+    /// The simulated walk, recorded by the phone logic with depth.
+    SimulatedWalk,
+    /// The reference trial's poses (no depth on the backend).
+    ReferenceTrial,
+}
+
+impl Source {
+    /// What the page says about where the 3-D scene came from.
+    pub(crate) fn describe(self) -> &'static str {
+        match self {
+            Self::SimulatedWalk => "the recorded walk with its depth samples",
+            Self::ReferenceTrial => {
+                "the reference trial: a real recording brings no depth to the backend, so there are no surface points or markers"
+            }
+        }
+    }
+}
+
+fn config(row: &Row) -> Result<SessionConfig, Error> {
+    let text = json!({
+        "convention": "arcore",
+        "subtrajectory_frames": row.settings.window_frames,
+        "pose_relation": row.settings.pose_relation.to_string(),
+        // The scene needs poses and depth; camera images would cost a render and a JPEG per
+        // midpoint on every rebuild.
+        "images": false,
+    })
+    .to_string();
+    SessionConfig::from_json(&text).map_err(|e| Error::Internal(format!("phone config: {e}")))
+}
+
+/// The reference trial (the first stored) replayed through the phone logic, without depth.
+fn from_reference_trial(shared: &Shared, row: &Row) -> Result<Session, Error> {
+    let first = shared
+        .db
+        .trials_in_order(&row.id)?
+        .first()
+        .map(|(index, _)| *index)
+        .ok_or_else(|| Error::Conflict(format!("session {} has no trials yet", row.id)))?;
+    let path = shared.files.trial(&row.id, first);
+    let text = std::fs::read_to_string(&path).map_err(|e| Error::io("cannot read", &path, e))?;
+    let trajectory = sitar_estimator::parse_tum(&text, "reference trial")
+        .map_err(|e| Error::InvalidContent(format!("reference trial of {}: {e}", row.id)))?;
+    let poses: Vec<(i64, sitar_core::Pose)> = (0..trajectory.len())
+        .map(|i| {
+            (
+                trajectory.stamps[i],
+                sitar_core::Pose::new(trajectory.positions[i], trajectory.orientations[i]),
+            )
+        })
+        .collect();
+    if poses.len() < 3 {
+        return Err(Error::Conflict(format!(
+            "the reference trial of {} has {} poses; a scene needs 3",
+            row.id,
+            poses.len()
+        )));
+    }
+    let fail = |e: sitar_core::Error| Error::InvalidContent(format!("reference trial: {e}"));
+    let mut session = Session::try_new(config(row)?).map_err(fail)?;
+    let last = poses.len() - 1;
+    session.start(poses[0].0, poses[0].1).map_err(fail)?;
+    for (t, pose) in &poses[1..last] {
+        session.frame(*t, *pose).map_err(fail)?;
+    }
+    session.stop(poses[last].0, poses[last].1).map_err(fail)?;
+    Ok(session)
+}
+
+/// Builds the phone session of `row` (no results loaded). Blocking and CPU-heavy for
+/// simulated walks (one depth image per midpoint).
+fn build(shared: &Shared, row: &Row) -> Result<(Session, Source), Error> {
+    let path = shared.files.recording(&row.id);
+    let simulated = std::fs::read(&path)
+        .ok()
+        .and_then(|bytes| sitar_sim::Recording::from_bytes(&bytes).ok());
+    if let Some(recording) = simulated {
+        let session = recording
+            .phone_session(config(row)?, DisplayRotation::Deg90)
+            .map_err(|e| Error::InvalidContent(format!("simulated walk: {e}")))?;
+        return Ok((session, Source::SimulatedWalk));
+    }
+    Ok((from_reference_trial(shared, row)?, Source::ReferenceTrial))
+}
+
+/// Phone sessions with results loaded, most recent last: a report and its `scene.json` (and a
+/// reload) reuse the work. Keyed by folder (data dir + id) and the results' trial count.
+type Cached = (std::path::PathBuf, u32, Arc<(Session, Source)>);
+static CACHE: Mutex<Vec<Cached>> = Mutex::new(Vec::new());
+/// Sessions kept in memory (a 10-minute walk's is a few MB).
+const CACHED_SESSIONS: usize = 4;
+
+/// The phone session of `row` with its latest results loaded. Blocking.
+pub(crate) fn load(shared: &Shared, row: &Row) -> Result<Arc<(Session, Source)>, Error> {
+    let key = shared.files.phone_session(&row.id);
+    let lock = || {
+        CACHE
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner())
+    };
+    if let Some((_, _, hit)) = lock()
+        .iter()
+        .find(|(k, trials, _)| *k == key && *trials == row.results_trials)
+    {
+        return Ok(hit.clone());
+    }
+    let loaded = Arc::new(load_uncached(shared, row)?);
+    let mut cache = lock();
+    cache.retain(|(k, _, _)| *k != key);
+    if cache.len() >= CACHED_SESSIONS {
+        cache.remove(0);
+    }
+    cache.push((key, row.results_trials, loaded.clone()));
+    Ok(loaded)
+}
+
+fn load_uncached(shared: &Shared, row: &Row) -> Result<(Session, Source), Error> {
+    let dir = shared.files.phone_session(&row.id);
+    let marker = dir.join("source.txt");
+    let cached = Session::load(&dir)
+        .ok()
+        .zip(
+            std::fs::read_to_string(&marker)
+                .ok()
+                .map(|s| match s.trim() {
+                    "sim" => Source::SimulatedWalk,
+                    _ => Source::ReferenceTrial,
+                }),
+        );
+    let (mut session, source) = match cached {
+        Some(found) => found,
+        None => {
+            let (session, source) = build(shared, row)?;
+            // Built in a scratch folder and renamed into place: a concurrent request either
+            // sees the whole folder or builds its own.
+            let scratch = shared.files.scratch_dir();
+            let kept = session.save(&scratch).is_ok()
+                && std::fs::write(
+                    scratch.join("source.txt"),
+                    if source == Source::SimulatedWalk {
+                        "sim"
+                    } else {
+                        "trial"
+                    },
+                )
+                .is_ok()
+                && std::fs::rename(&scratch, &dir).is_ok();
+            if !kept {
+                let _ = std::fs::remove_dir_all(&scratch);
+            }
+            (session, source)
+        }
+    };
+    if row.results_trials > 0 {
+        let json = published::read(shared, row, Form::Json)?;
+        session
+            .load_results(&json)
+            .map_err(|e| Error::Internal(format!("results of {} do not fit: {e}", row.id)))?;
+    }
+    Ok((session, source))
+}
