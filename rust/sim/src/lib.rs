@@ -15,8 +15,8 @@
 //!   a mechanistic visual-inertial tracker: landmarks on the surfaces with a density that
 //!   follows their texture, feature noise, wrong matches, spurious corners and the glass
 //!   pane's reflections (recorded once per recording, shared by every trial, as a replayed
-//!   mp4 is), then per trial an inertial prior, ARRSAC (the `arrsac` crate, Raguram et al.'s
-//!   adaptive real-time RANSAC that the paper cites) over P3P hypotheses with a fixed budget,
+//!   mp4 is), then per trial an inertial prior, RANSAC over P3P hypotheses with a fixed
+//!   real-time iteration budget (the only randomness a trial has, as the paper explains),
 //!   Gauss–Newton refinement and a map triangulated from the trial's own estimated poses.
 //!   The P3P solver is written here (Lambda Twist, from Persson & Nordberg's equations) because
 //!   the `lambda-twist` crate pins nalgebra 0.21 through `cv-core`, incompatible with the

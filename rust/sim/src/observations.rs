@@ -7,7 +7,7 @@
 //! tracker's own randomness.
 
 use glam::{DMat3, DQuat, DVec2, DVec3};
-use rand::seq::IndexedRandom;
+use rand::seq::{IndexedRandom, SliceRandom};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal, Poisson};
@@ -117,6 +117,12 @@ impl Observations {
                 &mut rng,
                 &mut frame,
             );
+            // The detector's real-time budget: it keeps the same features of the same image
+            // in every replay (a fixed subset per frame, chosen here once).
+            if frame.len() > model.features_per_frame {
+                frame.shuffle(&mut rng);
+                frame.truncate(model.features_per_frame);
+            }
             frames.push(frame);
         }
         let gyro = Normal::new(0.0, model.gyro_noise_deg.to_radians())

@@ -1,11 +1,15 @@
-//! Per-frame pose from 2D–3D matches: ARRSAC (the `arrsac` crate) over P3P hypotheses that
-//! agree with the inertial prior, then Gauss–Newton refinement on the inliers.
+//! Per-frame pose from 2D–3D matches: RANSAC with a fixed iteration budget over P3P
+//! hypotheses that agree with the inertial prior, then Gauss–Newton refinement on the
+//! inliers until they stop changing.
+//!
+//! Plain RANSAC (Fischler & Bolles, which the paper names as the source of the trials'
+//! randomness) rather than a preemptive variant such as ARRSAC: it keeps the hypothesis
+//! with the most inliers over *all* matches, so a larger budget converges on the largest
+//! consensus — the behaviour the method relies on and `tests/method_behaviour.rs` checks.
 
-use arrsac::Arrsac;
 use glam::{DMat3, DVec2, DVec3};
 use nalgebra::{Matrix6, Vector6};
 use rand_chacha::ChaCha8Rng;
-use sample_consensus::{Consensus, Estimator, Model};
 
 use crate::p3p::{CameraPose, p3p};
 
@@ -32,14 +36,8 @@ fn reprojection(pose: &CameraPose, m: &Match) -> f64 {
     (DVec2::new(p.x / p.z, p.y / p.z) - m.normalised).length()
 }
 
-impl Model<&Match> for CameraPose {
-    fn residual(&self, data: &&Match) -> f64 {
-        reprojection(self, data)
-    }
-}
-
-/// P3P hypotheses, kept only when they reproject their own sample (so every model has at
-/// least three inliers, which `arrsac` needs) and stay within the gate around the prior.
+/// P3P hypotheses, kept only when they reproject their own sample and stay within the gate
+/// around the prior.
 struct P3pSolver<'a> {
     prior: &'a CameraPose,
     gate: Gate,
@@ -61,19 +59,8 @@ impl Gate {
     }
 }
 
-impl<'a> Estimator<&'a Match> for P3pSolver<'_> {
-    type Model = CameraPose;
-    type ModelIter = std::iter::Flatten<std::array::IntoIter<Option<CameraPose>, 4>>;
-    const MIN_SAMPLES: usize = 3;
-
-    fn estimate<I>(&self, mut data: I) -> Self::ModelIter
-    where
-        I: Iterator<Item = &'a Match> + Clone,
-    {
-        let (Some(a), Some(b), Some(c)) = (data.next(), data.next(), data.next()) else {
-            return [None; 4].into_iter().flatten();
-        };
-        let sample = [a, b, c];
+impl P3pSolver<'_> {
+    fn hypotheses(&self, sample: [&Match; 3]) -> impl Iterator<Item = CameraPose> {
         let mut models = p3p(sample.map(Match::bearing), sample.map(|m| m.world));
         for slot in &mut models {
             let keep = slot.as_ref().is_some_and(|pose| {
@@ -93,16 +80,15 @@ impl<'a> Estimator<&'a Match> for P3pSolver<'_> {
 /// Settings of [`locate`].
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct LocateOptions {
-    /// Hypotheses per ARRSAC stage (the real-time budget): the initial random ones and as
-    /// many again drawn from the best one's inliers.
+    /// RANSAC iterations (random minimal samples): the real-time budget.
     pub hypotheses: usize,
     /// Inlier threshold in normalised units (pixels / focal length).
     pub threshold: f64,
     pub gate: Gate,
 }
 
-/// The largest number of matches [`locate`] takes: ARRSAC then scores every hypothesis on
-/// all of them in its initial blocks (so every kept model has its sample among its inliers).
+/// The largest number of matches [`locate`] takes (the feature budget's upper bound): the
+/// inlier sets are bit sets of this size.
 pub(crate) const MAX_MATCHES: usize = 256;
 
 /// The pose from `matches` and its inlier count, or `None` when no hypothesis within the
@@ -122,23 +108,22 @@ pub(crate) fn locate(
         gate: options.gate,
         threshold: options.threshold,
     };
-    let budget = options.hypotheses.max(1);
-    let mut arrsac = Arrsac::new(options.threshold, rng)
-        .initialization_hypotheses(budget)
-        .estimations_per_block(budget)
-        .block_size(MAX_MATCHES / 4)
-        .initialization_blocks(4);
-    let (pose, inliers) = arrsac.model_inliers(&solver, matches.iter())?;
-    let mut inliers: Vec<Match> = inliers.iter().map(|&i| matches[i]).collect();
+    let (pose, inliers) = best_hypothesis(&solver, matches, options, rng)?;
+    let inliers: Vec<Match> = inliers.iter().map(|&i| matches[i]).collect();
     let mut pose = refine(pose, &inliers);
-    // One more round: the refined pose's own inliers.
-    inliers = matches
-        .iter()
-        .filter(|m| reprojection(&pose, m) < options.threshold)
-        .copied()
-        .collect();
-    if inliers.len() >= 3 {
+    // Refine on the refined pose's own inliers until they stop changing: the result is then a
+    // function of the consensus set alone, not of the hypothesis that found it.
+    let mut previous = Vec::new();
+    for _ in 0..REFINE_ROUNDS {
+        let current: Vec<usize> = (0..matches.len())
+            .filter(|&i| reprojection(&pose, &matches[i]) < options.threshold)
+            .collect();
+        if current.len() < 3 || current == previous {
+            break;
+        }
+        let inliers: Vec<Match> = current.iter().map(|&i| matches[i]).collect();
         pose = refine(pose, &inliers);
+        previous = current;
     }
     let count = matches
         .iter()
@@ -147,9 +132,71 @@ pub(crate) fn locate(
     (options.gate.admits(prior, &pose) && count >= 3).then_some((pose, count))
 }
 
+/// RANSAC: `options.hypotheses` random minimal samples, each P3P solution that passes the
+/// gate scored by its inliers on every match; the best one (most inliers, ties broken by the
+/// inlier set itself, so that the answer depends on the consensus found and not on the order
+/// it was found in) and the indices of its inliers.
+fn best_hypothesis(
+    solver: &P3pSolver<'_>,
+    matches: &[Match],
+    options: &LocateOptions,
+    rng: &mut ChaCha8Rng,
+) -> Option<(CameraPose, Vec<usize>)> {
+    let mut best: Option<(InlierSet, CameraPose)> = None;
+    for _ in 0..options.hypotheses.max(1) {
+        let sample = rand::seq::index::sample(rng, matches.len(), 3);
+        let sample = [0, 1, 2].map(|k| &matches[sample.index(k)]);
+        for pose in solver.hypotheses(sample) {
+            let set = InlierSet::of(&pose, matches, options.threshold);
+            if best.as_ref().is_none_or(|(b, _)| set.beats(b)) {
+                best = Some((set, pose));
+            }
+        }
+    }
+    let (set, pose) = best?;
+    Some((pose, set.indices()))
+}
+
+/// The matches a pose explains, as a bit set over at most [`MAX_MATCHES`] indices.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct InlierSet {
+    count: u32,
+    bits: [u64; MAX_MATCHES / 64],
+}
+
+impl InlierSet {
+    fn of(pose: &CameraPose, matches: &[Match], threshold: f64) -> Self {
+        let mut set = Self {
+            count: 0,
+            bits: [0; MAX_MATCHES / 64],
+        };
+        for (i, m) in matches.iter().enumerate() {
+            if reprojection(pose, m) < threshold {
+                set.bits[i / 64] |= 1 << (i % 64);
+                set.count += 1;
+            }
+        }
+        set
+    }
+
+    /// More inliers, or as many and the smaller set in bit order: a total order.
+    fn beats(&self, other: &Self) -> bool {
+        (self.count, std::cmp::Reverse(self.bits)) > (other.count, std::cmp::Reverse(other.bits))
+    }
+
+    fn indices(&self) -> Vec<usize> {
+        (0..MAX_MATCHES)
+            .filter(|&i| self.bits[i / 64] & (1 << (i % 64)) != 0)
+            .collect()
+    }
+}
+
+/// Rounds of re-scoring and refinement after RANSAC.
+const REFINE_ROUNDS: usize = 5;
+
 /// Gauss–Newton on the reprojection error over `inliers`, with left-multiplied updates.
 pub(crate) fn refine(mut pose: CameraPose, inliers: &[Match]) -> CameraPose {
-    for _ in 0..4 {
+    for _ in 0..10 {
         let mut h = Matrix6::<f64>::zeros();
         let mut g = Vector6::<f64>::zeros();
         for m in inliers {
@@ -187,7 +234,7 @@ pub(crate) fn refine(mut pose: CameraPose, inliers: &[Match]) -> CameraPose {
             rotation: turn * pose.rotation,
             translation: turn * pose.translation + v,
         };
-        if step.norm() < 1e-10 {
+        if step.norm() < 1e-13 {
             break;
         }
     }

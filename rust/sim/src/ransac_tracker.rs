@@ -2,16 +2,17 @@
 //! recording's observations, so trials differ only by the tracker's own randomness.
 //!
 //! Per frame: an inertial prior (the recorded gyroscope rotation and motion, plus the
-//! accelerometer bias integrated since the last visual fix), a random subset of the matches
-//! within a real-time feature budget, ARRSAC over P3P hypotheses within a gate around the
-//! prior, Gauss–Newton refinement on the inliers, a fusion with the prior weighted by the
-//! inlier count, and two-view triangulation of new landmarks from the trial's *estimated*
-//! poses (so an error made once stays in the map). Map points that keep failing as outliers
-//! are dropped and triangulated again.
+//! accelerometer bias integrated since the last visual fix), RANSAC over P3P hypotheses
+//! within a gate around the prior with a fixed iteration budget (the trial's only source of
+//! randomness), Gauss–Newton refinement on the inliers, a fusion with the prior weighted by
+//! the inlier count, and triangulation of new landmarks from the trial's *estimated* poses
+//! (two views, confirmed by a third, then refined by every later ray in which the point was
+//! an inlier), so an error made once stays in the map and a different consensus chosen in one
+//! frame changes the trial from then on. Map points that keep failing as outliers are dropped
+//! and triangulated again.
 
 use glam::{DMat3, DQuat, DVec3};
 use rand::SeedableRng;
-use rand::seq::index::sample;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 use sitar_estimator::Trajectory;
@@ -46,10 +47,12 @@ pub struct RansacModel {
     pub detection_probability: f64,
     /// Probability that a reflection in glass is matched to the real landmark it mirrors.
     pub reflection_match_probability: f64,
-    /// The real-time budget: at most this many features are matched per frame, a random
-    /// subset per trial when more are detected.
+    /// The detector's real-time budget: at most this many features are matched per frame, a
+    /// fixed subset of the recording when more are detected (every replay sees the same).
     pub features_per_frame: usize,
-    /// ARRSAC hypotheses per stage: the fixed real-time iteration budget.
+    /// RANSAC iterations per frame: the fixed real-time budget. Where the inlier share is low
+    /// (blank walls, reflections) so few iterations often miss the largest consensus, and the
+    /// trials disagree; a large budget finds it every time.
     pub ransac_hypotheses: usize,
     /// Inlier threshold (pixels).
     pub inlier_threshold_px: f64,
@@ -91,8 +94,8 @@ impl Default for RansacModel {
             reflection_match_probability: 0.3,
             features_per_frame: 40,
             ransac_hypotheses: 16,
-            inlier_threshold_px: 6.0,
-            min_inliers: 6,
+            inlier_threshold_px: 5.0,
+            min_inliers: 4,
             prior_weight_inliers: 20.0,
             min_parallax_deg: 4.0,
             gate_m: 0.08,
@@ -100,7 +103,7 @@ impl Default for RansacModel {
             gate_growth_frames: 15.0,
             gyro_noise_deg: 0.03,
             accel_noise_mps: 0.01,
-            accel_bias_mps2: 0.05,
+            accel_bias_mps2: 0.03,
             world_offset: true,
         }
     }
@@ -179,7 +182,16 @@ struct Map {
     candidates: Vec<Option<DVec3>>,
     first_ray: Vec<Option<(DVec3, DVec3)>>,
     misses: Vec<u8>,
+    /// Per map point, the normal equations Σ(I − ddᵀ)·p = Σ(I − ddᵀ)·c of its rays so far:
+    /// every ray of a frame in which it was an inlier refines it (multi-view triangulation).
+    rays: Vec<(DMat3, DVec3)>,
+    /// Per landmark, whether it was an inlier of the current frame's pose.
+    inlier_now: Vec<bool>,
 }
+
+/// Rays whose normal equations have a smaller determinant are too close to parallel to
+/// place a point (two rays 4° apart give about 0.01).
+const MIN_RAY_DETERMINANT: f64 = 1e-4;
 
 /// Outlier verdicts in a row after which a map point is dropped and triangulated anew.
 const MAX_MISSES: u8 = 3;
@@ -191,6 +203,8 @@ impl Map {
             candidates: vec![None; landmarks],
             first_ray: vec![None; landmarks],
             misses: vec![0; landmarks],
+            rays: vec![(DMat3::ZERO, DVec3::ZERO); landmarks],
+            inlier_now: vec![false; landmarks],
         }
     }
 
@@ -207,12 +221,24 @@ impl Map {
         tolerance: f64,
     ) {
         if self.points[landmark].is_some() {
+            if std::mem::take(&mut self.inlier_now[landmark]) {
+                self.add_ray(landmark, centre, direction);
+                let (a, b) = self.rays[landmark];
+                if a.determinant() > MIN_RAY_DETERMINANT {
+                    self.points[landmark] = Some(a.inverse() * b);
+                }
+            }
             return;
         }
         if let Some(candidate) = self.candidates[landmark] {
             let seen = (candidate - centre).normalize_or_zero();
             if seen.dot(direction) > tolerance.cos() {
                 self.points[landmark] = Some(candidate);
+                self.rays[landmark] = (DMat3::ZERO, DVec3::ZERO);
+                if let Some((c0, d0)) = self.first_ray[landmark] {
+                    self.add_ray(landmark, c0, d0);
+                }
+                self.add_ray(landmark, centre, direction);
             } else {
                 self.candidates[landmark] = None;
                 self.first_ray[landmark] = Some((centre, direction));
@@ -245,7 +271,20 @@ impl Map {
         }
     }
 
+    fn add_ray(&mut self, landmark: usize, centre: DVec3, direction: DVec3) {
+        let projector = DMat3::IDENTITY
+            - DMat3::from_cols(
+                direction * direction.x,
+                direction * direction.y,
+                direction * direction.z,
+            );
+        let (a, b) = &mut self.rays[landmark];
+        *a += projector;
+        *b += projector * centre;
+    }
+
     fn verdict(&mut self, landmark: usize, inlier: bool) {
+        self.inlier_now[landmark] = inlier;
         if inlier {
             self.misses[landmark] = 0;
             return;
@@ -300,10 +339,9 @@ pub(crate) fn play(
     };
     let min_cos = model.min_parallax_deg.to_radians().cos();
     let mut map = Map::new(observations.landmarks.len());
-    let mut pose = from_arcore(
-        world_rotation * gt.positions[0] + world_offset,
-        world_rotation * gt.orientations[0],
-    );
+    // The tracker runs in the ground truth's frame and reports in the trial's own: the same
+    // geometry, without rounding differences between trials that are not the tracker's.
+    let mut pose = from_arcore(gt.positions[0], gt.orientations[0]);
     let mut velocity_error = DVec3::ZERO;
     let mut frames_lost = 0.0;
     let mut positions = Vec::with_capacity(n);
@@ -312,12 +350,6 @@ pub(crate) fn play(
     let mut matched = Vec::with_capacity(model.features_per_frame);
     for f in 0..n {
         let frame = &observations.frames[f];
-        // The real-time feature budget: a random subset when more were detected.
-        let chosen: Vec<usize> = if frame.len() > model.features_per_frame {
-            sample(&mut rng, frame.len(), model.features_per_frame).into_vec()
-        } else {
-            (0..frame.len()).collect()
-        };
         if f > 0 {
             let step = &observations.imu[f];
             let dt = (gt.stamps[f] - gt.stamps[f - 1]) as f64 * 1e-9;
@@ -332,8 +364,7 @@ pub(crate) fn play(
             };
             matches.clear();
             matched.clear();
-            for &i in &chosen {
-                let o = frame[i];
+            for o in frame {
                 if let Some(world) = map.points[o.landmark as usize] {
                     matches.push(Match {
                         world,
@@ -371,8 +402,7 @@ pub(crate) fn play(
         }
         let world_from_camera = pose.rotation.transpose();
         let centre = pose.centre();
-        for &i in &chosen {
-            let o = frame[i];
+        for o in frame {
             let direction = (world_from_camera * o.normalised.extend(1.0)).normalize();
             map.observe(
                 o.landmark as usize,
@@ -382,7 +412,11 @@ pub(crate) fn play(
                 2.0 * options.threshold,
             );
         }
-        let (position, mut orientation) = to_arcore(&pose);
+        let (position, orientation) = to_arcore(&pose);
+        let (position, mut orientation) = (
+            world_rotation * position + world_offset,
+            (world_rotation * orientation).normalize(),
+        );
         if orientations
             .last()
             .is_some_and(|q| q.dot(orientation) < 0.0)
