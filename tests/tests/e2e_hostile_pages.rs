@@ -8,7 +8,8 @@
 //! note on the overview) and session options (the setting is a closed list: a hostile
 //! one is refused with a JSON error and never stored, so is the pose relation). The report page shows only the
 //! session id and server-made values; it is loaded for the session the hostile phone
-//! played. The phones are `tests/fake_adb.sh` (a fake `adb` on PATH).
+//! played, and for one where the phone returned a hostile trial file (the trial is
+//! dropped: its text reaches no page). The phones are `tests/fake_adb.sh` (a fake `adb` on PATH).
 //!
 //! One test function: it sets PATH and FAKE_ADB_ROOT for the whole process.
 
@@ -204,6 +205,19 @@ fn hostile_strings_reach_the_pages_as_text() {
     assert!(error.contains(PAYLOAD), "the message is kept: {error:.300}");
     assert!(error.contains(SERIAL), "the message names the phone");
 
+    // A session whose phone returns a hostile trial file (the second of the pool's next
+    // three): the trial is dropped, the session ends with the other two.
+    std::fs::remove_file(phone.join(".fail")).unwrap();
+    let hostile_trial = format!("0 0 0 0 0 0 0 1\n{PAYLOAD} 1 2 3\n");
+    std::fs::write(root.join("pool/trial_4.txt"), &hostile_trial).unwrap();
+    let bad_trial = client.create_session(&new("trim_mean_30")).unwrap();
+    client
+        .upload_recording(&bad_trial, &mp4, &mut |_, _| {})
+        .unwrap();
+    let status = wait_done(&client, &bad_trial);
+    assert_eq!(status.state, SessionState::Done, "{status:?}");
+    assert_eq!(status.trials_done, 2, "{status:?}");
+
     // The overview, opened as an operator would: `/?token=` sets the cookie, then `/`.
     let overview = dump_dom(&format!("{}/?token={ADMIN_TOKEN}", server.url()));
     assert!(
@@ -245,5 +259,16 @@ fn hostile_strings_reach_the_pages_as_text() {
         report
     );
     assert_inert(&report, "report");
+    // And of the session with the hostile trial file: nothing of it shows.
+    let report = dump_dom(&format!(
+        "{}/v1/sessions/{bad_trial}/report?token={ADMIN_TOKEN}",
+        server.url()
+    ));
+    assert!(report.contains("<table id=\"regions\""), "{:.2000}", report);
+    assert_inert(&report, "report of the hostile trial's session");
+    assert!(
+        !report.contains("PWNED"),
+        "the hostile trial is not on the page"
+    );
     drop(server);
 }
