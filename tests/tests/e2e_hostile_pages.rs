@@ -5,11 +5,12 @@
 //! What reaches the pages from outside the server: device serials (from `adb devices`;
 //! shown in the devices table, in "played by" as `adb:SERIAL`, in error texts), the
 //! playback app's failure message (read from the phone's status file; the session's
-//! note on the overview) and session options (the setting is a closed list: a hostile
-//! one is refused with a JSON error and never stored, so is the pose relation). The report page shows only the
-//! session id and server-made values; it is loaded for the session the hostile phone
-//! played, and for one where the phone returned a hostile trial file (the trial is
-//! dropped: its text reaches no page). The phones are `tests/fake_adb.sh` (a fake `adb` on PATH).
+//! note on the overview) and session options (setting and pose relation are closed
+//! lists: hostile ones are refused with a JSON error and never stored). The report page
+//! shows only the session id and server-made values; it is loaded for the session the
+//! hostile phone played, and for one where the phone returned a hostile trial file (the
+//! trial is dropped: its text reaches no page). The phones are `tests/fake_adb.sh` (a
+//! fake `adb` on PATH).
 //!
 //! One test function: it sets PATH and FAKE_ADB_ROOT for the whole process.
 
