@@ -89,11 +89,11 @@ pub(crate) async fn overview(State(shared): AppState, _: Admin) -> Result<Respon
             .collect();
         sessions.push(json!({
             "id": row.id,
-            "created": shared.db.session_created_ms(&row.id)?.map(utc).unwrap_or_default(),
+            "created_at": shared.db.session_created_ms(&row.id)?.map(utc).unwrap_or_default(),
             "state": row.state.as_str(),
             "progress": format!("{:.0} %", status["progress"].as_f64().unwrap_or(0.0) * 100.0),
             "eta": status["eta_s"].as_f64().map(|e| format!("{e:.0} s")).unwrap_or_else(|| "—".into()),
-            "done": status["trials_done"].as_u64().unwrap_or(0),
+            "trials_done": status["trials_done"].as_u64().unwrap_or(0),
             "total": row.trials_total,
             "played_by": played_by,
             "playback": row.playback.as_str(),
