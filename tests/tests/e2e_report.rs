@@ -83,7 +83,10 @@ fn the_report_renders_the_walk_in_chromium_offline() {
 
     let out = dir.path().join("shot");
     let script = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../scripts/report-screenshot");
-    let url = format!("{}/v1/sessions/{id}/report", server.url());
+    let url = format!(
+        "{}/v1/sessions/{id}/report?token={ADMIN_TOKEN}",
+        server.url()
+    );
     let status = Command::new(&script)
         .arg(&url)
         .arg(&out)
