@@ -170,7 +170,7 @@ impl AdbPlayback {
     }
 
     /// `adb devices`, parsed: (serial, state) per attached device. One answer serves every
-    /// caller for [`DEVICE_LIST_TTL`], and callers arriving while it runs wait for it, so
+    /// caller for 2 s (`DEVICE_LIST_TTL`), and callers arriving while it runs wait for it, so
     /// many concurrent `GET /v1/devices` start one `adb` process, not one each.
     pub fn list(&self) -> Result<Vec<(String, String)>, Error> {
         let mut cached = self.listing.lock().unwrap_or_else(|e| e.into_inner());
