@@ -237,10 +237,7 @@ impl Client {
             self.base,
             check_session_id(id)?
         );
-        let meta = std::fs::metadata(path).map_err(|source| Error::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let meta = recording_file(path)?;
         let total = meta.len();
         // The server ties the bytes it keeps to this key, so a resume never continues another
         // file's bytes, and the same file uploaded again (after an app restart) resumes.
@@ -494,6 +491,24 @@ impl Client {
 }
 
 /// Connection errors, timeouts and 5xx answers are worth another attempt.
+/// The metadata of a recording that can be read: a regular file that opens. Anything else
+/// (missing, a directory, unreadable) is a local [`Error::Io`], never retried as a network error.
+pub(crate) fn recording_file(path: &Path) -> Result<std::fs::Metadata, Error> {
+    let io = |source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let meta = std::fs::metadata(path).map_err(io)?;
+    if !meta.is_file() {
+        return Err(io(std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            "not a regular file",
+        )));
+    }
+    File::open(path).map_err(io)?;
+    Ok(meta)
+}
+
 fn retryable<T>(outcome: &Result<T, Error>) -> bool {
     match outcome {
         Ok(_) => false,

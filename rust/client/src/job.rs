@@ -234,6 +234,10 @@ impl UploadJob {
         E: Into<SinkError>,
     {
         options.validate()?;
+        // A local file error is the caller's, found before a server session exists.
+        if options.session_id.is_none() {
+            crate::client::recording_file(recording)?;
+        }
         let shared = Arc::new(Shared {
             status: Mutex::new(Status {
                 progress: JobProgress {

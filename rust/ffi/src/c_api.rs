@@ -138,7 +138,8 @@ pub(crate) fn copy_text(
 ) -> Result<(), Error> {
     check_array_out(buf, cap, out_len)?;
     *out(out_len, "out_len")? = text.len();
-    let n = text.len().min(cap.saturating_sub(1));
+    // A truncated copy ends at a character boundary so the buffer stays valid UTF-8.
+    let n = char_floor(text, cap.saturating_sub(1));
     if cap > 0 {
         // SAFETY: `buf` is non-NULL (cap > 0) with room for `cap` bytes; n + 1 <= cap.
         unsafe {
@@ -153,6 +154,17 @@ pub(crate) fn copy_text(
         });
     }
     Ok(())
+}
+
+/// The largest `n <= max` at which `text` may be cut without splitting a character.
+fn char_floor(text: &str, max: usize) -> usize {
+    if max >= text.len() {
+        return text.len();
+    }
+    (0..=max)
+        .rev()
+        .find(|&i| text.is_char_boundary(i))
+        .unwrap_or(0)
 }
 
 /// A result written to several output pointers (checked non-NULL beforehand).
@@ -223,6 +235,27 @@ mod tests {
         let (r, _, len) = text("", 0);
         assert_eq!(r.unwrap_err().status(), SITAR_ERR_BUFFER_TOO_SMALL);
         assert_eq!(len, 0);
+    }
+
+    #[test]
+    fn truncated_text_never_splits_a_character() {
+        // "aé€😀" = 1 + 2 + 3 + 4 bytes; every capacity leaves valid UTF-8 before the NUL.
+        let s = "a\u{e9}\u{20ac}\u{1f600}";
+        for cap in 1..=s.len() + 1 {
+            let (_, buf, len) = text(s, cap);
+            assert_eq!(len, s.len());
+            let nul = buf.iter().position(|&b| b == 0).expect("NUL written");
+            let copied = std::str::from_utf8(&buf[..nul]).expect("valid UTF-8");
+            assert!(s.starts_with(copied), "cap {cap}: {copied:?}");
+            assert!(
+                copied.len() + 4 > cap.saturating_sub(1),
+                "cap {cap}: cut too short"
+            );
+        }
+        let (_, buf, _) = text("\u{e9}\u{e9}", 3);
+        assert_eq!(&buf[..], "\u{e9}\0".as_bytes());
+        let (_, buf, _) = text("\u{e9}", 2);
+        assert_eq!(&buf[..], b"\0\x55");
     }
 
     #[test]

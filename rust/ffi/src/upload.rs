@@ -219,6 +219,19 @@ mod tests {
     }
 
     #[test]
+    fn a_recording_that_cannot_be_read_is_an_io_error_before_any_request() {
+        // Port 9 (discard) is never asked: the file is checked first.
+        let dir = tempfile::tempdir().unwrap();
+        let options = r#"{"server_url":"http://127.0.0.1:9"}"#;
+        for recording in [dir.path().to_path_buf(), dir.path().join("missing.mp4")] {
+            let e = start(session("{}"), &recording, options)
+                .err()
+                .unwrap_or_else(|| panic!("{recording:?} was accepted"));
+            assert_eq!(e.code(), crate::SitarStatus::SITAR_ERR_IO as i32, "{e}");
+        }
+    }
+
+    #[test]
     fn every_job_state_has_its_c_value_in_order() {
         let all = [
             JobState::Starting,

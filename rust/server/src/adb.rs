@@ -4,7 +4,7 @@ use std::collections::{HashSet, VecDeque};
 use std::io::Read;
 use std::path::Path;
 use std::process::{Command, Stdio};
-use std::sync::Mutex;
+use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use crate::Error;
@@ -71,7 +71,15 @@ pub mod contract {
 #[derive(Debug, Clone)]
 pub struct AdbPlayback {
     config: AdbConfig,
+    /// The last `adb devices` answer and when it came: see [`AdbPlayback::list`].
+    listing: Arc<Mutex<Option<(Instant, Listing)>>>,
 }
+
+/// `adb devices`, parsed, or why it failed.
+type Listing = Result<Vec<(String, String)>, String>;
+
+/// How long an `adb devices` answer is reused.
+pub const DEVICE_LIST_TTL: Duration = Duration::from_secs(2);
 
 /// Runs a command with a deadline; stdout on success, an error naming the command otherwise.
 fn run(program: &Path, args: &[&str], timeout: Duration) -> Result<String, Error> {
@@ -145,7 +153,10 @@ pub fn mp4_duration_s(path: &Path) -> Result<f64, Error> {
 impl AdbPlayback {
     /// An adb backend with the given configuration.
     pub fn new(config: AdbConfig) -> AdbPlayback {
-        AdbPlayback { config }
+        AdbPlayback {
+            config,
+            listing: Arc::default(),
+        }
     }
 
     fn adb(&self, args: &[&str], timeout: Duration) -> Result<String, Error> {
@@ -158,8 +169,28 @@ impl AdbPlayback {
         self.adb(&all, timeout)
     }
 
-    /// `adb devices`, parsed: (serial, state) per attached device.
+    /// `adb devices`, parsed: (serial, state) per attached device. One answer serves every
+    /// caller for 2 s (`DEVICE_LIST_TTL`), and callers arriving while it runs wait for it, so
+    /// many concurrent `GET /v1/devices` start one `adb` process, not one each.
     pub fn list(&self) -> Result<Vec<(String, String)>, Error> {
+        let mut cached = self.listing.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some((at, listing)) = cached.as_ref()
+            && at.elapsed() < DEVICE_LIST_TTL
+        {
+            return listing.clone().map_err(Error::Playback);
+        }
+        let fresh = self.list_now();
+        *cached = Some((
+            Instant::now(),
+            fresh.as_ref().map(Vec::clone).map_err(|e| match e {
+                Error::Playback(m) => m.clone(),
+                other => other.to_string(),
+            }),
+        ));
+        fresh
+    }
+
+    fn list_now(&self) -> Result<Vec<(String, String)>, Error> {
         let out = self.adb(&["devices"], Duration::from_secs(10))?;
         Ok(out
             .lines()
@@ -485,6 +516,42 @@ impl Playback for AdbPlayback {
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
+
+    #[cfg(unix)]
+    #[test]
+    fn concurrent_device_lists_share_one_adb_run() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = tempfile::tempdir().unwrap();
+        let calls = dir.path().join("calls");
+        let adb = dir.path().join("adb");
+        std::fs::write(
+            &adb,
+            format!(
+                "#!/bin/sh\necho run >> '{}'\nsleep 0.3\n\
+                 printf 'List of devices attached\\nR58M device\\n'\n",
+                calls.display()
+            ),
+        )
+        .unwrap();
+        std::fs::set_permissions(&adb, std::fs::Permissions::from_mode(0o755)).unwrap();
+        let playback = AdbPlayback::new(AdbConfig {
+            adb_path: adb,
+            ..AdbConfig::default()
+        });
+        let runs = || std::fs::read_to_string(&calls).unwrap().lines().count();
+        std::thread::scope(|s| {
+            let lists: Vec<_> = (0..16).map(|_| s.spawn(|| playback.list())).collect();
+            for list in lists {
+                let list = list.join().unwrap().unwrap();
+                assert_eq!(list, vec![("R58M".to_owned(), "device".to_owned())]);
+            }
+        });
+        assert_eq!(runs(), 1, "16 concurrent callers, one adb process");
+        // Past the interval, the next caller asks adb again.
+        std::thread::sleep(DEVICE_LIST_TTL);
+        playback.list().unwrap();
+        assert_eq!(runs(), 2);
+    }
 
     #[test]
     fn trajectory_names_parse() {

@@ -1,5 +1,7 @@
 use axum::http::StatusCode;
 use axum::response::{IntoResponse, Response};
+#[cfg(test)]
+use std::path::Path;
 
 /// Everything that can go wrong in the backend.
 ///
@@ -59,11 +61,14 @@ pub enum Error {
     /// An uploaded trajectory or recording cannot be read: 422 `invalid_content`.
     #[error("{0}")]
     InvalidContent(String),
-    /// A file in the data directory could not be read or written: 500 `io`.
-    #[error("{context}: {source}")]
+    /// A file in the data directory could not be read or written: 500 `io`. The log gets
+    /// the whole path; the client only the session-relative one.
+    #[error("{context} {}: {source}", path.display())]
     Io {
-        /// What was being done, with the path.
+        /// What was being done.
         context: String,
+        /// The file.
+        path: std::path::PathBuf,
         /// The underlying error.
         source: std::io::Error,
     },
@@ -91,8 +96,22 @@ impl Error {
         source: std::io::Error,
     ) -> Error {
         Error::Io {
-            context: format!("{} {}", context.into(), path.display()),
+            context: context.into(),
+            path: path.to_path_buf(),
             source,
+        }
+    }
+
+    /// The message a client sees: as [`std::fmt::Display`], but a data-directory file is
+    /// named relative to its session (`session ID: trials/3.tum`), never by its server path.
+    pub fn client_message(&self) -> String {
+        match self {
+            Error::Io {
+                context,
+                path,
+                source,
+            } => format!("{context} {}: {source}", client_path(path)),
+            other => other.to_string(),
         }
     }
 
@@ -121,6 +140,37 @@ impl Error {
     }
 }
 
+/// `sessions/ID/trials/3.tum` under any directory as `session ID: trials/3.tum`; any other
+/// path as its file name alone.
+fn client_path(path: &std::path::Path) -> String {
+    let parts: Vec<_> = path.components().map(|c| c.as_os_str()).collect();
+    if let Some(at) = parts.iter().rposition(|p| *p == "sessions")
+        && at + 1 < parts.len()
+    {
+        let id = parts[at + 1].to_string_lossy();
+        let rest: std::path::PathBuf = parts[at + 2..].iter().collect();
+        return match rest.as_os_str().is_empty() {
+            true => format!("session {id}"),
+            false => format!("session {id}: {}", rest.display()),
+        };
+    }
+    path.file_name()
+        .map_or_else(String::new, |n| n.to_string_lossy().into_owned())
+}
+
+/// At most `limit` bytes of client input to quote in a message (cut at a character
+/// boundary, `…` marking the cut).
+pub(crate) fn short(text: &str, limit: usize) -> String {
+    if text.len() <= limit {
+        return text.to_owned();
+    }
+    let cut = (0..=limit)
+        .rev()
+        .find(|&i| text.is_char_boundary(i))
+        .unwrap_or(0);
+    format!("{}…", &text[..cut])
+}
+
 /// The JSON error body every failing route answers with.
 pub(crate) fn error_body(code: &str, message: &str) -> String {
     serde_json::json!({"error": {"code": code, "message": message}}).to_string()
@@ -132,7 +182,7 @@ impl IntoResponse for Error {
         if status.is_server_error() {
             log::error!("{self}");
         }
-        let mut response = (status, error_body(code, &self.to_string())).into_response();
+        let mut response = (status, error_body(code, &self.client_message())).into_response();
         response.headers_mut().insert(
             axum::http::header::CONTENT_TYPE,
             axum::http::HeaderValue::from_static("application/json"),
@@ -152,5 +202,44 @@ impl IntoResponse for Error {
             _ => {}
         }
         response
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_client_never_sees_a_server_path() {
+        let gone = || std::io::Error::from(std::io::ErrorKind::NotFound);
+        let e = Error::io(
+            "cannot read",
+            Path::new("/srv/data/sessions/s01/trials/3.tum"),
+            gone(),
+        );
+        assert!(
+            e.to_string()
+                .contains("/srv/data/sessions/s01/trials/3.tum")
+        );
+        let m = e.client_message();
+        assert!(
+            m.starts_with("cannot read session s01: trials/3.tum: "),
+            "{m}"
+        );
+        assert!(!m.contains("/srv"), "{m}");
+        let e = Error::io("cannot open", Path::new("/srv/data/sitar.db"), gone());
+        assert!(e.client_message().starts_with("cannot open sitar.db: "));
+        let e = Error::io("cannot create", Path::new("/srv/data/sessions/s02"), gone());
+        assert!(
+            e.client_message()
+                .starts_with("cannot create session s02: ")
+        );
+    }
+
+    #[test]
+    fn quoted_input_is_cut_at_a_character_boundary() {
+        assert_eq!(short("abc", 3), "abc");
+        assert_eq!(short("abcd", 3), "abc…");
+        assert_eq!(short("a\u{e9}b", 2), "a…");
     }
 }

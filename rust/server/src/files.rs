@@ -102,6 +102,11 @@ impl Files {
         self.session_dir(id).join("recording.part.key")
     }
 
+    /// The `Content-Range` total the first chunk of the kept prefix declared.
+    pub fn recording_part_total(&self, id: &str) -> PathBuf {
+        self.session_dir(id).join("recording.part.total")
+    }
+
     pub fn trial(&self, id: &str, index: u32) -> PathBuf {
         self.session_dir(id)
             .join("trials")

@@ -66,8 +66,9 @@ fn conclude(shared: &Shared, id: &str, job: Option<i64>, outcome: Result<Outcome
             log::info!("session {id}: interrupted by shutdown ({e}), resumes on next start")
         }
         Err(e) => {
-            let message = e.to_string();
-            log::warn!("session {id} failed: {message}");
+            // The stored reason is shown to clients: no server paths in it.
+            let message = e.client_message();
+            log::warn!("session {id} failed: {e}");
             if let Err(e) = shared.lifecycle().fail(id, &message) {
                 log::warn!("session {id}: {e}");
             }

@@ -97,6 +97,7 @@ mod handlers;
 mod held;
 mod http;
 mod jobs;
+mod json_errors;
 mod live;
 mod mp4_check;
 mod netinfo;

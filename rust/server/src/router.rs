@@ -69,6 +69,9 @@ pub(crate) fn router(shared: Arc<Shared>) -> Router {
             shared.clone(),
             auth::authenticate,
         ))
+        .layer(axum::middleware::from_fn(
+            crate::json_errors::json_rejections,
+        ))
         .layer(axum::middleware::from_fn(log_request))
         .with_state(shared)
 }

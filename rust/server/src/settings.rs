@@ -6,6 +6,7 @@ use sitar_estimator::{EstimateOptions, PoseRelation, Setting};
 
 use crate::Error;
 use crate::config::ServerConfig;
+use crate::error::short;
 
 /// Window length when a session names none: the phone's 10-frame sub-trajectories.
 pub(crate) const DEFAULT_WINDOW_FRAMES: u32 = 10;
@@ -85,8 +86,11 @@ impl EstimateSettings {
 
 /// Parses a setting name (JSON key `setting`), naming the accepted ones when it is wrong.
 pub(crate) fn parse_setting(name: &str) -> Result<Setting, Error> {
-    name.parse::<Setting>()
-        .map_err(|e| Error::BadRequest(format!("setting {name:?}: {e}")))
+    name.parse::<Setting>().map_err(|e| {
+        // Both quote the client's string: short prefixes only.
+        let (name, why) = (short(name, 64), short(&e.to_string(), 300));
+        Error::BadRequest(format!("setting {name:?}: {why}"))
+    })
 }
 
 /// Checks a window length (JSON key `window_frames`).
@@ -109,7 +113,8 @@ pub(crate) fn parse_pose_relation(name: &str) -> Result<PoseRelation, Error> {
         "trans_part" => Ok(PoseRelation::TranslationPart),
         "angle_deg" => Ok(PoseRelation::RotationAngleDeg),
         other => Err(Error::BadRequest(format!(
-            "pose_relation: {other:?} is not trans_part or angle_deg"
+            "pose_relation: {:?} is not trans_part or angle_deg",
+            short(other, 64)
         ))),
     }
 }

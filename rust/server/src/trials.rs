@@ -24,11 +24,46 @@ pub(crate) fn parse_trial(bytes: &[u8], source: &str) -> Result<Trajectory, Erro
             trial.len()
         )));
     }
+    if trial
+        .positions
+        .iter()
+        .any(|p| p.to_array().into_iter().any(out_of_bounds))
+    {
+        return Err(Error::InvalidContent(absurd_position(text, source)));
+    }
     // Held in memory for the session's life: no spare capacity (64 bytes a pose).
     trial.stamps.shrink_to_fit();
     trial.positions.shrink_to_fit();
     trial.orientations.shrink_to_fit();
     Ok(trial)
+}
+
+/// The largest position coordinate a trial may have, in metres: a room-scale AR session is
+/// metres across; beyond this a value is a unit or encoding error whose errors would overflow.
+pub(crate) const MAX_POSITION_M: f64 = 1e6;
+
+fn out_of_bounds(v: f64) -> bool {
+    !v.is_finite() || v.abs() > MAX_POSITION_M
+}
+
+/// Names the first line of `text` whose position is out of bounds (the parser has checked
+/// every line's form already).
+fn absurd_position(text: &str, source: &str) -> String {
+    let line = text.split('\n').enumerate().find(|(_, line)| {
+        let data = line.split('#').next().unwrap_or("");
+        data.split_whitespace()
+            .skip(1)
+            .take(3)
+            .filter_map(|t| t.parse::<f64>().ok())
+            .any(out_of_bounds)
+    });
+    match line {
+        Some((i, _)) => format!(
+            "{source}:{}: a position coordinate is beyond ±{MAX_POSITION_M:e} m",
+            i + 1
+        ),
+        None => format!("{source}: a position coordinate is beyond ±{MAX_POSITION_M:e} m"),
+    }
 }
 
 /// Where a trial comes from.
@@ -110,4 +145,31 @@ pub(crate) async fn live_session(
     })
     .await
     .map_err(|e| Error::Internal(format!("rebuilding session {id}: {e}")))?
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_absurd_position_is_refused_naming_its_line() {
+        let text = "# t x y z qx qy qz qw\n0 0 0 0 0 0 0 1\n1 0 1e308 0 0 0 0 1\n";
+        let e = parse_trial(text.as_bytes(), "t.tum").unwrap_err();
+        assert!(matches!(e, Error::InvalidContent(_)), "{e}");
+        assert!(e.to_string().starts_with("t.tum:3: "), "{e}");
+        let text = "0 0 0 0 0 0 0 1\n1 -1000001 0 0 0 0 0 1\n";
+        assert!(
+            parse_trial(text.as_bytes(), "t")
+                .unwrap_err()
+                .to_string()
+                .starts_with("t:2: ")
+        );
+        let text = "0 0 0 0 0 0 0 1\n1 -999999 0 0 0 0 0 1\n";
+        assert_eq!(parse_trial(text.as_bytes(), "t").unwrap().len(), 2);
+        let text = "0 0 0 0 0 0 0 1\n1 inf 0 0 0 0 0 1\n";
+        assert!(matches!(
+            parse_trial(text.as_bytes(), "t"),
+            Err(Error::InvalidContent(_))
+        ));
+    }
 }

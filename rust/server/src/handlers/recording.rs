@@ -116,6 +116,7 @@ async fn whole(
             if broken.temp.bytes > 0 && !shared.files.recording(&row.id).is_file() {
                 // Key file last: a crash in between leaves a prefix no key matches.
                 remove_if_present(&shared.files.recording_part_key(&row.id))?;
+                remove_if_present(&shared.files.recording_part_total(&row.id))?;
                 broken.temp.publish(&part)?;
                 write_key(shared, &row.id, key.as_deref())?;
             }
@@ -181,6 +182,7 @@ async fn resume(
             .insert(UPLOAD_OFFSET_HEADER, HeaderValue::from(kept));
         return Ok(response);
     }
+    check_total(shared, &row.id, range.total)?;
     let end = range.last + 1;
     let now = shared
         .files
@@ -247,9 +249,33 @@ fn write_key(shared: &Shared, id: &str, key: Option<&str>) -> Result<(), Error> 
         .write_atomic(&path, key.unwrap_or("").as_bytes())
 }
 
+/// The first chunk of a prefix fixes the recording's total size; a later chunk declaring
+/// another total is a conflict naming both (the bytes kept so far stay).
+fn check_total(shared: &Shared, id: &str, total: u64) -> Result<(), Error> {
+    let path = shared.files.recording_part_total(id);
+    match std::fs::read_to_string(&path) {
+        Ok(text) => match text.trim().parse::<u64>() {
+            Ok(fixed) if fixed == total => Ok(()),
+            Ok(fixed) => Err(Error::Conflict(format!(
+                "Content-Range total {total} differs from the total {fixed} the upload's first \
+                 chunk declared"
+            ))),
+            // Unreadable: this chunk fixes it again.
+            Err(_) => shared
+                .files
+                .write_atomic(&path, total.to_string().as_bytes()),
+        },
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => shared
+            .files
+            .write_atomic(&path, total.to_string().as_bytes()),
+        Err(e) => Err(Error::io("cannot read", &path, e)),
+    }
+}
+
 /// Removes the kept prefix and its key (key first: a prefix without a key is never used).
 fn discard_part(shared: &Shared, id: &str) -> Result<(), Error> {
     remove_if_present(&shared.files.recording_part_key(id))?;
+    remove_if_present(&shared.files.recording_part_total(id))?;
     remove_if_present(&shared.files.recording_part(id))
 }
 

@@ -11,10 +11,18 @@ use crate::Error;
 use crate::auth::Caller;
 use crate::config::PlaybackKind;
 use crate::deletion;
-use crate::http::{AppState, Found, content_type, idempotency_key, json_value};
+use crate::error::short;
+use crate::http::{
+    AppState, Found, check_declared_length, content_type, idempotency_key, json_value,
+};
 use crate::session::NewSession;
 use crate::settings::EstimateSettings;
 use crate::status::status_json;
+
+/// The largest `POST /v1/sessions` body: a few short keys need far less.
+pub(crate) const MAX_REQUEST_BYTES: u64 = 64 * 1024;
+/// How much of a client's input an error message quotes at most.
+pub(crate) const QUOTE_LIMIT: usize = 200;
 
 const DEFAULT_LIMIT: u32 = 50;
 const MAX_LIMIT: u32 = 500;
@@ -48,21 +56,33 @@ pub(crate) async fn create(
     State(shared): AppState,
     caller: Caller,
     headers: HeaderMap,
-    body: axum::body::Bytes,
+    body: axum::body::Body,
 ) -> Result<Response, Error> {
     if content_type(&headers) != "application/json" {
         return Err(Error::UnsupportedMediaType(
             "POST /v1/sessions takes application/json".into(),
         ));
     }
+    // Checked before reading (the declared length) and while reading (the bytes).
+    check_declared_length(&headers, MAX_REQUEST_BYTES, "session request")?;
+    let body = shared
+        .files
+        .receive_bytes(
+            body.into_data_stream(),
+            MAX_REQUEST_BYTES,
+            "session request",
+        )
+        .await?;
     let req: CreateRequest =
         serde_path_to_error::deserialize(&mut serde_json::Deserializer::from_slice(&body))
             .map_err(|e| {
                 // The key at fault first: `window_frames: invalid type: string "20", …`.
-                let key = e.path().to_string();
+                // Both may quote the client's input: short prefixes only.
+                let key = short(&e.path().to_string(), QUOTE_LIMIT);
+                let inner = short(&e.inner().to_string(), QUOTE_LIMIT);
                 match key.as_str() {
-                    "." => Error::BadRequest(format!("session request: {}", e.inner())),
-                    _ => Error::BadRequest(format!("{key}: {}", e.inner())),
+                    "." => Error::BadRequest(format!("session request: {inner}")),
+                    _ => Error::BadRequest(format!("{key}: {inner}")),
                 }
             })?;
     let trials = req.trials.unwrap_or(shared.config.default_trials);
@@ -73,9 +93,9 @@ pub(crate) async fn create(
     }
     let playback = match req.playback.as_deref() {
         None => shared.config.playback,
-        Some(name) => name
-            .parse::<PlaybackKind>()
-            .map_err(|e| Error::BadRequest(format!("playback: {e}")))?,
+        Some(name) => name.parse::<PlaybackKind>().map_err(|e| {
+            Error::BadRequest(format!("playback: {}", short(&e.to_string(), QUOTE_LIMIT)))
+        })?,
     };
     let settings = EstimateSettings::from_request(
         &shared.config,
