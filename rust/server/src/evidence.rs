@@ -54,13 +54,12 @@ pub(crate) struct Span {
     pub end_ns: Option<i64>,
 }
 
+/// A CSV table: column positions by name, and the non-empty rows with their line numbers.
+type Table<'a> = (HashMap<&'a str, usize>, Vec<(usize, Vec<&'a str>)>);
+
 /// The rows of the CSV body `text` (`src` names it in errors), after a header that must
 /// contain the `needed` columns; each row has as many cells as the header.
-fn table<'a>(
-    src: &str,
-    text: &'a str,
-    needed: &[&str],
-) -> Result<(HashMap<&'a str, usize>, Vec<(usize, Vec<&'a str>)>), Error> {
+fn table<'a>(src: &str, text: &'a str, needed: &[&str]) -> Result<Table<'a>, Error> {
     let mut lines = text.lines().enumerate();
     let header: Vec<&str> = lines
         .next()
