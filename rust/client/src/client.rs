@@ -43,6 +43,8 @@ enum Payload<'a> {
     Empty,
     Json(String),
     Text(&'a str),
+    /// A small body held in memory, with its content type.
+    Bytes(&'a [u8], &'static str),
     /// A file sent from byte `offset` on (a resumed upload when `offset > 0`).
     File {
         path: &'a Path,
@@ -311,6 +313,77 @@ impl Client {
             .map(|_| ())
     }
 
+    /// Sends a phone session folder's evidence (`subtrajectories.csv`, `evidence.csv`,
+    /// `thumbnails/<k>.jpg`, sitar-core's formats) to session `id`: `PUT`s that each replace
+    /// one small file, so a retry sends them again. Returns how many thumbnails were sent;
+    /// `Ok(None)` when `dir` has no `evidence.csv` (nothing is sent).
+    pub fn upload_evidence(&self, id: &str, dir: &Path) -> Result<Option<usize>, Error> {
+        let id = check_session_id(id)?;
+        let read = |path: std::path::PathBuf| {
+            std::fs::read(&path).map_err(|source| Error::Io { path, source })
+        };
+        let evidence = dir.join("evidence.csv");
+        if !evidence.is_file() {
+            return Ok(None);
+        }
+        let spans = dir.join("subtrajectories.csv");
+        if spans.is_file() {
+            let body = read(spans)?;
+            let url = format!("/v1/sessions/{id}/subtrajectories.csv");
+            self.request("PUT", &url, Payload::Bytes(&body, "text/csv"), None)?;
+        }
+        let body = read(evidence)?;
+        let url = format!("/v1/sessions/{id}/evidence.csv");
+        self.request("PUT", &url, Payload::Bytes(&body, "text/csv"), None)?;
+        // Only `<k>.jpg` with a numeric k: the names the phone writes.
+        let mut thumbnails: Vec<u32> = std::fs::read_dir(dir.join("thumbnails"))
+            .into_iter()
+            .flatten()
+            .flatten()
+            .filter_map(|e| e.file_name().to_str()?.strip_suffix(".jpg")?.parse().ok())
+            .collect();
+        thumbnails.sort_unstable();
+        for k in &thumbnails {
+            let body = read(dir.join("thumbnails").join(format!("{k}.jpg")))?;
+            let url = format!("/v1/sessions/{id}/subtrajectories/{k}/image.jpg");
+            self.request("PUT", &url, Payload::Bytes(&body, "image/jpeg"), None)?;
+        }
+        Ok(Some(thumbnails.len()))
+    }
+
+    /// `GET /v1/sessions/{id}/subtrajectories`: the evidence joined with the latest results
+    /// (JSON text).
+    pub fn subtrajectories_json(&self, id: &str) -> Result<String, Error> {
+        let url = format!("/v1/sessions/{}/subtrajectories", check_session_id(id)?);
+        self.request("GET", &url, Payload::Empty, None)
+    }
+
+    /// `GET /v1/sessions/{id}/subtrajectories/{k}/image.jpg`: the thumbnail's bytes (at
+    /// most 1 MiB are read).
+    pub fn subtrajectory_image(&self, id: &str, k: u32) -> Result<Vec<u8>, Error> {
+        let url = format!(
+            "{}/v1/sessions/{}/subtrajectories/{k}/image.jpg",
+            self.base,
+            check_session_id(id)?
+        );
+        let (plain, _) = self.agents()?;
+        let mut response = plain
+            .get(&url)
+            .call()
+            .map_err(|e| transport_error(&url, e))?;
+        let status = response.status().as_u16();
+        let body = response
+            .body_mut()
+            .with_config()
+            .limit(1 << 20)
+            .read_to_vec()
+            .map_err(|e| transport_error(&url, e))?;
+        if status >= 400 {
+            return Err(server_error(status, &String::from_utf8_lossy(&body)));
+        }
+        Ok(body)
+    }
+
     /// `POST /v1/sessions/{id}/estimate`: asks for the estimate of the trials so far.
     pub fn start_estimate(&self, id: &str) -> Result<(), Error> {
         let url = format!("/v1/sessions/{}/estimate", check_session_id(id)?);
@@ -432,6 +505,9 @@ impl Client {
             (m, Payload::Text(text)) => with_key(body_builder(agent, m, url))
                 .header("content-type", "text/plain; charset=utf-8")
                 .send(*text),
+            (m, Payload::Bytes(bytes, content_type)) => with_key(body_builder(agent, m, url))
+                .header("content-type", *content_type)
+                .send(*bytes),
             (
                 m,
                 Payload::File {

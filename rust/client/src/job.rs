@@ -22,6 +22,10 @@ pub struct JobOptions {
     pub session_id: Option<String>,
     /// How often the server's status is asked for while it works (at least 10 ms).
     pub poll_interval: Duration,
+    /// The phone's session folder: after the recording, its evidence (`evidence.csv`,
+    /// `subtrajectories.csv`, `thumbnails/`) is sent when it is there. A folder without
+    /// evidence, or an evidence upload that fails after its retries, never fails the job.
+    pub evidence_dir: Option<PathBuf>,
 }
 
 impl JobOptions {
@@ -31,6 +35,7 @@ impl JobOptions {
             session,
             session_id: None,
             poll_interval: Duration::from_millis(500),
+            evidence_dir: None,
         }
     }
 
@@ -105,6 +110,9 @@ pub struct JobProgress {
     pub results_revision: u32,
     /// Trials behind the results delivered last (0 = none yet).
     pub results_trials: u32,
+    /// Whether the session folder's evidence reached the server (false without
+    /// [`JobOptions::evidence_dir`], without evidence in it, or when its upload failed).
+    pub evidence_sent: bool,
     /// Why the job failed, once it has: a client error, [`Error::SessionFailed`],
     /// [`Error::Results`] (the sink refused the final results) or [`Error::Panicked`].
     pub error: Option<Arc<Error>>,

@@ -49,6 +49,9 @@ pub(crate) fn run(
     if shared.is_cancelled() {
         return Ok(());
     }
+    if let Some(dir) = &options.evidence_dir {
+        send_evidence(shared, client, &id, dir);
+    }
     shared.set_state(JobState::Playing);
     // With "adb"/"sim" the server plays and estimates on its own (asking for an estimate
     // would cut playback short). With "upload" the playback devices send their trials; once
@@ -146,6 +149,19 @@ fn send_recording(
     match sent {
         Err(Error::Cancelled) => Ok(()),
         other => other,
+    }
+}
+
+/// Sends the session folder's evidence; a failure (after the client's retries) is logged
+/// and leaves [`crate::JobProgress::evidence_sent`] false: the results never depend on it.
+fn send_evidence(shared: &Shared, client: &Client, id: &str, dir: &Path) {
+    match client.upload_evidence(id, dir) {
+        Ok(Some(thumbnails)) => {
+            log::info!("upload: evidence of {id} sent ({thumbnails} thumbnails)");
+            shared.update(|p| p.evidence_sent = true);
+        }
+        Ok(None) => log::debug!("upload: {} has no evidence", dir.display()),
+        Err(e) => log::warn!("upload: evidence of {id} not sent: {e}"),
     }
 }
 

@@ -106,6 +106,7 @@ pub(crate) fn start(
         },
         session_id: o.session_id,
         poll_interval: Duration::from_millis(o.poll_interval_ms),
+        evidence_dir: None,
     };
     let mut client = Client::new(&url)?;
     if let Some(token) = &o.server_token {

@@ -1,4 +1,5 @@
-//! Backend figures: overhead beyond playback, upload throughput, 50 concurrent sessions.
+//! Backend figures: overhead beyond playback, upload throughput, 50 concurrent sessions,
+//! uploading a 15 s walk's evidence.
 //!
 //! `cargo bench -p sitar-server`
 
@@ -155,10 +156,81 @@ fn concurrent_sessions(c: &mut Criterion) {
     group.finish();
 }
 
+/// A 15 s walk recorded by the phone logic (sitar-core) with the simulator's rendered
+/// images and depth at every midpoint; its session folder's evidence is uploaded.
+fn evidence_upload(c: &mut Criterion) {
+    use sitar_core::{DepthImage, DisplayRotation, LumaImage, Pose, Session, SessionConfig};
+    let dir = tempfile::tempdir().unwrap();
+    let recording = sitar_sim::Recording::demo(15.0, 30.0, 5).unwrap();
+    let gt = &recording.walk().ground_truth;
+    let (depth_camera, luma_camera) = (
+        sitar_sim::DepthCamera::phone(),
+        sitar_sim::LumaCamera::phone(),
+    );
+    let display = DisplayRotation::Deg0;
+    let mut phone = Session::new(SessionConfig::from_json(r#"{"convention":"arcore"}"#).unwrap());
+    let pose = |i: usize| Pose::new(gt.positions[i], gt.orientations[i]);
+    let last = gt.len() - 1;
+    phone.start(gt.stamps[0], pose(0)).unwrap();
+    for i in 1..last {
+        if phone.frame(gt.stamps[i], pose(i)).unwrap().is_midpoint() {
+            let (p, q) = (gt.positions[i], gt.orientations[i]);
+            let luma = recording
+                .room()
+                .render_luma_rotated(p, q, &luma_camera, display, i as u64);
+            let (w, h) = (luma_camera.width, luma_camera.height);
+            phone
+                .image(&LumaImage::new(&luma, w, h, w).unwrap(), display)
+                .unwrap();
+            let depth = recording
+                .room()
+                .render_depth_mm_rotated(p, q, &depth_camera, display);
+            let image = DepthImage::new(
+                &depth,
+                depth_camera.width,
+                depth_camera.height,
+                depth_camera.width * 2,
+            )
+            .unwrap();
+            let _ = phone.depth(&image, &depth_camera.intrinsics, display);
+        }
+    }
+    phone.stop(gt.stamps[last], pose(last)).unwrap();
+    let folder = dir.path().join("phone");
+    phone.save(&folder).unwrap();
+    let server = sim_server(&dir.path().join("data"), 1.0, 1);
+    let client = client(&server.url());
+    let id = client
+        .create_session(&NewSession {
+            trials: 2,
+            setting: "mean".into(),
+            playback: "upload".into(),
+            window_frames: None,
+            pose_relation: None,
+        })
+        .unwrap();
+    let sent = client.upload_evidence(&id, &folder).unwrap().unwrap();
+    let bytes: u64 = std::fs::read_dir(folder.join("thumbnails"))
+        .unwrap()
+        .map(|e| e.unwrap().metadata().unwrap().len())
+        .sum();
+    eprintln!(
+        "evidence of a 15 s walk: {} sub-trajectories, {sent} thumbnails, {bytes} thumbnail bytes",
+        phone.subtrajectories().len()
+    );
+    let mut group = c.benchmark_group("server");
+    group.sample_size(20);
+    group.bench_function("evidence_upload_15s_walk", |b| {
+        b.iter(|| client.upload_evidence(&id, &folder).unwrap())
+    });
+    group.finish();
+}
+
 criterion_group!(
     benches,
     overhead_beyond_playback,
     upload_throughput,
-    concurrent_sessions
+    concurrent_sessions,
+    evidence_upload
 );
 criterion_main!(benches);

@@ -104,11 +104,21 @@ impl FromRequestParts<Arc<Shared>> for Found {
             .await
             .map_err(|e| Error::NotFound(format!("no session: {e}")))?;
         let caller = Caller::from_request_parts(parts, shared).await?;
-        let session = shared.session(&id)?;
-        if caller.may_see(&session) {
-            Ok(Found(session))
-        } else {
-            Err(Error::NotFound(format!("no session {id:?}")))
-        }
+        visible_session(shared, &caller, &id).map(Found)
+    }
+}
+
+/// The session `id` if `caller` may see it; otherwise the same 404 as an unknown id.
+/// [`Found`] uses it; routes with more path parameters than `{id}` call it themselves.
+pub(crate) fn visible_session(
+    shared: &Shared,
+    caller: &Caller,
+    id: &str,
+) -> Result<Session, Error> {
+    let session = shared.session(id)?;
+    if caller.may_see(&session) {
+        Ok(session)
+    } else {
+        Err(Error::NotFound(format!("no session {id:?}")))
     }
 }

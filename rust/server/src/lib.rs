@@ -77,6 +77,7 @@
 // session (state, record, store, lifecycle)     — a session's life; the only state writer
 // estimation, held, live, playback, adb         — estimates over trials held in memory
 // shared, published, trials, status, report     — what handlers and jobs share
+// evidence                                      — the phone's evidence, checked and stored
 // jobs, recordings, deletion                    — work on sessions
 // auth                                          — tokens, callers, limits (middleware)
 // http                                          — helpers below every handler
@@ -92,6 +93,7 @@ mod db;
 mod deletion;
 mod error;
 mod estimation;
+mod evidence;
 mod files;
 mod handlers;
 mod held;

@@ -12,7 +12,7 @@ use axum::routing::{get, post, put};
 use crate::Error;
 use crate::auth::{self, CallerName};
 use crate::handlers::{
-    devices, health, legacy, pages, recording, results, scene, sessions, share, trials,
+    devices, evidence, health, legacy, pages, recording, results, scene, sessions, share, trials,
 };
 use crate::http::json_response;
 use crate::shared::Shared;
@@ -37,6 +37,19 @@ pub(crate) fn router(shared: Arc<Shared>) -> Router {
         .route("/v1/sessions/{id}/results.csv", get(results::csv))
         .route("/v1/sessions/{id}/results.json", get(results::json))
         .route("/v1/sessions/{id}/report", get(pages::report))
+        .route(
+            "/v1/sessions/{id}/evidence.csv",
+            put(evidence::put_evidence),
+        )
+        .route(
+            "/v1/sessions/{id}/subtrajectories.csv",
+            put(evidence::put_spans),
+        )
+        .route("/v1/sessions/{id}/subtrajectories", get(evidence::list))
+        .route(
+            "/v1/sessions/{id}/subtrajectories/{k}/image.jpg",
+            put(evidence::put_image).get(evidence::get_image),
+        )
         .route(
             "/v1/sessions/{id}/share",
             post(share::create).delete(share::revoke),

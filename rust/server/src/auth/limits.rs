@@ -178,7 +178,8 @@ fn is_upload(method: &Method, path: &str) -> bool {
             .and_then(|rest| rest.strip_suffix(suffix))
             .is_some_and(|id| !id.is_empty() && !id.contains('/'))
     };
-    (method == Method::PUT && in_session("/recording"))
+    // Every PUT under a session is an upload: the recording and the evidence files.
+    (method == Method::PUT && path.starts_with("/v1/sessions/"))
         || (method == Method::POST
             && (in_session("/trials") || matches!(path, "/recording" | "/timestamps")))
 }
@@ -265,6 +266,12 @@ mod tests {
     #[test]
     fn upload_routes_are_recognised() {
         assert!(is_upload(&Method::PUT, "/v1/sessions/s01/recording"));
+        assert!(is_upload(&Method::PUT, "/v1/sessions/s01/evidence.csv"));
+        assert!(is_upload(
+            &Method::PUT,
+            "/v1/sessions/s01/subtrajectories/3/image.jpg"
+        ));
+        assert!(!is_upload(&Method::GET, "/v1/sessions/s01/subtrajectories"));
         assert!(is_upload(&Method::POST, "/v1/sessions/s01/trials"));
         assert!(is_upload(&Method::POST, "/recording"));
         assert!(is_upload(&Method::POST, "/timestamps"));

@@ -2,6 +2,7 @@
 //! lookup extractor, JSON answers) and never another handler.
 
 pub(crate) mod devices;
+pub(crate) mod evidence;
 pub(crate) mod health;
 pub(crate) mod legacy;
 pub(crate) mod pages;
