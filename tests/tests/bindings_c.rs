@@ -131,6 +131,7 @@ struct Api {
     start: extern "C" fn(H, i64, *const Pose) -> i32,
     frame: extern "C" fn(H, i64, *const Pose, *mut u32) -> i32,
     depth: extern "C" fn(H, *const u16, i32, i32, i32, *const Intrinsics, i32) -> i32,
+    image: extern "C" fn(H, *const u8, i32, i32, i32, i32) -> i32,
     stop: extern "C" fn(H, i64, *const Pose, *mut Summary) -> i32,
     summary: extern "C" fn(H, *mut Summary) -> i32,
     load_results: extern "C" fn(H, *const c_char) -> i32,
@@ -180,6 +181,7 @@ fn api() -> &'static Api {
             start: sym!("sitar_session_start"),
             frame: sym!("sitar_session_frame"),
             depth: sym!("sitar_session_depth"),
+            image: sym!("sitar_session_image"),
             stop: sym!("sitar_session_stop"),
             summary: sym!("sitar_session_summary"),
             load_results: sym!("sitar_session_load_results"),
@@ -1537,4 +1539,75 @@ fn wait_for_state_any(job: H, wanted: &[i32], timeout: Duration) -> JobProgress 
         }
         std::thread::sleep(Duration::from_millis(10));
     }
+}
+
+/// A session given camera images: the upload job saves its evidence beside the recording
+/// (`walk.rec.evidence/`) and sends it, and the backend serves every thumbnail.
+#[test]
+fn an_upload_sends_the_camera_evidence_of_the_session() {
+    let a = api();
+    let dir = tempfile::tempdir().unwrap();
+    let rec = sitar_tests::sim_recording(dir.path(), "walk.rec", 6.0, 12);
+    let server = sitar_tests::start(sitar_tests::sim_config(&dir.path().join("data"), 10.0, 1));
+    let h = new_session(&format!(r#"{{"server_url":"{}"}}"#, server.url()));
+    // A textured 64×48 luminance plane (a checkerboard) at every midpoint.
+    let (w, hgt) = (64, 48);
+    let luma: Vec<u8> = (0..w * hgt)
+        .map(|i| {
+            if (i % w / 8 + i / w / 8) % 2 == 0 {
+                40
+            } else {
+                200
+            }
+        })
+        .collect();
+    let depth = vec![2000u16; (W * HGT) as usize];
+    assert_eq!((a.start)(h, 0, &pose_at(0)), OK);
+    for i in 1..=60 {
+        let mut flags = 0;
+        assert_eq!((a.frame)(h, i * FRAME_NS, &pose_at(i), &mut flags), OK);
+        if flags == 1 {
+            assert_eq!(
+                (a.image)(h, luma.as_ptr(), w, hgt, w, 0),
+                OK,
+                "{}",
+                last_error()
+            );
+            assert_eq!((a.depth)(h, depth.as_ptr(), W, HGT, W * 2, &K, 0), OK);
+        }
+    }
+    let mut summary = Summary::default();
+    assert_eq!((a.stop)(h, 61 * FRAME_NS, &pose_at(61), &mut summary), OK);
+    let options = c(&format!(
+        r#"{{"trials":2,"playback":"sim","poll_interval_ms":10,"server_token":"{}"}}"#,
+        sitar_tests::APP_TOKEN
+    ));
+    let job = start_upload(h, &rec, &options);
+    let last = wait_for_state(job, 5, Duration::from_secs(120));
+    assert_eq!(last.state, 5, "job done: {}", message(job));
+    let saved = dir.path().join("walk.rec.evidence");
+    assert!(
+        saved.join("evidence.csv").is_file(),
+        "evidence saved beside the recording"
+    );
+    let mut id = vec![0u8; 64];
+    let mut len = 0;
+    assert_eq!(
+        (a.upload_server_id)(job, id.as_mut_ptr().cast(), id.len(), &mut len),
+        OK
+    );
+    let id = String::from_utf8(id[..len].to_vec()).unwrap();
+    let client = sitar_tests::client(&server);
+    let list: serde_json::Value =
+        serde_json::from_str(&client.subtrajectories_json(&id).unwrap()).unwrap();
+    let subs = list["subtrajectories"].as_array().unwrap();
+    assert_eq!(subs.len(), summary.midpoints as usize, "{list}");
+    for sub in subs {
+        let k = sub["index"].as_u64().unwrap();
+        let served = client.subtrajectory_image(&id, k as u32).unwrap();
+        let phone = std::fs::read(saved.join(format!("thumbnails/{k}.jpg"))).unwrap();
+        assert_eq!(served, phone, "thumbnail {k} as the phone made it");
+    }
+    (a.upload_free)(job);
+    (a.session_free)(h);
 }

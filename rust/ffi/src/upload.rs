@@ -1,7 +1,7 @@
 //! The bridge to `sitar-client`'s [`UploadJob`]: the upload options JSON, a results sink
 //! that loads into the phone's session, and the job's snapshot as a [`SitarJobProgress`].
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
@@ -29,6 +29,11 @@ struct UploadOptions {
     poll_interval_ms: u64,
     window_frames: Option<u32>,
     pose_relation: Option<PoseRelation>,
+    /// A session folder (as `sitar_session_save` writes it) whose camera evidence
+    /// (`evidence.csv`, `subtrajectories.csv`, `thumbnails/`) goes to the backend after the
+    /// recording. Without it, a session that was given camera images is saved next to the
+    /// recording (`RECORDING.evidence/`, or under the config's `data_dir`) and sent from there.
+    evidence_dir: Option<PathBuf>,
 }
 
 impl Default for UploadOptions {
@@ -44,6 +49,7 @@ impl Default for UploadOptions {
             poll_interval_ms: 500,
             window_frames: None,
             pose_relation: None,
+            evidence_dir: None,
         }
     }
 }
@@ -63,7 +69,7 @@ pub(crate) fn start(
         serde_json::from_str(options_json)?
     };
     let config = crate::bridge::lock(&session)?.config().clone();
-    let url = o.server_url.or(config.server_url).ok_or_else(|| {
+    let url = o.server_url.or(config.server_url.clone()).ok_or_else(|| {
         Error::invalid(
             "options_json",
             "no server_url in the upload options or the session config",
@@ -106,7 +112,9 @@ pub(crate) fn start(
         },
         session_id: o.session_id,
         poll_interval: Duration::from_millis(o.poll_interval_ms),
-        evidence_dir: None,
+        evidence_dir: o
+            .evidence_dir
+            .or_else(|| save_evidence(&session, recording, &config)),
     };
     let mut client = Client::new(&url)?;
     if let Some(token) = &o.server_token {
@@ -246,6 +254,32 @@ mod tests {
         ];
         for (i, s) in all.into_iter().enumerate() {
             assert_eq!(state(s) as i32, i as i32, "{s:?}");
+        }
+    }
+}
+
+/// Saves the session beside the recording when it holds camera evidence, so the job can send
+/// it; `None` (and a log line) when there is none or the folder cannot be written: the
+/// results never depend on the evidence.
+fn save_evidence(
+    session: &Arc<Mutex<Session>>,
+    recording: &Path,
+    config: &sitar_core::SessionConfig,
+) -> Option<PathBuf> {
+    let session = crate::bridge::lock(session).ok()?;
+    if !session.midpoint_inputs().iter().any(|m| m.image.is_some()) {
+        return None;
+    }
+    let name = format!("{}.evidence", recording.file_name()?.to_string_lossy());
+    let dir = match &config.data_dir {
+        Some(data) => data.join(name),
+        None => recording.parent()?.join(name),
+    };
+    match session.save(&dir) {
+        Ok(()) => Some(dir),
+        Err(e) => {
+            log::warn!("camera evidence not sent: {e}");
+            None
         }
     }
 }
