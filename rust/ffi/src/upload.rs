@@ -170,6 +170,32 @@ fn state(s: JobState) -> SitarJobState {
     }
 }
 
+/// Saves the session beside the recording when it holds camera evidence, so the job can send
+/// it; `None` (and a log line) when there is none or the folder cannot be written: the
+/// results never depend on the evidence.
+fn save_evidence(
+    session: &Arc<Mutex<Session>>,
+    recording: &Path,
+    config: &sitar_core::SessionConfig,
+) -> Option<PathBuf> {
+    let session = crate::bridge::lock(session).ok()?;
+    if !session.midpoint_inputs().iter().any(|m| m.image.is_some()) {
+        return None;
+    }
+    let name = format!("{}.evidence", recording.file_name()?.to_string_lossy());
+    let dir = match &config.data_dir {
+        Some(data) => data.join(name),
+        None => recording.parent()?.join(name),
+    };
+    match session.save(&dir) {
+        Ok(()) => Some(dir),
+        Err(e) => {
+            log::warn!("camera evidence not sent: {e}");
+            None
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -254,32 +280,6 @@ mod tests {
         ];
         for (i, s) in all.into_iter().enumerate() {
             assert_eq!(state(s) as i32, i as i32, "{s:?}");
-        }
-    }
-}
-
-/// Saves the session beside the recording when it holds camera evidence, so the job can send
-/// it; `None` (and a log line) when there is none or the folder cannot be written: the
-/// results never depend on the evidence.
-fn save_evidence(
-    session: &Arc<Mutex<Session>>,
-    recording: &Path,
-    config: &sitar_core::SessionConfig,
-) -> Option<PathBuf> {
-    let session = crate::bridge::lock(session).ok()?;
-    if !session.midpoint_inputs().iter().any(|m| m.image.is_some()) {
-        return None;
-    }
-    let name = format!("{}.evidence", recording.file_name()?.to_string_lossy());
-    let dir = match &config.data_dir {
-        Some(data) => data.join(name),
-        None => recording.parent()?.join(name),
-    };
-    match session.save(&dir) {
-        Ok(()) => Some(dir),
-        Err(e) => {
-            log::warn!("camera evidence not sent: {e}");
-            None
         }
     }
 }
