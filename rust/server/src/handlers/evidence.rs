@@ -78,16 +78,9 @@ pub(crate) async fn put_evidence(
     headers: HeaderMap,
     body: Body,
 ) -> Result<Response, Error> {
-    let text = utf8(
-        small_body(&headers, body, MAX_TABLE_BYTES, "evidence.csv").await?,
-        "evidence.csv",
-    )?;
-    let rows = parse_evidence(&text)?;
+    let rows = parse_evidence(&table_text(&headers, body, "evidence.csv").await?)?;
     under_lock(&shared, &session.id, |f| f.store_evidence(&rows)).await?;
-    Ok(json_value(
-        StatusCode::OK,
-        &json!({"subtrajectories": rows.len()}),
-    ))
+    Ok(stored(rows.len()))
 }
 
 /// `PUT /v1/sessions/{id}/subtrajectories.csv`.
@@ -97,16 +90,22 @@ pub(crate) async fn put_spans(
     headers: HeaderMap,
     body: Body,
 ) -> Result<Response, Error> {
-    let text = utf8(
-        small_body(&headers, body, MAX_TABLE_BYTES, "subtrajectories.csv").await?,
-        "subtrajectories.csv",
-    )?;
-    let spans = parse_spans(&text)?;
+    let spans = parse_spans(&table_text(&headers, body, "subtrajectories.csv").await?)?;
     under_lock(&shared, &session.id, |f| f.store_spans(&spans)).await?;
-    Ok(json_value(
-        StatusCode::OK,
-        &json!({"subtrajectories": spans.len()}),
-    ))
+    Ok(stored(spans.len()))
+}
+
+/// A phone table's body as text: bounded by `MAX_TABLE_BYTES`, UTF-8, errors naming `name`.
+async fn table_text(headers: &HeaderMap, body: Body, name: &'static str) -> Result<String, Error> {
+    utf8(
+        small_body(headers, body, MAX_TABLE_BYTES, name).await?,
+        name,
+    )
+}
+
+/// The answer to a stored table: how many sub-trajectories it holds.
+fn stored(rows: usize) -> Response {
+    json_value(StatusCode::OK, &json!({"subtrajectories": rows}))
 }
 
 /// The session and the sub-trajectory index of a `…/subtrajectories/{k}/…` route: the same
