@@ -31,19 +31,27 @@ fn all_pixels() -> f64 {
     1.0
 }
 
+/// The horizontal field of view of the simulated phone's cameras (depth and luminance).
+pub(crate) const PHONE_HFOV_DEG: f64 = 64.0;
+
+/// Square-pixel intrinsics with the principal point at the centre pixel.
+pub(crate) fn centred_pinhole(width: u32, height: u32, hfov_deg: f64) -> Intrinsics {
+    let f = f64::from(width) / 2.0 / (hfov_deg / 2.0).to_radians().tan();
+    Intrinsics {
+        fx: f,
+        fy: f,
+        cx: f64::from(width / 2),
+        cy: f64::from(height / 2),
+    }
+}
+
 impl DepthCamera {
     /// A phone-like 160 × 120 depth image with a 64° horizontal field of view, principal
     /// point at the centre pixel (80, 60), 8 m range; 30 % of the pixels on glass have depth.
     pub fn phone() -> Self {
         let (width, height) = (160u32, 120u32);
-        let f = f64::from(width) / 2.0 / (32f64.to_radians()).tan();
         Self {
-            intrinsics: Intrinsics {
-                fx: f,
-                fy: f,
-                cx: f64::from(width / 2),
-                cy: f64::from(height / 2),
-            },
+            intrinsics: centred_pinhole(width, height, PHONE_HFOV_DEG),
             width,
             height,
             max_range_m: 8.0,

@@ -25,14 +25,12 @@ impl LumaCamera {
     /// ray-cast).
     pub fn phone() -> Self {
         let (width, height) = (320u32, 240u32);
-        let f = f64::from(width) / 2.0 / (32f64.to_radians()).tan();
         Self {
-            intrinsics: Intrinsics {
-                fx: f,
-                fy: f,
-                cx: f64::from(width / 2),
-                cy: f64::from(height / 2),
-            },
+            intrinsics: crate::camera::centred_pinhole(
+                width,
+                height,
+                crate::camera::PHONE_HFOV_DEG,
+            ),
             width,
             height,
         }
