@@ -5,7 +5,8 @@
 //! the peak RSS of each phase. Target: total CPU ≤ 1.5× one one-shot estimate.
 //!
 //! `cargo bench -p sitar-estimator --bench incremental [-- REPEATS [TRIALS POSES]]`;
-//! `-- --progressive-only` or `-- --one-shot-only` runs one phase once in a fresh process.
+//! `-- --progressive-only` or `-- --one-shot-only` runs one phase once in a fresh process
+//! (`--setting NAME` picks the setting, default `trim_mean_30`).
 
 use std::time::Instant;
 
@@ -106,7 +107,17 @@ fn main() {
     if only("--progressive-only") || only("--one-shot-only") {
         let trials = synthetic::trials(100, 2820, 11, true);
         let input_mb = peak_rss_mb();
-        let opts = EstimateOptions::default();
+        // `--setting NAME` (default trim_mean_30).
+        let argv: Vec<String> = std::env::args().collect();
+        let setting = argv
+            .iter()
+            .position(|a| a == "--setting")
+            .and_then(|i| argv.get(i + 1))
+            .map(|name| name.parse().expect("a setting name"));
+        let opts = EstimateOptions {
+            setting: setting.unwrap_or_default(),
+            ..EstimateOptions::default()
+        };
         let run = if only("--one-shot-only") {
             one_shot(&trials, &opts)
         } else {
