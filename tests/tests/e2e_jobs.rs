@@ -52,7 +52,10 @@ fn upload(base: &str, token: &str, id: &str, recording: &Path) {
         &bytes,
         &[("authorization", &auth)],
     );
-    assert!(status == 200 || status == 201 || status == 202, "{status} {text}");
+    assert!(
+        status == 200 || status == 201 || status == 202,
+        "{status} {text}"
+    );
 }
 
 /// `GET /v1/sessions/{id}` as `token`: (status, document).
@@ -69,7 +72,13 @@ fn status(base: &str, token: &str, id: &str) -> (u16, Value) {
 }
 
 /// Polls (every 20 ms, up to `limit`) until `done` holds for the session's status.
-fn wait_for(base: &str, token: &str, id: &str, limit: Duration, done: impl Fn(&Value) -> bool) -> Value {
+fn wait_for(
+    base: &str,
+    token: &str,
+    id: &str,
+    limit: Duration,
+    done: impl Fn(&Value) -> bool,
+) -> Value {
     let started = Instant::now();
     loop {
         let (code, doc) = status(base, token, id);
@@ -92,14 +101,38 @@ fn kinds_and_trials_beyond_what_the_server_offers_are_422s_that_name_the_bound()
     // An adb server: sim sessions only with --allow-sim.
     let server = start(sitar_server::ServerConfig::new(dir.path().join("adb")));
     let base = server.url();
-    let (code, text) = post_json(&base, "/v1/sessions", APP_TOKEN, r#"{"playback":"sim","trials":1000}"#, &[]);
+    let (code, text) = post_json(
+        &base,
+        "/v1/sessions",
+        APP_TOKEN,
+        r#"{"playback":"sim","trials":1000}"#,
+        &[],
+    );
     assert_eq!(code, 422, "{text}");
-    let (code, text) = post_json(&base, "/v1/sessions", APP_TOKEN, r#"{"playback":"sim","trials":3}"#, &[]);
+    let (code, text) = post_json(
+        &base,
+        "/v1/sessions",
+        APP_TOKEN,
+        r#"{"playback":"sim","trials":3}"#,
+        &[],
+    );
     assert_eq!(code, 422, "{text}");
-    assert!(text.contains("adb and upload") && text.contains("--allow-sim"), "{text}");
-    let (code, text) = post_json(&base, "/v1/sessions", APP_TOKEN, r#"{"playback":"upload","trials":101}"#, &[]);
+    assert!(
+        text.contains("adb and upload") && text.contains("--allow-sim"),
+        "{text}"
+    );
+    let (code, text) = post_json(
+        &base,
+        "/v1/sessions",
+        APP_TOKEN,
+        r#"{"playback":"upload","trials":101}"#,
+        &[],
+    );
     assert_eq!(code, 422, "{text}");
-    assert!(text.contains("cap of 100") && text.contains("--max-trials"), "{text}");
+    assert!(
+        text.contains("cap of 100") && text.contains("--max-trials"),
+        "{text}"
+    );
     create(&base, APP_TOKEN, r#"{"playback":"upload","trials":100}"#);
     create(&base, APP_TOKEN, r#"{"playback":"adb","trials":100}"#);
     server.stop();
@@ -110,7 +143,13 @@ fn kinds_and_trials_beyond_what_the_server_offers_are_422s_that_name_the_bound()
     let server = start(config);
     let base = server.url();
     create(&base, APP_TOKEN, r#"{"playback":"sim","trials":7}"#);
-    let (code, text) = post_json(&base, "/v1/sessions", APP_TOKEN, r#"{"playback":"sim","trials":8}"#, &[]);
+    let (code, text) = post_json(
+        &base,
+        "/v1/sessions",
+        APP_TOKEN,
+        r#"{"playback":"sim","trials":8}"#,
+        &[],
+    );
     assert_eq!(code, 422, "{text}");
     assert!(text.contains("cap of 7"), "{text}");
 }
@@ -129,7 +168,9 @@ fn queued_sessions_wait_their_turn_show_their_place_and_cancel_or_delete() {
 
     let a1 = create(&base, APP_TOKEN, r#"{"playback":"sim","trials":40}"#);
     upload(&base, APP_TOKEN, &a1, &rec);
-    wait_for(&base, APP_TOKEN, &a1, Duration::from_secs(10), |d| d["state"] == "playing");
+    wait_for(&base, APP_TOKEN, &a1, Duration::from_secs(10), |d| {
+        d["state"] == "playing"
+    });
     let a2 = create(&base, APP_TOKEN, r#"{"playback":"sim","trials":3}"#);
     let a3 = create(&base, APP_TOKEN, r#"{"playback":"sim","trials":3}"#);
     let b1 = create(&base, APP2_TOKEN, r#"{"playback":"sim","trials":2}"#);
@@ -145,46 +186,106 @@ fn queued_sessions_wait_their_turn_show_their_place_and_cancel_or_delete() {
     assert_eq!(status(&base, APP_TOKEN, &a3).1["state"], "uploaded");
 
     // Another token can neither cancel nor delete it: the same 404 as an unknown id.
-    let (code, _) = post_json(&base, &format!("/v1/sessions/{a3}/cancel"), APP2_TOKEN, "", &[]);
+    let (code, _) = post_json(
+        &base,
+        &format!("/v1/sessions/{a3}/cancel"),
+        APP2_TOKEN,
+        "",
+        &[],
+    );
     assert_eq!(code, 404);
     // Cancelling a queued session with no trials fails it with the reason.
-    let (code, text) = post_json(&base, &format!("/v1/sessions/{a3}/cancel"), APP_TOKEN, "", &[]);
+    let (code, text) = post_json(
+        &base,
+        &format!("/v1/sessions/{a3}/cancel"),
+        APP_TOKEN,
+        "",
+        &[],
+    );
     assert_eq!(code, 202, "{text}");
     let doc = status(&base, APP_TOKEN, &a3).1;
     assert_eq!(doc["state"], "failed", "{doc}");
-    assert!(doc["error"].as_str().unwrap().contains("cancelled by the client after 0 trial(s)"), "{doc}");
-    let (code, text) = post_json(&base, &format!("/v1/sessions/{a3}/cancel"), APP_TOKEN, "", &[]);
+    assert!(
+        doc["error"]
+            .as_str()
+            .unwrap()
+            .contains("cancelled by the client after 0 trial(s)"),
+        "{doc}"
+    );
+    let (code, text) = post_json(
+        &base,
+        &format!("/v1/sessions/{a3}/cancel"),
+        APP_TOKEN,
+        "",
+        &[],
+    );
     assert_eq!(code, 409, "{text}");
     // Deleting a queued session takes it out of the queue.
     let auth = bearer(APP_TOKEN);
-    let (code, _, text) = raw("DELETE", &format!("{base}/v1/sessions/{a2}"), None, b"", &[("authorization", &auth)]);
+    let (code, _, text) = raw(
+        "DELETE",
+        &format!("{base}/v1/sessions/{a2}"),
+        None,
+        b"",
+        &[("authorization", &auth)],
+    );
     assert_eq!(code, 200, "{text}");
     assert_eq!(status(&base, APP_TOKEN, &a2).0, 404);
     assert_eq!(place(APP2_TOKEN, &b1), 1);
 
     // Cancelling a playing session keeps what it played: an estimate over its trials.
-    wait_for(&base, APP_TOKEN, &a1, Duration::from_secs(20), |d| d["trials_done"].as_u64() >= Some(2));
-    let (code, text) = post_json(&base, &format!("/v1/sessions/{a1}/cancel"), APP_TOKEN, "", &[]);
+    wait_for(&base, APP_TOKEN, &a1, Duration::from_secs(20), |d| {
+        d["trials_done"].as_u64() >= Some(2)
+    });
+    let (code, text) = post_json(
+        &base,
+        &format!("/v1/sessions/{a1}/cancel"),
+        APP_TOKEN,
+        "",
+        &[],
+    );
     assert_eq!(code, 202, "{text}");
     let doc = wait_for(&base, APP_TOKEN, &a1, Duration::from_secs(20), finished);
     assert_eq!(doc["state"], "done", "{doc}");
     let played = doc["trials_done"].as_u64().unwrap();
     assert!((2..40).contains(&played), "{doc}");
     assert_eq!(doc["results_trials"].as_u64(), Some(played), "{doc}");
-    assert!(doc["stop_reason"].as_str().unwrap().contains("cancelled by the client"), "{doc}");
+    assert!(
+        doc["stop_reason"]
+            .as_str()
+            .unwrap()
+            .contains("cancelled by the client"),
+        "{doc}"
+    );
 
     // The other token's session plays next, to the end.
     let doc = wait_for(&base, APP2_TOKEN, &b1, Duration::from_secs(30), finished);
-    assert_eq!((doc["state"].as_str(), doc["trials_done"].as_u64()), (Some("done"), Some(2)), "{doc}");
+    assert_eq!(
+        (doc["state"].as_str(), doc["trials_done"].as_u64()),
+        (Some("done"), Some(2)),
+        "{doc}"
+    );
 
     // Deleting a playing session stops it, then deletes it whole.
     let a4 = create(&base, APP_TOKEN, r#"{"playback":"sim","trials":40}"#);
     upload(&base, APP_TOKEN, &a4, &rec);
-    wait_for(&base, APP_TOKEN, &a4, Duration::from_secs(20), |d| d["trials_done"].as_u64() >= Some(1));
+    wait_for(&base, APP_TOKEN, &a4, Duration::from_secs(20), |d| {
+        d["trials_done"].as_u64() >= Some(1)
+    });
     let started = Instant::now();
-    let (code, _, text) = raw("DELETE", &format!("{base}/v1/sessions/{a4}"), None, b"", &[("authorization", &auth)]);
+    let (code, _, text) = raw(
+        "DELETE",
+        &format!("{base}/v1/sessions/{a4}"),
+        None,
+        b"",
+        &[("authorization", &auth)],
+    );
     assert_eq!(code, 200, "{text}");
-    assert!(started.elapsed() < Duration::from_secs(5), "{:?}", started.elapsed());
+    assert!(
+        started.elapsed() < Duration::from_secs(5),
+        "{:?}",
+        started.elapsed()
+    );
     assert_eq!(status(&base, APP_TOKEN, &a4).0, 404);
     assert!(!data.join("sessions").join(&a4).exists());
 
@@ -210,7 +311,9 @@ fn after_a_restart_the_queue_resumes_in_order_and_a_bad_row_fails_alone() {
     let base = server.url();
     let first = create(&base, APP_TOKEN, r#"{"playback":"sim","trials":3}"#);
     upload(&base, APP_TOKEN, &first, &rec);
-    wait_for(&base, APP_TOKEN, &first, Duration::from_secs(10), |d| d["state"] == "playing");
+    wait_for(&base, APP_TOKEN, &first, Duration::from_secs(10), |d| {
+        d["state"] == "playing"
+    });
     let queued: Vec<String> = (0..4)
         .map(|_| {
             let id = create(&base, APP_TOKEN, r#"{"playback":"sim","trials":2}"#);
@@ -223,8 +326,14 @@ fn after_a_restart_the_queue_resumes_in_order_and_a_bad_row_fails_alone() {
     // Rows no server writes: a negative trial count, an unknown playback, an unknown state.
     let db = rusqlite::Connection::open(data.join("sitar.db")).unwrap();
     let set = |sql: &str, id: &str| db.execute(sql, [id]).unwrap();
-    set("UPDATE sessions SET trials_total = -5 WHERE id = ?1", &queued[1]);
-    set("UPDATE sessions SET playback = 'vhs' WHERE id = ?1", &queued[2]);
+    set(
+        "UPDATE sessions SET trials_total = -5 WHERE id = ?1",
+        &queued[1],
+    );
+    set(
+        "UPDATE sessions SET playback = 'vhs' WHERE id = ?1",
+        &queued[2],
+    );
     let odd = create_offline(&db);
     drop(db);
 
@@ -257,9 +366,11 @@ fn after_a_restart_the_queue_resumes_in_order_and_a_bad_row_fails_alone() {
     let db = rusqlite::Connection::open(data.join("sitar.db")).unwrap();
     for id in [&queued[1], &queued[2]] {
         let (state, error): (String, String) = db
-            .query_row("SELECT state, error FROM sessions WHERE id = ?1", [id], |r| {
-                Ok((r.get(0)?, r.get(1)?))
-            })
+            .query_row(
+                "SELECT state, error FROM sessions WHERE id = ?1",
+                [id],
+                |r| Ok((r.get(0)?, r.get(1)?)),
+            )
             .unwrap();
         assert_eq!(state, "failed", "{id}");
         assert!(error.contains("cannot read"), "{error}");
@@ -290,25 +401,44 @@ fn legacy_results_and_idempotency_keys_stay_with_their_token() {
     // Token one plays a session through the legacy routes.
     let (ct, body) = multipart("recording", "recording.mp4", &std::fs::read(&rec).unwrap());
     let auth1 = bearer(APP_TOKEN);
-    let (code, _, text) = raw("POST", &format!("{base}/recording"), Some(&ct), &body, &[("authorization", &auth1)]);
+    let (code, _, text) = raw(
+        "POST",
+        &format!("{base}/recording"),
+        Some(&ct),
+        &body,
+        &[("authorization", &auth1)],
+    );
     assert_eq!(code, 200, "{text}");
     let legacy: Value = serde_json::from_str(&text).unwrap();
     let legacy = legacy["id"].as_str().unwrap().to_owned();
     // Then a v1 session of each token finishes later.
     for token in [APP_TOKEN, APP2_TOKEN] {
-        let id = create(&base, token, r#"{"playback":"sim","trials":3,"setting":"median"}"#);
+        let id = create(
+            &base,
+            token,
+            r#"{"playback":"sim","trials":3,"setting":"median"}"#,
+        );
         upload(&base, token, &id, &rec);
         wait_for(&base, token, &id, Duration::from_secs(30), finished);
     }
     let results = |token: &str, path: &str| {
         let auth = bearer(token);
-        let (code, _, text) = raw("GET", &format!("{base}{path}"), None, b"", &[("authorization", &auth)]);
+        let (code, _, text) = raw(
+            "GET",
+            &format!("{base}{path}"),
+            None,
+            b"",
+            &[("authorization", &auth)],
+        );
         (code, text)
     };
     // Token one gets its legacy session's results, not the newer v1 one's.
     let (code, text) = results(APP_TOKEN, "/results.csv");
     assert_eq!(code, 200, "{text}");
-    assert_eq!(text, results(APP_TOKEN, &format!("/v1/sessions/{legacy}/results.csv")).1);
+    assert_eq!(
+        text,
+        results(APP_TOKEN, &format!("/v1/sessions/{legacy}/results.csv")).1
+    );
     // Token two made no legacy session: nothing, never token one's.
     assert_eq!(results(APP2_TOKEN, "/results.csv").0, 404);
 
@@ -319,7 +449,13 @@ fn legacy_results_and_idempotency_keys_stay_with_their_token() {
     assert_eq!(code, 201, "{first}");
     let (code, again) = post_json(&base, "/v1/sessions", APP_TOKEN, body, &key);
     assert_eq!((code, &again), (201, &first));
-    let (code, text) = post_json(&base, "/v1/sessions", APP_TOKEN, r#"{"playback":"upload","trials":4}"#, &key);
+    let (code, text) = post_json(
+        &base,
+        "/v1/sessions",
+        APP_TOKEN,
+        r#"{"playback":"upload","trials":4}"#,
+        &key,
+    );
     assert_eq!(code, 409, "{text}");
     assert!(text.contains("Idempotency-Key"), "{text}");
     let (code, other) = post_json(&base, "/v1/sessions", APP2_TOKEN, body, &key);

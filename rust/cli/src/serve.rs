@@ -167,7 +167,11 @@ pub fn run(args: Args) -> Result<()> {
          Ctrl-C or SIGTERM stops",
         args.data.display(),
         config.playback.as_str(),
-        if config.allow_sim { " (sim allowed)" } else { "" },
+        if config.allow_sim {
+            " (sim allowed)"
+        } else {
+            ""
+        },
         config.playback_workers,
         config.estimate_workers
     );

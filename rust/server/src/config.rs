@@ -253,8 +253,12 @@ impl ServerConfig {
             preset_tokens: Vec::new(),
             limits: crate::auth::Limits::default(),
             tls: None,
-            playback_workers: std::thread::available_parallelism().map_or(2, |n| n.get()).clamp(2, 8),
-            estimate_workers: std::thread::available_parallelism().map_or(2, |n| n.get()).clamp(2, 8),
+            playback_workers: std::thread::available_parallelism()
+                .map_or(2, |n| n.get())
+                .clamp(2, 8),
+            estimate_workers: std::thread::available_parallelism()
+                .map_or(2, |n| n.get())
+                .clamp(2, 8),
             jobs_per_token: 2,
             max_queued: 10_000,
             max_trials: 100,

@@ -41,10 +41,7 @@ async fn delete(shared: &Arc<Shared>, id: &str, playback_stopped: bool) -> Resul
     // Read again under the lock: the state may have moved on meanwhile.
     let session = shared.session(&id)?;
     let stopped = playback_stopped && session.playback != crate::config::PlaybackKind::Upload;
-    if !(session.is_idle() || stopped)
-        || shared.running(&id).is_some()
-        || shared.queue.holds(&id)
-    {
+    if !(session.is_idle() || stopped) || shared.running(&id).is_some() || shared.queue.holds(&id) {
         return Err(Error::Conflict(format!(
             "session {id} is {}: a job works on it; delete it once it is done or failed",
             session.state

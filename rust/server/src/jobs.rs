@@ -480,7 +480,10 @@ pub(crate) fn recover(shared: &Arc<Shared>) -> Result<(), Error> {
         let id = session.id.clone();
         if let Err(e) = recover_one(shared, session) {
             log::warn!("session {id}: cannot resume after restart: {e}");
-            let why = format!("server restarted and cannot resume it: {}", e.client_message());
+            let why = format!(
+                "server restarted and cannot resume it: {}",
+                e.client_message()
+            );
             if let Err(e) = shared.lifecycle().fail(&id, &why) {
                 log::warn!("session {id}: {e}");
             }

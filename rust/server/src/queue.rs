@@ -193,7 +193,10 @@ impl PlaybackQueue {
 
     /// The control of session `id`'s job while a worker has it.
     pub fn control(&self, id: &str) -> Option<Arc<JobControl>> {
-        self.state().active.get(id).map(|(_, control)| control.clone())
+        self.state()
+            .active
+            .get(id)
+            .map(|(_, control)| control.clone())
     }
 
     /// Whether session `id` waits or plays.

@@ -11,12 +11,12 @@ use crate::Error;
 use crate::auth::Caller;
 use crate::config::PlaybackKind;
 use crate::deletion;
-use crate::jobs::{self, Stopped};
-use crate::queue::Intent;
 use crate::error::short;
 use crate::http::{
     AppState, Found, check_declared_length, content_type, idempotency_key, json_value,
 };
+use crate::jobs::{self, Stopped};
+use crate::queue::Intent;
 use crate::session::{NewSession, SessionState};
 use crate::settings::EstimateSettings;
 use crate::status::status_json;
@@ -212,7 +212,8 @@ pub(crate) async fn list(
         .iter()
         .map(|session| status_json(&shared, session))
         .collect::<Result<Vec<_>, _>>()?;
-    // A row no version of the server writes is named and skipped, never a 500 for all.
+    // A row no version of the server writes is named (under `unreadable`) and skipped,
+    // never a 500 for all.
     let unreadable: Vec<_> = rows
         .unreadable
         .iter()
@@ -221,10 +222,11 @@ pub(crate) async fn list(
             json!({"id": bad.id, "error": short(&bad.why, QUOTE_LIMIT)})
         })
         .collect();
-    Ok(json_value(
-        StatusCode::OK,
-        &json!({"sessions": sessions, "unreadable": unreadable}),
-    ))
+    let mut doc = json!({"sessions": sessions});
+    if !unreadable.is_empty() {
+        doc["unreadable"] = unreadable.into();
+    }
+    Ok(json_value(StatusCode::OK, &doc))
 }
 
 /// `DELETE /v1/sessions/{id}`: a queued or playing session's playback is stopped first (the

@@ -96,7 +96,10 @@ pub(crate) struct Rows {
 }
 
 /// Reads every row of `stmt` (a `SELECT {COLUMNS}`), sorting the readable from the rest.
-fn read_rows(stmt: &mut rusqlite::Statement<'_>, params: impl rusqlite::Params) -> rusqlite::Result<Rows> {
+fn read_rows(
+    stmt: &mut rusqlite::Statement<'_>,
+    params: impl rusqlite::Params,
+) -> rusqlite::Result<Rows> {
     let mut rows = stmt.query(params)?;
     let mut out = Rows::default();
     while let Some(row) = rows.next()? {
@@ -371,10 +374,17 @@ mod tests {
         assert_eq!(ids, vec!["b"]);
         let bad: Vec<_> = rows.unreadable.iter().map(|u| u.id.as_str()).collect();
         assert_eq!(bad, vec!["c", "a"]);
-        assert!(rows.unreadable[0].why.contains("vhs"), "{:?}", rows.unreadable);
+        assert!(
+            rows.unreadable[0].why.contains("vhs"),
+            "{:?}",
+            rows.unreadable
+        );
         assert_eq!(db.recent_sessions(None, 10).unwrap().len(), 1);
         let in_flight = db.sessions_in(&[SessionState::Created]).unwrap();
-        assert_eq!((in_flight.sessions.len(), in_flight.unreadable.len()), (1, 2));
+        assert_eq!(
+            (in_flight.sessions.len(), in_flight.unreadable.len()),
+            (1, 2)
+        );
         // Failing an unreadable row needs no typed row.
         crate::session::Lifecycle::new(&db)
             .fail_unreadable("a", "bad row")
