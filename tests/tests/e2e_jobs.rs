@@ -462,3 +462,82 @@ fn legacy_results_and_idempotency_keys_stay_with_their_token() {
     assert_eq!(code, 201, "{other}");
     assert_ne!(other, first);
 }
+
+#[test]
+fn sessions_resumed_into_the_queue_end_at_once_on_estimate_or_cancel() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("data");
+    let config = |workers| {
+        let mut config = sim_config(&data, 3.0, 1);
+        config.playback_workers = workers;
+        config.jobs_per_token = workers;
+        config
+    };
+    let rec = sim_recording(dir.path(), "walk.rec", 3.0, 4);
+    // Three play at once, each to 2 trials or more.
+    let server = start(config(3));
+    let base = server.url();
+    let ids: Vec<String> = (0..3)
+        .map(|_| {
+            let id = create(&base, APP_TOKEN, r#"{"playback":"sim","trials":40}"#);
+            upload(&base, APP_TOKEN, &id, &rec);
+            id
+        })
+        .collect();
+    for id in &ids {
+        wait_for(&base, APP_TOKEN, id, Duration::from_secs(30), |d| {
+            d["trials_done"].as_u64() >= Some(2)
+        });
+    }
+    server.stop();
+
+    // One worker after the restart: the first plays, the others wait, still `playing`.
+    let server = start(config(1));
+    let base = server.url();
+    for (id, place) in [(&ids[1], 1), (&ids[2], 2)] {
+        let doc = status(&base, APP_TOKEN, id).1;
+        assert_eq!(
+            (doc["state"].as_str(), doc["queue_position"].as_u64()),
+            (Some("playing"), Some(place)),
+            "{doc}"
+        );
+    }
+    let (code, text) = post_json(
+        &base,
+        &format!("/v1/sessions/{}/estimate", ids[1]),
+        APP_TOKEN,
+        "",
+        &[],
+    );
+    assert_eq!(code, 202, "{text}");
+    let (code, text) = post_json(
+        &base,
+        &format!("/v1/sessions/{}/cancel", ids[2]),
+        APP_TOKEN,
+        "",
+        &[],
+    );
+    assert_eq!(code, 202, "{text}");
+    for (id, reason) in [
+        (&ids[1], "estimate requested after"),
+        (&ids[2], "cancelled by the client after"),
+    ] {
+        let doc = wait_for(&base, APP_TOKEN, id, Duration::from_secs(20), finished);
+        assert_eq!(doc["state"], "done", "{doc}");
+        assert!(
+            doc["stop_reason"].as_str().unwrap().starts_with(reason),
+            "{doc}"
+        );
+        assert_eq!(doc["results_trials"], doc["trials_done"], "{doc}");
+        assert!(doc["trials_done"].as_u64() >= Some(2), "{doc}");
+    }
+    let auth = bearer(APP_TOKEN);
+    let (code, _, text) = raw(
+        "DELETE",
+        &format!("{base}/v1/sessions/{}", ids[0]),
+        None,
+        b"",
+        &[("authorization", &auth)],
+    );
+    assert_eq!(code, 200, "{text}");
+}

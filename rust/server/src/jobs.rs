@@ -212,9 +212,18 @@ fn too_few_after_cancel(count: u32) -> String {
     format!("cancelled by the client after {count} trial(s); an estimate needs 2")
 }
 
-/// A cancelled session that left the queue: with 2 trials or more (played before a restart)
-/// its final estimate runs; with fewer it fails with the reason.
-pub(crate) fn finish_dequeued(shared: Arc<Shared>, id: String) -> Result<(), Error> {
+/// Why a session that left the queue ends early.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum EndEarly {
+    /// `POST …/cancel`.
+    Cancel,
+    /// `POST …/estimate`.
+    Estimate,
+}
+
+/// A session taken out of the queue to end now: with 2 trials or more (played before a
+/// restart) its final estimate runs; with fewer it fails with the reason.
+pub(crate) fn finish_dequeued(shared: Arc<Shared>, id: String, why: EndEarly) -> Result<(), Error> {
     let count = shared.db.trial_count(&id)?;
     if count < 2 {
         return shared.lifecycle().fail(&id, &too_few_after_cancel(count));
@@ -234,13 +243,14 @@ pub(crate) fn finish_dequeued(shared: Arc<Shared>, id: String) -> Result<(), Err
         let job = shared.db.start_job(&id, "estimate").ok();
         let outcome = with_estimate_permit(&shared, async {
             let session = shared.session(&id)?;
-            shared.lifecycle().stop(
-                &id,
-                &format!(
+            let reason = match why {
+                EndEarly::Cancel => format!(
                     "cancelled by the client after {count} of {} trials",
                     session.trials_total
                 ),
-            )?;
+                EndEarly::Estimate => format!("estimate requested after {count} trials"),
+            };
+            shared.lifecycle().stop(&id, &reason)?;
             shared.lifecycle().start_estimating(&id)?;
             let live = trials::live_session(&shared, &session).await?;
             publish(&shared, &live, &id, Purpose::Final).await?;

@@ -15,7 +15,7 @@ use crate::error::short;
 use crate::http::{
     AppState, Found, check_declared_length, content_type, idempotency_key, json_value,
 };
-use crate::jobs::{self, Stopped};
+use crate::jobs::{self, EndEarly, Stopped};
 use crate::queue::Intent;
 use crate::session::{NewSession, SessionState};
 use crate::settings::EstimateSettings;
@@ -268,7 +268,7 @@ pub(crate) async fn cancel(
         )));
     }
     match jobs::stop_playback(&shared, &id, Intent::Cancel).await? {
-        Stopped::Dequeued => jobs::finish_dequeued(shared.clone(), id.clone())?,
+        Stopped::Dequeued => jobs::finish_dequeued(shared.clone(), id.clone(), EndEarly::Cancel)?,
         // Its job ends the playback and estimates what was played.
         Stopped::Playing => {}
         Stopped::Idle => match session.state {
