@@ -350,4 +350,32 @@ fn adb_playback_with_fake_phones() {
     );
     assert_eq!(error_code(code, &rct, &body, 422), "invalid_content");
     drop(server);
+
+    // Deleting a playing adb session stops the app on the phone, then deletes it.
+    fake_phones(&phones, &["PHONE7"], &pool);
+    std::fs::write(phones.join("phones/PHONE7/.hang"), "").unwrap();
+    let server = start(adb_config(&dir.path().join("data")));
+    let client = sitar_tests::client(&server);
+    let id = client.create_session(&new(4)).unwrap();
+    client.upload_recording(&id, &mp4, &mut |_, _| {}).unwrap();
+    let log_has = |needle: &str| {
+        std::fs::read_to_string(phones.join("log"))
+            .unwrap_or_default()
+            .contains(needle)
+    };
+    let began = std::time::Instant::now();
+    while !log_has("PHONE7 shell am start") {
+        assert!(
+            began.elapsed() < Duration::from_secs(20),
+            "the app never started"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    client.delete_session(&id).unwrap();
+    assert_eq!(client.status(&id).unwrap_err().status(), Some(404));
+    assert!(
+        log_has("PHONE7 shell am force-stop io.github.sitar.playback"),
+        "the app was stopped"
+    );
+    drop(server);
 }

@@ -1,4 +1,5 @@
-//! `DELETE /v1/sessions/{id}`: whole sessions go, with their files; sessions in flight stay.
+//! `DELETE /v1/sessions/{id}`: whole sessions go, with their files; a playing session's
+//! playback is stopped first.
 
 use std::path::Path;
 use std::time::Duration;
@@ -11,30 +12,35 @@ fn session_dir(data: &Path, id: &str) -> std::path::PathBuf {
 }
 
 #[test]
-fn finished_and_waiting_sessions_are_deleted_whole_and_running_ones_refused() {
+fn finished_waiting_and_playing_sessions_are_deleted_whole() {
     let dir = tempfile::tempdir().unwrap();
     let data = dir.path().join("data");
     // 5× real time: a playback lasts long enough (about 1 s) to be caught in flight.
     let server = start(sim_config(&data, 5.0, 2));
     let client = client(&server);
     let rec = sim_recording(dir.path(), "walk.rec", 3.0, 5);
+    let sim = |trials| NewSession {
+        trials,
+        setting: "median".into(),
+        playback: "sim".into(),
+        window_frames: None,
+        pose_relation: None,
+    };
 
-    // A sim session: refused while its playback job runs, deleted once done.
-    let played = client
-        .create_session(&NewSession {
-            trials: 3,
-            setting: "median".into(),
-            playback: "sim".into(),
-            window_frames: None,
-            pose_relation: None,
-        })
+    // A playing sim session: its playback stops, then it goes whole.
+    let playing = client.create_session(&sim(40)).unwrap();
+    client
+        .upload_recording(&playing, &rec, &mut |_, _| {})
         .unwrap();
+    client.delete_session(&playing).unwrap();
+    assert_eq!(client.status(&playing).unwrap_err().status(), Some(404));
+    assert!(!session_dir(&data, &playing).exists());
+
+    // A finished one goes with its results.
+    let played = client.create_session(&sim(3)).unwrap();
     client
         .upload_recording(&played, &rec, &mut |_, _| {})
         .unwrap();
-    let err = client.delete_session(&played).unwrap_err();
-    assert_eq!(err.status(), Some(409), "{err}");
-    assert!(err.to_string().contains("job"), "{err}");
     let status = wait_done(&client, &played);
     assert_eq!(status.state, SessionState::Done, "{status:?}");
     assert!(session_dir(&data, &played).join("results.csv").is_file());

@@ -13,7 +13,7 @@ fn create(base: &str, token: &str) -> (u16, String, String) {
         .post(&format!("{base}/v1/sessions"))
         .header("authorization", &format!("Bearer {token}"))
         .header("content-type", "application/json")
-        .send(r#"{"playback":"upload","trials":1000}"#)
+        .send(r#"{"playback":"upload","trials":100}"#)
         .unwrap();
     let retry = response
         .headers()

@@ -70,6 +70,8 @@ pub fn run(args: Args) -> Result<()> {
     config.playback = PlaybackKind::Sim;
     config.sim.speed = args.speed;
     config.sim.devices = args.devices;
+    // The demo's own server plays what it is asked for.
+    config.max_trials = config.max_trials.max(args.trials);
     // The demo's own token, fresh each run (a new hash under the same name).
     let token = sitar_server::new_token()?;
     config.preset_tokens = vec![PresetToken {

@@ -71,6 +71,27 @@ pub struct Args {
     /// Uploads one token may send at once (429 beyond).
     #[arg(long, value_name = "N", default_value_t = Limits::default().concurrent_uploads)]
     max_concurrent_uploads: u32,
+    /// Playback jobs (sim, adb) running at once; more wait in a queue holding no thread
+    /// [default: the machine's cores, 2 … 8].
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=256))]
+    playback_workers: Option<u32>,
+    /// `upload` sessions' estimates running at once [default: the machine's cores, 2 … 8].
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=256))]
+    estimate_workers: Option<u32>,
+    /// Sessions of one token playing at once (tokens are served round-robin).
+    #[arg(long, value_name = "N", default_value_t = 2,
+          value_parser = clap::value_parser!(u32).range(1..=256))]
+    jobs_per_token: u32,
+    /// Sessions waiting for playback, all tokens together (503 beyond).
+    #[arg(long, value_name = "N", default_value_t = 10_000)]
+    max_queued: usize,
+    /// Largest `trials` a session may ask for (422 beyond).
+    #[arg(long, value_name = "N", default_value_t = 100,
+          value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    max_trials: u32,
+    /// Let sessions ask for sim playback although --playback is adb (demos, load tests).
+    #[arg(long)]
+    allow_sim: bool,
     /// No tokens at all: every request is allowed. Refused unless --addr is loopback.
     #[arg(long)]
     insecure_no_auth: bool,
@@ -118,6 +139,16 @@ pub fn run(args: Args) -> Result<()> {
     config.max_recording_bytes = args.max_recording_mib << 20;
     config.max_trajectory_bytes = args.max_trajectory_mib << 20;
     config.insecure_no_auth = args.insecure_no_auth;
+    if let Some(n) = args.playback_workers {
+        config.playback_workers = n as usize;
+    }
+    if let Some(n) = args.estimate_workers {
+        config.estimate_workers = n as usize;
+    }
+    config.jobs_per_token = args.jobs_per_token as usize;
+    config.max_queued = args.max_queued;
+    config.max_trials = args.max_trials;
+    config.allow_sim = args.allow_sim;
     config.tls = args.tls.then_some(TlsConfig {
         cert: args.cert,
         key: args.key,
@@ -132,9 +163,17 @@ pub fn run(args: Args) -> Result<()> {
         .keep_days
         .map(|days| Duration::from_secs(u64::from(days) * 86_400));
     eprintln!(
-        "sitar serve: data {}, playback {}; Ctrl-C or SIGTERM stops",
+        "sitar serve: data {}, playback {}{}, {} playback and {} estimate workers; \
+         Ctrl-C or SIGTERM stops",
         args.data.display(),
-        config.playback.as_str()
+        config.playback.as_str(),
+        if config.allow_sim {
+            " (sim allowed)"
+        } else {
+            ""
+        },
+        config.playback_workers,
+        config.estimate_workers
     );
     Server::run(config, args.addr).context("the server stopped")
 }

@@ -20,7 +20,10 @@ fn sim_server(data: &Path, speed: f64, devices: u32) -> ServerHandle {
         role: Role::App,
         token: BENCH_TOKEN.into(),
     }];
-    // 50 sessions at once, many times over: no per-token limit in the way.
+    // 50 sessions at once, many times over: no per-token limit in the way, and a playback
+    // worker for each.
+    config.playback_workers = 50;
+    config.jobs_per_token = 50;
     config.limits = Limits {
         sessions_per_hour: u32::MAX,
         upload_bytes_per_day: u64::MAX,

@@ -206,6 +206,23 @@ pub struct ServerConfig {
     pub limits: crate::auth::Limits,
     /// HTTPS with rustls (`sitar serve --tls`); `None` (the default): plain HTTP.
     pub tls: Option<crate::tls::TlsConfig>,
+    /// Playback jobs (sim, adb) running at once, each on its own thread; more wait in the
+    /// queue holding no thread (default: the machine's cores, at least 2, at most 8).
+    pub playback_workers: usize,
+    /// `upload` sessions' estimates (progressive and final) running at once (default: the
+    /// machine's cores, at least 2, at most 8).
+    pub estimate_workers: usize,
+    /// Sessions of one token playing at once; the queue serves tokens round-robin, so one
+    /// client never starves another (default 2; sessions made without a token share one).
+    pub jobs_per_token: usize,
+    /// Sessions waiting in the playback queue, all tokens together (default 10 000); a
+    /// recording that would start one more is refused with 503 `busy`.
+    pub max_queued: usize,
+    /// Largest `trials` a session may ask for (default 100); more is a 422 naming the cap.
+    pub max_trials: u32,
+    /// Whether sessions may ask for `sim` playback on a server whose `playback` is another
+    /// (default false): simulated playback costs CPU and is for demos and tests.
+    pub allow_sim: bool,
 }
 
 impl ServerConfig {
@@ -236,6 +253,16 @@ impl ServerConfig {
             preset_tokens: Vec::new(),
             limits: crate::auth::Limits::default(),
             tls: None,
+            playback_workers: std::thread::available_parallelism()
+                .map_or(2, |n| n.get())
+                .clamp(2, 8),
+            estimate_workers: std::thread::available_parallelism()
+                .map_or(2, |n| n.get())
+                .clamp(2, 8),
+            jobs_per_token: 2,
+            max_queued: 10_000,
+            max_trials: 100,
+            allow_sim: false,
         }
     }
 }

@@ -13,6 +13,16 @@ const WRITER_WAIT: Duration = Duration::from_secs(5);
 
 /// Deletes session `id` unless a job works on it (409) or it does not exist (404).
 pub(crate) async fn delete_idle(shared: &Arc<Shared>, id: &str) -> Result<(), Error> {
+    delete(shared, id, false).await
+}
+
+/// Deletes sim or adb session `id` whose playback was stopped for it (taken out of the
+/// queue, or its job ended): its state may still say `uploaded` or `playing`.
+pub(crate) async fn delete_stopped(shared: &Arc<Shared>, id: &str) -> Result<(), Error> {
+    delete(shared, id, true).await
+}
+
+async fn delete(shared: &Arc<Shared>, id: &str, playback_stopped: bool) -> Result<(), Error> {
     let session = shared.session(id)?;
     let id = session.id;
     // A progressive estimate publishes under the session lock: let a running one end first.
@@ -30,7 +40,8 @@ pub(crate) async fn delete_idle(shared: &Arc<Shared>, id: &str) -> Result<(), Er
     };
     // Read again under the lock: the state may have moved on meanwhile.
     let session = shared.session(&id)?;
-    if !session.is_idle() || shared.running(&id).is_some() {
+    let stopped = playback_stopped && session.playback != crate::config::PlaybackKind::Upload;
+    if !(session.is_idle() || stopped) || shared.running(&id).is_some() || shared.queue.holds(&id) {
         return Err(Error::Conflict(format!(
             "session {id} is {}: a job works on it; delete it once it is done or failed",
             session.state

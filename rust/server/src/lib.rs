@@ -76,6 +76,7 @@
 // error, config, settings, files, db            — vocabulary and storage
 // session (state, record, store, lifecycle)     — a session's life; the only state writer
 // estimation, held, live, playback, adb         — estimates over trials held in memory
+// queue                                         — sessions waiting for a playback worker
 // shared, published, trials, status, report     — what handlers and jobs share
 // evidence                                      — the phone's evidence, checked and stored
 // jobs, recordings, deletion                    — work on sessions
@@ -105,6 +106,7 @@ mod mp4_check;
 mod netinfo;
 mod playback;
 mod published;
+mod queue;
 mod recordings;
 mod regions;
 mod report;

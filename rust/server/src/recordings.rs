@@ -1,5 +1,5 @@
-//! Accepting a whole recording: moved into place, and for sim and adb sessions the start of
-//! their playback. Used by `PUT …/recording` (whole or resumed) and the legacy route.
+//! Accepting a whole recording: moved into place, and for sim and adb sessions a place in
+//! the playback queue. Used by `PUT …/recording` (whole or resumed) and the legacy route.
 
 use std::sync::Arc;
 
@@ -10,7 +10,7 @@ use crate::jobs::{self, Begin};
 use crate::session::{Session, SessionState, Step};
 use crate::shared::Shared;
 
-/// Moves an uploaded recording into place and starts playback (sim, adb). `session` is read
+/// Moves an uploaded recording into place and queues its playback (sim, adb). `session` is read
 /// under the session's lock.
 ///
 /// Only the first whole upload starts playback. A repeated upload with the same bytes (a
@@ -43,9 +43,11 @@ pub(crate) fn accept_recording(
         };
     }
     session.require(Step::AcceptRecording)?;
+    // Refused before it is kept: a full queue is a 503 the client can retry.
+    shared.queue.check_room()?;
     temp.publish(&dest)?;
     if shared.lifecycle().accept_recording(id, bytes)? == SessionState::Created {
-        jobs::spawn_session(shared.clone(), id.clone(), Begin::Start);
+        jobs::enqueue(shared, session, Begin::Start);
     }
     Ok(())
 }

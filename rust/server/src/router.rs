@@ -32,6 +32,7 @@ pub(crate) fn router(shared: Arc<Shared>) -> Router {
             "/v1/sessions/{id}/recording",
             put(recording::put_recording).head(recording::kept_offset),
         )
+        .route("/v1/sessions/{id}/cancel", post(sessions::cancel))
         .route("/v1/sessions/{id}/trials", post(trials::post))
         .route("/v1/sessions/{id}/estimate", post(results::estimate))
         .route("/v1/sessions/{id}/results.csv", get(results::csv))

@@ -13,6 +13,7 @@ use crate::db::Db;
 use crate::files::Files;
 use crate::live::LiveSessions;
 use crate::playback::{Playback, PlaybackPlan, SimPlayback, UploadPlayback};
+use crate::queue::{PlaybackQueue, QueueLimits};
 use crate::session::{Lifecycle, NewSession, Session};
 
 /// What a running job knows that the database does not: timing and the cancel flag.
@@ -40,6 +41,10 @@ pub(crate) struct Shared {
     pub tls_fingerprint: Option<String>,
     /// Parsed trials of the sessions in flight.
     pub live: LiveSessions,
+    /// Sim and adb sessions waiting for, or held by, a playback worker.
+    pub queue: PlaybackQueue,
+    /// One permit per estimate worker: `upload` sessions' estimates run within it.
+    pub estimates: tokio::sync::Semaphore,
     sim: Arc<dyn Playback>,
     adb: Arc<dyn Playback>,
     upload: Arc<dyn Playback>,
@@ -64,6 +69,11 @@ impl Shared {
             secure_cookies: false,
             tls_fingerprint: None,
             live: LiveSessions::new(config.live_session_bytes, config.live_total_bytes),
+            queue: PlaybackQueue::new(QueueLimits {
+                per_owner: config.jobs_per_token,
+                max_waiting: config.max_queued,
+            }),
+            estimates: tokio::sync::Semaphore::new(config.estimate_workers.max(1)),
             config,
             db,
             files,
@@ -136,6 +146,8 @@ impl Shared {
     /// Stops every job; their sessions stay in flight for the next start.
     pub fn stop_all(&self) {
         self.shutdown.store(true, Ordering::SeqCst);
+        self.queue.close();
+        self.estimates.close();
         for job in self.running_jobs().values() {
             job.cancel.store(true, Ordering::SeqCst);
         }

@@ -1,5 +1,6 @@
 //! The status document of a session (`GET /v1/sessions/{id}`, and each entry of the list):
-//! its state, progress and ETA (d·⌈T/D⌉ from the playback plan), trials and settings.
+//! its state, progress and ETA (d·⌈T/D⌉ from the playback plan), trials and settings, and
+//! its place in the playback queue while it waits.
 
 use serde_json::json;
 
@@ -65,5 +66,7 @@ pub(crate) fn status_json(shared: &Shared, session: &Session) -> Result<serde_js
         "window_frames": settings.window_frames,
         "pose_relation": settings.pose_relation.to_string(),
         "jobs": jobs,
+        // Where it waits for a playback worker (1: next); null when not queued.
+        "queue_position": shared.queue.position(&session.id),
     }))
 }

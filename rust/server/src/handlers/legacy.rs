@@ -117,7 +117,7 @@ pub(crate) async fn recording(
     }
 }
 
-/// `POST /timestamps`: stored with the caller's latest legacy session.
+/// `POST /timestamps`: stored with the latest legacy session of the caller's token.
 pub(crate) async fn timestamps(
     State(shared): AppState,
     caller: Caller,
@@ -127,7 +127,7 @@ pub(crate) async fn timestamps(
     let temp = multipart_field(&shared, multipart, &headers, TIMESTAMPS).await?;
     let id = shared
         .db
-        .latest_session(false, true, caller.scope())?
+        .latest_session(false, true, caller.owner())?
         .ok_or_else(|| {
             Error::Conflict("no recording uploaded yet: POST /recording first".into())
         })?;
@@ -138,11 +138,12 @@ pub(crate) async fn timestamps(
     Ok(json_value(StatusCode::OK, &json!({"id": id})))
 }
 
-/// `GET /results.csv`: the results of the caller's latest finished session.
+/// `GET /results.csv`: the results of the latest finished session the caller's token made
+/// through `POST /recording` (never a v1 session, nor another token's).
 pub(crate) async fn results(State(shared): AppState, caller: Caller) -> Result<Response, Error> {
     let id = shared
         .db
-        .latest_session(true, false, caller.scope())?
+        .latest_session(true, true, caller.owner())?
         .ok_or_else(|| Error::NotFound("no finished session yet".into()))?;
     let text = published::read(&shared, &shared.session(&id)?, Form::Csv)?;
     Ok(([(header::CONTENT_TYPE, "text/csv; charset=utf-8")], text).into_response())

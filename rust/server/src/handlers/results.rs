@@ -38,8 +38,11 @@ pub(crate) async fn estimate(
             )));
         }
         SessionState::Playing => {
-            // Estimate now: stop playback; the job publishes the final estimate.
-            if let Some(job) = shared.running(&id) {
+            if shared.queue.remove(&id) {
+                // Waiting for a worker after a restart: estimate what it has now.
+                jobs::finish_dequeued(shared.clone(), id.clone(), jobs::EndEarly::Estimate)?;
+            } else if let Some(job) = shared.running(&id) {
+                // Estimate now: stop playback; the job publishes the final estimate.
                 job.cancel.store(true, std::sync::atomic::Ordering::SeqCst);
             }
         }

@@ -1,5 +1,5 @@
 //! The session resource: `POST /v1/sessions`, `GET /v1/sessions[?limit=N]`,
-//! `GET /v1/sessions/{id}`, `DELETE /v1/sessions/{id}`.
+//! `GET /v1/sessions/{id}`, `DELETE /v1/sessions/{id}`, `POST /v1/sessions/{id}/cancel`.
 
 use axum::extract::{RawQuery, State};
 use axum::http::{HeaderMap, StatusCode, header};
@@ -15,7 +15,9 @@ use crate::error::short;
 use crate::http::{
     AppState, Found, check_declared_length, content_type, idempotency_key, json_value,
 };
-use crate::session::NewSession;
+use crate::jobs::{self, EndEarly, Stopped};
+use crate::queue::Intent;
+use crate::session::{NewSession, SessionState};
 use crate::settings::EstimateSettings;
 use crate::status::status_json;
 
@@ -86,9 +88,13 @@ pub(crate) async fn create(
                 }
             })?;
     let trials = req.trials.unwrap_or(shared.config.default_trials);
-    if !(1..=1000).contains(&trials) {
-        return Err(Error::BadRequest(format!(
-            "trials: {trials} is not in 1..=1000"
+    if trials == 0 {
+        return Err(Error::BadRequest("trials: 0 is below 1".into()));
+    }
+    let cap = shared.config.max_trials;
+    if trials > cap {
+        return Err(Error::InvalidContent(format!(
+            "trials: {trials} is above this server's cap of {cap} (sitar serve --max-trials)"
         )));
     }
     let playback = match req.playback.as_deref() {
@@ -97,6 +103,20 @@ pub(crate) async fn create(
             Error::BadRequest(format!("playback: {}", short(&e.to_string(), QUOTE_LIMIT)))
         })?,
     };
+    let offered = offered_playback(&shared.config);
+    if !offered.contains(&playback) {
+        let names: Vec<_> = offered.iter().map(|kind| kind.as_str()).collect();
+        let hint = match playback {
+            PlaybackKind::Sim => " (sim needs sitar serve --allow-sim)",
+            _ => "",
+        };
+        return Err(Error::InvalidContent(format!(
+            "playback: this server offers {} (started with --playback {}), not {}{hint}",
+            names.join(" and "),
+            shared.config.playback.as_str(),
+            playback.as_str()
+        )));
+    }
     let settings = EstimateSettings::from_request(
         &shared.config,
         req.setting.as_deref(),
@@ -132,6 +152,19 @@ pub(crate) async fn create(
         axum::Json(json!({"id": id})),
     )
         .into_response())
+}
+
+/// The playback kinds sessions may ask for: the server's own, `upload`, and `sim` with
+/// `allow_sim`.
+fn offered_playback(config: &crate::ServerConfig) -> Vec<PlaybackKind> {
+    [PlaybackKind::Adb, PlaybackKind::Sim, PlaybackKind::Upload]
+        .into_iter()
+        .filter(|&kind| {
+            kind == config.playback
+                || kind == PlaybackKind::Upload
+                || (kind == PlaybackKind::Sim && config.allow_sim)
+        })
+        .collect()
 }
 
 /// `GET /v1/sessions/{id}`.
@@ -173,24 +206,85 @@ pub(crate) async fn list(
     RawQuery(query): RawQuery,
 ) -> Result<Response, Error> {
     let limit = limit(query.as_deref())?;
-    let sessions = shared
-        .db
-        .recent_sessions(caller.scope(), limit)?
+    let rows = shared.db.recent_rows(caller.scope(), limit)?;
+    let sessions = rows
+        .sessions
         .iter()
         .map(|session| status_json(&shared, session))
         .collect::<Result<Vec<_>, _>>()?;
-    Ok(json_value(StatusCode::OK, &json!({"sessions": sessions})))
+    // A row no version of the server writes is named (under `unreadable`) and skipped,
+    // never a 500 for all.
+    let unreadable: Vec<_> = rows
+        .unreadable
+        .iter()
+        .map(|bad| {
+            log::warn!("session {}: unreadable row, left out: {}", bad.id, bad.why);
+            json!({"id": bad.id, "error": short(&bad.why, QUOTE_LIMIT)})
+        })
+        .collect();
+    let mut doc = json!({"sessions": sessions});
+    if !unreadable.is_empty() {
+        doc["unreadable"] = unreadable.into();
+    }
+    Ok(json_value(StatusCode::OK, &doc))
 }
 
-/// `DELETE /v1/sessions/{id}`.
+/// `DELETE /v1/sessions/{id}`: a queued or playing session's playback is stopped first (the
+/// adb backend stops the app on the phones), then the session goes.
 pub(crate) async fn delete(
     State(shared): AppState,
     Found(session): Found,
 ) -> Result<Response, Error> {
-    deletion::delete_idle(&shared, &session.id).await?;
+    match jobs::stop_playback(&shared, &session.id, Intent::Delete).await? {
+        Stopped::Dequeued | Stopped::Playing => {
+            deletion::delete_stopped(&shared, &session.id).await?
+        }
+        Stopped::Idle => deletion::delete_idle(&shared, &session.id).await?,
+    }
     Ok(json_value(
         StatusCode::OK,
         &json!({"id": session.id, "deleted": true}),
+    ))
+}
+
+/// `POST /v1/sessions/{id}/cancel`: stops a sim or adb session's playback and keeps what
+/// was played: the session ends with an estimate over its trials (2 or more), else failed
+/// with the reason. A queued session leaves the queue.
+pub(crate) async fn cancel(
+    State(shared): AppState,
+    Found(session): Found,
+) -> Result<Response, Error> {
+    let id = session.id;
+    if session.playback == PlaybackKind::Upload {
+        return Err(Error::Conflict(format!(
+            "session {id} is an upload session: it has no playback to cancel \
+             (POST /v1/sessions/{id}/estimate ends it, DELETE removes it)"
+        )));
+    }
+    if session.state.is_finished() {
+        return Err(Error::Conflict(format!(
+            "session {id} is {}: nothing to cancel",
+            session.state
+        )));
+    }
+    match jobs::stop_playback(&shared, &id, Intent::Cancel).await? {
+        Stopped::Dequeued => jobs::finish_dequeued(shared.clone(), id.clone(), EndEarly::Cancel)?,
+        // Its job ends the playback and estimates what was played.
+        Stopped::Playing => {}
+        Stopped::Idle => match session.state {
+            SessionState::Created => shared
+                .lifecycle()
+                .fail(&id, "cancelled by the client before its recording arrived")?,
+            state => {
+                return Err(Error::Conflict(format!(
+                    "session {id} is {state} and not playing: nothing to cancel"
+                )));
+            }
+        },
+    }
+    Ok(json_value(
+        StatusCode::ACCEPTED,
+        &json!({"id": id, "cancelled": true}),
     ))
 }
 

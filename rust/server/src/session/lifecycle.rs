@@ -75,6 +75,19 @@ impl<'a> Lifecycle<'a> {
         self.take(id, Step::Fail, Also::Error(why)).map(drop)
     }
 
+    /// A session whose row cannot be read (a value no version writes: `trials_total = -5`,
+    /// an unknown playback) fails with `why`, whatever its state: the one step that needs no
+    /// typed row, so one bad row never stops the server.
+    pub fn fail_unreadable(&self, id: &str, why: &str) -> Result<(), Error> {
+        self.db.with(|c| {
+            c.execute(
+                "UPDATE sessions SET state = ?2, error = ?3, finished_ms = ?4 WHERE id = ?1",
+                params![id, SessionState::Failed.as_str(), why, now_ms()],
+            )
+        })?;
+        Ok(())
+    }
+
     /// Checks `step` against the session's state and writes the state it leads to, with what
     /// the step records. Returns the state before.
     fn take(&self, id: &str, step: Step, also: Also<'_>) -> Result<SessionState, Error> {

@@ -14,6 +14,30 @@ use crate::settings::{self, EstimateSettings};
 const COLUMNS: &str = "id, trials_total, setting, playback, state, error, stop_reason, adaptive_min, \
      adaptive_k, recording_bytes, results_trials, legacy, window_frames, pose_relation, owner";
 
+/// What makes two session requests the same, as one text (compared for an idempotency key
+/// used again); must match [`NewSession::request_summary`].
+const REQUEST: &str = "trials_total || '/' || playback || '/' || setting || '/' || window_frames \
+     || '/' || pose_relation || '/' || COALESCE(adaptive_min, '-') || '/' || adaptive_k \
+     || '/' || legacy";
+
+impl NewSession<'_> {
+    /// The request as [`REQUEST`] reads it back from a row.
+    fn request_summary(&self) -> String {
+        format!(
+            "{}/{}/{}/{}/{}/{}/{}/{}",
+            self.trials_total,
+            self.playback.as_str(),
+            self.settings.setting,
+            self.settings.window_frames,
+            self.settings.pose_relation,
+            self.adaptive_min
+                .map_or_else(|| "-".to_string(), |m| m.to_string()),
+            self.adaptive_k,
+            self.legacy as i64,
+        )
+    }
+}
+
 /// A text column parsed into its type; a value no version of the server writes is an error
 /// that names the column.
 fn typed<T>(
@@ -56,20 +80,63 @@ fn session_from_row(r: &rusqlite::Row<'_>) -> rusqlite::Result<Session> {
     })
 }
 
+/// A row of the `sessions` table the server cannot read (a value no version writes).
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Unreadable {
+    pub id: String,
+    /// What is wrong with it, naming the column.
+    pub why: String,
+}
+
+/// Sessions read from the table, and the rows that could not be read (skipped).
+#[derive(Debug, Default)]
+pub(crate) struct Rows {
+    pub sessions: Vec<Session>,
+    pub unreadable: Vec<Unreadable>,
+}
+
+/// Reads every row of `stmt` (a `SELECT {COLUMNS}`), sorting the readable from the rest.
+fn read_rows(
+    stmt: &mut rusqlite::Statement<'_>,
+    params: impl rusqlite::Params,
+) -> rusqlite::Result<Rows> {
+    let mut rows = stmt.query(params)?;
+    let mut out = Rows::default();
+    while let Some(row) = rows.next()? {
+        match session_from_row(row) {
+            Ok(session) => out.sessions.push(session),
+            Err(e) => out.unreadable.push(Unreadable {
+                id: row.get::<_, String>(0).unwrap_or_default(),
+                why: e.to_string(),
+            }),
+        }
+    }
+    Ok(out)
+}
+
 impl Db {
     /// Inserts a session (state `created`), or returns the one created earlier with the same
     /// idempotency key. The bool is true when a new row was made.
     pub fn insert_session(&self, id: &str, new: &NewSession<'_>) -> Result<(String, bool), Error> {
         self.transaction(|tx| {
             if let Some(key) = new.idempotency_key {
-                let existing: Option<String> = tx
+                let existing: Option<(String, String)> = tx
                     .query_row(
-                        "SELECT id FROM sessions WHERE idempotency_key = ?1",
+                        &format!(
+                            "SELECT id, {REQUEST} FROM sessions WHERE idempotency_key = ?1"
+                        ),
                         [key],
-                        |r| r.get(0),
+                        |r| Ok((r.get(0)?, r.get(1)?)),
                     )
                     .optional()?;
-                if let Some(existing) = existing {
+                if let Some((existing, request)) = existing {
+                    // The IETF Idempotency-Key draft: a key reused for another request is refused.
+                    if request != new.request_summary() {
+                        return Err(Error::Conflict(format!(
+                            "this Idempotency-Key was used for a different request (session \
+                             {existing}): a new request needs a new key"
+                        )));
+                    }
                     return Ok((existing, false));
                 }
             }
@@ -108,29 +175,37 @@ impl Db {
         })
     }
 
-    /// The newest `limit` sessions, newest first; of token `owner` only when given.
+    /// The newest `limit` sessions, newest first; of token `owner` only when given. Rows
+    /// that cannot be read are logged and left out.
     pub fn recent_sessions(&self, owner: Option<i64>, limit: u32) -> Result<Vec<Session>, Error> {
+        let rows = self.recent_rows(owner, limit)?;
+        for bad in &rows.unreadable {
+            log::warn!("session {}: unreadable row, left out: {}", bad.id, bad.why);
+        }
+        Ok(rows.sessions)
+    }
+
+    /// As [`Db::recent_sessions`], with the unreadable rows named.
+    pub fn recent_rows(&self, owner: Option<i64>, limit: u32) -> Result<Rows, Error> {
         self.with(|c| {
             let mut stmt = c.prepare(&format!(
                 "SELECT {COLUMNS} FROM sessions WHERE ?1 IS NULL OR owner = ?1 \
                  ORDER BY rowid DESC LIMIT ?2"
             ))?;
-            let rows = stmt.query_map(params![owner, limit], session_from_row)?;
-            rows.collect()
+            read_rows(&mut stmt, params![owner, limit])
         })
     }
 
-    /// Sessions in any of `states`, oldest first.
-    pub fn sessions_in(&self, states: &[SessionState]) -> Result<Vec<Session>, Error> {
+    /// Sessions in any of `states`, oldest first (in the order they were created).
+    pub fn sessions_in(&self, states: &[SessionState]) -> Result<Rows, Error> {
         let names: Vec<&str> = states.iter().map(|s| s.as_str()).collect();
         let list = serde_json::to_string(&names).unwrap_or_default();
         self.with(|c| {
             let mut stmt = c.prepare(&format!(
                 "SELECT {COLUMNS} FROM sessions WHERE state IN (SELECT value FROM json_each(?1)) \
-                 ORDER BY created_ms"
+                 ORDER BY created_ms, rowid"
             ))?;
-            let rows = stmt.query_map([list], session_from_row)?;
-            rows.collect()
+            read_rows(&mut stmt, [list])
         })
     }
 
@@ -236,6 +311,22 @@ mod tests {
             let new = new_session(Some("k1"));
             assert_eq!(db.insert_session("a", &new).unwrap(), ("a".into(), true));
             assert_eq!(db.insert_session("b", &new).unwrap(), ("a".into(), false));
+            // The same key with another request is refused, naming the key's session.
+            for other in [
+                NewSession {
+                    trials_total: 6,
+                    ..new.clone()
+                },
+                NewSession {
+                    adaptive_min: Some(4),
+                    ..new.clone()
+                },
+            ] {
+                let err = db.insert_session("c", &other).unwrap_err();
+                assert_eq!(err.status_and_code().0.as_u16(), 409, "{err}");
+                assert!(err.to_string().contains("Idempotency-Key"), "{err}");
+            }
+            assert!(db.session("c").unwrap().is_none());
         }
         let db = Db::open(&path).unwrap();
         let session = db.session("a").unwrap().unwrap();
@@ -244,8 +335,19 @@ mod tests {
         assert_eq!(session.settings, new_session(None).settings);
         assert_eq!((session.trials_total, session.adaptive_k), (5, 3));
         assert!(db.session("b").unwrap().is_none());
-        assert_eq!(db.sessions_in(&[SessionState::Created]).unwrap().len(), 1);
-        assert!(db.sessions_in(&[SessionState::Done]).unwrap().is_empty());
+        assert_eq!(
+            db.sessions_in(&[SessionState::Created])
+                .unwrap()
+                .sessions
+                .len(),
+            1
+        );
+        assert!(
+            db.sessions_in(&[SessionState::Done])
+                .unwrap()
+                .sessions
+                .is_empty()
+        );
         assert_eq!(
             db.latest_session(false, false, None).unwrap().as_deref(),
             Some("a")
@@ -253,6 +355,42 @@ mod tests {
         assert_eq!(db.latest_session(true, false, None).unwrap(), None);
         assert!(db.delete_session("a").unwrap());
         assert!(!db.delete_session("a").unwrap());
+    }
+
+    #[test]
+    fn unreadable_rows_are_named_and_left_out_of_listings() {
+        let dir = tempfile::tempdir().unwrap();
+        let db = Db::open(&dir.path().join("sitar.db")).unwrap();
+        for id in ["a", "b", "c"] {
+            db.insert_session(id, &new_session(None)).unwrap();
+        }
+        db.with(|c| {
+            c.execute("UPDATE sessions SET trials_total = -5 WHERE id = 'a'", [])?;
+            c.execute("UPDATE sessions SET playback = 'vhs' WHERE id = 'c'", [])
+        })
+        .unwrap();
+        let rows = db.recent_rows(None, 10).unwrap();
+        let ids: Vec<_> = rows.sessions.iter().map(|s| s.id.as_str()).collect();
+        assert_eq!(ids, vec!["b"]);
+        let bad: Vec<_> = rows.unreadable.iter().map(|u| u.id.as_str()).collect();
+        assert_eq!(bad, vec!["c", "a"]);
+        assert!(
+            rows.unreadable[0].why.contains("vhs"),
+            "{:?}",
+            rows.unreadable
+        );
+        assert_eq!(db.recent_sessions(None, 10).unwrap().len(), 1);
+        let in_flight = db.sessions_in(&[SessionState::Created]).unwrap();
+        assert_eq!(
+            (in_flight.sessions.len(), in_flight.unreadable.len()),
+            (1, 2)
+        );
+        // Failing an unreadable row needs no typed row.
+        crate::session::Lifecycle::new(&db)
+            .fail_unreadable("a", "bad row")
+            .unwrap();
+        let failed = db.sessions_in(&[SessionState::Failed]).unwrap();
+        assert_eq!(failed.unreadable[0].id, "a");
     }
 
     #[test]
