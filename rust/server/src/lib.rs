@@ -106,6 +106,7 @@ mod mp4_check;
 mod netinfo;
 mod playback;
 mod published;
+mod quota;
 mod recordings;
 mod regions;
 mod report;
