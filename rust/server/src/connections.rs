@@ -30,7 +30,8 @@ const REFUSAL_TIMEOUT: Duration = Duration::from_secs(2);
 /// make the server hold for headers and for body bytes not yet taken by the handler.
 const MAX_READ_BUFFER: usize = 64 << 10;
 
-const BUSY_ANSWER: &[u8] = b"HTTP/1.1 503 Service Unavailable\r\nContent-Type: application/json\r\n\
+const BUSY_ANSWER: &[u8] =
+    b"HTTP/1.1 503 Service Unavailable\r\nContent-Type: application/json\r\n\
 Connection: close\r\nRetry-After: 1\r\nContent-Length: 87\r\n\r\n\
 {\"error\":{\"code\":\"busy\",\"message\":\"too many connections to the server: retry shortly\"}}";
 

@@ -98,7 +98,11 @@ impl Files {
 
     /// Room for an upload into session `id`'s folder (`None`: a new session's, only the
     /// global quota applies); `declared` bytes that cannot fit are refused at once.
-    pub fn reserve(&self, id: Option<&str>, declared: Option<u64>) -> Result<Reservation<'_>, Error> {
+    pub fn reserve(
+        &self,
+        id: Option<&str>,
+        declared: Option<u64>,
+    ) -> Result<Reservation<'_>, Error> {
         let dir = id.map(|id| self.session_dir(id));
         self.quota.reserve(dir.as_deref(), declared)
     }
@@ -207,6 +211,10 @@ impl Files {
         let mut sink = Sink::new(file, &temp.path, 0, self.idle, room);
         let outcome = sink.copy(&mut body, limit, what).await;
         temp.bytes = sink.written;
+        if outcome.is_err() {
+            // The temporary file goes: its bytes stop counting.
+            sink.room.discard();
+        }
         drop(sink);
         match outcome {
             Ok(()) => Ok(temp),
@@ -271,6 +279,7 @@ impl Files {
                     )),
                     other => other,
                 };
+                sink.room.discard();
                 let file = sink.out.into_inner();
                 file.set_len(offset)
                     .await
@@ -317,7 +326,10 @@ impl Files {
         };
         match sink.copy(&mut body, limit, what).await {
             Ok(()) => Ok(sink.out),
-            Err(Copy::BrokeOff(error) | Copy::Failed(error)) => Err(error),
+            Err(Copy::BrokeOff(error) | Copy::Failed(error)) => {
+                sink.room.discard();
+                Err(error)
+            }
         }
     }
 
@@ -588,7 +600,14 @@ mod tests {
 
         // Another break while appending: what arrived is kept.
         let len = files
-            .append(broken_after(2), &part, 3000, 10_000, "recording", room(&files))
+            .append(
+                broken_after(2),
+                &part,
+                3000,
+                10_000,
+                "recording",
+                room(&files),
+            )
             .await
             .unwrap();
         assert!(len.broken.is_some());
@@ -614,7 +633,14 @@ mod tests {
         );
         assert_eq!(std::fs::read(&part).unwrap(), vec![9u8; 500]);
         let err = files
-            .append(broken_after(1), &part, 400, 10_000, "recording", room(&files))
+            .append(
+                broken_after(1),
+                &part,
+                400,
+                10_000,
+                "recording",
+                room(&files),
+            )
             .await
             .unwrap_err();
         assert!(matches!(err, Error::Internal(_)), "{err}");

@@ -126,6 +126,15 @@ impl Reservation<'_> {
         self.written += n;
         Ok(())
     }
+
+    /// The bytes counted were not kept (a refused upload, cut back or removed): they stop
+    /// counting at once.
+    pub fn discard(&mut self) {
+        self.quota
+            .in_flight
+            .fetch_sub(self.written, Ordering::SeqCst);
+        self.written = 0;
+    }
 }
 
 impl Drop for Reservation<'_> {
@@ -189,8 +198,12 @@ mod tests {
         other.add(900).unwrap();
         let err = other.add(1).unwrap_err();
         assert_eq!(err.status_and_code().0.as_u16(), 507, "{err}");
-        drop((upload, other));
-        // Finished uploads stay counted until a walk sees what was kept.
+        drop(upload);
+        // Finished uploads stay counted until a walk sees what was kept...
         assert_eq!(quota.used(), 2000);
+        // ...unless they were refused and removed.
+        other.discard();
+        drop(other);
+        assert_eq!(quota.used(), 1100);
     }
 }

@@ -39,6 +39,8 @@ pub(crate) struct BodyLimit {
     /// Whether the handler streams the body and counts its bytes itself (an upload: it
     /// answers its own 413 and keeps a recording's prefix); else this layer cuts it.
     pub counted_by_handler: bool,
+    /// The body ends once it sends nothing for this long.
+    pub idle: Duration,
 }
 
 /// The body bound of `method` on the route `pattern` (as the router spells it).
@@ -47,6 +49,7 @@ pub(crate) fn body_limit(config: &ServerConfig, method: &Method, pattern: &str) 
         bytes,
         what,
         counted_by_handler: true,
+        idle: config.upload_idle_timeout + UPLOAD_IDLE_MARGIN,
     };
     match (method.as_str(), pattern) {
         ("PUT", "/v1/sessions/{id}/recording") => upload(config.max_recording_bytes, "recording"),
@@ -63,14 +66,21 @@ pub(crate) fn body_limit(config: &ServerConfig, method: &Method, pattern: &str) 
             "recording",
         ),
         ("POST", "/timestamps") => upload(
-            config.max_trajectory_bytes.saturating_add(MULTIPART_FRAMING),
+            config
+                .max_trajectory_bytes
+                .saturating_add(MULTIPART_FRAMING),
             "timestamps",
         ),
-        ("POST", "/v1/sessions") => upload(MAX_REQUEST_BYTES, "session request"),
+        // A few short keys: no reason to wait for them as long as for a recording.
+        ("POST", "/v1/sessions") => BodyLimit {
+            idle: config.body_idle_timeout,
+            ..upload(MAX_REQUEST_BYTES, "session request")
+        },
         _ => BodyLimit {
             bytes: MAX_REQUEST_BYTES,
             what: "request body",
             counted_by_handler: false,
+            idle: config.body_idle_timeout,
         },
     }
 }
@@ -96,12 +106,12 @@ pub(crate) async fn bound_bodies(
         }
         .into_response();
     }
-    let (cap, idle) = if limit.counted_by_handler {
-        (u64::MAX, config.upload_idle_timeout + UPLOAD_IDLE_MARGIN)
+    let cap = if limit.counted_by_handler {
+        u64::MAX
     } else {
-        (limit.bytes, config.body_idle_timeout)
+        limit.bytes
     };
-    let request = request.map(|body| Body::new(Bounded::new(body, cap, idle)));
+    let request = request.map(|body| Body::new(Bounded::new(body, cap, limit.idle)));
     next.run(request).await
 }
 
@@ -200,6 +210,9 @@ mod tests {
         assert_eq!((other.bytes, other.counted_by_handler), (64 << 10, false));
         let get = body_limit(&config, &Method::GET, "/v1/sessions/{id}/recording");
         assert_eq!(get.bytes, 64 << 10);
+        let create = body_limit(&config, &Method::POST, "/v1/sessions");
+        assert_eq!(create.idle, config.body_idle_timeout);
+        assert!(recording.idle > config.upload_idle_timeout);
     }
 
     #[tokio::test]

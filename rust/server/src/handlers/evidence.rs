@@ -77,7 +77,8 @@ pub(crate) async fn put_evidence(
     headers: HeaderMap,
     body: Body,
 ) -> Result<Response, Error> {
-    let rows = parse_evidence(&table_text(&shared, &session.id, &headers, body, "evidence.csv").await?)?;
+    let rows =
+        parse_evidence(&table_text(&shared, &session.id, &headers, body, "evidence.csv").await?)?;
     under_lock(&shared, &session.id, |f| f.store_evidence(&rows)).await?;
     Ok(stored(rows.len()))
 }
@@ -89,7 +90,9 @@ pub(crate) async fn put_spans(
     headers: HeaderMap,
     body: Body,
 ) -> Result<Response, Error> {
-    let spans = parse_spans(&table_text(&shared, &session.id, &headers, body, "subtrajectories.csv").await?)?;
+    let spans = parse_spans(
+        &table_text(&shared, &session.id, &headers, body, "subtrajectories.csv").await?,
+    )?;
     under_lock(&shared, &session.id, |f| f.store_spans(&spans)).await?;
     Ok(stored(spans.len()))
 }
@@ -140,7 +143,15 @@ pub(crate) async fn put_image(
     body: Body,
 ) -> Result<Response, Error> {
     let (session, k) = session_and_index(&shared, &caller, &id, &k)?;
-    let jpeg = small_body(&shared, &session.id, &headers, body, MAX_THUMBNAIL_BYTES, "image.jpg").await?;
+    let jpeg = small_body(
+        &shared,
+        &session.id,
+        &headers,
+        body,
+        MAX_THUMBNAIL_BYTES,
+        "image.jpg",
+    )
+    .await?;
     check_jpeg(&jpeg)?;
     under_lock(&shared, &session.id, |f| {
         let rows = f.evidence_rows()?.ok_or_else(|| {

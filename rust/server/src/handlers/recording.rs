@@ -101,7 +101,7 @@ async fn whole(
 ) -> Result<Response, Error> {
     let limit = shared.config.max_recording_bytes;
     let lock = shared.session_lock(&row.id);
-    let Ok(_held) = lock.try_lock() else {
+    let Ok(_held) = tokio::time::timeout(UPLOAD_LOCK_WAIT, lock.lock()).await else {
         return Err(busy_uploading(&row.id));
     };
     // The session may have been deleted, or moved on, since the request was routed.
@@ -146,6 +146,10 @@ async fn whole(
     Ok(uploaded(id))
 }
 
+/// How long an upload waits for an earlier one to the same session to end (a client that
+/// retries right after its connection dropped: the server may not have seen the drop yet).
+const UPLOAD_LOCK_WAIT: std::time::Duration = std::time::Duration::from_secs(5);
+
 fn busy_uploading(id: &str) -> Error {
     Error::Conflict(format!(
         "another upload to session {id} is still being received; try again shortly"
@@ -179,7 +183,7 @@ async fn resume(
         )));
     }
     let lock = shared.session_lock(&row.id);
-    let Ok(_held) = lock.try_lock() else {
+    let Ok(_held) = tokio::time::timeout(UPLOAD_LOCK_WAIT, lock.lock()).await else {
         return Err(busy_uploading(&row.id));
     };
     let row = &shared.session(&row.id)?;
