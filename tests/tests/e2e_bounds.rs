@@ -341,3 +341,57 @@ fn the_session_quota_is_413_and_the_server_quota_507_leaving_nothing_behind() {
         std::thread::sleep(Duration::from_millis(250));
     }
 }
+
+/// A TUM trajectory of `n` poses, walking along x; `wobble` shifts it a little per trial.
+fn trajectory(n: usize, wobble: f64) -> String {
+    (0..n)
+        .map(|i| {
+            let t = i as f64 / 30.0;
+            let x = t * 0.5 + wobble * (i as f64 * 0.37).sin();
+            format!("{t:.6} {x:.6} 0.000000 1.500000 0 0 0 1\n")
+        })
+        .collect()
+}
+
+#[test]
+fn results_json_pages_its_windows_and_answers_a_normal_session_unchanged() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut config = sim_config(dir.path(), 10.0, 1);
+    config.progressive_uploads = false;
+    let server = start(config);
+    let admin = client(&server);
+    let id = upload_session(&admin);
+    for wobble in [0.0, 0.01] {
+        admin.upload_trial(&id, &trajectory(300, wobble)).unwrap();
+    }
+    admin.start_estimate(&id).unwrap();
+    wait_done(&admin, &id);
+    let url = format!("{}/v1/sessions/{id}/results.json", server.url());
+    let (status, _, whole) = raw("GET", &url, None, b"", &[]);
+    assert_eq!(status, 200, "{whole}");
+    let whole: serde_json::Value = serde_json::from_str(&whole).unwrap();
+    assert!(whole.get("page").is_none(), "{whole}");
+    let windows = whole["windows"].as_array().unwrap().clone();
+    assert!(windows.len() > 7, "{} windows", windows.len());
+
+    let mut paged = Vec::new();
+    let mut next = Some(0u64);
+    while let Some(offset) = next {
+        let (status, _, text) = raw(
+            "GET",
+            &format!("{url}?offset={offset}&limit=3"),
+            None,
+            b"",
+            &[],
+        );
+        assert_eq!(status, 200, "{text}");
+        let page: serde_json::Value = serde_json::from_str(&text).unwrap();
+        assert_eq!(page["page"]["total"], windows.len());
+        assert_eq!(page["setting"], whole["setting"]);
+        paged.extend(page["windows"].as_array().unwrap().iter().cloned());
+        next = page["page"]["next"].as_u64();
+    }
+    assert_eq!(paged, windows);
+    let (status, ct, text) = raw("GET", &format!("{url}?limit=0"), None, b"", &[]);
+    assert_eq!(error_code(status, &ct, &text, 400), "bad_request");
+}

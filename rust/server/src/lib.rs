@@ -104,6 +104,7 @@ mod json_errors;
 mod live;
 mod mp4_check;
 mod netinfo;
+mod pagination;
 mod playback;
 mod published;
 mod quota;
