@@ -361,3 +361,54 @@ fn stalled_uploads_and_dribbled_headers_are_cut_off_within_a_bounded_memory() {
         "peak RSS {peak} KiB passes {PEAK_RSS_LIMIT_KIB} KiB"
     );
 }
+
+/// A TUM trajectory of `n` poses walking along x; `wobble` shifts it a little per trial.
+fn trajectory(n: usize, wobble: f64) -> String {
+    (0..n)
+        .map(|i| {
+            let t = i as f64 / 30.0;
+            let x = t * 0.5 + wobble * (i as f64 * 0.37).sin();
+            format!("{t:.6} {x:.6} 0.000000 1.500000 0 0 0 1\n")
+        })
+        .collect()
+}
+
+#[test]
+fn report_requests_cost_a_measured_amount_of_memory() {
+    const POSES: usize = 20_000;
+    const CONCURRENT: usize = 16;
+    let dir = tempfile::tempdir().unwrap();
+    let server = Serving::start(&dir.path().join("data"), &[]);
+    let client = server.client();
+    let id = upload_session(&client);
+    for wobble in [0.0, 0.01] {
+        client
+            .upload_trial(&id, &trajectory(POSES, wobble))
+            .unwrap();
+    }
+    client.start_estimate(&id).unwrap();
+    let deadline = Instant::now() + Duration::from_secs(120);
+    while client.status(&id).unwrap().state != sitar_client::SessionState::Done {
+        assert!(Instant::now() < deadline, "the estimate never finished");
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    // One request first: what stays allocated after it (caches, templates) is not per request.
+    let first = client.report_html(&id).unwrap();
+    let (rss_before, hwm_before) = server.memory_kib();
+    let sizes: Vec<usize> = std::thread::scope(|scope| {
+        let handles: Vec<_> = (0..CONCURRENT)
+            .map(|_| scope.spawn(|| server.client().report_html(&id).unwrap().len()))
+            .collect();
+        handles.into_iter().map(|h| h.join().unwrap()).collect()
+    });
+    assert!(sizes.iter().all(|&n| n == first.len()));
+    let (rss_after, hwm_after) = server.memory_kib();
+    eprintln!(
+        "sitar serve report memory (KiB): {CONCURRENT} concurrent reports of a {POSES}-pose \
+         session ({} KiB page): RSS {rss_before} → {rss_after}, peak {hwm_before} → {hwm_after}, \
+         about {} KiB per request",
+        first.len() >> 10,
+        hwm_after.saturating_sub(rss_before) / CONCURRENT as u64
+    );
+    assert!(hwm_after < PEAK_RSS_LIMIT_KIB, "peak RSS {hwm_after} KiB");
+}
