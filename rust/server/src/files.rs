@@ -17,8 +17,9 @@ use crate::quota::{DiskQuota, Reservation};
 /// DATA/tmp/upload-*.part              uploads in progress (cleared at start)
 /// DATA/tmp/deleted-ID                 a deleted session's folder, until removed (cleared at start)
 /// DATA/sessions/ID/recording          the uploaded recording (mp4 or sim recording)
-/// DATA/sessions/ID/recording.part     the bytes kept of an interrupted recording upload
+/// DATA/sessions/ID/recording.part     a recording upload as it arrives; kept when it breaks off
 /// DATA/sessions/ID/recording.part.key the Idempotency-Key of the upload they belong to
+/// DATA/sessions/ID/recording.part.total the total length the upload declared
 /// DATA/sessions/ID/trials/trial_NNN.txt   one TUM file per finished trial
 /// DATA/sessions/ID/timestamps.txt     legacy POST /timestamps upload
 /// DATA/sessions/ID/results.csv|json   latest published estimate
