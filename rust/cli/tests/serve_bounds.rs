@@ -41,6 +41,11 @@ impl Serving {
             .spawn()
             .expect("run sitar serve");
         let stderr = child.stderr.take().unwrap();
+        // Killed and waited for on drop, also when the start fails below.
+        let mut serving = Serving {
+            child,
+            addr: SocketAddr::from(([0, 0, 0, 0], 0)),
+        };
         let (tx, rx) = std::sync::mpsc::channel();
         std::thread::spawn(move || {
             for line in BufReader::new(stderr).lines().map_while(Result::ok) {
@@ -54,11 +59,11 @@ impl Serving {
                 .expect("sitar serve never said where it listens");
             let line = rx.recv_timeout(left).expect("sitar serve's log");
             if let Some(at) = line.find("listening on http://") {
-                let addr = line[at + "listening on http://".len()..]
+                serving.addr = line[at + "listening on http://".len()..]
                     .trim()
                     .parse()
                     .unwrap();
-                return Serving { child, addr };
+                return serving;
             }
         }
     }

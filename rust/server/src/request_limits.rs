@@ -19,10 +19,12 @@ use tokio::time::{Instant, Sleep};
 use crate::Error;
 use crate::config::ServerConfig;
 use crate::evidence::{MAX_TABLE_BYTES, MAX_THUMBNAIL_BYTES};
-use crate::handlers::sessions::MAX_REQUEST_BYTES;
 use crate::http::declared_length;
 use crate::shared::Shared;
 
+/// A JSON body (`POST /v1/sessions`, whose handler counts the same 64 KiB itself), and the
+/// body of every route that takes none: a few short keys need far less.
+pub(crate) const MAX_REQUEST_BYTES: u64 = 64 << 10;
 /// Multipart framing around a legacy upload's one field.
 const MULTIPART_FRAMING: u64 = 64 << 10;
 /// An upload handler's own idle check fires first (it keeps a recording's prefix); this
