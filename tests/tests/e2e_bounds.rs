@@ -132,6 +132,19 @@ fn headers_dribbled_slowly_are_cut_off() {
     let mut config = sim_config(dir.path(), 10.0, 1);
     config.header_read_timeout = Duration::from_millis(800);
     let server = start(config);
+    // A connection that sends nothing at all is closed too.
+    let mut silent = TcpStream::connect(addr(&server)).unwrap();
+    silent
+        .set_read_timeout(Some(Duration::from_secs(10)))
+        .unwrap();
+    let opened = Instant::now();
+    let mut buf = [0u8; 64];
+    let _ = silent.read(&mut buf);
+    assert!(
+        opened.elapsed() < Duration::from_secs(5),
+        "{:?}",
+        opened.elapsed()
+    );
     let mut slow = TcpStream::connect(addr(&server)).unwrap();
     slow.write_all(b"GET /healthz HTTP/1.1\r\nhost: x\r\n")
         .unwrap();

@@ -81,6 +81,11 @@ pub(crate) async fn kept_offset(
     headers: HeaderMap,
 ) -> Result<Response, Error> {
     let key = idempotency_key(&headers)?;
+    // An upload still writing the prefix (its client may already have given up: the server
+    // sees the break a moment later) holds the lock; its final length is the one to resume
+    // from. If it holds on, the length so far is a valid prefix too.
+    let lock = shared.session_lock(&row.id);
+    let _held = tokio::time::timeout(UPLOAD_LOCK_WAIT, lock.lock()).await;
     let kept = kept_for(&shared, &row.id, key.as_deref())?.unwrap_or(0);
     let mut response = StatusCode::OK.into_response();
     let headers = response.headers_mut();
