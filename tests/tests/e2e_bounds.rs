@@ -483,3 +483,56 @@ fn the_tls_listener_has_the_same_cap_and_answers_503_over_tls() {
         std::thread::sleep(Duration::from_millis(100));
     }
 }
+
+#[test]
+fn the_subtrajectory_list_pages_like_results_json() {
+    let dir = tempfile::tempdir().unwrap();
+    let server = start(sim_config(dir.path(), 10.0, 1));
+    let id = upload_session(&client(&server));
+    let base = format!("{}/v1/sessions/{id}", server.url());
+    let mut table = String::from("index,start_ns,end_ns\n");
+    for k in 0..25u64 {
+        table.push_str(&format!(
+            "{k},{},{}\n",
+            k * 1_000_000,
+            k * 1_000_000 + 999_999
+        ));
+    }
+    let (status, _, text) = raw(
+        "PUT",
+        &format!("{base}/subtrajectories.csv"),
+        Some("text/csv"),
+        table.as_bytes(),
+        &[],
+    );
+    assert_eq!(status, 200, "{text}");
+    let get = |query: &str| {
+        let (status, _, text) = raw(
+            "GET",
+            &format!("{base}/subtrajectories{query}"),
+            None,
+            b"",
+            &[],
+        );
+        assert_eq!(status, 200, "{text}");
+        serde_json::from_str::<serde_json::Value>(&text).unwrap()
+    };
+    let whole = get("");
+    assert!(whole.get("page").is_none());
+    assert_eq!(whole["subtrajectories"].as_array().unwrap().len(), 25);
+    let mut indices = Vec::new();
+    let mut next = Some(0);
+    while let Some(offset) = next {
+        let page = get(&format!("?offset={offset}&limit=10"));
+        assert_eq!(page["page"]["total"], 25);
+        indices.extend(
+            page["subtrajectories"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|s| s["index"].as_u64().unwrap()),
+        );
+        next = page["page"]["next"].as_u64();
+    }
+    assert_eq!(indices, (0..25).collect::<Vec<u64>>());
+}

@@ -8,7 +8,7 @@
 //! names, so a retried or resumed upload sends each small file again and nothing else.
 
 use axum::body::Body;
-use axum::extract::{Path, State};
+use axum::extract::{Path, RawQuery, State};
 use axum::http::{HeaderMap, HeaderValue, StatusCode, header};
 use axum::response::{IntoResponse, Response};
 use serde_json::{Value, json};
@@ -23,6 +23,7 @@ use crate::evidence::{
 use crate::http::{
     AppState, Found, check_declared_length, declared_length, json_value, visible_session,
 };
+use crate::pagination::PageRequest;
 use crate::published::{self, Form};
 use crate::session::Session;
 use crate::shared::Shared;
@@ -211,7 +212,9 @@ pub(crate) async fn get_image(
 pub(crate) async fn list(
     State(shared): AppState,
     Found(session): Found,
+    RawQuery(query): RawQuery,
 ) -> Result<Response, Error> {
+    let page = PageRequest::parse(query.as_deref())?;
     let files = EvidenceFiles {
         files: &shared.files,
         id: &session.id,
@@ -227,7 +230,9 @@ pub(crate) async fn list(
     };
     let thresholds = session.settings.thresholds(&shared.config);
     let n = rows.len().max(spans.len());
-    let subtrajectories: Vec<Value> = (0..n)
+    let from = page.offset.min(n);
+    let to = from.saturating_add(page.limit).min(n);
+    let subtrajectories: Vec<Value> = (from..to)
         .map(|k| {
             let span = spans.get(k);
             let start = span.map(|s| s.start_ns);
@@ -266,14 +271,20 @@ pub(crate) async fn list(
         })
         .collect();
     let unit = results.as_ref().map(|r| r.unit());
-    Ok(json_value(
-        StatusCode::OK,
-        &json!({
-            "id": session.id,
-            "unit": unit.map(|u| u.name()),
-            "subtrajectories": subtrajectories,
-        }),
-    ))
+    let mut answer = json!({
+        "id": session.id,
+        "unit": unit.map(|u| u.name()),
+        "subtrajectories": subtrajectories,
+    });
+    if (from, to) != (0, n) {
+        answer["page"] = json!({
+            "offset": from,
+            "limit": page.limit,
+            "total": n,
+            "next": (to < n).then_some(to),
+        });
+    }
+    Ok(json_value(StatusCode::OK, &answer))
 }
 
 /// How far a window's start may be from the sub-trajectory's: half its mean frame interval
