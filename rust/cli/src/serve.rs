@@ -53,6 +53,26 @@ pub struct Args {
     /// Largest trajectory accepted, in MiB.
     #[arg(long, default_value_t = 64)]
     max_trajectory_mib: u64,
+    /// Connections served at once; one more is answered 503 and closed.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..),
+          default_value_t = ServerConfig::new("").max_connections as u64)]
+    max_connections: u64,
+    /// Seconds a client has to send a request's headers whole (slow clients are cut off).
+    #[arg(long, value_name = "SECS", value_parser = clap::value_parser!(u64).range(1..), default_value_t = ServerConfig::new("").header_read_timeout.as_secs())]
+    header_timeout_s: u64,
+    /// Seconds a request body other than an upload may send nothing before it is ended.
+    #[arg(long, value_name = "SECS", value_parser = clap::value_parser!(u64).range(1..), default_value_t = ServerConfig::new("").body_idle_timeout.as_secs())]
+    body_idle_timeout_s: u64,
+    /// Seconds an upload may send nothing before it is taken as broken off (what arrived of
+    /// a recording is kept for a resume).
+    #[arg(long, value_name = "SECS", value_parser = clap::value_parser!(u64).range(1..), default_value_t = ServerConfig::new("").upload_idle_timeout.as_secs())]
+    upload_idle_timeout_s: u64,
+    /// MiB one session may keep on disk (413 beyond).
+    #[arg(long, value_name = "MIB", default_value_t = ServerConfig::new("").session_disk_quota >> 20)]
+    session_quota_mib: u64,
+    /// GiB all sessions together may keep on disk (507 beyond).
+    #[arg(long, value_name = "GIB", default_value_t = ServerConfig::new("").disk_quota >> 30)]
+    disk_quota_gib: u64,
     /// Delete finished (done or failed) sessions, files included, this many days after
     /// they finished, and idle ones (never uploaded, or waiting for trials) this many days
     /// after they were created. Without it everything is kept (DELETE frees one).
@@ -138,6 +158,12 @@ pub fn run(args: Args) -> Result<()> {
     config.default_trials = args.trials;
     config.max_recording_bytes = args.max_recording_mib << 20;
     config.max_trajectory_bytes = args.max_trajectory_mib << 20;
+    config.max_connections = usize::try_from(args.max_connections).unwrap_or(usize::MAX);
+    config.header_read_timeout = Duration::from_secs(args.header_timeout_s);
+    config.body_idle_timeout = Duration::from_secs(args.body_idle_timeout_s);
+    config.upload_idle_timeout = Duration::from_secs(args.upload_idle_timeout_s);
+    config.session_disk_quota = args.session_quota_mib.saturating_mul(1 << 20);
+    config.disk_quota = args.disk_quota_gib.saturating_mul(1 << 30);
     config.insecure_no_auth = args.insecure_no_auth;
     if let Some(n) = args.playback_workers {
         config.playback_workers = n as usize;

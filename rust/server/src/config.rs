@@ -159,6 +159,20 @@ pub struct ServerConfig {
     pub max_recording_bytes: u64,
     /// Largest accepted trajectory or timestamps file (default 64 MiB).
     pub max_trajectory_bytes: u64,
+    /// Connections served at once (default 512); one more is answered 503 `busy` and closed.
+    pub max_connections: usize,
+    /// A request's headers must arrive whole within this time, else the connection is
+    /// closed (default 10 s; slow clients dribbling headers are cut off).
+    pub header_read_timeout: std::time::Duration,
+    /// A request body other than an upload (recording, trial, evidence) that sends nothing
+    /// for this long ends its request (default 10 s); uploads use `upload_idle_timeout`.
+    pub body_idle_timeout: std::time::Duration,
+    /// Bytes one session may keep on disk: recording, its kept prefix, trials, evidence,
+    /// results (default 4 GiB). An upload that would pass it is a 413 `too_large`.
+    pub session_disk_quota: u64,
+    /// Bytes all sessions together may keep on disk, uploads in progress included
+    /// (default 100 GiB). An upload that would pass it is a 507 `insufficient_storage`.
+    pub disk_quota: u64,
     /// Trials for sessions created by the legacy route or without `trials` (default 5, the
     /// paper's).
     pub default_trials: u32,
@@ -233,6 +247,11 @@ impl ServerConfig {
             playback: PlaybackKind::Adb,
             max_recording_bytes: 2 << 30,
             max_trajectory_bytes: 64 << 20,
+            max_connections: 512,
+            header_read_timeout: Duration::from_secs(10),
+            body_idle_timeout: Duration::from_secs(10),
+            session_disk_quota: 4 << 30,
+            disk_quota: 100 << 30,
             default_trials: 5,
             default_setting: sitar_core::DEFAULT_SETTING.to_string(),
             default_adaptive_k: 3,

@@ -41,6 +41,12 @@ pub enum Error {
         /// The limit in bytes.
         limit: u64,
     },
+    /// An upload would pass the session's disk quota: 413 `too_large`.
+    #[error("{0}")]
+    QuotaExceeded(String),
+    /// An upload would pass the server's disk quota: 507 `insufficient_storage`.
+    #[error("{0}")]
+    InsufficientStorage(String),
     /// The request does not fit the session's state (e.g. estimate before 2 trials): 409 `conflict`.
     #[error("{0}")]
     Conflict(String),
@@ -126,7 +132,12 @@ impl Error {
             Error::UnsupportedMediaType(_) => {
                 (StatusCode::UNSUPPORTED_MEDIA_TYPE, "unsupported_media_type")
             }
-            Error::TooLarge { .. } => (StatusCode::PAYLOAD_TOO_LARGE, "too_large"),
+            Error::TooLarge { .. } | Error::QuotaExceeded(_) => {
+                (StatusCode::PAYLOAD_TOO_LARGE, "too_large")
+            }
+            Error::InsufficientStorage(_) => {
+                (StatusCode::INSUFFICIENT_STORAGE, "insufficient_storage")
+            }
             Error::Conflict(_) | Error::Transition { .. } => (StatusCode::CONFLICT, "conflict"),
             Error::Busy(_) => (StatusCode::SERVICE_UNAVAILABLE, "busy"),
             Error::InvalidContent(_) => (StatusCode::UNPROCESSABLE_ENTITY, "invalid_content"),

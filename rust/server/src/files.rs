@@ -7,6 +7,7 @@ use futures_util::{Stream, StreamExt};
 use tokio::io::AsyncWriteExt;
 
 use crate::Error;
+use crate::quota::{DiskQuota, Reservation};
 
 /// The data directory's file layout. Every path is made here, from
 /// server-made ids and indices only: no client-supplied name becomes a path.
@@ -16,8 +17,9 @@ use crate::Error;
 /// DATA/tmp/upload-*.part              uploads in progress (cleared at start)
 /// DATA/tmp/deleted-ID                 a deleted session's folder, until removed (cleared at start)
 /// DATA/sessions/ID/recording          the uploaded recording (mp4 or sim recording)
-/// DATA/sessions/ID/recording.part     the bytes kept of an interrupted recording upload
+/// DATA/sessions/ID/recording.part     a recording upload as it arrives; kept when it breaks off
 /// DATA/sessions/ID/recording.part.key the Idempotency-Key of the upload they belong to
+/// DATA/sessions/ID/recording.part.total the total length the upload declared
 /// DATA/sessions/ID/trials/trial_NNN.txt   one TUM file per finished trial
 /// DATA/sessions/ID/timestamps.txt     legacy POST /timestamps upload
 /// DATA/sessions/ID/results.csv|json   latest published estimate
@@ -27,6 +29,8 @@ pub(crate) struct Files {
     root: PathBuf,
     /// A body that sends nothing for this long is treated as broken off.
     idle: std::time::Duration,
+    /// Every upload streamed here counts against it.
+    quota: std::sync::Arc<DiskQuota>,
 }
 
 /// Default of [`Files::with_idle_timeout`].
@@ -74,6 +78,7 @@ impl Files {
         Ok(Files {
             root: root.to_path_buf(),
             idle: DEFAULT_IDLE,
+            quota: std::sync::Arc::new(DiskQuota::new(root, u64::MAX, u64::MAX)),
         })
     }
 
@@ -83,6 +88,24 @@ impl Files {
     pub fn with_idle_timeout(mut self, idle: std::time::Duration) -> Files {
         self.idle = idle;
         self
+    }
+
+    /// The same files with disk quotas: `session` bytes per session folder, `global` bytes
+    /// for the whole data directory.
+    pub fn with_quotas(mut self, session: u64, global: u64) -> Files {
+        self.quota = std::sync::Arc::new(DiskQuota::new(&self.root, session, global));
+        self
+    }
+
+    /// Room for an upload into session `id`'s folder (`None`: a new session's, only the
+    /// global quota applies); `declared` bytes that cannot fit are refused at once.
+    pub fn reserve(
+        &self,
+        id: Option<&str>,
+        declared: Option<u64>,
+    ) -> Result<Reservation<'_>, Error> {
+        let dir = id.map(|id| self.session_dir(id));
+        self.quota.reserve(dir.as_deref(), declared)
     }
 
     pub fn session_dir(&self, id: &str) -> PathBuf {
@@ -165,31 +188,15 @@ impl Files {
             .join(format!("upload-{}.part", new_id()))
     }
 
-    /// Streams `body` into a temporary file, refusing more than `limit` bytes.
-    /// The caller moves the result into place with [`TempFile::publish`].
+    /// Streams `body` into a temporary file, refusing more than `limit` bytes (and what
+    /// would pass the global disk quota). The caller moves the result into place with
+    /// [`TempFile::publish`]; a body that breaks off leaves nothing.
     pub async fn receive<S, E>(
-        &self,
-        body: S,
-        limit: u64,
-        what: &'static str,
-    ) -> Result<TempFile, Error>
-    where
-        S: Stream<Item = Result<Bytes, E>> + Unpin,
-        E: std::fmt::Display,
-    {
-        self.receive_or_prefix(body, limit, what)
-            .await?
-            .map_err(|broken| broken.error)
-    }
-
-    /// [`Files::receive`] that keeps what arrived when the body breaks off (the client's
-    /// connection dropped): `Ok(Err(BrokenOff))` holds the prefix, so it can be resumed.
-    pub async fn receive_or_prefix<S, E>(
         &self,
         mut body: S,
         limit: u64,
         what: &'static str,
-    ) -> Result<Result<TempFile, BrokenOff>, Error>
+    ) -> Result<TempFile, Error>
     where
         S: Stream<Item = Result<Bytes, E>> + Unpin,
         E: std::fmt::Display,
@@ -201,13 +208,18 @@ impl Files {
         let file = tokio::fs::File::create(&temp.path)
             .await
             .map_err(|e| Error::io("cannot create", &temp.path, e))?;
-        let mut sink = Sink::new(file, &temp.path, temp.bytes, self.idle);
+        let room = self.reserve(None, None)?;
+        let mut sink = Sink::new(file, &temp.path, 0, self.idle, room);
         let outcome = sink.copy(&mut body, limit, what).await;
         temp.bytes = sink.written;
+        if outcome.is_err() {
+            // The temporary file goes: its bytes stop counting.
+            sink.room.discard();
+        }
+        drop(sink);
         match outcome {
-            Ok(()) => Ok(Ok(temp)),
-            Err(Copy::BrokeOff(error)) => Ok(Err(BrokenOff { temp, error })),
-            Err(Copy::Failed(error)) => Err(error),
+            Ok(()) => Ok(temp),
+            Err(Copy::BrokeOff(error) | Copy::Failed(error)) => Err(error),
         }
     }
 
@@ -222,7 +234,8 @@ impl Files {
         offset: u64,
         end: u64,
         what: &'static str,
-    ) -> Result<u64, Error>
+        room: Reservation<'_>,
+    ) -> Result<Appended, Error>
     where
         S: Stream<Item = Result<Bytes, E>> + Unpin,
         E: std::fmt::Display,
@@ -249,9 +262,16 @@ impl Files {
         file.seek(std::io::SeekFrom::Start(offset))
             .await
             .map_err(|e| Error::io("cannot seek in", path, e))?;
-        let mut sink = Sink::new(file, path, offset, self.idle);
+        let mut sink = Sink::new(file, path, offset, self.idle, room);
         match sink.copy(&mut body, end, what).await {
-            Ok(()) | Err(Copy::BrokeOff(_)) => Ok(sink.written),
+            Ok(()) => Ok(Appended {
+                len: sink.written,
+                broken: None,
+            }),
+            Err(Copy::BrokeOff(error)) => Ok(Appended {
+                len: sink.written,
+                broken: Some(error),
+            }),
             Err(Copy::Failed(error)) => {
                 let error = match error {
                     Error::TooLarge { .. } => Error::BadRequest(format!(
@@ -260,6 +280,7 @@ impl Files {
                     )),
                     other => other,
                 };
+                sink.room.discard();
                 let file = sink.out.into_inner();
                 file.set_len(offset)
                     .await
@@ -273,9 +294,25 @@ impl Files {
     /// from these bytes and written once). A body that breaks off or stalls is a 400.
     pub async fn receive_bytes<S, E>(
         &self,
+        body: S,
+        limit: u64,
+        what: &'static str,
+    ) -> Result<Vec<u8>, Error>
+    where
+        S: Stream<Item = Result<Bytes, E>> + Unpin,
+        E: std::fmt::Display,
+    {
+        self.receive_bytes_into(body, limit, what, self.reserve(None, None)?)
+            .await
+    }
+
+    /// [`Files::receive_bytes`] of bytes that will be stored under `room`'s quotas.
+    pub async fn receive_bytes_into<S, E>(
+        &self,
         mut body: S,
         limit: u64,
         what: &'static str,
+        room: Reservation<'_>,
     ) -> Result<Vec<u8>, Error>
     where
         S: Stream<Item = Result<Bytes, E>> + Unpin,
@@ -286,10 +323,14 @@ impl Files {
             path: Path::new("(memory)"),
             written: 0,
             idle: self.idle,
+            room,
         };
         match sink.copy(&mut body, limit, what).await {
             Ok(()) => Ok(sink.out),
-            Err(Copy::BrokeOff(error) | Copy::Failed(error)) => Err(error),
+            Err(Copy::BrokeOff(error) | Copy::Failed(error)) => {
+                sink.room.discard();
+                Err(error)
+            }
         }
     }
 
@@ -303,6 +344,15 @@ impl Files {
             .map_err(|e| Error::io("cannot write", &temp.path, e))?;
         temp.publish(dest)
     }
+}
+
+/// What [`Files::append`] made of a body.
+#[derive(Debug)]
+pub(crate) struct Appended {
+    /// The file's length now.
+    pub len: u64,
+    /// Why the body broke off before its end (what arrived is kept), if it did.
+    pub broken: Option<Error>,
 }
 
 /// Why copying a body stopped.
@@ -321,15 +371,24 @@ struct Sink<'p, W> {
     /// The length written once flushed.
     written: u64,
     idle: std::time::Duration,
+    /// The disk quotas the bytes count against.
+    room: Reservation<'p>,
 }
 
 impl<'p> Sink<'p, tokio::io::BufWriter<tokio::fs::File>> {
-    fn new(file: tokio::fs::File, path: &'p Path, written: u64, idle: std::time::Duration) -> Self {
+    fn new(
+        file: tokio::fs::File,
+        path: &'p Path,
+        written: u64,
+        idle: std::time::Duration,
+        room: Reservation<'p>,
+    ) -> Self {
         Sink {
             out: tokio::io::BufWriter::with_capacity(1 << 20, file),
             path,
             written,
             idle,
+            room,
         }
     }
 }
@@ -390,6 +449,7 @@ impl<W: tokio::io::AsyncWrite + Unpin> Sink<'_, W> {
             if self.written + chunk.len() as u64 > limit {
                 return Err(Copy::Failed(Error::TooLarge { what, limit }));
             }
+            self.room.add(chunk.len() as u64).map_err(Copy::Failed)?;
             self.out
                 .write_all(&chunk)
                 .await
@@ -399,13 +459,6 @@ impl<W: tokio::io::AsyncWrite + Unpin> Sink<'_, W> {
         }
         Ok(())
     }
-}
-
-/// A body that broke off: the bytes that arrived, and why it ended.
-#[derive(Debug)]
-pub(crate) struct BrokenOff {
-    pub temp: TempFile,
-    pub error: Error,
 }
 
 /// An upload in `DATA/tmp`; removed on drop unless published.
@@ -519,6 +572,10 @@ mod tests {
         );
     }
 
+    fn room(files: &Files) -> Reservation<'_> {
+        files.reserve(None, None).unwrap()
+    }
+
     fn broken_after(chunks: usize) -> impl Stream<Item = Result<Bytes, std::io::Error>> + Unpin {
         futures_util::stream::iter((0..=chunks).map(move |i| {
             if i < chunks {
@@ -533,26 +590,29 @@ mod tests {
     async fn a_broken_body_keeps_its_prefix_and_an_append_continues_it() {
         let dir = tempfile::tempdir().unwrap();
         let files = Files::open(dir.path()).unwrap();
+        let part = dir.path().join("part");
         let broken = files
-            .receive_or_prefix(broken_after(3), 10_000, "recording")
+            .append(broken_after(3), &part, 0, 10_000, "recording", room(&files))
             .await
-            .unwrap()
-            .unwrap_err();
-        assert_eq!(broken.temp.bytes, 3000);
-        assert!(
-            broken.error.to_string().contains("broke off"),
-            "{}",
-            broken.error
-        );
-        let part = dir.path().join("sessions/x/recording.part");
-        broken.temp.publish(&part).unwrap();
+            .unwrap();
+        assert_eq!(broken.len, 3000);
+        let error = broken.broken.unwrap().to_string();
+        assert!(error.contains("broke off"), "{error}");
 
         // Another break while appending: what arrived is kept.
         let len = files
-            .append(broken_after(2), &part, 3000, 10_000, "recording")
+            .append(
+                broken_after(2),
+                &part,
+                3000,
+                10_000,
+                "recording",
+                room(&files),
+            )
             .await
             .unwrap();
-        assert_eq!(len, 5000);
+        assert!(len.broken.is_some());
+        assert_eq!(len.len, 5000);
         let kept = std::fs::read(&part).unwrap();
         assert_eq!(kept.len(), 5000);
         assert_eq!((kept[2999], kept[3000], kept[4999]), (2, 0, 1));
@@ -565,7 +625,7 @@ mod tests {
         let part = dir.path().join("part");
         std::fs::write(&part, [9u8; 500]).unwrap();
         let err = files
-            .append(broken_after(3), &part, 500, 2500, "recording")
+            .append(broken_after(3), &part, 500, 2500, "recording", room(&files))
             .await
             .unwrap_err();
         assert!(
@@ -574,7 +634,14 @@ mod tests {
         );
         assert_eq!(std::fs::read(&part).unwrap(), vec![9u8; 500]);
         let err = files
-            .append(broken_after(1), &part, 400, 10_000, "recording")
+            .append(
+                broken_after(1),
+                &part,
+                400,
+                10_000,
+                "recording",
+                room(&files),
+            )
             .await
             .unwrap_err();
         assert!(matches!(err, Error::Internal(_)), "{err}");

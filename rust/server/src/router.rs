@@ -77,6 +77,10 @@ pub(crate) fn router(shared: Arc<Shared>) -> Router {
         .layer(DefaultBodyLimit::disable())
         .layer(axum::middleware::from_fn_with_state(
             shared.clone(),
+            crate::request_limits::bound_bodies,
+        ))
+        .layer(axum::middleware::from_fn_with_state(
+            shared.clone(),
             auth::limit_uploads,
         ))
         .layer(axum::middleware::from_fn_with_state(

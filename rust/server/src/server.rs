@@ -74,21 +74,19 @@ impl Server {
             shutdown.await;
             shared.stop_all();
         };
-        let served = match &self.tls {
+        let limits = crate::connections::ConnectionLimits {
+            max_connections: self.shared.config.max_connections,
+            header_read_timeout: self.shared.config.header_read_timeout,
+        };
+        match &self.tls {
             Some(tls) => {
                 let listener = tls::TlsListener::new(listener, tls.config.clone())
                     .map_err(|e| Error::Config(format!("listener: {e}")))?;
-                axum::serve(listener, self.router())
-                    .with_graceful_shutdown(stop)
-                    .await
+                crate::connections::serve(listener, self.router(), limits, stop).await;
             }
-            None => {
-                axum::serve(listener, self.router())
-                    .with_graceful_shutdown(stop)
-                    .await
-            }
-        };
-        served.map_err(|e| Error::Internal(format!("server: {e}")))
+            None => crate::connections::serve(listener, self.router(), limits, stop).await,
+        }
+        Ok(())
     }
 
     /// `https` with TLS, else `http`.

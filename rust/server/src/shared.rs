@@ -59,7 +59,9 @@ pub(crate) struct Shared {
 
 impl Shared {
     pub fn open(config: ServerConfig) -> Result<Shared, Error> {
-        let files = Files::open(&config.data_dir)?.with_idle_timeout(config.upload_idle_timeout);
+        let files = Files::open(&config.data_dir)?
+            .with_idle_timeout(config.upload_idle_timeout)
+            .with_quotas(config.session_disk_quota, config.disk_quota);
         let db = Db::open(&config.data_dir.join("sitar.db"))?;
         Ok(Shared {
             sim: Arc::new(SimPlayback::new(config.sim.clone())),

@@ -8,10 +8,9 @@
 //! names, so a retried or resumed upload sends each small file again and nothing else.
 
 use axum::body::Body;
-use axum::extract::{Path, State};
+use axum::extract::{Path, RawQuery, State};
 use axum::http::{HeaderMap, HeaderValue, StatusCode, header};
 use axum::response::{IntoResponse, Response};
-use futures_util::StreamExt;
 use serde_json::{Value, json};
 use sitar_core::Results;
 
@@ -21,29 +20,30 @@ use crate::evidence::{
     EvidenceFiles, MAX_SUBTRAJECTORIES, MAX_TABLE_BYTES, MAX_THUMBNAIL_BYTES, check_jpeg,
     parse_evidence, parse_spans,
 };
-use crate::http::{AppState, Found, check_declared_length, json_value, visible_session};
+use crate::http::{
+    AppState, Found, check_declared_length, declared_length, json_value, visible_session,
+};
+use crate::pagination::PageRequest;
 use crate::published::{self, Form};
 use crate::session::Session;
 use crate::shared::Shared;
 
-/// The whole body, refused with a 413 once it passes `limit` (declared or sent).
+/// The whole body, refused with a 413 once it passes `limit` (declared or sent) or the
+/// session's disk quota (507 past the server's).
 async fn small_body(
+    shared: &Shared,
+    id: &str,
     headers: &HeaderMap,
     body: Body,
     limit: u64,
     what: &'static str,
 ) -> Result<Vec<u8>, Error> {
     check_declared_length(headers, limit, what)?;
-    let mut stream = body.into_data_stream();
-    let mut bytes = Vec::new();
-    while let Some(chunk) = stream.next().await {
-        let chunk = chunk.map_err(|e| Error::BadRequest(format!("{what}: body broke off: {e}")))?;
-        if (bytes.len() + chunk.len()) as u64 > limit {
-            return Err(Error::TooLarge { what, limit });
-        }
-        bytes.extend_from_slice(&chunk);
-    }
-    Ok(bytes)
+    let room = shared.files.reserve(Some(id), declared_length(headers))?;
+    shared
+        .files
+        .receive_bytes_into(body.into_data_stream(), limit, what, room)
+        .await
 }
 
 fn utf8(bytes: Vec<u8>, what: &str) -> Result<String, Error> {
@@ -78,7 +78,8 @@ pub(crate) async fn put_evidence(
     headers: HeaderMap,
     body: Body,
 ) -> Result<Response, Error> {
-    let rows = parse_evidence(&table_text(&headers, body, "evidence.csv").await?)?;
+    let rows =
+        parse_evidence(&table_text(&shared, &session.id, &headers, body, "evidence.csv").await?)?;
     under_lock(&shared, &session.id, |f| f.store_evidence(&rows)).await?;
     Ok(stored(rows.len()))
 }
@@ -90,15 +91,23 @@ pub(crate) async fn put_spans(
     headers: HeaderMap,
     body: Body,
 ) -> Result<Response, Error> {
-    let spans = parse_spans(&table_text(&headers, body, "subtrajectories.csv").await?)?;
+    let spans = parse_spans(
+        &table_text(&shared, &session.id, &headers, body, "subtrajectories.csv").await?,
+    )?;
     under_lock(&shared, &session.id, |f| f.store_spans(&spans)).await?;
     Ok(stored(spans.len()))
 }
 
 /// A phone table's body as text: bounded by `MAX_TABLE_BYTES`, UTF-8, errors naming `name`.
-async fn table_text(headers: &HeaderMap, body: Body, name: &'static str) -> Result<String, Error> {
+async fn table_text(
+    shared: &Shared,
+    id: &str,
+    headers: &HeaderMap,
+    body: Body,
+    name: &'static str,
+) -> Result<String, Error> {
     utf8(
-        small_body(headers, body, MAX_TABLE_BYTES, name).await?,
+        small_body(shared, id, headers, body, MAX_TABLE_BYTES, name).await?,
         name,
     )
 }
@@ -135,7 +144,15 @@ pub(crate) async fn put_image(
     body: Body,
 ) -> Result<Response, Error> {
     let (session, k) = session_and_index(&shared, &caller, &id, &k)?;
-    let jpeg = small_body(&headers, body, MAX_THUMBNAIL_BYTES, "image.jpg").await?;
+    let jpeg = small_body(
+        &shared,
+        &session.id,
+        &headers,
+        body,
+        MAX_THUMBNAIL_BYTES,
+        "image.jpg",
+    )
+    .await?;
     check_jpeg(&jpeg)?;
     under_lock(&shared, &session.id, |f| {
         let rows = f.evidence_rows()?.ok_or_else(|| {
@@ -195,7 +212,9 @@ pub(crate) async fn get_image(
 pub(crate) async fn list(
     State(shared): AppState,
     Found(session): Found,
+    RawQuery(query): RawQuery,
 ) -> Result<Response, Error> {
+    let page = PageRequest::parse(query.as_deref())?;
     let files = EvidenceFiles {
         files: &shared.files,
         id: &session.id,
@@ -211,7 +230,9 @@ pub(crate) async fn list(
     };
     let thresholds = session.settings.thresholds(&shared.config);
     let n = rows.len().max(spans.len());
-    let subtrajectories: Vec<Value> = (0..n)
+    let from = page.offset.min(n);
+    let to = from.saturating_add(page.limit).min(n);
+    let subtrajectories: Vec<Value> = (from..to)
         .map(|k| {
             let span = spans.get(k);
             let start = span.map(|s| s.start_ns);
@@ -250,14 +271,20 @@ pub(crate) async fn list(
         })
         .collect();
     let unit = results.as_ref().map(|r| r.unit());
-    Ok(json_value(
-        StatusCode::OK,
-        &json!({
-            "id": session.id,
-            "unit": unit.map(|u| u.name()),
-            "subtrajectories": subtrajectories,
-        }),
-    ))
+    let mut answer = json!({
+        "id": session.id,
+        "unit": unit.map(|u| u.name()),
+        "subtrajectories": subtrajectories,
+    });
+    if (from, to) != (0, n) {
+        answer["page"] = json!({
+            "offset": from,
+            "limit": page.limit,
+            "total": n,
+            "next": (to < n).then_some(to),
+        });
+    }
+    Ok(json_value(StatusCode::OK, &answer))
 }
 
 /// How far a window's start may be from the sub-trajectory's: half its mean frame interval

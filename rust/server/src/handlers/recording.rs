@@ -68,7 +68,7 @@ pub(crate) async fn put_recording(
         Some(range) => resume(&shared, &row, &headers, key, range, body).await,
         None => {
             check_declared_length(&headers, limit, "recording")?;
-            whole(&shared, &row, key, body).await
+            whole(&shared, &row, &headers, key, body).await
         }
     }
 }
@@ -81,6 +81,11 @@ pub(crate) async fn kept_offset(
     headers: HeaderMap,
 ) -> Result<Response, Error> {
     let key = idempotency_key(&headers)?;
+    // An upload still writing the prefix (its client may already have given up: the server
+    // sees the break a moment later) holds the lock; its final length is the one to resume
+    // from. If it holds on, the length so far is a valid prefix too.
+    let lock = shared.session_lock(&row.id);
+    let _held = tokio::time::timeout(UPLOAD_LOCK_WAIT, lock.lock()).await;
     let kept = kept_for(&shared, &row.id, key.as_deref())?.unwrap_or(0);
     let mut response = StatusCode::OK.into_response();
     let headers = response.headers_mut();
@@ -89,40 +94,71 @@ pub(crate) async fn kept_offset(
     Ok(response)
 }
 
+/// A plain `PUT`: streamed straight into `recording.part` under the request's key (total
+/// and key written first), so a body broken off — even by a crash of the server — leaves a
+/// prefix a range `PUT` with the same key resumes from.
 async fn whole(
     shared: &Arc<Shared>,
     row: &Session,
+    headers: &HeaderMap,
     key: Option<String>,
     body: Body,
 ) -> Result<Response, Error> {
     let limit = shared.config.max_recording_bytes;
-    let received = shared
-        .files
-        .receive_or_prefix(body.into_data_stream(), limit, "recording")
-        .await?;
     let lock = shared.session_lock(&row.id);
-    let _held = lock.lock().await;
-    // The session may have been deleted, or moved on, while the body was arriving.
+    let Ok(_held) = tokio::time::timeout(UPLOAD_LOCK_WAIT, lock.lock()).await else {
+        return Err(busy_uploading(&row.id));
+    };
+    // The session may have been deleted, or moved on, since the request was routed.
     let row = &shared.session(&row.id)?;
-    let part = shared.files.recording_part(&row.id);
-    match received {
-        Ok(temp) => {
-            accept_recording(shared, row, temp)?;
-            discard_part(shared, &row.id)?;
-            Ok(uploaded(&row.id))
-        }
-        Err(broken) => {
-            // The latest upload's prefix replaces any older one: a retry resumes from it.
-            if broken.temp.bytes > 0 && !shared.files.recording(&row.id).is_file() {
-                // Key file last: a crash in between leaves a prefix no key matches.
-                remove_if_present(&shared.files.recording_part_key(&row.id))?;
-                remove_if_present(&shared.files.recording_part_total(&row.id))?;
-                broken.temp.publish(&part)?;
-                write_key(shared, &row.id, key.as_deref())?;
-            }
-            Err(broken.error)
-        }
+    let id = &row.id;
+    // The latest upload's prefix replaces any older one: a retry resumes from it.
+    discard_part(shared, id)?;
+    let declared = declared_length(headers);
+    let room = shared.files.reserve(Some(id), declared)?;
+    if let Some(total) = declared.filter(|&n| n > 0) {
+        shared.files.write_atomic(
+            &shared.files.recording_part_total(id),
+            total.to_string().as_bytes(),
+        )?;
     }
+    write_key(shared, id, key.as_deref())?;
+    let part = shared.files.recording_part(id);
+    let appended = shared
+        .files
+        .append(body.into_data_stream(), &part, 0, limit, "recording", room)
+        .await;
+    let appended = match appended {
+        Ok(appended) => appended,
+        Err(error) => {
+            discard_part(shared, id)?;
+            return Err(error);
+        }
+    };
+    if let Some(error) = appended.broken {
+        if appended.len == 0 || shared.files.recording(id).is_file() {
+            discard_part(shared, id)?;
+        }
+        return Err(error);
+    }
+    let temp = TempFile {
+        path: part,
+        bytes: appended.len,
+    };
+    let accepted = accept_recording(shared, row, temp);
+    discard_part(shared, id)?;
+    accepted?;
+    Ok(uploaded(id))
+}
+
+/// How long an upload waits for an earlier one to the same session to end (a client that
+/// retries right after its connection dropped: the server may not have seen the drop yet).
+const UPLOAD_LOCK_WAIT: std::time::Duration = std::time::Duration::from_secs(5);
+
+fn busy_uploading(id: &str) -> Error {
+    Error::Conflict(format!(
+        "another upload to session {id} is still being received; try again shortly"
+    ))
 }
 
 async fn resume(
@@ -152,11 +188,8 @@ async fn resume(
         )));
     }
     let lock = shared.session_lock(&row.id);
-    let Ok(_held) = lock.try_lock() else {
-        return Err(Error::Conflict(format!(
-            "another upload to session {} is still being received; try again shortly",
-            row.id
-        )));
+    let Ok(_held) = tokio::time::timeout(UPLOAD_LOCK_WAIT, lock.lock()).await else {
+        return Err(busy_uploading(&row.id));
     };
     let row = &shared.session(&row.id)?;
     let part = shared.files.recording_part(&row.id);
@@ -184,10 +217,12 @@ async fn resume(
     }
     check_total(shared, &row.id, range.total)?;
     let end = range.last + 1;
+    let room = shared.files.reserve(Some(&row.id), Some(range.len()))?;
     let now = shared
         .files
-        .append(body.into_data_stream(), &part, kept, end, "recording")
-        .await?;
+        .append(body.into_data_stream(), &part, kept, end, "recording", room)
+        .await?
+        .len;
     if now == range.total {
         let temp = TempFile {
             path: part,

@@ -1,7 +1,7 @@
 //! A session's results: `POST /v1/sessions/{id}/estimate` (the final estimate, now) and
 //! `GET /v1/sessions/{id}/results.csv|results.json` (the latest published one).
 
-use axum::extract::State;
+use axum::extract::{RawQuery, State};
 use axum::http::{StatusCode, header};
 use axum::response::{IntoResponse, Response};
 use serde_json::json;
@@ -10,6 +10,7 @@ use crate::Error;
 use crate::config::PlaybackKind;
 use crate::http::{AppState, Found, json_response, json_value};
 use crate::jobs;
+use crate::pagination::{PageRequest, page_of};
 use crate::published::{self, Form};
 use crate::session::SessionState;
 
@@ -65,13 +66,18 @@ pub(crate) async fn csv(State(shared): AppState, Found(session): Found) -> Resul
     Ok(([(header::CONTENT_TYPE, "text/csv; charset=utf-8")], text).into_response())
 }
 
-/// `GET /v1/sessions/{id}/results.json`.
+/// `GET /v1/sessions/{id}/results.json[?offset=N&limit=M]`: at most
+/// [`MAX_PAGE`](crate::pagination::MAX_PAGE) windows per answer, with a `page` object when
+/// the answer does not hold them all.
 pub(crate) async fn json(
     State(shared): AppState,
     Found(session): Found,
+    RawQuery(query): RawQuery,
 ) -> Result<Response, Error> {
+    let page = PageRequest::parse(query.as_deref())?;
+    let doc = published::read(&shared, &session, Form::Json)?;
     Ok(json_response(
         StatusCode::OK,
-        &published::read(&shared, &session, Form::Json)?,
+        &page_of(doc, "windows", page)?,
     ))
 }

@@ -44,9 +44,12 @@ pub(crate) async fn post(
     let limit = shared.config.max_trajectory_bytes;
     check_declared_length(&headers, limit, "trajectory")?;
     let key = idempotency_key(&headers)?;
+    let room = shared
+        .files
+        .reserve(Some(&id), crate::http::declared_length(&headers))?;
     let bytes = shared
         .files
-        .receive_bytes(body.into_data_stream(), limit, "trajectory")
+        .receive_bytes_into(body.into_data_stream(), limit, "trajectory", room)
         .await?;
     let trial = trials::parse_trial(&bytes, "trial")?;
     let lock = shared.session_lock(&id);

@@ -1,0 +1,419 @@
+//! `sitar serve` (the real binary) under hostile load, bounded in count and time: a kill -9
+//! during a plain recording `PUT` keeps the prefix, which a range `PUT` resumes; 1 000
+//! stalled uploads and 1 000 header-dribbling connections are all cut off (timeouts and the
+//! connection cap) with the server's peak RSS under [`PEAK_RSS_LIMIT_KIB`]; an oversized
+//! JSON body is refused with a small answer and no memory growth. Prints the memory figures
+//! the server README quotes (`cargo test -p sitar-cli --test serve_bounds -- --nocapture`).
+
+use std::io::{BufRead, BufReader, ErrorKind, Read, Write};
+use std::net::{SocketAddr, TcpStream};
+use std::path::Path;
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+/// The documented bound (server README, "Memory"): the peak RSS of `sitar serve` through
+/// the whole load test.
+const PEAK_RSS_LIMIT_KIB: u64 = 256 << 10;
+
+struct Serving {
+    child: Child,
+    addr: SocketAddr,
+}
+
+impl Serving {
+    fn start(data: &Path, extra: &[&str]) -> Serving {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_sitar"))
+            .args([
+                "serve",
+                "--addr",
+                "127.0.0.1:0",
+                "--playback",
+                "sim",
+                "--insecure-no-auth",
+                "--log-level",
+                "info",
+                "--data",
+            ])
+            .arg(data)
+            .args(extra)
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("run sitar serve");
+        let stderr = child.stderr.take().unwrap();
+        // Killed and waited for on drop, also when the start fails below.
+        let mut serving = Serving {
+            child,
+            addr: SocketAddr::from(([0, 0, 0, 0], 0)),
+        };
+        let (tx, rx) = std::sync::mpsc::channel();
+        std::thread::spawn(move || {
+            for line in BufReader::new(stderr).lines().map_while(Result::ok) {
+                let _ = tx.send(line);
+            }
+        });
+        let deadline = Instant::now() + Duration::from_secs(30);
+        loop {
+            let left = deadline
+                .checked_duration_since(Instant::now())
+                .expect("sitar serve never said where it listens");
+            let line = rx.recv_timeout(left).expect("sitar serve's log");
+            if let Some(at) = line.find("listening on http://") {
+                serving.addr = line[at + "listening on http://".len()..]
+                    .trim()
+                    .parse()
+                    .unwrap();
+                return serving;
+            }
+        }
+    }
+
+    fn url(&self) -> String {
+        format!("http://{}", self.addr)
+    }
+
+    /// `VmRSS` and `VmHWM` (peak) of the server process, KiB.
+    fn memory_kib(&self) -> (u64, u64) {
+        let status = std::fs::read_to_string(format!("/proc/{}/status", self.child.id())).unwrap();
+        let field = |name: &str| {
+            status
+                .lines()
+                .find_map(|l| l.strip_prefix(name))
+                .and_then(|v| v.trim().trim_end_matches("kB").trim().parse().ok())
+                .unwrap_or_else(|| panic!("no {name} in /proc status"))
+        };
+        (field("VmRSS:"), field("VmHWM:"))
+    }
+
+    fn client(&self) -> sitar_client::Client {
+        sitar_client::Client::new(&self.url()).unwrap()
+    }
+}
+
+impl Drop for Serving {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+fn upload_session(client: &sitar_client::Client) -> String {
+    client
+        .create_session(&sitar_client::NewSession {
+            trials: 2,
+            setting: "median".into(),
+            playback: "upload".into(),
+            window_frames: None,
+            pose_relation: None,
+        })
+        .unwrap()
+}
+
+/// Deterministic, non-repeating bytes: a misplaced byte range cannot compare equal.
+fn recording_bytes(len: usize) -> Vec<u8> {
+    (0..len as u64)
+        .map(|i| (i.wrapping_mul(2_654_435_761) >> 13) as u8)
+        .collect()
+}
+
+/// `Upload-Offset` for the key `k` (raw HTTP: the answer's headers only).
+fn kept(addr: SocketAddr, id: &str) -> u64 {
+    let (_, answer) = exchange(
+        addr,
+        &format!(
+            "HEAD /v1/sessions/{id}/recording HTTP/1.1\r\nhost: x\r\nidempotency-key: k\r\nconnection: close\r\n\r\n"
+        ),
+        b"",
+    );
+    answer
+        .lines()
+        .find_map(|l| {
+            l.to_ascii_lowercase()
+                .strip_prefix("upload-offset:")
+                .map(|v| v.trim().parse().unwrap())
+        })
+        .unwrap_or_else(|| panic!("no Upload-Offset: {answer}"))
+}
+
+fn exchange(addr: SocketAddr, head: &str, body: &[u8]) -> (u16, String) {
+    let mut stream = TcpStream::connect(addr).unwrap();
+    stream
+        .set_read_timeout(Some(Duration::from_secs(20)))
+        .unwrap();
+    stream.write_all(head.as_bytes()).unwrap();
+    let _ = stream.write_all(body);
+    let mut answer = Vec::new();
+    let _ = stream.read_to_end(&mut answer);
+    let text = String::from_utf8_lossy(&answer).into_owned();
+    let status = text
+        .get(9..12)
+        .and_then(|s| s.parse().ok())
+        .unwrap_or_else(|| panic!("no status in {text:?}"));
+    (status, text)
+}
+
+#[test]
+fn a_plain_put_broken_off_by_kill_9_resumes_from_its_prefix() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("data");
+    let server = Serving::start(&data, &[]);
+    let id = upload_session(&server.client());
+    let bytes = recording_bytes(6 << 20);
+
+    let mut put = TcpStream::connect(server.addr).unwrap();
+    write!(
+        put,
+        "PUT /v1/sessions/{id}/recording HTTP/1.1\r\nhost: x\r\n\
+         content-type: application/octet-stream\r\nidempotency-key: k\r\n\
+         content-length: {}\r\n\r\n",
+        bytes.len()
+    )
+    .unwrap();
+    put.write_all(&bytes[..4 << 20]).unwrap();
+    put.flush().unwrap();
+    // The server writes what arrives into the session's recording.part (1 MiB at a time).
+    let deadline = Instant::now() + Duration::from_secs(20);
+    let part = data.join("sessions").join(&id).join("recording.part");
+    while std::fs::metadata(&part).map_or(0, |m| m.len()) < (2 << 20) {
+        assert!(
+            Instant::now() < deadline,
+            "the upload never reached the disk"
+        );
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    let mut server = server;
+    server.child.kill().unwrap(); // SIGKILL: no handler runs, no flush.
+    server.child.wait().unwrap();
+    drop(put);
+
+    let server = Serving::start(&data, &[]);
+    let offset = kept(server.addr, &id);
+    assert!(
+        (2 << 20..=4 << 20).contains(&offset),
+        "kept {offset} bytes of the 4 MiB sent"
+    );
+    let last = bytes.len() - 1;
+    let (status, answer) = exchange(
+        server.addr,
+        &format!(
+            "PUT /v1/sessions/{id}/recording HTTP/1.1\r\nhost: x\r\n\
+             content-type: application/octet-stream\r\nidempotency-key: k\r\n\
+             content-range: bytes {offset}-{last}/{}\r\ncontent-length: {}\r\nconnection: close\r\n\r\n",
+            bytes.len(),
+            bytes.len() as u64 - offset
+        ),
+        &bytes[offset as usize..],
+    );
+    assert_eq!(status, 202, "{answer}");
+    let stored = std::fs::read(data.join("sessions").join(&id).join("recording")).unwrap();
+    assert!(stored == bytes, "the resumed recording differs");
+    assert!(!part.exists());
+}
+
+/// One client socket of the load test, and whether the server has let go of it.
+struct Probe {
+    stream: TcpStream,
+    closed: bool,
+}
+
+impl Probe {
+    /// Whether the server answered or closed (reads without waiting).
+    fn poll_closed(&mut self) -> bool {
+        if !self.closed {
+            let mut buf = [0u8; 1024];
+            self.closed = match self.stream.read(&mut buf) {
+                Ok(_) => true,
+                Err(e) => e.kind() != ErrorKind::WouldBlock,
+            };
+        }
+        self.closed
+    }
+}
+
+fn open_probe(addr: SocketAddr, first_bytes: &[u8]) -> Probe {
+    let mut stream = TcpStream::connect(addr).unwrap();
+    // A refused (503) connection may already be closed: a failed write is an answer too.
+    let closed = stream.write_all(first_bytes).is_err();
+    stream.set_nonblocking(true).unwrap();
+    Probe { stream, closed }
+}
+
+/// Waits until every probe is closed by the server, sending each open one `dribble` every
+/// 200 ms; panics after `limit`. Returns how long it took.
+fn wait_all_cut(probes: &mut [Probe], dribble: Option<&[u8]>, limit: Duration) -> Duration {
+    let started = Instant::now();
+    loop {
+        let mut open = 0;
+        for probe in probes.iter_mut() {
+            if !probe.poll_closed() {
+                open += 1;
+                if let Some(bytes) = dribble
+                    && probe.stream.write(bytes).is_err()
+                {
+                    probe.closed = true;
+                }
+            }
+        }
+        if open == 0 {
+            return started.elapsed();
+        }
+        assert!(
+            started.elapsed() < limit,
+            "{open} connections still open after {limit:?}"
+        );
+        std::thread::sleep(Duration::from_millis(200));
+    }
+}
+
+#[test]
+fn stalled_uploads_and_dribbled_headers_are_cut_off_within_a_bounded_memory() {
+    let dir = tempfile::tempdir().unwrap();
+    let server = Serving::start(
+        &dir.path().join("data"),
+        &[
+            "--max-connections",
+            "512",
+            "--header-timeout-s",
+            "2",
+            "--upload-idle-timeout-s",
+            "2",
+            "--body-idle-timeout-s",
+            "2",
+        ],
+    );
+    let client = server.client();
+    client.health().unwrap();
+    let (idle_rss, _) = server.memory_kib();
+
+    // 1 000 stalled uploads: 200 recording PUTs (one session each: a PUT holds its session)
+    // and 800 trial POSTs, each announcing 1 MiB, sending 48 KiB and going silent.
+    let trial_session = upload_session(&client);
+    let recording_sessions: Vec<String> = (0..200).map(|_| upload_session(&client)).collect();
+    let chunk = vec![b'1'; 48 << 10];
+    let mut probes: Vec<Probe> = (0..1000)
+        .map(|i| {
+            let head = match recording_sessions.get(i) {
+                Some(id) => format!(
+                    "PUT /v1/sessions/{id}/recording HTTP/1.1\r\nhost: x\r\n\
+                     content-type: application/octet-stream\r\ncontent-length: 1048576\r\n\r\n"
+                ),
+                None => format!(
+                    "POST /v1/sessions/{trial_session}/trials HTTP/1.1\r\nhost: x\r\n\
+                     content-type: text/plain\r\ncontent-length: 1048576\r\n\r\n"
+                ),
+            };
+            let mut first = head.into_bytes();
+            first.extend_from_slice(&chunk);
+            open_probe(server.addr, &first)
+        })
+        .collect();
+    std::thread::sleep(Duration::from_millis(500));
+    let (stalled_rss, _) = server.memory_kib();
+    let took = wait_all_cut(&mut probes, None, Duration::from_secs(30));
+    drop(probes);
+    let (after_uploads_rss, _) = server.memory_kib();
+
+    // 1 000 connections dribbling header lines, one every 200 ms each.
+    let mut probes: Vec<Probe> = (0..1000)
+        .map(|_| open_probe(server.addr, b"GET /healthz HTTP/1.1\r\nhost: x\r\n"))
+        .collect();
+    let dribbled = wait_all_cut(&mut probes, Some(b"x-slow: y\r\n"), Duration::from_secs(30));
+    drop(probes);
+    client.health().unwrap();
+
+    // An oversized JSON body: refused by its declared length, small answer, no growth.
+    let (_, hwm_before) = server.memory_kib();
+    let mut stream = TcpStream::connect(server.addr).unwrap();
+    stream
+        .set_read_timeout(Some(Duration::from_secs(10)))
+        .unwrap();
+    write!(
+        stream,
+        "POST /v1/sessions HTTP/1.1\r\nhost: x\r\ncontent-type: application/json\r\n\
+         content-length: 1073741824\r\n\r\n"
+    )
+    .unwrap();
+    let junk = vec![b'a'; 1 << 20];
+    for _ in 0..64 {
+        if stream.write_all(&junk).is_err() {
+            break;
+        }
+    }
+    let mut answer = Vec::new();
+    let _ = stream.read_to_end(&mut answer);
+    let answer = String::from_utf8_lossy(&answer);
+    assert!(answer.starts_with("HTTP/1.1 413"), "{answer}");
+    assert!(answer.len() <= 1024, "{} bytes", answer.len());
+    let (_, hwm_after) = server.memory_kib();
+    assert!(
+        hwm_after - hwm_before < 8 << 10,
+        "peak RSS grew by {} KiB for a refused body",
+        hwm_after - hwm_before
+    );
+
+    let (rss, peak) = server.memory_kib();
+    eprintln!(
+        "sitar serve memory (KiB): idle RSS {idle_rss}; with 1000 stalled uploads (512 \
+         served) RSS {stalled_rss}, {} KiB per served upload; all cut off in {:.1} s, RSS \
+         then {after_uploads_rss}; 1000 header dribblers cut off in {:.1} s; RSS at the end \
+         {rss}, peak (VmHWM) {peak}",
+        stalled_rss.saturating_sub(idle_rss) / 512,
+        took.as_secs_f64(),
+        dribbled.as_secs_f64()
+    );
+    assert!(
+        peak < PEAK_RSS_LIMIT_KIB,
+        "peak RSS {peak} KiB passes {PEAK_RSS_LIMIT_KIB} KiB"
+    );
+}
+
+/// A TUM trajectory of `n` poses walking along x; `wobble` shifts it a little per trial.
+fn trajectory(n: usize, wobble: f64) -> String {
+    (0..n)
+        .map(|i| {
+            let t = i as f64 / 30.0;
+            let x = t * 0.5 + wobble * (i as f64 * 0.37).sin();
+            format!("{t:.6} {x:.6} 0.000000 1.500000 0 0 0 1\n")
+        })
+        .collect()
+}
+
+#[test]
+fn report_requests_cost_a_measured_amount_of_memory() {
+    const POSES: usize = 20_000;
+    const CONCURRENT: usize = 16;
+    let dir = tempfile::tempdir().unwrap();
+    let server = Serving::start(&dir.path().join("data"), &[]);
+    let client = server.client();
+    let id = upload_session(&client);
+    for wobble in [0.0, 0.01] {
+        client
+            .upload_trial(&id, &trajectory(POSES, wobble))
+            .unwrap();
+    }
+    client.start_estimate(&id).unwrap();
+    let deadline = Instant::now() + Duration::from_secs(120);
+    while client.status(&id).unwrap().state != sitar_client::SessionState::Done {
+        assert!(Instant::now() < deadline, "the estimate never finished");
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    // One request first: what stays allocated after it (caches, templates) is not per request.
+    let first = client.report_html(&id).unwrap();
+    let (rss_before, hwm_before) = server.memory_kib();
+    let sizes: Vec<usize> = std::thread::scope(|scope| {
+        let handles: Vec<_> = (0..CONCURRENT)
+            .map(|_| scope.spawn(|| server.client().report_html(&id).unwrap().len()))
+            .collect();
+        handles.into_iter().map(|h| h.join().unwrap()).collect()
+    });
+    assert!(sizes.iter().all(|&n| n == first.len()));
+    let (rss_after, hwm_after) = server.memory_kib();
+    eprintln!(
+        "sitar serve report memory (KiB): {CONCURRENT} concurrent reports of a {POSES}-pose \
+         session ({} KiB page): RSS {rss_before} → {rss_after}, peak {hwm_before} → {hwm_after}, \
+         about {} KiB per request",
+        first.len() >> 10,
+        hwm_after.saturating_sub(rss_before) / CONCURRENT as u64
+    );
+    assert!(hwm_after < PEAK_RSS_LIMIT_KIB, "peak RSS {hwm_after} KiB");
+}
