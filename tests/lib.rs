@@ -322,3 +322,45 @@ pub fn parse_csv(text: &str) -> Vec<(String, f64)> {
         })
         .collect()
 }
+
+/// The user's phone on a simulated walk, as the demo records it: start, every frame, the
+/// camera image and a depth image at each midpoint, stop (sitar-core's evidence included).
+pub fn phone_walk_with_evidence(recording: &sitar_sim::Recording) -> sitar_core::Session {
+    use sitar_core::{DepthImage, DisplayRotation, LumaImage, Pose, Session, SessionConfig};
+    use sitar_sim::{DepthCamera, LumaCamera};
+    let config = SessionConfig::from_json(r#"{"convention":"arcore"}"#).expect("config");
+    let mut session = Session::new(config);
+    let gt = &recording.walk().ground_truth;
+    let (camera, luma_camera, display) = (
+        DepthCamera::phone(),
+        LumaCamera::phone(),
+        DisplayRotation::Deg90,
+    );
+    let pose = |i: usize| Pose::new(gt.positions[i], gt.orientations[i]);
+    let last = gt.len() - 1;
+    session.start(gt.stamps[0], pose(0)).expect("start");
+    for i in 1..last {
+        if session
+            .frame(gt.stamps[i], pose(i))
+            .expect("frame")
+            .is_midpoint()
+        {
+            let (p, q) = (gt.positions[i], gt.orientations[i]);
+            let luma = recording
+                .room()
+                .render_luma_rotated(p, q, &luma_camera, display, i as u64);
+            let (w, h) = (luma_camera.width, luma_camera.height);
+            let image = LumaImage::new(&luma, w, h, w).expect("luma image");
+            session.image(&image, display).expect("image");
+            let depth = recording
+                .room()
+                .render_depth_mm_rotated(p, q, &camera, display);
+            let image = DepthImage::new(&depth, camera.width, camera.height, camera.width * 2)
+                .expect("depth image");
+            // Glass gives no usable sample: recorded, and the walk goes on.
+            let _ = session.depth(&image, &camera.intrinsics, display);
+        }
+    }
+    session.stop(gt.stamps[last], pose(last)).expect("stop");
+    session
+}

@@ -2,7 +2,9 @@
 //! the running server with every host but loopback refused (`scripts/report-screenshot`):
 //! the 3-D canvas shows the walk (pixel statistics of the screenshot, not a stored image),
 //! the regions table lists the markers the phone places, the console shows no error and
-//! no request leaves loopback.
+//! no request leaves loopback. A session whose phone sent its camera evidence shows each
+//! region's thumbnail and likely causes; its share link shows the same 3-D view with no
+//! other token, and reaches nothing of another session.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -39,6 +41,53 @@ fn netlog_strings(value: &serde_json::Value, key: &str, out: &mut Vec<String>) {
         serde_json::Value::Array(items) => items.iter().for_each(|v| netlog_strings(v, key, out)),
         _ => {}
     }
+}
+
+/// Runs `scripts/report-screenshot` on `url` into `out` (1280 × 1000).
+fn shoot(url: &str, out: &Path) {
+    let script = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../scripts/report-screenshot");
+    let status = Command::new(&script)
+        .arg(url)
+        .arg(out)
+        .arg("1280x1000")
+        .status()
+        .unwrap();
+    assert!(status.success());
+}
+
+/// Console lines of the page, besides SwiftShader's performance notes.
+fn console_lines(out: &Path) -> Vec<String> {
+    std::fs::read_to_string(out.join("console.log"))
+        .unwrap()
+        .lines()
+        .filter(|l| l.contains(":CONSOLE"))
+        .filter(|l| !l.contains("GL Driver Message"))
+        .map(str::to_owned)
+        .collect()
+}
+
+/// Chromium's net log of the page load.
+fn netlog(out: &Path) -> serde_json::Value {
+    let text = std::fs::read_to_string(out.join("netlog.json")).unwrap();
+    // Chromium may leave the log's closing brackets out when it exits.
+    serde_json::from_str(&text)
+        .or_else(|_| serde_json::from_str(&format!("{}]}}", text.trim_end().trim_end_matches(','))))
+        .unwrap()
+}
+
+/// Every URL the page asked for.
+fn requested_urls(netlog: &serde_json::Value) -> Vec<String> {
+    let mut urls = Vec::new();
+    netlog_strings(netlog, "url", &mut urls);
+    urls
+}
+
+/// The contents of the element that starts with `open` (up to `close`).
+fn section<'a>(dom: &'a str, open: &str, close: &str) -> &'a str {
+    let from = &dom[dom
+        .find(open)
+        .unwrap_or_else(|| panic!("no {open} in {}", &dom[..dom.len().min(3000)]))..];
+    &from[..from.find(close).unwrap()]
 }
 
 #[test]
@@ -82,18 +131,11 @@ fn the_report_renders_the_walk_in_chromium_offline() {
     assert!(!markers.is_empty());
 
     let out = dir.path().join("shot");
-    let script = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../scripts/report-screenshot");
     let url = format!(
         "{}/v1/sessions/{id}/report?token={ADMIN_TOKEN}",
         server.url()
     );
-    let status = Command::new(&script)
-        .arg(&url)
-        .arg(&out)
-        .arg("1280x1000")
-        .status()
-        .unwrap();
-    assert!(status.success());
+    shoot(&url, &out);
 
     // The scripts ran: the view says it is ready, and the regions table lists every marker.
     let dom = std::fs::read_to_string(out.join("dom.html")).unwrap();
@@ -114,25 +156,12 @@ fn the_report_renders_the_walk_in_chromium_offline() {
     }
 
     // No console error: the only console lines allowed are SwiftShader's performance notes.
-    let log = std::fs::read_to_string(out.join("console.log")).unwrap();
-    let console: Vec<&str> = log
-        .lines()
-        .filter(|l| l.contains(":CONSOLE"))
-        .filter(|l| !l.contains("GL Driver Message"))
-        .collect();
+    let console = console_lines(&out);
     assert!(console.is_empty(), "console: {console:#?}");
 
     // No request left loopback: every connection went to 127.0.0.1, and every URL the
     // page asked for is this server's.
-    let netlog: serde_json::Value = {
-        let text = std::fs::read_to_string(out.join("netlog.json")).unwrap();
-        // Chromium may leave the log's closing brackets out when it exits.
-        serde_json::from_str(&text)
-            .or_else(|_| {
-                serde_json::from_str(&format!("{}]}}", text.trim_end().trim_end_matches(',')))
-            })
-            .unwrap()
-    };
+    let netlog = netlog(&out);
     // TCP connections (HTTP) and UDP datagrams actually sent. (Chromium `connect`s a UDP
     // socket to a public address to learn its route, sending nothing: not a request.)
     let name_of = |table: &str, id: &serde_json::Value| {
@@ -167,11 +196,9 @@ fn the_report_renders_the_walk_in_chromium_offline() {
         }
     }
     assert!(connections > 0, "no connection in the net log");
-    let mut urls = Vec::new();
-    netlog_strings(&netlog, "url", &mut urls);
+    let urls = requested_urls(&netlog);
     assert!(
-        urls.iter()
-            .any(|u| u.ends_with("/assets/three/three.core.js")),
+        urls.iter().any(|u| u.ends_with("/assets/report.bundle.js")),
         "{urls:?}"
     );
     assert!(urls.iter().any(|u| u.ends_with("/scene.json")));
@@ -219,5 +246,262 @@ fn the_report_renders_the_walk_in_chromium_offline() {
     println!(
         "canvas ({x0},{y0})–({x1},{y1}): {:.1} % drawn, {blue} blue, {yellow} yellow px",
         share * 100.0
+    );
+}
+
+/// GET `url` with `token` (none: no credentials at all): (status, body bytes).
+fn get_with(url: &str, token: Option<&str>) -> (u16, Vec<u8>) {
+    let agent = if token.is_some() {
+        agent()
+    } else {
+        bare_agent()
+    };
+    let mut request = agent.get(url);
+    if let Some(token) = token {
+        request = request.header("authorization", format!("Bearer {token}"));
+    }
+    let mut response = request.call().expect("request goes through");
+    let status = response.status().as_u16();
+    let body = response
+        .body_mut()
+        .with_config()
+        .limit(64 << 20)
+        .read_to_vec()
+        .unwrap_or_default();
+    (status, body)
+}
+
+#[test]
+fn regions_show_the_camera_evidence_and_a_share_link_shows_the_same_view() {
+    if !Path::new("/usr/bin/chromium").exists() {
+        println!(
+            "SKIPPED evidence and share in Chromium: /usr/bin/chromium is not installed (.ci/run installs it)"
+        );
+        return;
+    }
+    use sitar_client::{JobOptions, JobState, UploadJob};
+    use std::time::{Duration, Instant};
+    let dir = tempfile::tempdir().unwrap();
+    let server = start(sim_config(&dir.path().join("data"), 40.0, 2));
+    let base = server.url();
+    // The demo's walk (it has problem regions), recorded with images and depth by the phone
+    // logic; the upload job sends the recording and the session folder's evidence.
+    let recording = sitar_sim::Recording::demo(15.0, 30.0, 42).unwrap();
+    let rec_path = dir.path().join("walk.rec");
+    std::fs::write(&rec_path, recording.to_bytes()).unwrap();
+    let mut phone = phone_walk_with_evidence(&recording);
+    let folder = dir.path().join("phone");
+    phone.save(&folder).unwrap();
+    let app = client_with(&server, APP_TOKEN);
+    let mut options = JobOptions::new(NewSession {
+        trials: 6,
+        setting: "trim_mean_30".into(),
+        playback: "sim".into(),
+        window_frames: None,
+        pose_relation: None,
+    });
+    options.poll_interval = Duration::from_millis(20);
+    options.evidence_dir = Some(folder.clone());
+    let job = UploadJob::start(app.clone(), &rec_path, options, |_: &str| {
+        Ok::<(), std::convert::Infallible>(())
+    })
+    .unwrap();
+    let started = Instant::now();
+    while !job.progress().state.is_finished() && started.elapsed() < Duration::from_secs(180) {
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let progress = job.progress();
+    assert_eq!(progress.state, JobState::Done, "{:?}", progress.error);
+    assert!(progress.evidence_sent);
+    let id = job.server_id().unwrap();
+    phone.load_results(&app.results_json(&id).unwrap()).unwrap();
+
+    // The owner's page: every region row has the thumbnail of one of its sub-trajectories,
+    // loaded by the browser, and the causes the phone found for it.
+    let out = dir.path().join("owner");
+    shoot(
+        &format!("{base}/v1/sessions/{id}/report?token={ADMIN_TOKEN}"),
+        &out,
+    );
+    let dom = std::fs::read_to_string(out.join("dom.html")).unwrap();
+    assert!(
+        dom.contains("data-view=\"ready\""),
+        "{}",
+        &dom[..dom.len().min(2000)]
+    );
+    assert!(section(&dom, "<p class=\"note\" id=\"evidence-note\">", "</p>").contains("Camera:"));
+    let regions = section(&dom, "<table id=\"regions\"", "</table>");
+    let rows: Vec<&str> = regions.split("<tr class=").skip(1).collect();
+    assert!(
+        !rows.is_empty(),
+        "the demo walk has problem regions: {regions}"
+    );
+    let urls = requested_urls(&netlog(&out));
+    let mut causes_shown = 0;
+    for row in &rows {
+        let prefix = format!("<img src=\"/v1/sessions/{id}/subtrajectories/");
+        let at = row
+            .find(&prefix)
+            .unwrap_or_else(|| panic!("no thumbnail: {row}"));
+        let k: u32 = row[at + prefix.len()..]
+            .split('/')
+            .next()
+            .unwrap()
+            .parse()
+            .unwrap();
+        // The pictured sub-trajectory is one of the region's medium/high ones …
+        assert!(
+            matches!(
+                phone.subtrajectory_class(k),
+                sitar_core::ErrorClass::Medium | sitar_core::ErrorClass::High
+            ),
+            "sub-trajectory {k} pictured: {row}"
+        );
+        // … the browser fetched its image, and it is the phone's thumbnail.
+        let path = format!("/v1/sessions/{id}/subtrajectories/{k}/image.jpg");
+        assert!(
+            urls.iter().any(|u| u.ends_with(&path)),
+            "{path} not requested"
+        );
+        let (status, jpeg) = get_with(&format!("{base}{path}"), Some(ADMIN_TOKEN));
+        assert_eq!(status, 200);
+        assert_eq!(jpeg, phone.thumbnail(k).unwrap());
+        // Its causes are listed, each with a reason.
+        let cell = section(row, "<td class=\"cause\">", "</td>");
+        for name in phone.evidence_of(k).unwrap().causes.names() {
+            assert!(
+                cell.contains(&format!("<b class=\"cause-name\">{name}</b>")),
+                "cause {name} of sub-trajectory {k} missing: {cell}"
+            );
+            causes_shown += 1;
+        }
+    }
+    assert!(
+        causes_shown > 0,
+        "the demo's regions face the blank wall or the glass"
+    );
+    let console = console_lines(&out);
+    assert!(console.is_empty(), "console: {console:#?}");
+
+    // A share link, opened in a browser with no token and no cookie: the same 3-D view,
+    // its data and images through the link's own token.
+    let (status, _, body) = raw(
+        "POST",
+        &format!("{base}/v1/sessions/{id}/share"),
+        None,
+        b"",
+        &[("authorization", &format!("Bearer {APP_TOKEN}"))],
+    );
+    assert_eq!(status, 201, "{body}");
+    let link = serde_json::from_str::<serde_json::Value>(&body).unwrap()["url"]
+        .as_str()
+        .unwrap()
+        .to_owned();
+    let token = link.rsplit('/').next().unwrap().to_owned();
+    let out = dir.path().join("shared");
+    shoot(&link, &out);
+    let dom = std::fs::read_to_string(out.join("dom.html")).unwrap();
+    assert!(
+        dom.contains("data-view=\"ready\""),
+        "{}",
+        &dom[..dom.len().min(2000)]
+    );
+    let status_line = section(&dom, "<p id=\"view-status\"", "</p>");
+    assert!(status_line.contains("sub-trajectories"), "{status_line}");
+    assert!(dom.contains(&format!("<img src=\"/share/{token}/subtrajectories/")));
+    assert!(
+        !dom.contains(&format!("/v1/sessions/{id}/")),
+        "owner URLs on a share page"
+    );
+    let urls = requested_urls(&netlog(&out));
+    assert!(
+        urls.iter()
+            .any(|u| u.ends_with(&format!("/share/{token}/scene.json"))),
+        "{urls:?}"
+    );
+    assert!(urls.iter().all(|u| !u.contains("/v1/")), "{urls:?}");
+    let console = console_lines(&out);
+    assert!(console.is_empty(), "console: {console:#?}");
+    let (status, shared_scene) = get_with(&format!("{base}/share/{token}/scene.json"), None);
+    assert_eq!(status, 200);
+    let (_, owner_scene) = get_with(
+        &format!("{base}/v1/sessions/{id}/scene.json"),
+        Some(ADMIN_TOKEN),
+    );
+    assert_eq!(shared_scene, owner_scene);
+    for name in [
+        "results.csv",
+        "results.json",
+        "trajectory.tum",
+        "scene.glb",
+        "trials.zip",
+    ] {
+        assert_eq!(
+            get_with(&format!("{base}/share/{token}/{name}"), None).0,
+            200,
+            "{name}"
+        );
+    }
+
+    // Nothing else through it: another session's data, other names, paths out of the link,
+    // a wrong token; and nothing once revoked.
+    let other = app
+        .create_session(&NewSession {
+            trials: 2,
+            setting: "median".into(),
+            playback: "upload".into(),
+            window_frames: None,
+            pose_relation: None,
+        })
+        .unwrap();
+    for path in [
+        format!("/share/{token}/{other}/scene.json"),
+        format!("/share/{token}/..%2F..%2Fv1%2Fsessions%2F{other}%2Fscene.json"),
+        format!("/share/{token}/sessions"),
+        format!("/share/{token}/subtrajectories/0/../../../v1/sessions/{other}/scene.json"),
+        format!("/share/{token}/subtrajectories/999999/image.jpg"),
+        format!("/share/{token}/subtrajectories/-1/image.jpg"),
+        format!("/share/{token}x/scene.json"),
+        format!("/v1/sessions/{other}/scene.json"),
+        format!("/v1/sessions/{id}/scene.json"),
+    ] {
+        let (status, _) = get_with(&format!("{base}{path}"), None);
+        assert!(matches!(status, 401 | 404), "{path}: {status}");
+    }
+    let (status, _, _) = raw(
+        "DELETE",
+        &format!("{base}/v1/sessions/{id}/share"),
+        None,
+        b"",
+        &[("authorization", &format!("Bearer {APP_TOKEN}"))],
+    );
+    assert_eq!(status, 200);
+    assert_eq!(
+        get_with(&format!("{base}/share/{token}/scene.json"), None).0,
+        404
+    );
+    server.stop();
+}
+
+/// The served bundle is `scripts/bundle-report`'s output for the committed `report.js` and
+/// vendored three.js (esbuild from `tools/npm`).
+#[test]
+fn the_served_bundle_is_built_from_report_js() {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
+    if !root.join("tools/npm/node_modules/.bin/esbuild").exists() {
+        println!("SKIPPED the bundle check: run `npm ci --prefix tools/npm` (.ci/run does)");
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("report.bundle.js");
+    let status = Command::new(root.join("scripts/bundle-report"))
+        .arg(&out)
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let committed = std::fs::read(root.join("rust/server/assets/report.bundle.js")).unwrap();
+    assert!(
+        std::fs::read(&out).unwrap() == committed,
+        "rust/server/assets/report.bundle.js is stale: run scripts/vendor-three"
     );
 }

@@ -16,20 +16,70 @@ function viridis(t) {
 
 const $ = (id) => document.getElementById(id);
 
+// A tube through `points` as one indexed geometry: a ring of `radial` vertices per point,
+// its frame carried along the path (parallel transport), so no curve fitting or arc-length
+// sampling is needed. Faces 2·radial per segment, in path order (picking relies on it).
+function tubeGeometry(points, radius, radial) {
+  const n = points.length;
+  const ring = radial + 1;
+  const position = new Float32Array(n * ring * 3);
+  const normal = new Float32Array(n * ring * 3);
+  const index = new Uint32Array((n - 1) * radial * 6);
+  const t = new THREE.Vector3(), u = new THREE.Vector3(), v = new THREE.Vector3(), d = new THREE.Vector3();
+  for (let i = 0; i < n; i++) {
+    t.subVectors(points[Math.min(i + 1, n - 1)], points[Math.max(i - 1, 0)]);
+    if (t.lengthSq() < 1e-12) t.set(1, 0, 0);
+    t.normalize();
+    // Keep the previous ring's normal, less its part along the new tangent.
+    if (i === 0 || u.lengthSq() < 1e-12) u.set(0, 1, 0);
+    u.addScaledVector(t, -u.dot(t));
+    if (u.lengthSq() < 1e-8) u.set(1, 0, 0).addScaledVector(t, -t.x);
+    u.normalize();
+    v.crossVectors(t, u);
+    for (let k = 0; k <= radial; k++) {
+      const a = (k / radial) * Math.PI * 2;
+      d.copy(u).multiplyScalar(Math.cos(a)).addScaledVector(v, Math.sin(a));
+      const o = (i * ring + k) * 3;
+      normal[o] = d.x; normal[o + 1] = d.y; normal[o + 2] = d.z;
+      position[o] = points[i].x + d.x * radius;
+      position[o + 1] = points[i].y + d.y * radius;
+      position[o + 2] = points[i].z + d.z * radius;
+    }
+  }
+  let f = 0;
+  for (let i = 0; i + 1 < n; i++) {
+    for (let k = 0; k < radial; k++) {
+      const a = i * ring + k, b = a + ring, c = b + 1, e = a + 1;
+      // Counter-clockwise seen from outside: front faces face out.
+      index[f++] = a; index[f++] = e; index[f++] = b;
+      index[f++] = b; index[f++] = e; index[f++] = c;
+    }
+  }
+  const geometry = new THREE.BufferGeometry();
+  geometry.setAttribute("position", new THREE.BufferAttribute(position, 3));
+  geometry.setAttribute("normal", new THREE.BufferAttribute(normal, 3));
+  geometry.setIndex(new THREE.BufferAttribute(index, 1));
+  return geometry;
+}
+
 function status(text) {
   $("view-status").textContent = text;
 }
 
 async function main() {
+  performance.mark("modules-ready");
   const canvas = $("view3d");
   let data;
   try {
-    const response = await fetch("scene.json");
+    // The owner's page and a share link's fetch the scene from different places.
+    const response = await fetch(document.body.dataset.scene);
+    performance.mark("scene-fetched");
     if (!response.ok) {
       status("No 3-D scene: " + (await response.text()));
       return;
     }
     data = await response.json();
+    performance.mark("scene-parsed");
   } catch (e) {
     status("No 3-D scene: " + e);
     return;
@@ -75,31 +125,23 @@ async function main() {
 
   // The tube: one geometry, vertex colours per ring from the sub-trajectory of that point.
   const subOf = data.joint_sub;
-  const cumulative = [0];
-  for (let i = 1; i < joints.length; i++) cumulative.push(cumulative[i - 1] + joints[i].distanceTo(joints[i - 1]));
-  const total = cumulative[cumulative.length - 1] || 1;
-  const curve = new THREE.CatmullRomCurve3(joints, false, "centripetal");
-  // One tube step per logged pose (every 5th frame): smooth enough, and cheap for long walks.
-  const tubular = Math.min(joints.length - 1, 8000);
+  // A long walk's scene.json carries only the sub-trajectories something drawn refers to.
+  const columns = data.subs;
+  const subs = new Map(columns.index.map((k, i) => [k, {
+    t0: columns.t0[i], t1: columns.t1[i], error: columns.error[i], class: columns.class[i], length: columns.length[i],
+  }]));
+  // One ring per path point (a 10-minute walk logs 3 600; scene.json thins past 6 000).
+  const tubular = joints.length - 1;
   const radial = 6;
-  const tube = new THREE.TubeGeometry(curve, tubular, 0.012 * Math.max(1, span / 8), radial, false);
-  const ringJoint = [];
-  for (let r = 0; r <= tubular; r++) {
-    const target = (r / tubular) * total;
-    let lo = 0, hi = cumulative.length - 1;
-    while (lo < hi) {
-      const mid = (lo + hi + 1) >> 1;
-      if (cumulative[mid] <= target) lo = mid; else hi = mid - 1;
-    }
-    ringJoint.push(Math.min(lo, joints.length - 1));
-  }
+  const tube = tubeGeometry(joints, 0.012 * Math.max(1, span / 8), radial);
+  const ringJoint = joints.map((_, i) => i);
   const colours = new Float32Array((tubular + 1) * (radial + 1) * 3);
   tube.setAttribute("color", new THREE.BufferAttribute(colours, 3));
-  const errors = data.subs.map((s) => s.error).filter((e) => e !== null);
+  const errors = columns.error.filter((e) => e !== null);
   const maxError = Math.max(data.thresholds[1] * 1.2, ...errors);
   function paint(byError) {
     for (let r = 0; r <= tubular; r++) {
-      const sub = data.subs[subOf[ringJoint[r]]];
+      const sub = subs.get(subOf[ringJoint[r]]);
       const c = byError
         ? (sub && sub.error !== null ? viridis(sub.error / maxError) : new THREE.Color(CLASS_COLOURS.unknown))
         : new THREE.Color(CLASS_COLOURS[sub ? sub.class : "unknown"]);
@@ -239,21 +281,30 @@ async function main() {
     } else {
       const ring = Math.floor(hit.faceIndex / (2 * radial));
       const k = subOf[ringJoint[Math.min(ring, ringJoint.length - 1)]];
-      const s = data.subs[k];
+      const s = subs.get(k);
       $("picked").textContent = s
         ? `Sub-trajectory ${k}: ${s.t0.toFixed(2)}–${s.t1.toFixed(2)} s, ${s.length.toFixed(2)} m, ` +
           (s.error === null ? "no estimate" : `error ${s.error.toFixed(1)} ${data.unit} (${s.class})`)
         : `Sub-trajectory ${k}`;
     }
   });
+  performance.mark("scene-built");
   render();
+  performance.mark("first-frame");
   document.body.dataset.view = "ready";
+  // Where the time went (scripts/bench-report prints these): milliseconds since navigation.
+  document.body.dataset.marks = ["modules-ready", "scene-fetched", "scene-parsed", "scene-built", "first-frame"]
+    .map((name) => `${name}=${Math.round(performance.getEntriesByName(name)[0].startTime)}`)
+    .join(" ");
   // Navigation start to the first frame of the 3-D view (scripts/bench-report reads it).
   document.body.dataset.renderMs = String(Math.round(performance.now()));
   // scripts/bench-report opens the page with #bench: a request marks the first frame in
   // Chromium's net log, on the real clock (headless virtual time also drives performance.now).
   if (location.hash === "#bench") fetch("/healthz?rendered").catch(() => {});
-  status(`${data.subs.length} sub-trajectories, ${data.frustums.length} frustums, ${data.markers.length} markers, ${data.surface.length / 3} surface points.`);
+  const d = data.downsampled;
+  const thinned = Object.entries(d).filter(([, c]) => c.shown < c.total).map(([k, c]) => `${c.shown} of ${c.total} ${k}`);
+  status(`${d.subs.total} sub-trajectories, ${d.frustums.total} frustums, ${d.markers.total} markers, ${d.surface.total} surface points.` +
+    (thinned.length ? ` A long walk: drawn thinned for display (${thinned.join(", ")}); the numbers on this page are from all the data.` : ""));
 }
 
 main().catch((e) => {

@@ -1,6 +1,8 @@
-//! `GET /assets/{name}`: the pages' scripts and styles, compiled into the binary (three.js
-//! vendored by `scripts/vendor-three` at the version pinned in `tools/npm`), so the pages
-//! work on a LAN with no internet. Names come from this fixed table, never from the path.
+//! `GET /assets/{name}`: the pages' scripts and styles, compiled into the binary, so the pages
+//! work on a LAN with no internet. The report's script is `report.bundle.js`: `report.js`
+//! with the parts of three.js it uses (vendored at the version pinned in `tools/npm`),
+//! bundled and minified by `scripts/vendor-three`. Names come from this fixed table, never
+//! from the path.
 
 use axum::extract::Path;
 use axum::http::{HeaderValue, header};
@@ -12,26 +14,15 @@ const JS: &str = "text/javascript; charset=utf-8";
 
 /// (name, content type, bytes).
 const ASSETS: &[(&str, &str, &[u8])] = &[
-    ("report.js", JS, include_bytes!("../assets/report.js")),
+    (
+        "report.bundle.js",
+        JS,
+        include_bytes!("../assets/report.bundle.js"),
+    ),
     (
         "site.css",
         "text/css; charset=utf-8",
         include_bytes!("../assets/site.css"),
-    ),
-    (
-        "three/three.module.js",
-        JS,
-        include_bytes!("../assets/three/three.module.js"),
-    ),
-    (
-        "three/three.core.js",
-        JS,
-        include_bytes!("../assets/three/three.core.js"),
-    ),
-    (
-        "three/OrbitControls.js",
-        JS,
-        include_bytes!("../assets/three/OrbitControls.js"),
     ),
     (
         "three/LICENSE",

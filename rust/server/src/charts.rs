@@ -92,8 +92,25 @@ fn trim(v: f64) -> String {
     if s == "-0" { "0".into() } else { s.into() }
 }
 
-/// Error over time: class bands, one step per sub-trajectory (gaps where no window matched),
-/// dashed lines at the markers' times. `scale` turns the unit into the shown one (m → cm).
+/// Steps of the error-over-time chart: past this many sub-trajectories, consecutive ones are
+/// grouped and each group drawn at its largest error (the chart is 760 px wide).
+pub(crate) const MAX_CHART_STEPS: usize = 1_000;
+
+/// `subs` grouped into at most `MAX_CHART_STEPS` steps, each spanning its group's time and
+/// showing its largest error (none when no member has one).
+fn grouped(subs: &[(f64, f64, Option<f64>)]) -> Vec<(f64, f64, Option<f64>)> {
+    let size = subs.len().div_ceil(MAX_CHART_STEPS).max(1);
+    subs.chunks(size)
+        .map(|group| {
+            let max = group.iter().filter_map(|s| s.2).reduce(f64::max);
+            (group[0].0, group[group.len() - 1].1, max)
+        })
+        .collect()
+}
+
+/// Error over time: class bands, one step per sub-trajectory (gaps where no window matched;
+/// grouped past `MAX_CHART_STEPS`), dashed lines at the markers' times. `scale` turns the
+/// unit into the shown one (m → cm).
 pub(crate) fn error_over_time(
     subs: &[(f64, f64, Option<f64>)],
     thresholds: Thresholds,
@@ -131,7 +148,15 @@ pub(crate) fn error_over_time(
     frame.axes(&mut svg, "time (s)", y_label, scale);
     let mut path = String::new();
     let mut pen_down = false;
-    for &(t0, t1, e) in subs {
+    let steps = grouped(subs);
+    if steps.len() < subs.len() {
+        let _ = write!(
+            svg,
+            r#"<title>each step: the largest error of {} consecutive sub-trajectories</title>"#,
+            subs.len().div_ceil(steps.len())
+        );
+    }
+    for &(t0, t1, e) in &steps {
         match e {
             Some(e) => {
                 let op = if pen_down { 'L' } else { 'M' };
@@ -214,6 +239,81 @@ pub(crate) fn histogram(
     svg
 }
 
+/// The estimate as trials arrived: mean and max window error after each published
+/// estimate (`(trials, mean, max)`, in the results' unit), over the class bands.
+pub(crate) fn history(
+    points: &[(f64, f64, f64)],
+    thresholds: Thresholds,
+    scale: f64,
+    y_label: &str,
+) -> String {
+    let (w, h) = (420.0, 240.0);
+    let x0 = points.iter().map(|p| p.0).fold(f64::MAX, f64::min);
+    let x1 = points.iter().map(|p| p.0).fold(f64::MIN, f64::max);
+    let top = points
+        .iter()
+        .map(|p| p.2)
+        .fold(thresholds.high * 1.25, f64::max);
+    let frame = Frame {
+        w,
+        h,
+        x0,
+        x1: x1.max(x0 + 1.0),
+        y1: top,
+    };
+    let mut svg = format!(
+        r#"<svg id="history-chart" xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" viewBox="0 0 {w} {h}" role="img" aria-label="the estimate as trials arrived">"#
+    );
+    for (lo, hi, colour) in [
+        (0.0, thresholds.medium, LOW),
+        (thresholds.medium, thresholds.high, MEDIUM),
+        (thresholds.high, frame.y1, HIGH),
+    ] {
+        let _ = write!(
+            svg,
+            r#"<rect class="band" x="{x:.1}" y="{y:.1}" width="{bw:.1}" height="{bh:.1}" fill="{colour}" fill-opacity="0.10"/>"#,
+            x = LEFT,
+            y = frame.y(hi),
+            bw = w - LEFT - RIGHT,
+            bh = frame.y(lo) - frame.y(hi),
+        );
+    }
+    frame.axes(&mut svg, "trials received", y_label, scale);
+    for (id, pick, colour, dash) in [
+        ("history-mean", 1, "#222", ""),
+        ("history-max", 2, HIGH, r#" stroke-dasharray="5 3""#),
+    ] {
+        let value = |p: &(f64, f64, f64)| if pick == 1 { p.1 } else { p.2 };
+        let mut path = String::new();
+        for (i, p) in points.iter().enumerate() {
+            let op = if i == 0 { 'M' } else { 'L' };
+            let _ = write!(path, "{op}{:.1} {:.1}", frame.x(p.0), frame.y(value(p)));
+        }
+        let _ = write!(
+            svg,
+            r#"<path id="{id}" d="{path}" fill="none" stroke="{colour}" stroke-width="1.5"{dash}/>"#
+        );
+        for p in points {
+            let _ = write!(
+                svg,
+                r#"<circle class="{id}" cx="{:.1}" cy="{:.1}" r="2.5" fill="{colour}"><title>{} trials: {}</title></circle>"#,
+                frame.x(p.0),
+                frame.y(value(p)),
+                p.0,
+                trim(value(p) * scale)
+            );
+        }
+    }
+    let _ = write!(
+        svg,
+        r##"<text x="{x:.1}" y="{y:.1}" font-size="11" text-anchor="end">— mean  - - max window error</text>"##,
+        x = w - RIGHT - 4.0,
+        y = TOP + 12.0
+    );
+    svg.push_str("</svg>");
+    svg
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -223,6 +323,60 @@ mod tests {
         assert_eq!(tick_step(10.0, 5.0), 2.0);
         assert_eq!(tick_step(0.3, 4.0), 0.1);
         assert_eq!(tick_step(700.0, 6.0), 200.0);
+    }
+
+    #[test]
+    fn the_history_chart_has_one_point_per_estimate_on_its_axes() {
+        let t = Thresholds {
+            medium: 0.05,
+            high: 0.1,
+        };
+        let svg = history(
+            &[(2.0, 0.08, 0.3), (3.0, 0.06, 0.2), (5.0, 0.04, 0.1)],
+            t,
+            100.0,
+            "error (cm)",
+        );
+        assert_eq!(svg.matches(r#"class="history-mean""#).count(), 3);
+        assert_eq!(svg.matches(r#"class="history-max""#).count(), 3);
+        assert!(svg.contains("<title>5 trials: 4</title>"), "{svg}");
+        // The first estimate sits on the left edge, the last on the right one; the largest
+        // max (30 cm) on the top edge.
+        assert!(
+            svg.contains(&format!(r#"id="history-max" d="M{LEFT:.1} {TOP:.1}"#)),
+            "{svg}"
+        );
+        assert!(svg.contains(&format!("L{:.1} ", 420.0 - RIGHT)), "{svg}");
+    }
+
+    #[test]
+    fn a_long_walk_is_grouped_keeping_each_groups_worst() {
+        let subs: Vec<(f64, f64, Option<f64>)> = (0..39_000)
+            .map(|i| {
+                let t = f64::from(i) / 3.0;
+                let e = if i % 7 == 0 {
+                    None
+                } else {
+                    Some(f64::from(i % 100) / 1000.0)
+                };
+                (t, t + 1.0 / 3.0, e)
+            })
+            .collect();
+        let steps = grouped(&subs);
+        assert!(steps.len() <= MAX_CHART_STEPS, "{}", steps.len());
+        assert_eq!(steps[0].0, 0.0);
+        assert_eq!(steps.last().unwrap().1, subs.last().unwrap().1);
+        // Groups of 39: each holds an i % 100 == 99 or reaches 0.099 only where it does.
+        let max_all = steps.iter().filter_map(|s| s.2).fold(0.0, f64::max);
+        assert_eq!(max_all, 0.099);
+        let short = &subs[..500];
+        assert_eq!(grouped(short), short.to_vec());
+        let t = Thresholds {
+            medium: 0.05,
+            high: 0.1,
+        };
+        let svg = error_over_time(&subs, t, &[], 100.0, "error (cm)");
+        assert!(svg.len() < 120_000, "{} bytes", svg.len());
     }
 
     #[test]

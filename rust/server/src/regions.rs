@@ -43,12 +43,33 @@ pub(crate) struct Region {
     pub surface: Option<DVec3>,
     /// Markers (1-based, the phone's order) placed in this region.
     pub markers: Vec<usize>,
-    /// A camera image of the place, once the camera evidence is stored (URL of an image
-    /// served by this backend). Empty until then: the page shows a placeholder.
+    /// The camera evidence of the place (`crate::region_evidence`), when the phone sent it.
+    pub evidence: Option<RegionEvidence>,
+}
+
+/// What the phone's camera evidence says of one region.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct RegionEvidence {
+    /// The sub-trajectory pictured: the worst one with a stored thumbnail.
+    pub pictured: Option<u32>,
+    /// URL of its thumbnail, served by this backend.
     pub thumbnail_url: Option<String>,
-    /// The likely cause (blank wall, glass, motion blur, …), once the camera evidence is
-    /// analysed. Empty until then.
-    pub cause: Option<String>,
+    /// The likely causes seen in the region, the most frequent first.
+    pub causes: Vec<CauseLine>,
+    /// Sub-trajectories of the region the evidence table covers.
+    pub covered: usize,
+}
+
+/// One likely cause of a region, in the user's words.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct CauseLine {
+    /// sitar-core's machine name (`low_texture`, `no_depth`, …).
+    pub name: String,
+    /// One line: the measured value and what it means, from the worst sub-trajectory with
+    /// this cause.
+    pub reason: String,
+    /// Sub-trajectories of the region with this cause.
+    pub count: usize,
 }
 
 /// The sub-trajectories of `session` with errors classified by `thresholds`.
@@ -135,8 +156,7 @@ pub(crate) fn regions(subs: &[SubRow], markers: &[Marker], radius_m: f64) -> Vec
                     .map(|(i, _)| i + 1)
                     .collect(),
                 subtrajectories: indices,
-                thumbnail_url: None,
-                cause: None,
+                evidence: None,
             }
         })
         .collect();

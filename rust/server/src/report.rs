@@ -3,7 +3,7 @@
 //! is escaped unless the template says otherwise, and only the numeric SVG charts do).
 //!
 //! What it shows: counts in sub-trajectories and regions (the window count labelled as
-//! such), the interactive 3-D view (`/assets/report.js`, three.js served by this backend,
+//! such), the interactive 3-D view (`/assets/report.bundle.js`, three.js served by this backend,
 //! data from `scene.json`), a static SVG top view, the problem regions, the charts, the
 //! statistics and the downloads. Errors are in cm for `trans_part` and degrees for
 //! `angle_deg`.
@@ -17,6 +17,7 @@ use sitar_core::{Convention, ErrorClass, Session as Phone, Thresholds};
 use crate::Error;
 use crate::charts::{self, HIGH, LOW, MEDIUM, UNKNOWN};
 use crate::config::ServerConfig;
+use crate::region_evidence::{self, CameraEvidence};
 use crate::regions::{self, SubRow};
 use crate::scene::Source;
 use crate::session::Session;
@@ -125,21 +126,30 @@ fn top_view(phone: &Phone, subs: &[SubRow]) -> String {
         );
         g += 1.0;
     }
-    for (w, j) in pts.windows(2).zip(&joints) {
+    // A long walk is thinned for display (the SVG stays small); a segment takes the class
+    // of the joint it starts at.
+    let kept = crate::thinning::thin(pts.len(), MAX_TOP_VIEW_POINTS);
+    let _ = write!(
+        svg,
+        r#"<g stroke-width="{stroke:.4}" stroke-linecap="round">"#
+    );
+    for pair in kept.windows(2) {
+        let (a, b) = (pts[pair[0]], pts[pair[1]]);
         let class = subs
-            .get(j.subtrajectory as usize)
+            .get(joints[pair[0]].subtrajectory as usize)
             .map_or(ErrorClass::Unknown, |s| s.class);
         let _ = write!(
             svg,
-            r#"<line class="seg {}" x1="{:.3}" y1="{:.3}" x2="{:.3}" y2="{:.3}" stroke="{}" stroke-width="{stroke:.4}" stroke-linecap="round"/>"#,
+            r#"<line class="seg {}" x1="{:.2}" y1="{:.2}" x2="{:.2}" y2="{:.2}" stroke="{}"/>"#,
             class.name(),
-            w[0].x,
-            w[0].z,
-            w[1].x,
-            w[1].z,
+            a.x,
+            a.z,
+            b.x,
+            b.z,
             colour(class)
         );
     }
+    svg.push_str("</g>");
     if let Ok(markers) = phone.markers() {
         for (i, m) in markers.iter().enumerate() {
             let p = view_point(m.position);
@@ -201,7 +211,18 @@ pub(crate) struct ReportInput<'a> {
     pub phone: Option<(&'a Phone, Source)>,
     /// The published estimates in order (`published::history`).
     pub history: Vec<serde_json::Value>,
+    /// Where this reader fetches the session's data: `/v1/sessions/ID/` for its owner,
+    /// `/share/TOKEN/` through a share link (the page's scene.json, images and downloads).
+    pub base: &'a str,
+    /// The phone's camera evidence, when it sent any.
+    pub evidence: Option<&'a CameraEvidence>,
 }
+
+/// Path points of the static top view (a 10-minute walk logs 3 600).
+const MAX_TOP_VIEW_POINTS: usize = 1_500;
+
+/// Regions and markers listed on the page (the counts above the tables are of all).
+const MAX_TABLE_ROWS: usize = 100;
 
 pub(crate) fn render(input: &ReportInput<'_>) -> Result<String, Error> {
     let row = input.row;
@@ -217,7 +238,13 @@ pub(crate) fn render(input: &ReportInput<'_>) -> Result<String, Error> {
         None => (Vec::new(), Vec::new()),
     };
     let radius = input.phone.map_or(0.5, |(p, _)| p.config().dedup_radius_m);
-    let found = regions::regions(&subs, &markers, radius);
+    let mut found = regions::regions(&subs, &markers, radius);
+    if let Some(evidence) = input.evidence {
+        let base = input.base;
+        region_evidence::attach(&mut found, &subs, evidence, &|k| {
+            format!("{base}subtrajectories/{k}/image.jpg")
+        });
+    }
     let errors: Vec<f64> = subs.iter().filter_map(|s| s.error).collect();
     let count = |c: ErrorClass| subs.iter().filter(|s| s.class == c).count();
     let stats = statistics(&errors);
@@ -231,7 +258,9 @@ pub(crate) fn render(input: &ReportInput<'_>) -> Result<String, Error> {
         subs.iter().map(|s| (s.t0, s.t1, s.error)).collect();
     let region_rows: Vec<serde_json::Value> = found
         .iter()
+        .take(MAX_TABLE_ROWS)
         .map(|r| {
+            let evidence = r.evidence.as_ref();
             json!({
                 "rank": r.rank,
                 "class": r.class.name(),
@@ -248,14 +277,19 @@ pub(crate) fn render(input: &ReportInput<'_>) -> Result<String, Error> {
                     format!("({:.2}, {:.2}, {:.2})", p.x, p.y, p.z)
                 }),
                 "markers": r.markers.iter().map(|m| format!("M{m}")).collect::<Vec<_>>().join(", "),
-                "thumbnail_url": r.thumbnail_url,
-                "cause": r.cause,
+                "thumbnail_url": evidence.and_then(|e| e.thumbnail_url.as_deref()),
+                "pictured": evidence.and_then(|e| e.pictured),
+                "covered": evidence.map(|e| e.covered),
+                "causes": evidence.map(|e| e.causes.iter().map(|c| json!({
+                    "name": c.name, "reason": c.reason, "count": c.count,
+                })).collect::<Vec<_>>()),
             })
         })
         .collect();
     let marker_rows: Vec<serde_json::Value> = markers
         .iter()
         .enumerate()
+        .take(MAX_TABLE_ROWS)
         .map(|(i, m)| {
             let p = view_point(m.position);
             json!({
@@ -322,7 +356,11 @@ pub(crate) fn render(input: &ReportInput<'_>) -> Result<String, Error> {
         "medium": count(ErrorClass::Medium),
         "low": count(ErrorClass::Low),
         "regions": region_rows,
+        "region_count": found.len(),
         "markers": marker_rows,
+        "marker_count": markers.len(),
+        "has_evidence": input.evidence.is_some(),
+        "base": input.base,
         "windows": doc.windows.len(),
         "window_frames": row.settings.window_frames,
         "trials": trials,
@@ -337,6 +375,7 @@ pub(crate) fn render(input: &ReportInput<'_>) -> Result<String, Error> {
             charts::histogram(&errors, thresholds, unit.scale, &y_label)
         },
         "settings": settings,
+        "history_chart": history_chart(&input.history, thresholds, &unit, &y_label),
         "history": input.history.iter().map(|h| json!({
             "trials": h["trials"],
             "mean": unit.show(h["mean"].as_f64().unwrap_or(0.0)),
@@ -346,6 +385,29 @@ pub(crate) fn render(input: &ReportInput<'_>) -> Result<String, Error> {
         "colours": {"low": LOW, "medium": MEDIUM, "high": HIGH, "unknown": UNKNOWN},
     });
     templates::render("report.html", &context)
+}
+
+/// The estimate as trials arrived, as a chart (none before two estimates).
+fn history_chart(
+    history: &[serde_json::Value],
+    thresholds: Thresholds,
+    unit: &Unit,
+    y_label: &str,
+) -> String {
+    let points: Vec<(f64, f64, f64)> = history
+        .iter()
+        .filter_map(|h| {
+            Some((
+                h["trials"].as_f64()?,
+                h["mean"].as_f64()?,
+                h["max"].as_f64()?,
+            ))
+        })
+        .collect();
+    if points.len() < 2 {
+        return String::new();
+    }
+    charts::history(&points, thresholds, unit.scale, y_label)
 }
 
 /// `3–7, 12, 15–16`: sorted indices as ranges.
@@ -375,6 +437,114 @@ fn summarize(indices: &[u32]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A walk of `frames` poses round a 6 m circle at 30 fps, with results whose error rises
+    /// and falls along it (so every class shows), loaded.
+    fn long_walk(frames: usize) -> Phone {
+        use sitar_core::{Pose, SessionConfig};
+        let mut phone = Phone::try_new(
+            SessionConfig::from_json(r#"{"convention":"arcore","images":false}"#).unwrap(),
+        )
+        .unwrap();
+        let pose = |i: usize| {
+            let a = i as f64 * 0.0005;
+            let p = glam::DVec3::new(6.0 * a.cos(), 1.4, 6.0 * a.sin());
+            (
+                i as i64 * 33_333_333,
+                Pose::new(p, glam::DQuat::from_rotation_y(-a)),
+            )
+        };
+        let (t, p) = pose(0);
+        phone.start(t, p).unwrap();
+        for i in 1..frames - 1 {
+            let (t, p) = pose(i);
+            phone.frame(t, p).unwrap();
+        }
+        let (t, p) = pose(frames - 1);
+        phone.stop(t, p).unwrap();
+        let windows: Vec<serde_json::Value> = phone
+            .subtrajectories()
+            .iter()
+            .map(|s| {
+                let e = 0.06 + 0.06 * (f64::from(s.index) * 0.01).sin();
+                json!({"start": s.start_ns, "error_m": e})
+            })
+            .collect();
+        let results = json!({"version": 1, "setting": "median", "trials": 3,
+            "pose_relation": "trans_part", "window_frames": 10, "unit": "m", "windows": windows});
+        phone.load_results(&results.to_string()).unwrap();
+        phone
+    }
+
+    /// Issue 11's huge trial: 390 000 poses give a top view, a chart and a scene.json of
+    /// bounded size, thinned for display, while the statistics use every sub-trajectory.
+    #[test]
+    fn a_390000_pose_walk_gives_a_bounded_page_and_scene() {
+        let phone = long_walk(390_000);
+        let thresholds = Thresholds {
+            medium: 0.05,
+            high: 0.10,
+        };
+        let subs = regions::sub_rows(&phone, thresholds);
+        assert_eq!(subs.len(), 39_000);
+        let svg = top_view(&phone, &subs);
+        assert_eq!(
+            svg.matches("<line class=\"seg ").count(),
+            MAX_TOP_VIEW_POINTS - 1
+        );
+        for class in ["low", "medium", "high"] {
+            assert!(svg.contains(&format!("seg {class}")), "no {class} segment");
+        }
+        let timeline: Vec<(f64, f64, Option<f64>)> =
+            subs.iter().map(|s| (s.t0, s.t1, s.error)).collect();
+        let chart = charts::error_over_time(&timeline, thresholds, &[], 100.0, "error (cm)");
+        let unit = Unit {
+            name: "cm",
+            scale: 100.0,
+        };
+        let scene = crate::scene_view::scene_json(&phone, &subs, thresholds, &unit, "test");
+        let scene_text = scene.to_string();
+        println!(
+            "390 000 poses: top view {} kB, error chart {} kB, scene.json {} kB",
+            svg.len() / 1000,
+            chart.len() / 1000,
+            scene_text.len() / 1000
+        );
+        assert!(svg.len() < 150_000, "top view {} bytes", svg.len());
+        assert!(chart.len() < 60_000, "chart {} bytes", chart.len());
+        assert!(
+            scene_text.len() < 600_000,
+            "scene.json {} bytes",
+            scene_text.len()
+        );
+        let joints = &scene["downsampled"]["joints"];
+        assert_eq!(joints["total"], 78_000);
+        assert_eq!(joints["shown"], crate::scene_view::MAX_VIEW_JOINTS);
+        assert_eq!(
+            scene["joints"].as_array().unwrap().len(),
+            3 * crate::scene_view::MAX_VIEW_JOINTS
+        );
+        // Every drawn joint's sub-trajectory is among those sent.
+        let sent: std::collections::HashSet<u64> = scene["subs"]["index"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|k| k.as_u64().unwrap())
+            .collect();
+        assert!(
+            scene["joint_sub"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .all(|k| sent.contains(&k.as_u64().unwrap()))
+        );
+        assert_eq!(scene["downsampled"]["subs"]["total"], 39_000);
+        // The statistics still come from all 39 000 sub-trajectories.
+        let errors: Vec<f64> = subs.iter().filter_map(|s| s.error).collect();
+        assert_eq!(errors.len(), 39_000);
+        let max = statistics(&errors).unwrap()[3];
+        assert!((max - 0.12).abs() < 1e-4, "{max}");
+    }
 
     #[test]
     fn ranges_and_statistics() {

@@ -56,6 +56,11 @@ pub(crate) fn router(shared: Arc<Shared>) -> Router {
             post(share::create).delete(share::revoke),
         )
         .route("/share/{token}", get(share::view))
+        .route("/share/{token}/{name}", get(share::data))
+        .route(
+            "/share/{token}/subtrajectories/{k}/image.jpg",
+            get(share::image),
+        )
         .route("/v1/sessions/{id}/scene.glb", get(scene::glb))
         .route("/v1/sessions/{id}/scene.json", get(scene::json))
         .route("/v1/sessions/{id}/trajectory.tum", get(scene::trajectory))

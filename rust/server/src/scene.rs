@@ -3,9 +3,13 @@
 //!
 //! A simulated recording (`sitar-sim`) holds the walk and the room, so the phone session is
 //! rebuilt exactly as the phone logic recorded it (depth images included). A real recording
-//! holds no depth: the reference trial's poses give the render plan, without surface
-//! points or markers. Either is built once and kept as a `sitar_core` session folder
-//! (`sessions/ID/phone/`); the latest results are loaded into it on every request.
+//! holds no depth: the reference trial's poses give the render plan; when the phone sent its
+//! camera evidence (`crate::evidence`), each midpoint's measured distance to the surface it
+//! faced is put back as a depth sample straight ahead, so the page has surface points and
+//! markers (placed by sitar-core's own rule; their normals face the camera, as the true
+//! ones are unknown). Either is built once and kept as a `sitar_core` session folder
+//! (`sessions/ID/phone/`, rebuilt when evidence arrives later); the latest results are
+//! loaded into it on every request.
 
 use std::sync::{Arc, Mutex};
 
@@ -13,6 +17,7 @@ use serde_json::json;
 use sitar_core::{DisplayRotation, Session, SessionConfig};
 
 use crate::Error;
+use crate::evidence::{EvidenceFiles, EvidenceRow};
 use crate::published::{self, Form};
 use crate::session::Session as Row;
 use crate::shared::Shared;
@@ -24,6 +29,8 @@ pub(crate) enum Source {
     SimulatedWalk,
     /// The reference trial's poses (no depth on the backend).
     ReferenceTrial,
+    /// The reference trial's poses with the surface distances of the phone's evidence.
+    ReferenceTrialWithEvidence,
 }
 
 impl Source {
@@ -32,10 +39,58 @@ impl Source {
         match self {
             Self::SimulatedWalk => "the recorded walk with its depth samples",
             Self::ReferenceTrial => {
-                "the reference trial: a real recording brings no depth to the backend, so there are no surface points or markers"
+                "the reference trial: a real recording brings no depth to the backend, and the phone sent no camera evidence, so there are no surface points or markers"
+            }
+            Self::ReferenceTrialWithEvidence => {
+                "the reference trial, with the surface distances the phone measured (surface points straight ahead of each midpoint; marker normals face the camera)"
             }
         }
     }
+
+    /// Its name in the phone folder's `source.txt`.
+    fn tag(self) -> &'static str {
+        match self {
+            Self::SimulatedWalk => "sim",
+            Self::ReferenceTrial => "trial",
+            Self::ReferenceTrialWithEvidence => "trial+evidence",
+        }
+    }
+
+    fn from_tag(tag: &str) -> Self {
+        match tag {
+            "sim" => Self::SimulatedWalk,
+            "trial+evidence" => Self::ReferenceTrialWithEvidence,
+            _ => Self::ReferenceTrial,
+        }
+    }
+}
+
+/// A constant depth image (a wall facing the camera) at `distance_m`, for the phone logic's
+/// own sampling: 16 × 16 px, a pinhole of 16 px focal length.
+const FLAT_SIDE: u32 = 16;
+
+fn flat_depth_sample(session: &mut Session, distance_m: f64) {
+    let mm = (distance_m * 1000.0).round();
+    // sitar-core reads depth in millimetres within u16 (65 m).
+    if !(100.0..65_000.0).contains(&mm) {
+        return;
+    }
+    let pixels = vec![mm as u16; (FLAT_SIDE * FLAT_SIDE) as usize];
+    // The principal point on the pixel sitar-core samples (`DepthImage::centre`): the
+    // sample's ray is the optical axis, as the phone's distance was measured along it.
+    let half = f64::from(FLAT_SIDE / 2);
+    let k = sitar_core::Intrinsics {
+        fx: 16.0,
+        fy: 16.0,
+        cx: half,
+        cy: half,
+    };
+    let Ok(image) = sitar_core::DepthImage::new(&pixels, FLAT_SIDE, FLAT_SIDE, FLAT_SIDE * 2)
+    else {
+        return;
+    };
+    // An unusable sample only leaves this midpoint without a surface point.
+    let _ = session.depth(&image, &k, DisplayRotation::Deg0);
 }
 
 fn config(row: &Row) -> Result<SessionConfig, Error> {
@@ -51,8 +106,13 @@ fn config(row: &Row) -> Result<SessionConfig, Error> {
     SessionConfig::from_json(&text).map_err(|e| Error::Internal(format!("phone config: {e}")))
 }
 
-/// The reference trial (the first stored) replayed through the phone logic, without depth.
-fn from_reference_trial(shared: &Shared, row: &Row) -> Result<Session, Error> {
+/// The reference trial (the first stored) replayed through the phone logic, with each
+/// midpoint's surface distance from `evidence` (rows by sub-trajectory index) when given.
+fn from_reference_trial(
+    shared: &Shared,
+    row: &Row,
+    evidence: Option<&[EvidenceRow]>,
+) -> Result<Session, Error> {
     let first = shared
         .db
         .trials_in_order(&row.id)?
@@ -83,7 +143,14 @@ fn from_reference_trial(shared: &Shared, row: &Row) -> Result<Session, Error> {
     let last = poses.len() - 1;
     session.start(poses[0].0, poses[0].1).map_err(fail)?;
     for (t, pose) in &poses[1..last] {
-        session.frame(*t, *pose).map_err(fail)?;
+        let flags = session.frame(*t, *pose).map_err(fail)?;
+        if let Some(rows) = evidence
+            && flags.is_midpoint()
+            && let Some(k) = session.subtrajectories().last().map(|s| s.index as usize)
+            && let Some(measured) = rows.get(k).filter(|r| r.index == k && r.depth_valid)
+        {
+            flat_depth_sample(&mut session, measured.distance_m);
+        }
     }
     session.stop(poses[last].0, poses[last].1).map_err(fail)?;
     Ok(session)
@@ -102,7 +169,28 @@ fn build(shared: &Shared, row: &Row) -> Result<(Session, Source), Error> {
             .map_err(|e| Error::InvalidContent(format!("simulated walk: {e}")))?;
         return Ok((session, Source::SimulatedWalk));
     }
-    Ok((from_reference_trial(shared, row)?, Source::ReferenceTrial))
+    let evidence = stored_evidence(shared, row);
+    let source = if evidence.is_some() {
+        Source::ReferenceTrialWithEvidence
+    } else {
+        Source::ReferenceTrial
+    };
+    Ok((
+        from_reference_trial(shared, row, evidence.as_deref())?,
+        source,
+    ))
+}
+
+/// The phone's evidence rows of `row`, if it sent any (an unreadable table counts as none:
+/// the scene is drawn without it).
+fn stored_evidence(shared: &Shared, row: &Row) -> Option<Vec<EvidenceRow>> {
+    EvidenceFiles {
+        files: &shared.files,
+        id: &row.id,
+    }
+    .evidence_rows()
+    .ok()
+    .flatten()
 }
 
 /// Phone sessions with results loaded, most recent last: a report and its `scene.json` (and a
@@ -144,11 +232,15 @@ fn load_uncached(shared: &Shared, row: &Row) -> Result<(Session, Source), Error>
         .zip(
             std::fs::read_to_string(&marker)
                 .ok()
-                .map(|s| match s.trim() {
-                    "sim" => Source::SimulatedWalk,
-                    _ => Source::ReferenceTrial,
-                }),
-        );
+                .map(|s| Source::from_tag(s.trim())),
+        )
+        // Built before the phone's evidence arrived: built again with it.
+        .filter(|(_, source)| {
+            *source != Source::ReferenceTrial || stored_evidence(shared, row).is_none()
+        });
+    if cached.is_none() && dir.exists() {
+        let _ = std::fs::remove_dir_all(&dir);
+    }
     let (mut session, source) = match cached {
         Some(found) => found,
         None => {
@@ -157,15 +249,7 @@ fn load_uncached(shared: &Shared, row: &Row) -> Result<(Session, Source), Error>
             // sees the whole folder or builds its own.
             let scratch = shared.files.scratch_dir();
             let kept = session.save(&scratch).is_ok()
-                && std::fs::write(
-                    scratch.join("source.txt"),
-                    if source == Source::SimulatedWalk {
-                        "sim"
-                    } else {
-                        "trial"
-                    },
-                )
-                .is_ok()
+                && std::fs::write(scratch.join("source.txt"), source.tag()).is_ok()
                 && std::fs::rename(&scratch, &dir).is_ok();
             if !kept {
                 let _ = std::fs::remove_dir_all(&scratch);

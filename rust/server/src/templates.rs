@@ -82,9 +82,14 @@ mod tests {
             &serde_json::json!({
                 "id": hostile,
                 "settings": [["Stop reason", hostile]],
-                "regions": [{"rank": 1, "class": hostile, "cause": hostile, "thumbnail_url": hostile,
+                "regions": [{"rank": 1, "class": hostile, "thumbnail_url": hostile, "pictured": hostile,
+                             "causes": [{"name": hostile, "reason": hostile, "count": 1}],
                              "markers": hostile, "subtrajectories": hostile}],
+                "region_count": 1,
                 "markers": [],
+                "marker_count": 0,
+                "has_evidence": true,
+                "base": hostile,
                 "source": hostile,
             }),
         )
@@ -95,7 +100,7 @@ mod tests {
             // No inline script at all: the only script is the module from /assets.
             assert_eq!(
                 page.matches("<script").count(),
-                page.matches("<script type=\"module\" src=\"/assets/report.js\">")
+                page.matches("<script type=\"module\" src=\"/assets/report.bundle.js\">")
                     .count()
             );
         }

@@ -13,6 +13,7 @@ use crate::auth::Admin;
 use crate::config::PlaybackKind;
 use crate::http::{AppState, Found};
 use crate::published::{self, Form};
+use crate::region_evidence::CameraEvidence;
 use crate::report::{self, ReportInput};
 use crate::scene;
 use crate::status::status_json;
@@ -165,25 +166,35 @@ pub(crate) async fn report(
     State(shared): AppState,
     Found(session): Found,
 ) -> Result<Response, Error> {
-    Ok(templates::page(render_report(shared, session).await?))
+    let base = format!("/v1/sessions/{}/", session.id);
+    Ok(templates::page(render_report(shared, session, base).await?))
 }
 
-/// The report page of `session`: for its owner and for a share link alike.
+/// The report page of `session`: for its owner and for a share link alike; `base` is where
+/// this reader fetches the session's data (`/v1/sessions/ID/` or `/share/TOKEN/`).
 pub(crate) async fn render_report(
     shared: std::sync::Arc<crate::shared::Shared>,
     session: crate::session::Session,
+    base: String,
 ) -> Result<String, Error> {
     let json = published::read(&shared, &session, Form::Json)?;
     tokio::task::spawn_blocking(move || {
         // No trajectory (e.g. trials without a readable reference) still gets a page.
         let phone = scene::load(&shared, &session).ok();
         let history = published::history(&shared, &session);
+        // Unreadable evidence costs the regions their thumbnails, not the page.
+        let evidence = CameraEvidence::load(&shared.files, &session.id).unwrap_or_else(|e| {
+            log::warn!("report of {}: evidence left out: {e}", session.id);
+            None
+        });
         report::render(&ReportInput {
             row: &session,
             results_json: &json,
             config: &shared.config,
             phone: phone.as_deref().map(|(p, s)| (p, *s)),
             history,
+            base: &base,
+            evidence: evidence.as_ref(),
         })
     })
     .await

@@ -1,15 +1,20 @@
 //! Read-only share links of one session's report: `POST /v1/sessions/{id}/share` makes one
 //! (a URL with its own random token, stored hashed), `DELETE /v1/sessions/{id}/share` revokes
 //! every link of the session, and `GET /share/{token}` opens the report without an account.
+//! The page fetches its data through the same token (`GET /share/{token}/scene.json`, the
+//! downloads, the regions' thumbnails): one session's data, nothing else.
 
 use axum::extract::{Path, State};
 use axum::http::{HeaderMap, StatusCode, header};
-use axum::response::Response;
+use axum::response::{IntoResponse, Response};
 use serde_json::json;
 
 use crate::Error;
 use crate::auth::new_token;
+use crate::evidence::{EvidenceFiles, MAX_SUBTRAJECTORIES};
 use crate::http::{AppState, Found, json_value};
+use crate::session::Session;
+use crate::shared::Shared;
 
 /// The `Host` the client reached us by, if it is a plain host name or address with a port.
 fn host(headers: &HeaderMap) -> Result<&str, Error> {
@@ -57,14 +62,65 @@ pub(crate) async fn revoke(
     ))
 }
 
+/// The session share link `token` was made for; an unknown or revoked link is 404.
+fn shared_session(shared: &Shared, token: &str) -> Result<Session, Error> {
+    let gone = || Error::NotFound("no such share link (revoked, or its session deleted)".into());
+    let id = shared.db.shared_session(token)?.ok_or_else(gone)?;
+    shared.session(&id).map_err(|_| gone())
+}
+
 /// `GET /share/{token}`: the report the link was made for; an unknown or revoked link is 404.
 pub(crate) async fn view(
     State(shared): AppState,
     Path(token): Path<String>,
 ) -> Result<Response, Error> {
-    let gone = || Error::NotFound("no such share link (revoked, or its session deleted)".into());
-    let id = shared.db.shared_session(&token)?.ok_or_else(gone)?;
-    let session = shared.session(&id).map_err(|_| gone())?;
-    let html = super::pages::render_report(shared.clone(), session).await?;
+    let session = shared_session(&shared, &token)?;
+    // The token is lower-case hex (checked by the lookup): safe in a URL path as it is.
+    let base = format!("/share/{token}/");
+    let html = super::pages::render_report(shared.clone(), session, base).await?;
     Ok(crate::templates::page(html))
+}
+
+/// `GET /share/{token}/{name}`: the shared session's 3-D scene data and downloads, by a
+/// fixed list of names (the same answers as the owner's `/v1/sessions/{id}/{name}`).
+pub(crate) async fn data(
+    State(shared): AppState,
+    Path((token, name)): Path<(String, String)>,
+) -> Result<Response, Error> {
+    let session = Found(shared_session(&shared, &token)?);
+    let shared = State(shared);
+    match name.as_str() {
+        "scene.json" => super::scene::json(shared, session).await,
+        "scene.glb" => super::scene::glb(shared, session).await,
+        "trajectory.tum" => super::scene::trajectory(shared, session).await,
+        "trials.zip" => super::scene::trials_zip(shared, session).await,
+        "results.csv" => super::results::csv(shared, session).await,
+        "results.json" => super::results::json(shared, session).await,
+        _ => Err(Error::NotFound(format!("a share link has no {name:?}"))),
+    }
+}
+
+/// `GET /share/{token}/subtrajectories/{k}/image.jpg`: a thumbnail of the shared session.
+pub(crate) async fn image(
+    State(shared): AppState,
+    Path((token, k)): Path<(String, String)>,
+) -> Result<Response, Error> {
+    let session = shared_session(&shared, &token)?;
+    let none = || Error::NotFound(format!("the shared session has no image {k:?}"));
+    let k: usize = k
+        .parse()
+        .ok()
+        .filter(|k| *k < MAX_SUBTRAJECTORIES)
+        .ok_or_else(none)?;
+    let path = EvidenceFiles {
+        files: &shared.files,
+        id: &session.id,
+    }
+    .thumbnail(k);
+    let jpeg = match std::fs::read(&path) {
+        Ok(bytes) => bytes,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Err(none()),
+        Err(e) => return Err(Error::io("cannot read", &path, e)),
+    };
+    Ok(([(header::CONTENT_TYPE, "image/jpeg")], jpeg).into_response())
 }
