@@ -8,7 +8,7 @@ mod caller;
 mod limits;
 mod middleware;
 mod role;
-mod secret;
+pub(crate) mod secret;
 mod store;
 
 pub(crate) use bootstrap::ensure_admin_token;
