@@ -44,10 +44,14 @@ pub fn session_request(body: &[u8]) -> Result<(PlaybackKind, u32, &'static str),
         let inner = short(&e.inner().to_string(), QUOTE_LIMIT);
         Error::BadRequest(format!("{key}: {inner}"))
     })?;
-    // The typed request parsed, so the body is a JSON object with only known keys of the
-    // right types: read the values the settings take from it.
-    let value: serde_json::Value = serde_json::from_slice(body)
-        .map_err(|e| Error::Internal(format!("typed but not a JSON value: {e}")))?;
+    // The typed request parsed, so the body starts with a JSON value with only known keys of
+    // the right types: read the values the settings take from it. Like the handler, only that
+    // first value is read (`serde_path_to_error::deserialize` leaves what follows unread).
+    let value: serde_json::Value = serde_json::Deserializer::from_slice(body)
+        .into_iter()
+        .next()
+        .and_then(Result::ok)
+        .ok_or_else(|| Error::Internal("typed but not a JSON value".into()))?;
     let text = |key: &str| value.get(key).and_then(|v| v.as_str());
     let window_frames = value
         .get("window_frames")
