@@ -1,12 +1,17 @@
-//! Trajectory text parsers: sitar-estimator's TUM, EuRoC CSV and KITTI readers and
-//! sitar-core's integer-nanosecond TUM reader. Whatever parses must write back and parse
-//! again to the same trajectory (quaternions to 1e-12: reading renormalises them).
+//! Trajectory text parsers: sitar-estimator's TUM, EuRoC CSV and KITTI readers,
+//! sitar-core's integer-nanosecond TUM reader, and the server's trial reader (its TUM parse
+//! plus the checks a trial upload gets: at least 2 poses, positions finite and within 1e6 m).
+//! Whatever parses must write back and parse again to the same trajectory (quaternions to 1e-12: reading renormalises them).
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
 use sitar_estimator::{parse_euroc_csv, parse_kitti, parse_tum, write_tum};
 
 fuzz_target!(|data: &[u8]| {
+    // The server reads trial bytes, UTF-8 or not.
+    if let Ok(poses) = sitar_server::fuzzing::trial(data) {
+        assert!(poses >= 2);
+    }
     let Ok(text) = std::str::from_utf8(data) else {
         return;
     };

@@ -111,8 +111,8 @@ impl Client {
     /// `fingerprint` (`AB:CD:…` as `sitar serve --tls` and `openssl x509 -fingerprint -sha256`
     /// print it): for a self-signed certificate. The URL must be `https://`. A server showing
     /// another certificate fails every call with [`Error::CertificateMismatch`]; without a
-    /// pin, an `https://` server needs a certificate from a well-known authority (Mozilla's
-    /// roots, bundled).
+    /// pin, an `https://` server needs a certificate the platform trusts (its verifier and
+    /// system roots; on Android Mozilla's roots, bundled).
     pub fn with_server_cert_sha256(mut self, fingerprint: &str) -> Result<Client, Error> {
         if !self.base.starts_with("https://") {
             return Err(Error::InvalidArgument(format!(
@@ -623,6 +623,21 @@ impl ureq::middleware::Middleware for BearerAuth {
     }
 }
 
+/// What an unpinned `https://` URL is checked against: the platform's verifier (the system's
+/// roots and policy; on Linux the system bundle, or `SSL_CERT_FILE` / `SSL_CERT_DIR` when
+/// set).
+#[cfg(not(target_os = "android"))]
+fn platform_roots() -> ureq::tls::RootCerts {
+    ureq::tls::RootCerts::PlatformVerifier
+}
+
+/// On Android the platform verifier needs the app's Context (a JNI init) and its Kotlin
+/// component; the library keeps Mozilla's bundled roots there instead.
+#[cfg(target_os = "android")]
+fn platform_roots() -> ureq::tls::RootCerts {
+    ureq::tls::RootCerts::WebPki
+}
+
 fn make_agent(
     timeout: Duration,
     streaming: bool,
@@ -639,14 +654,15 @@ fn make_agent(
         value.set_sensitive(true);
         builder = builder.middleware(BearerAuth(value));
     }
-    if let Some(cert) = only_root {
-        let root = ureq::tls::Certificate::from_der(cert.as_ref()).to_owned();
-        builder = builder.tls_config(
-            ureq::tls::TlsConfig::builder()
-                .root_certs(ureq::tls::RootCerts::new_with_certs(&[root]))
-                .build(),
-        );
-    }
+    let roots = match only_root {
+        Some(cert) => {
+            ureq::tls::RootCerts::new_with_certs(&[
+                ureq::tls::Certificate::from_der(cert.as_ref()).to_owned()
+            ])
+        }
+        None => platform_roots(),
+    };
+    builder = builder.tls_config(ureq::tls::TlsConfig::builder().root_certs(roots).build());
     let builder = if streaming {
         // Bigger writes: fewer syscalls and server wake-ups per GiB uploaded.
         builder

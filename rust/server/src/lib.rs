@@ -85,6 +85,7 @@
 // handlers/*                                    — one file per resource
 // tls                                           — certificate and HTTPS listener
 // router, server                                — route table and middleware; serving
+// fuzzing                                       — the parsers, for fuzz/ only (doc-hidden)
 mod adb;
 mod assets;
 mod auth;
@@ -97,6 +98,8 @@ mod error;
 mod estimation;
 mod evidence;
 mod files;
+#[doc(hidden)]
+pub mod fuzzing;
 mod handlers;
 mod held;
 mod http;

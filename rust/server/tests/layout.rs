@@ -198,13 +198,14 @@ fn no_import_cycle_among_the_modules() {
         visit(module, &graph, &mut Vec::new(), &mut done);
     }
     // The seams later work builds on: the helpers sit below every handler, and the router
-    // is the only user of the handlers.
+    // is the only user of the handlers (besides `fuzzing`, the fuzz targets' hidden window on
+    // the handlers' parsers, at the top beside the router).
     for (module, uses) in &graph {
         let handler = module.starts_with("handlers::");
         for used in uses {
             if used.starts_with("handlers") {
                 assert!(
-                    module == "router" || (module == "handlers" && handler),
+                    module == "router" || module == "fuzzing" || (module == "handlers" && handler),
                     "{module} uses {used}: only the router takes handlers"
                 );
             }

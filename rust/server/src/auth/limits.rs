@@ -1,10 +1,11 @@
-//! Limits per token, counted in memory (a restart starts them afresh): sessions created per
-//! hour, bytes uploaded per day, uploads in progress at once. A request over a limit gets 429
-//! with `Retry-After`, and the same request later goes through.
+//! Limits per token: sessions created per hour, bytes uploaded per day, uploads in progress
+//! at once. The first two are counted in SQLite (`usage.rs`), so a restart does not reset
+//! them; uploads in progress are counted in memory (none survive a restart). A request over
+//! a limit gets 429 with `Retry-After`, and the same request later goes through.
 
-use std::collections::{HashMap, VecDeque};
+use std::collections::HashMap;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
-use std::time::{Duration, Instant};
 
 use axum::body::Body;
 use axum::extract::{Request, State};
@@ -15,6 +16,8 @@ use futures_util::StreamExt;
 
 use crate::Error;
 use crate::auth::caller::Caller;
+use crate::auth::usage::Full;
+use crate::db::{Db, now_ms};
 use crate::shared::Shared;
 
 /// The limits every token has (`sitar serve --max-sessions-per-hour`, `--max-upload-gib-per-day`,
@@ -23,10 +26,11 @@ use crate::shared::Shared;
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Limits {
     /// Sessions a token may create in any hour (default 120; the legacy `POST /recording`
-    /// creates one too).
+    /// creates one too). Kept in the database: a restart does not reset it.
     pub sessions_per_hour: u32,
-    /// Bytes a token may upload in any 24 hours (recordings, trials, timestamps; default
-    /// 200 GiB). An upload that starts under it is finished.
+    /// Bytes a token may upload in the last 24 hours, counted per whole hour (recordings,
+    /// trials, timestamps; default 200 GiB). An upload that starts under it is finished; its
+    /// bytes count when its body ends. Kept in the database: a restart does not reset it.
     pub upload_bytes_per_day: u64,
     /// Upload bodies a token may send at once (default 8: a lab's phones sharing one token).
     pub concurrent_uploads: u32,
@@ -42,129 +46,124 @@ impl Default for Limits {
     }
 }
 
-const HOUR: Duration = Duration::from_secs(3600);
-const DAY: Duration = Duration::from_secs(86_400);
-/// Uploaded bytes are summed per minute: a token's ledger has at most 1440 entries.
-const BUCKET: Duration = Duration::from_secs(60);
-
-#[derive(Default)]
-struct Usage {
-    created: VecDeque<Instant>,
-    /// (start of the minute, bytes), oldest first.
-    uploaded: VecDeque<(Instant, u64)>,
-    uploading: u32,
-}
-
-impl Usage {
-    fn forget_before(&mut self, now: Instant) {
-        while self.created.front().is_some_and(|t| now - *t >= HOUR) {
-            self.created.pop_front();
-        }
-        while self.uploaded.front().is_some_and(|(t, _)| now - *t >= DAY) {
-            self.uploaded.pop_front();
-        }
-    }
+/// Whole seconds from `now_ms` until `at_ms`, at least 1, for `Retry-After`.
+fn seconds_until(at_ms: i64, now_ms: i64) -> u64 {
+    let ms = (at_ms - now_ms).max(1) as u64;
+    ms.div_ceil(1000)
 }
 
 /// The counters of every token.
 pub(crate) struct UploadLimiter {
     limits: Limits,
-    usage: Mutex<HashMap<i64, Usage>>,
-}
-
-/// Whole seconds, at least 1, for `Retry-After`.
-fn seconds(d: Duration) -> u64 {
-    d.as_secs() + u64::from(d.subsec_nanos() > 0)
+    /// Upload bodies being read, per token.
+    uploading: Mutex<HashMap<i64, u32>>,
+    /// Whether the ledger's table exists (made on first use).
+    tables_made: AtomicBool,
 }
 
 impl UploadLimiter {
     pub fn new(limits: Limits) -> UploadLimiter {
         UploadLimiter {
             limits,
-            usage: Mutex::new(HashMap::new()),
+            uploading: Mutex::new(HashMap::new()),
+            tables_made: AtomicBool::new(false),
         }
     }
 
-    fn with<T>(&self, token: i64, f: impl FnOnce(&mut Usage, Instant) -> T) -> T {
-        let mut usage = self.usage.lock().unwrap_or_else(|e| e.into_inner());
-        let now = Instant::now();
-        let entry = usage.entry(token).or_default();
-        entry.forget_before(now);
-        f(entry, now)
+    fn ledger<'a>(&self, db: &'a Db) -> Result<&'a Db, Error> {
+        if !self.tables_made.load(Ordering::Acquire) {
+            db.create_usage_tables()?;
+            self.tables_made.store(true, Ordering::Release);
+        }
+        Ok(db)
     }
 
-    /// Counts a session creation, or refuses it with the seconds until one is allowed.
-    fn create_session(&self, token: i64) -> Result<(), Error> {
+    /// Counts a session creation at `now_ms`, or refuses it with the seconds until one is
+    /// allowed.
+    fn create_session(&self, db: &Db, token: i64, now_ms: i64) -> Result<(), Error> {
         let max = self.limits.sessions_per_hour;
-        self.with(token, |usage, now| {
-            if usage.created.len() as u64 >= u64::from(max) {
-                let oldest = usage.created.front().copied().unwrap_or(now);
-                return Err(Error::TooManyRequests {
-                    message: format!("this token created {max} sessions in the last hour"),
-                    retry_after_s: seconds(HOUR.saturating_sub(now - oldest)).max(1),
-                });
-            }
-            usage.created.push_back(now);
-            Ok(())
-        })
+        match self
+            .ledger(db)?
+            .count_session_creation(token, max, now_ms)?
+        {
+            Ok(()) => Ok(()),
+            Err(Full { frees_at_ms, .. }) => Err(Error::TooManyRequests {
+                message: format!("this token created {max} sessions in the last hour"),
+                retry_after_s: seconds_until(frees_at_ms, now_ms),
+            }),
+        }
     }
 
-    /// Starts an upload, or refuses it (too many at once, or the day's bytes are used up).
-    fn start_upload(self: &Arc<Self>, token: i64) -> Result<UploadGuard, Error> {
+    /// Starts an upload at `now_ms`, or refuses it (too many at once, or the day's bytes are
+    /// used up).
+    fn start_upload(
+        &self,
+        shared: &Arc<Shared>,
+        token: i64,
+        now_ms: i64,
+    ) -> Result<UploadGuard, Error> {
         let limits = self.limits;
-        self.with(token, |usage, now| {
-            if usage.uploading >= limits.concurrent_uploads {
-                return Err(Error::TooManyRequests {
-                    message: format!(
-                        "this token has {} uploads in progress already",
-                        limits.concurrent_uploads
-                    ),
-                    retry_after_s: 5,
-                });
-            }
-            let used: u64 = usage.uploaded.iter().map(|(_, b)| b).sum();
-            if used >= limits.upload_bytes_per_day {
-                let oldest = usage.uploaded.front().map_or(now, |(t, _)| *t);
-                return Err(Error::TooManyRequests {
-                    message: format!(
-                        "this token uploaded {used} bytes in the last 24 hours (limit {})",
-                        limits.upload_bytes_per_day
-                    ),
-                    retry_after_s: seconds(DAY.saturating_sub(now - oldest)).max(1),
-                });
-            }
-            usage.uploading += 1;
-            Ok(())
-        })?;
+        let day = self.ledger(&shared.db)?.uploaded_in_day(token, now_ms)?;
+        if day.used >= limits.upload_bytes_per_day {
+            return Err(Error::TooManyRequests {
+                message: format!(
+                    "this token uploaded {} bytes in the last 24 hours (limit {})",
+                    day.used, limits.upload_bytes_per_day
+                ),
+                retry_after_s: seconds_until(day.frees_at_ms, now_ms),
+            });
+        }
+        let mut uploading = self.uploading.lock().unwrap_or_else(|e| e.into_inner());
+        let count = uploading.entry(token).or_default();
+        if *count >= limits.concurrent_uploads {
+            return Err(Error::TooManyRequests {
+                message: format!(
+                    "this token has {} uploads in progress already",
+                    limits.concurrent_uploads
+                ),
+                retry_after_s: 5,
+            });
+        }
+        *count += 1;
         Ok(UploadGuard {
-            limiter: self.clone(),
+            shared: shared.clone(),
             token,
             bytes: 0,
         })
     }
 
-    fn add_bytes(&self, token: i64, bytes: u64) {
-        self.with(token, |usage, now| match usage.uploaded.back_mut() {
-            Some((start, sum)) if now - *start < BUCKET => *sum += bytes,
-            _ => usage.uploaded.push_back((now, bytes)),
-        });
+    /// An upload's body is done with: its bytes go into the ledger, its slot is free.
+    fn finish_upload(&self, db: &Db, token: i64, bytes: u64) {
+        if bytes > 0
+            && let Err(e) = self
+                .ledger(db)
+                .and_then(|db| db.add_uploaded(token, bytes, now_ms()))
+        {
+            log::warn!("cannot count {bytes} uploaded bytes: {e}");
+        }
+        let mut uploading = self.uploading.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(count) = uploading.get_mut(&token) {
+            *count = count.saturating_sub(1);
+            if *count == 0 {
+                uploading.remove(&token);
+            }
+        }
     }
 }
 
 /// Held while an upload body is read: its bytes are counted, and the slot is freed when the
 /// body is done with (read to the end, or dropped).
 struct UploadGuard {
-    limiter: Arc<UploadLimiter>,
+    shared: Arc<Shared>,
     token: i64,
     bytes: u64,
 }
 
 impl Drop for UploadGuard {
     fn drop(&mut self) {
-        self.limiter.add_bytes(self.token, self.bytes);
-        self.limiter.with(self.token, |usage, _| {
-            usage.uploading = usage.uploading.saturating_sub(1)
-        });
+        self.shared
+            .limiter
+            .finish_upload(&self.shared.db, self.token, self.bytes);
     }
 }
 
@@ -195,14 +194,14 @@ pub(crate) async fn limit_uploads(
     };
     let (method, path) = (request.method().clone(), request.uri().path().to_owned());
     if creates_session(&method, &path)
-        && let Err(e) = shared.limiter.create_session(id)
+        && let Err(e) = shared.limiter.create_session(&shared.db, id, now_ms())
     {
         return e.into_response();
     }
     if !is_upload(&method, &path) {
         return next.run(request).await;
     }
-    let mut guard = match shared.limiter.start_upload(id) {
+    let mut guard = match shared.limiter.start_upload(&shared, id, now_ms()) {
         Ok(guard) => guard,
         Err(e) => return e.into_response(),
     };
@@ -224,25 +223,41 @@ pub(crate) async fn limit_uploads(
 mod tests {
     use super::*;
 
+    use crate::auth::usage::HOUR_MS;
+    use crate::config::ServerConfig;
+
+    fn shared(dir: &std::path::Path, limits: Limits) -> Arc<Shared> {
+        let mut config = ServerConfig::new(dir);
+        config.limits = limits;
+        Arc::new(Shared::open(config).unwrap())
+    }
+
     #[test]
     fn each_limit_refuses_with_a_retry_after_and_frees_up() {
-        let limiter = Arc::new(UploadLimiter::new(Limits {
+        let dir = tempfile::tempdir().unwrap();
+        let limits = Limits {
             sessions_per_hour: 2,
             upload_bytes_per_day: 100,
             concurrent_uploads: 1,
-        }));
-        limiter.create_session(1).unwrap();
-        limiter.create_session(1).unwrap();
-        let Err(Error::TooManyRequests { retry_after_s, .. }) = limiter.create_session(1) else {
+        };
+        let shared = shared(dir.path(), limits);
+        let (limiter, db) = (&shared.limiter, &shared.db);
+        let t0 = 500_000 * HOUR_MS + 1_000;
+        limiter.create_session(db, 1, t0).unwrap();
+        limiter.create_session(db, 1, t0 + 1).unwrap();
+        let Err(Error::TooManyRequests { retry_after_s, .. }) =
+            limiter.create_session(db, 1, t0 + 2)
+        else {
             panic!("the third session in an hour is refused");
         };
-        assert!((3599..=3600).contains(&retry_after_s), "{retry_after_s}");
-        // Another token has its own counters.
-        limiter.create_session(2).unwrap();
+        assert_eq!(retry_after_s, 3600);
+        // Another token has its own counters; an hour later the first may create again.
+        limiter.create_session(db, 2, t0 + 2).unwrap();
+        limiter.create_session(db, 1, t0 + HOUR_MS).unwrap();
 
-        let mut first = limiter.start_upload(1).unwrap();
+        let mut first = limiter.start_upload(&shared, 1, t0).unwrap();
         assert!(matches!(
-            limiter.start_upload(1),
+            limiter.start_upload(&shared, 1, t0),
             Err(Error::TooManyRequests {
                 retry_after_s: 5,
                 ..
@@ -250,17 +265,51 @@ mod tests {
         ));
         first.bytes = 150;
         drop(first);
-        // The slot is free again, but the day's bytes are used up.
+        // The slot is free again, but the day's bytes are used up (counted in the hour of
+        // the clock, so asked at the real time).
+        let now = now_ms();
         let Err(Error::TooManyRequests {
             retry_after_s,
             message,
-        }) = limiter.start_upload(1)
+        }) = limiter.start_upload(&shared, 1, now)
         else {
             panic!("over the day's bytes");
         };
         assert!(message.contains("150 bytes"), "{message}");
-        assert!(retry_after_s > 86_000, "{retry_after_s}");
-        assert!(limiter.start_upload(2).is_ok());
+        assert!(
+            (82_800..=86_400).contains(&retry_after_s),
+            "{retry_after_s}"
+        );
+        assert!(limiter.start_upload(&shared, 2, now).is_ok());
+        // A day later the bytes have left the window.
+        assert!(limiter.start_upload(&shared, 1, now + 24 * HOUR_MS).is_ok());
+    }
+
+    #[test]
+    fn the_counts_outlive_the_limiter() {
+        let dir = tempfile::tempdir().unwrap();
+        let limits = Limits {
+            sessions_per_hour: 1,
+            upload_bytes_per_day: 10,
+            concurrent_uploads: 4,
+        };
+        let t0 = now_ms();
+        {
+            let shared = shared(dir.path(), limits);
+            shared.limiter.create_session(&shared.db, 7, t0).unwrap();
+            let mut upload = shared.limiter.start_upload(&shared, 7, t0).unwrap();
+            upload.bytes = 11;
+        }
+        // A new server on the same data directory: both limits still apply.
+        let shared = shared(dir.path(), limits);
+        assert!(
+            shared
+                .limiter
+                .create_session(&shared.db, 7, t0 + 1)
+                .is_err()
+        );
+        assert!(shared.limiter.start_upload(&shared, 7, t0 + 1).is_err());
+        assert!(shared.limiter.create_session(&shared.db, 8, t0 + 1).is_ok());
     }
 
     #[test]

@@ -324,10 +324,10 @@ fn remove_if_present(path: &std::path::Path) -> Result<(), Error> {
 
 /// `Content-Range: bytes START-LAST/TOTAL` (inclusive `LAST`, as in RFC 9110).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-struct ContentRange {
-    start: u64,
-    last: u64,
-    total: u64,
+pub(crate) struct ContentRange {
+    pub(crate) start: u64,
+    pub(crate) last: u64,
+    pub(crate) total: u64,
 }
 
 impl ContentRange {
@@ -348,7 +348,7 @@ fn content_range(headers: &HeaderMap) -> Result<Option<ContentRange>, Error> {
     })
 }
 
-fn parse_content_range(text: &str) -> Option<ContentRange> {
+pub(crate) fn parse_content_range(text: &str) -> Option<ContentRange> {
     let rest = text.trim().strip_prefix("bytes ")?;
     let (span, total) = rest.split_once('/')?;
     let (start, last) = span.split_once('-')?;

@@ -32,7 +32,7 @@ const MAX_LIMIT: u32 = 500;
 /// The JSON body of `POST /v1/sessions`; every key optional.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
-struct CreateRequest {
+pub(crate) struct CreateRequest {
     /// Defaults to the server's trial count.
     #[serde(default)]
     trials: Option<u32>,

@@ -4,7 +4,7 @@
 //! The page fetches its data through the same token (`GET /share/{token}/scene.json`, the
 //! downloads, the regions' thumbnails): one session's data, nothing else.
 
-use axum::extract::{Path, State};
+use axum::extract::{Path, RawQuery, State};
 use axum::http::{HeaderMap, StatusCode, header};
 use axum::response::{IntoResponse, Response};
 use serde_json::json;
@@ -86,6 +86,7 @@ pub(crate) async fn view(
 pub(crate) async fn data(
     State(shared): AppState,
     Path((token, name)): Path<(String, String)>,
+    query: RawQuery,
 ) -> Result<Response, Error> {
     let session = Found(shared_session(&shared, &token)?);
     let shared = State(shared);
@@ -95,7 +96,7 @@ pub(crate) async fn data(
         "trajectory.tum" => super::scene::trajectory(shared, session).await,
         "trials.zip" => super::scene::trials_zip(shared, session).await,
         "results.csv" => super::results::csv(shared, session).await,
-        "results.json" => super::results::json(shared, session).await,
+        "results.json" => super::results::json(shared, session, query).await,
         _ => Err(Error::NotFound(format!("a share link has no {name:?}"))),
     }
 }

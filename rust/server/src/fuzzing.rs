@@ -1,0 +1,80 @@
+//! The HTTP-facing parsers, reachable from the fuzz targets in `fuzz/` (a separate
+//! workspace, so it can only call public items). Not an API: hidden from the docs, and it
+//! may change with the handlers. Each function runs the same code a request runs, minus the
+//! database and the network.
+
+use axum::http::{HeaderMap, HeaderValue};
+
+use crate::Error;
+use crate::config::{PlaybackKind, ServerConfig};
+use crate::error::short;
+use crate::settings::EstimateSettings;
+
+pub use crate::auth::secret::{
+    COOKIE_NAME, bearer, cookie, has_param, plausible, query_param, without_param,
+};
+
+/// `Content-Range: bytes START-LAST/TOTAL` of a `PUT …/recording`, as `(start, last, total)`.
+pub fn content_range(text: &str) -> Option<(u64, u64, u64)> {
+    crate::handlers::recording::parse_content_range(text).map(|r| (r.start, r.last, r.total))
+}
+
+/// The `Idempotency-Key` check of `POST /v1/sessions` on a raw header value; `Ok(None)` is
+/// also the answer for bytes no HTTP header could carry (they never reach a handler).
+pub fn idempotency_key(value: &[u8]) -> Result<Option<String>, Error> {
+    let Ok(value) = HeaderValue::from_bytes(value) else {
+        return Ok(None);
+    };
+    let mut headers = HeaderMap::new();
+    headers.insert(crate::http::IDEMPOTENCY_HEADER, value);
+    crate::http::idempotency_key(&headers)
+}
+
+/// What `POST /v1/sessions` makes of its JSON body before it touches the database: the typed
+/// request (unknown keys refused), the error text quoting short prefixes only, the playback
+/// kind and the estimate settings (checked against a default server configuration).
+pub fn session_request(body: &[u8]) -> Result<(PlaybackKind, u32, &'static str), Error> {
+    use crate::handlers::sessions::{CreateRequest, QUOTE_LIMIT};
+    // The handler's own error mapping: the key at fault, then the reason.
+    let _typed: CreateRequest = serde_path_to_error::deserialize(
+        &mut serde_json::Deserializer::from_slice(body),
+    )
+    .map_err(|e| {
+        let key = short(&e.path().to_string(), QUOTE_LIMIT);
+        let inner = short(&e.inner().to_string(), QUOTE_LIMIT);
+        Error::BadRequest(format!("{key}: {inner}"))
+    })?;
+    // The typed request parsed, so the body starts with a JSON value with only known keys of
+    // the right types: read the values the settings take from it. Like the handler, only that
+    // first value is read (`serde_path_to_error::deserialize` leaves what follows unread).
+    let value: serde_json::Value = serde_json::Deserializer::from_slice(body)
+        .into_iter()
+        .next()
+        .and_then(Result::ok)
+        .ok_or_else(|| Error::Internal("typed but not a JSON value".into()))?;
+    let text = |key: &str| value.get(key).and_then(|v| v.as_str());
+    let window_frames = value
+        .get("window_frames")
+        .and_then(|v| v.as_u64())
+        .map(|n| n as u32);
+    let config = ServerConfig::new("unused");
+    let playback = match text("playback") {
+        None => config.playback,
+        Some(name) => name
+            .parse::<PlaybackKind>()
+            .map_err(|e| Error::BadRequest(format!("playback: {}", short(&e, QUOTE_LIMIT))))?,
+    };
+    let settings = EstimateSettings::from_request(
+        &config,
+        text("setting"),
+        window_frames,
+        text("pose_relation"),
+    )?;
+    Ok((playback, settings.window_frames, settings.unit()))
+}
+
+/// A trial's TUM text as `POST /v1/sessions/{id}/trials` and the playback phones' uploads
+/// read it; the number of poses.
+pub fn trial(bytes: &[u8]) -> Result<usize, Error> {
+    crate::trials::parse_trial(bytes, "trial.txt").map(|t| t.len())
+}
