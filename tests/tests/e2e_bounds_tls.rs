@@ -79,4 +79,3 @@ fn the_tls_listener_has_the_same_cap_and_answers_503_over_tls() {
         std::thread::sleep(Duration::from_millis(100));
     }
 }
-

@@ -8,6 +8,7 @@ use axum::http::{HeaderMap, HeaderValue};
 use crate::Error;
 use crate::config::{PlaybackKind, ServerConfig};
 use crate::error::short;
+use crate::handlers::sessions::QUOTE_LIMIT;
 use crate::settings::EstimateSettings;
 
 pub use crate::auth::secret::{
@@ -34,24 +35,10 @@ pub fn idempotency_key(value: &[u8]) -> Result<Option<String>, Error> {
 /// request (unknown keys refused), the error text quoting short prefixes only, the playback
 /// kind and the estimate settings (checked against a default server configuration).
 pub fn session_request(body: &[u8]) -> Result<(PlaybackKind, u32, &'static str), Error> {
-    use crate::handlers::sessions::{CreateRequest, QUOTE_LIMIT};
-    // The handler's own error mapping: the key at fault, then the reason.
-    let _typed: CreateRequest = serde_path_to_error::deserialize(
-        &mut serde_json::Deserializer::from_slice(body),
-    )
-    .map_err(|e| {
-        let key = short(&e.path().to_string(), QUOTE_LIMIT);
-        let inner = short(&e.inner().to_string(), QUOTE_LIMIT);
-        Error::BadRequest(format!("{key}: {inner}"))
-    })?;
-    // The typed request parsed, so the body starts with a JSON value with only known keys of
-    // the right types: read the values the settings take from it. Like the handler, only that
-    // first value is read (`serde_path_to_error::deserialize` leaves what follows unread).
-    let value: serde_json::Value = serde_json::Deserializer::from_slice(body)
-        .into_iter()
-        .next()
-        .and_then(Result::ok)
-        .ok_or_else(|| Error::Internal("typed but not a JSON value".into()))?;
+    // The handler's own parser: one JSON object, unknown keys refused, nothing after it.
+    crate::handlers::sessions::parse_create_request(body)?;
+    let value: serde_json::Value = serde_json::from_slice(body)
+        .map_err(|_| Error::Internal("typed but not one JSON value".into()))?;
     let text = |key: &str| value.get(key).and_then(|v| v.as_str());
     let window_frames = value
         .get("window_frames")

@@ -53,6 +53,30 @@ pub(crate) struct CreateRequest {
     pose_relation: Option<String>,
 }
 
+/// The `POST /v1/sessions` body as a typed request: one JSON object and nothing after it
+/// (serde would also take an array of the fields in order, and stop reading after the first
+/// value). Errors name the key at fault first (`window_frames: invalid type: string "20", …`)
+/// and quote the client's input in short prefixes only.
+pub(crate) fn parse_create_request(body: &[u8]) -> Result<CreateRequest, Error> {
+    let bad = |key: &str, inner: &str| {
+        let (key, inner) = (short(key, QUOTE_LIMIT), short(inner, QUOTE_LIMIT));
+        match key.as_str() {
+            "." => Error::BadRequest(format!("session request: {inner}")),
+            _ => Error::BadRequest(format!("{key}: {inner}")),
+        }
+    };
+    let first = body.iter().find(|b| !b.is_ascii_whitespace());
+    if first != Some(&b'{') {
+        return Err(bad(".", "the body must be one JSON object"));
+    }
+    let mut de = serde_json::Deserializer::from_slice(body);
+    let req: CreateRequest = serde_path_to_error::deserialize(&mut de)
+        .map_err(|e| bad(&e.path().to_string(), &e.inner().to_string()))?;
+    de.end()
+        .map_err(|e| bad(".", &format!("after the JSON object: {e}")))?;
+    Ok(req)
+}
+
 /// `POST /v1/sessions`: a new session, its settings checked and stored typed.
 pub(crate) async fn create(
     State(shared): AppState,
@@ -75,18 +99,7 @@ pub(crate) async fn create(
             "session request",
         )
         .await?;
-    let req: CreateRequest =
-        serde_path_to_error::deserialize(&mut serde_json::Deserializer::from_slice(&body))
-            .map_err(|e| {
-                // The key at fault first: `window_frames: invalid type: string "20", …`.
-                // Both may quote the client's input: short prefixes only.
-                let key = short(&e.path().to_string(), QUOTE_LIMIT);
-                let inner = short(&e.inner().to_string(), QUOTE_LIMIT);
-                match key.as_str() {
-                    "." => Error::BadRequest(format!("session request: {inner}")),
-                    _ => Error::BadRequest(format!("{key}: {inner}")),
-                }
-            })?;
+    let req = parse_create_request(&body)?;
     let trials = req.trials.unwrap_or(shared.config.default_trials);
     if trials == 0 {
         return Err(Error::BadRequest("trials: 0 is below 1".into()));
@@ -291,6 +304,25 @@ pub(crate) async fn cancel(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_session_request_is_one_json_object_and_nothing_after_it() {
+        let req = parse_create_request(b" {\"trials\":2} \n").unwrap();
+        assert_eq!(req.trials, Some(2));
+        for (body, says) in [
+            (&b"{\"trials\":2}garbage"[..], "after the JSON object"),
+            (b"{\"trials\":2}{\"trials\":3}", "after the JSON object"),
+            (b"[2,\"median\"]", "one JSON object"),
+            (b"2", "one JSON object"),
+            (b"", "one JSON object"),
+            (b"{\"trials\":\"2\"}", "trials: invalid type"),
+        ] {
+            match parse_create_request(body) {
+                Err(Error::BadRequest(message)) => assert!(message.contains(says), "{message}"),
+                other => panic!("{:?}: {other:?}", String::from_utf8_lossy(body)),
+            }
+        }
+    }
 
     #[test]
     fn limit_takes_one_number_in_range_and_names_what_is_wrong() {
