@@ -127,6 +127,41 @@ fn connections_beyond_the_cap_get_a_json_503_and_the_slots_come_back() {
 }
 
 #[test]
+fn requests_hyper_cannot_parse_get_the_json_error_shape_too() {
+    let dir = tempfile::tempdir().unwrap();
+    let server = start(sim_config(dir.path(), 10.0, 1));
+    let many_headers: String = (0..200).map(|i| format!("x-h{i}: a\r\n")).collect();
+    for (head, status, code) in [
+        (
+            // A Content-Length beyond u64: hyper refuses it before any handler runs.
+            "POST /v1/sessions HTTP/1.1\r\nhost: x\r\ncontent-length: 99999999999999999999999\r\n\r\n"
+                .to_string(),
+            400,
+            "bad_request",
+        ),
+        ("GARBAGE\r\n\r\n".to_string(), 400, "bad_request"),
+        (
+            format!("GET /healthz HTTP/1.1\r\nhost: x\r\n{many_headers}\r\n"),
+            431,
+            "headers_too_large",
+        ),
+    ] {
+        let (got, answer) = exchange(addr(&server), &head, b"");
+        assert_eq!(got, status, "{answer}");
+        let (got_code, len) = json_error(&answer);
+        assert_eq!(got_code, code, "{answer}");
+        assert!(answer.len() <= 1024 && len < 300, "{answer}");
+    }
+    // The connection's other answers are untouched: a normal request still works.
+    let (status, answer) = exchange(
+        addr(&server),
+        "GET /healthz HTTP/1.1\r\nhost: x\r\nconnection: close\r\n\r\n",
+        b"",
+    );
+    assert_eq!(status, 200, "{answer}");
+}
+
+#[test]
 fn headers_dribbled_slowly_are_cut_off() {
     let dir = tempfile::tempdir().unwrap();
     let mut config = sim_config(dir.path(), 10.0, 1);

@@ -12,6 +12,8 @@ use hyper_util::service::TowerToHyperService;
 use tokio::io::{AsyncRead, AsyncWrite, AsyncWriteExt};
 use tokio::sync::{Semaphore, watch};
 
+use crate::parse_errors::JsonParseErrors;
+
 /// How the accept loop bounds connections.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct ConnectionLimits {
@@ -75,7 +77,7 @@ pub(crate) async fn serve<L>(
                 .header_read_timeout(limits.header_read_timeout)
                 .max_buf_size(MAX_READ_BUFFER);
             let conn = builder
-                .serve_connection(TokioIo::new(io), service)
+                .serve_connection(TokioIo::new(JsonParseErrors::new(io)), service)
                 .with_upgrades();
             tokio::pin!(conn);
             tokio::select! {

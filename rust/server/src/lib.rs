@@ -109,6 +109,7 @@ mod live;
 mod mp4_check;
 mod netinfo;
 mod pagination;
+mod parse_errors;
 mod playback;
 mod published;
 mod queue;
