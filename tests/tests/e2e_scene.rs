@@ -65,6 +65,14 @@ fn the_scene_of_a_sim_session_matches_the_phones_render_plan_and_validates() {
         .upload_recording(&id, &recording, &mut |_, _| {})
         .unwrap();
     assert_eq!(wait_done(&client, &id).state, SessionState::Done);
+    // Built ahead when the session finished, before anyone asks for it: the report's first
+    // load does not pay for rebuilding the walk.
+    let built = dir.path().join(format!("data/sessions/{id}/phone/source.txt"));
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(60);
+    while !built.exists() {
+        assert!(std::time::Instant::now() < deadline, "no scene built ahead");
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
 
     let (status, ct, glb) = get_bytes(&url);
     assert_eq!((status, ct.as_str()), (200, "model/gltf-binary"));

@@ -48,7 +48,12 @@ async fn publish(
 
 /// Ends a job's session: a failure is recorded (unless the server is stopping, which leaves
 /// the session in flight), the job row closed, the live session dropped.
-fn conclude(shared: &Shared, id: &str, job: Option<i64>, outcome: Result<Outcome, Error>) {
+fn conclude(
+    shared: &Arc<Shared>,
+    id: &str,
+    job: Option<i64>,
+    outcome: Result<Outcome, Error>,
+) {
     shared.set_running(id, None);
     shared.live.remove(id);
     match outcome {
@@ -56,6 +61,7 @@ fn conclude(shared: &Shared, id: &str, job: Option<i64>, outcome: Result<Outcome
             if let Some(job) = job {
                 let _ = shared.db.finish_job(job, JobEnd::Done, None);
             }
+            crate::scene::prepare(shared.clone(), id.to_string());
         }
         Ok(Outcome::Interrupted) => {
             log::info!("session {id}: interrupted by shutdown, resumes on next start")

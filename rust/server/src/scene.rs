@@ -8,9 +8,11 @@
 //! faced is put back as a depth sample straight ahead, so the page has surface points and
 //! markers (placed by sitar-core's own rule; their normals face the camera, as the true
 //! ones are unknown). Either is built once and kept as a `sitar_core` session folder
-//! (`sessions/ID/phone/`, rebuilt when evidence arrives later); the latest results are
-//! loaded into it on every request.
+//! (`sessions/ID/phone/`, rebuilt when evidence arrives later), right after the session
+//! finishes ([`prepare`]) or else on the first request; the latest results are loaded into
+//! it on every request.
 
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 
 use serde_json::json;
@@ -199,6 +201,31 @@ type Cached = (std::path::PathBuf, u32, Arc<(Session, Source)>);
 static CACHE: Mutex<Vec<Cached>> = Mutex::new(Vec::new());
 /// Sessions kept in memory (a 10-minute walk's is a few MB).
 const CACHED_SESSIONS: usize = 4;
+
+/// Whether a finished session's scene is being built ahead (at most one at a time).
+static PREPARING: AtomicBool = AtomicBool::new(false);
+
+/// Builds a just-finished session's scene — the phone session folder, its results loaded,
+/// the in-memory cache — on a thread of its own, so the first load of its report does not pay
+/// for it (a simulated 10-minute walk takes seconds to rebuild). One at a time: a session that
+/// finishes while another's is built gets its scene on the first request instead, as before.
+pub(crate) fn prepare(shared: Arc<Shared>, id: String) {
+    if PREPARING.swap(true, Ordering::AcqRel) {
+        return;
+    }
+    let spawned = std::thread::Builder::new()
+        .name("sitar-scene".into())
+        .spawn(move || {
+            let built = shared.session(&id).and_then(|row| load(&shared, &row));
+            if let Err(e) = built {
+                log::debug!("session {id}: scene not built ahead: {e}");
+            }
+            PREPARING.store(false, Ordering::Release);
+        });
+    if spawned.is_err() {
+        PREPARING.store(false, Ordering::Release);
+    }
+}
 
 /// The phone session of `row` with its latest results loaded. Blocking.
 pub(crate) fn load(shared: &Shared, row: &Row) -> Result<Arc<(Session, Source)>, Error> {
