@@ -67,7 +67,9 @@ fn the_scene_of_a_sim_session_matches_the_phones_render_plan_and_validates() {
     assert_eq!(wait_done(&client, &id).state, SessionState::Done);
     // Built ahead when the session finished, before anyone asks for it: the report's first
     // load does not pay for rebuilding the walk.
-    let built = dir.path().join(format!("data/sessions/{id}/phone/source.txt"));
+    let built = dir
+        .path()
+        .join(format!("data/sessions/{id}/phone/source.txt"));
     let deadline = std::time::Instant::now() + std::time::Duration::from_secs(60);
     while !built.exists() {
         assert!(std::time::Instant::now() < deadline, "no scene built ahead");

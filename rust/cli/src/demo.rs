@@ -134,6 +134,15 @@ pub fn run(args: Args) -> Result<()> {
         "session     {id}: {uploaded} bytes uploaded, {} trials playing",
         args.trials
     );
+    // The camera evidence (thumbnails, image properties, likely causes) goes along, as the
+    // native library sends it from the session folder: the report's regions show it.
+    let phone_dir = data.join("demo-phone-session");
+    session
+        .save(&phone_dir)
+        .with_context(|| format!("cannot save the phone session to {}", phone_dir.display()))?;
+    if let Some(thumbnails) = client.upload_evidence(&id, &phone_dir)? {
+        println!("evidence    {thumbnails} camera thumbnails and their image properties sent");
+    }
 
     // 4. Progress while the phones play; progressive results as they come.
     let bar = indicatif::ProgressBar::new(1000);

@@ -822,3 +822,42 @@ fn estimate_equals_evo_scipy_for_every_setting() {
         }
     }
 }
+
+/// The README's main command, end to end: the demo's session gets the phone's camera
+/// evidence, and its saved report shows thumbnails and likely causes per region.
+#[test]
+fn the_demo_sends_the_camera_evidence_and_its_report_shows_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("demo");
+    let out = ok(&["demo", "--data", p(&data), "--trials", "4"]);
+    let sent: usize = out
+        .lines()
+        .find_map(|l| l.strip_prefix("evidence    "))
+        .and_then(|l| l.split_whitespace().next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("no evidence line in:\n{out}"));
+    let evidence = std::fs::read_to_string(data.join("demo-phone-session/evidence.csv")).unwrap();
+    let with_image = evidence
+        .lines()
+        .skip(1)
+        .filter(|row| row.split(',').nth(1) == Some("1"));
+    assert_eq!(
+        sent,
+        with_image.count(),
+        "every thumbnail the phone kept is sent"
+    );
+    let report = out
+        .lines()
+        .find_map(|l| l.strip_prefix("report      "))
+        .unwrap_or_else(|| panic!("no report line in:\n{out}"));
+    let html = std::fs::read_to_string(report.trim()).unwrap();
+    assert!(
+        html.contains("image.jpg"),
+        "no region thumbnail in the report"
+    );
+    assert!(
+        html.contains("low_texture"),
+        "no likely cause in the report"
+    );
+    assert!(!html.contains("No camera evidence uploaded"));
+}

@@ -48,12 +48,7 @@ async fn publish(
 
 /// Ends a job's session: a failure is recorded (unless the server is stopping, which leaves
 /// the session in flight), the job row closed, the live session dropped.
-fn conclude(
-    shared: &Arc<Shared>,
-    id: &str,
-    job: Option<i64>,
-    outcome: Result<Outcome, Error>,
-) {
+fn conclude(shared: &Arc<Shared>, id: &str, job: Option<i64>, outcome: Result<Outcome, Error>) {
     shared.set_running(id, None);
     shared.live.remove(id);
     match outcome {
