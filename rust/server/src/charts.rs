@@ -41,6 +41,24 @@ impl Frame {
     fn y(&self, v: f64) -> f64 {
         self.h - BOTTOM - v / self.y1.max(1e-12) * (self.h - BOTTOM - TOP)
     }
+    /// The low, medium and high bands behind a chart of errors, from the class thresholds.
+    fn class_bands(&self, svg: &mut String, thresholds: Thresholds) {
+        for (lo, hi, colour) in [
+            (0.0, thresholds.medium, LOW),
+            (thresholds.medium, thresholds.high, MEDIUM),
+            (thresholds.high, self.y1, HIGH),
+        ] {
+            let _ = write!(
+                svg,
+                r#"<rect class="band" x="{x:.1}" y="{y:.1}" width="{bw:.1}" height="{bh:.1}" fill="{colour}" fill-opacity="0.10"/>"#,
+                x = LEFT,
+                y = self.y(hi),
+                bw = self.w - LEFT - RIGHT,
+                bh = self.y(lo) - self.y(hi),
+            );
+        }
+    }
+
     fn axes(&self, svg: &mut String, x_label: &str, y_label: &str, scale: f64) {
         let step = tick_step(self.x1 - self.x0, 6.0);
         let mut t = (self.x0 / step).ceil() * step;
@@ -131,20 +149,7 @@ pub(crate) fn error_over_time(
     let mut svg = format!(
         r#"<svg id="error-time" xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" viewBox="0 0 {w} {h}" role="img" aria-label="estimated error over time">"#
     );
-    for (lo, hi, colour) in [
-        (0.0, thresholds.medium, LOW),
-        (thresholds.medium, thresholds.high, MEDIUM),
-        (thresholds.high, frame.y1, HIGH),
-    ] {
-        let _ = write!(
-            svg,
-            r#"<rect class="band" x="{x:.1}" y="{y:.1}" width="{bw:.1}" height="{bh:.1}" fill="{colour}" fill-opacity="0.10"/>"#,
-            x = LEFT,
-            y = frame.y(hi),
-            bw = w - LEFT - RIGHT,
-            bh = frame.y(lo) - frame.y(hi),
-        );
-    }
+    frame.class_bands(&mut svg, thresholds);
     frame.axes(&mut svg, "time (s)", y_label, scale);
     let mut path = String::new();
     let mut pen_down = false;
@@ -264,20 +269,7 @@ pub(crate) fn history(
     let mut svg = format!(
         r#"<svg id="history-chart" xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" viewBox="0 0 {w} {h}" role="img" aria-label="the estimate as trials arrived">"#
     );
-    for (lo, hi, colour) in [
-        (0.0, thresholds.medium, LOW),
-        (thresholds.medium, thresholds.high, MEDIUM),
-        (thresholds.high, frame.y1, HIGH),
-    ] {
-        let _ = write!(
-            svg,
-            r#"<rect class="band" x="{x:.1}" y="{y:.1}" width="{bw:.1}" height="{bh:.1}" fill="{colour}" fill-opacity="0.10"/>"#,
-            x = LEFT,
-            y = frame.y(hi),
-            bw = w - LEFT - RIGHT,
-            bh = frame.y(lo) - frame.y(hi),
-        );
-    }
+    frame.class_bands(&mut svg, thresholds);
     frame.axes(&mut svg, "trials received", y_label, scale);
     for (id, pick, colour, dash) in [
         ("history-mean", 1, "#222", ""),

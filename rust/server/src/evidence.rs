@@ -275,6 +275,16 @@ impl EvidenceFiles<'_> {
             .join(format!("{k}.jpg"))
     }
 
+    /// Sub-trajectory `k`'s stored thumbnail, `None` when there is none.
+    pub fn read_thumbnail(&self, k: usize) -> Result<Option<Vec<u8>>, Error> {
+        let path = self.thumbnail(k);
+        match std::fs::read(&path) {
+            Ok(bytes) => Ok(Some(bytes)),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
+            Err(e) => Err(Error::io("cannot read", &path, e)),
+        }
+    }
+
     fn ensure_dir(&self, dir: &std::path::Path) -> Result<(), Error> {
         std::fs::create_dir_all(dir).map_err(|e| Error::io("cannot create", dir, e))
     }

@@ -125,12 +125,22 @@ async fn with_estimate_permit<T>(
 /// Runs the final estimate of an `upload` session in the background; the caller has moved
 /// it to `estimating` (so a delete under the session lock sees it in flight).
 pub(crate) fn spawn_estimate(shared: Arc<Shared>, id: String) {
+    // Nothing new since the last progressive estimate: it is the final one.
+    spawn_final_estimate(shared, id, |_, _| Ok(()));
+}
+
+/// Runs a session's final estimate in the background within an estimate worker's permit,
+/// `prepare` first (the state moves the caller has not made), then publish and finish.
+fn spawn_final_estimate<F>(shared: Arc<Shared>, id: String, prepare: F)
+where
+    F: FnOnce(&Shared, &Session) -> Result<(), Error> + Send + 'static,
+{
     tokio::spawn(async move {
         let job = shared.db.start_job(&id, "estimate").ok();
         let outcome = with_estimate_permit(&shared, async {
             let session = shared.session(&id)?;
+            prepare(&shared, &session)?;
             let live = trials::live_session(&shared, &session).await?;
-            // Nothing new since the last progressive estimate: it is the final one.
             publish(&shared, &live, &id, Purpose::Final).await?;
             shared.lifecycle().finish(&id)?;
             Ok(Outcome::Done)
@@ -240,27 +250,16 @@ pub(crate) fn finish_dequeued(shared: Arc<Shared>, id: String, why: EndEarly) ->
             needed: 0,
         }),
     );
-    tokio::spawn(async move {
-        let job = shared.db.start_job(&id, "estimate").ok();
-        let outcome = with_estimate_permit(&shared, async {
-            let session = shared.session(&id)?;
-            let reason = match why {
-                EndEarly::Cancel => format!(
-                    "cancelled by the client after {count} of {} trials",
-                    session.trials_total
-                ),
-                EndEarly::Estimate => format!("estimate requested after {count} trials"),
-            };
-            shared.lifecycle().stop(&id, &reason)?;
-            shared.lifecycle().start_estimating(&id)?;
-            let live = trials::live_session(&shared, &session).await?;
-            publish(&shared, &live, &id, Purpose::Final).await?;
-            shared.lifecycle().finish(&id)?;
-            Ok(Outcome::Done)
-        })
-        .await
-        .unwrap_or(Ok(Outcome::Interrupted));
-        conclude(&shared, &id, job, outcome);
+    spawn_final_estimate(shared, id, move |shared, session| {
+        let reason = match why {
+            EndEarly::Cancel => format!(
+                "cancelled by the client after {count} of {} trials",
+                session.trials_total
+            ),
+            EndEarly::Estimate => format!("estimate requested after {count} trials"),
+        };
+        shared.lifecycle().stop(&session.id, &reason)?;
+        shared.lifecycle().start_estimating(&session.id)
     });
     Ok(())
 }

@@ -183,26 +183,27 @@ pub(crate) async fn get_image(
     Path((id, k)): Path<(String, String)>,
 ) -> Result<Response, Error> {
     let (session, k) = session_and_index(&shared, &caller, &id, &k)?;
-    let path = EvidenceFiles {
+    let jpeg = EvidenceFiles {
         files: &shared.files,
         id: &session.id,
     }
-    .thumbnail(k);
-    let jpeg = match std::fs::read(&path) {
-        Ok(bytes) => bytes,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
-            return Err(Error::NotFound(format!(
-                "session {} has no image of sub-trajectory {k}",
-                session.id
-            )));
-        }
-        Err(e) => return Err(Error::io("cannot read", &path, e)),
-    };
+    .read_thumbnail(k)?
+    .ok_or_else(|| {
+        Error::NotFound(format!(
+            "session {} has no image of sub-trajectory {k}",
+            session.id
+        ))
+    })?;
+    Ok(jpeg_response(jpeg))
+}
+
+/// A thumbnail's answer (the owner's route and a share link's).
+pub(crate) fn jpeg_response(jpeg: Vec<u8>) -> Response {
     let mut response = jpeg.into_response();
     response
         .headers_mut()
         .insert(header::CONTENT_TYPE, HeaderValue::from_static("image/jpeg"));
-    Ok(response)
+    response
 }
 
 /// `GET /v1/sessions/{id}/subtrajectories`: per sub-trajectory its start and end (ns), the

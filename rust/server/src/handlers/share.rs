@@ -6,7 +6,7 @@
 
 use axum::extract::{Path, RawQuery, State};
 use axum::http::{HeaderMap, StatusCode, header};
-use axum::response::{IntoResponse, Response};
+use axum::response::Response;
 use serde_json::json;
 
 use crate::Error;
@@ -113,15 +113,11 @@ pub(crate) async fn image(
         .ok()
         .filter(|k| *k < MAX_SUBTRAJECTORIES)
         .ok_or_else(none)?;
-    let path = EvidenceFiles {
+    let jpeg = EvidenceFiles {
         files: &shared.files,
         id: &session.id,
     }
-    .thumbnail(k);
-    let jpeg = match std::fs::read(&path) {
-        Ok(bytes) => bytes,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Err(none()),
-        Err(e) => return Err(Error::io("cannot read", &path, e)),
-    };
-    Ok(([(header::CONTENT_TYPE, "image/jpeg")], jpeg).into_response())
+    .read_thumbnail(k)?
+    .ok_or_else(none)?;
+    Ok(super::evidence::jpeg_response(jpeg))
 }
