@@ -47,28 +47,24 @@ fn json_answer(head: &[u8]) -> Option<Vec<u8>> {
     {
         return None;
     }
-    let (reason, code, message) = match status {
+    let (code, message) = match status {
         "31" => (
-            "Request Header Fields Too Large",
             "headers_too_large",
             "the request's headers are too many (at most 100) or too large (at most 64 KiB)",
         ),
         "00" => (
-            "Bad Request",
             "bad_request",
             "the request is not readable HTTP/1.1: a malformed request line or header, or a \
              Content-Length that is not a number below 2^64",
         ),
-        _ => (
-            "Bad Request",
-            "bad_request",
-            "the request is not readable HTTP/1.1",
-        ),
+        _ => ("bad_request", "the request is not readable HTTP/1.1"),
     };
+    // hyper's own status line is kept: its code and reason phrase.
+    let status_line = text.lines().next()?;
     let body = serde_json::json!({ "error": { "code": code, "message": message } }).to_string();
     Some(
         format!(
-            "HTTP/1.1 4{status} {reason}\r\ncontent-type: application/json\r\n\
+            "{status_line}\r\ncontent-type: application/json\r\n\
              connection: close\r\ncontent-length: {}\r\n\r\n{body}",
             body.len()
         )
