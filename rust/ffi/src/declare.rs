@@ -45,6 +45,15 @@
 //! error ([`crate::guard::run_ffi_safe`]); JNI throws `SitarException` and returns 0/null
 //! ([`crate::jni_api::run`]).
 
+//!
+//! How the macro is built: each export walks its parameters once per bridge (`@params`),
+//! one `name: kind` at a time. A kind is one `@kind` rule per bridge, which says only what
+//! that kind adds — its parameters of the entry point, its conversion to what the safe
+//! function takes, the argument of the call (and for JNI its Kotlin parameters) — and hands
+//! them to `@push`, which appends them and walks on. A C output is one `@c_emit` rule: its
+//! out-parameters and what it does with the result; `@c_fn` writes the guarded function and
+//! `@decl` every descriptor. Adding a parameter kind is one `@kind` rule per bridge.
+
 macro_rules! exports {
     ($(
         $(#[doc = $doc:literal])*
@@ -68,6 +77,30 @@ macro_rules! exports {
         pub const JNI_EXPORTS: &[$crate::decl::Export] = &[$($( $jname::DECL, )?)*];
     };
 
+    // ---- Both bridges: the parameter walk ----------------------------------------------
+    //
+    // `@params $bridge [$head [acc]...] name: kind, …`: `$bridge` is `c` or `[jni $env]`
+    // (`$env` is the closure's `Env`, named where the closure is written); the accumulators
+    // are C: [signature] [conversions] [call arguments]; JNI: the same and [Kotlin parameters].
+
+    (@params $bridge:tt $state:tt $n:ident : $($rest:tt)*) => {
+        $crate::declare::exports!(@split $bridge $state $n [] $($rest)*);
+    };
+    // The kind's tokens run up to the next comma.
+    (@split $bridge:tt $state:tt $n:ident $kind:tt , $($rest:tt)*) => {
+        $crate::declare::exports!(@kind $bridge [$bridge $state [$($rest)*]] $n $kind);
+    };
+    (@split $bridge:tt $state:tt $n:ident $kind:tt) => {
+        $crate::declare::exports!(@kind $bridge [$bridge $state []] $n $kind);
+    };
+    (@split $bridge:tt $state:tt $n:ident [$($kind:tt)*] $t:tt $($rest:tt)*) => {
+        $crate::declare::exports!(@split $bridge $state $n [$($kind)* $t] $($rest)*);
+    };
+    // What a kind adds, one group per accumulator.
+    (@push [$bridge:tt [$head:tt $([$($acc:tt)*])*] [$($rest:tt)*]] $([$($add:tt)*])*) => {
+        $crate::declare::exports!(@params $bridge [$head $([$($acc)* $($add)*])*] $($rest)*);
+    };
+
     // ---- C ---------------------------------------------------------------------------
 
     (@c $docs:tt $feat:tt $name:ident $ret:tt $params:tt) => {};
@@ -75,201 +108,130 @@ macro_rules! exports {
         $crate::declare::exports!(@c $docs $feat $name [()] $params c $cname $couts);
     };
     (@c $docs:tt $feat:tt $name:ident [$ret:ty] [$($params:tt)*] c $cname:ident $couts:tt) => {
-        $crate::declare::exports!(@c_param [$docs $feat $name $cname $couts [$ret]] [] [] []
+        $crate::declare::exports!(@params c [[$docs $feat $name $cname $couts [$ret]] [] [] []]
             $($params)*);
     };
 
-    // One parameter at a time: [signature] [conversions] [call arguments].
-    (@c_param $head:tt [$($sig:tt)*] [$($conv:tt)*] [$($args:tt)*]
-        $n:ident : SitarHandle $(, $($rest:tt)*)?) => {
-        $crate::declare::exports!(@c_param $head [$($sig)* $n: SitarHandle,] [$($conv)*]
-            [$($args)* $n,] $($($rest)*)?);
+    // Parameter kinds: [C parameters] [conversion] [argument].
+    (@kind c $k:tt $n:ident [SitarHandle]) => {
+        $crate::declare::exports!(@push $k [$n: SitarHandle,] [] [$n,]);
     };
-    (@c_param $head:tt [$($sig:tt)*] [$($conv:tt)*] [$($args:tt)*]
-        $n:ident : i64 $(, $($rest:tt)*)?) => {
-        $crate::declare::exports!(@c_param $head [$($sig)* $n: i64,] [$($conv)*]
-            [$($args)* $n,] $($($rest)*)?);
+    (@kind c $k:tt $n:ident [i64]) => {
+        $crate::declare::exports!(@push $k [$n: i64,] [] [$n,]);
     };
-    (@c_param $head:tt [$($sig:tt)*] [$($conv:tt)*] [$($args:tt)*]
-        $n:ident : i32 $(, $($rest:tt)*)?) => {
-        $crate::declare::exports!(@c_param $head [$($sig)* $n: i32,] [$($conv)*]
-            [$($args)* $n,] $($($rest)*)?);
+    (@kind c $k:tt $n:ident [i32]) => {
+        $crate::declare::exports!(@push $k [$n: i32,] [] [$n,]);
     };
-    (@c_param $head:tt [$($sig:tt)*] [$($conv:tt)*] [$($args:tt)*]
-        $n:ident : u32 $(, $($rest:tt)*)?) => {
-        $crate::declare::exports!(@c_param $head [$($sig)* $n: u32,] [$($conv)*]
-            [$($args)* $n,] $($($rest)*)?);
+    (@kind c $k:tt $n:ident [u32]) => {
+        $crate::declare::exports!(@push $k [$n: u32,] [] [$n,]);
     };
-    (@c_param $head:tt [$($sig:tt)*] [$($conv:tt)*] [$($args:tt)*]
-        $n:ident : &str $(, $($rest:tt)*)?) => {
-        $crate::declare::exports!(@c_param $head [$($sig)* $n: *const c_char,]
-            [$($conv)* let $n = $crate::c_api::text_arg($n, stringify!($n))?;]
-            [$($args)* $n,] $($($rest)*)?);
+    (@kind c $k:tt $n:ident [&str]) => {
+        $crate::declare::exports!(@push $k [$n: *const c_char,]
+            [let $n = $crate::c_api::text_arg($n, stringify!($n))?;] [$n,]);
     };
-    (@c_param $head:tt [$($sig:tt)*] [$($conv:tt)*] [$($args:tt)*]
-        $n:ident : Option<&str> $(, $($rest:tt)*)?) => {
-        $crate::declare::exports!(@c_param $head [$($sig)* $n: *const c_char,]
-            [$($conv)* let $n = $crate::c_api::optional_text_arg($n, stringify!($n))?;]
-            [$($args)* $n,] $($($rest)*)?);
+    (@kind c $k:tt $n:ident [Option<&str>]) => {
+        $crate::declare::exports!(@push $k [$n: *const c_char,]
+            [let $n = $crate::c_api::optional_text_arg($n, stringify!($n))?;] [$n,]);
     };
-    (@c_param $head:tt [$($sig:tt)*] [$($conv:tt)*] [$($args:tt)*]
-        $n:ident : &Path $(, $($rest:tt)*)?) => {
-        $crate::declare::exports!(@c_param $head [$($sig)* $n: *const c_char,]
-            [$($conv)* let $n = ::std::path::Path::new(
-                $crate::c_api::text_arg($n, stringify!($n))?);]
-            [$($args)* $n,] $($($rest)*)?);
+    (@kind c $k:tt $n:ident [&Path]) => {
+        $crate::declare::exports!(@push $k [$n: *const c_char,]
+            [let $n = ::std::path::Path::new($crate::c_api::text_arg($n, stringify!($n))?);]
+            [$n,]);
     };
-    (@c_param $head:tt [$($sig:tt)*] [$($conv:tt)*] [$($args:tt)*]
-        $n:ident : &SitarPose $(, $($rest:tt)*)?) => {
-        $crate::declare::exports!(@c_param $head [$($sig)* $n: *const SitarPose,]
-            [$($conv)* let $n = $crate::c_api::arg($n, stringify!($n))?;]
-            [$($args)* $n,] $($($rest)*)?);
+    (@kind c $k:tt $n:ident [&SitarPose]) => {
+        $crate::declare::exports!(@push $k [$n: *const SitarPose,]
+            [let $n = $crate::c_api::arg($n, stringify!($n))?;] [$n,]);
     };
-    (@c_param $head:tt [$($sig:tt)*] [$($conv:tt)*] [$($args:tt)*]
-        $n:ident : &SitarIntrinsics $(, $($rest:tt)*)?) => {
-        $crate::declare::exports!(@c_param $head [$($sig)* $n: *const SitarIntrinsics,]
-            [$($conv)* let $n = $crate::c_api::arg($n, stringify!($n))?;]
-            [$($args)* $n,] $($($rest)*)?);
+    (@kind c $k:tt $n:ident [&SitarIntrinsics]) => {
+        $crate::declare::exports!(@push $k [$n: *const SitarIntrinsics,]
+            [let $n = $crate::c_api::arg($n, stringify!($n))?;] [$n,]);
     };
-    (@c_param $head:tt [$($sig:tt)*] [$($conv:tt)*] [$($args:tt)*]
-        $n:ident : DepthPointer $(, $($rest:tt)*)?) => {
-        $crate::declare::exports!(@c_param $head
-            [$($sig)* $n: *const u16, width: i32, height: i32, row_stride_bytes: i32,]
-            [$($conv)* let $n = $crate::c_api::depth_arg($n, width, height, row_stride_bytes)?;]
-            [$($args)* $n,] $($($rest)*)?);
+    (@kind c $k:tt $n:ident [DepthPointer]) => {
+        $crate::declare::exports!(@push $k
+            [$n: *const u16, width: i32, height: i32, row_stride_bytes: i32,]
+            [let $n = $crate::c_api::depth_arg($n, width, height, row_stride_bytes)?;] [$n,]);
     };
-    (@c_param $head:tt [$($sig:tt)*] [$($conv:tt)*] [$($args:tt)*]
-        $n:ident : LumaPointer $(, $($rest:tt)*)?) => {
-        $crate::declare::exports!(@c_param $head
-            [$($sig)* $n: *const u8, width: i32, height: i32, row_stride_bytes: i32,]
-            [$($conv)* let $n = $crate::c_api::luma_arg($n, width, height, row_stride_bytes)?;]
-            [$($args)* $n,] $($($rest)*)?);
-    };
-    (@c_param [$docs:tt $feat:tt $name:ident $cname:ident $couts:tt $ret:tt] $sig:tt
-        $conv:tt $args:tt) => {
-        $crate::declare::exports!(@c_emit $docs $feat $name $cname $couts $ret $sig $conv
-            $args);
+    (@kind c $k:tt $n:ident [LumaPointer]) => {
+        $crate::declare::exports!(@push $k
+            [$n: *const u8, width: i32, height: i32, row_stride_bytes: i32,]
+            [let $n = $crate::c_api::luma_arg($n, width, height, row_stride_bytes)?;] [$n,]);
     };
 
-    // The entry point, by its outputs.
-    (@c_emit [$(#[doc = $doc:literal])*] [$($feature:literal)?] $name:ident $cname:ident
-        (static) [$ret:ty] [] [] []) => {
-        $(#[doc = $doc])*
-        $(#[cfg(feature = $feature)])?
-        #[no_mangle]
-        pub extern "C" fn $cname() -> *const c_char {
+    // Every parameter walked: the call of the safe function, as a block.
+    (@params c [[$docs:tt $feat:tt $name:ident $cname:ident $couts:tt [$ret:ty]]
+        [$($sig:tt)*] [$($conv:tt)*] [$($args:tt)*]]) => {
+        $crate::declare::exports!(@c_emit $couts [$ret] [$docs $feat $cname [$($sig)*]] $name
+            { $($conv)* $crate::bridge::$name($($args)*)? });
+    };
+
+    // The entry point, by its outputs: [out-parameters] and the body of the guard, where
+    // `$call` is the safe function's result (conversions and call, after the outputs'
+    // checks).
+    (@c_emit (static) [$ret:ty] $fn:tt $name:ident $call:block) => {
+        // Cannot fail or panic: no guard, and the C string itself is returned.
+        $crate::declare::exports!(@c_item $fn [] [*const c_char] {
             let version: ::std::result::Result<$ret, _> = $crate::bridge::$name();
             version.map_or(c"".as_ptr(), ::std::ffi::CStr::as_ptr)
-        }
-        $crate::declare::exports!(@c_decl [$($doc)*] [$($feature)?] $cname [] [*const c_char]);
+        });
     };
-    (@c_emit [$(#[doc = $doc:literal])*] [$($feature:literal)?] $name:ident $cname:ident
-        () [$ret:ty] [$($p:ident : $t:ty,)*] [$($conv:tt)*]
-        [$($args:tt)*]) => {
-        $(#[doc = $doc])*
-        $(#[cfg(feature = $feature)])?
-        #[no_mangle]
-        pub extern "C" fn $cname($($p: $t),*) -> i32 {
-            $crate::guard::run_ffi_safe(|| {
-                $($conv)*
-                // A result the C side does not take (e.g. the path written) is dropped.
-                let _: $ret = $crate::bridge::$name($($args)*)?;
-                Ok(())
-            })
-        }
-        $crate::declare::exports!(@c_decl [$($doc)*] [$($feature)?] $cname [$($p: $t,)*] [i32]);
+    (@c_emit () [$ret:ty] $fn:tt $name:ident $call:block) => {
+        $crate::declare::exports!(@c_fn $fn [] {
+            // A result the C side does not take (e.g. the path written) is dropped.
+            let _: $ret = $call;
+            Ok(())
+        });
     };
-    (@c_emit [$(#[doc = $doc:literal])*] [$($feature:literal)?] $name:ident $cname:ident
-        (text) [$ret:ty] [$($p:ident : $t:ty,)*] [$($conv:tt)*]
-        [$($args:tt)*]) => {
-        $(#[doc = $doc])*
-        $(#[cfg(feature = $feature)])?
-        #[no_mangle]
-        pub extern "C" fn $cname($($p: $t,)* buf: *mut c_char, cap: usize, out_len: *mut usize)
-            -> i32 {
-            $crate::guard::run_ffi_safe(|| {
-                $crate::c_api::check_array_out(buf, cap, out_len)?;
-                $($conv)*
-                let text: $ret = $crate::bridge::$name($($args)*)?;
-                $crate::c_api::copy_text(::core::convert::AsRef::<str>::as_ref(&text), buf, cap,
-                    out_len)
-            })
-        }
-        $crate::declare::exports!(@c_decl [$($doc)*] [$($feature)?] $cname
-            [$($p: $t,)* buf: *mut c_char, cap: usize, out_len: *mut usize,] [i32]);
+    (@c_emit (text) [$ret:ty] $fn:tt $name:ident $call:block) => {
+        $crate::declare::exports!(@c_fn $fn [buf: *mut c_char, cap: usize, out_len: *mut usize,] {
+            $crate::c_api::check_array_out(buf, cap, out_len)?;
+            let text: $ret = $call;
+            $crate::c_api::copy_text(::core::convert::AsRef::<str>::as_ref(&text), buf, cap,
+                out_len)
+        });
     };
-    (@c_emit [$(#[doc = $doc:literal])*] [$($feature:literal)?] $name:ident $cname:ident
-        (items: $item:ty) [$ret:ty] [$($p:ident : $t:ty,)*] [$($conv:tt)*]
-        [$($args:tt)*]) => {
-        $(#[doc = $doc])*
-        $(#[cfg(feature = $feature)])?
-        #[no_mangle]
-        pub extern "C" fn $cname($($p: $t,)* out: *mut $item, capacity: usize,
-            out_len: *mut usize) -> i32 {
-            $crate::guard::run_ffi_safe(|| {
-                $crate::c_api::check_array_out(out, capacity, out_len)?;
-                $($conv)*
-                let items: $ret = $crate::bridge::$name($($args)*)?;
-                let items: &[$item] = &items;
-                $crate::c_api::copy_items(items, out, capacity, out_len)
-            })
-        }
-        $crate::declare::exports!(@c_decl [$($doc)*] [$($feature)?] $cname
-            [$($p: $t,)* out: *mut $item, capacity: usize, out_len: *mut usize,] [i32]);
+    (@c_emit (items: $item:ty) [$ret:ty] $fn:tt $name:ident $call:block) => {
+        $crate::declare::exports!(@c_fn $fn
+            [out: *mut $item, capacity: usize, out_len: *mut usize,] {
+            $crate::c_api::check_array_out(out, capacity, out_len)?;
+            let items: $ret = $call;
+            let items: &[$item] = &items;
+            $crate::c_api::copy_items(items, out, capacity, out_len)
+        });
     };
-    (@c_emit [$(#[doc = $doc:literal])*] [$($feature:literal)?] $name:ident $cname:ident
-        ($o:ident : $ot:ty) [$ret:ty] [$($p:ident : $t:ty,)*] [$($conv:tt)*]
-        [$($args:tt)*]) => {
-        $(#[doc = $doc])*
-        $(#[cfg(feature = $feature)])?
-        #[no_mangle]
-        pub extern "C" fn $cname($($p: $t,)* $o: *mut $ot) -> i32 {
-            $crate::guard::run_ffi_safe(|| {
-                let $o = $crate::c_api::out($o, stringify!($o))?;
-                $($conv)*
-                let result: $ret = $crate::bridge::$name($($args)*)?;
-                *$o = ::core::convert::Into::into(result);
-                Ok(())
-            })
-        }
-        $crate::declare::exports!(@c_decl [$($doc)*] [$($feature)?] $cname
-            [$($p: $t,)* $o: *mut $ot,] [i32]);
+    (@c_emit ($o:ident : $ot:ty) [$ret:ty] $fn:tt $name:ident $call:block) => {
+        $crate::declare::exports!(@c_fn $fn [$o: *mut $ot,] {
+            let $o = $crate::c_api::out($o, stringify!($o))?;
+            let result: $ret = $call;
+            *$o = ::core::convert::Into::into(result);
+            Ok(())
+        });
     };
-    (@c_emit [$(#[doc = $doc:literal])*] [$($feature:literal)?] $name:ident $cname:ident
-        ($($o:ident : $ot:ty),+) [$ret:ty] [$($p:ident : $t:ty,)*] [$($conv:tt)*]
-        [$($args:tt)*]) => {
-        $(#[doc = $doc])*
-        $(#[cfg(feature = $feature)])?
-        #[no_mangle]
-        pub extern "C" fn $cname($($p: $t,)* $($o: *mut $ot),+) -> i32 {
-            $crate::guard::run_ffi_safe(|| {
-                $( let $o = $crate::c_api::out($o, stringify!($o))?; )+
-                $($conv)*
-                let result: $ret = $crate::bridge::$name($($args)*)?;
-                $crate::c_api::WriteOuts::write_outs(result, ($($o,)+));
-                Ok(())
-            })
-        }
-        $crate::declare::exports!(@c_decl [$($doc)*] [$($feature)?] $cname
-            [$($p: $t,)* $($o: *mut $ot,)+] [i32]);
+    (@c_emit ($($o:ident : $ot:ty),+) [$ret:ty] $fn:tt $name:ident $call:block) => {
+        $crate::declare::exports!(@c_fn $fn [$($o: *mut $ot,)+] {
+            $( let $o = $crate::c_api::out($o, stringify!($o))?; )+
+            let result: $ret = $call;
+            $crate::c_api::WriteOuts::write_outs(result, ($($o,)+));
+            Ok(())
+        });
     };
 
-    (@c_decl [$($doc:literal)*] [$($feature:literal)?] $cname:ident [$($p:ident : $t:ty,)*]
-        [$ret:ty]) => {
-        #[doc(hidden)]
-        pub(crate) mod $cname {
-            pub(crate) const DECL: $crate::decl::Export = $crate::decl::Export {
-                name: stringify!($cname),
-                doc: concat!($($doc, "\n",)*),
-                params: &[$( (stringify!($p), stringify!($t)), )*],
-                returns: stringify!($ret),
-                feature: $crate::declare::exports!(@feature $($feature)?),
-            };
-        }
+    // A guarded C entry point: the status of `$body`'s result, its message kept.
+    (@c_fn $fn:tt $outs:tt $body:block) => {
+        $crate::declare::exports!(@c_item $fn $outs [i32] {
+            $crate::guard::run_ffi_safe(|| $body)
+        });
     };
+    (@c_item [[$(#[doc = $doc:literal])*] [$($feature:literal)?] $cname:ident
+        [$($p:ident : $t:ty,)*]] [$($o:ident : $ot:ty,)*] [$ret:ty] $body:block) => {
+        $(#[doc = $doc])*
+        $(#[cfg(feature = $feature)])?
+        #[no_mangle]
+        pub extern "C" fn $cname($($p: $t,)* $($o: $ot,)*) -> $ret $body
 
-    (@feature) => { None };
-    (@feature $feature:literal) => { Some($feature) };
+        $crate::declare::exports!(@decl [$($doc)*] [$($feature)?] $cname
+            [&[$( (stringify!($p), stringify!($t)), )* $( (stringify!($o), stringify!($ot)), )*]]
+            [stringify!($ret)]);
+    };
 
     // ---- JNI -------------------------------------------------------------------------
 
@@ -278,154 +240,113 @@ macro_rules! exports {
         $crate::declare::exports!(@jni $docs $feat $name [()] $params jni $jname);
     };
     (@jni $docs:tt $feat:tt $name:ident [$ret:ty] [$($params:tt)*] jni $jname:ident) => {
-        $crate::declare::exports!(@jni_param [env $docs $feat $name $jname [$ret]]
-            [] [] [] [] $($params)*);
+        $crate::declare::exports!(@params [jni env] [[$docs $feat $name $jname [$ret]]
+            [] [] [] []] $($params)*);
     };
 
-    // One parameter at a time: [signature] [conversions] [call arguments] [Kotlin
-    // parameters]. `$env` is the closure's `Env`, named where the closure is written.
-    (@jni_param [$env:ident $($head:tt)*] [$($sig:tt)*] [$($conv:tt)*] [$($args:tt)*]
-        [$($kt:tt)*] $n:ident : SitarHandle $(, $($rest:tt)*)?) => {
-        $crate::declare::exports!(@jni_param [$env $($head)*] [$($sig)* $n: jlong,]
-            [$($conv)* let $n = $n as u64;] [$($args)* $n,]
-            [$($kt)* (stringify!($n), "Long"),] $($($rest)*)?);
+    // Parameter kinds: [JNI parameters] [conversion] [argument] [Kotlin parameters].
+    (@kind [jni $env:ident] $k:tt $n:ident [SitarHandle]) => {
+        $crate::declare::exports!(@push $k [$n: jlong,] [let $n = $n as u64;] [$n,]
+            [(stringify!($n), "Long"),]);
     };
-    (@jni_param [$env:ident $($head:tt)*] [$($sig:tt)*] [$($conv:tt)*] [$($args:tt)*]
-        [$($kt:tt)*] $n:ident : i64 $(, $($rest:tt)*)?) => {
-        $crate::declare::exports!(@jni_param [$env $($head)*] [$($sig)* $n: jlong,]
-            [$($conv)*] [$($args)* $n,] [$($kt)* (stringify!($n), "Long"),] $($($rest)*)?);
+    (@kind [jni $env:ident] $k:tt $n:ident [i64]) => {
+        $crate::declare::exports!(@push $k [$n: jlong,] [] [$n,] [(stringify!($n), "Long"),]);
     };
-    (@jni_param [$env:ident $($head:tt)*] [$($sig:tt)*] [$($conv:tt)*] [$($args:tt)*]
-        [$($kt:tt)*] $n:ident : i32 $(, $($rest:tt)*)?) => {
-        $crate::declare::exports!(@jni_param [$env $($head)*] [$($sig)* $n: jint,]
-            [$($conv)*] [$($args)* $n,] [$($kt)* (stringify!($n), "Int"),] $($($rest)*)?);
+    (@kind [jni $env:ident] $k:tt $n:ident [i32]) => {
+        $crate::declare::exports!(@push $k [$n: jint,] [] [$n,] [(stringify!($n), "Int"),]);
     };
-    (@jni_param [$env:ident $($head:tt)*] [$($sig:tt)*] [$($conv:tt)*] [$($args:tt)*]
-        [$($kt:tt)*] $n:ident : u32 $(, $($rest:tt)*)?) => {
-        $crate::declare::exports!(@jni_param [$env $($head)*] [$($sig)* $n: jint,]
-            [$($conv)* let $n = $crate::jni_api::non_negative($n, stringify!($n))?;]
-            [$($args)* $n,] [$($kt)* (stringify!($n), "Int"),] $($($rest)*)?);
+    (@kind [jni $env:ident] $k:tt $n:ident [u32]) => {
+        $crate::declare::exports!(@push $k [$n: jint,]
+            [let $n = $crate::jni_api::non_negative($n, stringify!($n))?;] [$n,]
+            [(stringify!($n), "Int"),]);
     };
-    (@jni_param [$env:ident $($head:tt)*] [$($sig:tt)*] [$($conv:tt)*] [$($args:tt)*]
-        [$($kt:tt)*] $n:ident : &str $(, $($rest:tt)*)?) => {
-        $crate::declare::exports!(@jni_param [$env $($head)*] [$($sig)* $n: JString<'l>,]
-            [$($conv)* let $n = $crate::jni_api::string($env, &$n, stringify!($n))?;]
-            [$($args)* &$n,] [$($kt)* (stringify!($n), "String"),] $($($rest)*)?);
+    (@kind [jni $env:ident] $k:tt $n:ident [&str]) => {
+        $crate::declare::exports!(@push $k [$n: JString<'l>,]
+            [let $n = $crate::jni_api::string($env, &$n, stringify!($n))?;] [&$n,]
+            [(stringify!($n), "String"),]);
     };
-    (@jni_param [$env:ident $($head:tt)*] [$($sig:tt)*] [$($conv:tt)*] [$($args:tt)*]
-        [$($kt:tt)*] $n:ident : Option<&str> $(, $($rest:tt)*)?) => {
-        $crate::declare::exports!(@jni_param [$env $($head)*] [$($sig)* $n: JString<'l>,]
-            [$($conv)* let $n = $crate::jni_api::optional_string($env, &$n, stringify!($n))?;]
-            [$($args)* $n.as_deref(),] [$($kt)* (stringify!($n), "String?"),] $($($rest)*)?);
+    (@kind [jni $env:ident] $k:tt $n:ident [Option<&str>]) => {
+        $crate::declare::exports!(@push $k [$n: JString<'l>,]
+            [let $n = $crate::jni_api::optional_string($env, &$n, stringify!($n))?;]
+            [$n.as_deref(),] [(stringify!($n), "String?"),]);
     };
-    (@jni_param [$env:ident $($head:tt)*] [$($sig:tt)*] [$($conv:tt)*] [$($args:tt)*]
-        [$($kt:tt)*] $n:ident : &Path $(, $($rest:tt)*)?) => {
-        $crate::declare::exports!(@jni_param [$env $($head)*] [$($sig)* $n: JString<'l>,]
-            [$($conv)* let $n = $crate::jni_api::path($env, &$n, stringify!($n))?;]
-            [$($args)* &$n,] [$($kt)* (stringify!($n), "String"),] $($($rest)*)?);
+    (@kind [jni $env:ident] $k:tt $n:ident [&Path]) => {
+        $crate::declare::exports!(@push $k [$n: JString<'l>,]
+            [let $n = $crate::jni_api::path($env, &$n, stringify!($n))?;] [&$n,]
+            [(stringify!($n), "String"),]);
     };
-    (@jni_param [$env:ident $($head:tt)*] [$($sig:tt)*] [$($conv:tt)*] [$($args:tt)*]
-        [$($kt:tt)*] $n:ident : &SitarPose $(, $($rest:tt)*)?) => {
-        $crate::declare::exports!(@jni_param [$env $($head)*]
-            [$($sig)* px: jdouble, py: jdouble, pz: jdouble, qx: jdouble, qy: jdouble,
-                qz: jdouble, qw: jdouble,]
-            [$($conv)* let $n = SitarPose { px, py, pz, qx, qy, qz, qw };]
-            [$($args)* &$n,]
-            [$($kt)* ("px", "Double"), ("py", "Double"), ("pz", "Double"), ("qx", "Double"),
-                ("qy", "Double"), ("qz", "Double"), ("qw", "Double"),]
-            $($($rest)*)?);
+    (@kind [jni $env:ident] $k:tt $n:ident [&SitarPose]) => {
+        $crate::declare::exports!(@push $k
+            [px: jdouble, py: jdouble, pz: jdouble, qx: jdouble, qy: jdouble, qz: jdouble,
+                qw: jdouble,]
+            [let $n = SitarPose { px, py, pz, qx, qy, qz, qw };]
+            [&$n,]
+            [("px", "Double"), ("py", "Double"), ("pz", "Double"), ("qx", "Double"),
+                ("qy", "Double"), ("qz", "Double"), ("qw", "Double"),]);
     };
-    (@jni_param [$env:ident $($head:tt)*] [$($sig:tt)*] [$($conv:tt)*] [$($args:tt)*]
-        [$($kt:tt)*] $n:ident : &SitarIntrinsics $(, $($rest:tt)*)?) => {
-        $crate::declare::exports!(@jni_param [$env $($head)*]
-            [$($sig)* fx: jdouble, fy: jdouble, cx: jdouble, cy: jdouble,]
-            [$($conv)* let $n = SitarIntrinsics { fx, fy, cx, cy };]
-            [$($args)* &$n,]
-            [$($kt)* ("fx", "Double"), ("fy", "Double"), ("cx", "Double"), ("cy", "Double"),]
-            $($($rest)*)?);
+    (@kind [jni $env:ident] $k:tt $n:ident [&SitarIntrinsics]) => {
+        $crate::declare::exports!(@push $k
+            [fx: jdouble, fy: jdouble, cx: jdouble, cy: jdouble,]
+            [let $n = SitarIntrinsics { fx, fy, cx, cy };]
+            [&$n,]
+            [("fx", "Double"), ("fy", "Double"), ("cx", "Double"), ("cy", "Double"),]);
     };
-    (@jni_param [$env:ident $($head:tt)*] [$($sig:tt)*] [$($conv:tt)*] [$($args:tt)*]
-        [$($kt:tt)*] $n:ident : DirectBuffer $(, $($rest:tt)*)?) => {
-        $crate::declare::exports!(@jni_param [$env $($head)*]
-            [$($sig)* $n: JByteBuffer<'l>, width: jint, height: jint, row_stride_bytes: jint,]
-            [$($conv)* let $n = $crate::jni_api::depth_from_buffer(
-                $env, &$n, width, height, row_stride_bytes)?;]
-            [$($args)* $n,]
-            [$($kt)* (stringify!($n), "ByteBuffer"), ("width", "Int"), ("height", "Int"),
-                ("row_stride_bytes", "Int"),]
-            $($($rest)*)?);
+    (@kind [jni $env:ident] $k:tt $n:ident [DirectBuffer]) => {
+        $crate::declare::exports!(@image_buffer $env $k $n depth_from_buffer);
+    };
+    (@kind [jni $env:ident] $k:tt $n:ident [LumaBuffer]) => {
+        $crate::declare::exports!(@image_buffer $env $k $n luma_from_buffer);
     };
     // The elements are held (a JNI critical section) until the bridge call returns, so no
-    // JNI call may follow: parameters after a `ShortArray` must be ones whose conversion
-    // calls no JNI (numbers, a pose, intrinsics).
-    (@jni_param [$env:ident $($head:tt)*] [$($sig:tt)*] [$($conv:tt)*] [$($args:tt)*]
-        [$($kt:tt)*] $n:ident : ShortArray $(, $($rest:tt)*)?) => {
-        $crate::declare::exports!(@jni_param [$env $($head)*]
-            [$($sig)* $n: JShortArray<'l>, width: jint, height: jint, row_stride_bytes: jint,]
-            [$($conv)*
-                let needed = $crate::jni_api::depth_array_len(
-                    $env, &$n, width, height, row_stride_bytes)?;
-                // SAFETY: read-only access; no JNI call happens while the critical
-                // section is held (see above).
-                let elements = unsafe {
-                    $n.get_elements_critical($env, ::jni::elements::ReleaseMode::NoCopyBack)?
-                };
-                // SAFETY: i16 and u16 have the same size and alignment; the array holds
-                // at least `needed` elements.
-                let samples = unsafe {
-                    ::std::slice::from_raw_parts(elements.as_ptr().cast::<u16>(), needed)
-                };
-                let $n = $crate::bridge::DepthView::new(samples, width, height,
-                    row_stride_bytes)?;]
-            [$($args)* $n,]
-            [$($kt)* (stringify!($n), "ShortArray"), ("width", "Int"), ("height", "Int"),
-                ("row_stride_bytes", "Int"),]
-            $($($rest)*)?);
+    // JNI call may follow: parameters after a `ShortArray` or a `ByteArray` must be ones
+    // whose conversion calls no JNI (numbers, a pose, intrinsics).
+    (@kind [jni $env:ident] $k:tt $n:ident [ShortArray]) => {
+        $crate::declare::exports!(@image_array $env $k $n ShortArray JShortArray u16
+            depth_array_len DepthView);
     };
-    (@jni_param [$env:ident $($head:tt)*] [$($sig:tt)*] [$($conv:tt)*] [$($args:tt)*]
-        [$($kt:tt)*] $n:ident : LumaBuffer $(, $($rest:tt)*)?) => {
-        $crate::declare::exports!(@jni_param [$env $($head)*]
-            [$($sig)* $n: JByteBuffer<'l>, width: jint, height: jint, row_stride_bytes: jint,]
-            [$($conv)* let $n = $crate::jni_api::luma_from_buffer(
-                $env, &$n, width, height, row_stride_bytes)?;]
-            [$($args)* $n,]
-            [$($kt)* (stringify!($n), "ByteBuffer"), ("width", "Int"), ("height", "Int"),
-                ("row_stride_bytes", "Int"),]
-            $($($rest)*)?);
-    };
-    // As `ShortArray`: the elements are held in a critical section until the call returns.
-    (@jni_param [$env:ident $($head:tt)*] [$($sig:tt)*] [$($conv:tt)*] [$($args:tt)*]
-        [$($kt:tt)*] $n:ident : ByteArray $(, $($rest:tt)*)?) => {
-        $crate::declare::exports!(@jni_param [$env $($head)*]
-            [$($sig)* $n: JByteArray<'l>, width: jint, height: jint, row_stride_bytes: jint,]
-            [$($conv)*
-                let needed = $crate::jni_api::luma_array_len(
-                    $env, &$n, width, height, row_stride_bytes)?;
-                // SAFETY: read-only access; no JNI call happens while the critical
-                // section is held (see `ShortArray`).
-                let elements = unsafe {
-                    $n.get_elements_critical($env, ::jni::elements::ReleaseMode::NoCopyBack)?
-                };
-                // SAFETY: i8 and u8 have the same size and alignment; the array holds
-                // at least `needed` elements.
-                let bytes = unsafe {
-                    ::std::slice::from_raw_parts(elements.as_ptr().cast::<u8>(), needed)
-                };
-                let $n = $crate::bridge::LumaView::new(bytes, width, height,
-                    row_stride_bytes)?;]
-            [$($args)* $n,]
-            [$($kt)* (stringify!($n), "ByteArray"), ("width", "Int"), ("height", "Int"),
-                ("row_stride_bytes", "Int"),]
-            $($($rest)*)?);
-    };
-    (@jni_param [$env:ident $docs:tt $feat:tt $name:ident $jname:ident [$ret:ty]] $sig:tt
-        $conv:tt $args:tt $kt:tt) => {
-        $crate::declare::exports!(@jni_emit $docs $feat $name $jname [$ret] $env $sig $conv
-            $args $kt);
+    (@kind [jni $env:ident] $k:tt $n:ident [ByteArray]) => {
+        $crate::declare::exports!(@image_array $env $k $n ByteArray JByteArray u8
+            luma_array_len LumaView);
     };
 
-    (@jni_emit [$(#[doc = $doc:literal])*] [$($feature:literal)?] $name:ident $jname:ident
-        [$ret:ty] $env:ident [$($sig:tt)*] [$($conv:tt)*] [$($args:tt)*] [$($kt:tt)*]) => {
+    // An image in a direct `ByteBuffer` and its `width, height, rowStrideBytes`.
+    (@image_buffer $env:ident $k:tt $n:ident $view:ident) => {
+        $crate::declare::exports!(@push $k
+            [$n: JByteBuffer<'l>, width: jint, height: jint, row_stride_bytes: jint,]
+            [let $n = $crate::jni_api::$view($env, &$n, width, height, row_stride_bytes)?;]
+            [$n,]
+            [(stringify!($n), "ByteBuffer"), ("width", "Int"), ("height", "Int"),
+                ("row_stride_bytes", "Int"),]);
+    };
+    // An image in a Java array of signed `$array` read as `$sample`s, and its `width,
+    // height, rowStrideBytes`; `$len` checks it, `$view` wraps it.
+    (@image_array $env:ident $k:tt $n:ident $kotlin:ident $array:ident $sample:ident
+        $len:ident $view:ident) => {
+        $crate::declare::exports!(@push $k
+            [$n: $array<'l>, width: jint, height: jint, row_stride_bytes: jint,]
+            [
+                let needed = $crate::jni_api::$len($env, &$n, width, height, row_stride_bytes)?;
+                // SAFETY: read-only access; no JNI call happens while the critical
+                // section is held (see the `ShortArray` kind).
+                let elements = unsafe {
+                    $n.get_elements_critical($env, ::jni::elements::ReleaseMode::NoCopyBack)?
+                };
+                // SAFETY: a signed and an unsigned integer of one width have the same size
+                // and alignment; the array holds at least `needed` elements.
+                let samples = unsafe {
+                    ::std::slice::from_raw_parts(elements.as_ptr().cast::<$sample>(), needed)
+                };
+                let $n = $crate::bridge::$view::new(samples, width, height, row_stride_bytes)?;
+            ]
+            [$n,]
+            [(stringify!($n), stringify!($kotlin)), ("width", "Int"), ("height", "Int"),
+                ("row_stride_bytes", "Int"),]);
+    };
+
+    // Every parameter walked.
+    (@params [jni $env:ident] [[[$(#[doc = $doc:literal])*] [$($feature:literal)?]
+        $name:ident $jname:ident [$ret:ty]] [$($sig:tt)*] [$($conv:tt)*] [$($args:tt)*]
+        [$($kt:tt)*]]) => {
         $(#[doc = $doc])*
         $(#[cfg(feature = $feature)])?
         #[allow(non_snake_case)]
@@ -445,20 +366,31 @@ macro_rules! exports {
             })
         }
 
+        $crate::declare::exports!(@decl [$($doc)*] [$($feature)?] $jname [&[$($kt)*]]
+            [<$ret as $crate::jni_api::IntoJava<'static>>::KOTLIN]);
+    };
+
+    // ---- Both bridges: the descriptor --------------------------------------------------
+
+    (@decl [$($doc:literal)*] [$($feature:literal)?] $export:ident [$params:expr]
+        [$returns:expr]) => {
         #[doc(hidden)]
         #[allow(non_snake_case)]
-        pub(crate) mod $jname {
+        pub(crate) mod $export {
             #[allow(unused_imports)]
             use super::*;
             pub(crate) const DECL: $crate::decl::Export = $crate::decl::Export {
-                name: stringify!($jname),
+                name: stringify!($export),
                 doc: concat!($($doc, "\n",)*),
-                params: &[$($kt)*],
-                returns: <$ret as $crate::jni_api::IntoJava<'static>>::KOTLIN,
+                params: $params,
+                returns: $returns,
                 feature: $crate::declare::exports!(@feature $($feature)?),
             };
         }
     };
+
+    (@feature) => { None };
+    (@feature $feature:literal) => { Some($feature) };
 }
 
 pub(crate) use exports;
