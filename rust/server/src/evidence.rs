@@ -97,6 +97,29 @@ fn table<'a>(src: &str, text: &'a str, needed: &[&str]) -> Result<Table<'a>, Err
     Ok((columns, rows))
 }
 
+/// Reads every row of the table `text` (as [`table`]) with `row`, given the row's cells and
+/// its `index` cell, which must count 0, 1, … in order.
+fn indexed_rows<T>(
+    src: &'static str,
+    text: &str,
+    needed: &[&str],
+    mut row: impl FnMut(&Cells<'_, '_>, usize) -> Result<T, Error>,
+) -> Result<Vec<T>, Error> {
+    let (columns, rows) = table(src, text, needed)?;
+    let mut out = Vec::with_capacity(rows.len());
+    for (k, (line, cells)) in rows.iter().enumerate() {
+        let c = Cells {
+            src,
+            line: *line,
+            columns: &columns,
+            cells,
+        };
+        let index = c.index(k)?;
+        out.push(row(&c, index)?);
+    }
+    Ok(out)
+}
+
 /// One row's cells by column name, for errors that name line and column.
 struct Cells<'a, 'b> {
     src: &'static str,
@@ -167,16 +190,7 @@ pub(crate) fn parse_evidence(text: &str) -> Result<Vec<EvidenceRow>, Error> {
         )));
     }
     let needed: Vec<&str> = EVIDENCE_HEADER.split(',').collect();
-    let (columns, rows) = table(SRC, text, &needed)?;
-    let mut out = Vec::with_capacity(rows.len());
-    for (k, (line, cells)) in rows.iter().enumerate() {
-        let c = Cells {
-            src: SRC,
-            line: *line,
-            columns: &columns,
-            cells,
-        };
-        let index = c.index(k)?;
+    indexed_rows(SRC, text, &needed, |c, index| {
         let (image, thumbnail_size) = if c.flag("image")? {
             let image = ImageProperties {
                 mean_brightness: c.measure("mean_brightness")?,
@@ -193,7 +207,7 @@ pub(crate) fn parse_evidence(text: &str) -> Result<Vec<EvidenceRow>, Error> {
         let causes_cell = c.raw("causes");
         let causes = Causes::from_names(causes_cell.split_whitespace())
             .ok_or_else(|| c.bad("causes", format!("`{causes_cell}` names an unknown cause")))?;
-        out.push(EvidenceRow {
+        Ok(EvidenceRow {
             index,
             image,
             thumbnail_size,
@@ -203,25 +217,15 @@ pub(crate) fn parse_evidence(text: &str) -> Result<Vec<EvidenceRow>, Error> {
             depth_valid: c.flag("depth_valid")?,
             distance_m: c.measure("distance_m")?,
             causes: causes.names().map(str::to_owned).collect(),
-        });
-    }
-    Ok(out)
+        })
+    })
 }
 
 /// Parses the phone's `subtrajectories.csv`: only `index`, `start_ns` and `end_ns` are read
 /// (the other columns are the phone's and informational here).
 pub(crate) fn parse_spans(text: &str) -> Result<Vec<Span>, Error> {
     const SRC: &str = "subtrajectories.csv";
-    let (columns, rows) = table(SRC, text, &["index", "start_ns", "end_ns"])?;
-    let mut out = Vec::with_capacity(rows.len());
-    for (k, (line, cells)) in rows.iter().enumerate() {
-        let c = Cells {
-            src: SRC,
-            line: *line,
-            columns: &columns,
-            cells,
-        };
-        let index = c.index(k)?;
+    indexed_rows(SRC, text, &["index", "start_ns", "end_ns"], |c, index| {
         let start_ns: i64 = c.parse("start_ns")?;
         let end_ns = match c.raw("end_ns") {
             "" => None,
@@ -230,13 +234,12 @@ pub(crate) fn parse_spans(text: &str) -> Result<Vec<Span>, Error> {
         if end_ns.is_some_and(|e| e < start_ns) {
             return Err(c.bad("end_ns", "ends before it starts"));
         }
-        out.push(Span {
+        Ok(Span {
             index,
             start_ns,
             end_ns,
-        });
-    }
-    Ok(out)
+        })
+    })
 }
 
 /// Whether `bytes` look like a JPEG: the SOI marker `FF D8 FF` first, EOI `FF D9` last.
