@@ -1,8 +1,11 @@
 //! The original Unity app's routes, unchanged for it: `POST /recording`, `POST /timestamps`
 //! (multipart form uploads) and `GET /results.csv`.
 
+use std::marker::PhantomData;
+use std::sync::Arc;
+
 use axum::extract::multipart::MultipartRejection;
-use axum::extract::{Multipart, State};
+use axum::extract::{FromRequest, Multipart, Request, State};
 use axum::http::{HeaderMap, StatusCode, header};
 use axum::response::{IntoResponse, Response};
 use serde_json::json;
@@ -22,20 +25,50 @@ use crate::shared::Shared;
 const LEGACY_POLL: std::time::Duration = std::time::Duration::from_millis(100);
 
 /// The one field of a legacy upload: its multipart name and the size limit it takes.
-struct Field {
+pub(crate) struct Field {
     name: &'static str,
     limit: fn(&ServerConfig) -> u64,
 }
 
-const RECORDING: Field = Field {
-    name: "recording",
-    limit: |config| config.max_recording_bytes,
-};
+/// What a legacy upload route receives.
+pub(crate) trait Upload {
+    const FIELD: Field;
+}
 
-const TIMESTAMPS: Field = Field {
-    name: "timestamps",
-    limit: |config| config.max_trajectory_bytes,
-};
+/// `POST /recording`'s field.
+pub(crate) struct Recording;
+
+impl Upload for Recording {
+    const FIELD: Field = Field {
+        name: "recording",
+        limit: |config| config.max_recording_bytes,
+    };
+}
+
+/// `POST /timestamps`'s field.
+pub(crate) struct Timestamps;
+
+impl Upload for Timestamps {
+    const FIELD: Field = Field {
+        name: "timestamps",
+        limit: |config| config.max_trajectory_bytes,
+    };
+}
+
+/// The body of a legacy upload route: its field `U::FIELD`, in a temp file. As the last
+/// extractor, it reads the body only after the caller is known.
+pub(crate) struct Received<U>(TempFile, PhantomData<U>);
+
+impl<U: Upload> FromRequest<Arc<Shared>> for Received<U> {
+    type Rejection = Error;
+
+    async fn from_request(request: Request, shared: &Arc<Shared>) -> Result<Self, Error> {
+        let headers = request.headers().clone();
+        let multipart = Multipart::from_request(request, shared).await;
+        let temp = multipart_field(shared, multipart, &headers, U::FIELD).await?;
+        Ok(Received(temp, PhantomData))
+    }
+}
 
 /// Reads the multipart field `field` of a legacy upload into a temp file.
 async fn multipart_field(
@@ -74,10 +107,8 @@ async fn multipart_field(
 pub(crate) async fn recording(
     State(shared): AppState,
     caller: Caller,
-    headers: HeaderMap,
-    multipart: Result<Multipart, MultipartRejection>,
+    Received(temp, _): Received<Recording>,
 ) -> Result<Response, Error> {
-    let temp = multipart_field(&shared, multipart, &headers, RECORDING).await?;
     let (id, _) = shared.create_session(&NewSession {
         idempotency_key: None,
         trials_total: shared.config.default_trials,
@@ -121,10 +152,8 @@ pub(crate) async fn recording(
 pub(crate) async fn timestamps(
     State(shared): AppState,
     caller: Caller,
-    headers: HeaderMap,
-    multipart: Result<Multipart, MultipartRejection>,
+    Received(temp, _): Received<Timestamps>,
 ) -> Result<Response, Error> {
-    let temp = multipart_field(&shared, multipart, &headers, TIMESTAMPS).await?;
     let id = shared
         .db
         .latest_session(false, true, caller.owner())?
