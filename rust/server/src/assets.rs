@@ -5,7 +5,7 @@
 //! from the path.
 
 use axum::extract::Path;
-use axum::http::{HeaderValue, header};
+use axum::http::header;
 use axum::response::{IntoResponse, Response};
 
 use crate::Error;
@@ -37,17 +37,30 @@ pub(crate) async fn get(Path(name): Path<String>) -> Result<Response, Error> {
         .iter()
         .find(|(n, _, _)| *n == name)
         .ok_or_else(|| Error::NotFound(format!("no asset {name:?}")))?;
-    let mut response = (*bytes).into_response();
-    let headers = response.headers_mut();
-    headers.insert(header::CONTENT_TYPE, HeaderValue::from_static(content_type));
-    // The assets change only with the binary; an hour keeps reloads off the network.
-    headers.insert(
-        header::CACHE_CONTROL,
-        HeaderValue::from_static("public, max-age=3600"),
-    );
-    headers.insert(
-        header::X_CONTENT_TYPE_OPTIONS,
-        HeaderValue::from_static("nosniff"),
-    );
-    Ok(response)
+    Ok((
+        [
+            (header::CONTENT_TYPE, *content_type),
+            // The assets change only with the binary; an hour keeps reloads off the network.
+            (header::CACHE_CONTROL, "public, max-age=3600"),
+            (header::X_CONTENT_TYPE_OPTIONS, "nosniff"),
+        ],
+        *bytes,
+    )
+        .into_response())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[tokio::test]
+    async fn an_asset_has_its_type_and_cache_headers_and_an_unknown_name_is_404() {
+        let response = get(Path("site.css".to_owned())).await.unwrap();
+        let headers = response.headers();
+        assert_eq!(headers[header::CONTENT_TYPE], "text/css; charset=utf-8");
+        assert_eq!(headers[header::CACHE_CONTROL], "public, max-age=3600");
+        assert_eq!(headers[header::X_CONTENT_TYPE_OPTIONS], "nosniff");
+        let e = get(Path("../Cargo.toml".to_owned())).await.unwrap_err();
+        assert!(matches!(e, Error::NotFound(_)), "{e}");
+    }
 }
