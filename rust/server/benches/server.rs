@@ -41,6 +41,23 @@ fn client(url: &str) -> Client {
         .unwrap()
 }
 
+/// A server at 1× with one simulated phone, its client, and a session whose trials the
+/// client uploads (`playback: upload`), for benchmarks of the upload routes.
+fn upload_session(data: &Path) -> (ServerHandle, Client, String) {
+    let server = sim_server(data, 1.0, 1);
+    let client = client(&server.url());
+    let id = client
+        .create_session(&NewSession {
+            trials: 2,
+            setting: "mean".into(),
+            playback: "upload".into(),
+            window_frames: None,
+            pose_relation: None,
+        })
+        .unwrap();
+    (server, client, id)
+}
+
 fn run_session(client: &Client, recording: &Path, trials: u32) -> Duration {
     let id = client
         .create_session(&NewSession {
@@ -105,17 +122,7 @@ fn upload_throughput(c: &mut Criterion) {
             f.write_all(&block).unwrap();
         }
     }
-    let server = sim_server(&dir.path().join("data"), 1.0, 1);
-    let client = client(&server.url());
-    let id = client
-        .create_session(&NewSession {
-            trials: 2,
-            setting: "mean".into(),
-            playback: "upload".into(),
-            window_frames: None,
-            pose_relation: None,
-        })
-        .unwrap();
+    let (_server, client, id) = upload_session(&dir.path().join("data"));
     let mut group = c.benchmark_group("server");
     group.sample_size(10);
     group.throughput(Throughput::Bytes(size));
@@ -201,17 +208,7 @@ fn evidence_upload(c: &mut Criterion) {
     phone.stop(gt.stamps[last], pose(last)).unwrap();
     let folder = dir.path().join("phone");
     phone.save(&folder).unwrap();
-    let server = sim_server(&dir.path().join("data"), 1.0, 1);
-    let client = client(&server.url());
-    let id = client
-        .create_session(&NewSession {
-            trials: 2,
-            setting: "mean".into(),
-            playback: "upload".into(),
-            window_frames: None,
-            pose_relation: None,
-        })
-        .unwrap();
+    let (_server, client, id) = upload_session(&dir.path().join("data"));
     let sent = client.upload_evidence(&id, &folder).unwrap().unwrap();
     let bytes: u64 = std::fs::read_dir(folder.join("thumbnails"))
         .unwrap()
