@@ -1,18 +1,14 @@
 //! An upload job whose recording cannot be read fails at once with a local I/O error,
 //! and the real server on loopback never sees a session for it.
 
+mod support;
+
 use sitar_client::{Client, Error, JobOptions, NewSession, UploadJob};
-use sitar_server::{Server, ServerConfig};
 
 #[test]
 fn an_unreadable_recording_is_an_io_error_before_any_session_exists() {
     let dir = tempfile::tempdir().unwrap();
-    let server = Server::spawn(
-        ServerConfig::new(dir.path()),
-        "127.0.0.1:0".parse().unwrap(),
-    )
-    .unwrap();
-    let admin = std::fs::read_to_string(dir.path().join(sitar_server::ADMIN_TOKEN_FILE)).unwrap();
+    let (server, admin) = support::spawn_with_admin(dir.path());
     let inputs = tempfile::tempdir().unwrap();
     let missing = inputs.path().join("missing.mp4");
     for recording in [inputs.path(), missing.as_path()] {

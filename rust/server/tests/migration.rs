@@ -1,7 +1,7 @@
 //! A data directory written by the previous version: its database gains the new session
 //! columns on start, and its sessions are served with the settings they were made with.
 
-use sitar_server::{Server, ServerConfig};
+mod support;
 
 #[test]
 fn a_previous_versions_data_directory_is_served_with_the_default_window_settings() {
@@ -28,14 +28,8 @@ fn a_previous_versions_data_directory_is_served_with_the_default_window_settings
 
     // Twice: the second start finds the columns in place and adds nothing.
     for _ in 0..2 {
-        let server = Server::spawn(
-            ServerConfig::new(dir.path()),
-            "127.0.0.1:0".parse().unwrap(),
-        )
-        .unwrap();
         // An old data directory gets its admin token on the first start.
-        let admin =
-            std::fs::read_to_string(dir.path().join(sitar_server::ADMIN_TOKEN_FILE)).unwrap();
+        let (server, admin) = support::spawn_with_admin(dir.path());
         let client = sitar_client::Client::new(&server.url())
             .unwrap()
             .with_server_token(&admin)

@@ -6,7 +6,9 @@ use std::io::{Read, Write};
 use std::net::TcpStream;
 use std::time::Duration;
 
-use sitar_server::{Server, ServerConfig, ServerHandle};
+use sitar_server::ServerHandle;
+
+mod support;
 
 struct Reply {
     status: u16,
@@ -63,13 +65,8 @@ fn send(server: &ServerHandle, token: &str, head: &str, body: &[u8]) -> Reply {
 
 fn start() -> (tempfile::TempDir, ServerHandle, String) {
     let dir = tempfile::tempdir().unwrap();
-    let server = Server::spawn(
-        ServerConfig::new(dir.path()),
-        "127.0.0.1:0".parse().unwrap(),
-    )
-    .unwrap();
-    let admin = std::fs::read_to_string(dir.path().join(sitar_server::ADMIN_TOKEN_FILE)).unwrap();
-    (dir, server, admin.trim().to_owned())
+    let (server, admin) = support::spawn_with_admin(dir.path());
+    (dir, server, admin)
 }
 
 fn create_upload_session(server: &ServerHandle, token: &str) -> String {
