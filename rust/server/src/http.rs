@@ -1,5 +1,6 @@
 //! HTTP helpers every handler uses, below all of them: JSON answers, the content type, the
-//! declared body length, the idempotency key, and the session lookup extractor.
+//! declared body length, the idempotency key, the session lookup extractor, and blocking
+//! work off the async workers.
 
 use std::sync::Arc;
 
@@ -12,6 +13,17 @@ use crate::Error;
 use crate::auth::Caller;
 use crate::session::Session;
 use crate::shared::Shared;
+
+/// Runs `f` on tokio's blocking pool (file and CPU work off the async workers); a task that
+/// panicked or was cancelled is an internal error naming `what`.
+pub(crate) async fn blocking<T: Send + 'static>(
+    what: &'static str,
+    f: impl FnOnce() -> Result<T, Error> + Send + 'static,
+) -> Result<T, Error> {
+    tokio::task::spawn_blocking(f)
+        .await
+        .map_err(|e| Error::Internal(format!("{what}: {e}")))?
+}
 
 /// The state every handler gets.
 pub(crate) type AppState = axum::extract::State<Arc<Shared>>;

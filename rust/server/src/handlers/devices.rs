@@ -6,14 +6,12 @@ use serde_json::json;
 
 use crate::Error;
 use crate::auth::Admin;
-use crate::http::AppState;
+use crate::http::{AppState, blocking};
 
 /// Admin only: devices are the lab's, not an app's.
 pub(crate) async fn list(State(shared): AppState, _: Admin) -> Result<Response, Error> {
     let backend = shared.backend(shared.config.playback);
-    let list = tokio::task::spawn_blocking(move || backend.devices())
-        .await
-        .map_err(|e| Error::Internal(format!("devices task: {e}")))?;
+    let list = blocking("devices task", move || Ok(backend.devices())).await?;
     for d in &list {
         shared.db.upsert_device(&d.serial, &d.state, None)?;
     }

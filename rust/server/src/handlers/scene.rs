@@ -5,29 +5,31 @@ use axum::http::header;
 use axum::response::{IntoResponse, Response};
 
 use crate::Error;
-use crate::http::{AppState, Found};
+use crate::http::{AppState, Found, blocking};
 use crate::scene;
+
+/// A download: `body` as the file `file_name` of type `content_type`.
+fn attachment(content_type: &'static str, file_name: &str, body: Vec<u8>) -> Response {
+    let disposition = format!("attachment; filename=\"{file_name}\"");
+    (
+        [
+            (header::CONTENT_TYPE, content_type.to_owned()),
+            (header::CONTENT_DISPOSITION, disposition),
+        ],
+        body,
+    )
+        .into_response()
+}
 
 /// `GET /v1/sessions/{id}/scene.glb`: trajectory by class, frustums, markers, surface points.
 pub(crate) async fn glb(State(shared): AppState, Found(session): Found) -> Result<Response, Error> {
-    let glb = tokio::task::spawn_blocking(move || {
+    let glb = blocking("scene export", move || {
         let loaded = scene::load(&shared, &session)?;
         sitar_scene::to_glb(&sitar_scene::SceneParts::from_session(&loaded.0))
             .map_err(|e| Error::Conflict(format!("no scene for session {}: {e}", session.id)))
     })
-    .await
-    .map_err(|e| Error::Internal(format!("scene export: {e}")))??;
-    Ok((
-        [
-            (header::CONTENT_TYPE, "model/gltf-binary"),
-            (
-                header::CONTENT_DISPOSITION,
-                "attachment; filename=\"scene.glb\"",
-            ),
-        ],
-        glb,
-    )
-        .into_response())
+    .await?;
+    Ok(attachment("model/gltf-binary", "scene.glb", glb))
 }
 
 /// `GET /v1/sessions/{id}/scene.json`: what the report's 3-D view draws
@@ -36,7 +38,7 @@ pub(crate) async fn json(
     State(shared): AppState,
     Found(session): Found,
 ) -> Result<Response, Error> {
-    let value = tokio::task::spawn_blocking(move || -> Result<serde_json::Value, Error> {
+    let value = blocking("scene data", move || {
         let loaded = scene::load(&shared, &session)?;
         let (phone, source) = (&loaded.0, loaded.1);
         let thresholds = session.settings.thresholds(&shared.config);
@@ -49,8 +51,7 @@ pub(crate) async fn json(
             source.describe(),
         ))
     })
-    .await
-    .map_err(|e| Error::Internal(format!("scene data: {e}")))??;
+    .await?;
     Ok(crate::http::json_value(axum::http::StatusCode::OK, &value))
 }
 
@@ -60,22 +61,15 @@ pub(crate) async fn trajectory(
     State(shared): AppState,
     Found(session): Found,
 ) -> Result<Response, Error> {
-    let tum = tokio::task::spawn_blocking(move || {
+    let tum = blocking("trajectory", move || {
         scene::load(&shared, &session).map(|loaded| loaded.0.trajectory_tum())
     })
-    .await
-    .map_err(|e| Error::Internal(format!("trajectory: {e}")))??;
-    Ok((
-        [
-            (header::CONTENT_TYPE, "text/plain; charset=utf-8"),
-            (
-                header::CONTENT_DISPOSITION,
-                "attachment; filename=\"trajectory.tum\"",
-            ),
-        ],
-        tum,
-    )
-        .into_response())
+    .await?;
+    Ok(attachment(
+        "text/plain; charset=utf-8",
+        "trajectory.tum",
+        tum.into_bytes(),
+    ))
 }
 
 /// `GET /v1/sessions/{id}/trials.zip`: every stored trial (`trial_NNN.txt`, TUM), stored
@@ -84,7 +78,7 @@ pub(crate) async fn trials_zip(
     State(shared): AppState,
     Found(session): Found,
 ) -> Result<Response, Error> {
-    let bytes = tokio::task::spawn_blocking(move || -> Result<Vec<u8>, Error> {
+    let bytes = blocking("trials.zip", move || {
         use std::io::Write as _;
         let mut zip = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
         let options = zip::write::SimpleFileOptions::default()
@@ -100,17 +94,23 @@ pub(crate) async fn trials_zip(
         }
         Ok(zip.finish().map_err(fail)?.into_inner())
     })
-    .await
-    .map_err(|e| Error::Internal(format!("trials.zip: {e}")))??;
-    Ok((
-        [
-            (header::CONTENT_TYPE, "application/zip"),
-            (
-                header::CONTENT_DISPOSITION,
-                "attachment; filename=\"trials.zip\"",
-            ),
-        ],
-        bytes,
-    )
-        .into_response())
+    .await?;
+    Ok(attachment("application/zip", "trials.zip", bytes))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_attachment_has_its_type_and_file_name_and_no_other_header() {
+        let response = attachment("application/zip", "trials.zip", b"PK".to_vec());
+        let headers = response.headers();
+        assert_eq!(headers[header::CONTENT_TYPE], "application/zip");
+        assert_eq!(
+            headers[header::CONTENT_DISPOSITION],
+            "attachment; filename=\"trials.zip\""
+        );
+        assert_eq!(headers.len(), 2, "{headers:?}");
+    }
 }
