@@ -103,6 +103,7 @@ pub mod fuzzing;
 mod handlers;
 mod held;
 mod http;
+mod index_ranges;
 mod jobs;
 mod json_errors;
 mod live;

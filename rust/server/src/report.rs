@@ -17,6 +17,7 @@ use sitar_core::{Convention, ErrorClass, Session as Phone, Thresholds};
 use crate::Error;
 use crate::charts::{self, HIGH, LOW, MEDIUM, UNKNOWN};
 use crate::config::ServerConfig;
+use crate::index_ranges::index_ranges;
 use crate::region_evidence::{self, CameraEvidence};
 use crate::regions::{self, SubRow};
 use crate::scene::Source;
@@ -269,7 +270,7 @@ pub(crate) fn render(input: &ReportInput<'_>) -> Result<String, Error> {
                 "mean_error": unit.show(r.mean_error),
                 "span": format!("{:.1}–{:.1} s", r.t0, r.t1),
                 "distance": format!("{:.2} m", r.distance_m),
-                "subtrajectories": summarize(&r.subtrajectories),
+                "subtrajectories": index_ranges(&r.subtrajectories),
                 "sub_count": r.subtrajectories.len(),
                 "stretches": r.stretches,
                 "surface": r.surface.map(|p| {
@@ -410,30 +411,6 @@ fn history_chart(
     charts::history(&points, thresholds, unit.scale, y_label)
 }
 
-/// `3–7, 12, 15–16`: sorted indices as ranges.
-fn summarize(indices: &[u32]) -> String {
-    let mut sorted = indices.to_vec();
-    sorted.sort_unstable();
-    let mut out = String::new();
-    let mut i = 0;
-    while i < sorted.len() {
-        let mut j = i;
-        while j + 1 < sorted.len() && sorted[j + 1] == sorted[j] + 1 {
-            j += 1;
-        }
-        if !out.is_empty() {
-            out.push_str(", ");
-        }
-        if i == j {
-            let _ = write!(out, "{}", sorted[i]);
-        } else {
-            let _ = write!(out, "{}–{}", sorted[i], sorted[j]);
-        }
-        i = j + 1;
-    }
-    out
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -547,8 +524,7 @@ mod tests {
     }
 
     #[test]
-    fn ranges_and_statistics() {
-        assert_eq!(summarize(&[7, 3, 4, 5, 12, 15, 16]), "3–5, 7, 12, 15–16");
+    fn statistics_of_a_sample() {
         let s = statistics(&[3.0, 4.0, 1.0, 2.0]).unwrap();
         assert!((s[0] - (30.0f64 / 4.0).sqrt()).abs() < 1e-12);
         assert_eq!((s[1], s[2], s[3]), (2.5, 2.5, 4.0));

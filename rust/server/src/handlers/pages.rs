@@ -12,6 +12,7 @@ use crate::Error;
 use crate::auth::Admin;
 use crate::config::PlaybackKind;
 use crate::http::{AppState, Found};
+use crate::index_ranges::index_ranges;
 use crate::published::{self, Form};
 use crate::region_evidence::CameraEvidence;
 use crate::report::{self, ReportInput};
@@ -86,7 +87,7 @@ pub(crate) async fn overview(State(shared): AppState, _: Admin) -> Result<Respon
             .db
             .trial_sources(&row.id)?
             .into_iter()
-            .map(|(source, trials)| json!({"source": source, "trials": ranges(&trials)}))
+            .map(|(source, trials)| json!({"source": source, "trials": index_ranges(&trials)}))
             .collect();
         sessions.push(json!({
             "id": row.id,
@@ -122,28 +123,6 @@ pub(crate) async fn overview(State(shared): AppState, _: Admin) -> Result<Respon
         }),
     )?;
     Ok(templates::page(html))
-}
-
-/// `0–3, 7`: trial indices as ranges.
-fn ranges(indices: &[u32]) -> String {
-    let mut out = String::new();
-    let mut i = 0;
-    while i < indices.len() {
-        let mut j = i;
-        while j + 1 < indices.len() && indices[j + 1] == indices[j] + 1 {
-            j += 1;
-        }
-        if !out.is_empty() {
-            out.push_str(", ");
-        }
-        if i == j {
-            let _ = write!(out, "{}", indices[i]);
-        } else {
-            let _ = write!(out, "{}–{}", indices[i], indices[j]);
-        }
-        i = j + 1;
-    }
-    out
 }
 
 /// `trim_mean_30`, with the window and relation when they are not the defaults.
@@ -206,10 +185,9 @@ mod tests {
     use super::*;
 
     #[test]
-    fn utc_dates_and_trial_ranges() {
+    fn utc_dates() {
         assert_eq!(utc(0), "1970-01-01 00:00:00");
         // 2024-02-29 12:34:56 UTC (a leap day).
         assert_eq!(utc(1_709_210_096_000), "2024-02-29 12:34:56");
-        assert_eq!(ranges(&[0, 1, 2, 5, 7, 8]), "0–2, 5, 7–8");
     }
 }
