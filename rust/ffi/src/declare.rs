@@ -301,12 +301,12 @@ macro_rules! exports {
     // JNI call may follow: parameters after a `ShortArray` or a `ByteArray` must be ones
     // whose conversion calls no JNI (numbers, a pose, intrinsics).
     (@kind [jni $env:ident] $k:tt $n:ident [ShortArray]) => {
-        $crate::declare::exports!(@image_array $env $k $n ShortArray JShortArray u16
-            depth_array_len DepthView);
+        $crate::declare::exports!(@image_array $env $k $n ShortArray JShortArray u16 Depth
+            DepthView);
     };
     (@kind [jni $env:ident] $k:tt $n:ident [ByteArray]) => {
-        $crate::declare::exports!(@image_array $env $k $n ByteArray JByteArray u8
-            luma_array_len LumaView);
+        $crate::declare::exports!(@image_array $env $k $n ByteArray JByteArray u8 Luma
+            LumaView);
     };
 
     // An image in a direct `ByteBuffer` and its `width, height, rowStrideBytes`.
@@ -319,13 +319,14 @@ macro_rules! exports {
                 ("row_stride_bytes", "Int"),]);
     };
     // An image in a Java array of signed `$array` read as `$sample`s, and its `width,
-    // height, rowStrideBytes`; `$len` checks it, `$view` wraps it.
+    // height, rowStrideBytes`; checked as an `ArrayImage::$image`, wrapped as a `$view`.
     (@image_array $env:ident $k:tt $n:ident $kotlin:ident $array:ident $sample:ident
-        $len:ident $view:ident) => {
+        $image:ident $view:ident) => {
         $crate::declare::exports!(@push $k
             [$n: $array<'l>, width: jint, height: jint, row_stride_bytes: jint,]
             [
-                let needed = $crate::jni_api::$len($env, &$n, width, height, row_stride_bytes)?;
+                let needed = $crate::jni_api::image_array_len($env, &$n,
+                    $crate::jni_api::ArrayImage::$image, width, height, row_stride_bytes)?;
                 // SAFETY: read-only access; no JNI call happens while the critical
                 // section is held (see the `ShortArray` kind).
                 let elements = unsafe {

@@ -9,7 +9,9 @@ use std::ffi::CStr;
 use std::path::PathBuf;
 
 use jni::errors::ErrorPolicy;
-use jni::objects::{JByteArray, JByteBuffer, JDoubleArray, JShortArray, JString, JThrowable};
+use jni::objects::{
+    JByteArray, JByteBuffer, JDoubleArray, JPrimitiveArray, JString, JThrowable, TypeArray,
+};
 use jni::sys::{jboolean, jint, jlong};
 use jni::{jni_sig, jni_str, Env, EnvUnowned, JValue};
 
@@ -181,49 +183,46 @@ pub(crate) fn luma_from_buffer<'a>(
     crate::bridge::LumaView::new(data, width, height, row_stride_bytes)
 }
 
-/// Checks a luminance `ByteArray` and returns the number of bytes the plane needs.
-pub(crate) fn luma_array_len(
-    env: &Env<'_>,
-    array: &JByteArray<'_>,
-    width: jint,
-    height: jint,
-    row_stride_bytes: jint,
-) -> Result<usize, Error> {
-    if array.is_null() {
-        return Err(Error::Null("luma"));
-    }
-    let needed = crate::bridge::luma_len(width, height, row_stride_bytes)?;
-    let available = array.len(env)?;
-    if available < needed {
-        return Err(Error::invalid(
-            "luma",
-            format!(
-                "{available} bytes; a {width}x{height} plane with row stride {row_stride_bytes} needs {needed}"
-            ),
-        ));
-    }
-    Ok(needed)
+/// The image a Java array holds, for [`image_array_len`].
+pub(crate) enum ArrayImage {
+    /// A depth image in a `ShortArray` (parameter `data`).
+    Depth,
+    /// A luminance plane in a `ByteArray` (parameter `luma`).
+    Luma,
 }
 
-/// Checks a depth `ShortArray` and returns the number of samples the image needs.
-pub(crate) fn depth_array_len(
+/// Checks a Java array holding `image` and returns the number of elements it needs: not
+/// null, a valid geometry, and at least that many elements.
+pub(crate) fn image_array_len<T: TypeArray>(
     env: &Env<'_>,
-    array: &JShortArray<'_>,
+    array: &JPrimitiveArray<'_, T>,
+    image: ArrayImage,
     width: jint,
     height: jint,
     row_stride_bytes: jint,
 ) -> Result<usize, Error> {
+    let name = match image {
+        ArrayImage::Depth => "data",
+        ArrayImage::Luma => "luma",
+    };
     if array.is_null() {
-        return Err(Error::Null("data"));
+        return Err(Error::Null(name));
     }
-    let needed = crate::bridge::depth_len(width, height, row_stride_bytes)?;
+    let (needed, what) = match image {
+        ArrayImage::Depth => (
+            crate::bridge::depth_len(width, height, row_stride_bytes)?,
+            format!("shorts; a {width}x{height} image with row stride {row_stride_bytes} bytes"),
+        ),
+        ArrayImage::Luma => (
+            crate::bridge::luma_len(width, height, row_stride_bytes)?,
+            format!("bytes; a {width}x{height} plane with row stride {row_stride_bytes}"),
+        ),
+    };
     let available = array.len(env)?;
     if available < needed {
         return Err(Error::invalid(
-            "data",
-            format!(
-                "{available} shorts; a {width}x{height} image with row stride {row_stride_bytes} bytes needs {needed}"
-            ),
+            name,
+            format!("{available} {what} needs {needed}"),
         ));
     }
     Ok(needed)
