@@ -33,6 +33,7 @@
 //! | `LumaPointer` (a `LumaView`) | `const uint8_t *name, int32_t width, height, row_stride_bytes` | — |
 //! | `LumaBuffer` (a `LumaView`) | — | `name: ByteBuffer` (direct), `width, height, rowStrideBytes: Int` |
 //! | `ByteArray` (a `LumaView`) | — | `name: ByteArray`, `width, height, rowStrideBytes: Int` |
+//! | `JavaContext` (the app's `Context`, with the call's `Env`; last parameter) | — | `name: Any` (null → `NULL`) |
 //!
 //! C outputs, in the parentheses after the C name (every pointer is checked before the call):
 //! `()` none (a result is dropped); `(name: T)` writes `*name` (via `Into`); `(a: A, b: B, …)`
@@ -417,6 +418,13 @@ macro_rules! exports {
             [$($kt)* (stringify!($n), "ByteArray"), ("width", "Int"), ("height", "Int"),
                 ("row_stride_bytes", "Int"),]
             $($($rest)*)?);
+    };
+    // Holds the call's `Env` until the bridge call returns: declare it last.
+    (@jni_param [$env:ident $($head:tt)*] [$($sig:tt)*] [$($conv:tt)*] [$($args:tt)*]
+        [$($kt:tt)*] $n:ident : JavaContext $(, $($rest:tt)*)?) => {
+        $crate::declare::exports!(@jni_param [$env $($head)*] [$($sig)* $n: JObject<'l>,]
+            [$($conv)* let $n = $crate::android_tls::JavaContext::new($env, $n, stringify!($n))?;]
+            [$($args)* $n,] [$($kt)* (stringify!($n), "Any"),] $($($rest)*)?);
     };
     (@jni_param [$env:ident $docs:tt $feat:tt $name:ident $jname:ident [$ret:ty]] $sig:tt
         $conv:tt $args:tt $kt:tt) => {
