@@ -61,6 +61,11 @@ pub fn set_android_platform_verifier(outcome: Result<(), String>) -> Result<(), 
     ANDROID_INIT.get_or_init(|| outcome).clone()
 }
 
+/// The recorded outcome of the Android init, `None` before any.
+pub fn android_init_outcome() -> Option<Result<(), String>> {
+    ANDROID_INIT.get().cloned()
+}
+
 /// Whether the Android init succeeded in this process.
 pub fn android_platform_verifier_ready() -> bool {
     matches!(ANDROID_INIT.get(), Some(Ok(())))
@@ -117,6 +122,10 @@ mod tests {
             Err("no Kotlin component".to_string())
         );
         assert!(!android_platform_verifier_ready());
+        assert_eq!(
+            android_init_outcome(),
+            Some(Err("no Kotlin component".to_string()))
+        );
     }
 
     #[cfg(not(target_os = "android"))]

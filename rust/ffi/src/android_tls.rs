@@ -43,6 +43,9 @@ pub(crate) fn platform_tls_init(context: JavaContext<'_, '_>) -> Result<bool, Er
     crate::logging::init();
     #[cfg(target_os = "android")]
     {
+        if let Some(first) = sitar_client::platform_tls::android_init_outcome() {
+            return Ok(first.is_ok());
+        }
         let outcome = android::init(context.env, context.context);
         Ok(sitar_client::platform_tls::set_android_platform_verifier(outcome).is_ok())
     }
@@ -63,23 +66,19 @@ mod android {
 
     /// Checks that the Kotlin component is in the app, then initialises the verifier.
     pub(super) fn init(env: &mut Env<'_>, context: JObject<'_>) -> Result<(), String> {
-        let loaded = component_present(env, &context);
-        if env.exception_check() {
-            // A ClassNotFoundException (or a non-Context argument): reported below instead.
-            env.exception_clear();
-        }
-        loaded.map_err(|e| {
+        component_present(env, &context).map_err(|e| {
             format!(
                 "the verifier's Kotlin component ({VERIFIER_CLASS}, the \
-                 rustls:rustls-platform-verifier AAR) cannot be loaded from the app's \
-                 Context ({e}); add it to the app (android/README.md)"
+                 rustls:rustls-platform-verifier AAR) cannot be loaded through the app's \
+                 Context ({}); add it to the app (android/README.md, \"HTTPS\")",
+                describe(env, e)
             )
         })?;
         rustls_platform_verifier::android::init_with_env(env, context).map_err(|e| {
-            if env.exception_check() {
-                env.exception_clear();
-            }
-            format!("rustls-platform-verifier's JNI init failed: {e}")
+            format!(
+                "rustls-platform-verifier's JNI init failed: {}",
+                describe(env, e)
+            )
         })
     }
 
@@ -97,5 +96,17 @@ mod android {
         let name = env.new_string(VERIFIER_CLASS)?;
         loader.load_class(env, name)?;
         Ok(())
+    }
+
+    /// The error, with a pending Java exception (a `ClassNotFoundException`, or a
+    /// `NoSuchMethodError` for an argument that is no `Context`) caught and cleared, so
+    /// that the caller gets an answer instead of that exception.
+    fn describe(env: &Env<'_>, e: jni::errors::Error) -> String {
+        match env.exception_catch() {
+            Err(jni::errors::Error::CaughtJavaException { name, msg, .. }) => {
+                format!("{name}: {msg}")
+            }
+            _ => e.to_string(),
+        }
     }
 }
