@@ -61,6 +61,28 @@ fun findNdk(): File? {
         .maxByOrNull { it.name }
 }
 
+/**
+ * The version of rustls-platform-verifier's Kotlin component (Maven `rustls:rustls-platform-verifier`):
+ * that of the `rustls-platform-verifier-android` crate in the workspace's Cargo.lock, which the
+ * verifier's Rust side (in libsitar.so) is built against; another version may not match its JNI
+ * calls. Read lazily, so a changed lock file is picked up (and the configuration cache kept).
+ */
+val rustlsPlatformVerifierVersion: Provider<String> =
+    providers.fileContents(layout.projectDirectory.file("../Cargo.lock")).asText.map { lock ->
+        val lines = lock.lines()
+        val at = lines.indexOfFirst { it.trim() == "name = \"rustls-platform-verifier-android\"" }
+        require(at >= 0) { "rustls-platform-verifier-android not found in Cargo.lock" }
+        lines[at + 1].trim().removePrefix("version = \"").removeSuffix("\"")
+    }
+
+dependencies {
+    // Android's certificate verifier for unpinned https (Sitar.init(context)); libsitar.so calls
+    // it over JNI. Its Maven repository (the `rustls` group only) is declared in
+    // settings.gradle.kts; an app that includes this module declares it in its own settings
+    // (README.md, "HTTPS").
+    implementation(rustlsPlatformVerifierVersion.map { "rustls:rustls-platform-verifier:$it" })
+}
+
 val cargoNdk by tasks.registering(Exec::class) {
     description = "Builds libsitar.so for arm64-v8a, armeabi-v7a and x86_64 with cargo-ndk."
     group = "build"

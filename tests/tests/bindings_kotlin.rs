@@ -1,14 +1,17 @@
-//! Compiles the Kotlin library sources (`android/src/main/kotlin`) and the
+//! Compiles the Kotlin library sources (`android/src/main/kotlin`, those that need
+//! no Android: `Sitar.kt` takes a `Context` and is type-checked by `kotlin_apps`) and the
 //! host test main (`android/src/hostTest/kotlin`) with `kotlinc`, then runs
 //! it on the JVM against the host-built `libsitar.so`: a whole session and
 //! every error path as the right `SitarException`. Skipped, loudly, where
 //! `kotlinc` or `java` is missing.
 
 mod bindings_support;
+mod host_support;
 
 use std::process::Command;
 
 use bindings_support::{library_dir, run, skip, which, workspace_root};
+use host_support::{files_with_suffix, uses_android};
 
 #[test]
 fn kotlin_wrapper_runs_a_session_and_maps_every_error() {
@@ -22,9 +25,17 @@ fn kotlin_wrapper_runs_a_session_and_maps_every_error() {
     let android = workspace_root().join("android");
     let dir = tempfile::tempdir().unwrap();
     let jar = dir.path().join("host-test.jar");
+    let library: Vec<_> = files_with_suffix(&android.join("src/main/kotlin"), ".kt")
+        .into_iter()
+        .filter(|f| !uses_android(f))
+        .collect();
+    assert!(
+        library.iter().any(|f| f.ends_with("Native.kt")),
+        "{library:?}"
+    );
     run(
         Command::new(kotlinc)
-            .arg(android.join("src/main/kotlin"))
+            .args(&library)
             .arg(android.join("src/hostTest/kotlin"))
             .arg("-include-runtime")
             .arg("-d")

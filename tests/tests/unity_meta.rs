@@ -158,7 +158,7 @@ fn every_asset_has_a_meta_with_its_stable_unique_guid() {
             (false, Some("mat")) => {
                 "NativeFormatImporter:\n  externalObjects: {}\n  mainObjectFileID: 2100000"
             }
-            (false, Some("so")) => "PluginImporter:",
+            (false, Some("so" | "java")) => "PluginImporter:",
             _ => "DefaultImporter:",
         };
         assert!(
@@ -236,6 +236,25 @@ fn the_native_libraries_meta_files_carry_their_platform_and_cpu() {
             }
         }
     }
+}
+
+#[test]
+fn the_android_java_source_is_for_android_players_only() {
+    let text = read_meta("Plugins/Android/Native.java");
+    let android = text
+        .split("  - first:\n")
+        .find(|block| block.contains("      Android: Android\n"))
+        .expect("an Android entry");
+    assert!(android.contains("enabled: 1"), "{android}");
+    assert!(
+        text.contains("Exclude Android: 0") && text.contains("Exclude Editor: 1"),
+        "{text}"
+    );
+    assert_eq!(
+        text.matches("enabled: 1").count(),
+        1,
+        "Android only:\n{text}"
+    );
 }
 
 #[test]

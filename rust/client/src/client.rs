@@ -625,17 +625,13 @@ impl ureq::middleware::Middleware for BearerAuth {
 
 /// What an unpinned `https://` URL is checked against: the platform's verifier (the system's
 /// roots and policy; on Linux the system bundle, or `SSL_CERT_FILE` / `SSL_CERT_DIR` when
-/// set).
-#[cfg(not(target_os = "android"))]
+/// set), or on Android before `Sitar.init(context)` the bundled Mozilla roots
+/// ([`crate::platform_tls`]).
 fn platform_roots() -> ureq::tls::RootCerts {
-    ureq::tls::RootCerts::PlatformVerifier
-}
-
-/// On Android the platform verifier needs the app's Context (a JNI init) and its Kotlin
-/// component; the library keeps Mozilla's bundled roots there instead.
-#[cfg(target_os = "android")]
-fn platform_roots() -> ureq::tls::RootCerts {
-    ureq::tls::RootCerts::WebPki
+    match crate::platform_tls::current_roots() {
+        crate::platform_tls::Roots::PlatformVerifier => ureq::tls::RootCerts::PlatformVerifier,
+        crate::platform_tls::Roots::Bundled => ureq::tls::RootCerts::WebPki,
+    }
 }
 
 fn make_agent(

@@ -52,6 +52,7 @@ mod error;
 mod job;
 mod job_run;
 mod pin;
+pub mod platform_tls;
 #[cfg(test)]
 mod test_server;
 mod types;

@@ -9,6 +9,7 @@ use sitar_core::{DepthImage, DisplayRotation, LumaImage, PlaybackLogger, Session
 
 use sitar_client::UploadJob;
 
+pub(crate) use crate::android_tls::platform_tls_init;
 use crate::error::Error;
 use crate::registry::{Registry, SitarHandle};
 use crate::types::{

@@ -33,6 +33,7 @@
 //! | `LumaPointer` (a `LumaView`) | `const uint8_t *name, int32_t width, height, row_stride_bytes` | — |
 //! | `LumaBuffer` (a `LumaView`) | — | `name: ByteBuffer` (direct), `width, height, rowStrideBytes: Int` |
 //! | `ByteArray` (a `LumaView`) | — | `name: ByteArray`, `width, height, rowStrideBytes: Int` |
+//! | `JavaContext` (the app's `Context`, with the call's `Env`; last parameter) | — | `name: Any` (null → `NULL`) |
 //!
 //! C outputs, in the parentheses after the C name (every pointer is checked before the call):
 //! `()` none (a result is dropped); `(name: T)` writes `*name` (via `Into`); `(a: A, b: B, …)`
@@ -303,6 +304,12 @@ macro_rules! exports {
     (@kind [jni $env:ident] $k:tt $n:ident [ShortArray]) => {
         $crate::declare::exports!(@image_array $env $k $n ShortArray JShortArray u16 Depth
             DepthView);
+    };
+    // Holds the call's `Env` until the bridge call returns: declare it last.
+    (@kind [jni $env:ident] $k:tt $n:ident [JavaContext]) => {
+        $crate::declare::exports!(@push $k [$n: JObject<'l>,]
+            [let $n = $crate::android_tls::JavaContext::new($env, $n, stringify!($n))?;] [$n,]
+            [(stringify!($n), "Any"),]);
     };
     (@kind [jni $env:ident] $k:tt $n:ident [ByteArray]) => {
         $crate::declare::exports!(@image_array $env $k $n ByteArray JByteArray u8 Luma

@@ -9,7 +9,7 @@
 
 use std::ffi::c_char;
 
-use jni::objects::{JByteArray, JByteBuffer, JClass, JShortArray, JString};
+use jni::objects::{JByteArray, JByteBuffer, JClass, JObject, JShortArray, JString};
 use jni::sys::{jdouble, jint, jlong};
 use jni::EnvUnowned;
 
@@ -218,6 +218,16 @@ crate::declare::exports! {
     /// Frees the job handle (cancelling it if still running).
     fn upload_free(job: SitarHandle)
         => c sitar_upload_free() jni uploadFree;
+
+    /// Android: unpinned `https://` uses Android's trust store and policy
+    /// (rustls-platform-verifier) from now on; call once with the application `Context`
+    /// before the first upload (`Sitar.init(context)`). Needs the verifier's Kotlin
+    /// component in the app (`rustls:rustls-platform-verifier`); without it, or before
+    /// this call, the bundled Mozilla roots are used and the log says why. Returns true
+    /// when the platform verifier is in use (the first call decides for the process).
+    /// Elsewhere a no-op returning true: the platform verifier is always used there.
+    fn platform_tls_init(context: JavaContext) -> bool
+        => jni platformTlsInit;
 
     /// Panics on purpose; returns `SITAR_ERR_PANIC` (feature `testing` only).
     #[cfg(feature = "testing")]

@@ -40,6 +40,7 @@
 //! which panic on purpose so binding tests can prove the panic path.
 #![deny(missing_docs)]
 
+mod android_tls;
 mod bridge;
 mod c_api;
 #[doc(hidden)]

@@ -23,6 +23,17 @@ pub fn files_with_suffix(dir: &Path, suffix: &str) -> Vec<PathBuf> {
     out
 }
 
+/// Whether a Kotlin source needs Android or ARCore (so it only type-checks against stubs).
+pub fn uses_android(source: &Path) -> bool {
+    let text = std::fs::read_to_string(source).unwrap();
+    text.lines().any(|l| {
+        let l = l.trim_start();
+        l.starts_with("import android.")
+            || l.starts_with("import com.google.ar.")
+            || l.starts_with("import javax.microedition.")
+    })
+}
+
 /// Parses every `JSON <hex> <document>` line of `stdout` with serde_json: the document is
 /// `{"convention": convention, "server_url": <the hex-decoded input>}` and nothing else.
 /// Returns how many there were.

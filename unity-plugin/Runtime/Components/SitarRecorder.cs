@@ -303,6 +303,8 @@ namespace Sitar.Unity
 
         void StartUpload(string serverSessionId)
         {
+            // Android: unpinned https trusts the device's trust store (once per process).
+            SitarPlatformTls.Init();
             upload = session.Upload(mp4Path, UploadOptions(serverSessionId));
             SetStatus("Uploading…");
         }

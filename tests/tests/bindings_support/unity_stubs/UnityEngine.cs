@@ -178,6 +178,7 @@ namespace UnityEngine
         internal AndroidJavaObject() { throw null; }
         public AndroidJavaObject(string className, params object[] args) { throw null; }
         public ReturnType Call<ReturnType>(string methodName, params object[] args) { throw null; }
+        public ReturnType CallStatic<ReturnType>(string methodName, params object[] args) { throw null; }
         public FieldType GetStatic<FieldType>(string fieldName) { throw null; }
         public void Dispose() { throw null; }
     }

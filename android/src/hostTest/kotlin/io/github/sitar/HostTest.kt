@@ -252,6 +252,17 @@ private fun windowSettings(tmp: File) {
 fun main(args: Array<String>) {
     val tmp = File(args[1])
     check(SitarSession.version() == args[0], "version ${SitarSession.version()}")
+    // `Sitar.init(context)`'s entry point: on the host a no-op, as the platform verifier is
+    // always in use there; any object reaches it (only Android needs a Context).
+    check(Native.platformTlsInit(Any()), "platformTlsInit on the host")
+    check(Native.platformTlsInit("again"), "platformTlsInit twice")
+    try {
+        Native::class.java.getMethod("platformTlsInit", Any::class.java).invoke(null, null)
+        check(false, "platformTlsInit(null) should throw")
+    } catch (e: java.lang.reflect.InvocationTargetException) {
+        val cause = e.cause
+        check(cause is SitarException && cause.status == SitarStatus.NULL && (cause.message ?: "").contains("context"), "platformTlsInit(null): $cause")
+    }
     wholeSession(tmp)
     errorPaths()
     playback(tmp)

@@ -54,6 +54,8 @@ internal object Native {
     @JvmStatic external fun uploadCancel(job: Long)
     @JvmStatic external fun uploadFree(job: Long)
 
+    @JvmStatic external fun platformTlsInit(context: Any): Boolean
+
     /** Only in builds with the `testing` feature. */
     @JvmStatic external fun testingPanic()
 }

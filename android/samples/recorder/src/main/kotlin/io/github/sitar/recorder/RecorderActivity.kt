@@ -33,6 +33,7 @@ import com.google.ar.core.exceptions.UnavailableException
 import io.github.sitar.Marker
 import io.github.sitar.Pose
 import io.github.sitar.RenderPlan
+import io.github.sitar.Sitar
 import io.github.sitar.SitarException
 import io.github.sitar.SitarSession
 import io.github.sitar.UploadJob
@@ -79,6 +80,8 @@ class RecorderActivity : Activity(), GLSurfaceView.Renderer {
 
     override fun onCreate(savedInstanceState: Bundle?) {
         super.onCreate(savedInstanceState)
+        // Unpinned https uploads trust Android's trust store (the bundled roots without it).
+        Sitar.init(this)
         surface = GLSurfaceView(this)
         surface.setPreserveEGLContextOnPause(true)
         surface.setEGLContextClientVersion(2)
