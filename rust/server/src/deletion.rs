@@ -32,6 +32,12 @@ async fn delete(shared: &Arc<Shared>, id: &str, playback_stopped: bool) -> Resul
             tokio::time::sleep(Duration::from_millis(10)).await;
         }
     }
+    // A finished session's scene may be being built ahead in a scratch folder: let it end,
+    // so that nothing of the session is written after it is gone.
+    let deadline = tokio::time::Instant::now() + WRITER_WAIT;
+    while crate::scene::preparing(&id) && tokio::time::Instant::now() < deadline {
+        tokio::time::sleep(Duration::from_millis(10)).await;
+    }
     let lock = shared.session_lock(&id);
     let Ok(_held) = tokio::time::timeout(WRITER_WAIT, lock.lock()).await else {
         return Err(Error::Conflict(format!(
@@ -61,6 +67,7 @@ async fn delete(shared: &Arc<Shared>, id: &str, playback_stopped: bool) -> Resul
     }
     shared.live.remove(&id);
     shared.forget_session_lock(&id);
+    crate::scene::forget(shared, &id);
     if let Some(trash) = trash {
         // Already out of sight; what a failure leaves, the next start removes.
         if let Err(e) = std::fs::remove_dir_all(&trash) {

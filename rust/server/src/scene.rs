@@ -12,7 +12,6 @@
 //! finishes ([`prepare`]) or else on the first request; the latest results are loaded into
 //! it on every request.
 
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 
 use serde_json::json;
@@ -202,16 +201,26 @@ static CACHE: Mutex<Vec<Cached>> = Mutex::new(Vec::new());
 /// Sessions kept in memory (a 10-minute walk's is a few MB).
 const CACHED_SESSIONS: usize = 4;
 
-/// Whether a finished session's scene is being built ahead (at most one at a time).
-static PREPARING: AtomicBool = AtomicBool::new(false);
+/// The session whose scene is being built ahead, if any (at most one at a time).
+static PREPARING: Mutex<Option<String>> = Mutex::new(None);
+
+fn preparing_slot() -> std::sync::MutexGuard<'static, Option<String>> {
+    PREPARING
+        .lock()
+        .unwrap_or_else(|poisoned| poisoned.into_inner())
+}
 
 /// Builds a just-finished session's scene — the phone session folder, its results loaded,
 /// the in-memory cache — on a thread of its own, so the first load of its report does not pay
 /// for it (a simulated 10-minute walk takes seconds to rebuild). One at a time: a session that
 /// finishes while another's is built gets its scene on the first request instead, as before.
 pub(crate) fn prepare(shared: Arc<Shared>, id: String) {
-    if PREPARING.swap(true, Ordering::AcqRel) {
-        return;
+    {
+        let mut slot = preparing_slot();
+        if slot.is_some() {
+            return;
+        }
+        *slot = Some(id.clone());
     }
     let spawned = std::thread::Builder::new()
         .name("sitar-scene".into())
@@ -220,11 +229,27 @@ pub(crate) fn prepare(shared: Arc<Shared>, id: String) {
             if let Err(e) = built {
                 log::debug!("session {id}: scene not built ahead: {e}");
             }
-            PREPARING.store(false, Ordering::Release);
+            *preparing_slot() = None;
         });
     if spawned.is_err() {
-        PREPARING.store(false, Ordering::Release);
+        *preparing_slot() = None;
     }
+}
+
+/// Whether session `id`'s scene is being built ahead right now (its scratch folder under
+/// `tmp/` may exist until the build ends).
+pub(crate) fn preparing(id: &str) -> bool {
+    preparing_slot().as_deref() == Some(id)
+}
+
+/// Drops session `id`'s scene from the in-memory cache (a deleted session's data must not
+/// stay readable, even in memory).
+pub(crate) fn forget(shared: &Shared, id: &str) {
+    let key = shared.files.phone_session(id);
+    CACHE
+        .lock()
+        .unwrap_or_else(|poisoned| poisoned.into_inner())
+        .retain(|(k, _, _)| *k != key);
 }
 
 /// The phone session of `row` with its latest results loaded. Blocking.
