@@ -70,6 +70,20 @@ pub fn wait_done(client: &sitar_client::Client, id: &str) -> sitar_client::Sessi
         .expect("the session finishes")
 }
 
+/// Creates an `upload` session of `trials` trials with the median: the plain session most
+/// route tests need.
+pub fn upload_session(client: &sitar_client::Client, trials: u32) -> String {
+    client
+        .create_session(&sitar_client::NewSession {
+            trials,
+            setting: "median".into(),
+            playback: "upload".into(),
+            window_frames: None,
+            pose_relation: None,
+        })
+        .expect("an upload session is created")
+}
+
 /// A client of `server` with the admin token.
 pub fn client(server: &ServerHandle) -> sitar_client::Client {
     client_with(server, ADMIN_TOKEN)

@@ -1188,15 +1188,7 @@ fn a_job_for_an_existing_server_session_resumes_its_upload() {
     let dir = tempfile::tempdir().unwrap();
     let data = dir.path().join("data");
     let server = sitar_tests::start(sitar_tests::sim_config(&data, 10.0, 1));
-    let id = sitar_tests::client(&server)
-        .create_session(&sitar_client::NewSession {
-            trials: 3,
-            setting: "median".into(),
-            playback: "upload".into(),
-            window_frames: None,
-            pose_relation: None,
-        })
-        .unwrap();
+    let id = sitar_tests::upload_session(&sitar_tests::client(&server), 3);
     let rec = dir.path().join("big.mp4");
     let total = 96u64 << 20;
     std::fs::File::create(&rec).unwrap().set_len(total).unwrap();

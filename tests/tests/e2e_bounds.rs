@@ -8,20 +8,7 @@ use std::net::{SocketAddr, TcpStream};
 use std::path::Path;
 use std::time::{Duration, Instant};
 
-use sitar_client::NewSession;
 use sitar_tests::*;
-
-fn upload_session(client: &sitar_client::Client) -> String {
-    client
-        .create_session(&NewSession {
-            trials: 2,
-            setting: "median".into(),
-            playback: "upload".into(),
-            window_frames: None,
-            pose_relation: None,
-        })
-        .unwrap()
-}
 
 /// Sends `head` (a request head, `\r\n\r\n` included) and `body`, then reads the answer until
 /// the server closes or 10 s pass: (status, whole answer).
@@ -221,7 +208,7 @@ fn every_route_refuses_an_oversized_declared_body_before_reading_it() {
     config.max_recording_bytes = 1 << 20;
     config.max_trajectory_bytes = 1 << 20;
     let server = start(config);
-    let id = upload_session(&client(&server));
+    let id = upload_session(&client(&server), 2);
     let huge = 1u64 << 40;
     for (method, path, limit) in [
         ("POST", "/v1/sessions".to_owned(), 64 << 10),
@@ -337,7 +324,7 @@ fn the_session_quota_is_413_and_the_server_quota_507_leaving_nothing_behind() {
     let admin = client(&server);
     let url = |id: &str| format!("{}/v1/sessions/{id}/recording", server.url());
 
-    let a = upload_session(&admin);
+    let a = upload_session(&admin, 2);
     let before = session_files(&data, &a);
     for declare in [true, false] {
         let (status, answer) = put_recording(&url(&a), &vec![7u8; (1 << 20) + 1], declare);
@@ -352,7 +339,7 @@ fn the_session_quota_is_413_and_the_server_quota_507_leaving_nothing_behind() {
     let mut others = Vec::new();
     let refused = loop {
         assert!(others.len() < 8, "the server quota never answered");
-        let id = upload_session(&admin);
+        let id = upload_session(&admin, 2);
         let (status, answer) = put_recording(&url(&id), &vec![9u8; 1000 << 10], false);
         match status {
             202 => others.push(id),
@@ -411,7 +398,7 @@ fn results_json_pages_its_windows_and_answers_a_normal_session_unchanged() {
     config.progressive_uploads = false;
     let server = start(config);
     let admin = client(&server);
-    let id = upload_session(&admin);
+    let id = upload_session(&admin, 2);
     for wobble in [0.0, 0.01] {
         admin.upload_trial(&id, &trajectory(300, wobble)).unwrap();
     }
@@ -451,7 +438,7 @@ fn results_json_pages_its_windows_and_answers_a_normal_session_unchanged() {
 fn the_subtrajectory_list_pages_like_results_json() {
     let dir = tempfile::tempdir().unwrap();
     let server = start(sim_config(dir.path(), 10.0, 1));
-    let id = upload_session(&client(&server));
+    let id = upload_session(&client(&server), 2);
     let base = format!("{}/v1/sessions/{id}", server.url());
     let mut table = String::from("index,start_ns,end_ns\n");
     for k in 0..25u64 {

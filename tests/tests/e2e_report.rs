@@ -445,15 +445,7 @@ fn regions_show_the_camera_evidence_and_a_share_link_shows_the_same_view() {
 
     // Nothing else through it: another session's data, other names, paths out of the link,
     // a wrong token; and nothing once revoked.
-    let other = app
-        .create_session(&NewSession {
-            trials: 2,
-            setting: "median".into(),
-            playback: "upload".into(),
-            window_frames: None,
-            pose_relation: None,
-        })
-        .unwrap();
+    let other = upload_session(&app, 2);
     for path in [
         format!("/share/{token}/{other}/scene.json"),
         format!("/share/{token}/..%2F..%2Fv1%2Fsessions%2F{other}%2Fscene.json"),

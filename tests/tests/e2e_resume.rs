@@ -8,20 +8,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
-use sitar_client::NewSession;
 use sitar_tests::*;
-
-fn upload_session(client: &sitar_client::Client) -> String {
-    client
-        .create_session(&NewSession {
-            trials: 2,
-            setting: "median".into(),
-            playback: "upload".into(),
-            window_frames: None,
-            pose_relation: None,
-        })
-        .unwrap()
-}
 
 /// Deterministic, non-repeating bytes: a misplaced byte range cannot compare equal.
 fn recording_bytes(len: usize) -> Vec<u8> {
@@ -109,7 +96,7 @@ fn a_broken_upload_keeps_its_prefix_across_a_restart_and_resumes_exactly() {
     let mut config = sim_config(&data, 10.0, 1);
     config.max_recording_bytes = 1 << 20;
     let server = start(config.clone());
-    let id = upload_session(&client(&server));
+    let id = upload_session(&client(&server), 2);
     let url = format!("{}/v1/sessions/{id}/recording", server.url());
     let bytes = recording_bytes(300_000);
 
@@ -262,7 +249,7 @@ fn the_client_resumes_a_cut_upload_and_sends_only_the_rest() {
     let dir = tempfile::tempdir().unwrap();
     let data = dir.path().join("data");
     let server = start(sim_config(&data, 10.0, 1));
-    let id = upload_session(&client(&server));
+    let id = upload_session(&client(&server), 2);
     let bytes = recording_bytes(8 << 20);
     let path = dir.path().join("recording.mp4");
     std::fs::write(&path, &bytes).unwrap();
@@ -306,7 +293,7 @@ fn a_later_call_for_the_same_file_resumes_what_a_failed_one_left() {
     let dir = tempfile::tempdir().unwrap();
     let data = dir.path().join("data");
     let server = start(sim_config(&data, 10.0, 1));
-    let id = upload_session(&client(&server));
+    let id = upload_session(&client(&server), 2);
     let bytes = recording_bytes(6 << 20);
     let path = dir.path().join("recording.mp4");
     std::fs::write(&path, &bytes).unwrap();
@@ -349,7 +336,7 @@ fn a_stalled_upload_is_cut_off_and_its_prefix_resumed_while_it_still_hangs() {
     let mut config = sim_config(&data, 10.0, 1);
     config.upload_idle_timeout = Duration::from_millis(300);
     let server = start(config);
-    let id = upload_session(&client(&server));
+    let id = upload_session(&client(&server), 2);
     let url = format!("{}/v1/sessions/{id}/recording", server.url());
     let bytes = recording_bytes(200_000);
 

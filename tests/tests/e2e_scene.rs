@@ -138,15 +138,7 @@ fn a_real_recording_with_evidence_gets_the_phones_surface_points_and_markers() {
     // drift grows along the walk, so its later part is medium and high.
     let gt = recording.walk().ground_truth.clone();
     let app = client_with(&server, APP_TOKEN);
-    let id = app
-        .create_session(&NewSession {
-            trials: 3,
-            setting: "median".into(),
-            playback: "upload".into(),
-            window_frames: None,
-            pose_relation: None,
-        })
-        .unwrap();
+    let id = upload_session(&app, 3);
     for trial in 0..3u32 {
         let mut t = gt.clone();
         let n = t.len() as f64;

@@ -4,7 +4,6 @@
 
 use std::process::Command;
 
-use sitar_client::NewSession;
 use sitar_server::TlsConfig;
 use sitar_tests::*;
 
@@ -42,15 +41,7 @@ fn a_pinned_client_talks_https_and_a_wrong_pin_is_refused_clearly() {
         .with_server_cert_sha256(&fingerprint)
         .unwrap();
     pinned.health().unwrap();
-    let id = pinned
-        .create_session(&NewSession {
-            trials: 2,
-            setting: "median".into(),
-            playback: "upload".into(),
-            window_frames: None,
-            pose_relation: None,
-        })
-        .unwrap();
+    let id = upload_session(&pinned, 2);
     assert_eq!(pinned.status(&id).unwrap().id, id);
 
     // Another fingerprint: refused before anything is sent, naming both, not retried.
