@@ -101,37 +101,16 @@ fn kinds_and_trials_beyond_what_the_server_offers_are_422s_that_name_the_bound()
     // An adb server: sim sessions only with --allow-sim.
     let server = start(sitar_server::ServerConfig::new(dir.path().join("adb")));
     let base = server.url();
-    let (code, text) = post_json(
+    refused(&base, r#"{"playback":"sim","trials":1000}"#, &[]);
+    refused(
         &base,
-        "/v1/sessions",
-        APP_TOKEN,
-        r#"{"playback":"sim","trials":1000}"#,
-        &[],
-    );
-    assert_eq!(code, 422, "{text}");
-    let (code, text) = post_json(
-        &base,
-        "/v1/sessions",
-        APP_TOKEN,
         r#"{"playback":"sim","trials":3}"#,
-        &[],
+        &["adb and upload", "--allow-sim"],
     );
-    assert_eq!(code, 422, "{text}");
-    assert!(
-        text.contains("adb and upload") && text.contains("--allow-sim"),
-        "{text}"
-    );
-    let (code, text) = post_json(
+    refused(
         &base,
-        "/v1/sessions",
-        APP_TOKEN,
         r#"{"playback":"upload","trials":101}"#,
-        &[],
-    );
-    assert_eq!(code, 422, "{text}");
-    assert!(
-        text.contains("cap of 100") && text.contains("--max-trials"),
-        "{text}"
+        &["cap of 100", "--max-trials"],
     );
     create(&base, APP_TOKEN, r#"{"playback":"upload","trials":100}"#);
     create(&base, APP_TOKEN, r#"{"playback":"adb","trials":100}"#);
@@ -143,15 +122,16 @@ fn kinds_and_trials_beyond_what_the_server_offers_are_422s_that_name_the_bound()
     let server = start(config);
     let base = server.url();
     create(&base, APP_TOKEN, r#"{"playback":"sim","trials":7}"#);
-    let (code, text) = post_json(
-        &base,
-        "/v1/sessions",
-        APP_TOKEN,
-        r#"{"playback":"sim","trials":8}"#,
-        &[],
-    );
-    assert_eq!(code, 422, "{text}");
-    assert!(text.contains("cap of 7"), "{text}");
+    refused(&base, r#"{"playback":"sim","trials":8}"#, &["cap of 7"]);
+}
+
+/// `POST /v1/sessions` with `body` is a 422 whose text names each of `named`.
+fn refused(base: &str, body: &str, named: &[&str]) {
+    let (code, text) = post_json(base, "/v1/sessions", APP_TOKEN, body, &[]);
+    assert_eq!(code, 422, "{body}: {text}");
+    for name in named {
+        assert!(text.contains(name), "{body}: {name} not in {text}");
+    }
 }
 
 #[test]
