@@ -55,10 +55,16 @@ static ANDROID_INIT: OnceLock<Result<(), String>> = OnceLock::new();
 /// library's `Sitar.init(context)`). The first outcome wins: a later call changes nothing
 /// and returns the recorded outcome, so agents made before and after agree.
 pub fn set_android_platform_verifier(outcome: Result<(), String>) -> Result<(), String> {
-    if let Err(why) = &outcome {
-        log::warn!("Android platform TLS roots unavailable, keeping the bundled roots: {why}");
-    }
-    ANDROID_INIT.get_or_init(|| outcome).clone()
+    ANDROID_INIT
+        .get_or_init(|| {
+            if let Err(why) = &outcome {
+                log::warn!(
+                    "Android platform TLS roots unavailable, keeping the bundled roots: {why}"
+                );
+            }
+            outcome
+        })
+        .clone()
 }
 
 /// The recorded outcome of the Android init, `None` before any.
@@ -66,15 +72,13 @@ pub fn android_init_outcome() -> Option<Result<(), String>> {
     ANDROID_INIT.get().cloned()
 }
 
-/// Whether the Android init succeeded in this process.
-pub fn android_platform_verifier_ready() -> bool {
-    matches!(ANDROID_INIT.get(), Some(Ok(())))
-}
-
 /// The roots for a new agent on this target, logging once why the bundled roots are used
 /// when they are.
 pub(crate) fn current_roots() -> Roots {
-    let roots = choose_roots(TargetOs::current(), android_platform_verifier_ready());
+    let roots = choose_roots(
+        TargetOs::current(),
+        matches!(ANDROID_INIT.get(), Some(Ok(()))),
+    );
     if roots == Roots::Bundled {
         static SAID: Once = Once::new();
         SAID.call_once(|| {
@@ -121,7 +125,6 @@ mod tests {
             set_android_platform_verifier(Ok(())),
             Err("no Kotlin component".to_string())
         );
-        assert!(!android_platform_verifier_ready());
         assert_eq!(
             android_init_outcome(),
             Some(Err("no Kotlin component".to_string()))
