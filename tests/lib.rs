@@ -84,6 +84,25 @@ pub fn upload_session(client: &sitar_client::Client, trials: u32) -> String {
         .expect("an upload session is created")
 }
 
+/// A TUM trajectory of `n` poses (about 60 bytes each) walking along x at 0.5 m/s, 30 Hz;
+/// `wobble` shifts it a little per pose, so trials differ.
+pub fn tum_walk(n: usize, wobble: f64) -> String {
+    (0..n)
+        .map(|i| {
+            let t = i as f64 / 30.0;
+            let x = t * 0.5 + wobble * (i as f64 * 0.37).sin();
+            format!("{t:.6} {x:.6} 0.000000 1.500000 0 0 0 1\n")
+        })
+        .collect()
+}
+
+/// Deterministic, non-repeating bytes: a misplaced byte range cannot compare equal.
+pub fn recording_bytes(len: usize) -> Vec<u8> {
+    (0..len as u64)
+        .map(|i| (i.wrapping_mul(2_654_435_761) >> 13) as u8)
+        .collect()
+}
+
 /// A client of `server` with the admin token.
 pub fn client(server: &ServerHandle) -> sitar_client::Client {
     client_with(server, ADMIN_TOKEN)

@@ -380,17 +380,6 @@ fn the_session_quota_is_413_and_the_server_quota_507_leaving_nothing_behind() {
     }
 }
 
-/// A TUM trajectory of `n` poses, walking along x; `wobble` shifts it a little per trial.
-fn trajectory(n: usize, wobble: f64) -> String {
-    (0..n)
-        .map(|i| {
-            let t = i as f64 / 30.0;
-            let x = t * 0.5 + wobble * (i as f64 * 0.37).sin();
-            format!("{t:.6} {x:.6} 0.000000 1.500000 0 0 0 1\n")
-        })
-        .collect()
-}
-
 #[test]
 fn results_json_pages_its_windows_and_answers_a_normal_session_unchanged() {
     let dir = tempfile::tempdir().unwrap();
@@ -400,7 +389,7 @@ fn results_json_pages_its_windows_and_answers_a_normal_session_unchanged() {
     let admin = client(&server);
     let id = upload_session(&admin, 2);
     for wobble in [0.0, 0.01] {
-        admin.upload_trial(&id, &trajectory(300, wobble)).unwrap();
+        admin.upload_trial(&id, &tum_walk(300, wobble)).unwrap();
     }
     admin.start_estimate(&id).unwrap();
     wait_done(&admin, &id);

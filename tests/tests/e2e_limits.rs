@@ -40,16 +40,6 @@ fn post_trial(base: &str, id: &str, token: &str, text: &str) -> (u16, String, St
     (response.status().as_u16(), retry, body)
 }
 
-/// A TUM trajectory of `n` poses (about 60 bytes each).
-fn trajectory(n: usize) -> String {
-    (0..n)
-        .map(|i| {
-            let t = i as f64 / 30.0;
-            format!("{t:.6} {:.6} 0.000000 1.500000 0 0 0 1\n", t * 0.5)
-        })
-        .collect()
-}
-
 #[test]
 fn each_limit_answers_429_with_retry_after_and_recovers() {
     let dir = tempfile::tempdir().unwrap();
@@ -94,7 +84,7 @@ fn each_limit_answers_429_with_retry_after_and_recovers() {
     )
     .unwrap();
     held.flush().unwrap();
-    let text = trajectory(200);
+    let text = tum_walk(200, 0.0);
     let deadline = Instant::now() + Duration::from_secs(10);
     loop {
         let (status, retry, body) = post_trial(&base, &first, APP_TOKEN, &text);

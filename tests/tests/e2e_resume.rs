@@ -10,13 +10,6 @@ use std::time::{Duration, Instant};
 
 use sitar_tests::*;
 
-/// Deterministic, non-repeating bytes: a misplaced byte range cannot compare equal.
-fn recording_bytes(len: usize) -> Vec<u8> {
-    (0..len as u64)
-        .map(|i| (i.wrapping_mul(2_654_435_761) >> 13) as u8)
-        .collect()
-}
-
 /// `HEAD` on the recording URL with an `Idempotency-Key`: the `Upload-Offset` answered.
 fn kept(url: &str, key: Option<&str>) -> u64 {
     let mut request = agent().head(url);

@@ -11,6 +11,8 @@ use std::path::Path;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
+use sitar_tests::{recording_bytes, tum_walk, upload_session};
+
 /// The documented bound (server README, "Memory"): the peak RSS of `sitar serve` through
 /// the whole load test.
 const PEAK_RSS_LIMIT_KIB: u64 = 256 << 10;
@@ -97,25 +99,6 @@ impl Drop for Serving {
     }
 }
 
-fn upload_session(client: &sitar_client::Client) -> String {
-    client
-        .create_session(&sitar_client::NewSession {
-            trials: 2,
-            setting: "median".into(),
-            playback: "upload".into(),
-            window_frames: None,
-            pose_relation: None,
-        })
-        .unwrap()
-}
-
-/// Deterministic, non-repeating bytes: a misplaced byte range cannot compare equal.
-fn recording_bytes(len: usize) -> Vec<u8> {
-    (0..len as u64)
-        .map(|i| (i.wrapping_mul(2_654_435_761) >> 13) as u8)
-        .collect()
-}
-
 /// `Upload-Offset` for the key `k` (raw HTTP: the answer's headers only).
 fn kept(addr: SocketAddr, id: &str) -> u64 {
     let (_, answer) = exchange(
@@ -157,7 +140,7 @@ fn a_plain_put_broken_off_by_kill_9_resumes_from_its_prefix() {
     let dir = tempfile::tempdir().unwrap();
     let data = dir.path().join("data");
     let server = Serving::start(&data, &[]);
-    let id = upload_session(&server.client());
+    let id = upload_session(&server.client(), 2);
     let bytes = recording_bytes(6 << 20);
 
     let mut put = TcpStream::connect(server.addr).unwrap();
@@ -287,8 +270,8 @@ fn stalled_uploads_and_dribbled_headers_are_cut_off_within_a_bounded_memory() {
 
     // 1 000 stalled uploads: 200 recording PUTs (one session each: a PUT holds its session)
     // and 800 trial POSTs, each announcing 1 MiB, sending 48 KiB and going silent.
-    let trial_session = upload_session(&client);
-    let recording_sessions: Vec<String> = (0..200).map(|_| upload_session(&client)).collect();
+    let trial_session = upload_session(&client, 2);
+    let recording_sessions: Vec<String> = (0..200).map(|_| upload_session(&client, 2)).collect();
     let chunk = vec![b'1'; 48 << 10];
     let mut probes: Vec<Probe> = (0..1000)
         .map(|i| {
@@ -367,17 +350,6 @@ fn stalled_uploads_and_dribbled_headers_are_cut_off_within_a_bounded_memory() {
     );
 }
 
-/// A TUM trajectory of `n` poses walking along x; `wobble` shifts it a little per trial.
-fn trajectory(n: usize, wobble: f64) -> String {
-    (0..n)
-        .map(|i| {
-            let t = i as f64 / 30.0;
-            let x = t * 0.5 + wobble * (i as f64 * 0.37).sin();
-            format!("{t:.6} {x:.6} 0.000000 1.500000 0 0 0 1\n")
-        })
-        .collect()
-}
-
 #[test]
 fn report_requests_cost_a_measured_amount_of_memory() {
     const POSES: usize = 20_000;
@@ -385,11 +357,9 @@ fn report_requests_cost_a_measured_amount_of_memory() {
     let dir = tempfile::tempdir().unwrap();
     let server = Serving::start(&dir.path().join("data"), &[]);
     let client = server.client();
-    let id = upload_session(&client);
+    let id = upload_session(&client, 2);
     for wobble in [0.0, 0.01] {
-        client
-            .upload_trial(&id, &trajectory(POSES, wobble))
-            .unwrap();
+        client.upload_trial(&id, &tum_walk(POSES, wobble)).unwrap();
     }
     client.start_estimate(&id).unwrap();
     let deadline = Instant::now() + Duration::from_secs(120);
