@@ -10,55 +10,6 @@ use std::time::{Duration, Instant};
 
 use sitar_tests::*;
 
-/// Sends `head` (a request head, `\r\n\r\n` included) and `body`, then reads the answer until
-/// the server closes or 10 s pass: (status, whole answer).
-fn exchange(addr: SocketAddr, head: &str, body: &[u8]) -> (u16, String) {
-    let mut stream = TcpStream::connect(addr).unwrap();
-    stream
-        .set_read_timeout(Some(Duration::from_secs(10)))
-        .unwrap();
-    stream.write_all(head.as_bytes()).unwrap();
-    let _ = stream.write_all(body);
-    read_answer(&mut stream)
-}
-
-fn read_answer(stream: &mut TcpStream) -> (u16, String) {
-    let mut answer = Vec::new();
-    let mut buf = [0u8; 4096];
-    loop {
-        match stream.read(&mut buf) {
-            Ok(0) | Err(_) => break,
-            Ok(n) => answer.extend_from_slice(&buf[..n]),
-        }
-        if complete(&answer) {
-            break;
-        }
-    }
-    let text = String::from_utf8_lossy(&answer).into_owned();
-    let status = text
-        .get(9..12)
-        .and_then(|s| s.parse().ok())
-        .unwrap_or_else(|| panic!("no status in {text:?}"));
-    (status, text)
-}
-
-/// Whether `answer` holds a whole head and the body its `content-length` declares.
-fn complete(answer: &[u8]) -> bool {
-    let text = String::from_utf8_lossy(answer);
-    let Some((head, body)) = text.split_once("\r\n\r\n") else {
-        return false;
-    };
-    let length = head
-        .lines()
-        .find_map(|l| {
-            let (k, v) = l.split_once(':')?;
-            k.eq_ignore_ascii_case("content-length")
-                .then(|| v.trim().parse::<usize>().ok())?
-        })
-        .unwrap_or(0);
-    body.len() >= length
-}
-
 /// The JSON error of a raw answer: (code, whole body length).
 fn json_error(answer: &str) -> (String, usize) {
     let (head, body) = answer.split_once("\r\n\r\n").unwrap();

@@ -11,7 +11,7 @@ use std::path::Path;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
-use sitar_tests::{recording_bytes, tum_walk, upload_session};
+use sitar_tests::{exchange, recording_bytes, tum_walk, upload_session};
 
 /// The documented bound (server README, "Memory"): the peak RSS of `sitar serve` through
 /// the whole load test.
@@ -116,23 +116,6 @@ fn kept(addr: SocketAddr, id: &str) -> u64 {
                 .map(|v| v.trim().parse().unwrap())
         })
         .unwrap_or_else(|| panic!("no Upload-Offset: {answer}"))
-}
-
-fn exchange(addr: SocketAddr, head: &str, body: &[u8]) -> (u16, String) {
-    let mut stream = TcpStream::connect(addr).unwrap();
-    stream
-        .set_read_timeout(Some(Duration::from_secs(20)))
-        .unwrap();
-    stream.write_all(head.as_bytes()).unwrap();
-    let _ = stream.write_all(body);
-    let mut answer = Vec::new();
-    let _ = stream.read_to_end(&mut answer);
-    let text = String::from_utf8_lossy(&answer).into_owned();
-    let status = text
-        .get(9..12)
-        .and_then(|s| s.parse().ok())
-        .unwrap_or_else(|| panic!("no status in {text:?}"));
-    (status, text)
 }
 
 #[test]
