@@ -156,6 +156,35 @@ fn complete(answer: &[u8]) -> bool {
     body.len() >= length
 }
 
+/// GET `url` with `token` (`None`: no credentials at all): (status, content type, body
+/// bytes, up to 64 MiB).
+pub fn get_bytes(url: &str, token: Option<&str>) -> (u16, String, Vec<u8>) {
+    let agent = if token.is_some() {
+        agent()
+    } else {
+        bare_agent()
+    };
+    let mut request = agent.get(url);
+    if let Some(token) = token {
+        request = request.header("authorization", format!("Bearer {token}"));
+    }
+    let mut response = request.call().expect("request goes through");
+    let ct = response
+        .headers()
+        .get("content-type")
+        .and_then(|v| v.to_str().ok())
+        .unwrap_or_default()
+        .to_string();
+    let status = response.status().as_u16();
+    let body = response
+        .body_mut()
+        .with_config()
+        .limit(64 << 20)
+        .read_to_vec()
+        .unwrap_or_default();
+    (status, ct, body)
+}
+
 /// A client of `server` with the admin token.
 pub fn client(server: &ServerHandle) -> sitar_client::Client {
     client_with(server, ADMIN_TOKEN)

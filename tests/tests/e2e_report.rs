@@ -249,28 +249,6 @@ fn the_report_renders_the_walk_in_chromium_offline() {
     );
 }
 
-/// GET `url` with `token` (none: no credentials at all): (status, body bytes).
-fn get_with(url: &str, token: Option<&str>) -> (u16, Vec<u8>) {
-    let agent = if token.is_some() {
-        agent()
-    } else {
-        bare_agent()
-    };
-    let mut request = agent.get(url);
-    if let Some(token) = token {
-        request = request.header("authorization", format!("Bearer {token}"));
-    }
-    let mut response = request.call().expect("request goes through");
-    let status = response.status().as_u16();
-    let body = response
-        .body_mut()
-        .with_config()
-        .limit(64 << 20)
-        .read_to_vec()
-        .unwrap_or_default();
-    (status, body)
-}
-
 #[test]
 fn regions_show_the_camera_evidence_and_a_share_link_shows_the_same_view() {
     if !Path::new("/usr/bin/chromium").exists() {
@@ -363,7 +341,7 @@ fn regions_show_the_camera_evidence_and_a_share_link_shows_the_same_view() {
             urls.iter().any(|u| u.ends_with(&path)),
             "{path} not requested"
         );
-        let (status, jpeg) = get_with(&format!("{base}{path}"), Some(ADMIN_TOKEN));
+        let (status, _, jpeg) = get_bytes(&format!("{base}{path}"), Some(ADMIN_TOKEN));
         assert_eq!(status, 200);
         assert_eq!(jpeg, phone.thumbnail(k).unwrap());
         // Its causes are listed, each with a reason.
@@ -422,9 +400,9 @@ fn regions_show_the_camera_evidence_and_a_share_link_shows_the_same_view() {
     assert!(urls.iter().all(|u| !u.contains("/v1/")), "{urls:?}");
     let console = console_lines(&out);
     assert!(console.is_empty(), "console: {console:#?}");
-    let (status, shared_scene) = get_with(&format!("{base}/share/{token}/scene.json"), None);
+    let (status, _, shared_scene) = get_bytes(&format!("{base}/share/{token}/scene.json"), None);
     assert_eq!(status, 200);
-    let (_, owner_scene) = get_with(
+    let (_, _, owner_scene) = get_bytes(
         &format!("{base}/v1/sessions/{id}/scene.json"),
         Some(ADMIN_TOKEN),
     );
@@ -437,7 +415,7 @@ fn regions_show_the_camera_evidence_and_a_share_link_shows_the_same_view() {
         "trials.zip",
     ] {
         assert_eq!(
-            get_with(&format!("{base}/share/{token}/{name}"), None).0,
+            get_bytes(&format!("{base}/share/{token}/{name}"), None).0,
             200,
             "{name}"
         );
@@ -457,7 +435,7 @@ fn regions_show_the_camera_evidence_and_a_share_link_shows_the_same_view() {
         format!("/v1/sessions/{other}/scene.json"),
         format!("/v1/sessions/{id}/scene.json"),
     ] {
-        let (status, _) = get_with(&format!("{base}{path}"), None);
+        let (status, _, _) = get_bytes(&format!("{base}{path}"), None);
         assert!(matches!(status, 401 | 404), "{path}: {status}");
     }
     let (status, _, _) = raw(
@@ -469,7 +447,7 @@ fn regions_show_the_camera_evidence_and_a_share_link_shows_the_same_view() {
     );
     assert_eq!(status, 200);
     assert_eq!(
-        get_with(&format!("{base}/share/{token}/scene.json"), None).0,
+        get_bytes(&format!("{base}/share/{token}/scene.json"), None).0,
         404
     );
     server.stop();

@@ -10,24 +10,6 @@ use sitar_client::{NewSession, SessionState};
 use sitar_core::{DisplayRotation, SessionConfig};
 use sitar_tests::*;
 
-fn get_bytes(url: &str) -> (u16, String, Vec<u8>) {
-    let mut response = agent().get(url).call().expect("request goes through");
-    let ct = response
-        .headers()
-        .get("content-type")
-        .and_then(|v| v.to_str().ok())
-        .unwrap_or_default()
-        .to_string();
-    let status = response.status().as_u16();
-    let body = response
-        .body_mut()
-        .with_config()
-        .limit(64 << 20)
-        .read_to_vec()
-        .unwrap();
-    (status, ct, body)
-}
-
 /// The children count of the root's group `name` in a GLB's JSON.
 fn group_len(doc: &serde_json::Value, name: &str) -> usize {
     let nodes = doc["nodes"].as_array().unwrap();
@@ -59,7 +41,7 @@ fn the_scene_of_a_sim_session_matches_the_phones_render_plan_and_validates() {
         .unwrap();
     let url = format!("{}/v1/sessions/{id}/scene.glb", server.url());
     // Before the recording there is no scene: a JSON error, not a broken file.
-    let (status, ct, _) = get_bytes(&url);
+    let (status, ct, _) = get_bytes(&url, Some(ADMIN_TOKEN));
     assert_eq!((status, ct.as_str()), (409, "application/json"));
     client
         .upload_recording(&id, &recording, &mut |_, _| {})
@@ -76,7 +58,7 @@ fn the_scene_of_a_sim_session_matches_the_phones_render_plan_and_validates() {
         std::thread::sleep(std::time::Duration::from_millis(50));
     }
 
-    let (status, ct, glb) = get_bytes(&url);
+    let (status, ct, glb) = get_bytes(&url, Some(ADMIN_TOKEN));
     assert_eq!((status, ct.as_str()), (200, "model/gltf-binary"));
     // The phone's own session of the same walk, with the same results.
     let rec = sitar_sim::Recording::from_bytes(&std::fs::read(&recording).unwrap()).unwrap();
@@ -99,7 +81,7 @@ fn the_scene_of_a_sim_session_matches_the_phones_render_plan_and_validates() {
     assert_eq!(group_len(&doc, "frustums"), plan.frustums.len());
     assert_eq!(group_len(&doc, "markers"), markers.len());
     // A second request reads the kept phone session: the same bytes.
-    assert_eq!(get_bytes(&url).2, glb);
+    assert_eq!(get_bytes(&url, Some(ADMIN_TOKEN)).2, glb);
 
     let tools = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../tools/npm");
     if !tools.join("node_modules/gltf-validator").exists() {
@@ -160,7 +142,10 @@ fn a_real_recording_with_evidence_gets_the_phones_surface_points_and_markers() {
     assert!(matches!(status, 202 | 409), "{status} {body}");
     assert_eq!(wait_done(&app, &id).state, SessionState::Done);
 
-    let (status, _, body) = get_bytes(&format!("{base}/v1/sessions/{id}/scene.json"));
+    let (status, _, body) = get_bytes(
+        &format!("{base}/v1/sessions/{id}/scene.json"),
+        Some(ADMIN_TOKEN),
+    );
     assert_eq!(status, 200);
     let scene: serde_json::Value = serde_json::from_slice(&body).unwrap();
     assert!(
