@@ -169,12 +169,7 @@ pub fn get_bytes(url: &str, token: Option<&str>) -> (u16, String, Vec<u8>) {
         request = request.header("authorization", format!("Bearer {token}"));
     }
     let mut response = request.call().expect("request goes through");
-    let ct = response
-        .headers()
-        .get("content-type")
-        .and_then(|v| v.to_str().ok())
-        .unwrap_or_default()
-        .to_string();
+    let ct = content_type_of(&response);
     let status = response.status().as_u16();
     let body = response
         .body_mut()
@@ -183,6 +178,16 @@ pub fn get_bytes(url: &str, token: Option<&str>) -> (u16, String, Vec<u8>) {
         .read_to_vec()
         .unwrap_or_default();
     (status, ct, body)
+}
+
+/// An answer's `Content-Type` ("" when it has none).
+fn content_type_of<B>(response: &ureq::http::Response<B>) -> String {
+    response
+        .headers()
+        .get("content-type")
+        .and_then(|v| v.to_str().ok())
+        .unwrap_or_default()
+        .to_string()
 }
 
 /// A client of `server` with the admin token.
@@ -275,12 +280,7 @@ pub fn raw(
     };
     let mut response = result.expect("request goes through");
     let status = response.status().as_u16();
-    let ct = response
-        .headers()
-        .get("content-type")
-        .and_then(|v| v.to_str().ok())
-        .unwrap_or_default()
-        .to_string();
+    let ct = content_type_of(&response);
     let text = response.body_mut().read_to_string().unwrap_or_default();
     (status, ct, text)
 }

@@ -59,6 +59,19 @@ fn upload(base: &str, token: &str, id: &str, recording: &Path) {
 }
 
 /// `GET /v1/sessions/{id}` as `token`: (status, document).
+/// `DELETE {base}/v1/sessions/{id}` as `token`, which must answer 200.
+fn delete(base: &str, token: &str, id: &str) {
+    let auth = bearer(token);
+    let (code, _, text) = raw(
+        "DELETE",
+        &format!("{base}/v1/sessions/{id}"),
+        None,
+        b"",
+        &[("authorization", &auth)],
+    );
+    assert_eq!(code, 200, "{text}");
+}
+
 fn status(base: &str, token: &str, id: &str) -> (u16, Value) {
     let auth = bearer(token);
     let (code, _, text) = raw(
@@ -201,15 +214,7 @@ fn queued_sessions_wait_their_turn_show_their_place_and_cancel_or_delete() {
     );
     assert_eq!(code, 409, "{text}");
     // Deleting a queued session takes it out of the queue.
-    let auth = bearer(APP_TOKEN);
-    let (code, _, text) = raw(
-        "DELETE",
-        &format!("{base}/v1/sessions/{a2}"),
-        None,
-        b"",
-        &[("authorization", &auth)],
-    );
-    assert_eq!(code, 200, "{text}");
+    delete(&base, APP_TOKEN, &a2);
     assert_eq!(status(&base, APP_TOKEN, &a2).0, 404);
     assert_eq!(place(APP2_TOKEN, &b1), 1);
 
@@ -253,14 +258,7 @@ fn queued_sessions_wait_their_turn_show_their_place_and_cancel_or_delete() {
         d["trials_done"].as_u64() >= Some(1)
     });
     let started = Instant::now();
-    let (code, _, text) = raw(
-        "DELETE",
-        &format!("{base}/v1/sessions/{a4}"),
-        None,
-        b"",
-        &[("authorization", &auth)],
-    );
-    assert_eq!(code, 200, "{text}");
+    delete(&base, APP_TOKEN, &a4);
     assert!(
         started.elapsed() < Duration::from_secs(5),
         "{:?}",
@@ -511,13 +509,5 @@ fn sessions_resumed_into_the_queue_end_at_once_on_estimate_or_cancel() {
         assert_eq!(doc["results_trials"], doc["trials_done"], "{doc}");
         assert!(doc["trials_done"].as_u64() >= Some(2), "{doc}");
     }
-    let auth = bearer(APP_TOKEN);
-    let (code, _, text) = raw(
-        "DELETE",
-        &format!("{base}/v1/sessions/{}", ids[0]),
-        None,
-        b"",
-        &[("authorization", &auth)],
-    );
-    assert_eq!(code, 200, "{text}");
+    delete(&base, APP_TOKEN, &ids[0]);
 }
