@@ -15,6 +15,10 @@ pub(crate) struct Published {
     /// Class of the window of every sub-trajectory (every `window_frames`-th frame of the
     /// reference trial: what the phone colours), keyed by its start time (ns).
     pub classes: BTreeMap<i64, ErrorClass>,
+    /// Mean and greatest window error (the results' unit) over the windows with a finite
+    /// error (those the JSON writes as numbers), 0 when there are none: the history line.
+    pub mean_error: f64,
+    pub max_error: f64,
 }
 
 impl Published {
@@ -38,7 +42,16 @@ impl Published {
             .filter(|w| sub_starts.contains(&w.start))
             .map(|w| (w.start, thresholds.classify(w.error_m)))
             .collect();
+        let errors = || {
+            estimate
+                .windows
+                .iter()
+                .map(|w| w.error_m)
+                .filter(|e| e.is_finite())
+        };
         Published {
+            mean_error: errors().sum::<f64>() / errors().count().max(1) as f64,
+            max_error: errors().fold(0.0, f64::max),
             trials: estimate.trials as u32,
             csv: estimate.to_legacy_csv(),
             json: estimate.to_json(thresholds),
@@ -113,6 +126,21 @@ mod tests {
                 assert_eq!(published.classes[&w.start], thresholds.classify(w.error_m));
             }
             assert_eq!(published.trials, 2);
+            // The history line's mean and greatest error are those of the windows the JSON
+            // writes, to the bit.
+            let doc: serde_json::Value = serde_json::from_str(&published.json).unwrap();
+            let key = if frames == 10 { "error_m" } else { "error_deg" };
+            let errors: Vec<f64> = doc["windows"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .filter_map(|w| w[key].as_f64())
+                .collect();
+            assert!(errors.len() > 1 && errors.iter().any(|e| *e > 0.0));
+            let mean = errors.iter().sum::<f64>() / errors.len() as f64;
+            let max = errors.iter().copied().fold(0.0, f64::max);
+            assert_eq!(published.mean_error.to_bits(), mean.to_bits());
+            assert_eq!(published.max_error.to_bits(), max.to_bits());
             assert!(
                 published
                     .json

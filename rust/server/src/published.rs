@@ -39,20 +39,11 @@ pub(crate) const HISTORY: &str = "history.jsonl";
 /// history table, so the error is logged, not returned.
 fn append_history(path: &std::path::Path, published: &Published) {
     use std::io::Write as _;
-    let doc: serde_json::Value = serde_json::from_str(&published.json).unwrap_or_default();
-    let errors: Vec<f64> = doc["windows"]
-        .as_array()
-        .map(|w| {
-            w.iter()
-                .filter_map(|w| w["error_m"].as_f64().or(w["error_deg"].as_f64()))
-                .collect()
-        })
-        .unwrap_or_default();
     let count = |c: sitar_core::ErrorClass| published.classes.values().filter(|v| **v == c).count();
     let line = serde_json::json!({
         "trials": published.trials,
-        "mean": errors.iter().sum::<f64>() / errors.len().max(1) as f64,
-        "max": errors.iter().copied().fold(0.0, f64::max),
+        "mean": published.mean_error,
+        "max": published.max_error,
         "high": count(sitar_core::ErrorClass::High),
         "medium": count(sitar_core::ErrorClass::Medium),
         "low": count(sitar_core::ErrorClass::Low),
