@@ -6,7 +6,9 @@
 //!
 //! `cargo bench -p sitar-estimator --bench incremental [-- REPEATS [TRIALS POSES]]`;
 //! `-- --progressive-only` or `-- --one-shot-only` runs one phase once in a fresh process
-//! (`--setting NAME` picks the setting, default `trim_mean_30`).
+//! (`--setting NAME` picks the setting, default `trim_mean_30`; `--swapped` pushes the
+//! progressive phase's trials in swapped pairs, 1 0 3 2 …, each at its place, as two parallel
+//! phones may deliver them).
 
 use std::time::Instant;
 
@@ -71,15 +73,22 @@ fn one_shot(trials: &[Trajectory], opts: &EstimateOptions) -> Run {
     run
 }
 
-fn progressive(trials: &[Trajectory], opts: &EstimateOptions) -> Run {
+fn progressive(trials: &[Trajectory], opts: &EstimateOptions, swapped: bool) -> Run {
     reset_peak_rss();
     let (cpu, wall) = (cpu_seconds(), Instant::now());
     let mut incremental = IncrementalEstimate::new(*opts).expect("options");
     let mut last_push_cpu = 0.0;
     let mut windows = 0;
-    for trial in trials {
+    let arrivals = (0..trials.len()).map(|i| match (swapped, i % 2) {
+        (true, 0) if i + 1 < trials.len() => i + 1,
+        (true, 1) => i - 1,
+        _ => i,
+    });
+    for i in arrivals {
         let before = cpu_seconds();
-        incremental.push(trial.clone()).expect("push");
+        incremental
+            .push_ordered(trials[i].clone(), i as u64)
+            .expect("push");
         if incremental.trials() >= 2 {
             windows = incremental.estimate().expect("estimate").windows.len();
         }
@@ -121,7 +130,7 @@ fn main() {
         let run = if only("--one-shot-only") {
             one_shot(&trials, &opts)
         } else {
-            progressive(&trials, &opts)
+            progressive(&trials, &opts, only("--swapped"))
         };
         println!(
             "CPU {:.3} s, wall {:.3} s, memory_bytes {:.1} MB, peak RSS {:.0} MB (trials alone {:.0} MB)",
@@ -168,7 +177,7 @@ fn main() {
         let (mut once, mut prog) = (Vec::new(), Vec::new());
         for _ in 0..repeats {
             once.push(one_shot(&trials, &opts));
-            prog.push(progressive(&trials, &opts));
+            prog.push(progressive(&trials, &opts, false));
         }
         let m = |runs: &[Run], f: fn(&Run) -> f64| median(runs.iter().map(f).collect());
         let (once_cpu, prog_cpu) = (m(&once, |r| r.cpu), m(&prog, |r| r.cpu));

@@ -221,7 +221,8 @@ impl PairwiseValues {
             )));
         }
         let mut index = PairIndex::new(opts.pair_options()?);
-        index.extend(trials)?;
+        let ranks: Vec<u64> = (0..trials.len() as u64).collect();
+        index.extend(trials, &ranks)?;
         Ok(Self {
             time_unit: trials[0].time_unit,
             pose_relation: opts.pose_relation,

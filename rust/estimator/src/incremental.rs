@@ -19,7 +19,9 @@ use crate::{Error, Estimate, EstimateOptions, Setting, Trajectory, WindowEstimat
 /// [`estimate`](crate::estimate)`(&trials_so_far, &options)` — every window's start, end, pair
 /// count, error and spread — because both compute each statistic from the multiset of pair
 /// values alone: order statistics by rank and exact sums rounded once (see the crate docs,
-/// "Incremental estimation").
+/// "Incremental estimation"). Trials may also arrive out of their playback order (parallel
+/// phones finish in any order): [`push_ordered`](Self::push_ordered) gives each its place,
+/// and the estimate is then the one-shot estimate of the trials sorted by place.
 ///
 /// ```
 /// use sitar_estimator::{estimate, parse_tum, EstimateOptions, IncrementalEstimate};
@@ -42,7 +44,10 @@ use crate::{Error, Estimate, EstimateOptions, Setting, Trajectory, WindowEstimat
 #[derive(Debug, Clone)]
 pub struct IncrementalEstimate {
     options: EstimateOptions,
+    /// In the order pushed.
     trials: Vec<Trajectory>,
+    /// Playback place of each trial (same order), all distinct.
+    places: Vec<u64>,
     index: PairIndex,
     /// Per key of `index`: the window's values, once it has some.
     windows: Vec<Option<Box<WindowState>>>,
@@ -203,15 +208,17 @@ impl IncrementalEstimate {
         Ok(Self {
             options,
             trials: Vec::new(),
+            places: Vec::new(),
             index: PairIndex::new(options.pair_options()?),
             windows: Vec::new(),
             scratch: Vec::new(),
         })
     }
 
-    /// Adds a trial: validates it (poses, increasing stamps), associates it with every trial
-    /// already there and adds the values of those pairs only. On error (an invalid trial, or
-    /// one that shares no stamp with an earlier trial) nothing changes.
+    /// Adds a trial after every trial already there: validates it (poses, increasing
+    /// stamps), associates it with every trial already there and adds the values of those
+    /// pairs only. On error (an invalid trial, or one that shares no stamp with an earlier
+    /// trial) nothing changes.
     pub fn push(&mut self, trial: Trajectory) -> Result<(), Error> {
         self.try_push(trial).map_err(|rejected| rejected.0)
     }
@@ -219,10 +226,38 @@ impl IncrementalEstimate {
     /// [`push`](Self::push) that gives the trial back with the error, for a caller that
     /// keeps it (a server estimating over every trial it received, valid or not).
     pub fn try_push(&mut self, trial: Trajectory) -> Result<(), Box<(Error, Trajectory)>> {
+        let place = self
+            .places
+            .iter()
+            .max()
+            .map_or(0, |last| last.saturating_add(1));
+        self.try_push_ordered(trial, place)
+    }
+
+    /// Adds a trial at playback place `place` (any order of arrival; places must differ):
+    /// as [`push`](Self::push), the trial of the earlier place being the reference of each
+    /// new pair. The estimate is the one-shot estimate of the trials sorted by place.
+    pub fn push_ordered(&mut self, trial: Trajectory, place: u64) -> Result<(), Error> {
+        self.try_push_ordered(trial, place)
+            .map_err(|rejected| rejected.0)
+    }
+
+    /// [`push_ordered`](Self::push_ordered) that gives the trial back with the error.
+    pub fn try_push_ordered(
+        &mut self,
+        trial: Trajectory,
+        place: u64,
+    ) -> Result<(), Box<(Error, Trajectory)>> {
+        if self.places.contains(&place) {
+            let e = Error::InvalidArgument(format!("a trial at place {place} is already there"));
+            return Err(Box::new((e, trial)));
+        }
         self.trials.push(trial);
-        let remap = match self.index.extend(&self.trials) {
+        self.places.push(place);
+        let remap = match self.index.extend(&self.trials, &self.places) {
             Ok(remap) => remap,
             Err(e) => {
+                self.places.pop();
                 let trial = self.trials.pop().expect("pushed above");
                 return Err(Box::new((e, trial)));
             }
@@ -271,14 +306,22 @@ impl IncrementalEstimate {
         self.trials.len()
     }
 
-    /// The trials pushed, in order.
+    /// The trials pushed, in the order pushed.
     pub fn trajectories(&self) -> &[Trajectory] {
         &self.trials
     }
 
-    /// The trials pushed, in order; the rest of the state is dropped.
+    /// The trial of the earliest place (the reference whose stamps a phone colours), if any.
+    pub fn first_in_order(&self) -> Option<&Trajectory> {
+        let first = (0..self.trials.len()).min_by_key(|&i| self.places[i])?;
+        Some(&self.trials[first])
+    }
+
+    /// The trials pushed, sorted by place; the rest of the state is dropped.
     pub fn into_trajectories(self) -> Vec<Trajectory> {
-        self.trials
+        let mut placed: Vec<(u64, Trajectory)> = self.places.into_iter().zip(self.trials).collect();
+        placed.sort_by_key(|(place, _)| *place);
+        placed.into_iter().map(|(_, trial)| trial).collect()
     }
 
     /// The estimate over the trials pushed so far (at least 2).
@@ -310,7 +353,7 @@ impl IncrementalEstimate {
         Ok(Estimate {
             setting,
             trials: self.trials.len(),
-            time_unit: self.trials[0].time_unit,
+            time_unit: self.first_in_order().expect("2 trials or more").time_unit,
             pose_relation: self.options.pose_relation,
             delta: self.options.delta,
             windows,
@@ -335,6 +378,7 @@ impl IncrementalEstimate {
             + scratch
             + trials
             + self.trials.capacity() * size_of::<Trajectory>()
+            + self.places.capacity() * 8
             + self.index.heap_bytes()
             + self.windows.capacity() * size_of::<Option<Box<WindowState>>>()
             + windows

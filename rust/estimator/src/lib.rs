@@ -104,7 +104,11 @@
 //! `estimate()` gives the estimate over the trials so far, **bitwise equal** to
 //! [`estimate`] on them (every window's start, end, pair count, error and spread; a proptest
 //! checks it after every push for every setting, `trans_part` and `angle_deg`, identical
-//! stamps, dropped frames and jittered stamps).
+//! stamps, dropped frames and jittered stamps). Trials may arrive out of playback order:
+//! `push_ordered(trial, place)` gives each its place, and the estimate equals [`estimate`]
+//! on the trials sorted by place (a proptest pushes them in shuffled orders). Every trial's
+//! stamps are keys from its arrival on (a key no reference has gets no window), and each
+//! new pair takes the trial of the earlier place as its reference.
 //!
 //! * *Why it is exact:* both paths compute the same function of the same multiset per window
 //!   (the previous section); the incremental one only gathers the multiset differently.

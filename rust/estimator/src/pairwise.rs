@@ -1,9 +1,12 @@
 //! The pairwise RPE inputs of a set of trials that may grow, grouped for aggregation by window.
 //!
-//! Trials are ordered as given; for every pair `i < j` trial `i` is the reference, the two are
-//! associated as evo does, and an all-pairs RPE with a delta of `delta` frames is computed on
-//! the associated poses. Every value is keyed by the reference's start stamp (a *key*; keys
-//! are sorted and indexed, and blocks of [`BLOCK`] keys are aggregated in parallel).
+//! Trials have a playback order (a rank each; the order given, for a one-shot estimate); of
+//! every pair the earlier trial is the reference, the two are associated as evo does, and an
+//! all-pairs RPE with a delta of `delta` frames is computed on the associated poses. Every
+//! value is keyed by the reference's start stamp (a *key*: every trial's stamps are keys, so
+//! that a trial arriving ahead of earlier ones can later be a reference; keys are sorted and
+//! indexed, blocks of [`BLOCK`] keys are aggregated in parallel, and a key no reference has
+//! gets no values and no window).
 //!
 //! Speed: an RPE value only needs the two trials' *relative* poses over the window, so they are
 //! computed once per trial (`rel[k] = pose_k⁻¹ pose_{k+delta}`) and reused by every pair whose
@@ -11,10 +14,10 @@
 //! recomputed from the poses. Trials with identical stamps form a group whose pairs associate
 //! one to one; other pairs are associated once per distinct pair of stamp lists.
 //!
-//! [`PairIndex::extend`] adds trials: only the new pairs (those whose later trial is new) are
-//! associated, and [`PairIndex::fill_block`] yields only their values, so the incremental
-//! estimate touches each pair once. When a new reference brings stamps that are not keys yet,
-//! the keys are re-indexed and the caller gets the map from old to new key indices.
+//! [`PairIndex::extend`] adds trials, in any playback order: only the new pairs (those with a
+//! new trial) are associated, and [`PairIndex::fill_block`] yields only their values, so the
+//! incremental estimate touches each pair once. When a new trial brings stamps that are not
+//! keys yet, the keys are re-indexed and the caller gets the map from old to new key indices.
 
 use std::collections::HashMap;
 use std::hash::{Hash, Hasher};
@@ -88,13 +91,17 @@ pub(crate) struct PairIndex {
     options: PairOptions,
     /// Trials indexed so far.
     trials: usize,
+    /// Playback rank of each trial (indexed in the order trials were added).
+    ranks: Vec<u64>,
     /// Sorted, distinct window start stamps (ns): the stamps of every reference trial.
     keys: Vec<i64>,
-    /// End stamp per key (from the first reference that has the key).
+    /// End stamp per key, from the earliest trial in playback order that has the key.
     ends: Vec<i64>,
-    /// Per reference trial (all but the last): the key index of each of its poses.
+    /// Rank of the trial each end comes from.
+    end_ranks: Vec<u64>,
+    /// Per trial: the key index of each of its poses.
     key_of: Vec<Vec<u32>>,
-    /// Per reference trial: `[b]` = first pose whose key is in block `b` or later.
+    /// Per trial: `[b]` = first pose whose key is in block `b` or later.
     trial_block_starts: Vec<Vec<u32>>,
     /// Per trial: the first trial with identical stamps (its group's name).
     group_of: Vec<usize>,
@@ -323,8 +330,10 @@ impl PairIndex {
         Self {
             options,
             trials: 0,
+            ranks: Vec::new(),
             keys: Vec::new(),
             ends: Vec::new(),
+            end_ranks: Vec::new(),
             key_of: Vec::new(),
             trial_block_starts: Vec::new(),
             group_of: Vec::new(),
@@ -358,12 +367,19 @@ impl PairIndex {
     }
 
     /// Indexes `trials[self.trials()..]` (the earlier ones must be the trials indexed before,
-    /// unchanged, and are not checked again) and replaces the stored pairs by the new pairs:
-    /// every `(i, j)` with `j` new. Nothing changes on error. Returns the new index of every old
-    /// key when new keys were inserted among them, `None` when the old key indices stand.
-    pub(crate) fn extend(&mut self, trials: &[Trajectory]) -> Result<Option<Vec<u32>>, Error> {
+    /// unchanged, and are not checked again), whose playback ranks are `ranks` (one per trial,
+    /// all distinct), and replaces the stored pairs by the new pairs: every pair with a new
+    /// trial, the one of lower rank its reference. Nothing changes on error. Returns the new
+    /// index of every old key when new keys were inserted among them, `None` when the old key
+    /// indices stand.
+    pub(crate) fn extend(
+        &mut self,
+        trials: &[Trajectory],
+        ranks: &[u64],
+    ) -> Result<Option<Vec<u32>>, Error> {
         let old = self.trials;
         let n = trials.len();
+        debug_assert_eq!(ranks.len(), n);
         for (i, trial) in trials.iter().enumerate().skip(old) {
             validate_trial(i, trial)?;
         }
@@ -383,9 +399,12 @@ impl PairIndex {
             };
             group_of.push(group);
         }
-        // New pairs and the matchings they still need (the fallible part: association).
-        let new_pairs: Vec<(usize, usize)> =
-            (old..n).flat_map(|j| (0..j).map(move |i| (i, j))).collect();
+        // New pairs, as (reference, estimate), and the matchings they still need (the
+        // fallible part: association).
+        let orient = |i: usize, j: usize| if ranks[i] < ranks[j] { (i, j) } else { (j, i) };
+        let new_pairs: Vec<(usize, usize)> = (old..n)
+            .flat_map(|j| (0..j).map(move |i| orient(i, j)))
+            .collect();
         let mut wanted: Vec<(usize, usize)> = Vec::new();
         let mut pending: HashMap<(usize, usize), usize> = HashMap::new();
         for &(i, j) in &new_pairs {
@@ -418,10 +437,8 @@ impl PairIndex {
         let first_new_matching = self.matchings.len();
         self.matchings.extend(new_matchings);
         self.matching_index.extend(pending);
-        // References are all trials but the last: `old - 1 ..` are new references.
-        let references = n.saturating_sub(1);
-        let first_new_reference = old.saturating_sub(1).min(references);
-        let remap = self.add_references(trials, first_new_reference, references);
+        self.ranks = ranks.to_vec();
+        let remap = self.add_keys(trials, old, n);
         self.trials = n;
         let blocks = self.blocks();
         if remap.is_some() {
@@ -440,14 +457,9 @@ impl PairIndex {
         Ok(remap)
     }
 
-    /// Makes trials `from..to` references: their stamps become keys (re-indexing everything
-    /// when some were not), their key indices and block starts are computed.
-    fn add_references(
-        &mut self,
-        trials: &[Trajectory],
-        from: usize,
-        to: usize,
-    ) -> Option<Vec<u32>> {
+    /// Makes the stamps of trials `from..to` keys (re-indexing everything when some were not)
+    /// and computes their key indices, block starts and the ends of their keys.
+    fn add_keys(&mut self, trials: &[Trajectory], from: usize, to: usize) -> Option<Vec<u32>> {
         if from >= to {
             return None;
         }
@@ -514,12 +526,19 @@ impl PairIndex {
         self.key_of.extend(fresh);
         if first == 0 || remap.is_some() {
             self.ends = vec![i64::MIN; self.keys.len()];
+            self.end_ranks = vec![u64::MAX; self.keys.len()];
         }
-        for (t, ids) in trials[first..to].iter().zip(&self.key_of[first..]) {
+        for (index, (t, ids)) in trials[first..to]
+            .iter()
+            .zip(&self.key_of[first..])
+            .enumerate()
+        {
+            let rank = self.ranks[first + index];
             for (k, &key) in ids.iter().enumerate() {
-                let end = &mut self.ends[key as usize];
-                if *end == i64::MIN {
-                    *end = t.stamps[k.saturating_add(delta).min(t.len() - 1)];
+                let key = key as usize;
+                if rank < self.end_ranks[key] {
+                    self.end_ranks[key] = rank;
+                    self.ends[key] = t.stamps[k.saturating_add(delta).min(t.len() - 1)];
                 }
             }
         }
@@ -552,7 +571,6 @@ impl PairIndex {
             match self.groups.iter_mut().find(|g| g.members[0] == first) {
                 Some(group) => group.members.push(trial),
                 None => {
-                    // The first member is a reference (it has a later partner), so it has keys.
                     self.groups.push(Group {
                         members: vec![first, trial],
                         pose_of_key: pose_of_key(&self.key_of[first]),
@@ -622,9 +640,10 @@ impl PairIndex {
             .collect()
     }
 
-    /// Pushes the value of every pair `(i, j)` with `j ≥ first_new` — of the stored pairs,
-    /// and of the groups of identical stamps — into `buckets[key − block·BLOCK]` for the keys
-    /// of block `block`. `buckets` is resized to [`BLOCK`] and cleared first.
+    /// Pushes the value of every pair with a trial added at or after `first_new` (in the order
+    /// of adding) — of the stored pairs, and of the groups of identical stamps — into
+    /// `buckets[key − block·BLOCK]` for the keys of block `block`. `buckets` is resized to
+    /// [`BLOCK`] and cleared first.
     pub(crate) fn fill_block(
         &self,
         block: usize,
@@ -638,7 +657,11 @@ impl PairIndex {
         let with_rotation = relation != PoseRelation::TranslationPart;
         buckets.resize_with(BLOCK, Vec::new);
         buckets.iter_mut().for_each(Vec::clear);
-        for pair in self.pairs.iter().filter(|p| p.estimate >= first_new) {
+        for pair in self
+            .pairs
+            .iter()
+            .filter(|p| p.reference.max(p.estimate) >= first_new)
+        {
             let starts = &self.trial_block_starts[pair.reference];
             let (low, high) = (starts[block], starts[block + 1]);
             let keys_of_reference = &self.key_of[pair.reference];
@@ -727,20 +750,25 @@ impl PairIndex {
                             .iter()
                             .map(|&t| self.relative[t].rotation[pose]),
                     );
+                    let pose = |x: usize| RigidPose {
+                        rotation: rotations[x],
+                        translation: translations[x],
+                    };
+                    let ranks = &self.ranks;
                     for y in newest.max(1)..translations.len() {
-                        let p = RigidPose {
-                            rotation: rotations[y],
-                            translation: translations[y],
-                        };
+                        let rank_y = ranks[group.members[y]];
                         for x in 0..y {
-                            let q = RigidPose {
-                                rotation: rotations[x],
-                                translation: translations[x],
+                            // The earlier trial in playback order is the reference.
+                            let value = if ranks[group.members[x]] < rank_y {
+                                value_bits(relation, pose(x), pose(y))
+                            } else {
+                                value_bits(relation, pose(y), pose(x))
                             };
-                            bucket.push(value_bits(relation, q, p));
+                            bucket.push(value);
                         }
                     }
                 } else {
+                    // ‖a − b‖ = ‖b − a‖ to the bit: no orientation needed.
                     for (y, tp) in translations.iter().enumerate().skip(newest.max(1)) {
                         for tq in &translations[..y] {
                             bucket.push(((*tp - *tq).length() + 0.0).to_bits());
@@ -775,7 +803,8 @@ impl PairIndex {
             .iter()
             .map(|g| (g.members.capacity() * 8) + g.pose_of_key.capacity() * 4)
             .sum();
-        (self.keys.capacity() + self.ends.capacity()) * 8
+        (self.keys.capacity() + self.ends.capacity() + self.end_ranks.capacity()) * 8
+            + self.ranks.capacity() * 8
             + u32s(&self.key_of)
             + u32s(&self.trial_block_starts)
             + self.group_of.capacity() * 8

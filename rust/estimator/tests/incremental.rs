@@ -116,6 +116,53 @@ proptest! {
         prop_assert!(incremental.memory_bytes() > 0);
     }
 
+    /// Trials arriving out of playback order (parallel phones): after every push the estimate
+    /// equals the one-shot estimate of the trials so far sorted by place, bit for bit.
+    #[test]
+    fn out_of_order_pushes_equal_the_one_shot_estimate_in_playback_order(
+        seed in prop::collection::vec(-1.0f64..1.0, 7 * 6 * 40),
+        drops in prop::collection::vec(0usize..40, 0..6),
+        jitter in prop::collection::vec(-14_000_000i64..14_000_000, 0..4),
+        n in 2usize..8, len in 12usize..40, which in 0usize..7, rotational: bool,
+        delta in 1usize..5, order in any::<u64>(), arrival in any::<u64>(),
+    ) {
+        let trials = make_trials(&seed, &drops, &jitter, n, len, order);
+        prop_assume!(trials.len() >= 2);
+        // Places with gaps (some trials never arrive), arriving in a shuffled order.
+        let places: Vec<u64> = (0..trials.len() as u64).map(|i| 3 * i + (i % 2)).collect();
+        let mut arrivals: Vec<usize> = (0..trials.len()).collect();
+        let mut state = arrival | 1;
+        for i in (1..arrivals.len()).rev() {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            arrivals.swap(i, ((state >> 33) % (i as u64 + 1)) as usize);
+        }
+        let opts = EstimateOptions {
+            setting: Setting::ALL[which],
+            delta,
+            pose_relation: if rotational { PoseRelation::RotationAngleDeg } else { PoseRelation::TranslationPart },
+            ..EstimateOptions::default()
+        };
+        let mut incremental = IncrementalEstimate::new(opts).unwrap();
+        for (k, &t) in arrivals.iter().enumerate() {
+            incremental.push_ordered(trials[t].clone(), places[t]).unwrap();
+            let mut so_far: Vec<usize> = arrivals[..=k].to_vec();
+            so_far.sort_unstable();
+            prop_assert_eq!(incremental.first_in_order(), Some(&trials[so_far[0]]));
+            if k == 0 {
+                continue;
+            }
+            let in_order: Vec<Trajectory> = so_far.iter().map(|&i| trials[i].clone()).collect();
+            let want = estimate(&in_order, &opts).unwrap();
+            assert_bitwise_equal(&incremental.estimate().unwrap(), &want, &format!("{} after arrivals {:?}", opts.setting, &arrivals[..=k]))?;
+        }
+        // A place taken twice is refused and changes nothing.
+        let again = incremental.push_ordered(trials[0].clone(), places[0]);
+        prop_assert!(again.is_err());
+        prop_assert_eq!(incremental.trials(), trials.len());
+        let sorted: Vec<Trajectory> = incremental.clone().into_trajectories();
+        prop_assert_eq!(&sorted, &trials);
+    }
+
     /// Many trials with identical stamps and a few different ones: long windows, many ties
     /// and cursor moves.
     #[test]

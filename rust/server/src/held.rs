@@ -1,15 +1,15 @@
 //! The trials a live session holds, in playback order, and the estimator state kept with
-//! them: an [`IncrementalEstimate`] while trials arrive in playback order, so that a new
-//! trial adds only its pairs; plain trials (one-shot estimates) otherwise.
+//! them: an [`IncrementalEstimate`], so that a new trial adds only its pairs, whatever its
+//! place in playback order (parallel phones finish out of order: each trial joins at its
+//! place); plain trials (one-shot estimates) once that state is given up.
 //!
 //! Both give bitwise the one-shot estimate over the held trials in playback order; the
 //! incremental state only saves work. It is given up (its memory freed) for the rest of
-//! the live session when a trial arrives before one already in it (parallel phones finish out
-//! of order: the state's pairs are oriented by playback order), when a trial cannot join it
-//! (invalid, or no stamp shared: the one-shot estimate then reports the same error), or when
-//! its memory would pass the session's bounds. A final estimate with no state yet (an
-//! `upload` session without progressive estimates, or one rebuilt after a restart) is one
-//! one-shot estimate, cheaper than pushing every trial.
+//! the live session when a trial cannot join it (invalid, or no stamp shared: the one-shot
+//! estimate then reports the same error), or when its memory would pass the session's
+//! bounds. A final estimate with no state yet (an `upload` session without progressive
+//! estimates, or one rebuilt after a restart) is one one-shot estimate, cheaper than pushing
+//! every trial.
 
 use sitar_estimator::{Estimate, IncrementalEstimate, Trajectory};
 
@@ -52,7 +52,7 @@ pub(crate) struct HeldTrials {
 }
 
 enum Estimator {
-    /// Trials so far arrived in playback order; nothing estimated yet when it holds none.
+    /// Every trial so far, each at its place; nothing estimated yet when it holds none.
     Incremental(Box<IncrementalEstimate>),
     /// Every estimate from scratch over these trials.
     OneShot(Vec<Trajectory>),
@@ -134,27 +134,22 @@ impl HeldTrials {
             budget.shrink(self.counted - now);
             self.counted = now;
         }
-        let (estimate, trials) = match &self.estimator {
-            Estimator::Incremental(state) => (state.estimate(), state.trajectories()),
+        let (estimate, first) = match &self.estimator {
+            Estimator::Incremental(state) => (state.estimate(), state.first_in_order()),
             Estimator::OneShot(trials) => (
                 sitar_estimator::estimate(trials, &settings.options()),
-                trials.as_slice(),
+                trials.first(),
             ),
         };
         let estimate = estimate.map_err(|e| Error::Estimate(e.to_string()))?;
-        Ok((estimate, &trials[0]))
+        let first = first.ok_or_else(|| Error::Estimate("no trials".into()))?;
+        Ok((estimate, first))
     }
 
-    /// Gives the waiting trials to the estimator: pushed when they come after every trial it
-    /// holds, else the state is given up for plain trials.
+    /// Gives the waiting trials to the estimator, each at its place in playback order.
     fn bring_in(&mut self, purpose: Purpose) {
         let waiting = std::mem::take(&mut self.waiting);
-        let in_order = match (self.order.last(), waiting.first()) {
-            (Some(last), Some(first)) => first.order > *last,
-            _ => true,
-        };
-        let nothing_yet = self.order.is_empty();
-        if !in_order || (purpose == Purpose::Final && nothing_yet) {
+        if purpose == Purpose::Final && self.order.is_empty() {
             self.give_up_state();
         }
         for held in waiting {
@@ -163,12 +158,14 @@ impl HeldTrials {
             match &mut self.estimator {
                 Estimator::OneShot(trials) => trials.insert(at, held.trial),
                 Estimator::Incremental(state) => {
-                    if let Err(rejected) = state.try_push(held.trial) {
+                    let (play, index) = held.order;
+                    let place = (u64::from(play) << 32) | u64::from(index);
+                    if let Err(rejected) = state.try_push_ordered(held.trial, place) {
                         let (e, trial) = *rejected;
                         log::info!("incremental estimate given up: {e}");
                         self.give_up_state();
                         if let Estimator::OneShot(trials) = &mut self.estimator {
-                            trials.push(trial);
+                            trials.insert(at, trial);
                         }
                     }
                 }

@@ -410,24 +410,27 @@ mod tests {
     }
 
     #[tokio::test]
-    async fn a_trial_before_one_already_estimated_ends_the_incremental_state_not_the_equality() {
+    async fn a_trial_before_ones_already_estimated_joins_the_incremental_state_at_its_place() {
         let sessions = LiveSessions::new(1 << 24, 1 << 24);
         let live = live(&sessions, "a");
-        add_in_order(&live, [0, 2, 3]);
-        assert_eq!(progressive(&live).await.unwrap().json, one_shot(&[0, 2, 3]));
+        add_in_order(&live, [1, 3, 4]);
+        assert_eq!(progressive(&live).await.unwrap().json, one_shot(&[1, 3, 4]));
         assert!(live.incremental().await);
-        add(&live, 1, 4);
+        // Trial 2 finishes after 3 and 4, trial 0 (the new first) after them all.
+        add(&live, 2, 5);
         assert_eq!(
             progressive(&live).await.unwrap().json,
-            one_shot(&[0, 1, 2, 3])
+            one_shot(&[1, 2, 3, 4])
         );
-        assert!(!live.incremental().await);
-        // Its memory is given back: only the trials are counted now.
-        assert_eq!(sessions.held_bytes(), 4 * trial_bytes(&trial(0)));
-        add(&live, 4, 5);
+        add(&live, 0, 6);
+        let published = progressive(&live).await.unwrap();
+        assert_eq!(published.json, one_shot(&[0, 1, 2, 3, 4]));
+        assert!(live.incremental().await, "kept, each trial at its place");
+        assert!(sessions.held_bytes() > 5 * trial_bytes(&trial(0)));
+        add(&live, 5, 7);
         assert_eq!(
             progressive(&live).await.unwrap().json,
-            one_shot(&[0, 1, 2, 3, 4])
+            one_shot(&[0, 1, 2, 3, 4, 5])
         );
     }
 
