@@ -3,7 +3,8 @@
 //!
 //! `cargo bench -p sitar-server`
 
-use std::path::Path;
+use std::cell::OnceCell;
+use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
@@ -109,11 +110,29 @@ fn overhead_beyond_playback(c: &mut Criterion) {
     group.finish();
 }
 
+/// What a benchmark uploads to: a temporary folder (kept while it runs), the server, a client,
+/// the session, and the file or folder sent.
+type UploadSetup = (tempfile::TempDir, ServerHandle, Client, String, PathBuf);
+
 /// PUT of a 256 MiB recording over loopback, streamed from disk to the data directory.
 fn upload_throughput(c: &mut Criterion) {
+    // Set up only when the benchmark runs (not when a filter skips it).
+    let setup = OnceCell::new();
+    let size: u64 = 256 << 20;
+    let mut group = c.benchmark_group("server");
+    group.sample_size(10);
+    group.throughput(Throughput::Bytes(size));
+    group.bench_function("upload_256MiB", |b| {
+        let (_, _, client, id, file) = setup.get_or_init(|| upload_setup(size));
+        b.iter(|| client.upload_recording(id, file, &mut |_, _| {}).unwrap())
+    });
+    group.finish();
+}
+
+/// A file of `size` bytes and an `upload` session to send it to.
+fn upload_setup(size: u64) -> UploadSetup {
     let dir = tempfile::tempdir().unwrap();
     let file = dir.path().join("big.bin");
-    let size: u64 = 256 << 20;
     {
         use std::io::Write;
         let mut f = std::io::BufWriter::new(std::fs::File::create(&file).unwrap());
@@ -122,14 +141,8 @@ fn upload_throughput(c: &mut Criterion) {
             f.write_all(&block).unwrap();
         }
     }
-    let (_server, client, id) = upload_session(&dir.path().join("data"));
-    let mut group = c.benchmark_group("server");
-    group.sample_size(10);
-    group.throughput(Throughput::Bytes(size));
-    group.bench_function("upload_256MiB", |b| {
-        b.iter(|| client.upload_recording(&id, &file, &mut |_, _| {}).unwrap())
-    });
-    group.finish();
+    let (server, client, id) = upload_session(&dir.path().join("data"));
+    (dir, server, client, id, file)
 }
 
 /// 50 sessions at once (5 trials × 90 poses each, 2 simulated phones per session):
@@ -169,6 +182,19 @@ fn concurrent_sessions(c: &mut Criterion) {
 /// A 15 s walk recorded by the phone logic (sitar-core) with the simulator's rendered
 /// images and depth at every midpoint; its session folder's evidence is uploaded.
 fn evidence_upload(c: &mut Criterion) {
+    // Rendering the walk takes minutes in a debug build: only when the benchmark runs.
+    let setup = OnceCell::new();
+    let mut group = c.benchmark_group("server");
+    group.sample_size(20);
+    group.bench_function("evidence_upload_15s_walk", |b| {
+        let (_, _, client, id, folder) = setup.get_or_init(evidence_setup);
+        b.iter(|| client.upload_evidence(id, folder).unwrap())
+    });
+    group.finish();
+}
+
+/// The walk's phone session folder and an `upload` session to send its evidence to.
+fn evidence_setup() -> UploadSetup {
     use sitar_core::{DepthImage, DisplayRotation, LumaImage, Pose, Session, SessionConfig};
     let dir = tempfile::tempdir().unwrap();
     let recording = sitar_sim::Recording::demo(15.0, 30.0, 5).unwrap();
@@ -208,7 +234,7 @@ fn evidence_upload(c: &mut Criterion) {
     phone.stop(gt.stamps[last], pose(last)).unwrap();
     let folder = dir.path().join("phone");
     phone.save(&folder).unwrap();
-    let (_server, client, id) = upload_session(&dir.path().join("data"));
+    let (server, client, id) = upload_session(&dir.path().join("data"));
     let sent = client.upload_evidence(&id, &folder).unwrap().unwrap();
     let bytes: u64 = std::fs::read_dir(folder.join("thumbnails"))
         .unwrap()
@@ -218,12 +244,7 @@ fn evidence_upload(c: &mut Criterion) {
         "evidence of a 15 s walk: {} sub-trajectories, {sent} thumbnails, {bytes} thumbnail bytes",
         phone.subtrajectories().len()
     );
-    let mut group = c.benchmark_group("server");
-    group.sample_size(20);
-    group.bench_function("evidence_upload_15s_walk", |b| {
-        b.iter(|| client.upload_evidence(&id, &folder).unwrap())
-    });
-    group.finish();
+    (dir, server, client, id, folder)
 }
 
 criterion_group!(
