@@ -479,3 +479,32 @@ pub fn phone_walk_with_evidence(recording: &sitar_sim::Recording) -> sitar_core:
     session.stop(gt.stamps[last], pose(last)).expect("stop");
     session
 }
+
+/// Puts `tests/fake_adb.sh` on `PATH` as `adb` (the test double for phones), with its phones
+/// under `dir/phones-root` and each trial taking `trial_seconds`; returns that root.
+///
+/// # Safety
+/// It sets `PATH`, `FAKE_ADB_ROOT` and `FAKE_TRIAL_SECONDS` for the whole process: call it
+/// before any thread that reads the environment starts (one such test per binary).
+pub unsafe fn fake_adb_on_path(dir: &Path, trial_seconds: &str) -> PathBuf {
+    let bin = dir.join("bin");
+    std::fs::create_dir_all(&bin).unwrap();
+    std::fs::copy(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("fake_adb.sh"),
+        bin.join("adb"),
+    )
+    .unwrap();
+    let root = dir.join("phones-root");
+    let path = format!(
+        "{}:{}",
+        bin.display(),
+        std::env::var("PATH").unwrap_or_default()
+    );
+    // SAFETY: the caller's contract: no other thread reads the environment yet.
+    unsafe {
+        std::env::set_var("PATH", path);
+        std::env::set_var("FAKE_ADB_ROOT", &root);
+        std::env::set_var("FAKE_TRIAL_SECONDS", trial_seconds);
+    }
+    root
+}

@@ -8,19 +8,13 @@ mod bindings_support;
 
 use std::process::Command;
 
-use bindings_support::{library_dir, run, skip, which, workspace_root};
+use bindings_support::{library_dir, mono_or_skip, run, workspace_root};
 
 #[test]
 fn csharp_wrapper_runs_a_session_and_maps_every_error() {
     const NAME: &str = "csharp_wrapper_runs_a_session_and_maps_every_error";
-    let Some(mcs) = which("mcs") else {
-        return skip(NAME, "`mcs` is not on PATH (Debian package `mono-mcs`)");
-    };
-    let Some(mono) = which("mono") else {
-        return skip(
-            NAME,
-            "`mono` is not on PATH (Debian package `mono-runtime`)",
-        );
+    let Some((mcs, mono)) = mono_or_skip(NAME) else {
+        return;
     };
     let plugin = workspace_root().join("unity-plugin");
     let dir = tempfile::tempdir().unwrap();

@@ -54,27 +54,8 @@ fn adb_config(data: &Path) -> ServerConfig {
 #[test]
 fn adb_playback_with_fake_phones() {
     let dir = tempfile::tempdir().unwrap();
-    let bin = dir.path().join("bin");
-    std::fs::create_dir_all(&bin).unwrap();
-    std::fs::copy(
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("fake_adb.sh"),
-        bin.join("adb"),
-    )
-    .unwrap();
-    let phones = dir.path().join("phones-root");
-    // SAFETY: the only test in this binary, set before any thread that reads the environment.
-    unsafe {
-        std::env::set_var(
-            "PATH",
-            format!(
-                "{}:{}",
-                bin.display(),
-                std::env::var("PATH").unwrap_or_default()
-            ),
-        );
-        std::env::set_var("FAKE_ADB_ROOT", &phones);
-        std::env::set_var("FAKE_TRIAL_SECONDS", "0.3");
-    }
+    // SAFETY: the only test in this binary, before any thread that reads the environment.
+    let phones = unsafe { sitar_tests::fake_adb_on_path(dir.path(), "0.3") };
     let rec = sitar_sim::Recording::demo(3.0, 30.0, 21).unwrap();
     let pool = sitar_sim::simulate_trials(&rec, 12);
     let mp4 = dir.path().join("recording.mp4");

@@ -114,27 +114,8 @@ fn hostile_strings_reach_the_pages_as_text() {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
-    let bin = dir.path().join("bin");
-    std::fs::create_dir_all(&bin).unwrap();
-    std::fs::copy(
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("fake_adb.sh"),
-        bin.join("adb"),
-    )
-    .unwrap();
-    let root = dir.path().join("phones-root");
-    // SAFETY: the only test in this binary, set before any thread that reads the environment.
-    unsafe {
-        std::env::set_var(
-            "PATH",
-            format!(
-                "{}:{}",
-                bin.display(),
-                std::env::var("PATH").unwrap_or_default()
-            ),
-        );
-        std::env::set_var("FAKE_ADB_ROOT", &root);
-        std::env::set_var("FAKE_TRIAL_SECONDS", "0.1");
-    }
+    // SAFETY: the only test in this binary, before any thread that reads the environment.
+    let root = unsafe { sitar_tests::fake_adb_on_path(dir.path(), "0.1") };
     // The trial pool and one phone with the playback app, under the hostile serial.
     let rec = sitar_sim::Recording::demo(3.0, 30.0, 21).unwrap();
     let pool = sitar_sim::simulate_trials(&rec, 8);

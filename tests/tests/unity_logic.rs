@@ -11,19 +11,13 @@ mod host_support;
 
 use std::process::Command;
 
-use bindings_support::{library_dir, run, skip, which, workspace_root};
+use bindings_support::{library_dir, mono_or_skip, run, workspace_root};
 
 #[test]
 fn unity_playback_logic_and_json_run_on_mono_with_the_real_library() {
     const NAME: &str = "unity_playback_logic_and_json_run_on_mono_with_the_real_library";
-    let Some(mcs) = which("mcs") else {
-        return skip(NAME, "`mcs` is not on PATH (Debian package `mono-mcs`)");
-    };
-    let Some(mono) = which("mono") else {
-        return skip(
-            NAME,
-            "`mono` is not on PATH (Debian package `mono-runtime`)",
-        );
+    let Some((mcs, mono)) = mono_or_skip(NAME) else {
+        return;
     };
     let plugin = workspace_root().join("unity-plugin");
     let dir = tempfile::tempdir().unwrap();

@@ -13,7 +13,7 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use bindings_support::{run, skip, which, workspace_root};
+use bindings_support::{mcs_or_skip, run, skip, which, workspace_root};
 
 fn package() -> PathBuf {
     workspace_root().join("unity-plugin")
@@ -410,8 +410,8 @@ fn copy_dir(from: &Path, to: &Path) {
 #[test]
 fn the_editor_scripts_type_check_against_the_unity_editor_api_shapes() {
     const NAME: &str = "the_editor_scripts_type_check_against_the_unity_editor_api_shapes";
-    let Some(mcs) = which("mcs") else {
-        return skip(NAME, "`mcs` is not on PATH (Debian package `mono-mcs`)");
+    let Some(mcs) = mcs_or_skip(NAME) else {
+        return;
     };
     let support = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/bindings_support");
     let cs = |dir: &Path| host_support::files_with_suffix(dir, ".cs");

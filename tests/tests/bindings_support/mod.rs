@@ -74,6 +74,28 @@ pub fn which(tool: &str) -> Option<PathBuf> {
         .find(|p| p.is_file())
 }
 
+/// The Mono compiler `mcs`, or `None` with `test` reported as skipped.
+pub fn mcs_or_skip(test: &str) -> Option<PathBuf> {
+    let found = which("mcs");
+    if found.is_none() {
+        skip(test, "`mcs` is not on PATH (Debian package `mono-mcs`)");
+    }
+    found
+}
+
+/// `mcs` and the Mono runtime `mono`, or `None` with `test` reported as skipped.
+pub fn mono_or_skip(test: &str) -> Option<(PathBuf, PathBuf)> {
+    let mcs = mcs_or_skip(test)?;
+    let Some(mono) = which("mono") else {
+        skip(
+            test,
+            "`mono` is not on PATH (Debian package `mono-runtime`)",
+        );
+        return None;
+    };
+    Some((mcs, mono))
+}
+
 /// Reports a skipped test so it cannot pass silently: written straight to
 /// the stderr handle, which the test harness does not capture.
 pub fn skip(test: &str, reason: &str) {
