@@ -1,7 +1,7 @@
 //! What progressive estimates cost the backend, in process CPU time.
 //!
 //! `cargo run --release -p sitar-server --example progressive_cost [-- --trials 100 --poses
-//! 2820 --repeat 3 --sitar target/release/sitar]`
+//! 2820 --repeat 3 --sitar target/release/sitar --setting trim_mean_30]`
 //!
 //! The trials are `scripts/bench-vs-evo`'s (the estimator's synthetic generator, seed 11:
 //! every 3rd trial drops about 1 % of its frames). The server runs as a child process (this
@@ -18,7 +18,10 @@
 //!   when it exists; its CPU from this process's children times), else the same code path in
 //!   this process (read the files, estimate, write the CSV).
 //!
-//! Printed: CPU seconds and wall seconds of each, and the ratios a/b and b/c.
+//! Printed: CPU seconds and wall seconds of each, and the ratios a/b and b/c. `--setting` picks
+//! the sessions' and `sitar estimate`'s setting: with `mean`, whose progressive estimator path
+//! costs about one one-shot estimate, a/b shows what the server's own share of progressive
+//! results costs.
 
 use std::io::{BufRead, BufReader, Read, Write};
 use std::path::{Path, PathBuf};
@@ -114,7 +117,7 @@ impl Backend {
 }
 
 /// One run: (server CPU s, wall s, peak server memory MiB, status polls).
-fn run_session(texts: &[String], progressive: bool) -> (f64, f64, f64, u32) {
+fn run_session(texts: &[String], setting: &str, progressive: bool) -> (f64, f64, f64, u32) {
     let data = tempfile::tempdir().unwrap();
     let backend = Backend::start(data.path(), progressive);
     let admin = std::fs::read_to_string(data.path().join(sitar_server::ADMIN_TOKEN_FILE)).unwrap();
@@ -126,7 +129,7 @@ fn run_session(texts: &[String], progressive: bool) -> (f64, f64, f64, u32) {
     let id = client
         .create_session(&NewSession {
             trials: texts.len() as u32,
-            setting: "trim_mean_30".into(),
+            setting: setting.into(),
             playback: "upload".into(),
             window_frames: None,
             pose_relation: None,
@@ -162,13 +165,14 @@ fn run_session(texts: &[String], progressive: bool) -> (f64, f64, f64, u32) {
 }
 
 /// `sitar estimate FILES` (CPU s, wall s): the binary when there is one, else its code path.
-fn run_cli(sitar: Option<&Path>, files: &[PathBuf]) -> (f64, f64) {
+fn run_cli(sitar: Option<&Path>, files: &[PathBuf], setting: &str) -> (f64, f64) {
     let started = Instant::now();
     match sitar {
         Some(sitar) => {
             let (_, children0) = cpu_seconds("self");
             let out = Command::new(sitar)
                 .arg("estimate")
+                .args(["--setting", setting])
                 .args(files)
                 .output()
                 .expect("sitar runs");
@@ -186,9 +190,11 @@ fn run_cli(sitar: Option<&Path>, files: &[PathBuf]) -> (f64, f64) {
                 .iter()
                 .map(|f| sitar_estimator::read_tum(f).unwrap())
                 .collect();
-            let estimate =
-                sitar_estimator::estimate(&trials, &sitar_estimator::EstimateOptions::default())
-                    .unwrap();
+            let options = sitar_estimator::EstimateOptions {
+                setting: setting.parse().expect("a setting name"),
+                ..Default::default()
+            };
+            let estimate = sitar_estimator::estimate(&trials, &options).unwrap();
             std::hint::black_box(estimate.to_legacy_csv());
             let (own1, _) = cpu_seconds("self");
             (own1 - own0, started.elapsed().as_secs_f64())
@@ -221,6 +227,7 @@ fn main() {
     let trials: usize = value("--trials").map_or(100, |v| v.parse().unwrap());
     let poses: usize = value("--poses").map_or(2820, |v| v.parse().unwrap());
     let repeat: usize = value("--repeat").map_or(3, |v| v.parse().unwrap());
+    let setting = value("--setting").unwrap_or_else(|| sitar_core::DEFAULT_SETTING.into());
     let sitar = value("--sitar").map(PathBuf::from).or_else(|| {
         let built = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../target/release/sitar");
         built.is_file().then_some(built)
@@ -233,14 +240,14 @@ fn main() {
         .map(|f| std::fs::read_to_string(f).unwrap())
         .collect();
     println!(
-        "{trials} trials x {poses} poses (every 3rd drops frames), {repeat} runs each; \
-         CPU = user + system of the server process"
+        "{trials} trials x {poses} poses (every 3rd drops frames), {setting}, {repeat} runs \
+         each; CPU = user + system of the server process"
     );
     let (mut a, mut b, mut c) = (Vec::new(), Vec::new(), Vec::new());
     for run in 0..repeat {
-        let progressive = run_session(&texts, true);
-        let one_final = run_session(&texts, false);
-        let cli = run_cli(sitar.as_deref(), &files);
+        let progressive = run_session(&texts, &setting, true);
+        let one_final = run_session(&texts, &setting, false);
+        let cli = run_cli(sitar.as_deref(), &files, &setting);
         println!(
             "run {run}: (a) {:.2} CPU s, {:.2} s wall, {:.0} MiB peak, {} polls; \
              (b) {:.2} CPU s, {:.2} s wall, {:.0} MiB peak; (c) {:.2} CPU s, {:.2} s wall",
