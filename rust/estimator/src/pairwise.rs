@@ -91,9 +91,9 @@ pub(crate) struct PairIndex {
     options: PairOptions,
     /// Trials indexed so far.
     trials: usize,
-    /// Playback rank of each trial (indexed in the order trials were added).
+    /// Playback rank (place) of each trial, indexed in the order trials were added.
     ranks: Vec<u64>,
-    /// Sorted, distinct window start stamps (ns): the stamps of every reference trial.
+    /// Sorted, distinct window start stamps (ns): the stamps of every trial.
     keys: Vec<i64>,
     /// End stamp per key, from the earliest trial in playback order that has the key.
     ends: Vec<i64>,
