@@ -83,24 +83,41 @@ fn make_trials(
     trials
 }
 
+prop_compose! {
+    /// 2 to 7 trials of 12 to 39 poses, some dropping frames or with jittered stamps, in any
+    /// order.
+    fn some_trials()(
+        seed in prop::collection::vec(-1.0f64..1.0, 7 * 6 * 40),
+        drops in prop::collection::vec(0usize..40, 0..6),
+        jitter in prop::collection::vec(-14_000_000i64..14_000_000, 0..4),
+        n in 2usize..8, len in 12usize..40, order in any::<u64>(),
+    ) -> Vec<Trajectory> {
+        make_trials(&seed, &drops, &jitter, n, len, order)
+    }
+}
+
+/// Setting `Setting::ALL[which]`, windows of `delta` frames, `angle_deg` or `trans_part`.
+fn options(which: usize, delta: usize, rotational: bool) -> EstimateOptions {
+    EstimateOptions {
+        setting: Setting::ALL[which],
+        delta,
+        pose_relation: if rotational {
+            PoseRelation::RotationAngleDeg
+        } else {
+            PoseRelation::TranslationPart
+        },
+        ..EstimateOptions::default()
+    }
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(96))]
     #[test]
     fn every_push_equals_the_one_shot_estimate_bitwise(
-        seed in prop::collection::vec(-1.0f64..1.0, 7 * 6 * 40),
-        drops in prop::collection::vec(0usize..40, 0..6),
-        jitter in prop::collection::vec(-14_000_000i64..14_000_000, 0..4),
-        n in 2usize..8, len in 12usize..40, which in 0usize..7, rotational: bool,
-        delta in 1usize..5, order in any::<u64>(),
+        trials in some_trials(), which in 0usize..7, rotational: bool, delta in 1usize..5,
     ) {
-        let trials = make_trials(&seed, &drops, &jitter, n, len, order);
         prop_assume!(trials.len() >= 2);
-        let opts = EstimateOptions {
-            setting: Setting::ALL[which],
-            delta,
-            pose_relation: if rotational { PoseRelation::RotationAngleDeg } else { PoseRelation::TranslationPart },
-            ..EstimateOptions::default()
-        };
+        let opts = options(which, delta, rotational);
         let mut incremental = IncrementalEstimate::new(opts).unwrap();
         prop_assert!(incremental.estimate().is_err());
         for (k, trial) in trials.iter().enumerate() {
@@ -120,13 +137,9 @@ proptest! {
     /// equals the one-shot estimate of the trials so far sorted by place, bit for bit.
     #[test]
     fn out_of_order_pushes_equal_the_one_shot_estimate_in_playback_order(
-        seed in prop::collection::vec(-1.0f64..1.0, 7 * 6 * 40),
-        drops in prop::collection::vec(0usize..40, 0..6),
-        jitter in prop::collection::vec(-14_000_000i64..14_000_000, 0..4),
-        n in 2usize..8, len in 12usize..40, which in 0usize..7, rotational: bool,
-        delta in 1usize..5, order in any::<u64>(), arrival in any::<u64>(),
+        trials in some_trials(), which in 0usize..7, rotational: bool, delta in 1usize..5,
+        arrival in any::<u64>(),
     ) {
-        let trials = make_trials(&seed, &drops, &jitter, n, len, order);
         prop_assume!(trials.len() >= 2);
         // Places with gaps (some trials never arrive), arriving in a shuffled order.
         let places: Vec<u64> = (0..trials.len() as u64).map(|i| 3 * i + (i % 2)).collect();
@@ -136,12 +149,7 @@ proptest! {
             state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
             arrivals.swap(i, ((state >> 33) % (i as u64 + 1)) as usize);
         }
-        let opts = EstimateOptions {
-            setting: Setting::ALL[which],
-            delta,
-            pose_relation: if rotational { PoseRelation::RotationAngleDeg } else { PoseRelation::TranslationPart },
-            ..EstimateOptions::default()
-        };
+        let opts = options(which, delta, rotational);
         let mut incremental = IncrementalEstimate::new(opts).unwrap();
         for (k, &t) in arrivals.iter().enumerate() {
             incremental.push_ordered(trials[t].clone(), places[t]).unwrap();
