@@ -208,18 +208,21 @@ pub(crate) fn image_array_len<T: TypeArray>(
     if array.is_null() {
         return Err(Error::Null(name));
     }
-    let (needed, what) = match image {
-        ArrayImage::Depth => (
-            crate::bridge::depth_len(width, height, row_stride_bytes)?,
-            format!("shorts; a {width}x{height} image with row stride {row_stride_bytes} bytes"),
-        ),
-        ArrayImage::Luma => (
-            crate::bridge::luma_len(width, height, row_stride_bytes)?,
-            format!("bytes; a {width}x{height} plane with row stride {row_stride_bytes}"),
-        ),
+    let needed = match image {
+        ArrayImage::Depth => crate::bridge::depth_len(width, height, row_stride_bytes)?,
+        ArrayImage::Luma => crate::bridge::luma_len(width, height, row_stride_bytes)?,
     };
     let available = array.len(env)?;
     if available < needed {
+        // Described only when refused: this check runs for every frame's image.
+        let what = match image {
+            ArrayImage::Depth => {
+                format!("shorts; a {width}x{height} image with row stride {row_stride_bytes} bytes")
+            }
+            ArrayImage::Luma => {
+                format!("bytes; a {width}x{height} plane with row stride {row_stride_bytes}")
+            }
+        };
         return Err(Error::invalid(
             name,
             format!("{available} {what} needs {needed}"),
