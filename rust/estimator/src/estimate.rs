@@ -221,6 +221,7 @@ impl PairwiseValues {
             )));
         }
         let mut index = PairIndex::new(opts.pair_options()?);
+        // One-shot: the playback order is the order given.
         let ranks: Vec<u64> = (0..trials.len() as u64).collect();
         index.extend(trials, &ranks)?;
         Ok(Self {

@@ -44,10 +44,8 @@ use crate::{Error, Estimate, EstimateOptions, Setting, Trajectory, WindowEstimat
 #[derive(Debug, Clone)]
 pub struct IncrementalEstimate {
     options: EstimateOptions,
-    /// In the order pushed.
+    /// In the order pushed (their places: `index.ranks()`).
     trials: Vec<Trajectory>,
-    /// Playback place of each trial (same order), all distinct.
-    places: Vec<u64>,
     index: PairIndex,
     /// Per key of `index`: the window's values, once it has some.
     windows: Vec<Option<Box<WindowState>>>,
@@ -208,7 +206,6 @@ impl IncrementalEstimate {
         Ok(Self {
             options,
             trials: Vec::new(),
-            places: Vec::new(),
             index: PairIndex::new(options.pair_options()?),
             windows: Vec::new(),
             scratch: Vec::new(),
@@ -227,7 +224,8 @@ impl IncrementalEstimate {
     /// keeps it (a server estimating over every trial it received, valid or not).
     pub fn try_push(&mut self, trial: Trajectory) -> Result<(), Box<(Error, Trajectory)>> {
         let place = self
-            .places
+            .index
+            .ranks()
             .iter()
             .max()
             .map_or(0, |last| last.saturating_add(1));
@@ -248,16 +246,14 @@ impl IncrementalEstimate {
         trial: Trajectory,
         place: u64,
     ) -> Result<(), Box<(Error, Trajectory)>> {
-        if self.places.contains(&place) {
+        if self.index.ranks().contains(&place) {
             let e = Error::InvalidArgument(format!("a trial at place {place} is already there"));
             return Err(Box::new((e, trial)));
         }
         self.trials.push(trial);
-        self.places.push(place);
-        let remap = match self.index.extend(&self.trials, &self.places) {
+        let remap = match self.index.extend(&self.trials, &[place]) {
             Ok(remap) => remap,
             Err(e) => {
-                self.places.pop();
                 let trial = self.trials.pop().expect("pushed above");
                 return Err(Box::new((e, trial)));
             }
@@ -313,13 +309,14 @@ impl IncrementalEstimate {
 
     /// The trial of the earliest place (the reference whose stamps a phone colours), if any.
     pub fn first_in_order(&self) -> Option<&Trajectory> {
-        let first = (0..self.trials.len()).min_by_key(|&i| self.places[i])?;
+        let first = (0..self.trials.len()).min_by_key(|&i| self.index.ranks()[i])?;
         Some(&self.trials[first])
     }
 
     /// The trials pushed, sorted by place; the rest of the state is dropped.
     pub fn into_trajectories(self) -> Vec<Trajectory> {
-        let mut placed: Vec<(u64, Trajectory)> = self.places.into_iter().zip(self.trials).collect();
+        let places = self.index.ranks().to_vec();
+        let mut placed: Vec<(u64, Trajectory)> = places.into_iter().zip(self.trials).collect();
         placed.sort_by_key(|(place, _)| *place);
         placed.into_iter().map(|(_, trial)| trial).collect()
     }
@@ -378,7 +375,6 @@ impl IncrementalEstimate {
             + scratch
             + trials
             + self.trials.capacity() * size_of::<Trajectory>()
-            + self.places.capacity() * 8
             + self.index.heap_bytes()
             + self.windows.capacity() * size_of::<Option<Box<WindowState>>>()
             + windows

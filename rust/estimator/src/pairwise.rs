@@ -351,6 +351,11 @@ impl PairIndex {
         self.trials
     }
 
+    /// Playback rank of each trial, in the order trials were added.
+    pub(crate) fn ranks(&self) -> &[u64] {
+        &self.ranks
+    }
+
     /// Number of keys (window starts).
     pub(crate) fn key_count(&self) -> usize {
         self.keys.len()
@@ -367,19 +372,20 @@ impl PairIndex {
     }
 
     /// Indexes `trials[self.trials()..]` (the earlier ones must be the trials indexed before,
-    /// unchanged, and are not checked again), whose playback ranks are `ranks` (one per trial,
-    /// all distinct), and replaces the stored pairs by the new pairs: every pair with a new
+    /// unchanged, and are not checked again), whose playback ranks are `new_ranks` (one per
+    /// new trial; all ranks distinct), and replaces the stored pairs by the new pairs: every pair with a new
     /// trial, the one of lower rank its reference. Nothing changes on error. Returns the new
     /// index of every old key when new keys were inserted among them, `None` when the old key
     /// indices stand.
     pub(crate) fn extend(
         &mut self,
         trials: &[Trajectory],
-        ranks: &[u64],
+        new_ranks: &[u64],
     ) -> Result<Option<Vec<u32>>, Error> {
         let old = self.trials;
         let n = trials.len();
-        debug_assert_eq!(ranks.len(), n);
+        debug_assert_eq!(new_ranks.len(), n - old);
+        let ranks: Vec<u64> = self.ranks.iter().chain(new_ranks).copied().collect();
         for (i, trial) in trials.iter().enumerate().skip(old) {
             validate_trial(i, trial)?;
         }
@@ -437,7 +443,7 @@ impl PairIndex {
         let first_new_matching = self.matchings.len();
         self.matchings.extend(new_matchings);
         self.matching_index.extend(pending);
-        self.ranks = ranks.to_vec();
+        self.ranks = ranks;
         let remap = self.add_keys(trials, old, n);
         self.trials = n;
         let blocks = self.blocks();
