@@ -58,29 +58,28 @@ fn upload(base: &str, token: &str, id: &str, recording: &Path) {
     );
 }
 
-/// `GET /v1/sessions/{id}` as `token`: (status, document).
-/// `DELETE {base}/v1/sessions/{id}` as `token`, which must answer 200.
-fn delete(base: &str, token: &str, id: &str) {
+/// `METHOD {base}/v1/sessions/{id}` with no body as `token`: (status, body).
+fn on_session(method: &str, base: &str, token: &str, id: &str) -> (u16, String) {
     let auth = bearer(token);
     let (code, _, text) = raw(
-        "DELETE",
+        method,
         &format!("{base}/v1/sessions/{id}"),
         None,
         b"",
         &[("authorization", &auth)],
     );
+    (code, text)
+}
+
+/// `DELETE {base}/v1/sessions/{id}` as `token`, which must answer 200.
+fn delete(base: &str, token: &str, id: &str) {
+    let (code, text) = on_session("DELETE", base, token, id);
     assert_eq!(code, 200, "{text}");
 }
 
+/// `GET /v1/sessions/{id}` as `token`: (status, document).
 fn status(base: &str, token: &str, id: &str) -> (u16, Value) {
-    let auth = bearer(token);
-    let (code, _, text) = raw(
-        "GET",
-        &format!("{base}/v1/sessions/{id}"),
-        None,
-        b"",
-        &[("authorization", &auth)],
-    );
+    let (code, text) = on_session("GET", base, token, id);
     (code, serde_json::from_str(&text).unwrap_or(Value::Null))
 }
 
