@@ -11,7 +11,7 @@ use crate::Error;
 use crate::auth::caller::Caller;
 use crate::auth::role::Role;
 use crate::auth::secret::{self, digest};
-use crate::db::{Db, now_ms};
+use crate::db::{CachedSql, Db, now_ms};
 
 /// A token as `sitar token list` shows it: never the token itself.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -51,7 +51,7 @@ impl Db {
         check_name(name)?;
         let d = digest(token);
         self.with(|c| {
-            c.execute(
+            c.execute_cached(
                 "INSERT INTO tokens (name, role, lookup, hash, created_ms) VALUES (?1, ?2, ?3, ?4, ?5) \
                  ON CONFLICT(name) DO NOTHING",
                 params![name, role.as_str(), &d.lookup[..], &d.hash[..], now_ms()],
@@ -68,7 +68,7 @@ impl Db {
         check_name(name)?;
         let d = digest(token);
         self.with(|c| {
-            c.execute(
+            c.execute_cached(
                 "INSERT INTO tokens (name, role, lookup, hash, created_ms) VALUES (?1, ?2, ?3, ?4, ?5) \
                  ON CONFLICT(name) DO UPDATE SET role = ?2, lookup = ?3, hash = ?4",
                 params![name, role.as_str(), &d.lookup[..], &d.hash[..], now_ms()],
@@ -79,14 +79,14 @@ impl Db {
 
     pub(crate) fn has_token(&self, name: &str) -> Result<bool, Error> {
         self.with(|c| {
-            c.prepare("SELECT 1 FROM tokens WHERE name = ?1")?
+            c.prepare_cached("SELECT 1 FROM tokens WHERE name = ?1")?
                 .exists([name])
         })
     }
 
     pub(crate) fn tokens(&self) -> Result<Vec<TokenInfo>, Error> {
         self.with(|c| {
-            let mut stmt = c.prepare(
+            let mut stmt = c.prepare_cached(
                 "SELECT name, role, created_ms, last_used_ms FROM tokens ORDER BY created_ms, id",
             )?;
             let rows = stmt.query_map([], |r| {
@@ -116,7 +116,7 @@ impl Db {
     /// Deletes the token named `name`; whether it existed. Its sessions stay (an admin sees
     /// them); a new token of the same name does not inherit them.
     pub(crate) fn revoke_token(&self, name: &str) -> Result<bool, Error> {
-        self.with(|c| c.execute("DELETE FROM tokens WHERE name = ?1", [name]))
+        self.with(|c| c.execute_cached("DELETE FROM tokens WHERE name = ?1", [name]))
             .map(|n| n == 1)
     }
 
@@ -128,7 +128,7 @@ impl Db {
         }
         let d = digest(token);
         let found = self.with(|c| {
-            let mut stmt = c.prepare(
+            let mut stmt = c.prepare_cached(
                 "SELECT id, name, role, hash, last_used_ms FROM tokens WHERE lookup = ?1",
             )?;
             let rows = stmt.query_map([&d.lookup[..]], |r| {
@@ -151,7 +151,7 @@ impl Db {
         let now = now_ms();
         if last_used.is_none_or(|t| now - t >= TOUCH_EVERY_MS) {
             self.with(|c| {
-                c.execute(
+                c.execute_cached(
                     "UPDATE tokens SET last_used_ms = ?2 WHERE id = ?1",
                     params![id, now],
                 )
@@ -167,7 +167,7 @@ impl Db {
     pub(crate) fn insert_share(&self, session: &str, token: &str) -> Result<(), Error> {
         let d = digest(token);
         self.with(|c| {
-            c.execute(
+            c.execute_cached(
                 "INSERT INTO share_links (lookup, hash, session_id, created_ms) VALUES (?1, ?2, ?3, ?4)",
                 params![&d.lookup[..], &d.hash[..], session, now_ms()],
             )
@@ -183,7 +183,7 @@ impl Db {
         let d = digest(token);
         let rows = self.with(|c| {
             let mut stmt =
-                c.prepare("SELECT hash, session_id FROM share_links WHERE lookup = ?1")?;
+                c.prepare_cached("SELECT hash, session_id FROM share_links WHERE lookup = ?1")?;
             let rows = stmt.query_map([&d.lookup[..]], |r| {
                 Ok((r.get::<_, Vec<u8>>(0)?, r.get::<_, String>(1)?))
             })?;
@@ -197,13 +197,13 @@ impl Db {
 
     /// Revokes every share link of `session`; how many there were.
     pub(crate) fn revoke_shares(&self, session: &str) -> Result<usize, Error> {
-        self.with(|c| c.execute("DELETE FROM share_links WHERE session_id = ?1", [session]))
+        self.with(|c| c.execute_cached("DELETE FROM share_links WHERE session_id = ?1", [session]))
     }
 
     /// Whether any token is stored at all (raw rows, for the tests of what is stored).
     #[cfg(test)]
     pub(crate) fn token_count(&self) -> Result<i64, Error> {
-        self.with(|c| c.query_row("SELECT COUNT(*) FROM tokens", [], |r| r.get(0)))
+        self.with(|c| c.query_row_cached("SELECT COUNT(*) FROM tokens", [], |r| r.get(0)))
     }
 }
 

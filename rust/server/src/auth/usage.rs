@@ -7,7 +7,7 @@
 use rusqlite::{OptionalExtension, params};
 
 use crate::Error;
-use crate::db::Db;
+use crate::db::{CachedSql, Db};
 
 pub(crate) const HOUR_MS: i64 = 3_600_000;
 /// Uploaded bytes count against the day in whole hours: the last 24 hourly buckets.
@@ -44,11 +44,11 @@ impl Db {
         now_ms: i64,
     ) -> Result<Result<(), Full>, Error> {
         self.transaction(|tx| {
-            tx.execute(
+            tx.execute_cached(
                 "DELETE FROM session_creations WHERE token_id = ?1 AND created_ms <= ?2",
                 params![token, now_ms - HOUR_MS],
             )?;
-            let (used, oldest): (i64, Option<i64>) = tx.query_row(
+            let (used, oldest): (i64, Option<i64>) = tx.query_row_cached(
                 "SELECT COUNT(*), MIN(created_ms) FROM session_creations WHERE token_id = ?1",
                 [token],
                 |r| Ok((r.get(0)?, r.get(1)?)),
@@ -59,7 +59,7 @@ impl Db {
                     frees_at_ms: oldest.unwrap_or(now_ms) + HOUR_MS,
                 }));
             }
-            tx.execute(
+            tx.execute_cached(
                 "INSERT INTO session_creations (token_id, created_ms) VALUES (?1, ?2)",
                 params![token, now_ms],
             )?;
@@ -73,7 +73,7 @@ impl Db {
         let first_hour = now_ms.div_euclid(HOUR_MS) - DAY_HOURS + 1;
         self.with(|c| {
             // TOTAL (a float) cannot overflow as SUM would; exact to 2^53 bytes.
-            let (bytes, oldest): (f64, Option<i64>) = c.query_row(
+            let (bytes, oldest): (f64, Option<i64>) = c.query_row_cached(
                 "SELECT TOTAL(bytes), MIN(hour) FROM upload_usage WHERE token_id = ?1 AND hour >= ?2",
                 params![token, first_hour],
                 |r| Ok((r.get(0)?, r.get(1)?)),
@@ -91,18 +91,18 @@ impl Db {
         let hour = now_ms.div_euclid(HOUR_MS);
         let bytes = i64::try_from(bytes).unwrap_or(i64::MAX);
         self.transaction(|tx| {
-            tx.execute(
+            tx.execute_cached(
                 "DELETE FROM upload_usage WHERE token_id = ?1 AND hour <= ?2",
                 params![token, hour - DAY_HOURS],
             )?;
             let before: Option<i64> = tx
-                .query_row(
+                .query_row_cached(
                     "SELECT bytes FROM upload_usage WHERE token_id = ?1 AND hour = ?2",
                     params![token, hour],
                     |r| r.get(0),
                 )
                 .optional()?;
-            tx.execute(
+            tx.execute_cached(
                 "INSERT INTO upload_usage (token_id, hour, bytes) VALUES (?1, ?2, ?3) \
                  ON CONFLICT(token_id, hour) DO UPDATE SET bytes = ?3",
                 params![token, hour, before.unwrap_or(0).saturating_add(bytes)],
@@ -150,7 +150,7 @@ mod tests {
         // Old rows are gone: only the window's are kept.
         let rows: i64 = db
             .with(|c| {
-                c.query_row(
+                c.query_row_cached(
                     "SELECT COUNT(*) FROM session_creations WHERE token_id = 1",
                     [],
                     |r| r.get(0),

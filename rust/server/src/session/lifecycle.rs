@@ -6,7 +6,7 @@ use rusqlite::{OptionalExtension, params};
 
 use crate::Error;
 use crate::config::PlaybackKind;
-use crate::db::{Db, now_ms};
+use crate::db::{CachedSql, Db, now_ms};
 use crate::session::state::{SessionState, Step};
 
 /// The transitions of the sessions in one database.
@@ -80,7 +80,7 @@ impl<'a> Lifecycle<'a> {
     /// typed row, so one bad row never stops the server.
     pub fn fail_unreadable(&self, id: &str, why: &str) -> Result<(), Error> {
         self.db.with(|c| {
-            c.execute(
+            c.execute_cached(
                 "UPDATE sessions SET state = ?2, error = ?3, finished_ms = ?4 WHERE id = ?1",
                 params![id, SessionState::Failed.as_str(), why, now_ms()],
             )
@@ -93,7 +93,7 @@ impl<'a> Lifecycle<'a> {
     fn take(&self, id: &str, step: Step, also: Also<'_>) -> Result<SessionState, Error> {
         self.db.transaction(|tx| {
             let row: Option<(String, String)> = tx
-                .query_row(
+                .query_row_cached(
                     "SELECT state, playback FROM sessions WHERE id = ?1",
                     [id],
                     |r| Ok((r.get(0)?, r.get(1)?)),
@@ -114,25 +114,25 @@ impl<'a> Lifecycle<'a> {
                 action: step.describe(),
             })?;
             let finished = after.is_finished().then(now_ms);
-            tx.execute(
+            tx.execute_cached(
                 "UPDATE sessions SET state = ?2, finished_ms = COALESCE(?3, finished_ms) WHERE id = ?1",
                 params![id, after.as_str(), finished],
             )?;
             match also {
                 Also::Nothing => 0,
-                Also::RecordingBytes(bytes) => tx.execute(
+                Also::RecordingBytes(bytes) => tx.execute_cached(
                     "UPDATE sessions SET recording_bytes = ?2 WHERE id = ?1",
                     params![id, bytes as i64],
                 )?,
-                Also::ResultsTrials(trials) => tx.execute(
+                Also::ResultsTrials(trials) => tx.execute_cached(
                     "UPDATE sessions SET results_trials = ?2 WHERE id = ?1",
                     params![id, trials],
                 )?,
-                Also::StopReason(reason) => tx.execute(
+                Also::StopReason(reason) => tx.execute_cached(
                     "UPDATE sessions SET stop_reason = ?2 WHERE id = ?1",
                     params![id, reason],
                 )?,
-                Also::Error(why) => tx.execute(
+                Also::Error(why) => tx.execute_cached(
                     "UPDATE sessions SET error = ?2 WHERE id = ?1",
                     params![id, why],
                 )?,

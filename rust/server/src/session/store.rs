@@ -6,7 +6,7 @@ use rusqlite::{OptionalExtension, params};
 
 use crate::Error;
 use crate::config::PlaybackKind;
-use crate::db::{Db, now_ms};
+use crate::db::{CachedSql, Db, now_ms};
 use crate::session::record::{NewSession, Session};
 use crate::session::state::SessionState;
 use crate::settings::{self, EstimateSettings};
@@ -121,7 +121,7 @@ impl Db {
         self.transaction(|tx| {
             if let Some(key) = new.idempotency_key {
                 let existing: Option<(String, String)> = tx
-                    .query_row(
+                    .query_row_cached(
                         &format!(
                             "SELECT id, {REQUEST} FROM sessions WHERE idempotency_key = ?1"
                         ),
@@ -140,7 +140,7 @@ impl Db {
                     return Ok((existing, false));
                 }
             }
-            tx.execute(
+            tx.execute_cached(
                 "INSERT INTO sessions (id, idempotency_key, created_ms, trials_total, setting, playback, \
                  state, adaptive_min, adaptive_k, legacy, window_frames, pose_relation, owner) \
                  VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13)",
@@ -166,7 +166,7 @@ impl Db {
 
     pub fn session(&self, id: &str) -> Result<Option<Session>, Error> {
         self.with(|c| {
-            c.query_row(
+            c.query_row_cached(
                 &format!("SELECT {COLUMNS} FROM sessions WHERE id = ?1"),
                 [id],
                 session_from_row,
@@ -188,7 +188,7 @@ impl Db {
     /// As [`Db::recent_sessions`], with the unreadable rows named.
     pub fn recent_rows(&self, owner: Option<i64>, limit: u32) -> Result<Rows, Error> {
         self.with(|c| {
-            let mut stmt = c.prepare(&format!(
+            let mut stmt = c.prepare_cached(&format!(
                 "SELECT {COLUMNS} FROM sessions WHERE ?1 IS NULL OR owner = ?1 \
                  ORDER BY rowid DESC LIMIT ?2"
             ))?;
@@ -201,7 +201,7 @@ impl Db {
         let names: Vec<&str> = states.iter().map(|s| s.as_str()).collect();
         let list = serde_json::to_string(&names).unwrap_or_default();
         self.with(|c| {
-            let mut stmt = c.prepare(&format!(
+            let mut stmt = c.prepare_cached(&format!(
                 "SELECT {COLUMNS} FROM sessions WHERE state IN (SELECT value FROM json_each(?1)) \
                  ORDER BY created_ms, rowid"
             ))?;
@@ -214,7 +214,7 @@ impl Db {
     /// still waiting for trials).
     pub fn expired(&self, cutoff_ms: i64) -> Result<Vec<String>, Error> {
         self.with(|c| {
-            let mut stmt = c.prepare(
+            let mut stmt = c.prepare_cached(
                 "SELECT id FROM sessions WHERE \
                  (state IN (?2, ?3) AND finished_ms < ?1) \
                  OR (created_ms < ?1 AND (state = ?4 OR (state = ?5 AND playback = ?6))) \
@@ -250,7 +250,7 @@ impl Db {
                     "SELECT id FROM sessions WHERE state = ?1{legacy} AND (?2 IS NULL OR owner = ?2) \
                      ORDER BY finished_ms DESC, rowid DESC LIMIT 1"
                 );
-                c.query_row(&sql, params![SessionState::Done.as_str(), owner], |r| {
+                c.query_row_cached(&sql, params![SessionState::Done.as_str(), owner], |r| {
                     r.get(0)
                 })
                     .optional()
@@ -259,7 +259,7 @@ impl Db {
                     "SELECT id FROM sessions WHERE (?1 IS NULL OR owner = ?1){legacy} \
                      ORDER BY rowid DESC LIMIT 1"
                 );
-                c.query_row(&sql, [owner], |r| r.get(0)).optional()
+                c.query_row_cached(&sql, [owner], |r| r.get(0)).optional()
             }
         })
     }
@@ -268,14 +268,14 @@ impl Db {
     /// Returns whether it existed.
     pub fn delete_session(&self, id: &str) -> Result<bool, Error> {
         self.transaction(|tx| {
-            tx.execute("DELETE FROM trials WHERE session_id = ?1", [id])?;
-            tx.execute("DELETE FROM jobs WHERE session_id = ?1", [id])?;
-            tx.execute("DELETE FROM share_links WHERE session_id = ?1", [id])?;
-            tx.execute(
+            tx.execute_cached("DELETE FROM trials WHERE session_id = ?1", [id])?;
+            tx.execute_cached("DELETE FROM jobs WHERE session_id = ?1", [id])?;
+            tx.execute_cached("DELETE FROM share_links WHERE session_id = ?1", [id])?;
+            tx.execute_cached(
                 "UPDATE devices SET session_id = NULL WHERE session_id = ?1",
                 [id],
             )?;
-            Ok(tx.execute("DELETE FROM sessions WHERE id = ?1", [id])? == 1)
+            Ok(tx.execute_cached("DELETE FROM sessions WHERE id = ?1", [id])? == 1)
         })
     }
 }
@@ -365,8 +365,8 @@ mod tests {
             db.insert_session(id, &new_session(None)).unwrap();
         }
         db.with(|c| {
-            c.execute("UPDATE sessions SET trials_total = -5 WHERE id = 'a'", [])?;
-            c.execute("UPDATE sessions SET playback = 'vhs' WHERE id = 'c'", [])
+            c.execute_cached("UPDATE sessions SET trials_total = -5 WHERE id = 'a'", [])?;
+            c.execute_cached("UPDATE sessions SET playback = 'vhs' WHERE id = 'c'", [])
         })
         .unwrap();
         let rows = db.recent_rows(None, 10).unwrap();
@@ -398,7 +398,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let db = Db::open(&dir.path().join("sitar.db")).unwrap();
         db.insert_session("a", &new_session(None)).unwrap();
-        db.with(|c| c.execute("UPDATE sessions SET pose_relation = 'sideways'", []))
+        db.with(|c| c.execute_cached("UPDATE sessions SET pose_relation = 'sideways'", []))
             .unwrap();
         let err = db.session("a").unwrap_err().to_string();
         assert!(
