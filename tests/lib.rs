@@ -399,31 +399,12 @@ pub fn tum_text(trajectory: &sitar_estimator::Trajectory) -> String {
     String::from_utf8(out).unwrap()
 }
 
+#[path = "../rust/server/src/minimal_mp4.rs"]
+mod mp4_header;
+
 /// ftyp + moov(mvhd v0): the smallest file whose mp4 header says `duration_ms`.
 pub fn minimal_mp4(duration_ms: u32) -> Vec<u8> {
-    let mut mvhd = Vec::new();
-    mvhd.extend_from_slice(&108u32.to_be_bytes());
-    mvhd.extend_from_slice(b"mvhd");
-    mvhd.extend_from_slice(&[0; 12]);
-    mvhd.extend_from_slice(&1000u32.to_be_bytes());
-    mvhd.extend_from_slice(&duration_ms.to_be_bytes());
-    mvhd.extend_from_slice(&0x0001_0000u32.to_be_bytes());
-    mvhd.extend_from_slice(&0x0100u16.to_be_bytes());
-    mvhd.extend_from_slice(&[0; 10]);
-    for m in [0x0001_0000u32, 0, 0, 0, 0x0001_0000, 0, 0, 0, 0x4000_0000] {
-        mvhd.extend_from_slice(&m.to_be_bytes());
-    }
-    mvhd.extend_from_slice(&[0; 24]);
-    mvhd.extend_from_slice(&1u32.to_be_bytes());
-    let mut out = Vec::new();
-    out.extend_from_slice(&20u32.to_be_bytes());
-    out.extend_from_slice(b"ftypisom");
-    out.extend_from_slice(&0x200u32.to_be_bytes());
-    out.extend_from_slice(b"isom");
-    out.extend_from_slice(&((8 + mvhd.len()) as u32).to_be_bytes());
-    out.extend_from_slice(b"moov");
-    out.extend_from_slice(&mvhd);
-    out
+    mp4_header::minimal_mp4(1000, duration_ms)
 }
 
 /// Parses a legacy CSV into (start, error) rows, checking the header.

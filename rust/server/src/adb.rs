@@ -514,8 +514,9 @@ impl Playback for AdbPlayback {
 }
 
 #[cfg(test)]
-pub(crate) mod tests {
+mod tests {
     use super::*;
+    use crate::minimal_mp4::minimal_mp4;
 
     #[cfg(unix)]
     #[test]
@@ -599,33 +600,5 @@ pub(crate) mod tests {
             mp4_duration_s(&path),
             Err(Error::InvalidContent(_))
         ));
-    }
-
-    /// ftyp + moov(mvhd v0) with the given timescale and duration.
-    pub(crate) fn minimal_mp4(timescale: u32, duration: u32) -> Vec<u8> {
-        let mut mvhd = Vec::new();
-        mvhd.extend_from_slice(&108u32.to_be_bytes());
-        mvhd.extend_from_slice(b"mvhd");
-        mvhd.extend_from_slice(&[0; 4]); // version 0, flags
-        mvhd.extend_from_slice(&[0; 8]); // creation, modification
-        mvhd.extend_from_slice(&timescale.to_be_bytes());
-        mvhd.extend_from_slice(&duration.to_be_bytes());
-        mvhd.extend_from_slice(&0x0001_0000u32.to_be_bytes()); // rate 1.0
-        mvhd.extend_from_slice(&0x0100u16.to_be_bytes()); // volume 1.0
-        mvhd.extend_from_slice(&[0; 10]);
-        for m in [0x0001_0000u32, 0, 0, 0, 0x0001_0000, 0, 0, 0, 0x4000_0000] {
-            mvhd.extend_from_slice(&m.to_be_bytes());
-        }
-        mvhd.extend_from_slice(&[0; 24]);
-        mvhd.extend_from_slice(&1u32.to_be_bytes());
-        let mut out = Vec::new();
-        out.extend_from_slice(&20u32.to_be_bytes());
-        out.extend_from_slice(b"ftypisom");
-        out.extend_from_slice(&0x200u32.to_be_bytes());
-        out.extend_from_slice(b"isom");
-        out.extend_from_slice(&((8 + mvhd.len()) as u32).to_be_bytes());
-        out.extend_from_slice(b"moov");
-        out.extend_from_slice(&mvhd);
-        out
     }
 }

@@ -86,6 +86,7 @@
 // tls                                           — certificate and HTTPS listener
 // router, server                                — route table and middleware; serving
 // fuzzing                                       — the parsers, for fuzz/ only (doc-hidden)
+// minimal_mp4                                   — an MP4 header for tests (tests only)
 mod adb;
 mod assets;
 mod auth;
@@ -146,3 +147,7 @@ pub use playback::{
 };
 pub use server::{Server, ServerHandle};
 pub use tls::TlsConfig;
+
+// Last: `tests/layout.rs` reads the module list up to the first `#[cfg(test)]`.
+#[cfg(test)]
+mod minimal_mp4;

@@ -181,7 +181,7 @@ mod tests {
 
     #[test]
     fn minimal_mp4s_pass_in_the_orders_muxers_write() {
-        let header = crate::adb::tests::minimal_mp4(1000, 2500);
+        let header = crate::minimal_mp4::minimal_mp4(1000, 2500);
         assert!(mp4_crate_reads(&header));
         assert_eq!(check(&header), Ok(()));
         // Android's MediaMuxer: ftyp, then the media data, the movie header last.
@@ -235,7 +235,7 @@ mod tests {
             .collect();
         assert!(!mp4_crate_reads(&random));
         assert!(check(&random).is_err());
-        let header = crate::adb::tests::minimal_mp4(1000, 2500);
+        let header = crate::minimal_mp4::minimal_mp4(1000, 2500);
         // Cut short inside the movie header.
         let cut = check(&header[..header.len() - 10]).unwrap_err();
         assert!(cut.contains("`moov` box at byte 20 claims"), "{cut}");
@@ -281,7 +281,7 @@ mod tests {
         for _ in 0..(MAX_BOXES + 10) {
             many.extend(boxed(b"free", &[]));
         }
-        many.extend(crate::adb::tests::minimal_mp4(1000, 10));
+        many.extend(crate::minimal_mp4::minimal_mp4(1000, 10));
         let why = check(&many).unwrap_err();
         assert!(why.contains("first 4096 top-level boxes"), "{why}");
     }
@@ -310,7 +310,7 @@ mod tests {
             err.to_string().starts_with("the recording is not an MP4"),
             "{err}"
         );
-        std::fs::write(&path, crate::adb::tests::minimal_mp4(1000, 10)).unwrap();
+        std::fs::write(&path, crate::minimal_mp4::minimal_mp4(1000, 10)).unwrap();
         assert!(check_mp4_file(&path).is_ok());
         assert!(matches!(
             check_mp4_file(&dir.path().join("missing")),
