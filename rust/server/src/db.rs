@@ -163,7 +163,7 @@ const ADDED_COLUMNS: &[(&str, &str, &str)] = &[
 fn migrate(conn: &Connection) -> rusqlite::Result<()> {
     for (table, column, definition) in ADDED_COLUMNS {
         let present: bool = conn
-            .prepare_cached(&format!(
+            .prepare(&format!(
                 "SELECT 1 FROM pragma_table_info('{table}') WHERE name = ?1"
             ))?
             .exists([column])?;
@@ -396,7 +396,7 @@ mod tests {
             let db = Db::open(&path).unwrap();
             // Trials belong to a session (a foreign key).
             db.with(|c| {
-                c.execute_cached(
+                c.execute(
                     "INSERT INTO sessions (id, created_ms, trials_total, setting, playback, state, \
                      adaptive_k) VALUES ('a', 0, 5, 'median', 'upload', 'created', 3)",
                     [],

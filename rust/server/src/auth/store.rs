@@ -203,7 +203,7 @@ impl Db {
     /// Whether any token is stored at all (raw rows, for the tests of what is stored).
     #[cfg(test)]
     pub(crate) fn token_count(&self) -> Result<i64, Error> {
-        self.with(|c| c.query_row_cached("SELECT COUNT(*) FROM tokens", [], |r| r.get(0)))
+        self.with(|c| c.query_row("SELECT COUNT(*) FROM tokens", [], |r| r.get(0)))
     }
 }
 

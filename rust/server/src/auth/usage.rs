@@ -150,7 +150,7 @@ mod tests {
         // Old rows are gone: only the window's are kept.
         let rows: i64 = db
             .with(|c| {
-                c.query_row_cached(
+                c.query_row(
                     "SELECT COUNT(*) FROM session_creations WHERE token_id = 1",
                     [],
                     |r| r.get(0),

@@ -365,8 +365,8 @@ mod tests {
             db.insert_session(id, &new_session(None)).unwrap();
         }
         db.with(|c| {
-            c.execute_cached("UPDATE sessions SET trials_total = -5 WHERE id = 'a'", [])?;
-            c.execute_cached("UPDATE sessions SET playback = 'vhs' WHERE id = 'c'", [])
+            c.execute("UPDATE sessions SET trials_total = -5 WHERE id = 'a'", [])?;
+            c.execute("UPDATE sessions SET playback = 'vhs' WHERE id = 'c'", [])
         })
         .unwrap();
         let rows = db.recent_rows(None, 10).unwrap();
@@ -398,7 +398,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let db = Db::open(&dir.path().join("sitar.db")).unwrap();
         db.insert_session("a", &new_session(None)).unwrap();
-        db.with(|c| c.execute_cached("UPDATE sessions SET pose_relation = 'sideways'", []))
+        db.with(|c| c.execute("UPDATE sessions SET pose_relation = 'sideways'", []))
             .unwrap();
         let err = db.session("a").unwrap_err().to_string();
         assert!(
