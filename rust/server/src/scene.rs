@@ -204,8 +204,10 @@ const CACHED_SESSIONS: usize = 4;
 /// The session whose scene is being built ahead, if any (at most one at a time).
 static PREPARING: Mutex<Option<String>> = Mutex::new(None);
 
-fn preparing_slot() -> std::sync::MutexGuard<'static, Option<String>> {
-    PREPARING
+/// `mutex` locked; a panic elsewhere while it was held leaves its data usable (a cache and a
+/// flag: nothing half-written to guard against).
+fn locked<T>(mutex: &'static Mutex<T>) -> std::sync::MutexGuard<'static, T> {
+    mutex
         .lock()
         .unwrap_or_else(|poisoned| poisoned.into_inner())
 }
@@ -216,7 +218,7 @@ fn preparing_slot() -> std::sync::MutexGuard<'static, Option<String>> {
 /// finishes while another's is built gets its scene on the first request instead, as before.
 pub(crate) fn prepare(shared: Arc<Shared>, id: String) {
     {
-        let mut slot = preparing_slot();
+        let mut slot = locked(&PREPARING);
         if slot.is_some() {
             return;
         }
@@ -229,45 +231,37 @@ pub(crate) fn prepare(shared: Arc<Shared>, id: String) {
             if let Err(e) = built {
                 log::debug!("session {id}: scene not built ahead: {e}");
             }
-            *preparing_slot() = None;
+            *locked(&PREPARING) = None;
         });
     if spawned.is_err() {
-        *preparing_slot() = None;
+        *locked(&PREPARING) = None;
     }
 }
 
 /// Whether session `id`'s scene is being built ahead right now (its scratch folder under
 /// `tmp/` may exist until the build ends).
 pub(crate) fn preparing(id: &str) -> bool {
-    preparing_slot().as_deref() == Some(id)
+    locked(&PREPARING).as_deref() == Some(id)
 }
 
 /// Drops session `id`'s scene from the in-memory cache (a deleted session's data must not
 /// stay readable, even in memory).
 pub(crate) fn forget(shared: &Shared, id: &str) {
     let key = shared.files.phone_session(id);
-    CACHE
-        .lock()
-        .unwrap_or_else(|poisoned| poisoned.into_inner())
-        .retain(|(k, _, _)| *k != key);
+    locked(&CACHE).retain(|(k, _, _)| *k != key);
 }
 
 /// The phone session of `row` with its latest results loaded. Blocking.
 pub(crate) fn load(shared: &Shared, row: &Row) -> Result<Arc<(Session, Source)>, Error> {
     let key = shared.files.phone_session(&row.id);
-    let lock = || {
-        CACHE
-            .lock()
-            .unwrap_or_else(|poisoned| poisoned.into_inner())
-    };
-    if let Some((_, _, hit)) = lock()
+    if let Some((_, _, hit)) = locked(&CACHE)
         .iter()
         .find(|(k, trials, _)| *k == key && *trials == row.results_trials)
     {
         return Ok(hit.clone());
     }
     let loaded = Arc::new(load_uncached(shared, row)?);
-    let mut cache = lock();
+    let mut cache = locked(&CACHE);
     cache.retain(|(k, _, _)| *k != key);
     if cache.len() >= CACHED_SESSIONS {
         cache.remove(0);
