@@ -373,10 +373,10 @@ impl PairIndex {
 
     /// Indexes `trials[self.trials()..]` (the earlier ones must be the trials indexed before,
     /// unchanged, and are not checked again), whose playback ranks are `new_ranks` (one per
-    /// new trial; all ranks distinct), and replaces the stored pairs by the new pairs: every pair with a new
-    /// trial, the one of lower rank its reference. Nothing changes on error. Returns the new
-    /// index of every old key when new keys were inserted among them, `None` when the old key
-    /// indices stand.
+    /// new trial; all ranks distinct), and replaces the stored pairs by the new pairs: every
+    /// pair with a new trial, the one of lower rank its reference. Nothing changes on error.
+    /// Returns the new index of every old key when new keys were inserted among them, `None`
+    /// when the old key indices stand.
     pub(crate) fn extend(
         &mut self,
         trials: &[Trajectory],
