@@ -399,7 +399,7 @@ pub fn tum_text(trajectory: &sitar_estimator::Trajectory) -> String {
     String::from_utf8(out).unwrap()
 }
 
-#[path = "../rust/server/src/minimal_mp4.rs"]
+#[path = "../rust/server/src/ingest/minimal_mp4.rs"]
 mod mp4_header;
 
 /// ftyp + moov(mvhd v0): the smallest file whose mp4 header says `duration_ms`.

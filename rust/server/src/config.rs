@@ -219,7 +219,7 @@ pub struct ServerConfig {
     /// Limits per token (sessions per hour, upload bytes per day, concurrent uploads).
     pub limits: crate::auth::Limits,
     /// HTTPS with rustls (`sitar serve --tls`); `None` (the default): plain HTTP.
-    pub tls: Option<crate::tls::TlsConfig>,
+    pub tls: Option<crate::http::tls::TlsConfig>,
     /// Playback jobs (sim, adb) running at once, each on its own thread; more wait in the
     /// queue holding no thread (default: the machine's cores, at least 2, at most 8).
     pub playback_workers: usize,

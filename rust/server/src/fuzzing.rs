@@ -8,8 +8,8 @@ use axum::http::{HeaderMap, HeaderValue};
 use crate::Error;
 use crate::config::{PlaybackKind, ServerConfig};
 use crate::error::short;
-use crate::handlers::sessions::QUOTE_LIMIT;
-use crate::settings::EstimateSettings;
+use crate::http::handlers::sessions::QUOTE_LIMIT;
+use crate::session::estimate_settings::EstimateSettings;
 
 pub use crate::auth::secret::{
     COOKIE_NAME, bearer, cookie, has_param, plausible, query_param, without_param,
@@ -17,7 +17,7 @@ pub use crate::auth::secret::{
 
 /// `Content-Range: bytes START-LAST/TOTAL` of a `PUT …/recording`, as `(start, last, total)`.
 pub fn content_range(text: &str) -> Option<(u64, u64, u64)> {
-    crate::handlers::recording::parse_content_range(text).map(|r| (r.start, r.last, r.total))
+    crate::http::handlers::recording::parse_content_range(text).map(|r| (r.start, r.last, r.total))
 }
 
 /// The `Idempotency-Key` check of `POST /v1/sessions` on a raw header value; `Ok(None)` is
@@ -27,8 +27,8 @@ pub fn idempotency_key(value: &[u8]) -> Result<Option<String>, Error> {
         return Ok(None);
     };
     let mut headers = HeaderMap::new();
-    headers.insert(crate::http::IDEMPOTENCY_HEADER, value);
-    crate::http::idempotency_key(&headers)
+    headers.insert(crate::http::helpers::IDEMPOTENCY_HEADER, value);
+    crate::http::helpers::idempotency_key(&headers)
 }
 
 /// What `POST /v1/sessions` makes of its JSON body before it touches the database: the typed
@@ -36,7 +36,7 @@ pub fn idempotency_key(value: &[u8]) -> Result<Option<String>, Error> {
 /// kind and the estimate settings (checked against a default server configuration).
 pub fn session_request(body: &[u8]) -> Result<(PlaybackKind, u32, &'static str), Error> {
     // The handler's own parser: one JSON object, unknown keys refused, nothing after it.
-    crate::handlers::sessions::parse_create_request(body)?;
+    crate::http::handlers::sessions::parse_create_request(body)?;
     let value: serde_json::Value = serde_json::from_slice(body)
         .map_err(|_| Error::Internal("typed but not one JSON value".into()))?;
     let text = |key: &str| value.get(key).and_then(|v| v.as_str());
@@ -63,5 +63,5 @@ pub fn session_request(body: &[u8]) -> Result<(PlaybackKind, u32, &'static str),
 /// A trial's TUM text as `POST /v1/sessions/{id}/trials` and the playback phones' uploads
 /// read it; the number of poses.
 pub fn trial(bytes: &[u8]) -> Result<usize, Error> {
-    crate::trials::parse_trial(bytes, "trial.txt").map(|t| t.len())
+    crate::ingest::trials::parse_trial(bytes, "trial.txt").map(|t| t.len())
 }

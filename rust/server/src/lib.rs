@@ -71,83 +71,44 @@
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
 
-// Layers, lowest first (a module uses only those above it; `tests/layout.rs` checks that
-// no import cycle exists):
-// error, config, settings, files, db            — vocabulary and storage
-// session (state, record, store, lifecycle)     — a session's life; the only state writer
-// estimation, held, live, playback, adb         — estimates over trials held in memory
-// queue                                         — sessions waiting for a playback worker
-// shared, published, trials, status, report     — what handlers and jobs share
-// evidence                                      — the phone's evidence, checked and stored
-// jobs, recordings, deletion                    — work on sessions
+// Folders by concern, lowest first. `tests/layout.rs` checks that no import cycle exists
+// among the modules, that only `storage` speaks SQL or touches the data directory, and that
+// this comment names every module declared here:
+// error, config                                 — vocabulary
+// storage                                       — where bytes are kept: metadata store, blob store
+// session                                       — a session's life; the only state writer
+// estimate                                      — estimates over trials held in memory, published
+// playback                                      — how trials are played: adb, sim, upload, queue, jobs
+// ingest                                        — what arrives from phones: recordings, trials, evidence
+// report                                        — what the report draws: page, charts, regions, scene
+// app_state                                     — what handlers and jobs share
 // auth                                          — tokens, callers, limits (middleware)
-// http                                          — helpers below every handler
-// handlers/*                                    — one file per resource
-// tls                                           — certificate and HTTPS listener
-// router, server                                — route table and middleware; serving
+// http                                          — router, server, connections, limits, handlers, TLS
 // fuzzing                                       — the parsers, for fuzz/ only (doc-hidden)
-// minimal_mp4                                   — an MP4 header for tests (tests only)
-mod adb;
-mod assets;
+mod app_state;
 mod auth;
-mod charts;
 mod config;
-mod connections;
-mod db;
-mod deletion;
 mod error;
-mod estimation;
-mod evidence;
-mod files;
+mod estimate;
 #[doc(hidden)]
 pub mod fuzzing;
-mod handlers;
-mod held;
 mod http;
-mod index_ranges;
-mod jobs;
-mod json_errors;
-mod live;
-mod mp4_check;
-mod netinfo;
-mod pagination;
-mod parse_errors;
+mod ingest;
 mod playback;
-mod published;
-mod queue;
-mod quota;
-mod recordings;
-mod region_evidence;
-mod regions;
 mod report;
-mod request_limits;
-mod router;
-mod scene;
-mod scene_view;
-mod server;
 mod session;
-mod settings;
-mod shared;
-mod status;
-mod templates;
-mod thinning;
-mod tls;
-mod trials;
+mod storage;
 
-pub use adb::{AdbPlayback, contract as adb_contract, mp4_duration_s};
 pub use auth::{
     ADMIN_TOKEN_FILE, Limits, PresetToken, Role, TokenInfo, create_token, list_tokens, new_token,
     revoke_token,
 };
 pub use config::{AdbConfig, PlaybackKind, ServerConfig, SimConfig};
 pub use error::Error;
-pub use http::IDEMPOTENCY_HEADER;
+pub use http::helpers::IDEMPOTENCY_HEADER;
+pub use http::server::{Server, ServerHandle};
+pub use http::tls::TlsConfig;
+pub use playback::adb::{AdbPlayback, contract as adb_contract, mp4_duration_s};
 pub use playback::{
     DeviceInfo, Playback, PlaybackJob, PlaybackPlan, SimPlayback, TrialOutput, UploadPlayback,
 };
-pub use server::{Server, ServerHandle};
-pub use tls::TlsConfig;
-
-// Last: `tests/layout.rs` reads the module list up to the first `#[cfg(test)]`.
-#[cfg(test)]
-mod minimal_mp4;

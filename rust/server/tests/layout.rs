@@ -201,26 +201,31 @@ fn no_import_cycle_among_the_modules() {
     // is the only user of the handlers (besides `fuzzing`, the fuzz targets' hidden window on
     // the handlers' parsers, at the top beside the router).
     for (module, uses) in &graph {
-        let handler = module.starts_with("handlers::");
+        let handler = module.starts_with("http::handlers::");
         for used in uses {
-            if used.starts_with("handlers") {
+            if used.starts_with("http::handlers") {
                 assert!(
-                    module == "router" || module == "fuzzing" || (module == "handlers" && handler),
+                    module == "http::router"
+                        || module == "http"
+                        || module == "fuzzing"
+                        || (module == "http::handlers" && handler),
                     "{module} uses {used}: only the router takes handlers"
                 );
             }
             if handler {
-                assert!(!used.starts_with("handlers::"), "{module} uses {used}");
+                assert!(!used.starts_with("http::handlers::"), "{module} uses {used}");
             }
         }
     }
     // The graph is what the files say (a parser that missed edges would find no cycle).
     let uses = |module: &str, used: &str| graph[module].contains(used);
-    assert!(uses("handlers::trials", "http") && uses("handlers::trials", "trials"));
-    assert!(uses("jobs", "shared") && uses("jobs", "live") && uses("jobs", "session"));
-    assert!(uses("session::lifecycle", "db") && uses("session::lifecycle", "error"));
-    assert!(uses("router", "handlers") && uses("server", "router"));
-    assert!(!graph["http"].iter().any(|m| m.starts_with("handlers")));
+    assert!(uses("http::handlers::trials", "http::helpers"));
+    assert!(uses("http::handlers::trials", "ingest::trials"));
+    assert!(uses("playback::jobs", "app_state") && uses("playback::jobs", "session"));
+    assert!(uses("playback::jobs", "estimate::live_sessions"));
+    assert!(uses("session::lifecycle", "storage::db") && uses("session::lifecycle", "error"));
+    assert!(uses("http::router", "http::handlers") && uses("http::server", "http::router"));
+    assert!(!graph["http::helpers"].iter().any(|m| m.starts_with("http::handlers")));
 }
 
 #[test]
@@ -251,10 +256,10 @@ fn only_the_lifecycle_writes_a_sessions_state() {
         ] {
             let literal = format!("\"{name}\"");
             if code.contains(&literal) {
-                let jobs = module == "db" && matches!(name, "done" | "failed");
+                let jobs = module == "storage::db" && matches!(name, "done" | "failed");
                 // The playback app's status file (docs/playback-contract.md) has a
                 // `failed MESSAGE` line of its own: a word of that contract, not a state.
-                let status_file = module == "adb" && name == "failed";
+                let status_file = module == "playback::adb" && name == "failed";
                 assert!(
                     module == "session::state" || jobs || status_file,
                     "{module} spells the state {literal}"
@@ -267,4 +272,31 @@ fn only_the_lifecycle_writes_a_sessions_state() {
         BTreeSet::from(["session::lifecycle".to_string()]),
         "modules that write a session's state"
     );
+}
+
+#[test]
+fn the_layer_comment_names_every_module() {
+    let lib = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("src/lib.rs"))
+        .unwrap();
+    let comment: String = lib
+        .lines()
+        .filter(|l| l.trim_start().starts_with("// "))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    let declared: Vec<&str> = lib
+        .lines()
+        .filter_map(|l| {
+            let l = l.trim();
+            l.strip_prefix("mod ")
+                .or_else(|| l.strip_prefix("pub mod "))
+                .and_then(|rest| rest.strip_suffix(';'))
+        })
+        .collect();
+    assert!(declared.len() >= 10, "{declared:?}");
+    for module in declared {
+        let named = comment
+            .split(|c: char| !(c.is_alphanumeric() || c == '_'))
+            .any(|word| word == module);
+        assert!(named, "lib.rs declares `{module}` but its layer comment does not name it");
+    }
 }

@@ -8,7 +8,7 @@ use std::path::Path;
 use crate::Error;
 use crate::auth::role::Role;
 use crate::auth::secret;
-use crate::db::Db;
+use crate::storage::db::Db;
 
 /// The file in the data directory holding the first admin token.
 pub const ADMIN_TOKEN_FILE: &str = "admin.token";

@@ -15,10 +15,10 @@ use axum::response::{IntoResponse, Response};
 use futures_util::StreamExt;
 
 use crate::Error;
+use crate::app_state::App;
 use crate::auth::caller::Caller;
 use crate::auth::usage::Full;
-use crate::db::{Db, now_ms};
-use crate::shared::Shared;
+use crate::storage::db::{Db, now_ms};
 
 /// The limits every token has (`sitar serve --max-sessions-per-hour`, `--max-upload-gib-per-day`,
 /// `--max-concurrent-uploads`). The defaults are generous for one lab: a phone that records
@@ -98,7 +98,7 @@ impl UploadLimiter {
     /// used up).
     fn start_upload(
         &self,
-        shared: &Arc<Shared>,
+        shared: &Arc<App>,
         token: i64,
         now_ms: i64,
     ) -> Result<UploadGuard, Error> {
@@ -154,7 +154,7 @@ impl UploadLimiter {
 /// Held while an upload body is read: its bytes are counted, and the slot is freed when the
 /// body is done with (read to the end, or dropped).
 struct UploadGuard {
-    shared: Arc<Shared>,
+    shared: Arc<App>,
     token: i64,
     bytes: u64,
 }
@@ -185,7 +185,7 @@ fn is_upload(method: &Method, path: &str) -> bool {
 
 /// The middleware: runs after authentication, on the caller's token.
 pub(crate) async fn limit_uploads(
-    State(shared): State<Arc<Shared>>,
+    State(shared): State<Arc<App>>,
     request: Request,
     next: Next,
 ) -> Response {
@@ -226,10 +226,10 @@ mod tests {
     use crate::auth::usage::HOUR_MS;
     use crate::config::ServerConfig;
 
-    fn shared(dir: &std::path::Path, limits: Limits) -> Arc<Shared> {
+    fn shared(dir: &std::path::Path, limits: Limits) -> Arc<App> {
         let mut config = ServerConfig::new(dir);
         config.limits = limits;
-        Arc::new(Shared::open(config).unwrap())
+        Arc::new(App::open(config).unwrap())
     }
 
     #[test]

@@ -10,9 +10,9 @@ use axum::middleware::Next;
 use axum::response::{IntoResponse, Response};
 
 use crate::Error;
+use crate::app_state::App;
 use crate::auth::caller::Caller;
 use crate::auth::secret::{self, COOKIE_NAME};
-use crate::shared::Shared;
 
 /// The caller's name, put on the response for the request log.
 #[derive(Debug, Clone)]
@@ -41,7 +41,7 @@ fn is_legacy(path: &str) -> bool {
 }
 
 pub(crate) async fn authenticate(
-    State(shared): State<Arc<Shared>>,
+    State(shared): State<Arc<App>>,
     mut request: Request,
     next: Next,
 ) -> Response {
@@ -70,7 +70,7 @@ enum Found<'a> {
     PageVisit(&'a str),
 }
 
-fn identify<'a>(shared: &Shared, request: &'a Request) -> Result<Found<'a>, Error> {
+fn identify<'a>(shared: &App, request: &'a Request) -> Result<Found<'a>, Error> {
     let path = request.uri().path();
     let method = request.method();
     let query = request.uri().query().unwrap_or("");
@@ -112,7 +112,7 @@ fn identify<'a>(shared: &Shared, request: &'a Request) -> Result<Found<'a>, Erro
 }
 
 /// 303 to the same page without `token=`, setting the HttpOnly, SameSite=Strict cookie.
-fn redirect_with_cookie(shared: &Shared, request: &Request, token: &str) -> Response {
+fn redirect_with_cookie(shared: &App, request: &Request, token: &str) -> Response {
     let rest = secret::without_param(request.uri().query().unwrap_or(""), "token");
     let path = request.uri().path();
     let location = if rest.is_empty() {

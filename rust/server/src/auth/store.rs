@@ -11,7 +11,7 @@ use crate::Error;
 use crate::auth::caller::Caller;
 use crate::auth::role::Role;
 use crate::auth::secret::{self, digest};
-use crate::db::{CachedSql, Db, now_ms};
+use crate::storage::db::{CachedSql, Db, now_ms};
 
 /// A token as `sitar token list` shows it: never the token itself.
 #[derive(Debug, Clone, PartialEq, Eq)]

@@ -7,7 +7,7 @@
 use rusqlite::{OptionalExtension, params};
 
 use crate::Error;
-use crate::db::{CachedSql, Db};
+use crate::storage::db::{CachedSql, Db};
 
 pub(crate) const HOUR_MS: i64 = 3_600_000;
 /// Uploaded bytes count against the day in whole hours: the last 24 hourly buckets.

@@ -6,8 +6,8 @@ use rusqlite::{OptionalExtension, params};
 
 use crate::Error;
 use crate::config::PlaybackKind;
-use crate::db::{CachedSql, Db, now_ms};
 use crate::session::state::{SessionState, Step};
+use crate::storage::db::{CachedSql, Db, now_ms};
 
 /// The transitions of the sessions in one database.
 #[derive(Clone, Copy)]
@@ -145,8 +145,8 @@ impl<'a> Lifecycle<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::session::estimate_settings::EstimateSettings;
     use crate::session::record::NewSession;
-    use crate::settings::EstimateSettings;
 
     fn db_with(playback: PlaybackKind) -> (tempfile::TempDir, Db) {
         let dir = tempfile::tempdir().unwrap();

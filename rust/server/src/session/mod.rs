@@ -2,9 +2,12 @@
 //! (`state.rs`), its typed row (`record.rs`), reading and creating rows (`store.rs`) and the
 //! transitions (`lifecycle.rs`), the only code that writes a session's state.
 
+pub(crate) mod deletion;
+pub(crate) mod estimate_settings;
 mod lifecycle;
 mod record;
 mod state;
+pub(crate) mod status;
 mod store;
 
 pub(crate) use lifecycle::Lifecycle;

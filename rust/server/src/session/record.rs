@@ -1,8 +1,8 @@
 //! A session as the server knows it: the typed row of the `sessions` table.
 
 use crate::config::PlaybackKind;
+use crate::session::estimate_settings::EstimateSettings;
 use crate::session::state::{SessionState, Step};
-use crate::settings::EstimateSettings;
 
 /// One session, every column typed.
 #[derive(Debug, Clone, PartialEq)]

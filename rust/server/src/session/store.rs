@@ -6,10 +6,10 @@ use rusqlite::{OptionalExtension, params};
 
 use crate::Error;
 use crate::config::PlaybackKind;
-use crate::db::{CachedSql, Db, now_ms};
+use crate::session::estimate_settings::{self, EstimateSettings};
 use crate::session::record::{NewSession, Session};
 use crate::session::state::SessionState;
-use crate::settings::{self, EstimateSettings};
+use crate::storage::db::{CachedSql, Db, now_ms};
 
 const COLUMNS: &str = "id, trials_total, setting, playback, state, error, stop_reason, adaptive_min, \
      adaptive_k, recording_bytes, results_trials, legacy, window_frames, pose_relation, owner";
@@ -61,10 +61,12 @@ fn session_from_row(r: &rusqlite::Row<'_>) -> rusqlite::Result<Session> {
         id: r.get(0)?,
         trials_total: r.get(1)?,
         settings: EstimateSettings {
-            setting: typed(r, 2, "setting", |s| settings::parse_setting(s).ok())?,
+            setting: typed(r, 2, "setting", |s| {
+                estimate_settings::parse_setting(s).ok()
+            })?,
             window_frames: r.get(12)?,
             pose_relation: typed(r, 13, "pose_relation", |s| {
-                settings::parse_pose_relation(s).ok()
+                estimate_settings::parse_pose_relation(s).ok()
             })?,
         },
         playback: typed(r, 3, "playback", |s| s.parse::<PlaybackKind>().ok())?,

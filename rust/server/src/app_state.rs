@@ -1,0 +1,163 @@
+//! What the handlers and jobs share: configuration, storage, live sessions, running jobs,
+//! the playback backends and the per-session write locks.
+
+use std::collections::HashMap;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::Instant;
+
+use crate::Error;
+use crate::config::{PlaybackKind, ServerConfig};
+use crate::estimate::live_sessions::LiveSessions;
+use crate::playback::adb::AdbPlayback;
+use crate::playback::queue::{PlaybackQueue, QueueLimits};
+use crate::playback::{Playback, PlaybackPlan, SimPlayback, UploadPlayback};
+use crate::session::{Lifecycle, NewSession, Session};
+use crate::storage::db::Db;
+use crate::storage::files::Files;
+
+/// What a running job knows that the database does not: timing and the cancel flag.
+#[derive(Debug, Clone)]
+pub(crate) struct RunningJob {
+    pub cancel: Arc<AtomicBool>,
+    pub plan: Option<PlaybackPlan>,
+    pub started: Instant,
+    /// Trials stored before this run started (resume after restart).
+    pub done_before: u32,
+    /// Trials this run plays.
+    pub needed: u32,
+}
+
+/// Everything the routes and jobs share.
+pub(crate) struct App {
+    pub config: ServerConfig,
+    pub db: Db,
+    pub files: Files,
+    /// Per-token counters of sessions created and bytes uploaded.
+    pub limiter: Arc<crate::auth::UploadLimiter>,
+    /// Whether the page cookie carries `Secure` (served over TLS).
+    pub secure_cookies: bool,
+    /// The TLS certificate's SHA-256 fingerprint (`AB:CD:…`), shown on the overview page.
+    pub tls_fingerprint: Option<String>,
+    /// Parsed trials of the sessions in flight.
+    pub live: LiveSessions,
+    /// Sim and adb sessions waiting for, or held by, a playback worker.
+    pub queue: PlaybackQueue,
+    /// One permit per estimate worker: `upload` sessions' estimates run within it.
+    pub estimates: tokio::sync::Semaphore,
+    sim: Arc<dyn Playback>,
+    adb: Arc<dyn Playback>,
+    upload: Arc<dyn Playback>,
+    running: Mutex<HashMap<String, RunningJob>>,
+    /// Per session: held by a request while it writes into the session's folder (a
+    /// recording or its kept prefix, a trial, timestamps) or deletes the session.
+    session_locks: Mutex<HashMap<String, Arc<tokio::sync::Mutex<()>>>>,
+    /// Set when the server stops: jobs stop without changing their session's
+    /// state, so the next start resumes them.
+    shutdown: AtomicBool,
+}
+
+impl App {
+    pub fn open(config: ServerConfig) -> Result<App, Error> {
+        let files = Files::open(&config.data_dir)?
+            .with_idle_timeout(config.upload_idle_timeout)
+            .with_quotas(config.session_disk_quota, config.disk_quota);
+        let db = Db::open(&config.data_dir.join("sitar.db"))?;
+        Ok(App {
+            sim: Arc::new(SimPlayback::new(config.sim.clone())),
+            adb: Arc::new(AdbPlayback::new(config.adb.clone())),
+            upload: Arc::new(UploadPlayback),
+            limiter: Arc::new(crate::auth::UploadLimiter::new(config.limits)),
+            secure_cookies: false,
+            tls_fingerprint: None,
+            live: LiveSessions::new(config.live_session_bytes, config.live_total_bytes),
+            queue: PlaybackQueue::new(QueueLimits {
+                per_owner: config.jobs_per_token,
+                max_waiting: config.max_queued,
+            }),
+            estimates: tokio::sync::Semaphore::new(config.estimate_workers.max(1)),
+            config,
+            db,
+            files,
+            running: Mutex::new(HashMap::new()),
+            session_locks: Mutex::new(HashMap::new()),
+            shutdown: AtomicBool::new(false),
+        })
+    }
+
+    /// The transitions of this server's sessions.
+    pub fn lifecycle(&self) -> Lifecycle<'_> {
+        Lifecycle::new(&self.db)
+    }
+
+    /// Session `id`, or a 404 (an id the server cannot have made is never looked up).
+    pub fn session(&self, id: &str) -> Result<Session, Error> {
+        if !crate::storage::files::is_server_id(id) {
+            return Err(Error::NotFound(format!("no session {id:?}")));
+        }
+        self.db
+            .session(id)?
+            .ok_or_else(|| Error::NotFound(format!("no session {id:?}")))
+    }
+
+    /// Makes a session's row and folder; with an idempotency key seen before, returns the
+    /// earlier session (the bool is false).
+    pub fn create_session(&self, new: &NewSession<'_>) -> Result<(String, bool), Error> {
+        let (id, created) = self
+            .db
+            .insert_session(&crate::storage::files::new_id(), new)?;
+        self.files.create_session_dirs(&id)?;
+        Ok((id, created))
+    }
+
+    pub fn backend(&self, kind: PlaybackKind) -> Arc<dyn Playback> {
+        match kind {
+            PlaybackKind::Sim => self.sim.clone(),
+            PlaybackKind::Adb => self.adb.clone(),
+            PlaybackKind::Upload => self.upload.clone(),
+        }
+    }
+
+    fn running_jobs(&self) -> std::sync::MutexGuard<'_, HashMap<String, RunningJob>> {
+        self.running.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// The job running on session `id`, if one does.
+    pub fn running(&self, id: &str) -> Option<RunningJob> {
+        self.running_jobs().get(id).cloned()
+    }
+
+    pub fn set_running(&self, id: &str, job: Option<RunningJob>) {
+        let mut jobs = self.running_jobs();
+        match job {
+            Some(job) => jobs.insert(id.to_string(), job),
+            None => jobs.remove(id),
+        };
+    }
+
+    /// The lock over session `id`'s folder: writers hold it, and a delete waits for them.
+    pub fn session_lock(&self, id: &str) -> Arc<tokio::sync::Mutex<()>> {
+        let mut locks = self.session_locks.lock().unwrap_or_else(|e| e.into_inner());
+        locks.entry(id.to_string()).or_default().clone()
+    }
+
+    /// Forgets a deleted session's lock.
+    pub fn forget_session_lock(&self, id: &str) {
+        let mut locks = self.session_locks.lock().unwrap_or_else(|e| e.into_inner());
+        locks.remove(id);
+    }
+
+    /// Stops every job; their sessions stay in flight for the next start.
+    pub fn stop_all(&self) {
+        self.shutdown.store(true, Ordering::SeqCst);
+        self.queue.close();
+        self.estimates.close();
+        for job in self.running_jobs().values() {
+            job.cancel.store(true, Ordering::SeqCst);
+        }
+    }
+
+    pub fn stopping(&self) -> bool {
+        self.shutdown.load(Ordering::SeqCst)
+    }
+}

@@ -1,0 +1,193 @@
+//! The HTML pages: `GET /` (what the server holds, for the person next to the playback
+//! phones, refreshed every few seconds) and `GET /v1/sessions/{id}/report`. Both are
+//! minijinja templates (`templates/`, autoescaped) sent with the pages' CSP.
+
+use std::fmt::Write;
+
+use axum::extract::State;
+use axum::response::Response;
+use serde_json::json;
+
+use crate::Error;
+use crate::auth::Admin;
+use crate::config::PlaybackKind;
+use crate::estimate::results_files::{self, Form};
+use crate::http::helpers::{AppState, Found};
+use crate::report::index_ranges::index_ranges;
+use crate::report::page::{self, ReportInput};
+use crate::report::region_evidence::CameraEvidence;
+use crate::report::scene;
+use crate::report::templates;
+use crate::session::status::status_json;
+
+/// Sessions on the page (the newest).
+const PAGE_SESSIONS: u32 = 50;
+
+/// `2026-12-02 03:41:07` from milliseconds since the Unix epoch (UTC).
+fn utc(ms: i64) -> String {
+    let secs = ms.div_euclid(1000);
+    let (days, rem) = (secs.div_euclid(86_400), secs.rem_euclid(86_400));
+    // Civil date from days since 1970-01-01 (Howard Hinnant's algorithm).
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z.rem_euclid(146_097);
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let day = doy - (153 * mp + 2) / 5 + 1;
+    let month = if mp < 10 { mp + 3 } else { mp - 9 };
+    let year = yoe + era * 400 + i64::from(month <= 2);
+    format!(
+        "{year:04}-{month:02}-{day:02} {:02}:{:02}:{:02}",
+        rem / 3600,
+        rem % 3600 / 60,
+        rem % 60
+    )
+}
+
+/// Why the devices table is empty, in the operator's terms.
+fn why_no_devices(shared: &crate::app_state::App) -> String {
+    match shared.config.playback {
+        PlaybackKind::Sim => {
+            "this server plays back on simulated phones (sim playback), not adb devices".into()
+        }
+        PlaybackKind::Upload => {
+            "upload playback: the trials come from the app, no playback phones are driven".into()
+        }
+        PlaybackKind::Adb => {
+            let adb = &shared.config.adb.adb_path;
+            let found = adb.components().count() > 1 && adb.exists()
+                || std::env::var_os("PATH").is_some_and(|paths| {
+                    std::env::split_paths(&paths).any(|dir| dir.join(adb).is_file())
+                });
+            if found {
+                "adb sees no authorised phone (plug one in over USB and accept the debugging prompt)".into()
+            } else {
+                format!(
+                    "adb was not found ({}: install Android platform-tools or set the adb path)",
+                    adb.display()
+                )
+            }
+        }
+    }
+}
+
+/// `GET /`: the newest sessions and the known playback devices as one HTML page.
+pub(crate) async fn overview(State(shared): AppState, _: Admin) -> Result<Response, Error> {
+    let rows = shared.db.recent_sessions(None, PAGE_SESSIONS)?;
+    let mut sessions = Vec::new();
+    for row in &rows {
+        let status = status_json(&shared, row)?;
+        let note = row
+            .error
+            .as_deref()
+            .or(row.stop_reason.as_deref())
+            .unwrap_or("");
+        let played_by: Vec<serde_json::Value> = shared
+            .db
+            .trial_sources(&row.id)?
+            .into_iter()
+            .map(|(source, trials)| json!({"source": source, "trials": index_ranges(&trials)}))
+            .collect();
+        sessions.push(json!({
+            "id": row.id,
+            "created_at": shared.db.session_created_ms(&row.id)?.map(utc).unwrap_or_default(),
+            "state": row.state.as_str(),
+            "progress": format!("{:.0} %", status["progress"].as_f64().unwrap_or(0.0) * 100.0),
+            "eta": status["eta_s"].as_f64().map(|e| format!("{e:.0} s")).unwrap_or_else(|| "—".into()),
+            "trials_done": status["trials_done"].as_u64().unwrap_or(0),
+            "total": row.trials_total,
+            "played_by": played_by,
+            "playback": row.playback.as_str(),
+            "setting": settings_label(&row.settings),
+            "has_results": row.results_trials > 0,
+            "note": note,
+        }));
+    }
+    let devices: Vec<serde_json::Value> = shared
+        .db
+        .devices()?
+        .into_iter()
+        .map(|(serial, state, session, _seen)| json!({"serial": serial, "state": state, "session": session}))
+        .collect();
+    let html = templates::render(
+        "overview.html",
+        &json!({
+            "playback": shared.config.playback.as_str(),
+            "sessions": sessions,
+            "devices": devices,
+            "devices_empty_reason": why_no_devices(&shared),
+            "tls_fingerprint": shared.tls_fingerprint.as_deref(),
+            "held": format!("{:.1}", shared.live.held_bytes() as f64 / (1 << 20) as f64),
+            "bound": format!("{:.0}", shared.config.live_total_bytes as f64 / (1 << 20) as f64),
+        }),
+    )?;
+    Ok(templates::page(html))
+}
+
+/// `trim_mean_30`, with the window and relation when they are not the defaults.
+fn settings_label(settings: &crate::session::estimate_settings::EstimateSettings) -> String {
+    let mut label = settings.setting.to_string();
+    if settings.window_frames != crate::session::estimate_settings::DEFAULT_WINDOW_FRAMES
+        || settings.pose_relation != sitar_estimator::PoseRelation::TranslationPart
+    {
+        let _ = write!(
+            label,
+            " ({} frames, {})",
+            settings.window_frames, settings.pose_relation
+        );
+    }
+    label
+}
+
+/// `GET /v1/sessions/{id}/report`: the latest results on the walk (see `crate::report::page`).
+pub(crate) async fn report(
+    State(shared): AppState,
+    Found(session): Found,
+) -> Result<Response, Error> {
+    let base = format!("/v1/sessions/{}/", session.id);
+    Ok(templates::page(render_report(shared, session, base).await?))
+}
+
+/// The report page of `session`: for its owner and for a share link alike; `base` is where
+/// this reader fetches the session's data (`/v1/sessions/ID/` or `/share/TOKEN/`).
+pub(crate) async fn render_report(
+    shared: std::sync::Arc<crate::app_state::App>,
+    session: crate::session::Session,
+    base: String,
+) -> Result<String, Error> {
+    let json = results_files::read(&shared, &session, Form::Json)?;
+    tokio::task::spawn_blocking(move || {
+        // No trajectory (e.g. trials without a readable reference) still gets a page.
+        let phone = scene::load(&shared, &session).ok();
+        let history = results_files::history(&shared, &session);
+        // Unreadable evidence costs the regions their thumbnails, not the page.
+        let evidence = CameraEvidence::load(&shared.files, &session.id).unwrap_or_else(|e| {
+            log::warn!("report of {}: evidence left out: {e}", session.id);
+            None
+        });
+        page::render(&ReportInput {
+            row: &session,
+            results_json: &json,
+            config: &shared.config,
+            phone: phone.as_deref().map(|(p, s)| (p, *s)),
+            history,
+            base: &base,
+            evidence: evidence.as_ref(),
+        })
+    })
+    .await
+    .map_err(|e| Error::Internal(format!("report: {e}")))?
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn utc_dates() {
+        assert_eq!(utc(0), "1970-01-01 00:00:00");
+        // 2024-02-29 12:34:56 UTC (a leap day).
+        assert_eq!(utc(1_709_210_096_000), "2024-02-29 12:34:56");
+    }
+}

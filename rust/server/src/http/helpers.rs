@@ -1,0 +1,132 @@
+//! HTTP helpers every handler uses, below all of them: JSON answers, the content type, the
+//! declared body length, the idempotency key, the session lookup extractor, and blocking
+//! work off the async workers.
+
+use std::sync::Arc;
+
+use axum::extract::{FromRequestParts, Path};
+use axum::http::request::Parts;
+use axum::http::{HeaderMap, StatusCode, header};
+use axum::response::{IntoResponse, Response};
+
+use crate::Error;
+use crate::app_state::App;
+use crate::auth::Caller;
+use crate::session::Session;
+
+/// Runs `f` on tokio's blocking pool (file and CPU work off the async workers); a task that
+/// panicked or was cancelled is an internal error naming `what`.
+pub(crate) async fn blocking<T: Send + 'static>(
+    what: &'static str,
+    f: impl FnOnce() -> Result<T, Error> + Send + 'static,
+) -> Result<T, Error> {
+    tokio::task::spawn_blocking(f)
+        .await
+        .map_err(|e| Error::Internal(format!("{what}: {e}")))?
+}
+
+/// The state every handler gets.
+pub(crate) type AppState = axum::extract::State<Arc<App>>;
+
+/// The header carrying a client-made key that makes a `POST` safe to retry.
+pub const IDEMPOTENCY_HEADER: &str = "idempotency-key";
+
+/// `curl --data-binary @file` labels any raw body form-urlencoded; the bytes
+/// are still raw, so that label is accepted wherever a raw body is.
+pub(crate) const CURL_DEFAULT_CONTENT_TYPE: &str = "application/x-www-form-urlencoded";
+
+/// A JSON answer with `status`.
+pub(crate) fn json_response(status: StatusCode, body: &str) -> Response {
+    (
+        status,
+        [(header::CONTENT_TYPE, "application/json")],
+        body.to_string(),
+    )
+        .into_response()
+}
+
+/// A JSON answer of `value` with `status`.
+pub(crate) fn json_value(status: StatusCode, value: &serde_json::Value) -> Response {
+    json_response(status, &value.to_string())
+}
+
+/// The media type of the request body, lower case, without parameters ("" when none).
+pub(crate) fn content_type(headers: &HeaderMap) -> String {
+    headers
+        .get(header::CONTENT_TYPE)
+        .and_then(|v| v.to_str().ok())
+        .map(|v| {
+            v.split(';')
+                .next()
+                .unwrap_or("")
+                .trim()
+                .to_ascii_lowercase()
+        })
+        .unwrap_or_default()
+}
+
+/// The request's `Idempotency-Key` (1 to 128 ASCII characters), if it has one.
+pub(crate) fn idempotency_key(headers: &HeaderMap) -> Result<Option<String>, Error> {
+    match headers.get(IDEMPOTENCY_HEADER) {
+        None => Ok(None),
+        Some(v) => {
+            let key = v
+                .to_str()
+                .map_err(|_| Error::BadRequest("Idempotency-Key is not ASCII".into()))?;
+            if key.is_empty() || key.len() > 128 {
+                return Err(Error::BadRequest(
+                    "Idempotency-Key must have 1 to 128 characters".into(),
+                ));
+            }
+            Ok(Some(key.to_string()))
+        }
+    }
+}
+
+/// The body length the request declares (`Content-Length`), if it declares one.
+pub(crate) fn declared_length(headers: &HeaderMap) -> Option<u64> {
+    headers
+        .get(header::CONTENT_LENGTH)
+        .and_then(|v| v.to_str().ok())
+        .and_then(|v| v.parse().ok())
+}
+
+/// Refuses a body whose declared length is over the limit before reading it.
+pub(crate) fn check_declared_length(
+    headers: &HeaderMap,
+    limit: u64,
+    what: &'static str,
+) -> Result<(), Error> {
+    match declared_length(headers) {
+        Some(n) if n > limit => Err(Error::TooLarge { what, limit }),
+        _ => Ok(()),
+    }
+}
+
+/// The session a route's `{id}` names, looked up before the handler runs: a handler that
+/// takes it never sees an unknown or malformed id, nor another app token's session (both
+/// 404, with the same message: its existence is not revealed).
+pub(crate) struct Found(pub Session);
+
+impl FromRequestParts<Arc<App>> for Found {
+    type Rejection = Error;
+
+    async fn from_request_parts(parts: &mut Parts, shared: &Arc<App>) -> Result<Self, Error> {
+        let Path(id) = Path::<String>::from_request_parts(parts, shared)
+            .await
+            .map_err(|e| Error::NotFound(format!("no session: {e}")))?;
+        let caller = Caller::from_request_parts(parts, shared).await?;
+        visible_session(shared, &caller, &id).map(Found)
+    }
+}
+
+/// The session `id` if `caller` may see it; otherwise the same 404 as an unknown id.
+/// [`Found`] uses it; routes with more path parameters than `{id}` call it themselves.
+pub(crate) fn visible_session(shared: &App, caller: &Caller, id: &str) -> Result<Session, Error> {
+    let session = shared.session(id)?;
+    if caller.may_see(&session) {
+        Ok(session)
+    } else {
+        Err(Error::NotFound(format!("no session {id:?}")))
+    }
+}

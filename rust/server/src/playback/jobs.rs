@@ -1,0 +1,543 @@
+//! Session jobs: playback with progressive estimates and adaptive stopping (on the
+//! playback workers, which take sessions from the queue), the final estimate, `upload`
+//! sessions' progressive estimates (within the estimate workers' permits), cancelling, and
+//! resuming after a restart.
+
+use std::sync::Arc;
+use std::sync::atomic::Ordering;
+use std::time::{Duration, Instant};
+
+use crate::Error;
+use crate::app_state::{App, RunningJob};
+use crate::config::PlaybackKind;
+use crate::estimate::held_trials::Purpose;
+use crate::estimate::live_sessions::LiveSession;
+use crate::estimate::publishing::{self, Published};
+use crate::ingest::trials::{self, Arrival};
+pub(crate) use crate::playback::queue::Begin;
+use crate::playback::queue::{Intent, Ticket};
+use crate::playback::{PlaybackJob, TrialOutput};
+use crate::session::{Session, SessionState, Step};
+use crate::storage::db::JobEnd;
+
+/// How long a delete waits for a playback it stopped to end.
+const STOP_WAIT: Duration = Duration::from_secs(15);
+
+/// How a job ended.
+enum Outcome {
+    Done,
+    /// The server is stopping: the session stays in flight for the next start.
+    Interrupted,
+    /// A delete stopped it: nothing is published, the session goes next.
+    Deleted,
+}
+
+/// Publishes the estimate over the live session's trials if any arrived since the last.
+async fn publish(
+    shared: &Arc<App>,
+    live: &Arc<LiveSession>,
+    id: &str,
+    purpose: Purpose,
+) -> Result<Option<Published>, Error> {
+    let (shared, id) = (shared.clone(), id.to_string());
+    live.publish(purpose, move |published| {
+        crate::estimate::results_files::write(&shared, &id, published)
+    })
+    .await
+}
+
+/// Ends a job's session: a failure is recorded (unless the server is stopping, which leaves
+/// the session in flight), the job row closed, the live session dropped.
+fn conclude(shared: &Arc<App>, id: &str, job: Option<i64>, outcome: Result<Outcome, Error>) {
+    shared.set_running(id, None);
+    shared.live.remove(id);
+    match outcome {
+        Ok(Outcome::Done) => {
+            if let Some(job) = job {
+                let _ = shared.db.finish_job(job, JobEnd::Done, None);
+            }
+            crate::report::scene::prepare(shared.clone(), id.to_string());
+        }
+        Ok(Outcome::Interrupted) => {
+            log::info!("session {id}: interrupted by shutdown, resumes on next start")
+        }
+        Ok(Outcome::Deleted) => log::info!("session {id}: playback stopped for its deletion"),
+        // An error while the server stops (a cancelled playback, a refused blocking
+        // task) is the stop's doing: the session stays in flight for the next start.
+        Err(e) if shared.stopping() => {
+            log::info!("session {id}: interrupted by shutdown ({e}), resumes on next start")
+        }
+        Err(e) => {
+            // The stored reason is shown to clients: no server paths in it.
+            let message = e.client_message();
+            log::warn!("session {id} failed: {e}");
+            if let Err(e) = shared.lifecycle().fail(id, &message) {
+                log::warn!("session {id}: {e}");
+            }
+            if let Some(job) = job {
+                let _ = shared.db.finish_job(job, JobEnd::Failed, Some(&message));
+            }
+        }
+    }
+}
+
+/// Puts a sim or adb session in the playback queue; a playback worker takes it in turn.
+pub(crate) fn enqueue(shared: &App, session: &Session, begin: Begin) {
+    shared.queue.push(session.owner, &session.id, begin);
+}
+
+/// Starts the playback workers: each takes the next session from the queue and plays it to
+/// the end, until the server stops.
+pub(crate) fn spawn_workers(shared: &Arc<App>) {
+    for _ in 0..shared.config.playback_workers.max(1) {
+        let shared = shared.clone();
+        tokio::spawn(async move {
+            while let Some(ticket) = shared.queue.next().await {
+                let id = ticket.id.clone();
+                // A task of its own: a panic in one job ends that job, not the worker.
+                let job = tokio::spawn(run_ticket(shared.clone(), ticket)).await;
+                if let Err(e) = job {
+                    log::error!("session {id}: playback job ended abnormally: {e}");
+                    shared.set_running(&id, None);
+                }
+                shared.queue.finished(&id);
+            }
+        });
+    }
+}
+
+async fn run_ticket(shared: Arc<App>, ticket: Ticket) {
+    let id = ticket.id.clone();
+    let job = shared.db.start_job(&id, "playback").ok();
+    let outcome = play_and_estimate(&shared, &ticket).await;
+    conclude(&shared, &id, job, outcome);
+}
+
+/// Runs `work` within an estimate worker's permit; `None` when the server stops first.
+async fn with_estimate_permit<T>(
+    shared: &App,
+    work: impl std::future::Future<Output = T>,
+) -> Option<T> {
+    let _permit = shared.estimates.acquire().await.ok()?;
+    Some(work.await)
+}
+
+/// Runs the final estimate of an `upload` session in the background; the caller has moved
+/// it to `estimating` (so a delete under the session lock sees it in flight).
+pub(crate) fn spawn_estimate(shared: Arc<App>, id: String) {
+    // Nothing new since the last progressive estimate: it is the final one.
+    spawn_final_estimate(shared, id, |_, _| Ok(()));
+}
+
+/// Runs a session's final estimate in the background within an estimate worker's permit,
+/// `prepare` first (the state moves the caller has not made), then publish and finish.
+fn spawn_final_estimate<F>(shared: Arc<App>, id: String, prepare: F)
+where
+    F: FnOnce(&App, &Session) -> Result<(), Error> + Send + 'static,
+{
+    tokio::spawn(async move {
+        let job = shared.db.start_job(&id, "estimate").ok();
+        let outcome = with_estimate_permit(&shared, async {
+            let session = shared.session(&id)?;
+            prepare(&shared, &session)?;
+            let live = trials::live_session(&shared, &session).await?;
+            publish(&shared, &live, &id, Purpose::Final).await?;
+            shared.lifecycle().finish(&id)?;
+            Ok(Outcome::Done)
+        })
+        .await
+        .unwrap_or(Ok(Outcome::Interrupted));
+        conclude(&shared, &id, job, outcome);
+    });
+}
+
+/// After a trial of an `upload` session: publishes progressive estimates in the background
+/// until no trial is left waiting (trials that arrive during one are taken together by the
+/// next). One such worker per session at a time, each within an estimate worker's permit.
+pub(crate) fn spawn_progressive(shared: Arc<App>, live: Arc<LiveSession>, id: String) {
+    if !shared.config.progressive_uploads || !live.claim_worker() {
+        return;
+    }
+    tokio::spawn(async move {
+        loop {
+            let published =
+                with_estimate_permit(&shared, publish(&shared, &live, &id, Purpose::Progressive))
+                    .await;
+            if let Some(Err(e)) = &published
+                && !shared.stopping()
+            {
+                log::warn!("session {id}: progressive estimate: {e}");
+            }
+            if published.is_none() {
+                live.release_worker();
+                break;
+            }
+            if !live.release_worker() {
+                break;
+            }
+        }
+    });
+}
+
+/// What stopping a sim or adb session's playback found.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Stopped {
+    /// It waited in the queue and left it: no job ever works on it now.
+    Dequeued,
+    /// Its job was told to stop (and, for a delete, has ended).
+    Playing,
+    /// Neither queued nor playing.
+    Idle,
+}
+
+/// Stops session `id`'s playback for `intent` (`Cancel` or `Delete`): out of the queue if it
+/// waits there, else its job is told; a delete waits (bounded) until the job has ended.
+pub(crate) async fn stop_playback(
+    shared: &App,
+    id: &str,
+    intent: Intent,
+) -> Result<Stopped, Error> {
+    if shared.queue.remove(id) {
+        return Ok(Stopped::Dequeued);
+    }
+    let Some(control) = shared.queue.control(id) else {
+        return Ok(Stopped::Idle);
+    };
+    control.request(intent);
+    if intent == Intent::Delete {
+        let deadline = Instant::now() + STOP_WAIT;
+        while shared.queue.holds(id) {
+            if Instant::now() >= deadline {
+                return Err(Error::Conflict(format!(
+                    "session {id}: its playback is still stopping; try again shortly"
+                )));
+            }
+            tokio::time::sleep(Duration::from_millis(20)).await;
+        }
+    }
+    Ok(Stopped::Playing)
+}
+
+/// The reason a session cancelled after `count` trials fails with (an estimate needs 2).
+fn too_few_after_cancel(count: u32) -> String {
+    format!("cancelled by the client after {count} trial(s); an estimate needs 2")
+}
+
+/// Why a session that left the queue ends early.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum EndEarly {
+    /// `POST …/cancel`.
+    Cancel,
+    /// `POST …/estimate`.
+    Estimate,
+}
+
+/// A session taken out of the queue to end now: with 2 trials or more (played before a
+/// restart) its final estimate runs; with fewer it fails with the reason.
+pub(crate) fn finish_dequeued(shared: Arc<App>, id: String, why: EndEarly) -> Result<(), Error> {
+    let count = shared.db.trial_count(&id)?;
+    if count < 2 {
+        return shared.lifecycle().fail(&id, &too_few_after_cancel(count));
+    }
+    // Marked as running so that a delete waits for the estimate.
+    shared.set_running(
+        &id,
+        Some(RunningJob {
+            cancel: Default::default(),
+            plan: None,
+            started: Instant::now(),
+            done_before: count,
+            needed: 0,
+        }),
+    );
+    spawn_final_estimate(shared, id, move |shared, session| {
+        let reason = match why {
+            EndEarly::Cancel => format!(
+                "cancelled by the client after {count} of {} trials",
+                session.trials_total
+            ),
+            EndEarly::Estimate => format!("estimate requested after {count} trials"),
+        };
+        shared.lifecycle().stop(&session.id, &reason)?;
+        shared.lifecycle().start_estimating(&session.id)
+    });
+    Ok(())
+}
+
+/// Plays a session from the queue on a thread of its own (never one of tokio's blocking
+/// threads, which requests, file I/O and estimates need), publishing progressive estimates
+/// as trials arrive, then its final estimate.
+async fn play_and_estimate(shared: &Arc<App>, ticket: &Ticket) -> Result<Outcome, Error> {
+    let (id, begin, control) = (ticket.id.as_str(), ticket.begin, &ticket.control);
+    let cancel = control.cancel.clone();
+    // Marked running before anything else: a delete now waits for this job.
+    shared.set_running(
+        id,
+        Some(RunningJob {
+            cancel: cancel.clone(),
+            plan: None,
+            started: Instant::now(),
+            done_before: 0,
+            needed: 0,
+        }),
+    );
+    if shared.stopping() {
+        return Ok(Outcome::Interrupted);
+    }
+    if control.intent() == Intent::Delete {
+        return Ok(Outcome::Deleted);
+    }
+    let session = shared.session(id)?;
+    let backend = shared.backend(session.playback);
+    let done_before = shared.db.trial_count(id)?;
+    let needed = session.trials_total.saturating_sub(done_before);
+    let recording = shared.files.recording(id);
+    let plan = {
+        let (backend, recording) = (backend.clone(), recording.clone());
+        tokio::task::spawn_blocking(move || backend.plan(&recording, needed))
+            .await
+            .map_err(|e| Error::Internal(format!("plan task: {e}")))??
+    };
+    shared.set_running(
+        id,
+        Some(RunningJob {
+            cancel: cancel.clone(),
+            plan: Some(plan),
+            started: Instant::now(),
+            done_before,
+            needed,
+        }),
+    );
+    if begin == Begin::Start {
+        shared.lifecycle().start_playing(id)?;
+    }
+    let live = trials::live_session(shared, &session).await?;
+
+    let (tx, mut rx) = tokio::sync::mpsc::unbounded_channel::<TrialOutput>();
+    let job = PlaybackJob {
+        session: id.to_string(),
+        recording,
+        first_index: done_before,
+        trials: needed,
+        cancel: cancel.clone(),
+    };
+    let (played_tx, played_rx) = tokio::sync::oneshot::channel();
+    if cancel.load(Ordering::SeqCst) {
+        // Stopped before it began: nothing to play.
+        drop(tx);
+        let _ = played_tx.send(Ok(()));
+    } else {
+        std::thread::Builder::new()
+            .name(format!("sitar-play-{id}"))
+            .spawn(move || {
+                let sink = move |trial: TrialOutput| {
+                    let _ = tx.send(trial);
+                };
+                let _ = played_tx.send(backend.play(&job, &sink));
+            })
+            .map_err(|e| Error::Internal(format!("playback thread: {e}")))?;
+    }
+    if shared.stopping() {
+        cancel.store(true, Ordering::SeqCst);
+    }
+
+    let adaptive = session
+        .adaptive_min
+        .map(|min| (min.max(2), session.adaptive_k.max(1)));
+    let mut history = Vec::new();
+    let mut stop_reason: Option<String> = None;
+    let stop = |reason: String, stop_reason: &mut Option<String>| -> Result<(), Error> {
+        shared.lifecycle().stop(id, &reason)?;
+        *stop_reason = Some(reason);
+        cancel.store(true, Ordering::SeqCst);
+        Ok(())
+    };
+    if done_before >= 2
+        && let Some(p) = publish(shared, &live, id, Purpose::Progressive).await?
+    {
+        history.push((p.trials, p.classes));
+    }
+    while let Some(first) = rx.recv().await {
+        if control.intent() == Intent::Delete {
+            // The session goes: what the phones still deliver is dropped.
+            continue;
+        }
+        // Trials that queued up while the last estimate ran go in together.
+        let mut batch = vec![first];
+        while let Ok(more) = rx.try_recv() {
+            batch.push(more);
+        }
+        for trial in batch {
+            let arrival = Arrival {
+                key: None,
+                play_index: Some(trial.index),
+                source: &trial.source,
+            };
+            let bytes = trial.tum.as_bytes();
+            let stored = trials::parse_trial(bytes, "trial")
+                .and_then(|parsed| trials::store_trial(shared, &live, id, arrival, bytes, parsed));
+            match stored {
+                Ok(_) => {}
+                // The memory bound: what is there is estimated, nothing more is played.
+                Err(e @ (Error::TooLarge { .. } | Error::Busy(_))) if stop_reason.is_none() => {
+                    let count = shared.db.trial_count(id)?;
+                    stop(
+                        format!("memory bound: {e} (stopped after {count} trials)"),
+                        &mut stop_reason,
+                    )?;
+                }
+                Err(e) => log::warn!(
+                    "session {id}: trial {} from {} dropped: {e}",
+                    trial.index,
+                    trial.source
+                ),
+            }
+        }
+        let count = shared.db.trial_count(id)?;
+        if count < 2 || stop_reason.is_some() {
+            continue;
+        }
+        // Progressive results: a first picture from the 2nd trial on.
+        let Some(p) = publish(shared, &live, id, Purpose::Progressive).await? else {
+            continue;
+        };
+        history.push((p.trials, p.classes));
+        if let Some((min, k)) = adaptive
+            && count >= min
+            && count < session.trials_total
+            && publishing::classes_stable(&history, k)
+        {
+            stop(
+                format!(
+                    "adaptive stop: no window changed class over the last {k} trials (stopped after {count} of {})",
+                    session.trials_total
+                ),
+                &mut stop_reason,
+            )?;
+        }
+    }
+    let played = played_rx
+        .await
+        .map_err(|_| Error::Internal("the playback thread ended without an answer".into()))?;
+    if shared.stopping() {
+        return Ok(Outcome::Interrupted);
+    }
+    let intent = control.intent();
+    if intent == Intent::Delete {
+        return Ok(Outcome::Deleted);
+    }
+    let count = shared.db.trial_count(id)?;
+    match played {
+        Ok(()) if count < 2 && intent == Intent::Cancel => {
+            return Err(Error::Playback(too_few_after_cancel(count)));
+        }
+        Err(e) if count < 2 => return Err(e),
+        Err(e) => stop(
+            format!("playback failed after {count} trials: {e}"),
+            &mut stop_reason,
+        )?,
+        Ok(()) if count < 2 => {
+            return Err(Error::Playback(format!(
+                "only {count} trial(s) finished; an estimate needs 2"
+            )));
+        }
+        Ok(()) => {
+            if count < session.trials_total
+                && stop_reason.is_none()
+                && cancel.load(Ordering::SeqCst)
+            {
+                let reason = match intent {
+                    Intent::Cancel => format!(
+                        "cancelled by the client after {count} of {} trials",
+                        session.trials_total
+                    ),
+                    _ => format!("estimate requested after {count} trials"),
+                };
+                stop(reason, &mut stop_reason)?;
+            }
+        }
+    }
+    shared.lifecycle().start_estimating(id)?;
+    publish(shared, &live, id, Purpose::Final).await?;
+    shared.lifecycle().finish(id)?;
+    Ok(Outcome::Done)
+}
+
+/// After a restart: sessions in flight go back into the queue in their original order (or
+/// are marked failed with a reason). Jobs a dead process left running are marked interrupted
+/// first. A session that cannot be resumed, or whose row cannot be read, fails alone: the
+/// server always starts. Then the playback workers start.
+pub(crate) fn recover(shared: &Arc<App>) -> Result<(), Error> {
+    let interrupted = shared.db.interrupt_running_jobs()?;
+    if interrupted > 0 {
+        log::info!("{interrupted} job(s) were interrupted by the last stop");
+    }
+    let in_flight = [
+        SessionState::Created,
+        SessionState::Uploaded,
+        SessionState::Playing,
+        SessionState::Estimating,
+    ];
+    let rows = shared.db.sessions_in(&in_flight)?;
+    for bad in rows.unreadable {
+        log::warn!("session {}: unreadable row, failed: {}", bad.id, bad.why);
+        let why = format!("the server cannot read this session's row: {}", bad.why);
+        if let Err(e) = shared.lifecycle().fail_unreadable(&bad.id, &why) {
+            log::warn!("session {}: {e}", bad.id);
+        }
+    }
+    for session in rows.sessions {
+        let id = session.id.clone();
+        if let Err(e) = recover_one(shared, session) {
+            log::warn!("session {id}: cannot resume after restart: {e}");
+            let why = format!(
+                "server restarted and cannot resume it: {}",
+                e.client_message()
+            );
+            if let Err(e) = shared.lifecycle().fail(&id, &why) {
+                log::warn!("session {id}: {e}");
+            }
+        }
+    }
+    spawn_workers(shared);
+    Ok(())
+}
+
+/// Resumes one session in flight after a restart.
+fn recover_one(shared: &Arc<App>, session: Session) -> Result<(), Error> {
+    let id = session.id.clone();
+    if session.playback == PlaybackKind::Upload {
+        if session.state == SessionState::Estimating {
+            shared.lifecycle().resume(&id)?;
+            spawn_estimate(shared.clone(), id);
+        } else if shared.config.progressive_uploads
+            && session.results_trials < shared.db.trial_count(&id)?
+        {
+            // Trials arrived after the last published estimate: catch up.
+            let shared = shared.clone();
+            tokio::spawn(async move {
+                match trials::live_session(&shared, &session).await {
+                    Ok(live) => spawn_progressive(shared.clone(), live, id),
+                    Err(e) => log::warn!("session {id}: cannot rebuild its trials: {e}"),
+                }
+            });
+        }
+        return Ok(());
+    }
+    if session.state == SessionState::Created {
+        return Ok(());
+    }
+    if !shared.files.recording(&id).is_file() {
+        return shared
+            .lifecycle()
+            .fail(&id, "server restarted and the recording is missing");
+    }
+    log::info!("session {id}: back in the playback queue after restart");
+    if session.allows(Step::StartPlaying) {
+        enqueue(shared, &session, Begin::Start);
+    } else {
+        shared.lifecycle().resume(&id)?;
+        enqueue(shared, &session, Begin::Resume);
+    }
+    Ok(())
+}

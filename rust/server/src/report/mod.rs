@@ -1,0 +1,13 @@
+//! What the report draws: the page (`page`, from `templates`), its charts (`charts`), the
+//! problem regions and their evidence (`regions`, `region_evidence`), the 3-D scene
+//! (`scene`, `scene_view`) and the helpers for long walks (`thinning`, `index_ranges`).
+
+pub(crate) mod charts;
+pub(crate) mod index_ranges;
+pub(crate) mod page;
+pub(crate) mod region_evidence;
+pub(crate) mod regions;
+pub(crate) mod scene;
+pub(crate) mod scene_view;
+pub(crate) mod templates;
+pub(crate) mod thinning;

@@ -1,0 +1,313 @@
+//! A session as the user's phone saw it — render plan, depth-sampled surfaces, markers — for
+//! the report's 3-D view and `GET /v1/sessions/{id}/scene.glb`.
+//!
+//! A simulated recording (`sitar-sim`) holds the walk and the room, so the phone session is
+//! rebuilt exactly as the phone logic recorded it (depth images included). A real recording
+//! holds no depth: the reference trial's poses give the render plan; when the phone sent its
+//! camera evidence (`crate::ingest::evidence`), each midpoint's measured distance to the surface it
+//! faced is put back as a depth sample straight ahead, so the page has surface points and
+//! markers (placed by sitar-core's own rule; their normals face the camera, as the true
+//! ones are unknown). Either is built once and kept as a `sitar_core` session folder
+//! (`sessions/ID/phone/`, rebuilt when evidence arrives later), right after the session
+//! finishes ([`prepare`]) or else on the first request; the latest results are loaded into
+//! it on every request.
+
+use std::sync::{Arc, Mutex};
+
+use serde_json::json;
+use sitar_core::{DisplayRotation, Session, SessionConfig};
+
+use crate::Error;
+use crate::app_state::App;
+use crate::estimate::results_files::{self, Form};
+use crate::ingest::evidence::{EvidenceFiles, EvidenceRow};
+use crate::session::Session as Row;
+
+/// Where the scene's poses came from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Source {
+    /// The simulated walk, recorded by the phone logic with depth.
+    SimulatedWalk,
+    /// The reference trial's poses (no depth on the backend).
+    ReferenceTrial,
+    /// The reference trial's poses with the surface distances of the phone's evidence.
+    ReferenceTrialWithEvidence,
+}
+
+impl Source {
+    /// What the page says about where the 3-D scene came from.
+    pub(crate) fn describe(self) -> &'static str {
+        match self {
+            Self::SimulatedWalk => "the recorded walk with its depth samples",
+            Self::ReferenceTrial => {
+                "the reference trial: a real recording brings no depth to the backend, and the phone sent no camera evidence, so there are no surface points or markers"
+            }
+            Self::ReferenceTrialWithEvidence => {
+                "the reference trial, with the surface distances the phone measured (surface points straight ahead of each midpoint; marker normals face the camera)"
+            }
+        }
+    }
+
+    /// Its name in the phone folder's `source.txt`.
+    fn tag(self) -> &'static str {
+        match self {
+            Self::SimulatedWalk => "sim",
+            Self::ReferenceTrial => "trial",
+            Self::ReferenceTrialWithEvidence => "trial+evidence",
+        }
+    }
+
+    fn from_tag(tag: &str) -> Self {
+        match tag {
+            "sim" => Self::SimulatedWalk,
+            "trial+evidence" => Self::ReferenceTrialWithEvidence,
+            _ => Self::ReferenceTrial,
+        }
+    }
+}
+
+/// A constant depth image (a wall facing the camera) at `distance_m`, for the phone logic's
+/// own sampling: 16 × 16 px, a pinhole of 16 px focal length.
+const FLAT_SIDE: u32 = 16;
+
+fn flat_depth_sample(session: &mut Session, distance_m: f64) {
+    let mm = (distance_m * 1000.0).round();
+    // sitar-core reads depth in millimetres within u16 (65 m).
+    if !(100.0..65_000.0).contains(&mm) {
+        return;
+    }
+    let pixels = vec![mm as u16; (FLAT_SIDE * FLAT_SIDE) as usize];
+    // The principal point on the pixel sitar-core samples (`DepthImage::centre`): the
+    // sample's ray is the optical axis, as the phone's distance was measured along it.
+    let half = f64::from(FLAT_SIDE / 2);
+    let k = sitar_core::Intrinsics {
+        fx: 16.0,
+        fy: 16.0,
+        cx: half,
+        cy: half,
+    };
+    let Ok(image) = sitar_core::DepthImage::new(&pixels, FLAT_SIDE, FLAT_SIDE, FLAT_SIDE * 2)
+    else {
+        return;
+    };
+    // An unusable sample only leaves this midpoint without a surface point.
+    let _ = session.depth(&image, &k, DisplayRotation::Deg0);
+}
+
+fn config(row: &Row) -> Result<SessionConfig, Error> {
+    let text = json!({
+        "convention": "arcore",
+        "subtrajectory_frames": row.settings.window_frames,
+        "pose_relation": row.settings.pose_relation.to_string(),
+        // The scene needs poses and depth; camera images would cost a render and a JPEG per
+        // midpoint on every rebuild.
+        "images": false,
+    })
+    .to_string();
+    SessionConfig::from_json(&text).map_err(|e| Error::Internal(format!("phone config: {e}")))
+}
+
+/// The reference trial (the first stored) replayed through the phone logic, with each
+/// midpoint's surface distance from `evidence` (rows by sub-trajectory index) when given.
+fn from_reference_trial(
+    shared: &App,
+    row: &Row,
+    evidence: Option<&[EvidenceRow]>,
+) -> Result<Session, Error> {
+    let first = shared
+        .db
+        .trials_in_order(&row.id)?
+        .first()
+        .map(|(index, _)| *index)
+        .ok_or_else(|| Error::Conflict(format!("session {} has no trials yet", row.id)))?;
+    let path = shared.files.trial(&row.id, first);
+    let text = std::fs::read_to_string(&path).map_err(|e| Error::io("cannot read", &path, e))?;
+    let trajectory = sitar_estimator::parse_tum(&text, "reference trial")
+        .map_err(|e| Error::InvalidContent(format!("reference trial of {}: {e}", row.id)))?;
+    let poses: Vec<(i64, sitar_core::Pose)> = (0..trajectory.len())
+        .map(|i| {
+            (
+                trajectory.stamps[i],
+                sitar_core::Pose::new(trajectory.positions[i], trajectory.orientations[i]),
+            )
+        })
+        .collect();
+    if poses.len() < 3 {
+        return Err(Error::Conflict(format!(
+            "the reference trial of {} has {} poses; a scene needs 3",
+            row.id,
+            poses.len()
+        )));
+    }
+    let fail = |e: sitar_core::Error| Error::InvalidContent(format!("reference trial: {e}"));
+    let mut session = Session::try_new(config(row)?).map_err(fail)?;
+    let last = poses.len() - 1;
+    session.start(poses[0].0, poses[0].1).map_err(fail)?;
+    for (t, pose) in &poses[1..last] {
+        let flags = session.frame(*t, *pose).map_err(fail)?;
+        if let Some(rows) = evidence
+            && flags.is_midpoint()
+            && let Some(k) = session.subtrajectories().last().map(|s| s.index as usize)
+            && let Some(measured) = rows.get(k).filter(|r| r.index == k && r.depth_valid)
+        {
+            flat_depth_sample(&mut session, measured.distance_m);
+        }
+    }
+    session.stop(poses[last].0, poses[last].1).map_err(fail)?;
+    Ok(session)
+}
+
+/// Builds the phone session of `row` (no results loaded). Blocking and CPU-heavy for
+/// simulated walks (one depth image per midpoint).
+fn build(shared: &App, row: &Row) -> Result<(Session, Source), Error> {
+    let path = shared.files.recording(&row.id);
+    let simulated = std::fs::read(&path)
+        .ok()
+        .and_then(|bytes| sitar_sim::Recording::from_bytes(&bytes).ok());
+    if let Some(recording) = simulated {
+        let session = recording
+            .phone_session(config(row)?, DisplayRotation::Deg90)
+            .map_err(|e| Error::InvalidContent(format!("simulated walk: {e}")))?;
+        return Ok((session, Source::SimulatedWalk));
+    }
+    let evidence = stored_evidence(shared, row);
+    let source = if evidence.is_some() {
+        Source::ReferenceTrialWithEvidence
+    } else {
+        Source::ReferenceTrial
+    };
+    Ok((
+        from_reference_trial(shared, row, evidence.as_deref())?,
+        source,
+    ))
+}
+
+/// The phone's evidence rows of `row`, if it sent any (an unreadable table counts as none:
+/// the scene is drawn without it).
+fn stored_evidence(shared: &App, row: &Row) -> Option<Vec<EvidenceRow>> {
+    EvidenceFiles {
+        files: &shared.files,
+        id: &row.id,
+    }
+    .evidence_rows()
+    .ok()
+    .flatten()
+}
+
+/// Phone sessions with results loaded, most recent last: a report and its `scene.json` (and a
+/// reload) reuse the work. Keyed by folder (data dir + id) and the results' trial count.
+type Cached = (std::path::PathBuf, u32, Arc<(Session, Source)>);
+static CACHE: Mutex<Vec<Cached>> = Mutex::new(Vec::new());
+/// Sessions kept in memory (a 10-minute walk's is a few MB).
+const CACHED_SESSIONS: usize = 4;
+
+/// The session whose scene is being built ahead, if any (at most one at a time).
+static PREPARING: Mutex<Option<String>> = Mutex::new(None);
+
+/// `mutex` locked; a panic elsewhere while it was held leaves its data usable (a cache and a
+/// flag: nothing half-written to guard against).
+fn locked<T>(mutex: &'static Mutex<T>) -> std::sync::MutexGuard<'static, T> {
+    mutex
+        .lock()
+        .unwrap_or_else(|poisoned| poisoned.into_inner())
+}
+
+/// Builds a just-finished session's scene — the phone session folder, its results loaded,
+/// the in-memory cache — on a thread of its own, so the first load of its report does not pay
+/// for it (a simulated 10-minute walk takes seconds to rebuild). One at a time: a session that
+/// finishes while another's is built gets its scene on the first request instead, as before.
+pub(crate) fn prepare(shared: Arc<App>, id: String) {
+    {
+        let mut slot = locked(&PREPARING);
+        if slot.is_some() {
+            return;
+        }
+        *slot = Some(id.clone());
+    }
+    let spawned = std::thread::Builder::new()
+        .name("sitar-scene".into())
+        .spawn(move || {
+            let built = shared.session(&id).and_then(|row| load(&shared, &row));
+            if let Err(e) = built {
+                log::debug!("session {id}: scene not built ahead: {e}");
+            }
+            *locked(&PREPARING) = None;
+        });
+    if spawned.is_err() {
+        *locked(&PREPARING) = None;
+    }
+}
+
+/// Whether session `id`'s scene is being built ahead right now (its scratch folder under
+/// `tmp/` may exist until the build ends).
+pub(crate) fn preparing(id: &str) -> bool {
+    locked(&PREPARING).as_deref() == Some(id)
+}
+
+/// Drops session `id`'s scene from the in-memory cache (a deleted session's data must not
+/// stay readable, even in memory).
+pub(crate) fn forget(shared: &App, id: &str) {
+    let key = shared.files.phone_session(id);
+    locked(&CACHE).retain(|(k, _, _)| *k != key);
+}
+
+/// The phone session of `row` with its latest results loaded. Blocking.
+pub(crate) fn load(shared: &App, row: &Row) -> Result<Arc<(Session, Source)>, Error> {
+    let key = shared.files.phone_session(&row.id);
+    if let Some((_, _, hit)) = locked(&CACHE)
+        .iter()
+        .find(|(k, trials, _)| *k == key && *trials == row.results_trials)
+    {
+        return Ok(hit.clone());
+    }
+    let loaded = Arc::new(load_uncached(shared, row)?);
+    let mut cache = locked(&CACHE);
+    cache.retain(|(k, _, _)| *k != key);
+    if cache.len() >= CACHED_SESSIONS {
+        cache.remove(0);
+    }
+    cache.push((key, row.results_trials, loaded.clone()));
+    Ok(loaded)
+}
+
+fn load_uncached(shared: &App, row: &Row) -> Result<(Session, Source), Error> {
+    let dir = shared.files.phone_session(&row.id);
+    let marker = dir.join("source.txt");
+    let cached = Session::load(&dir)
+        .ok()
+        .zip(
+            std::fs::read_to_string(&marker)
+                .ok()
+                .map(|s| Source::from_tag(s.trim())),
+        )
+        // Built before the phone's evidence arrived: built again with it.
+        .filter(|(_, source)| {
+            *source != Source::ReferenceTrial || stored_evidence(shared, row).is_none()
+        });
+    if cached.is_none() && dir.exists() {
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+    let (mut session, source) = match cached {
+        Some(found) => found,
+        None => {
+            let (session, source) = build(shared, row)?;
+            // Built in a scratch folder and renamed into place: a concurrent request either
+            // sees the whole folder or builds its own.
+            let scratch = shared.files.scratch_dir();
+            let kept = session.save(&scratch).is_ok()
+                && std::fs::write(scratch.join("source.txt"), source.tag()).is_ok()
+                && std::fs::rename(&scratch, &dir).is_ok();
+            if !kept {
+                let _ = std::fs::remove_dir_all(&scratch);
+            }
+            (session, source)
+        }
+    };
+    if row.results_trials > 0 {
+        let json = results_files::read(shared, row, Form::Json)?;
+        session
+            .load_results(&json)
+            .map_err(|e| Error::Internal(format!("results of {} do not fit: {e}", row.id)))?;
+    }
+    Ok((session, source))
+}

@@ -1,0 +1,72 @@
+//! The status document of a session (`GET /v1/sessions/{id}`, and each entry of the list):
+//! its state, progress and ETA (d·⌈T/D⌉ from the playback plan), trials and settings, and
+//! its place in the playback queue while it waits.
+
+use serde_json::json;
+
+use crate::Error;
+use crate::app_state::App;
+use crate::session::{Session, SessionState};
+
+/// Progress (0 … 1) and seconds left, when known.
+fn progress(shared: &App, session: &Session, done: u32) -> (f64, Option<f64>) {
+    let total = session.trials_total.max(1) as f64;
+    match session.state {
+        SessionState::Done => (1.0, Some(0.0)),
+        SessionState::Failed => (done as f64 / total, None),
+        SessionState::Estimating => (0.97, Some(0.5)),
+        SessionState::Playing => {
+            let running = shared.running(&session.id);
+            match running
+                .as_ref()
+                .and_then(|job| job.plan.map(|plan| (job, plan)))
+            {
+                Some((job, plan)) if plan.devices > 0 => {
+                    let expected = plan.seconds_for(job.needed).max(1e-9);
+                    let elapsed = job.started.elapsed().as_secs_f64();
+                    let by_time = (job.done_before as f64
+                        + job.needed as f64 * (elapsed / expected).min(1.0))
+                        / total;
+                    let by_trials = done as f64 / total;
+                    (
+                        0.95 * by_time.max(by_trials).min(1.0),
+                        Some((expected - elapsed).max(0.0) + 0.5),
+                    )
+                }
+                _ => (0.95 * done as f64 / total, None),
+            }
+        }
+        SessionState::Created | SessionState::Uploaded => (0.0, None),
+    }
+}
+
+/// The status document of `session`.
+pub(crate) fn status_json(shared: &App, session: &Session) -> Result<serde_json::Value, Error> {
+    let done = shared.db.trial_count(&session.id)?;
+    let (progress, eta) = progress(shared, session, done);
+    let jobs: Vec<_> = shared
+        .db
+        .jobs_of(&session.id)?
+        .into_iter()
+        .map(|(kind, state)| json!({"kind": kind, "state": state}))
+        .collect();
+    let settings = &session.settings;
+    Ok(json!({
+        "id": session.id,
+        "state": session.state.as_str(),
+        "progress": (progress * 1000.0).round() / 1000.0,
+        "eta_s": eta.map(|e: f64| (e * 10.0).round() / 10.0),
+        "trials_done": done,
+        "trials_total": session.trials_total,
+        "error": session.error,
+        "results_trials": session.results_trials,
+        "stop_reason": session.stop_reason,
+        "playback": session.playback.as_str(),
+        "setting": settings.setting.to_string(),
+        "window_frames": settings.window_frames,
+        "pose_relation": settings.pose_relation.to_string(),
+        "jobs": jobs,
+        // Where it waits for a playback worker (1: next); null when not queued.
+        "queue_position": shared.queue.position(&session.id),
+    }))
+}

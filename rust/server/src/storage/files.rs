@@ -1,0 +1,677 @@
+use std::hash::{BuildHasher, Hasher};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use axum::body::Bytes;
+use futures_util::{Stream, StreamExt};
+use tokio::io::AsyncWriteExt;
+
+use crate::Error;
+use crate::storage::quota::{DiskQuota, Reservation};
+
+/// The data directory's file layout. Every path is made here, from
+/// server-made ids and indices only: no client-supplied name becomes a path.
+///
+/// ```text
+/// DATA/sitar.db                       SQLite: sessions, trials, jobs, devices
+/// DATA/tmp/upload-*.part              uploads in progress (cleared at start)
+/// DATA/tmp/deleted-ID                 a deleted session's folder, until removed (cleared at start)
+/// DATA/sessions/ID/recording          the uploaded recording (mp4 or sim recording)
+/// DATA/sessions/ID/recording.part     a recording upload as it arrives; kept when it breaks off
+/// DATA/sessions/ID/recording.part.key the Idempotency-Key of the upload they belong to
+/// DATA/sessions/ID/recording.part.total the total length the upload declared
+/// DATA/sessions/ID/trials/trial_NNN.txt   one TUM file per finished trial
+/// DATA/sessions/ID/timestamps.txt     legacy POST /timestamps upload
+/// DATA/sessions/ID/results.csv|json   latest published estimate
+/// ```
+#[derive(Debug, Clone)]
+pub(crate) struct Files {
+    root: PathBuf,
+    /// A body that sends nothing for this long is treated as broken off.
+    idle: std::time::Duration,
+    /// Every upload streamed here counts against it.
+    quota: std::sync::Arc<DiskQuota>,
+}
+
+/// Default of [`Files::with_idle_timeout`].
+const DEFAULT_IDLE: std::time::Duration = std::time::Duration::from_secs(60);
+
+/// A fresh server-made id: `s` and 16 hex digits.
+pub(crate) fn new_id() -> String {
+    static COUNTER: AtomicU64 = AtomicU64::new(0);
+    let mut h = std::collections::hash_map::RandomState::new().build_hasher();
+    h.write_u64(COUNTER.fetch_add(1, Ordering::Relaxed));
+    h.write_u128(
+        std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map(|d| d.as_nanos())
+            .unwrap_or(0),
+    );
+    format!("s{:016x}", h.finish())
+}
+
+/// Whether `id` has the shape of a server-made id (and so is safe in a path).
+pub(crate) fn is_server_id(id: &str) -> bool {
+    id.len() == 17
+        && id.starts_with('s')
+        && id[1..]
+            .bytes()
+            .all(|b| b.is_ascii_hexdigit() && !b.is_ascii_uppercase())
+}
+
+impl Files {
+    pub fn open(root: &Path) -> Result<Files, Error> {
+        for dir in [root.to_path_buf(), root.join("sessions"), root.join("tmp")] {
+            std::fs::create_dir_all(&dir).map_err(|e| Error::io("cannot create", &dir, e))?;
+        }
+        // Half-written uploads and deleted sessions' folders of a dead process are garbage.
+        if let Ok(entries) = std::fs::read_dir(root.join("tmp")) {
+            for entry in entries.flatten() {
+                let path = entry.path();
+                let _ = if path.is_dir() {
+                    std::fs::remove_dir_all(&path)
+                } else {
+                    std::fs::remove_file(&path)
+                };
+            }
+        }
+        Ok(Files {
+            root: root.to_path_buf(),
+            idle: DEFAULT_IDLE,
+            quota: std::sync::Arc::new(DiskQuota::new(root, u64::MAX, u64::MAX)),
+        })
+    }
+
+    /// The same files, with bodies that stall longer than `idle` treated as broken off:
+    /// what arrived is kept (a recording can be resumed), and the request ends instead of
+    /// holding its session for as long as a silent client keeps the connection open.
+    pub fn with_idle_timeout(mut self, idle: std::time::Duration) -> Files {
+        self.idle = idle;
+        self
+    }
+
+    /// The same files with disk quotas: `session` bytes per session folder, `global` bytes
+    /// for the whole data directory.
+    pub fn with_quotas(mut self, session: u64, global: u64) -> Files {
+        self.quota = std::sync::Arc::new(DiskQuota::new(&self.root, session, global));
+        self
+    }
+
+    /// Room for an upload into session `id`'s folder (`None`: a new session's, only the
+    /// global quota applies); `declared` bytes that cannot fit are refused at once.
+    pub fn reserve(
+        &self,
+        id: Option<&str>,
+        declared: Option<u64>,
+    ) -> Result<Reservation<'_>, Error> {
+        let dir = id.map(|id| self.session_dir(id));
+        self.quota.reserve(dir.as_deref(), declared)
+    }
+
+    pub fn session_dir(&self, id: &str) -> PathBuf {
+        debug_assert!(is_server_id(id));
+        self.root.join("sessions").join(id)
+    }
+
+    pub fn recording(&self, id: &str) -> PathBuf {
+        self.session_dir(id).join("recording")
+    }
+
+    pub fn recording_part(&self, id: &str) -> PathBuf {
+        self.session_dir(id).join("recording.part")
+    }
+
+    pub fn recording_part_key(&self, id: &str) -> PathBuf {
+        self.session_dir(id).join("recording.part.key")
+    }
+
+    /// The `Content-Range` total the first chunk of the kept prefix declared.
+    pub fn recording_part_total(&self, id: &str) -> PathBuf {
+        self.session_dir(id).join("recording.part.total")
+    }
+
+    pub fn trial(&self, id: &str, index: u32) -> PathBuf {
+        self.session_dir(id)
+            .join("trials")
+            .join(format!("trial_{index:03}.txt"))
+    }
+
+    pub fn timestamps(&self, id: &str) -> PathBuf {
+        self.session_dir(id).join("timestamps.txt")
+    }
+
+    pub fn results_csv(&self, id: &str) -> PathBuf {
+        self.session_dir(id).join("results.csv")
+    }
+
+    pub fn results_json(&self, id: &str) -> PathBuf {
+        self.session_dir(id).join("results.json")
+    }
+
+    /// Moves a session's folder out of `sessions/` into `tmp/` (one rename: the session's
+    /// files vanish at once; `tmp/` is emptied at every start). `None` if it has no folder.
+    pub fn trash_session_dir(&self, id: &str) -> Result<Option<PathBuf>, Error> {
+        let dir = self.session_dir(id);
+        let trash = self.root.join("tmp").join(format!("deleted-{id}"));
+        match std::fs::rename(&dir, &trash) {
+            Ok(()) => Ok(Some(trash)),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
+            Err(e) => Err(Error::io("cannot move away", &dir, e)),
+        }
+    }
+
+    /// Undoes [`Files::trash_session_dir`].
+    pub fn restore_session_dir(&self, id: &str, trash: &Path) -> Result<(), Error> {
+        let dir = self.session_dir(id);
+        std::fs::rename(trash, &dir).map_err(|e| Error::io("cannot move back", &dir, e))
+    }
+
+    pub fn create_session_dirs(&self, id: &str) -> Result<(), Error> {
+        let dir = self.session_dir(id).join("trials");
+        std::fs::create_dir_all(&dir).map_err(|e| Error::io("cannot create", &dir, e))
+    }
+
+    /// The user's phone session as the backend reconstructs it (`sitar_core` session folder):
+    /// the render plan and surface samples behind the report's 3-D view and `scene.glb`.
+    pub fn phone_session(&self, id: &str) -> PathBuf {
+        self.session_dir(id).join("phone")
+    }
+
+    /// A fresh scratch folder path under `tmp/` (same file system as the sessions).
+    pub fn scratch_dir(&self) -> PathBuf {
+        self.root.join("tmp").join(format!("phone-{}", new_id()))
+    }
+
+    fn temp_path(&self) -> PathBuf {
+        self.root
+            .join("tmp")
+            .join(format!("upload-{}.part", new_id()))
+    }
+
+    /// Streams `body` into a temporary file, refusing more than `limit` bytes (and what
+    /// would pass the global disk quota). The caller moves the result into place with
+    /// [`TempFile::publish`]; a body that breaks off leaves nothing.
+    pub async fn receive<S, E>(
+        &self,
+        mut body: S,
+        limit: u64,
+        what: &'static str,
+    ) -> Result<TempFile, Error>
+    where
+        S: Stream<Item = Result<Bytes, E>> + Unpin,
+        E: std::fmt::Display,
+    {
+        let mut temp = TempFile {
+            path: self.temp_path(),
+            bytes: 0,
+        };
+        let file = tokio::fs::File::create(&temp.path)
+            .await
+            .map_err(|e| Error::io("cannot create", &temp.path, e))?;
+        let room = self.reserve(None, None)?;
+        let mut sink = Sink::new(file, &temp.path, 0, self.idle, room);
+        let outcome = sink.copy(&mut body, limit, what).await;
+        temp.bytes = sink.written;
+        if outcome.is_err() {
+            // The temporary file goes: its bytes stop counting.
+            sink.room.discard();
+        }
+        drop(sink);
+        match outcome {
+            Ok(()) => Ok(temp),
+            Err(Copy::BrokeOff(error) | Copy::Failed(error)) => Err(error),
+        }
+    }
+
+    /// Appends `body` to the kept prefix at `path`, which must be `offset` bytes long, and
+    /// refuses to grow it beyond `end` bytes. Returns the new length. A body that breaks
+    /// off keeps what arrived (a prefix is always valid); any other failure cuts the file
+    /// back to `offset`, so a refused request leaves nothing behind.
+    pub async fn append<S, E>(
+        &self,
+        mut body: S,
+        path: &Path,
+        offset: u64,
+        end: u64,
+        what: &'static str,
+        room: Reservation<'_>,
+    ) -> Result<Appended, Error>
+    where
+        S: Stream<Item = Result<Bytes, E>> + Unpin,
+        E: std::fmt::Display,
+    {
+        let mut file = tokio::fs::OpenOptions::new()
+            .write(true)
+            .create(true)
+            .truncate(false)
+            .open(path)
+            .await
+            .map_err(|e| Error::io("cannot open", path, e))?;
+        let len = file
+            .metadata()
+            .await
+            .map_err(|e| Error::io("cannot stat", path, e))?
+            .len();
+        if len != offset {
+            return Err(Error::Internal(format!(
+                "{} is {len} bytes, not the expected {offset}",
+                path.display()
+            )));
+        }
+        use tokio::io::AsyncSeekExt;
+        file.seek(std::io::SeekFrom::Start(offset))
+            .await
+            .map_err(|e| Error::io("cannot seek in", path, e))?;
+        let mut sink = Sink::new(file, path, offset, self.idle, room);
+        match sink.copy(&mut body, end, what).await {
+            Ok(()) => Ok(Appended {
+                len: sink.written,
+                broken: None,
+            }),
+            Err(Copy::BrokeOff(error)) => Ok(Appended {
+                len: sink.written,
+                broken: Some(error),
+            }),
+            Err(Copy::Failed(error)) => {
+                let error = match error {
+                    Error::TooLarge { .. } => Error::BadRequest(format!(
+                        "{what}: the body is longer than its Content-Range ({} bytes)",
+                        end - offset
+                    )),
+                    other => other,
+                };
+                sink.room.discard();
+                let file = sink.out.into_inner();
+                file.set_len(offset)
+                    .await
+                    .map_err(|e| Error::io("cannot truncate", path, e))?;
+                Err(error)
+            }
+        }
+    }
+
+    /// Reads `body` into memory, refusing more than `limit` bytes (a trial: it is parsed
+    /// from these bytes and written once). A body that breaks off or stalls is a 400.
+    pub async fn receive_bytes<S, E>(
+        &self,
+        body: S,
+        limit: u64,
+        what: &'static str,
+    ) -> Result<Vec<u8>, Error>
+    where
+        S: Stream<Item = Result<Bytes, E>> + Unpin,
+        E: std::fmt::Display,
+    {
+        self.receive_bytes_into(body, limit, what, self.reserve(None, None)?)
+            .await
+    }
+
+    /// [`Files::receive_bytes`] of bytes that will be stored under `room`'s quotas.
+    pub async fn receive_bytes_into<S, E>(
+        &self,
+        mut body: S,
+        limit: u64,
+        what: &'static str,
+        room: Reservation<'_>,
+    ) -> Result<Vec<u8>, Error>
+    where
+        S: Stream<Item = Result<Bytes, E>> + Unpin,
+        E: std::fmt::Display,
+    {
+        let mut sink = Sink {
+            out: Vec::new(),
+            path: Path::new("(memory)"),
+            written: 0,
+            idle: self.idle,
+            room,
+        };
+        match sink.copy(&mut body, limit, what).await {
+            Ok(()) => Ok(sink.out),
+            Err(Copy::BrokeOff(error) | Copy::Failed(error)) => {
+                sink.room.discard();
+                Err(error)
+            }
+        }
+    }
+
+    /// Writes small server-made content atomically (temp file + rename).
+    pub fn write_atomic(&self, dest: &Path, content: &[u8]) -> Result<(), Error> {
+        let temp = TempFile {
+            path: self.temp_path(),
+            bytes: content.len() as u64,
+        };
+        std::fs::write(&temp.path, content)
+            .map_err(|e| Error::io("cannot write", &temp.path, e))?;
+        temp.publish(dest)
+    }
+}
+
+/// What [`Files::append`] made of a body.
+#[derive(Debug)]
+pub(crate) struct Appended {
+    /// The file's length now.
+    pub len: u64,
+    /// Why the body broke off before its end (what arrived is kept), if it did.
+    pub broken: Option<Error>,
+}
+
+/// Why copying a body stopped.
+enum Copy {
+    /// The body broke off (the client went away): what arrived is whole and kept.
+    BrokeOff(Error),
+    /// Too large, or the disk failed: what arrived must not be used.
+    Failed(Error),
+}
+
+/// Where a request body is being written: a buffered file, or memory.
+struct Sink<'p, W> {
+    out: W,
+    /// Named in write errors.
+    path: &'p Path,
+    /// The length written once flushed.
+    written: u64,
+    idle: std::time::Duration,
+    /// The disk quotas the bytes count against.
+    room: Reservation<'p>,
+}
+
+impl<'p> Sink<'p, tokio::io::BufWriter<tokio::fs::File>> {
+    fn new(
+        file: tokio::fs::File,
+        path: &'p Path,
+        written: u64,
+        idle: std::time::Duration,
+        room: Reservation<'p>,
+    ) -> Self {
+        Sink {
+            out: tokio::io::BufWriter::with_capacity(1 << 20, file),
+            path,
+            written,
+            idle,
+            room,
+        }
+    }
+}
+
+impl<W: tokio::io::AsyncWrite + Unpin> Sink<'_, W> {
+    /// Copies `body` until it ends, refusing to grow the file past `limit` bytes; the
+    /// buffer is flushed whatever happens, so `written` counts bytes in the file.
+    async fn copy<S, E>(&mut self, body: &mut S, limit: u64, what: &'static str) -> Result<(), Copy>
+    where
+        S: Stream<Item = Result<Bytes, E>> + Unpin,
+        E: std::fmt::Display,
+    {
+        let outcome = self.copy_unflushed(body, limit, what).await;
+        let flushed = self
+            .out
+            .flush()
+            .await
+            .map_err(|e| Copy::Failed(Error::io("cannot write", self.path, e)));
+        // A failed flush spoils even a broken-off prefix: it is not all in the file.
+        flushed.and(outcome)
+    }
+
+    async fn copy_unflushed<S, E>(
+        &mut self,
+        body: &mut S,
+        limit: u64,
+        what: &'static str,
+    ) -> Result<(), Copy>
+    where
+        S: Stream<Item = Result<Bytes, E>> + Unpin,
+        E: std::fmt::Display,
+    {
+        // One timer for the whole body, pushed back only when it fires: a timer per chunk
+        // cost a quarter of the upload throughput.
+        let mut last_data = tokio::time::Instant::now();
+        let stall = tokio::time::sleep(self.idle);
+        tokio::pin!(stall);
+        loop {
+            let next = tokio::select! {
+                biased;
+                next = body.next() => next,
+                () = &mut stall => {
+                    let deadline = last_data + self.idle;
+                    if deadline > tokio::time::Instant::now() {
+                        stall.as_mut().reset(deadline);
+                        continue;
+                    }
+                    return Err(Copy::BrokeOff(Error::BadRequest(format!(
+                        "{what}: no data for {} s, the body is taken as broken off",
+                        self.idle.as_secs_f64()
+                    ))));
+                }
+            };
+            let Some(chunk) = next else { break };
+            let chunk = chunk.map_err(|e| {
+                Copy::BrokeOff(Error::BadRequest(format!("{what}: body broke off: {e}")))
+            })?;
+            if self.written + chunk.len() as u64 > limit {
+                return Err(Copy::Failed(Error::TooLarge { what, limit }));
+            }
+            self.room.add(chunk.len() as u64).map_err(Copy::Failed)?;
+            self.out
+                .write_all(&chunk)
+                .await
+                .map_err(|e| Copy::Failed(Error::io("cannot write", self.path, e)))?;
+            self.written += chunk.len() as u64;
+            last_data = tokio::time::Instant::now();
+        }
+        Ok(())
+    }
+}
+
+/// An upload in `DATA/tmp`; removed on drop unless published.
+#[derive(Debug)]
+pub(crate) struct TempFile {
+    pub path: PathBuf,
+    pub bytes: u64,
+}
+
+impl TempFile {
+    /// Moves the file to `dest` (same file system: an atomic rename).
+    pub fn publish(self, dest: &Path) -> Result<(), Error> {
+        if let Some(parent) = dest.parent() {
+            std::fs::create_dir_all(parent).map_err(|e| Error::io("cannot create", parent, e))?;
+        }
+        std::fs::rename(&self.path, dest)
+            .map_err(|e| Error::io("cannot move upload to", dest, e))?;
+        std::mem::forget(self);
+        Ok(())
+    }
+}
+
+impl Drop for TempFile {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(&self.path);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ids_are_unique_and_path_safe() {
+        let ids: std::collections::HashSet<String> = (0..1000).map(|_| new_id()).collect();
+        assert_eq!(ids.len(), 1000);
+        assert!(ids.iter().all(|id| is_server_id(id)));
+        for bad in [
+            "../../x",
+            "s0123456789abcdeF",
+            "s0123456789abcde/",
+            "",
+            "s01234567",
+        ] {
+            assert!(!is_server_id(bad), "{bad}");
+        }
+    }
+
+    #[tokio::test]
+    async fn receive_enforces_the_limit_and_leaves_no_temp_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let files = Files::open(dir.path()).unwrap();
+        let chunks = || {
+            futures_util::stream::iter(
+                (0..4).map(|_| Ok::<_, std::io::Error>(Bytes::from(vec![7u8; 1000]))),
+            )
+        };
+        let err = files
+            .receive(chunks(), 3999, "recording")
+            .await
+            .unwrap_err();
+        assert!(matches!(err, Error::TooLarge { limit: 3999, .. }));
+        assert_eq!(
+            std::fs::read_dir(dir.path().join("tmp")).unwrap().count(),
+            0
+        );
+        let temp = files.receive(chunks(), 4000, "recording").await.unwrap();
+        assert_eq!(temp.bytes, 4000);
+        let dest = dir.path().join("sessions/x/recording");
+        temp.publish(&dest).unwrap();
+        assert_eq!(std::fs::read(&dest).unwrap(), vec![7u8; 4000]);
+        assert_eq!(
+            std::fs::read_dir(dir.path().join("tmp")).unwrap().count(),
+            0
+        );
+    }
+
+    #[tokio::test]
+    async fn bytes_in_memory_keep_the_limit_and_a_broken_body_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let files = Files::open(dir.path()).unwrap();
+        let body = || {
+            futures_util::stream::iter(
+                (0..3).map(|i| Ok::<_, std::io::Error>(Bytes::from(vec![i as u8; 10]))),
+            )
+        };
+        let bytes = files.receive_bytes(body(), 30, "trajectory").await.unwrap();
+        assert_eq!((bytes.len(), bytes[0], bytes[29]), (30, 0, 2));
+        let err = files
+            .receive_bytes(body(), 29, "trajectory")
+            .await
+            .unwrap_err();
+        assert!(
+            matches!(
+                err,
+                Error::TooLarge {
+                    what: "trajectory",
+                    limit: 29
+                }
+            ),
+            "{err}"
+        );
+        let err = files
+            .receive_bytes(broken_after(2), 10_000, "trajectory")
+            .await
+            .unwrap_err();
+        assert!(err.to_string().contains("broke off"), "{err}");
+        assert_eq!(
+            std::fs::read_dir(dir.path().join("tmp")).unwrap().count(),
+            0
+        );
+    }
+
+    fn room(files: &Files) -> Reservation<'_> {
+        files.reserve(None, None).unwrap()
+    }
+
+    fn broken_after(chunks: usize) -> impl Stream<Item = Result<Bytes, std::io::Error>> + Unpin {
+        futures_util::stream::iter((0..=chunks).map(move |i| {
+            if i < chunks {
+                Ok(Bytes::from(vec![i as u8; 1000]))
+            } else {
+                Err(std::io::Error::other("connection reset"))
+            }
+        }))
+    }
+
+    #[tokio::test]
+    async fn a_broken_body_keeps_its_prefix_and_an_append_continues_it() {
+        let dir = tempfile::tempdir().unwrap();
+        let files = Files::open(dir.path()).unwrap();
+        let part = dir.path().join("part");
+        let broken = files
+            .append(broken_after(3), &part, 0, 10_000, "recording", room(&files))
+            .await
+            .unwrap();
+        assert_eq!(broken.len, 3000);
+        let error = broken.broken.unwrap().to_string();
+        assert!(error.contains("broke off"), "{error}");
+
+        // Another break while appending: what arrived is kept.
+        let len = files
+            .append(
+                broken_after(2),
+                &part,
+                3000,
+                10_000,
+                "recording",
+                room(&files),
+            )
+            .await
+            .unwrap();
+        assert!(len.broken.is_some());
+        assert_eq!(len.len, 5000);
+        let kept = std::fs::read(&part).unwrap();
+        assert_eq!(kept.len(), 5000);
+        assert_eq!((kept[2999], kept[3000], kept[4999]), (2, 0, 1));
+    }
+
+    #[tokio::test]
+    async fn an_append_past_its_range_or_at_the_wrong_offset_changes_nothing() {
+        let dir = tempfile::tempdir().unwrap();
+        let files = Files::open(dir.path()).unwrap();
+        let part = dir.path().join("part");
+        std::fs::write(&part, [9u8; 500]).unwrap();
+        let err = files
+            .append(broken_after(3), &part, 500, 2500, "recording", room(&files))
+            .await
+            .unwrap_err();
+        assert!(
+            matches!(err, Error::BadRequest(ref m) if m.contains("Content-Range")),
+            "{err}"
+        );
+        assert_eq!(std::fs::read(&part).unwrap(), vec![9u8; 500]);
+        let err = files
+            .append(
+                broken_after(1),
+                &part,
+                400,
+                10_000,
+                "recording",
+                room(&files),
+            )
+            .await
+            .unwrap_err();
+        assert!(matches!(err, Error::Internal(_)), "{err}");
+        assert_eq!(std::fs::read(&part).unwrap(), vec![9u8; 500]);
+    }
+
+    #[test]
+    fn a_restart_clears_what_uploads_and_deletes_left_in_tmp() {
+        let dir = tempfile::tempdir().unwrap();
+        let files = Files::open(dir.path()).unwrap();
+        std::fs::create_dir_all(dir.path().join("sessions/s0123456789abcdef/trials")).unwrap();
+        std::fs::write(
+            dir.path()
+                .join("sessions/s0123456789abcdef/trials/trial_000.txt"),
+            "x",
+        )
+        .unwrap();
+        let trash = files
+            .trash_session_dir("s0123456789abcdef")
+            .unwrap()
+            .unwrap();
+        assert!(trash.join("trials/trial_000.txt").is_file());
+        assert!(!dir.path().join("sessions/s0123456789abcdef").exists());
+        assert_eq!(files.trash_session_dir("s0123456789abcdef").unwrap(), None);
+        std::fs::write(dir.path().join("tmp/upload-x.part"), "half").unwrap();
+        drop(files);
+        Files::open(dir.path()).unwrap();
+        assert_eq!(
+            std::fs::read_dir(dir.path().join("tmp")).unwrap().count(),
+            0
+        );
+    }
+}
