@@ -13,7 +13,8 @@ use crate::playback::adb::AdbPlayback;
 use crate::playback::queue::{PlaybackQueue, QueueLimits};
 use crate::playback::{Playback, PlaybackPlan, SimPlayback, UploadPlayback};
 use crate::session::{Lifecycle, NewSession, Session};
-use crate::storage::db::Db;
+use crate::storage::MetadataStore;
+use crate::storage::embedded::open_metadata;
 use crate::storage::files::Files;
 
 /// What a running job knows that the database does not: timing and the cancel flag.
@@ -31,7 +32,8 @@ pub(crate) struct RunningJob {
 /// Everything the routes and jobs share.
 pub(crate) struct App {
     pub config: ServerConfig,
-    pub db: Db,
+    /// Every row the server keeps (the embedded default: SQLite in `DATA/sitar.db`).
+    pub db: Arc<dyn MetadataStore>,
     pub files: Files,
     /// Per-token counters of sessions created and bytes uploaded.
     pub limiter: Arc<crate::auth::UploadLimiter>,
@@ -62,7 +64,7 @@ impl App {
         let files = Files::open(&config.data_dir)?
             .with_idle_timeout(config.upload_idle_timeout)
             .with_quotas(config.session_disk_quota, config.disk_quota);
-        let db = Db::open(&config.data_dir.join("sitar.db"))?;
+        let db = open_metadata(&config.data_dir)?;
         Ok(App {
             sim: Arc::new(SimPlayback::new(config.sim.clone())),
             adb: Arc::new(AdbPlayback::new(config.adb.clone())),
@@ -87,7 +89,7 @@ impl App {
 
     /// The transitions of this server's sessions.
     pub fn lifecycle(&self) -> Lifecycle<'_> {
-        Lifecycle::new(&self.db)
+        Lifecycle::new(&*self.db)
     }
 
     /// Session `id`, or a 404 (an id the server cannot have made is never looked up).

@@ -78,9 +78,9 @@ pub enum Error {
         /// The underlying error.
         source: std::io::Error,
     },
-    /// The SQLite database failed: 500 `database`.
+    /// The metadata store failed: 500 `database`.
     #[error("database: {0}")]
-    Database(#[from] rusqlite::Error),
+    Database(String),
     /// The estimator rejected the trials: 500 `estimate` (or 422 when the input is at fault).
     #[error("estimate: {0}")]
     Estimate(String),

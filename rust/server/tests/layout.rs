@@ -213,7 +213,10 @@ fn no_import_cycle_among_the_modules() {
                 );
             }
             if handler {
-                assert!(!used.starts_with("http::handlers::"), "{module} uses {used}");
+                assert!(
+                    !used.starts_with("http::handlers::"),
+                    "{module} uses {used}"
+                );
             }
         }
     }
@@ -223,27 +226,45 @@ fn no_import_cycle_among_the_modules() {
     assert!(uses("http::handlers::trials", "ingest::trials"));
     assert!(uses("playback::jobs", "app_state") && uses("playback::jobs", "session"));
     assert!(uses("playback::jobs", "estimate::live_sessions"));
-    assert!(uses("session::lifecycle", "storage::db") && uses("session::lifecycle", "error"));
+    assert!(uses("session::lifecycle", "storage") && uses("session::lifecycle", "error"));
+    assert!(uses("storage::sqlite::sessions", "storage::metadata"));
     assert!(uses("http::router", "http::handlers") && uses("http::server", "http::router"));
-    assert!(!graph["http::helpers"].iter().any(|m| m.starts_with("http::handlers")));
+    assert!(
+        !graph["http::helpers"]
+            .iter()
+            .any(|m| m.starts_with("http::handlers"))
+    );
 }
 
 #[test]
 fn only_the_lifecycle_writes_a_sessions_state() {
-    let mut writers = BTreeSet::new();
+    let mut sql_writers = BTreeSet::new();
     for (module, code) in sources() {
         let mut rest = code.as_str();
         while let Some(at) = rest.find("UPDATE sessions") {
             rest = &rest[at..];
             let statement = &rest[..rest.find("WHERE").unwrap_or(rest.len())];
             if statement.contains("state") {
-                writers.insert(module.clone());
+                sql_writers.insert(module.clone());
             }
             rest = &rest["UPDATE sessions".len()..];
         }
         if code.contains("INSERT INTO sessions") {
-            // A row is born `created`; nothing but the store makes rows.
-            assert_eq!(module, "session::store", "{module} inserts sessions");
+            // A row is born `created`; nothing but the store's sessions make rows.
+            assert_eq!(
+                module, "storage::sqlite::sessions",
+                "{module} inserts sessions"
+            );
+        }
+        // The store's state writes are called by the lifecycle alone.
+        if !module.starts_with("storage") {
+            for call in ["store.transition(", "db.transition(", ".fail_unreadable("] {
+                let direct = code.contains(call) && !code.contains("lifecycle().fail_unreadable(");
+                assert!(
+                    !direct || module == "session::lifecycle",
+                    "{module} calls {call} directly: go through session::Lifecycle"
+                );
+            }
         }
         // The wire names of the states are written once (the jobs table shares two).
         for name in [
@@ -256,7 +277,7 @@ fn only_the_lifecycle_writes_a_sessions_state() {
         ] {
             let literal = format!("\"{name}\"");
             if code.contains(&literal) {
-                let jobs = module == "storage::db" && matches!(name, "done" | "failed");
+                let jobs = module == "storage::metadata" && matches!(name, "done" | "failed");
                 // The playback app's status file (docs/playback-contract.md) has a
                 // `failed MESSAGE` line of its own: a word of that contract, not a state.
                 let status_file = module == "playback::adb" && name == "failed";
@@ -267,17 +288,44 @@ fn only_the_lifecycle_writes_a_sessions_state() {
             }
         }
     }
+    // In the embedded store, the state is written by `transition` and `fail_unreadable`
+    // of one file.
     assert_eq!(
-        writers,
-        BTreeSet::from(["session::lifecycle".to_string()]),
+        sql_writers,
+        BTreeSet::from(["storage::sqlite::sessions".to_string()]),
         "modules that write a session's state"
     );
 }
 
 #[test]
+fn only_the_storage_folder_speaks_sql() {
+    let sources = sources();
+    assert!(sources.len() > 40, "{:?}", sources.keys());
+    for (module, code) in &sources {
+        let sql = [
+            "rusqlite",
+            "SELECT ",
+            "INSERT INTO",
+            "DELETE FROM",
+            "CREATE TABLE",
+        ]
+        .into_iter()
+        .find(|word| code.contains(word));
+        if let Some(word) = sql {
+            assert!(
+                module.starts_with("storage::sqlite"),
+                "{module} speaks SQL ({word:?}): only storage::sqlite may"
+            );
+        }
+    }
+    // The test sees what the files hold: the embedded store does speak SQL.
+    assert!(sources["storage::sqlite::sessions"].contains("INSERT INTO sessions"));
+}
+
+#[test]
 fn the_layer_comment_names_every_module() {
-    let lib = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("src/lib.rs"))
-        .unwrap();
+    let lib =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("src/lib.rs")).unwrap();
     let comment: String = lib
         .lines()
         .filter(|l| l.trim_start().starts_with("// "))
@@ -297,6 +345,9 @@ fn the_layer_comment_names_every_module() {
         let named = comment
             .split(|c: char| !(c.is_alphanumeric() || c == '_'))
             .any(|word| word == module);
-        assert!(named, "lib.rs declares `{module}` but its layer comment does not name it");
+        assert!(
+            named,
+            "lib.rs declares `{module}` but its layer comment does not name it"
+        );
     }
 }

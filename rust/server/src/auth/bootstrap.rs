@@ -8,7 +8,7 @@ use std::path::Path;
 use crate::Error;
 use crate::auth::role::Role;
 use crate::auth::secret;
-use crate::storage::db::Db;
+use crate::storage::TokenStore;
 
 /// The file in the data directory holding the first admin token.
 pub const ADMIN_TOKEN_FILE: &str = "admin.token";
@@ -43,7 +43,7 @@ impl std::fmt::Debug for PresetToken {
 /// shown once.
 pub(crate) fn ensure_admin_token(
     data_dir: &Path,
-    db: &Db,
+    db: &dyn TokenStore,
     presets: &[PresetToken],
 ) -> Result<Option<String>, Error> {
     for preset in presets {
@@ -88,11 +88,12 @@ fn write_new_secret(path: &Path, text: &str) -> Result<(), Error> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::storage::sqlite::SqliteStore;
 
     #[test]
     fn the_admin_token_is_made_once_and_never_overwritten() {
         let dir = tempfile::tempdir().unwrap();
-        let db = Db::open(&dir.path().join("sitar.db")).unwrap();
+        let db = SqliteStore::open(&dir.path().join("sitar.db")).unwrap();
         let token = ensure_admin_token(dir.path(), &db, &[]).unwrap().unwrap();
         let file = dir.path().join(ADMIN_TOKEN_FILE);
         assert_eq!(std::fs::read_to_string(&file).unwrap().trim(), token);
@@ -113,7 +114,7 @@ mod tests {
     #[test]
     fn short_preset_tokens_are_refused() {
         let dir = tempfile::tempdir().unwrap();
-        let db = Db::open(&dir.path().join("sitar.db")).unwrap();
+        let db = SqliteStore::open(&dir.path().join("sitar.db")).unwrap();
         let short = PresetToken {
             name: "t".into(),
             role: Role::App,

@@ -4,7 +4,6 @@
 //! a limit gets 429 with `Retry-After`, and the same request later goes through.
 
 use std::collections::HashMap;
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 
 use axum::body::Body;
@@ -17,8 +16,8 @@ use futures_util::StreamExt;
 use crate::Error;
 use crate::app_state::App;
 use crate::auth::caller::Caller;
-use crate::auth::usage::Full;
-use crate::storage::db::{Db, now_ms};
+use crate::auth::usage::UsageFull;
+use crate::storage::{UsageStore, now_ms};
 
 /// The limits every token has (`sitar serve --max-sessions-per-hour`, `--max-upload-gib-per-day`,
 /// `--max-concurrent-uploads`). The defaults are generous for one lab: a phone that records
@@ -57,8 +56,6 @@ pub(crate) struct UploadLimiter {
     limits: Limits,
     /// Upload bodies being read, per token.
     uploading: Mutex<HashMap<i64, u32>>,
-    /// Whether the ledger's table exists (made on first use).
-    tables_made: AtomicBool,
 }
 
 impl UploadLimiter {
@@ -66,28 +63,16 @@ impl UploadLimiter {
         UploadLimiter {
             limits,
             uploading: Mutex::new(HashMap::new()),
-            tables_made: AtomicBool::new(false),
         }
-    }
-
-    fn ledger<'a>(&self, db: &'a Db) -> Result<&'a Db, Error> {
-        if !self.tables_made.load(Ordering::Acquire) {
-            db.create_usage_tables()?;
-            self.tables_made.store(true, Ordering::Release);
-        }
-        Ok(db)
     }
 
     /// Counts a session creation at `now_ms`, or refuses it with the seconds until one is
     /// allowed.
-    fn create_session(&self, db: &Db, token: i64, now_ms: i64) -> Result<(), Error> {
+    fn create_session(&self, db: &dyn UsageStore, token: i64, now_ms: i64) -> Result<(), Error> {
         let max = self.limits.sessions_per_hour;
-        match self
-            .ledger(db)?
-            .count_session_creation(token, max, now_ms)?
-        {
+        match db.count_session_creation(token, max, now_ms)? {
             Ok(()) => Ok(()),
-            Err(Full { frees_at_ms, .. }) => Err(Error::TooManyRequests {
+            Err(UsageFull { frees_at_ms, .. }) => Err(Error::TooManyRequests {
                 message: format!("this token created {max} sessions in the last hour"),
                 retry_after_s: seconds_until(frees_at_ms, now_ms),
             }),
@@ -103,7 +88,7 @@ impl UploadLimiter {
         now_ms: i64,
     ) -> Result<UploadGuard, Error> {
         let limits = self.limits;
-        let day = self.ledger(&shared.db)?.uploaded_in_day(token, now_ms)?;
+        let day = shared.db.uploaded_in_day(token, now_ms)?;
         if day.used >= limits.upload_bytes_per_day {
             return Err(Error::TooManyRequests {
                 message: format!(
@@ -133,11 +118,9 @@ impl UploadLimiter {
     }
 
     /// An upload's body is done with: its bytes go into the ledger, its slot is free.
-    fn finish_upload(&self, db: &Db, token: i64, bytes: u64) {
+    fn finish_upload(&self, db: &dyn UsageStore, token: i64, bytes: u64) {
         if bytes > 0
-            && let Err(e) = self
-                .ledger(db)
-                .and_then(|db| db.add_uploaded(token, bytes, now_ms()))
+            && let Err(e) = db.add_uploaded(token, bytes, now_ms())
         {
             log::warn!("cannot count {bytes} uploaded bytes: {e}");
         }
@@ -163,7 +146,7 @@ impl Drop for UploadGuard {
     fn drop(&mut self) {
         self.shared
             .limiter
-            .finish_upload(&self.shared.db, self.token, self.bytes);
+            .finish_upload(&*self.shared.db, self.token, self.bytes);
     }
 }
 
@@ -194,7 +177,7 @@ pub(crate) async fn limit_uploads(
     };
     let (method, path) = (request.method().clone(), request.uri().path().to_owned());
     if creates_session(&method, &path)
-        && let Err(e) = shared.limiter.create_session(&shared.db, id, now_ms())
+        && let Err(e) = shared.limiter.create_session(&*shared.db, id, now_ms())
     {
         return e.into_response();
     }
@@ -241,7 +224,7 @@ mod tests {
             concurrent_uploads: 1,
         };
         let shared = shared(dir.path(), limits);
-        let (limiter, db) = (&shared.limiter, &shared.db);
+        let (limiter, db) = (&shared.limiter, &*shared.db);
         let t0 = 500_000 * HOUR_MS + 1_000;
         limiter.create_session(db, 1, t0).unwrap();
         limiter.create_session(db, 1, t0 + 1).unwrap();
@@ -296,7 +279,7 @@ mod tests {
         let t0 = now_ms();
         {
             let shared = shared(dir.path(), limits);
-            shared.limiter.create_session(&shared.db, 7, t0).unwrap();
+            shared.limiter.create_session(&*shared.db, 7, t0).unwrap();
             let mut upload = shared.limiter.start_upload(&shared, 7, t0).unwrap();
             upload.bytes = 11;
         }
@@ -305,11 +288,16 @@ mod tests {
         assert!(
             shared
                 .limiter
-                .create_session(&shared.db, 7, t0 + 1)
+                .create_session(&*shared.db, 7, t0 + 1)
                 .is_err()
         );
         assert!(shared.limiter.start_upload(&shared, 7, t0 + 1).is_err());
-        assert!(shared.limiter.create_session(&shared.db, 8, t0 + 1).is_ok());
+        assert!(
+            shared
+                .limiter
+                .create_session(&*shared.db, 8, t0 + 1)
+                .is_ok()
+        );
     }
 
     #[test]

@@ -1,7 +1,7 @@
-//! Access control: tokens with roles (`admin`, `app`), stored only as hashes in SQLite and
+//! Access control: tokens with roles (`admin`, `app`), stored only as hashes in the metadata store and
 //! compared in constant time; the middleware that finds every request's caller; the
 //! `?token=` → cookie step of the HTML pages; share links; the admin token a new data
-//! directory gets; and the per-token limits, counted in SQLite so a restart keeps them.
+//! directory gets; and the per-token limits, counted in the metadata store so a restart keeps them.
 
 mod bootstrap;
 mod caller;
@@ -9,7 +9,7 @@ mod limits;
 mod middleware;
 mod role;
 pub(crate) mod secret;
-mod store;
+mod tokens;
 mod usage;
 
 pub(crate) use bootstrap::ensure_admin_token;
@@ -20,4 +20,6 @@ pub(crate) use limits::{UploadLimiter, limit_uploads};
 pub(crate) use middleware::{CallerName, authenticate};
 pub use role::Role;
 pub use secret::new_token;
-pub use store::{TokenInfo, create_token, list_tokens, revoke_token};
+pub(crate) use tokens::check_token_name;
+pub use tokens::{TokenInfo, create_token, list_tokens, revoke_token};
+pub(crate) use usage::{DAY_HOURS, HOUR_MS, UsageFull};

@@ -33,7 +33,7 @@ impl Server {
         } else {
             auth::ensure_admin_token(
                 &shared.config.data_dir,
-                &shared.db,
+                &*shared.db,
                 &shared.config.preset_tokens,
             )?
         };

@@ -98,7 +98,7 @@ pub(crate) fn store_trial(
     let (index, created) =
         shared
             .db
-            .add_trial(id, key, play_index, trial.len(), source, |index| {
+            .add_trial(id, key, play_index, trial.len(), source, &mut |index| {
                 shared
                     .files
                     .write_atomic(&shared.files.trial(id, index), bytes)

@@ -18,7 +18,7 @@ pub(crate) use crate::playback::queue::Begin;
 use crate::playback::queue::{Intent, Ticket};
 use crate::playback::{PlaybackJob, TrialOutput};
 use crate::session::{Session, SessionState, Step};
-use crate::storage::db::JobEnd;
+use crate::storage::JobEnd;
 
 /// How long a delete waits for a playback it stopped to end.
 const STOP_WAIT: Duration = Duration::from_secs(15);

@@ -87,7 +87,7 @@ pub(crate) fn spawn_retention_sweep(shared: Arc<App>) {
     tokio::spawn(async move {
         while !shared.stopping() {
             let cutoff =
-                crate::storage::db::now_ms() - retention.as_millis().min(i64::MAX as u128) as i64;
+                crate::storage::now_ms() - retention.as_millis().min(i64::MAX as u128) as i64;
             match shared.db.expired(cutoff) {
                 Ok(ids) => {
                     for id in ids {

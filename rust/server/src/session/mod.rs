@@ -1,6 +1,8 @@
 //! A session's life, in one place: its states and the table of the steps each allows
-//! (`state.rs`), its typed row (`record.rs`), reading and creating rows (`store.rs`) and the
-//! transitions (`lifecycle.rs`), the only code that writes a session's state.
+//! (`state`), its typed row (`record`), its estimate settings (`estimate_settings`), the
+//! transitions (`lifecycle`, the only code that changes a session's state, through
+//! [`crate::storage::SessionStore::transition`]), its status document (`status`) and its
+//! deletion (`deletion`).
 
 pub(crate) mod deletion;
 pub(crate) mod estimate_settings;
@@ -8,7 +10,6 @@ mod lifecycle;
 mod record;
 mod state;
 pub(crate) mod status;
-mod store;
 
 pub(crate) use lifecycle::Lifecycle;
 pub(crate) use record::{NewSession, Session};

@@ -1,54 +1,23 @@
 //! The `tokens` and `share_links` tables: only hashes are stored; a token is shown once, when
-//! it is made. `sitar token` uses the same functions on the same database, so it works while
-//! the server runs (SQLite in WAL mode, each request looks its token up afresh: a revoked
-//! token fails on the next request).
-
-use std::path::Path;
+//! it is made. Each request looks its token up afresh: a revoked token fails on the next
+//! request.
 
 use rusqlite::params;
 
+use super::{CachedSql, SqliteStore};
 use crate::Error;
-use crate::auth::caller::Caller;
-use crate::auth::role::Role;
 use crate::auth::secret::{self, digest};
-use crate::storage::db::{CachedSql, Db, now_ms};
-
-/// A token as `sitar token list` shows it: never the token itself.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct TokenInfo {
-    /// The name given when it was made (unique).
-    pub name: String,
-    /// What it may do.
-    pub role: Role,
-    /// Made at, ms since the Unix epoch.
-    pub created_ms: i64,
-    /// Last request with it, ms since the Unix epoch (to the minute).
-    pub last_used_ms: Option<i64>,
-}
+use crate::auth::{Caller, Role, TokenInfo, check_token_name};
+use crate::storage::metadata::TokenStore;
+use crate::storage::now_ms;
 
 /// `last_used_ms` is written at most once a minute per token: phones poll twice a second.
 const TOUCH_EVERY_MS: i64 = 60_000;
 
-/// Token names: 1 to 64 letters, digits and `._-` (they appear in logs and listings).
-pub(crate) fn check_name(name: &str) -> Result<(), Error> {
-    let ok = !name.is_empty()
-        && name.len() <= 64
-        && name
-            .chars()
-            .all(|c| c.is_ascii_alphanumeric() || "._-".contains(c));
-    if ok {
-        Ok(())
-    } else {
-        Err(Error::BadRequest(format!(
-            "token name {name:?}: use 1 to 64 letters, digits, '.', '_' or '-'"
-        )))
-    }
-}
-
-impl Db {
+impl TokenStore for SqliteStore {
     /// Stores `token`'s hash under `name`; a name in use is a conflict.
-    pub(crate) fn insert_token(&self, name: &str, role: Role, token: &str) -> Result<(), Error> {
-        check_name(name)?;
+    fn insert_token(&self, name: &str, role: Role, token: &str) -> Result<(), Error> {
+        check_token_name(name)?;
         let d = digest(token);
         self.with(|c| {
             c.execute_cached(
@@ -64,8 +33,8 @@ impl Db {
     }
 
     /// Stores `token` under `name`, replacing the hash a token of that name had (preset tokens).
-    pub(crate) fn set_token(&self, name: &str, role: Role, token: &str) -> Result<(), Error> {
-        check_name(name)?;
+    fn set_token(&self, name: &str, role: Role, token: &str) -> Result<(), Error> {
+        check_token_name(name)?;
         let d = digest(token);
         self.with(|c| {
             c.execute_cached(
@@ -77,14 +46,14 @@ impl Db {
         .map(|_| ())
     }
 
-    pub(crate) fn has_token(&self, name: &str) -> Result<bool, Error> {
+    fn has_token(&self, name: &str) -> Result<bool, Error> {
         self.with(|c| {
             c.prepare_cached("SELECT 1 FROM tokens WHERE name = ?1")?
                 .exists([name])
         })
     }
 
-    pub(crate) fn tokens(&self) -> Result<Vec<TokenInfo>, Error> {
+    fn tokens(&self) -> Result<Vec<TokenInfo>, Error> {
         self.with(|c| {
             let mut stmt = c.prepare_cached(
                 "SELECT name, role, created_ms, last_used_ms FROM tokens ORDER BY created_ms, id",
@@ -115,14 +84,14 @@ impl Db {
 
     /// Deletes the token named `name`; whether it existed. Its sessions stay (an admin sees
     /// them); a new token of the same name does not inherit them.
-    pub(crate) fn revoke_token(&self, name: &str) -> Result<bool, Error> {
+    fn revoke_token(&self, name: &str) -> Result<bool, Error> {
         self.with(|c| c.execute_cached("DELETE FROM tokens WHERE name = ?1", [name]))
             .map(|n| n == 1)
     }
 
     /// The caller `token` belongs to, if any. Rows come by the hash's first 8 bytes; the full
     /// hashes are compared in constant time.
-    pub(crate) fn caller(&self, token: &str) -> Result<Option<Caller>, Error> {
+    fn caller(&self, token: &str) -> Result<Option<Caller>, Error> {
         if !secret::plausible(token) {
             return Ok(None);
         }
@@ -164,7 +133,7 @@ impl Db {
     }
 
     /// Stores a share link's hash for `session`.
-    pub(crate) fn insert_share(&self, session: &str, token: &str) -> Result<(), Error> {
+    fn insert_share(&self, session: &str, token: &str) -> Result<(), Error> {
         let d = digest(token);
         self.with(|c| {
             c.execute_cached(
@@ -176,7 +145,7 @@ impl Db {
     }
 
     /// The session a share link opens, if the link exists (constant-time hash comparison).
-    pub(crate) fn shared_session(&self, token: &str) -> Result<Option<String>, Error> {
+    fn shared_session(&self, token: &str) -> Result<Option<String>, Error> {
         if !secret::plausible(token) {
             return Ok(None);
         }
@@ -196,83 +165,13 @@ impl Db {
     }
 
     /// Revokes every share link of `session`; how many there were.
-    pub(crate) fn revoke_shares(&self, session: &str) -> Result<usize, Error> {
+    fn revoke_shares(&self, session: &str) -> Result<usize, Error> {
         self.with(|c| c.execute_cached("DELETE FROM share_links WHERE session_id = ?1", [session]))
     }
 
     /// Whether any token is stored at all (raw rows, for the tests of what is stored).
     #[cfg(test)]
-    pub(crate) fn token_count(&self) -> Result<i64, Error> {
+    fn token_count(&self) -> Result<i64, Error> {
         self.with(|c| c.query_row("SELECT COUNT(*) FROM tokens", [], |r| r.get(0)))
-    }
-}
-
-/// Opens `DATA/sitar.db` for `sitar token` (creating it when new).
-fn open(data_dir: &Path) -> Result<Db, Error> {
-    std::fs::create_dir_all(data_dir)
-        .map_err(|e| Error::io("cannot create data directory", data_dir, e))?;
-    Db::open(&data_dir.join("sitar.db"))
-}
-
-/// Makes a token named `name` with `role` in the data directory's database and returns it
-/// (the only time it is shown: only its hash is stored).
-pub fn create_token(data_dir: &Path, role: Role, name: &str) -> Result<String, Error> {
-    let token = secret::new_token()?;
-    open(data_dir)?.insert_token(name, role, &token)?;
-    Ok(token)
-}
-
-/// The tokens of the data directory's database, oldest first.
-pub fn list_tokens(data_dir: &Path) -> Result<Vec<TokenInfo>, Error> {
-    open(data_dir)?.tokens()
-}
-
-/// Revokes the token named `name`: its next request is answered 401. Whether it existed.
-pub fn revoke_token(data_dir: &Path, name: &str) -> Result<bool, Error> {
-    open(data_dir)?.revoke_token(name)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn only_hashes_are_stored_and_revocation_is_immediate() {
-        let dir = tempfile::tempdir().unwrap();
-        let token = create_token(dir.path(), Role::App, "phone-1").unwrap();
-        let db = Db::open(&dir.path().join("sitar.db")).unwrap();
-        assert!(matches!(
-            db.caller(&token).unwrap(),
-            Some(Caller::Token {
-                role: Role::App,
-                ..
-            })
-        ));
-        assert_eq!(db.caller("sitar_nope").unwrap(), None);
-        assert_eq!(db.caller("").unwrap(), None);
-        // The raw token appears nowhere in the database file (nor its WAL).
-        for file in ["sitar.db", "sitar.db-wal"] {
-            if let Ok(bytes) = std::fs::read(dir.path().join(file)) {
-                let text = String::from_utf8_lossy(&bytes);
-                assert!(
-                    !text.contains(&token[secret::TOKEN_PREFIX.len()..]),
-                    "{file}"
-                );
-            }
-        }
-        let listed = list_tokens(dir.path()).unwrap();
-        assert_eq!(listed.len(), 1);
-        assert_eq!(listed[0].name, "phone-1");
-        assert!(listed[0].last_used_ms.is_some(), "the lookup touched it");
-        // The same name twice is refused; a bad name is named.
-        assert!(create_token(dir.path(), Role::App, "phone-1").is_err());
-        let err = create_token(dir.path(), Role::App, "a b")
-            .unwrap_err()
-            .to_string();
-        assert!(err.contains("token name"), "{err}");
-        assert!(revoke_token(dir.path(), "phone-1").unwrap());
-        assert!(!revoke_token(dir.path(), "phone-1").unwrap());
-        assert_eq!(db.caller(&token).unwrap(), None);
-        assert_eq!(db.token_count().unwrap(), 0);
     }
 }

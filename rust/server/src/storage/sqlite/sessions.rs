@@ -1,15 +1,17 @@
-//! Reading, creating and deleting rows of the `sessions` table, typed. (Changing a
-//! session's state is `lifecycle.rs`'s alone.)
+//! The `sessions` table: rows read typed, created (idempotently), listed, deleted, and moved
+//! through their states by [`SessionStore::transition`], which only `session::lifecycle`
+//! calls.
 
 use rusqlite::types::Type;
 use rusqlite::{OptionalExtension, params};
 
+use super::{CachedSql, SqliteStore};
 use crate::Error;
 use crate::config::PlaybackKind;
 use crate::session::estimate_settings::{self, EstimateSettings};
-use crate::session::record::{NewSession, Session};
-use crate::session::state::SessionState;
-use crate::storage::db::{CachedSql, Db, now_ms};
+use crate::session::{NewSession, Session, SessionState, Step};
+use crate::storage::metadata::{Rows, SessionStore, StepRecord, Unreadable};
+use crate::storage::now_ms;
 
 const COLUMNS: &str = "id, trials_total, setting, playback, state, error, stop_reason, adaptive_min, \
      adaptive_k, recording_bytes, results_trials, legacy, window_frames, pose_relation, owner";
@@ -82,21 +84,6 @@ fn session_from_row(r: &rusqlite::Row<'_>) -> rusqlite::Result<Session> {
     })
 }
 
-/// A row of the `sessions` table the server cannot read (a value no version writes).
-#[derive(Debug, Clone, PartialEq)]
-pub(crate) struct Unreadable {
-    pub id: String,
-    /// What is wrong with it, naming the column.
-    pub why: String,
-}
-
-/// Sessions read from the table, and the rows that could not be read (skipped).
-#[derive(Debug, Default)]
-pub(crate) struct Rows {
-    pub sessions: Vec<Session>,
-    pub unreadable: Vec<Unreadable>,
-}
-
 /// Reads every row of `stmt` (a `SELECT {COLUMNS}`), sorting the readable from the rest.
 fn read_rows(
     stmt: &mut rusqlite::Statement<'_>,
@@ -116,10 +103,10 @@ fn read_rows(
     Ok(out)
 }
 
-impl Db {
+impl SessionStore for SqliteStore {
     /// Inserts a session (state `created`), or returns the one created earlier with the same
     /// idempotency key. The bool is true when a new row was made.
-    pub fn insert_session(&self, id: &str, new: &NewSession<'_>) -> Result<(String, bool), Error> {
+    fn insert_session(&self, id: &str, new: &NewSession<'_>) -> Result<(String, bool), Error> {
         self.transaction(|tx| {
             if let Some(key) = new.idempotency_key {
                 let existing: Option<(String, String)> = tx
@@ -166,7 +153,7 @@ impl Db {
         })
     }
 
-    pub fn session(&self, id: &str) -> Result<Option<Session>, Error> {
+    fn session(&self, id: &str) -> Result<Option<Session>, Error> {
         self.with(|c| {
             c.query_row_cached(
                 &format!("SELECT {COLUMNS} FROM sessions WHERE id = ?1"),
@@ -179,7 +166,7 @@ impl Db {
 
     /// The newest `limit` sessions, newest first; of token `owner` only when given. Rows
     /// that cannot be read are logged and left out.
-    pub fn recent_sessions(&self, owner: Option<i64>, limit: u32) -> Result<Vec<Session>, Error> {
+    fn recent_sessions(&self, owner: Option<i64>, limit: u32) -> Result<Vec<Session>, Error> {
         let rows = self.recent_rows(owner, limit)?;
         for bad in &rows.unreadable {
             log::warn!("session {}: unreadable row, left out: {}", bad.id, bad.why);
@@ -187,8 +174,8 @@ impl Db {
         Ok(rows.sessions)
     }
 
-    /// As [`Db::recent_sessions`], with the unreadable rows named.
-    pub fn recent_rows(&self, owner: Option<i64>, limit: u32) -> Result<Rows, Error> {
+    /// As [`SessionStore::recent_sessions`], with the unreadable rows named.
+    fn recent_rows(&self, owner: Option<i64>, limit: u32) -> Result<Rows, Error> {
         self.with(|c| {
             let mut stmt = c.prepare_cached(&format!(
                 "SELECT {COLUMNS} FROM sessions WHERE ?1 IS NULL OR owner = ?1 \
@@ -199,7 +186,7 @@ impl Db {
     }
 
     /// Sessions in any of `states`, oldest first (in the order they were created).
-    pub fn sessions_in(&self, states: &[SessionState]) -> Result<Rows, Error> {
+    fn sessions_in(&self, states: &[SessionState]) -> Result<Rows, Error> {
         let names: Vec<&str> = states.iter().map(|s| s.as_str()).collect();
         let list = serde_json::to_string(&names).unwrap_or_default();
         self.with(|c| {
@@ -214,7 +201,7 @@ impl Db {
     /// Sessions past a retention that ends at `cutoff_ms` (ms since the epoch): finished
     /// before it, or created before it and idle since (never uploaded, or an `upload` session
     /// still waiting for trials).
-    pub fn expired(&self, cutoff_ms: i64) -> Result<Vec<String>, Error> {
+    fn expired(&self, cutoff_ms: i64) -> Result<Vec<String>, Error> {
         self.with(|c| {
             let mut stmt = c.prepare_cached(
                 "SELECT id FROM sessions WHERE \
@@ -239,7 +226,7 @@ impl Db {
 
     /// The newest session (by finish time when `done_only`), of the legacy routes when
     /// `legacy_only`, of token `owner` when given.
-    pub fn latest_session(
+    fn latest_session(
         &self,
         done_only: bool,
         legacy_only: bool,
@@ -268,7 +255,7 @@ impl Db {
 
     /// Removes a session with its trials and jobs (devices forget it) in one transaction.
     /// Returns whether it existed.
-    pub fn delete_session(&self, id: &str) -> Result<bool, Error> {
+    fn delete_session(&self, id: &str) -> Result<bool, Error> {
         self.transaction(|tx| {
             tx.execute_cached("DELETE FROM trials WHERE session_id = ?1", [id])?;
             tx.execute_cached("DELETE FROM jobs WHERE session_id = ?1", [id])?;
@@ -279,6 +266,84 @@ impl Db {
             )?;
             Ok(tx.execute_cached("DELETE FROM sessions WHERE id = ?1", [id])? == 1)
         })
+    }
+
+    fn session_created_ms(&self, session: &str) -> Result<Option<i64>, Error> {
+        self.with(|c| {
+            use rusqlite::OptionalExtension;
+            c.query_row_cached(
+                "SELECT created_ms FROM sessions WHERE id = ?1",
+                [session],
+                |r| r.get(0),
+            )
+            .optional()
+        })
+    }
+
+    fn transition(
+        &self,
+        id: &str,
+        step: Step,
+        also: StepRecord<'_>,
+    ) -> Result<SessionState, Error> {
+        self.transaction(|tx| {
+            let row: Option<(String, String)> = tx
+                .query_row_cached(
+                    "SELECT state, playback FROM sessions WHERE id = ?1",
+                    [id],
+                    |r| Ok((r.get(0)?, r.get(1)?)),
+                )
+                .optional()?;
+            let (state, playback) =
+                row.ok_or_else(|| Error::NotFound(format!("no session {id:?}")))?;
+            let unknown = |column: &str, value: &str| {
+                Error::Internal(format!("session {id}: unknown {column} {value:?}"))
+            };
+            let before = SessionState::from_wire(&state).ok_or_else(|| unknown("state", &state))?;
+            let playback = playback
+                .parse::<PlaybackKind>()
+                .map_err(|_| unknown("playback", &playback))?;
+            let after = step.next(before, playback).ok_or(Error::Transition {
+                session: id.to_string(),
+                state: before.as_str(),
+                action: step.describe(),
+            })?;
+            let finished = after.is_finished().then(now_ms);
+            tx.execute_cached(
+                "UPDATE sessions SET state = ?2, finished_ms = COALESCE(?3, finished_ms) WHERE id = ?1",
+                params![id, after.as_str(), finished],
+            )?;
+            match also {
+                StepRecord::Nothing => 0,
+                StepRecord::RecordingBytes(bytes) => tx.execute_cached(
+                    "UPDATE sessions SET recording_bytes = ?2 WHERE id = ?1",
+                    params![id, bytes as i64],
+                )?,
+                StepRecord::ResultsTrials(trials) => tx.execute_cached(
+                    "UPDATE sessions SET results_trials = ?2 WHERE id = ?1",
+                    params![id, trials],
+                )?,
+                StepRecord::StopReason(reason) => tx.execute_cached(
+                    "UPDATE sessions SET stop_reason = ?2 WHERE id = ?1",
+                    params![id, reason],
+                )?,
+                StepRecord::Error(why) => tx.execute_cached(
+                    "UPDATE sessions SET error = ?2 WHERE id = ?1",
+                    params![id, why],
+                )?,
+            };
+            Ok(before)
+        })
+    }
+
+    fn fail_unreadable(&self, id: &str, why: &str) -> Result<(), Error> {
+        self.with(|c| {
+            c.execute_cached(
+                "UPDATE sessions SET state = ?2, error = ?3, finished_ms = ?4 WHERE id = ?1",
+                params![id, SessionState::Failed.as_str(), why, now_ms()],
+            )
+        })?;
+        Ok(())
     }
 }
 
@@ -309,7 +374,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("sitar.db");
         {
-            let db = Db::open(&path).unwrap();
+            let db = SqliteStore::open(&path).unwrap();
             let new = new_session(Some("k1"));
             assert_eq!(db.insert_session("a", &new).unwrap(), ("a".into(), true));
             assert_eq!(db.insert_session("b", &new).unwrap(), ("a".into(), false));
@@ -330,7 +395,7 @@ mod tests {
             }
             assert!(db.session("c").unwrap().is_none());
         }
-        let db = Db::open(&path).unwrap();
+        let db = SqliteStore::open(&path).unwrap();
         let session = db.session("a").unwrap().unwrap();
         assert_eq!(session.state, SessionState::Created);
         assert_eq!(session.playback, PlaybackKind::Upload);
@@ -362,7 +427,7 @@ mod tests {
     #[test]
     fn unreadable_rows_are_named_and_left_out_of_listings() {
         let dir = tempfile::tempdir().unwrap();
-        let db = Db::open(&dir.path().join("sitar.db")).unwrap();
+        let db = SqliteStore::open(&dir.path().join("sitar.db")).unwrap();
         for id in ["a", "b", "c"] {
             db.insert_session(id, &new_session(None)).unwrap();
         }
@@ -398,7 +463,7 @@ mod tests {
     #[test]
     fn a_value_no_server_writes_is_an_error_naming_the_column() {
         let dir = tempfile::tempdir().unwrap();
-        let db = Db::open(&dir.path().join("sitar.db")).unwrap();
+        let db = SqliteStore::open(&dir.path().join("sitar.db")).unwrap();
         db.insert_session("a", &new_session(None)).unwrap();
         db.with(|c| c.execute("UPDATE sessions SET pose_relation = 'sideways'", []))
             .unwrap();

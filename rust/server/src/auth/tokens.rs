@@ -1,0 +1,106 @@
+//! Access tokens as `sitar token` manages them: names checked, a token shown once when it is
+//! made (the store keeps only its hash, [`crate::storage::metadata::TokenStore`]).
+//! `sitar token` opens the data directory's embedded store, so it works while the server
+//! runs.
+
+use std::path::Path;
+
+use crate::Error;
+use crate::auth::role::Role;
+use crate::auth::secret;
+use crate::storage::embedded::open_metadata;
+
+/// A token as `sitar token list` shows it: never the token itself.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct TokenInfo {
+    /// The name given when it was made (unique).
+    pub name: String,
+    /// What it may do.
+    pub role: Role,
+    /// Made at, ms since the Unix epoch.
+    pub created_ms: i64,
+    /// Last request with it, ms since the Unix epoch (to the minute).
+    pub last_used_ms: Option<i64>,
+}
+
+/// Token names: 1 to 64 letters, digits and `._-` (they appear in logs and listings).
+pub(crate) fn check_token_name(name: &str) -> Result<(), Error> {
+    let ok = !name.is_empty()
+        && name.len() <= 64
+        && name
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || "._-".contains(c));
+    if ok {
+        Ok(())
+    } else {
+        Err(Error::BadRequest(format!(
+            "token name {name:?}: use 1 to 64 letters, digits, '.', '_' or '-'"
+        )))
+    }
+}
+
+/// Makes a token named `name` with `role` in the data directory's database and returns it
+/// (the only time it is shown: only its hash is stored).
+pub fn create_token(data_dir: &Path, role: Role, name: &str) -> Result<String, Error> {
+    let token = secret::new_token()?;
+    open_metadata(data_dir)?.insert_token(name, role, &token)?;
+    Ok(token)
+}
+
+/// The tokens of the data directory's database, oldest first.
+pub fn list_tokens(data_dir: &Path) -> Result<Vec<TokenInfo>, Error> {
+    open_metadata(data_dir)?.tokens()
+}
+
+/// Revokes the token named `name`: its next request is answered 401. Whether it existed.
+pub fn revoke_token(data_dir: &Path, name: &str) -> Result<bool, Error> {
+    open_metadata(data_dir)?.revoke_token(name)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::auth::caller::Caller;
+    use crate::storage::TokenStore;
+    use crate::storage::sqlite::SqliteStore;
+
+    #[test]
+    fn only_hashes_are_stored_and_revocation_is_immediate() {
+        let dir = tempfile::tempdir().unwrap();
+        let token = create_token(dir.path(), Role::App, "phone-1").unwrap();
+        let db = SqliteStore::open(&dir.path().join("sitar.db")).unwrap();
+        assert!(matches!(
+            db.caller(&token).unwrap(),
+            Some(Caller::Token {
+                role: Role::App,
+                ..
+            })
+        ));
+        assert_eq!(db.caller("sitar_nope").unwrap(), None);
+        assert_eq!(db.caller("").unwrap(), None);
+        // The raw token appears nowhere in the database file (nor its WAL).
+        for file in ["sitar.db", "sitar.db-wal"] {
+            if let Ok(bytes) = std::fs::read(dir.path().join(file)) {
+                let text = String::from_utf8_lossy(&bytes);
+                assert!(
+                    !text.contains(&token[secret::TOKEN_PREFIX.len()..]),
+                    "{file}"
+                );
+            }
+        }
+        let listed = list_tokens(dir.path()).unwrap();
+        assert_eq!(listed.len(), 1);
+        assert_eq!(listed[0].name, "phone-1");
+        assert!(listed[0].last_used_ms.is_some(), "the lookup touched it");
+        // The same name twice is refused; a bad name is named.
+        assert!(create_token(dir.path(), Role::App, "phone-1").is_err());
+        let err = create_token(dir.path(), Role::App, "a b")
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("token name"), "{err}");
+        assert!(revoke_token(dir.path(), "phone-1").unwrap());
+        assert!(!revoke_token(dir.path(), "phone-1").unwrap());
+        assert_eq!(db.caller(&token).unwrap(), None);
+        assert_eq!(db.token_count().unwrap(), 0);
+    }
+}

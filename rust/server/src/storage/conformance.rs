@@ -1,0 +1,311 @@
+//! The conformance suite of the metadata store: what every implementation of
+//! [`MetadataStore`] must do, written once against the trait. The embedded store runs it
+//! (`storage::sqlite`'s tests); another implementation calls [`metadata_store`] on a fresh,
+//! empty store of its own.
+
+use crate::Error;
+use crate::auth::{Caller, Role, UsageFull};
+use crate::config::PlaybackKind;
+use crate::session::estimate_settings::EstimateSettings;
+use crate::session::{NewSession, SessionState, Step};
+use crate::storage::metadata::{JobEnd, MetadataStore, StepRecord};
+
+/// Runs every check on `store`, which must be empty.
+pub(crate) fn metadata_store(store: &dyn MetadataStore) {
+    sessions_are_created_once_per_key(store);
+    transitions_follow_the_state_table(store);
+    trials_are_ordered_idempotent_and_all_or_nothing(store);
+    jobs_and_devices_are_recorded(store);
+    tokens_keep_only_what_they_must(store);
+    share_links_open_one_session(store);
+    usage_is_counted_over_its_windows(store);
+    deleting_a_session_removes_what_belongs_to_it(store);
+}
+
+fn new_session(key: Option<&str>, playback: PlaybackKind, owner: Option<i64>) -> NewSession<'_> {
+    NewSession {
+        idempotency_key: key,
+        trials_total: 5,
+        playback,
+        settings: EstimateSettings::defaults(&crate::ServerConfig::new("unused")).unwrap(),
+        adaptive_min: None,
+        adaptive_k: 3,
+        legacy: false,
+        owner,
+    }
+}
+
+fn sessions_are_created_once_per_key(store: &dyn MetadataStore) {
+    let new = new_session(Some("key-1"), PlaybackKind::Sim, Some(7));
+    assert_eq!(
+        store.insert_session("s1000000000000001", &new).unwrap(),
+        ("s1000000000000001".to_string(), true)
+    );
+    // The same key and request: the first session, not a new one.
+    assert_eq!(
+        store.insert_session("s1000000000000002", &new).unwrap(),
+        ("s1000000000000001".to_string(), false)
+    );
+    // The same key with another request is refused, naming the key.
+    let other = NewSession {
+        trials_total: 9,
+        ..new_session(Some("key-1"), PlaybackKind::Sim, Some(7))
+    };
+    let refused = store.insert_session("s1000000000000003", &other);
+    assert!(refused.is_err(), "{refused:?}");
+    assert!(store.session("s1000000000000003").unwrap().is_none());
+    let row = store.session("s1000000000000001").unwrap().unwrap();
+    assert_eq!(row.state, SessionState::Created);
+    assert_eq!((row.trials_total, row.owner), (5, Some(7)));
+    assert!(store.session("s0000000000000000").unwrap().is_none());
+    let created = store
+        .session_created_ms("s1000000000000001")
+        .unwrap()
+        .unwrap();
+    assert!(created > 1_600_000_000_000, "{created}");
+    // Listing: newest first, by owner.
+    let new2 = new_session(None, PlaybackKind::Upload, Some(8));
+    store.insert_session("s1000000000000004", &new2).unwrap();
+    let all: Vec<String> = store
+        .recent_sessions(None, 10)
+        .unwrap()
+        .into_iter()
+        .map(|s| s.id)
+        .collect();
+    assert_eq!(all, ["s1000000000000004", "s1000000000000001"]);
+    let mine = store.recent_rows(Some(8), 10).unwrap();
+    assert_eq!(mine.sessions.len(), 1);
+    assert!(mine.unreadable.is_empty());
+    assert_eq!(store.recent_sessions(None, 1).unwrap().len(), 1);
+    let created_ones = store.sessions_in(&[SessionState::Created]).unwrap();
+    let ids: Vec<&str> = created_ones
+        .sessions
+        .iter()
+        .map(|s| s.id.as_str())
+        .collect();
+    assert_eq!(
+        ids,
+        ["s1000000000000001", "s1000000000000004"],
+        "oldest first"
+    );
+}
+
+fn transitions_follow_the_state_table(store: &dyn MetadataStore) {
+    let id = "s1000000000000001";
+    let before = store
+        .transition(id, Step::AcceptRecording, StepRecord::RecordingBytes(42))
+        .unwrap();
+    assert_eq!(before, SessionState::Created);
+    // A step the state does not allow is a transition error naming the state; nothing changes.
+    let refused = store.transition(id, Step::Finish, StepRecord::Nothing);
+    assert!(
+        matches!(refused, Err(Error::Transition { state, .. })
+            if state == SessionState::Uploaded.as_str()),
+        "{refused:?}"
+    );
+    store
+        .transition(id, Step::StartPlaying, StepRecord::Nothing)
+        .unwrap();
+    store
+        .transition(id, Step::Publish, StepRecord::ResultsTrials(2))
+        .unwrap();
+    store
+        .transition(id, Step::Stop, StepRecord::StopReason("adaptive stop"))
+        .unwrap();
+    let row = store.session(id).unwrap().unwrap();
+    assert_eq!(row.state, SessionState::Playing);
+    assert_eq!(row.recording_bytes, Some(42));
+    assert_eq!(row.results_trials, 2);
+    assert_eq!(row.stop_reason.as_deref(), Some("adaptive stop"));
+    let missing = store.transition("s0000000000000000", Step::Finish, StepRecord::Nothing);
+    assert!(matches!(missing, Err(Error::NotFound(_))), "{missing:?}");
+    // A failure records why and finishes the session, whatever the step table says.
+    store.fail_unreadable(id, "bad row").unwrap();
+    let row = store.session(id).unwrap().unwrap();
+    assert_eq!(row.state, SessionState::Failed);
+    assert_eq!(row.error.as_deref(), Some("bad row"));
+    // Finished sessions expire after their finish; idle ones after their creation.
+    let expired = store.expired(i64::MAX).unwrap();
+    assert!(expired.contains(&id.to_string()), "{expired:?}");
+    assert!(store.expired(0).unwrap().is_empty());
+    assert_eq!(
+        store.latest_session(true, false, None).unwrap(),
+        None,
+        "no session is done"
+    );
+    assert_eq!(
+        store
+            .latest_session(false, false, Some(8))
+            .unwrap()
+            .as_deref(),
+        Some("s1000000000000004")
+    );
+}
+
+fn trials_are_ordered_idempotent_and_all_or_nothing(store: &dyn MetadataStore) {
+    let id = "s1000000000000004";
+    let mut stored = Vec::new();
+    let mut add = |key: Option<&str>, play: Option<u32>, source: &str| {
+        store.add_trial(id, key, play, 10, source, &mut |index| {
+            stored.push(index);
+            Ok(())
+        })
+    };
+    assert_eq!(add(Some("t1"), Some(1), "sim:0").unwrap(), (0, true));
+    assert_eq!(add(Some("t2"), Some(0), "sim:1").unwrap(), (1, true));
+    assert_eq!(add(Some("t1"), Some(1), "sim:0").unwrap(), (0, false));
+    assert_eq!(add(None, Some(2), "sim:0").unwrap(), (2, true));
+    assert_eq!(stored, [0, 1, 2], "the key seen before stores nothing");
+    // A store that fails leaves no row behind.
+    let failed = store.add_trial(id, None, Some(3), 10, "sim:1", &mut |_| {
+        Err(Error::Internal("disk".into()))
+    });
+    assert!(failed.is_err());
+    assert_eq!(store.trial_count(id).unwrap(), 3);
+    assert_eq!(
+        store.trials_in_order(id).unwrap(),
+        vec![(1, 0), (0, 1), (2, 2)]
+    );
+    assert_eq!(
+        store.trial_sources(id).unwrap(),
+        vec![
+            ("sim:0".to_string(), vec![0, 2]),
+            ("sim:1".to_string(), vec![1])
+        ]
+    );
+    assert_eq!(store.trial_count("s0000000000000000").unwrap(), 0);
+}
+
+fn jobs_and_devices_are_recorded(store: &dyn MetadataStore) {
+    let id = "s1000000000000004";
+    let first = store.start_job(id, "playback").unwrap();
+    let second = store.start_job(id, "estimate").unwrap();
+    assert_ne!(first, second);
+    store.finish_job(first, JobEnd::Done, None).unwrap();
+    store
+        .finish_job(second, JobEnd::Failed, Some("no trials"))
+        .unwrap();
+    let third = store.start_job(id, "estimate").unwrap();
+    assert_eq!(store.interrupt_running_jobs().unwrap(), 1);
+    assert_eq!(store.interrupt_running_jobs().unwrap(), 0);
+    let jobs = store.jobs_of(id).unwrap();
+    let (done, failed) = (JobEnd::Done.as_str(), JobEnd::Failed.as_str());
+    assert_eq!(
+        jobs,
+        [
+            ("playback", done),
+            ("estimate", failed),
+            ("estimate", "interrupted")
+        ]
+        .map(|(k, s)| (k.to_string(), s.to_string()))
+    );
+    let _ = third;
+    store
+        .upsert_device("emulator-5554", "busy", Some(id))
+        .unwrap();
+    store.upsert_device("emulator-5556", "idle", None).unwrap();
+    store.upsert_device("emulator-5554", "idle", None).unwrap();
+    let devices = store.devices().unwrap();
+    assert_eq!(devices.len(), 2);
+    assert_eq!(devices[0].0, "emulator-5554");
+    assert_eq!(
+        (devices[0].1.as_str(), devices[0].2.as_deref()),
+        ("idle", None)
+    );
+}
+
+fn tokens_keep_only_what_they_must(store: &dyn MetadataStore) {
+    let token = "sitar_conformanceAAAAAAAAAAAAAAAAAAAAAAAAAA";
+    store.insert_token("phone-1", Role::App, token).unwrap();
+    assert!(
+        store
+            .insert_token("phone-1", Role::App, "sitar_other")
+            .is_err()
+    );
+    assert!(store.has_token("phone-1").unwrap());
+    assert!(!store.has_token("phone-2").unwrap());
+    let caller = store.caller(token).unwrap();
+    assert!(
+        matches!(&caller, Some(Caller::Token { role: Role::App, name, .. }) if name == "phone-1"),
+        "{caller:?}"
+    );
+    assert_eq!(store.caller("sitar_nope").unwrap(), None);
+    assert_eq!(store.caller("").unwrap(), None);
+    // A preset replaces the hash of its name.
+    let preset = "sitar_presetBBBBBBBBBBBBBBBBBBBBBBBBBBBBBB";
+    store.set_token("phone-1", Role::Admin, preset).unwrap();
+    assert_eq!(store.caller(token).unwrap(), None);
+    assert!(store.caller(preset).unwrap().unwrap().is_admin());
+    let listed = store.tokens().unwrap();
+    assert_eq!(listed.len(), 1);
+    assert_eq!(
+        (listed[0].name.as_str(), listed[0].role),
+        ("phone-1", Role::Admin)
+    );
+    assert!(store.revoke_token("phone-1").unwrap());
+    assert!(!store.revoke_token("phone-1").unwrap());
+    assert_eq!(store.caller(preset).unwrap(), None);
+    assert_eq!(store.token_count().unwrap(), 0);
+}
+
+fn share_links_open_one_session(store: &dyn MetadataStore) {
+    let id = "s1000000000000004";
+    let link = "share_CCCCCCCCCCCCCCCCCCCCCCCCCCCCCCCCCCCC";
+    store.insert_share(id, link).unwrap();
+    assert_eq!(store.shared_session(link).unwrap().as_deref(), Some(id));
+    assert_eq!(store.shared_session("share_nope").unwrap(), None);
+    assert_eq!(store.revoke_shares(id).unwrap(), 1);
+    assert_eq!(store.shared_session(link).unwrap(), None);
+}
+
+fn usage_is_counted_over_its_windows(store: &dyn MetadataStore) {
+    const HOUR: i64 = 3_600_000;
+    let t0 = 1_700_000_000_000;
+    assert_eq!(store.count_session_creation(1, 2, t0).unwrap(), Ok(()));
+    assert_eq!(store.count_session_creation(1, 2, t0 + 10).unwrap(), Ok(()));
+    assert_eq!(
+        store.count_session_creation(1, 2, t0 + 20).unwrap(),
+        Err(UsageFull {
+            used: 2,
+            frees_at_ms: t0 + HOUR
+        })
+    );
+    // Another token has its own count; an hour later the first may create again.
+    assert_eq!(store.count_session_creation(2, 2, t0 + 20).unwrap(), Ok(()));
+    assert_eq!(
+        store.count_session_creation(1, 2, t0 + HOUR + 1).unwrap(),
+        Ok(())
+    );
+    store.add_uploaded(1, 1000, t0).unwrap();
+    store.add_uploaded(1, 500, t0 + 2 * HOUR).unwrap();
+    store.add_uploaded(2, 7, t0).unwrap();
+    let day = store.uploaded_in_day(1, t0 + 3 * HOUR).unwrap();
+    assert_eq!(day.used, 1500);
+    // A day after the first upload, only the later one counts.
+    let later = store.uploaded_in_day(1, t0 + 24 * HOUR + HOUR).unwrap();
+    assert_eq!(later.used, 500);
+}
+
+fn deleting_a_session_removes_what_belongs_to_it(store: &dyn MetadataStore) {
+    let id = "s1000000000000004";
+    store
+        .insert_share(id, "share_DDDDDDDDDDDDDDDDDDDDDDDDDDDDDDDDDDDD")
+        .unwrap();
+    store
+        .upsert_device("emulator-5554", "busy", Some(id))
+        .unwrap();
+    assert!(store.delete_session(id).unwrap());
+    assert!(!store.delete_session(id).unwrap());
+    assert!(store.session(id).unwrap().is_none());
+    assert_eq!(store.trial_count(id).unwrap(), 0);
+    assert!(store.jobs_of(id).unwrap().is_empty());
+    let device = store
+        .devices()
+        .unwrap()
+        .into_iter()
+        .find(|d| d.0 == "emulator-5554");
+    assert_eq!(device.unwrap().2, None, "the device forgets the session");
+    // The same server-made id may not come back, but a new one works as before.
+    let new = new_session(None, PlaybackKind::Upload, None);
+    assert!(store.insert_session("s1000000000000005", &new).unwrap().1);
+}
