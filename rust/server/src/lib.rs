@@ -1,8 +1,9 @@
 //! The SiTAR backend: sessions, storage, playback, jobs, report.
 //!
 //! The paper's server side (section 4.2), sturdy: an axum + tokio HTTP API
-//! (versioned routes and the original Unity app's legacy routes), a SQLite
-//! database for sessions, trials, jobs and devices plus files in one data
+//! (versioned routes and the original Unity app's legacy routes), a metadata
+//! store for sessions, trials, jobs, devices, tokens and usage (behind traits by concern
+//! in `storage/`; the embedded default is SQLite in `DATA/sitar.db`) plus files in one data
 //! directory, uploads streamed to a temporary file and renamed when whole
 //! (a recording upload that breaks off keeps its prefix and can be resumed),
 //! server-made ids only, size limits answered with 413, JSON errors
@@ -75,7 +76,7 @@
 // among the modules, that only `storage` speaks SQL or touches the data directory, and that
 // this comment names every module declared here:
 // error, config                                 — vocabulary
-// storage                                       — where bytes are kept: metadata store, blob store
+// storage                                       — where bytes are kept: metadata store, files, quotas
 // session                                       — a session's life; the only state writer
 // estimate                                      — estimates over trials held in memory, published
 // playback                                      — how trials are played: adb, sim, upload, queue, jobs
