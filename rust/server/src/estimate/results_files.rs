@@ -6,6 +6,8 @@ use crate::Error;
 use crate::app_state::App;
 use crate::estimate::publishing::Published;
 use crate::session::Session;
+use crate::storage::files::Files;
+use crate::storage::keys::SessionObject;
 
 /// Which of the two forms.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -24,21 +26,17 @@ pub(crate) fn write(shared: &App, id: &str, published: &Published) -> Result<(),
     let _held = lock.blocking_lock();
     shared.session(id)?;
     let files = &shared.files;
-    files.write_atomic(&files.results_csv(id), published.csv.as_bytes())?;
-    files.write_atomic(&files.results_json(id), published.json.as_bytes())?;
-    append_history(&files.session_dir(id).join(HISTORY), published);
+    files.put(id, SessionObject::ResultsCsv, published.csv.as_bytes())?;
+    files.put(id, SessionObject::ResultsJson, published.json.as_bytes())?;
+    append_history(files, id, published);
     shared.lifecycle().publish(id, published.trials)
 }
 
-/// One line per published estimate (at most one per trial): how the estimate changed as
-/// trials arrived, for the report.
-pub(crate) const HISTORY: &str = "history.jsonl";
-
 /// Appends `{"trials","mean","max","high","medium","low"}` (window errors in the results'
-/// unit; sub-trajectory classes). A history that cannot be written only loses the report's
+/// unit; sub-trajectory classes) to the session's history, one line per published estimate
+/// (at most one per trial). A history that cannot be written only loses the report's
 /// history table, so the error is logged, not returned.
-fn append_history(path: &std::path::Path, published: &Published) {
-    use std::io::Write as _;
+fn append_history(files: &Files, id: &str, published: &Published) {
     let count = |c: sitar_core::ErrorClass| published.classes.values().filter(|v| **v == c).count();
     let line = serde_json::json!({
         "trials": published.trials,
@@ -48,25 +46,24 @@ fn append_history(path: &std::path::Path, published: &Published) {
         "medium": count(sitar_core::ErrorClass::Medium),
         "low": count(sitar_core::ErrorClass::Low),
     });
-    let written = std::fs::OpenOptions::new()
-        .create(true)
-        .append(true)
-        .open(path)
-        .and_then(|mut f| writeln!(f, "{line}"));
-    if let Err(e) = written {
-        log::warn!("cannot append to {}: {e}", path.display());
+    if let Err(e) = files.append_line(id, SessionObject::History, &line.to_string()) {
+        log::warn!("{e}");
     }
 }
 
 /// The published estimates of `session` in order (empty when none was recorded).
 pub(crate) fn history(shared: &App, session: &Session) -> Vec<serde_json::Value> {
-    std::fs::read_to_string(shared.files.session_dir(&session.id).join(HISTORY))
-        .map(|text| {
-            text.lines()
-                .filter_map(|l| serde_json::from_str(l).ok())
-                .collect()
-        })
-        .unwrap_or_default()
+    let text = match shared.files.get(&session.id, SessionObject::History) {
+        Ok(Some(bytes)) => String::from_utf8_lossy(&bytes).into_owned(),
+        Ok(None) => return Vec::new(),
+        Err(e) => {
+            log::warn!("{e}");
+            return Vec::new();
+        }
+    };
+    text.lines()
+        .filter_map(|l| serde_json::from_str(l).ok())
+        .collect()
 }
 
 /// The latest published results of `session`; a 409 naming the state when there are none.
@@ -77,9 +74,17 @@ pub(crate) fn read(shared: &App, session: &Session, form: Form) -> Result<String
             session.id, session.state
         )));
     }
-    let path = match form {
-        Form::Csv => shared.files.results_csv(&session.id),
-        Form::Json => shared.files.results_json(&session.id),
+    let object = match form {
+        Form::Csv => SessionObject::ResultsCsv,
+        Form::Json => SessionObject::ResultsJson,
     };
-    std::fs::read_to_string(&path).map_err(|e| Error::io("cannot read", &path, e))
+    let bytes = shared.files.get(&session.id, object)?.ok_or_else(|| {
+        Error::Internal(format!(
+            "session {}: {} is missing",
+            session.id,
+            object.relative_path()
+        ))
+    })?;
+    String::from_utf8(bytes)
+        .map_err(|e| Error::Internal(format!("{}: {e}", object.relative_path())))
 }

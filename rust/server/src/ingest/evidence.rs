@@ -12,13 +12,13 @@
 //! column.
 
 use std::collections::HashMap;
-use std::path::PathBuf;
 
 use serde::{Deserialize, Serialize};
 use sitar_core::{Causes, EVIDENCE_HEADER, ImageProperties};
 
 use crate::Error;
 use crate::storage::files::Files;
+use crate::storage::keys::SessionObject;
 
 /// Body limit of `PUT …/evidence.csv` and `PUT …/subtrajectories.csv`.
 pub(crate) const MAX_TABLE_BYTES: u64 = 8 << 20;
@@ -262,74 +262,51 @@ pub(crate) struct EvidenceFiles<'a> {
 }
 
 impl EvidenceFiles<'_> {
-    fn evidence(&self) -> PathBuf {
-        self.files.session_dir(self.id).join("evidence.json")
+    /// Whether sub-trajectory `k` has a stored thumbnail (`k` is a number, never a client
+    /// string).
+    pub fn has_thumbnail(&self, k: usize) -> bool {
+        self.files.exists(self.id, SessionObject::Thumbnail(k))
     }
 
-    fn spans(&self) -> PathBuf {
-        self.files.session_dir(self.id).join("spans.json")
-    }
-
-    /// Sub-trajectory `k`'s thumbnail (`k` is a number, never a client string).
-    pub fn thumbnail(&self, k: usize) -> PathBuf {
-        self.files
-            .session_dir(self.id)
-            .join("thumbnails")
-            .join(format!("{k}.jpg"))
-    }
-
-    /// Sub-trajectory `k`'s stored thumbnail, `None` when there is none.
+    /// Sub-trajectory `k`'s stored thumbnail bytes, `None` when there is none.
     pub fn read_thumbnail(&self, k: usize) -> Result<Option<Vec<u8>>, Error> {
-        let path = self.thumbnail(k);
-        match std::fs::read(&path) {
-            Ok(bytes) => Ok(Some(bytes)),
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
-            Err(e) => Err(Error::io("cannot read", &path, e)),
-        }
-    }
-
-    fn ensure_dir(&self, dir: &std::path::Path) -> Result<(), Error> {
-        std::fs::create_dir_all(dir).map_err(|e| Error::io("cannot create", dir, e))
+        self.files.get(self.id, SessionObject::Thumbnail(k))
     }
 
     pub fn store_evidence(&self, rows: &[EvidenceRow]) -> Result<(), Error> {
-        self.ensure_dir(&self.files.session_dir(self.id))?;
         let json = serde_json::to_vec(rows).map_err(|e| Error::Internal(e.to_string()))?;
-        self.files.write_atomic(&self.evidence(), &json)
+        self.files.put(self.id, SessionObject::Evidence, &json)
     }
 
     pub fn store_spans(&self, spans: &[Span]) -> Result<(), Error> {
-        self.ensure_dir(&self.files.session_dir(self.id))?;
         let json = serde_json::to_vec(spans).map_err(|e| Error::Internal(e.to_string()))?;
-        self.files.write_atomic(&self.spans(), &json)
+        self.files.put(self.id, SessionObject::Spans, &json)
     }
 
     pub fn store_thumbnail(&self, k: usize, jpeg: &[u8]) -> Result<(), Error> {
-        let path = self.thumbnail(k);
-        if let Some(dir) = path.parent() {
-            self.ensure_dir(dir)?;
-        }
-        self.files.write_atomic(&path, jpeg)
+        self.files.put(self.id, SessionObject::Thumbnail(k), jpeg)
     }
 
     /// The stored evidence rows; `None` before the phone sent `evidence.csv`.
     pub fn evidence_rows(&self) -> Result<Option<Vec<EvidenceRow>>, Error> {
-        read_json(&self.evidence())
+        self.read_json(SessionObject::Evidence)
     }
 
     /// The stored spans; `None` before the phone sent `subtrajectories.csv`.
     pub fn stored_spans(&self) -> Result<Option<Vec<Span>>, Error> {
-        read_json(&self.spans())
+        self.read_json(SessionObject::Spans)
     }
-}
 
-fn read_json<T: serde::de::DeserializeOwned>(path: &std::path::Path) -> Result<Option<T>, Error> {
-    match std::fs::read(path) {
-        Ok(bytes) => serde_json::from_slice(&bytes)
+    fn read_json<T: serde::de::DeserializeOwned>(
+        &self,
+        object: SessionObject,
+    ) -> Result<Option<T>, Error> {
+        let Some(bytes) = self.files.get(self.id, object)? else {
+            return Ok(None);
+        };
+        serde_json::from_slice(&bytes)
             .map(Some)
-            .map_err(|e| Error::Internal(format!("{}: {e}", path.display()))),
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
-        Err(e) => Err(Error::io("cannot read", path, e)),
+            .map_err(|e| Error::Internal(format!("{}: {e}", object.relative_path())))
     }
 }
 

@@ -25,7 +25,7 @@ impl CameraEvidence {
         };
         let thumbnails = rows
             .iter()
-            .filter(|r| r.image.is_some() && stored.thumbnail(r.index).is_file())
+            .filter(|r| r.image.is_some() && stored.has_thumbnail(r.index))
             .map(|r| r.index)
             .collect();
         Ok(Some(Self { rows, thumbnails }))

@@ -7,15 +7,20 @@ use futures_util::{Stream, StreamExt};
 use tokio::io::AsyncWriteExt;
 
 use crate::Error;
+use crate::storage::keys::SessionObject;
 use crate::storage::quota::{DiskQuota, Reservation};
 
-/// The data directory's file layout. Every path is made here, from
-/// server-made ids and indices only: no client-supplied name becomes a path.
+/// The data directory's file layout. Every path is made here, from server-made ids and
+/// indices only (a session's objects are typed, [`SessionObject`]): no client-supplied name
+/// becomes a path.
 ///
 /// ```text
-/// DATA/sitar.db                       SQLite: sessions, trials, jobs, devices
-/// DATA/tmp/upload-*.part              uploads in progress (cleared at start)
+/// DATA/sitar.db                       the embedded metadata store (storage::sqlite)
+/// DATA/admin.token                    the first start's admin token (auth::bootstrap)
+/// DATA/tls/cert.pem, key.pem          the self-signed TLS certificate of `--tls` (http::tls)
+/// DATA/tmp/upload-*.part              uploads and atomic writes in progress (cleared at start)
 /// DATA/tmp/deleted-ID                 a deleted session's folder, until removed (cleared at start)
+/// DATA/tmp/phone-*                    a phone session being rebuilt for the scene (cleared at start)
 /// DATA/sessions/ID/recording          the uploaded recording (mp4 or sim recording)
 /// DATA/sessions/ID/recording.part     a recording upload as it arrives; kept when it breaks off
 /// DATA/sessions/ID/recording.part.key the Idempotency-Key of the upload they belong to
@@ -23,6 +28,11 @@ use crate::storage::quota::{DiskQuota, Reservation};
 /// DATA/sessions/ID/trials/trial_NNN.txt   one TUM file per finished trial
 /// DATA/sessions/ID/timestamps.txt     legacy POST /timestamps upload
 /// DATA/sessions/ID/results.csv|json   latest published estimate
+/// DATA/sessions/ID/history.jsonl      one line per published estimate (the report's history)
+/// DATA/sessions/ID/evidence.json      the phone's evidence.csv, validated and parsed once
+/// DATA/sessions/ID/spans.json         start and end of each sub-trajectory
+/// DATA/sessions/ID/thumbnails/K.jpg   sub-trajectory K's camera thumbnail
+/// DATA/sessions/ID/phone/             the phone session rebuilt for the scene (sitar-core folder)
 /// ```
 #[derive(Debug, Clone)]
 pub(crate) struct Files {
@@ -113,39 +123,68 @@ impl Files {
         self.root.join("sessions").join(id)
     }
 
+    /// Where `object` of session `id` lives.
+    pub fn path(&self, id: &str, object: SessionObject) -> PathBuf {
+        self.session_dir(id).join(object.relative_path())
+    }
+
     pub fn recording(&self, id: &str) -> PathBuf {
-        self.session_dir(id).join("recording")
+        self.path(id, SessionObject::Recording)
     }
 
     pub fn recording_part(&self, id: &str) -> PathBuf {
-        self.session_dir(id).join("recording.part")
+        self.path(id, SessionObject::RecordingPart)
     }
 
     pub fn recording_part_key(&self, id: &str) -> PathBuf {
-        self.session_dir(id).join("recording.part.key")
+        self.path(id, SessionObject::RecordingPartKey)
     }
 
     /// The `Content-Range` total the first chunk of the kept prefix declared.
     pub fn recording_part_total(&self, id: &str) -> PathBuf {
-        self.session_dir(id).join("recording.part.total")
+        self.path(id, SessionObject::RecordingPartTotal)
     }
 
     pub fn trial(&self, id: &str, index: u32) -> PathBuf {
-        self.session_dir(id)
-            .join("trials")
-            .join(format!("trial_{index:03}.txt"))
+        self.path(id, SessionObject::Trial(index))
     }
 
     pub fn timestamps(&self, id: &str) -> PathBuf {
-        self.session_dir(id).join("timestamps.txt")
+        self.path(id, SessionObject::Timestamps)
     }
 
-    pub fn results_csv(&self, id: &str) -> PathBuf {
-        self.session_dir(id).join("results.csv")
+    /// Whether session `id`'s `object` is stored.
+    pub fn exists(&self, id: &str, object: SessionObject) -> bool {
+        self.path(id, object).is_file()
     }
 
-    pub fn results_json(&self, id: &str) -> PathBuf {
-        self.session_dir(id).join("results.json")
+    /// Session `id`'s `object` whole; `None` when it is not stored.
+    pub fn get(&self, id: &str, object: SessionObject) -> Result<Option<Vec<u8>>, Error> {
+        let path = self.path(id, object);
+        match std::fs::read(&path) {
+            Ok(bytes) => Ok(Some(bytes)),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
+            Err(e) => Err(Error::io("cannot read", &path, e)),
+        }
+    }
+
+    /// Stores session `id`'s `object` whole, replacing it atomically (readers see the old
+    /// bytes or the new, never a part).
+    pub fn put(&self, id: &str, object: SessionObject, bytes: &[u8]) -> Result<(), Error> {
+        self.write_atomic(&self.path(id, object), bytes)
+    }
+
+    /// Appends one line to session `id`'s `object` (a log: a crash may lose the last line,
+    /// never an earlier one).
+    pub fn append_line(&self, id: &str, object: SessionObject, line: &str) -> Result<(), Error> {
+        use std::io::Write as _;
+        let path = self.path(id, object);
+        std::fs::OpenOptions::new()
+            .create(true)
+            .append(true)
+            .open(&path)
+            .and_then(|mut f| writeln!(f, "{line}"))
+            .map_err(|e| Error::io("cannot append to", &path, e))
     }
 
     /// Moves a session's folder out of `sessions/` into `tmp/` (one rename: the session's

@@ -2,10 +2,12 @@
 //! trials, jobs, devices, tokens, usage, share links, idempotency keys) and the data
 //! directory's files (`files`, with the disk quotas of `quota`). The embedded default is
 //! SQLite in `DATA/sitar.db` ([`sqlite`]) beside the files; only this folder speaks SQL or
-//! touches the data directory (`tests/layout.rs` checks both).
+//! touches the data directory (`tests/layout.rs` checks the SQL). Every stored object of a
+//! session has a typed name ([`keys::SessionObject`]).
 
 pub(crate) mod embedded;
 pub(crate) mod files;
+pub(crate) mod keys;
 pub(crate) mod metadata;
 pub(crate) mod quota;
 pub(crate) mod sqlite;

@@ -245,8 +245,7 @@ pub(crate) async fn list(
             let row = rows.get(k);
             let image_url = row.filter(|r| r.image.is_some()).and_then(|_| {
                 files
-                    .thumbnail(k)
-                    .is_file()
+                    .has_thumbnail(k)
                     .then(|| format!("/v1/sessions/{}/subtrajectories/{k}/image.jpg", session.id))
             });
             json!({

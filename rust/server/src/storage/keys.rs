@@ -1,0 +1,93 @@
+//! The names of every object the server keeps for a session, typed: each is built from a
+//! server-made session id and server-checked numbers only, so no client-supplied text ever
+//! names a stored object. [`SessionObject::relative_path`] is the embedded layout (the folder
+//! `DATA/sessions/ID/`, unchanged from earlier versions).
+
+/// One stored object of a session.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum SessionObject {
+    /// The uploaded recording (mp4, or a sitar-sim recording).
+    Recording,
+    /// A recording upload as it arrives; kept when it breaks off.
+    RecordingPart,
+    /// The `Idempotency-Key` of the upload the kept prefix belongs to.
+    RecordingPartKey,
+    /// The `Content-Range` total the first chunk of the kept prefix declared.
+    RecordingPartTotal,
+    /// One finished trial (TUM text), by storage index.
+    Trial(u32),
+    /// The legacy `POST /timestamps` upload.
+    Timestamps,
+    /// The latest published estimate as CSV (`start,error`).
+    ResultsCsv,
+    /// The latest published estimate as JSON.
+    ResultsJson,
+    /// One line per published estimate, for the report's history table.
+    History,
+    /// The phone's `evidence.csv`, validated and parsed once.
+    Evidence,
+    /// Start and end of each sub-trajectory (the phone's `subtrajectories.csv`).
+    Spans,
+    /// Sub-trajectory k's camera thumbnail (k a checked number).
+    Thumbnail(usize),
+}
+
+impl SessionObject {
+    /// Where the object lives inside the session's folder.
+    pub(crate) fn relative_path(self) -> String {
+        match self {
+            SessionObject::Recording => "recording".into(),
+            SessionObject::RecordingPart => "recording.part".into(),
+            SessionObject::RecordingPartKey => "recording.part.key".into(),
+            SessionObject::RecordingPartTotal => "recording.part.total".into(),
+            SessionObject::Trial(index) => format!("trials/trial_{index:03}.txt"),
+            SessionObject::Timestamps => "timestamps.txt".into(),
+            SessionObject::ResultsCsv => "results.csv".into(),
+            SessionObject::ResultsJson => "results.json".into(),
+            SessionObject::History => "history.jsonl".into(),
+            SessionObject::Evidence => "evidence.json".into(),
+            SessionObject::Spans => "spans.json".into(),
+            SessionObject::Thumbnail(k) => format!("thumbnails/{k}.jpg"),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_object_has_its_own_path_inside_the_folder() {
+        let objects = [
+            SessionObject::Recording,
+            SessionObject::RecordingPart,
+            SessionObject::RecordingPartKey,
+            SessionObject::RecordingPartTotal,
+            SessionObject::Trial(0),
+            SessionObject::Trial(7),
+            SessionObject::Timestamps,
+            SessionObject::ResultsCsv,
+            SessionObject::ResultsJson,
+            SessionObject::History,
+            SessionObject::Evidence,
+            SessionObject::Spans,
+            SessionObject::Thumbnail(0),
+            SessionObject::Thumbnail(12),
+        ];
+        let paths: std::collections::BTreeSet<String> =
+            objects.iter().map(|o| o.relative_path()).collect();
+        assert_eq!(paths.len(), objects.len(), "{paths:?}");
+        for path in &paths {
+            assert!(!path.starts_with('/') && !path.contains(".."), "{path}");
+        }
+        // The layout earlier versions wrote, so an existing data directory keeps working.
+        assert_eq!(
+            SessionObject::Trial(7).relative_path(),
+            "trials/trial_007.txt"
+        );
+        assert_eq!(
+            SessionObject::Thumbnail(12).relative_path(),
+            "thumbnails/12.jpg"
+        );
+    }
+}
