@@ -9,6 +9,7 @@ use crate::config::PlaybackKind;
 use crate::playback::jobs::{self, Begin};
 use crate::session::{Session, SessionState, Step};
 use crate::storage::files::TempFile;
+use crate::storage::keys::SessionObject;
 
 /// Moves an uploaded recording into place and queues its playback (sim, adb). `session` is read
 /// under the session's lock.
@@ -27,14 +28,16 @@ pub(crate) fn accept_recording(
     }
     crate::ingest::mp4_check::check_recording(session.playback, &temp.path)?;
     let (id, bytes) = (&session.id, temp.bytes);
-    let dest = shared.files.recording(id);
     if session.playback == PlaybackKind::Upload {
         session.require(Step::AcceptRecording)?;
-        temp.publish(&dest)?;
+        shared.files.publish(temp, id, SessionObject::Recording)?;
         return shared.lifecycle().accept_recording(id, bytes).map(drop);
     }
-    if dest.is_file() {
-        return if same_content(&temp.path, &dest)? {
+    if shared.files.exists(id, SessionObject::Recording) {
+        return if shared
+            .files
+            .same_content(&temp, id, SessionObject::Recording)?
+        {
             Ok(())
         } else {
             Err(Error::Conflict(format!(
@@ -45,38 +48,9 @@ pub(crate) fn accept_recording(
     session.require(Step::AcceptRecording)?;
     // Refused before it is kept: a full queue is a 503 the client can retry.
     shared.queue.check_room()?;
-    temp.publish(&dest)?;
+    shared.files.publish(temp, id, SessionObject::Recording)?;
     if shared.lifecycle().accept_recording(id, bytes)? == SessionState::Created {
         jobs::enqueue(shared, session, Begin::Start);
     }
     Ok(())
-}
-
-fn same_content(a: &std::path::Path, b: &std::path::Path) -> Result<bool, Error> {
-    use std::io::Read;
-    let open =
-        |p: &std::path::Path| std::fs::File::open(p).map_err(|e| Error::io("cannot open", p, e));
-    let (mut fa, mut fb) = (open(a)?, open(b)?);
-    let len = |f: &std::fs::File, p| {
-        f.metadata()
-            .map(|m| m.len())
-            .map_err(|e| Error::io("cannot stat", p, e))
-    };
-    if len(&fa, a)? != len(&fb, b)? {
-        return Ok(false);
-    }
-    let (mut ba, mut bb) = (vec![0u8; 1 << 20], vec![0u8; 1 << 20]);
-    loop {
-        let n = fa
-            .read(&mut ba)
-            .map_err(|e| Error::io("cannot read", a, e))?;
-        if n == 0 {
-            return Ok(true);
-        }
-        fb.read_exact(&mut bb[..n])
-            .map_err(|e| Error::io("cannot read", b, e))?;
-        if ba[..n] != bb[..n] {
-            return Ok(false);
-        }
-    }
 }

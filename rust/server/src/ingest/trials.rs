@@ -10,6 +10,7 @@ use crate::Error;
 use crate::app_state::App;
 use crate::estimate::live_sessions::LiveSession;
 use crate::session::Session;
+use crate::storage::keys::SessionObject;
 
 /// Parses one trial's TUM text from the bytes received; the error names `source`, the line
 /// and the column.
@@ -99,9 +100,7 @@ pub(crate) fn store_trial(
         shared
             .db
             .add_trial(id, key, play_index, trial.len(), source, &mut |index| {
-                shared
-                    .files
-                    .write_atomic(&shared.files.trial(id, index), bytes)
+                shared.files.put(id, SessionObject::Trial(index), bytes)
             })?;
     if created {
         live.add(play_index.unwrap_or(index), index, trial, reservation);
@@ -133,9 +132,7 @@ pub(crate) async fn live_session(
                     .trials_in_order(&session.id)?
                     .into_iter()
                     .map(|(index, play_index)| {
-                        let path = shared.files.trial(&session.id, index);
-                        let bytes =
-                            std::fs::read(&path).map_err(|e| Error::io("cannot read", &path, e))?;
+                        let bytes = read_trial(&shared, &session.id, index)?;
                         let source = format!("trial_{index:03}.txt");
                         Ok((play_index, index, parse_trial(&bytes, &source)?))
                     })
@@ -145,6 +142,15 @@ pub(crate) async fn live_session(
     })
     .await
     .map_err(|e| Error::Internal(format!("rebuilding session {id}: {e}")))?
+}
+
+/// Trial `index` of session `id` as stored; a trial its row names but the store lacks is an
+/// internal error naming it.
+pub(crate) fn read_trial(shared: &App, id: &str, index: u32) -> Result<Vec<u8>, Error> {
+    shared
+        .files
+        .get(id, SessionObject::Trial(index))?
+        .ok_or_else(|| Error::Internal(format!("session {id}: trial {index} is missing")))
 }
 
 #[cfg(test)]

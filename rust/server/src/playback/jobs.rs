@@ -19,6 +19,7 @@ use crate::playback::queue::{Intent, Ticket};
 use crate::playback::{PlaybackJob, TrialOutput};
 use crate::session::{Session, SessionState, Step};
 use crate::storage::JobEnd;
+use crate::storage::keys::SessionObject;
 
 /// How long a delete waits for a playback it stopped to end.
 const STOP_WAIT: Duration = Duration::from_secs(15);
@@ -291,7 +292,7 @@ async fn play_and_estimate(shared: &Arc<App>, ticket: &Ticket) -> Result<Outcome
     let backend = shared.backend(session.playback);
     let done_before = shared.db.trial_count(id)?;
     let needed = session.trials_total.saturating_sub(done_before);
-    let recording = shared.files.recording(id);
+    let recording = shared.files.local_file(id, SessionObject::Recording);
     let plan = {
         let (backend, recording) = (backend.clone(), recording.clone());
         tokio::task::spawn_blocking(move || backend.plan(&recording, needed))
@@ -527,7 +528,7 @@ fn recover_one(shared: &Arc<App>, session: Session) -> Result<(), Error> {
     if session.state == SessionState::Created {
         return Ok(());
     }
-    if !shared.files.recording(&id).is_file() {
+    if !shared.files.exists(&id, SessionObject::Recording) {
         return shared
             .lifecycle()
             .fail(&id, "server restarted and the recording is missing");

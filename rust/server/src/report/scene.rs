@@ -22,6 +22,7 @@ use crate::app_state::App;
 use crate::estimate::results_files::{self, Form};
 use crate::ingest::evidence::{EvidenceFiles, EvidenceRow};
 use crate::session::Session as Row;
+use crate::storage::keys::SessionObject;
 
 /// Where the scene's poses came from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -120,8 +121,8 @@ fn from_reference_trial(
         .first()
         .map(|(index, _)| *index)
         .ok_or_else(|| Error::Conflict(format!("session {} has no trials yet", row.id)))?;
-    let path = shared.files.trial(&row.id, first);
-    let text = std::fs::read_to_string(&path).map_err(|e| Error::io("cannot read", &path, e))?;
+    let bytes = crate::ingest::trials::read_trial(shared, &row.id, first)?;
+    let text = String::from_utf8_lossy(&bytes);
     let trajectory = sitar_estimator::parse_tum(&text, "reference trial")
         .map_err(|e| Error::InvalidContent(format!("reference trial of {}: {e}", row.id)))?;
     let poses: Vec<(i64, sitar_core::Pose)> = (0..trajectory.len())
@@ -160,9 +161,11 @@ fn from_reference_trial(
 /// Builds the phone session of `row` (no results loaded). Blocking and CPU-heavy for
 /// simulated walks (one depth image per midpoint).
 fn build(shared: &App, row: &Row) -> Result<(Session, Source), Error> {
-    let path = shared.files.recording(&row.id);
-    let simulated = std::fs::read(&path)
+    let simulated = shared
+        .files
+        .get(&row.id, SessionObject::Recording)
         .ok()
+        .flatten()
         .and_then(|bytes| sitar_sim::Recording::from_bytes(&bytes).ok());
     if let Some(recording) = simulated {
         let session = recording
@@ -247,13 +250,13 @@ pub(crate) fn preparing(id: &str) -> bool {
 /// Drops session `id`'s scene from the in-memory cache (a deleted session's data must not
 /// stay readable, even in memory).
 pub(crate) fn forget(shared: &App, id: &str) {
-    let key = shared.files.phone_session(id);
+    let key = shared.files.scene_folder(id);
     locked(&CACHE).retain(|(k, _, _)| *k != key);
 }
 
 /// The phone session of `row` with its latest results loaded. Blocking.
 pub(crate) fn load(shared: &App, row: &Row) -> Result<Arc<(Session, Source)>, Error> {
-    let key = shared.files.phone_session(&row.id);
+    let key = shared.files.scene_folder(&row.id);
     if let Some((_, _, hit)) = locked(&CACHE)
         .iter()
         .find(|(k, trials, _)| *k == key && *trials == row.results_trials)
@@ -271,35 +274,24 @@ pub(crate) fn load(shared: &App, row: &Row) -> Result<Arc<(Session, Source)>, Er
 }
 
 fn load_uncached(shared: &App, row: &Row) -> Result<(Session, Source), Error> {
-    let dir = shared.files.phone_session(&row.id);
-    let marker = dir.join("source.txt");
-    let cached = Session::load(&dir)
-        .ok()
-        .zip(
-            std::fs::read_to_string(&marker)
-                .ok()
-                .map(|s| Source::from_tag(s.trim())),
-        )
+    let cached = shared
+        .files
+        .kept_scene(&row.id)
+        .and_then(|(dir, tag)| Some((Session::load(&dir).ok()?, Source::from_tag(&tag))))
         // Built before the phone's evidence arrived: built again with it.
         .filter(|(_, source)| {
             *source != Source::ReferenceTrial || stored_evidence(shared, row).is_none()
         });
-    if cached.is_none() && dir.exists() {
-        let _ = std::fs::remove_dir_all(&dir);
+    if cached.is_none() {
+        shared.files.discard_scene(&row.id);
     }
     let (mut session, source) = match cached {
         Some(found) => found,
         None => {
             let (session, source) = build(shared, row)?;
-            // Built in a scratch folder and renamed into place: a concurrent request either
-            // sees the whole folder or builds its own.
-            let scratch = shared.files.scratch_dir();
-            let kept = session.save(&scratch).is_ok()
-                && std::fs::write(scratch.join("source.txt"), source.tag()).is_ok()
-                && std::fs::rename(&scratch, &dir).is_ok();
-            if !kept {
-                let _ = std::fs::remove_dir_all(&scratch);
-            }
+            shared.files.keep_scene(&row.id, source.tag(), |scratch| {
+                session.save(scratch).is_ok()
+            });
             (session, source)
         }
     };

@@ -58,21 +58,19 @@ async fn delete(shared: &Arc<App>, id: &str, playback_stopped: bool) -> Result<(
             "session {id}: an estimate of its trials runs (a job works on it); try again shortly"
         )));
     }
-    let trash = shared.files.trash_session_dir(&id)?;
+    let taken = shared.files.take_away(&id)?;
     if let Err(e) = shared.db.delete_session(&id) {
-        if let Some(trash) = &trash {
-            shared.files.restore_session_dir(&id, trash)?;
+        if let Some(taken) = taken {
+            taken.restore()?;
         }
         return Err(e);
     }
     shared.live.remove(&id);
     shared.forget_session_lock(&id);
     crate::report::scene::forget(shared, &id);
-    if let Some(trash) = trash {
-        // Already out of sight; what a failure leaves, the next start removes.
-        if let Err(e) = std::fs::remove_dir_all(&trash) {
-            log::warn!("cannot remove {}: {e}", trash.display());
-        }
+    if let Some(taken) = taken {
+        // Already out of sight.
+        taken.remove();
     }
     log::info!("session {id} deleted");
     Ok(())

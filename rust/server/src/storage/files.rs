@@ -43,6 +43,9 @@ pub(crate) struct Files {
     quota: std::sync::Arc<DiskQuota>,
 }
 
+/// The file in a kept scene folder that names what the scene was built from.
+const SCENE_TAG: &str = "source.txt";
+
 /// Default of [`Files::with_idle_timeout`].
 const DEFAULT_IDLE: std::time::Duration = std::time::Duration::from_secs(60);
 
@@ -128,31 +131,6 @@ impl Files {
         self.session_dir(id).join(object.relative_path())
     }
 
-    pub fn recording(&self, id: &str) -> PathBuf {
-        self.path(id, SessionObject::Recording)
-    }
-
-    pub fn recording_part(&self, id: &str) -> PathBuf {
-        self.path(id, SessionObject::RecordingPart)
-    }
-
-    pub fn recording_part_key(&self, id: &str) -> PathBuf {
-        self.path(id, SessionObject::RecordingPartKey)
-    }
-
-    /// The `Content-Range` total the first chunk of the kept prefix declared.
-    pub fn recording_part_total(&self, id: &str) -> PathBuf {
-        self.path(id, SessionObject::RecordingPartTotal)
-    }
-
-    pub fn trial(&self, id: &str, index: u32) -> PathBuf {
-        self.path(id, SessionObject::Trial(index))
-    }
-
-    pub fn timestamps(&self, id: &str) -> PathBuf {
-        self.path(id, SessionObject::Timestamps)
-    }
-
     /// Whether session `id`'s `object` is stored.
     pub fn exists(&self, id: &str, object: SessionObject) -> bool {
         self.path(id, object).is_file()
@@ -187,22 +165,93 @@ impl Files {
             .map_err(|e| Error::io("cannot append to", &path, e))
     }
 
-    /// Moves a session's folder out of `sessions/` into `tmp/` (one rename: the session's
-    /// files vanish at once; `tmp/` is emptied at every start). `None` if it has no folder.
-    pub fn trash_session_dir(&self, id: &str) -> Result<Option<PathBuf>, Error> {
-        let dir = self.session_dir(id);
-        let trash = self.root.join("tmp").join(format!("deleted-{id}"));
-        match std::fs::rename(&dir, &trash) {
-            Ok(()) => Ok(Some(trash)),
+    /// The length of session `id`'s `object`; `None` when it is not stored.
+    pub fn len(&self, id: &str, object: SessionObject) -> Result<Option<u64>, Error> {
+        let path = self.path(id, object);
+        match std::fs::metadata(&path) {
+            Ok(m) => Ok(Some(m.len())),
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
-            Err(e) => Err(Error::io("cannot move away", &dir, e)),
+            Err(e) => Err(Error::io("cannot stat", &path, e)),
         }
     }
 
-    /// Undoes [`Files::trash_session_dir`].
-    pub fn restore_session_dir(&self, id: &str, trash: &Path) -> Result<(), Error> {
+    /// Removes session `id`'s `object` if it is stored.
+    pub fn remove(&self, id: &str, object: SessionObject) -> Result<(), Error> {
+        let path = self.path(id, object);
+        match std::fs::remove_file(&path) {
+            Ok(()) => Ok(()),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(()),
+            Err(e) => Err(Error::io("cannot remove", &path, e)),
+        }
+    }
+
+    /// A local file holding session `id`'s `object`, for tools that need a path (adb push,
+    /// the sim player, the MP4 check). In the embedded store it is the object's own file.
+    pub fn local_file(&self, id: &str, object: SessionObject) -> PathBuf {
+        self.path(id, object)
+    }
+
+    /// Moves an upload received with [`Files::receive`] into place as session `id`'s
+    /// `object` (atomically: readers see the old bytes or the new).
+    pub fn publish(&self, temp: TempFile, id: &str, object: SessionObject) -> Result<(), Error> {
+        temp.publish(&self.path(id, object))
+    }
+
+    /// Session `id`'s kept recording prefix as a staged upload of its length, to be checked
+    /// and published like any other ([`Files::publish`]).
+    pub fn staged_part(&self, id: &str, bytes: u64) -> TempFile {
+        TempFile {
+            path: self.path(id, SessionObject::RecordingPart),
+            bytes,
+        }
+    }
+
+    /// Whether the staged upload `temp` holds exactly the bytes of session `id`'s `object`.
+    pub fn same_content(
+        &self,
+        temp: &TempFile,
+        id: &str,
+        object: SessionObject,
+    ) -> Result<bool, Error> {
+        use std::io::Read;
+        let (a, b) = (temp.path.as_path(), self.path(id, object));
+        let open = |p: &Path| std::fs::File::open(p).map_err(|e| Error::io("cannot open", p, e));
+        let (mut fa, mut fb) = (open(a)?, open(&b)?);
+        let len = |f: &std::fs::File, p: &Path| {
+            f.metadata()
+                .map(|m| m.len())
+                .map_err(|e| Error::io("cannot stat", p, e))
+        };
+        if len(&fa, a)? != len(&fb, &b)? {
+            return Ok(false);
+        }
+        let (mut ba, mut bb) = (vec![0u8; 1 << 20], vec![0u8; 1 << 20]);
+        loop {
+            let n = fa
+                .read(&mut ba)
+                .map_err(|e| Error::io("cannot read", a, e))?;
+            if n == 0 {
+                return Ok(true);
+            }
+            fb.read_exact(&mut bb[..n])
+                .map_err(|e| Error::io("cannot read", &b, e))?;
+            if ba[..n] != bb[..n] {
+                return Ok(false);
+            }
+        }
+    }
+
+    /// Takes session `id`'s files out of sight at once (one rename of its folder into
+    /// `tmp/`, which every start empties), to be removed or put back with the answer.
+    /// `None` when the session has no files.
+    pub fn take_away(&self, id: &str) -> Result<Option<TakenAway>, Error> {
         let dir = self.session_dir(id);
-        std::fs::rename(trash, &dir).map_err(|e| Error::io("cannot move back", &dir, e))
+        let trash = self.root.join("tmp").join(format!("deleted-{id}"));
+        match std::fs::rename(&dir, &trash) {
+            Ok(()) => Ok(Some(TakenAway { dir, trash })),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
+            Err(e) => Err(Error::io("cannot move away", &dir, e)),
+        }
     }
 
     pub fn create_session_dirs(&self, id: &str) -> Result<(), Error> {
@@ -210,15 +259,43 @@ impl Files {
         std::fs::create_dir_all(&dir).map_err(|e| Error::io("cannot create", &dir, e))
     }
 
-    /// The user's phone session as the backend reconstructs it (`sitar_core` session folder):
-    /// the render plan and surface samples behind the report's 3-D view and `scene.glb`.
-    pub fn phone_session(&self, id: &str) -> PathBuf {
+    /// The folder of the phone session rebuilt for session `id`'s scene (a `sitar_core`
+    /// session folder: the render plan and surface samples behind the report's 3-D view and
+    /// `scene.glb`); also the key that names the scene in caches, unique per data directory.
+    pub fn scene_folder(&self, id: &str) -> PathBuf {
         self.session_dir(id).join("phone")
     }
 
-    /// A fresh scratch folder path under `tmp/` (same file system as the sessions).
-    pub fn scratch_dir(&self) -> PathBuf {
-        self.root.join("tmp").join(format!("phone-{}", new_id()))
+    /// The kept scene of session `id`: its folder and the tag of what it was built from;
+    /// `None` when none is kept whole.
+    pub fn kept_scene(&self, id: &str) -> Option<(PathBuf, String)> {
+        let dir = self.scene_folder(id);
+        let tag = std::fs::read_to_string(dir.join(SCENE_TAG)).ok()?;
+        Some((dir, tag.trim().to_string()))
+    }
+
+    /// Forgets the kept scene of session `id` (built from what is no longer the best source).
+    pub fn discard_scene(&self, id: &str) {
+        let dir = self.scene_folder(id);
+        if dir.exists()
+            && let Err(e) = std::fs::remove_dir_all(&dir)
+        {
+            log::warn!("cannot remove {}: {e}", dir.display());
+        }
+    }
+
+    /// Keeps a scene of session `id` built from `tag`: `save` writes the folder into a scratch
+    /// folder, which is renamed into place whole (a concurrent reader sees all of it or
+    /// none). Whether it was kept.
+    pub fn keep_scene(&self, id: &str, tag: &str, save: impl FnOnce(&Path) -> bool) -> bool {
+        let scratch = self.root.join("tmp").join(format!("phone-{}", new_id()));
+        let kept = save(&scratch)
+            && std::fs::write(scratch.join(SCENE_TAG), tag).is_ok()
+            && std::fs::rename(&scratch, self.scene_folder(id)).is_ok();
+        if !kept {
+            let _ = std::fs::remove_dir_all(&scratch);
+        }
+        kept
     }
 
     fn temp_path(&self) -> PathBuf {
@@ -262,11 +339,31 @@ impl Files {
         }
     }
 
-    /// Appends `body` to the kept prefix at `path`, which must be `offset` bytes long, and
-    /// refuses to grow it beyond `end` bytes. Returns the new length. A body that breaks
-    /// off keeps what arrived (a prefix is always valid); any other failure cuts the file
-    /// back to `offset`, so a refused request leaves nothing behind.
-    pub async fn append<S, E>(
+    /// Appends `body` to session `id`'s `object` (a kept prefix), which must be `offset`
+    /// bytes long, and refuses to grow it beyond `end` bytes. Returns the new length. A body
+    /// that breaks off keeps what arrived (a prefix is always valid); any other failure cuts
+    /// the object back to `offset`, so a refused request leaves nothing behind.
+    #[allow(clippy::too_many_arguments)]
+    pub async fn append_to<S, E>(
+        &self,
+        body: S,
+        id: &str,
+        object: SessionObject,
+        offset: u64,
+        end: u64,
+        what: &'static str,
+        room: Reservation<'_>,
+    ) -> Result<Appended, Error>
+    where
+        S: Stream<Item = Result<Bytes, E>> + Unpin,
+        E: std::fmt::Display,
+    {
+        let path = self.path(id, object);
+        self.append(body, &path, offset, end, what, room).await
+    }
+
+    /// [`Files::append_to`] at `path`.
+    async fn append<S, E>(
         &self,
         mut body: S,
         path: &Path,
@@ -385,7 +482,29 @@ impl Files {
     }
 }
 
-/// What [`Files::append`] made of a body.
+/// A session's files taken out of sight by [`Files::take_away`].
+#[derive(Debug)]
+pub(crate) struct TakenAway {
+    dir: PathBuf,
+    trash: PathBuf,
+}
+
+impl TakenAway {
+    /// Puts the files back where they were (the delete did not happen).
+    pub fn restore(self) -> Result<(), Error> {
+        std::fs::rename(&self.trash, &self.dir)
+            .map_err(|e| Error::io("cannot move back", &self.dir, e))
+    }
+
+    /// Removes the files for good; what a failure leaves, the next start removes.
+    pub fn remove(self) {
+        if let Err(e) = std::fs::remove_dir_all(&self.trash) {
+            log::warn!("cannot remove {}: {e}", self.trash.display());
+        }
+    }
+}
+
+/// What [`Files::append_to`] made of a body.
 #[derive(Debug)]
 pub(crate) struct Appended {
     /// The file's length now.
@@ -698,13 +817,18 @@ mod tests {
             "x",
         )
         .unwrap();
-        let trash = files
-            .trash_session_dir("s0123456789abcdef")
-            .unwrap()
-            .unwrap();
-        assert!(trash.join("trials/trial_000.txt").is_file());
+        let taken = files.take_away("s0123456789abcdef").unwrap().unwrap();
+        assert!(
+            dir.path()
+                .join("tmp/deleted-s0123456789abcdef/trials/trial_000.txt")
+                .is_file()
+        );
         assert!(!dir.path().join("sessions/s0123456789abcdef").exists());
-        assert_eq!(files.trash_session_dir("s0123456789abcdef").unwrap(), None);
+        assert!(files.take_away("s0123456789abcdef").unwrap().is_none());
+        // Put back, then taken away again and left for the next start.
+        taken.restore().unwrap();
+        assert!(files.exists("s0123456789abcdef", SessionObject::Trial(0)));
+        std::mem::forget(files.take_away("s0123456789abcdef").unwrap());
         std::fs::write(dir.path().join("tmp/upload-x.part"), "half").unwrap();
         drop(files);
         Files::open(dir.path()).unwrap();

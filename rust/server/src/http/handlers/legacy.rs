@@ -20,6 +20,7 @@ use crate::ingest::recordings::accept_recording;
 use crate::session::estimate_settings::EstimateSettings;
 use crate::session::{NewSession, SessionState};
 use crate::storage::files::TempFile;
+use crate::storage::keys::SessionObject;
 
 /// How often a held legacy `POST /recording` looks at its session's state.
 const LEGACY_POLL: std::time::Duration = std::time::Duration::from_millis(100);
@@ -163,7 +164,7 @@ pub(crate) async fn timestamps(
     let lock = shared.session_lock(&id);
     let _held = lock.lock().await;
     shared.session(&id)?;
-    temp.publish(&shared.files.timestamps(&id))?;
+    shared.files.publish(temp, &id, SessionObject::Timestamps)?;
     Ok(json_value(StatusCode::OK, &json!({"id": id})))
 }
 

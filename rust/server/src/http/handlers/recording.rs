@@ -31,7 +31,7 @@ use crate::http::helpers::{
 };
 use crate::ingest::recordings::accept_recording;
 use crate::session::{Session, SessionState, Step};
-use crate::storage::files::TempFile;
+use crate::storage::keys::SessionObject;
 
 /// Response header: the bytes of an interrupted upload the server keeps.
 pub const UPLOAD_OFFSET_HEADER: &str = "upload-offset";
@@ -117,16 +117,24 @@ async fn whole(
     let declared = declared_length(headers);
     let room = shared.files.reserve(Some(id), declared)?;
     if let Some(total) = declared.filter(|&n| n > 0) {
-        shared.files.write_atomic(
-            &shared.files.recording_part_total(id),
+        shared.files.put(
+            id,
+            SessionObject::RecordingPartTotal,
             total.to_string().as_bytes(),
         )?;
     }
     write_key(shared, id, key.as_deref())?;
-    let part = shared.files.recording_part(id);
     let appended = shared
         .files
-        .append(body.into_data_stream(), &part, 0, limit, "recording", room)
+        .append_to(
+            body.into_data_stream(),
+            id,
+            SessionObject::RecordingPart,
+            0,
+            limit,
+            "recording",
+            room,
+        )
         .await;
     let appended = match appended {
         Ok(appended) => appended,
@@ -136,15 +144,12 @@ async fn whole(
         }
     };
     if let Some(error) = appended.broken {
-        if appended.len == 0 || shared.files.recording(id).is_file() {
+        if appended.len == 0 || shared.files.exists(id, SessionObject::Recording) {
             discard_part(shared, id)?;
         }
         return Err(error);
     }
-    let temp = TempFile {
-        path: part,
-        bytes: appended.len,
-    };
+    let temp = shared.files.staged_part(id, appended.len);
     let accepted = accept_recording(shared, row, temp);
     discard_part(shared, id)?;
     accepted?;
@@ -192,7 +197,6 @@ async fn resume(
         return Err(busy_uploading(&row.id));
     };
     let row = &shared.session(&row.id)?;
-    let part = shared.files.recording_part(&row.id);
     let kept = match kept_for(shared, &row.id, key.as_deref())? {
         Some(kept) => kept,
         None if range.start == 0 => {
@@ -220,14 +224,19 @@ async fn resume(
     let room = shared.files.reserve(Some(&row.id), Some(range.len()))?;
     let now = shared
         .files
-        .append(body.into_data_stream(), &part, kept, end, "recording", room)
+        .append_to(
+            body.into_data_stream(),
+            &row.id,
+            SessionObject::RecordingPart,
+            kept,
+            end,
+            "recording",
+            room,
+        )
         .await?
         .len;
     if now == range.total {
-        let temp = TempFile {
-            path: part,
-            bytes: now,
-        };
+        let temp = shared.files.staged_part(&row.id, now);
         let accepted = accept_recording(shared, row, temp);
         discard_part(shared, &row.id)?;
         accepted?;
@@ -260,66 +269,58 @@ fn uploaded(id: &str) -> Response {
 /// The kept prefix's length if it belongs to the upload with `key` (no key is the empty
 /// key); `None` when the prefix is another upload's, or has no key file.
 fn kept_for(shared: &App, id: &str, key: Option<&str>) -> Result<Option<u64>, Error> {
-    let key_path = shared.files.recording_part_key(id);
-    let stored = match std::fs::read(&key_path) {
-        Ok(stored) => stored,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
-        Err(e) => return Err(Error::io("cannot read", &key_path, e)),
+    let Some(stored) = shared.files.get(id, SessionObject::RecordingPartKey)? else {
+        return Ok(None);
     };
     if stored != key.unwrap_or("").as_bytes() {
         return Ok(None);
     }
-    let part = shared.files.recording_part(id);
-    match std::fs::metadata(&part) {
-        Ok(m) => Ok(Some(m.len())),
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(Some(0)),
-        Err(e) => Err(Error::io("cannot stat", &part, e)),
-    }
+    Ok(Some(
+        shared
+            .files
+            .len(id, SessionObject::RecordingPart)?
+            .unwrap_or(0),
+    ))
 }
 
 fn write_key(shared: &App, id: &str, key: Option<&str>) -> Result<(), Error> {
-    let path = shared.files.recording_part_key(id);
-    shared
-        .files
-        .write_atomic(&path, key.unwrap_or("").as_bytes())
+    shared.files.put(
+        id,
+        SessionObject::RecordingPartKey,
+        key.unwrap_or("").as_bytes(),
+    )
 }
 
 /// The first chunk of a prefix fixes the recording's total size; a later chunk declaring
 /// another total is a conflict naming both (the bytes kept so far stay).
 fn check_total(shared: &App, id: &str, total: u64) -> Result<(), Error> {
-    let path = shared.files.recording_part_total(id);
-    match std::fs::read_to_string(&path) {
-        Ok(text) => match text.trim().parse::<u64>() {
-            Ok(fixed) if fixed == total => Ok(()),
-            Ok(fixed) => Err(Error::Conflict(format!(
-                "Content-Range total {total} differs from the total {fixed} the upload's first \
-                 chunk declared"
-            ))),
-            // Unreadable: this chunk fixes it again.
-            Err(_) => shared
-                .files
-                .write_atomic(&path, total.to_string().as_bytes()),
-        },
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => shared
-            .files
-            .write_atomic(&path, total.to_string().as_bytes()),
-        Err(e) => Err(Error::io("cannot read", &path, e)),
+    let stored = shared.files.get(id, SessionObject::RecordingPartTotal)?;
+    let fixed = stored.and_then(|bytes| String::from_utf8_lossy(&bytes).trim().parse::<u64>().ok());
+    match fixed {
+        Some(fixed) if fixed == total => Ok(()),
+        Some(fixed) => Err(Error::Conflict(format!(
+            "Content-Range total {total} differs from the total {fixed} the upload's first \
+             chunk declared"
+        ))),
+        // None yet, or unreadable: this chunk fixes it.
+        None => shared.files.put(
+            id,
+            SessionObject::RecordingPartTotal,
+            total.to_string().as_bytes(),
+        ),
     }
 }
 
 /// Removes the kept prefix and its key (key first: a prefix without a key is never used).
 fn discard_part(shared: &App, id: &str) -> Result<(), Error> {
-    remove_if_present(&shared.files.recording_part_key(id))?;
-    remove_if_present(&shared.files.recording_part_total(id))?;
-    remove_if_present(&shared.files.recording_part(id))
-}
-
-fn remove_if_present(path: &std::path::Path) -> Result<(), Error> {
-    match std::fs::remove_file(path) {
-        Ok(()) => Ok(()),
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(()),
-        Err(e) => Err(Error::io("cannot remove", path, e)),
+    for object in [
+        SessionObject::RecordingPartKey,
+        SessionObject::RecordingPartTotal,
+        SessionObject::RecordingPart,
+    ] {
+        shared.files.remove(id, object)?;
     }
+    Ok(())
 }
 
 /// `Content-Range: bytes START-LAST/TOTAL` (inclusive `LAST`, as in RFC 9110).

@@ -88,12 +88,11 @@ pub(crate) async fn trials_zip(
             .compression_method(zip::CompressionMethod::Stored);
         let fail = |e: zip::result::ZipError| Error::Internal(format!("trials.zip: {e}"));
         for (index, _) in shared.db.trials_in_order(&session.id)? {
-            let path = shared.files.trial(&session.id, index);
-            let text = std::fs::read(&path).map_err(|e| Error::io("cannot read", &path, e))?;
+            let text = crate::ingest::trials::read_trial(&shared, &session.id, index)?;
             zip.start_file(format!("trial_{index:03}.txt"), options)
                 .map_err(fail)?;
             zip.write_all(&text)
-                .map_err(|e| Error::io("cannot zip", &path, e))?;
+                .map_err(|e| Error::Internal(format!("trials.zip: trial {index}: {e}")))?;
         }
         Ok(zip.finish().map_err(fail)?.into_inner())
     })
