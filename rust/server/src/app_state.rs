@@ -13,6 +13,7 @@ use crate::playback::adb::AdbPlayback;
 use crate::playback::queue::{PlaybackQueue, QueueLimits};
 use crate::playback::{Playback, PlaybackPlan, SimPlayback, UploadPlayback};
 use crate::session::{Lifecycle, NewSession, Session};
+use crate::storage::BlobStore;
 use crate::storage::MetadataStore;
 use crate::storage::embedded::open_metadata;
 use crate::storage::files::Files;
@@ -34,7 +35,9 @@ pub(crate) struct App {
     pub config: ServerConfig,
     /// Every row the server keeps (the embedded default: SQLite in `DATA/sitar.db`).
     pub db: Arc<dyn MetadataStore>,
-    pub files: Files,
+    /// Every byte the server keeps for its sessions (the embedded default: the data
+    /// directory's session folders).
+    pub blobs: Arc<dyn BlobStore>,
     /// Per-token counters of sessions created and bytes uploaded.
     pub limiter: Arc<crate::auth::UploadLimiter>,
     /// Whether the page cookie carries `Secure` (served over TLS).
@@ -61,7 +64,7 @@ pub(crate) struct App {
 
 impl App {
     pub fn open(config: ServerConfig) -> Result<App, Error> {
-        let files = Files::open(&config.data_dir)?
+        let blobs = Files::open(&config.data_dir)?
             .with_idle_timeout(config.upload_idle_timeout)
             .with_quotas(config.session_disk_quota, config.disk_quota);
         let db = open_metadata(&config.data_dir)?;
@@ -80,7 +83,7 @@ impl App {
             estimates: tokio::sync::Semaphore::new(config.estimate_workers.max(1)),
             config,
             db,
-            files,
+            blobs: Arc::new(blobs),
             running: Mutex::new(HashMap::new()),
             session_locks: Mutex::new(HashMap::new()),
             shutdown: AtomicBool::new(false),
@@ -108,7 +111,7 @@ impl App {
         let (id, created) = self
             .db
             .insert_session(&crate::storage::files::new_id(), new)?;
-        self.files.create_session_dirs(&id)?;
+        self.blobs.create_session(&id)?;
         Ok((id, created))
     }
 

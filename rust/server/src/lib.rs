@@ -2,9 +2,9 @@
 //!
 //! The paper's server side (section 4.2), sturdy: an axum + tokio HTTP API
 //! (versioned routes and the original Unity app's legacy routes), a metadata
-//! store for sessions, trials, jobs, devices, tokens and usage (behind traits by concern
-//! in `storage/`; the embedded default is SQLite in `DATA/sitar.db`) plus files in one data
-//! directory, uploads streamed to a temporary file and renamed when whole
+//! store for sessions, trials, jobs, devices, tokens and usage and a blob store for every
+//! byte of a session (two traits in `storage/`; the embedded default is SQLite in
+//! `DATA/sitar.db` and the data directory's session folders), uploads streamed to a temporary file and renamed when whole
 //! (a recording upload that breaks off keeps its prefix and can be resumed),
 //! server-made ids only, size limits answered with 413, JSON errors
 //! `{"error":{"code":…,"message":…}}`, and jobs that survive a restart.
@@ -76,7 +76,7 @@
 // among the modules, that only `storage` speaks SQL or touches the data directory, and that
 // this comment names every module declared here:
 // error, config                                 — vocabulary
-// storage                                       — where bytes are kept: metadata store, files, quotas
+// storage                                       — where bytes are kept: metadata store, blob store (traits)
 // session                                       — a session's life; the only state writer
 // estimate                                      — estimates over trials held in memory, published
 // playback                                      — how trials are played: adb, sim, upload, queue, jobs

@@ -351,3 +351,50 @@ fn the_layer_comment_names_every_module() {
         );
     }
 }
+
+#[test]
+fn only_the_storage_folder_touches_the_data_directory() {
+    // File-system calls outside `storage`, each with the one reason it may have: none of them
+    // builds a path in the data directory (they read what they are handed, or the system's).
+    let allowed: BTreeMap<&str, &str> = BTreeMap::from([
+        (
+            "http::tls::certificate",
+            "reads /etc/hostname and the operator's --cert/--key",
+        ),
+        (
+            "playback::adb",
+            "the playback scratch folder beside the local recording it is handed",
+        ),
+        (
+            "playback",
+            "the sim player reads the local recording it is handed",
+        ),
+        ("ingest::mp4_check", "reads the staged upload it is handed"),
+    ]);
+    let sources = sources();
+    let mut found = BTreeSet::new();
+    for (module, code) in &sources {
+        if module.starts_with("storage") || module == "lib" {
+            continue;
+        }
+        for call in ["std::fs", "tokio::fs", "File::open", "File::create"] {
+            if code.contains(call) {
+                found.insert(module.as_str());
+                assert!(
+                    allowed.contains_key(module.as_str()),
+                    "{module} uses {call}: only storage touches the data directory"
+                );
+            }
+        }
+        // Nobody but the app state (which opens the stores) reaches for the embedded ones.
+        for word in ["storage::files", "storage::sqlite", "data_dir.join"] {
+            assert!(
+                !code.contains(word) || module == "app_state",
+                "{module} names {word}: go through the storage traits"
+            );
+        }
+    }
+    // The allowances are still needed (a stale one would hide a new use).
+    let unused: Vec<_> = allowed.keys().filter(|m| !found.contains(*m)).collect();
+    assert!(unused.is_empty(), "allowed but unused: {unused:?}");
+}

@@ -2,16 +2,15 @@
 //! `DATA/admin.token`, mode 0600, never overwritten), and tokens an embedding program
 //! registers (the demo, the tests).
 
-use std::io::Write;
 use std::path::Path;
 
 use crate::Error;
 use crate::auth::role::Role;
 use crate::auth::secret;
 use crate::storage::TokenStore;
+use crate::storage::instance;
 
-/// The file in the data directory holding the first admin token.
-pub const ADMIN_TOKEN_FILE: &str = "admin.token";
+pub use crate::storage::instance::ADMIN_TOKEN_FILE;
 
 /// The name of the first admin token in `sitar token list`.
 const ADMIN_TOKEN_NAME: &str = "admin";
@@ -55,7 +54,7 @@ pub(crate) fn ensure_admin_token(
         }
         db.set_token(&preset.name, preset.role, &preset.token)?;
     }
-    let file = data_dir.join(ADMIN_TOKEN_FILE);
+    let file = instance::admin_token_file(data_dir);
     if file.exists() || db.has_token(ADMIN_TOKEN_NAME)? {
         if !file.exists() {
             log::warn!(
@@ -66,23 +65,9 @@ pub(crate) fn ensure_admin_token(
         return Ok(None);
     }
     let token = secret::new_token()?;
-    write_new_secret(&file, &token)?;
+    instance::write_admin_token(data_dir, &token)?;
     db.insert_token(ADMIN_TOKEN_NAME, Role::Admin, &token)?;
     Ok(Some(token))
-}
-
-/// Writes `text` to a file that must not exist yet, readable by its owner only.
-fn write_new_secret(path: &Path, text: &str) -> Result<(), Error> {
-    let mut options = std::fs::OpenOptions::new();
-    options.write(true).create_new(true);
-    #[cfg(unix)]
-    std::os::unix::fs::OpenOptionsExt::mode(&mut options, 0o600);
-    let mut file = options
-        .open(path)
-        .map_err(|e| Error::io("cannot create", path, e))?;
-    writeln!(file, "{text}")
-        .and_then(|()| file.sync_all())
-        .map_err(|e| Error::io("cannot write", path, e))
 }
 
 #[cfg(test)]

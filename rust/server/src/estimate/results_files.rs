@@ -6,7 +6,7 @@ use crate::Error;
 use crate::app_state::App;
 use crate::estimate::publishing::Published;
 use crate::session::Session;
-use crate::storage::files::Files;
+use crate::storage::BlobStore;
 use crate::storage::keys::SessionObject;
 
 /// Which of the two forms.
@@ -25,10 +25,10 @@ pub(crate) fn write(shared: &App, id: &str, published: &Published) -> Result<(),
     let lock = shared.session_lock(id);
     let _held = lock.blocking_lock();
     shared.session(id)?;
-    let files = &shared.files;
+    let files = &shared.blobs;
     files.put(id, SessionObject::ResultsCsv, published.csv.as_bytes())?;
     files.put(id, SessionObject::ResultsJson, published.json.as_bytes())?;
-    append_history(files, id, published);
+    append_history(&**files, id, published);
     shared.lifecycle().publish(id, published.trials)
 }
 
@@ -36,7 +36,7 @@ pub(crate) fn write(shared: &App, id: &str, published: &Published) -> Result<(),
 /// unit; sub-trajectory classes) to the session's history, one line per published estimate
 /// (at most one per trial). A history that cannot be written only loses the report's
 /// history table, so the error is logged, not returned.
-fn append_history(files: &Files, id: &str, published: &Published) {
+fn append_history(blobs: &dyn BlobStore, id: &str, published: &Published) {
     let count = |c: sitar_core::ErrorClass| published.classes.values().filter(|v| **v == c).count();
     let line = serde_json::json!({
         "trials": published.trials,
@@ -46,14 +46,14 @@ fn append_history(files: &Files, id: &str, published: &Published) {
         "medium": count(sitar_core::ErrorClass::Medium),
         "low": count(sitar_core::ErrorClass::Low),
     });
-    if let Err(e) = files.append_line(id, SessionObject::History, &line.to_string()) {
+    if let Err(e) = blobs.append_line(id, SessionObject::History, &line.to_string()) {
         log::warn!("{e}");
     }
 }
 
 /// The published estimates of `session` in order (empty when none was recorded).
 pub(crate) fn history(shared: &App, session: &Session) -> Vec<serde_json::Value> {
-    let text = match shared.files.get(&session.id, SessionObject::History) {
+    let text = match shared.blobs.get(&session.id, SessionObject::History) {
         Ok(Some(bytes)) => String::from_utf8_lossy(&bytes).into_owned(),
         Ok(None) => return Vec::new(),
         Err(e) => {
@@ -78,7 +78,7 @@ pub(crate) fn read(shared: &App, session: &Session, form: Form) -> Result<String
         Form::Csv => SessionObject::ResultsCsv,
         Form::Json => SessionObject::ResultsJson,
     };
-    let bytes = shared.files.get(&session.id, object)?.ok_or_else(|| {
+    let bytes = shared.blobs.get(&session.id, object)?.ok_or_else(|| {
         Error::Internal(format!(
             "session {}: {} is missing",
             session.id,

@@ -121,7 +121,7 @@ impl Server {
                 // Shown once, on stdout, never logged: the token is also in DATA/admin.token.
                 println!(
                     "sitar serve: a new admin token is in {}; the overview: {scheme}://{}/?token={token}",
-                    server.shared.config.data_dir.join(auth::ADMIN_TOKEN_FILE).display(),
+                    crate::storage::instance::admin_token_file(&server.shared.config.data_dir).display(),
                     url_host(bound),
                 );
             }

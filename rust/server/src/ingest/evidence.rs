@@ -17,7 +17,7 @@ use serde::{Deserialize, Serialize};
 use sitar_core::{Causes, EVIDENCE_HEADER, ImageProperties};
 
 use crate::Error;
-use crate::storage::files::Files;
+use crate::storage::BlobStore;
 use crate::storage::keys::SessionObject;
 
 /// Body limit of `PUT …/evidence.csv` and `PUT …/subtrajectories.csv`.
@@ -257,7 +257,7 @@ pub(crate) fn check_jpeg(bytes: &[u8]) -> Result<(), Error> {
 
 /// Where a session's evidence lives; every path from a server-made id and a checked index.
 pub(crate) struct EvidenceFiles<'a> {
-    pub files: &'a Files,
+    pub blobs: &'a dyn BlobStore,
     pub id: &'a str,
 }
 
@@ -265,26 +265,26 @@ impl EvidenceFiles<'_> {
     /// Whether sub-trajectory `k` has a stored thumbnail (`k` is a number, never a client
     /// string).
     pub fn has_thumbnail(&self, k: usize) -> bool {
-        self.files.exists(self.id, SessionObject::Thumbnail(k))
+        self.blobs.exists(self.id, SessionObject::Thumbnail(k))
     }
 
     /// Sub-trajectory `k`'s stored thumbnail bytes, `None` when there is none.
     pub fn read_thumbnail(&self, k: usize) -> Result<Option<Vec<u8>>, Error> {
-        self.files.get(self.id, SessionObject::Thumbnail(k))
+        self.blobs.get(self.id, SessionObject::Thumbnail(k))
     }
 
     pub fn store_evidence(&self, rows: &[EvidenceRow]) -> Result<(), Error> {
         let json = serde_json::to_vec(rows).map_err(|e| Error::Internal(e.to_string()))?;
-        self.files.put(self.id, SessionObject::Evidence, &json)
+        self.blobs.put(self.id, SessionObject::Evidence, &json)
     }
 
     pub fn store_spans(&self, spans: &[Span]) -> Result<(), Error> {
         let json = serde_json::to_vec(spans).map_err(|e| Error::Internal(e.to_string()))?;
-        self.files.put(self.id, SessionObject::Spans, &json)
+        self.blobs.put(self.id, SessionObject::Spans, &json)
     }
 
     pub fn store_thumbnail(&self, k: usize, jpeg: &[u8]) -> Result<(), Error> {
-        self.files.put(self.id, SessionObject::Thumbnail(k), jpeg)
+        self.blobs.put(self.id, SessionObject::Thumbnail(k), jpeg)
     }
 
     /// The stored evidence rows; `None` before the phone sent `evidence.csv`.
@@ -301,7 +301,7 @@ impl EvidenceFiles<'_> {
         &self,
         object: SessionObject,
     ) -> Result<Option<T>, Error> {
-        let Some(bytes) = self.files.get(self.id, object)? else {
+        let Some(bytes) = self.blobs.get(self.id, object)? else {
             return Ok(None);
         };
         serde_json::from_slice(&bytes)

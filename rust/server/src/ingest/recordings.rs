@@ -8,8 +8,8 @@ use crate::app_state::App;
 use crate::config::PlaybackKind;
 use crate::playback::jobs::{self, Begin};
 use crate::session::{Session, SessionState, Step};
-use crate::storage::files::TempFile;
 use crate::storage::keys::SessionObject;
+use crate::storage::staged::TempFile;
 
 /// Moves an uploaded recording into place and queues its playback (sim, adb). `session` is read
 /// under the session's lock.
@@ -30,12 +30,12 @@ pub(crate) fn accept_recording(
     let (id, bytes) = (&session.id, temp.bytes);
     if session.playback == PlaybackKind::Upload {
         session.require(Step::AcceptRecording)?;
-        shared.files.publish(temp, id, SessionObject::Recording)?;
+        shared.blobs.publish(temp, id, SessionObject::Recording)?;
         return shared.lifecycle().accept_recording(id, bytes).map(drop);
     }
-    if shared.files.exists(id, SessionObject::Recording) {
+    if shared.blobs.exists(id, SessionObject::Recording) {
         return if shared
-            .files
+            .blobs
             .same_content(&temp, id, SessionObject::Recording)?
         {
             Ok(())
@@ -48,7 +48,7 @@ pub(crate) fn accept_recording(
     session.require(Step::AcceptRecording)?;
     // Refused before it is kept: a full queue is a 503 the client can retry.
     shared.queue.check_room()?;
-    shared.files.publish(temp, id, SessionObject::Recording)?;
+    shared.blobs.publish(temp, id, SessionObject::Recording)?;
     if shared.lifecycle().accept_recording(id, bytes)? == SessionState::Created {
         jobs::enqueue(shared, session, Begin::Start);
     }

@@ -100,7 +100,7 @@ pub(crate) fn store_trial(
         shared
             .db
             .add_trial(id, key, play_index, trial.len(), source, &mut |index| {
-                shared.files.put(id, SessionObject::Trial(index), bytes)
+                shared.blobs.put(id, SessionObject::Trial(index), bytes)
             })?;
     if created {
         live.add(play_index.unwrap_or(index), index, trial, reservation);
@@ -148,7 +148,7 @@ pub(crate) async fn live_session(
 /// internal error naming it.
 pub(crate) fn read_trial(shared: &App, id: &str, index: u32) -> Result<Vec<u8>, Error> {
     shared
-        .files
+        .blobs
         .get(id, SessionObject::Trial(index))?
         .ok_or_else(|| Error::Internal(format!("session {id}: trial {index} is missing")))
 }

@@ -292,7 +292,7 @@ async fn play_and_estimate(shared: &Arc<App>, ticket: &Ticket) -> Result<Outcome
     let backend = shared.backend(session.playback);
     let done_before = shared.db.trial_count(id)?;
     let needed = session.trials_total.saturating_sub(done_before);
-    let recording = shared.files.local_file(id, SessionObject::Recording);
+    let recording = shared.blobs.local_file(id, SessionObject::Recording);
     let plan = {
         let (backend, recording) = (backend.clone(), recording.clone());
         tokio::task::spawn_blocking(move || backend.plan(&recording, needed))
@@ -528,7 +528,7 @@ fn recover_one(shared: &Arc<App>, session: Session) -> Result<(), Error> {
     if session.state == SessionState::Created {
         return Ok(());
     }
-    if !shared.files.exists(&id, SessionObject::Recording) {
+    if !shared.blobs.exists(&id, SessionObject::Recording) {
         return shared
             .lifecycle()
             .fail(&id, "server restarted and the recording is missing");

@@ -8,7 +8,7 @@ use std::collections::HashSet;
 use crate::Error;
 use crate::ingest::evidence::{EvidenceFiles, EvidenceRow};
 use crate::report::regions::{CauseLine, Region, RegionEvidence, SubRow};
-use crate::storage::files::Files;
+use crate::storage::BlobStore;
 
 /// A session's stored evidence: the rows, and which sub-trajectories have a thumbnail.
 pub(crate) struct CameraEvidence {
@@ -18,8 +18,8 @@ pub(crate) struct CameraEvidence {
 
 impl CameraEvidence {
     /// The evidence of session `id`, none when the phone sent no `evidence.csv`.
-    pub(crate) fn load(files: &Files, id: &str) -> Result<Option<Self>, Error> {
-        let stored = EvidenceFiles { files, id };
+    pub(crate) fn load(blobs: &dyn BlobStore, id: &str) -> Result<Option<Self>, Error> {
+        let stored = EvidenceFiles { blobs, id };
         let Some(rows) = stored.evidence_rows()? else {
             return Ok(None);
         };

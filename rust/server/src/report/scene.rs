@@ -162,7 +162,7 @@ fn from_reference_trial(
 /// simulated walks (one depth image per midpoint).
 fn build(shared: &App, row: &Row) -> Result<(Session, Source), Error> {
     let simulated = shared
-        .files
+        .blobs
         .get(&row.id, SessionObject::Recording)
         .ok()
         .flatten()
@@ -189,7 +189,7 @@ fn build(shared: &App, row: &Row) -> Result<(Session, Source), Error> {
 /// the scene is drawn without it).
 fn stored_evidence(shared: &App, row: &Row) -> Option<Vec<EvidenceRow>> {
     EvidenceFiles {
-        files: &shared.files,
+        blobs: &*shared.blobs,
         id: &row.id,
     }
     .evidence_rows()
@@ -250,13 +250,13 @@ pub(crate) fn preparing(id: &str) -> bool {
 /// Drops session `id`'s scene from the in-memory cache (a deleted session's data must not
 /// stay readable, even in memory).
 pub(crate) fn forget(shared: &App, id: &str) {
-    let key = shared.files.scene_folder(id);
+    let key = shared.blobs.scene_folder(id);
     locked(&CACHE).retain(|(k, _, _)| *k != key);
 }
 
 /// The phone session of `row` with its latest results loaded. Blocking.
 pub(crate) fn load(shared: &App, row: &Row) -> Result<Arc<(Session, Source)>, Error> {
-    let key = shared.files.scene_folder(&row.id);
+    let key = shared.blobs.scene_folder(&row.id);
     if let Some((_, _, hit)) = locked(&CACHE)
         .iter()
         .find(|(k, trials, _)| *k == key && *trials == row.results_trials)
@@ -275,7 +275,7 @@ pub(crate) fn load(shared: &App, row: &Row) -> Result<Arc<(Session, Source)>, Er
 
 fn load_uncached(shared: &App, row: &Row) -> Result<(Session, Source), Error> {
     let cached = shared
-        .files
+        .blobs
         .kept_scene(&row.id)
         .and_then(|(dir, tag)| Some((Session::load(&dir).ok()?, Source::from_tag(&tag))))
         // Built before the phone's evidence arrived: built again with it.
@@ -283,15 +283,17 @@ fn load_uncached(shared: &App, row: &Row) -> Result<(Session, Source), Error> {
             *source != Source::ReferenceTrial || stored_evidence(shared, row).is_none()
         });
     if cached.is_none() {
-        shared.files.discard_scene(&row.id);
+        shared.blobs.discard_scene(&row.id);
     }
     let (mut session, source) = match cached {
         Some(found) => found,
         None => {
             let (session, source) = build(shared, row)?;
-            shared.files.keep_scene(&row.id, source.tag(), |scratch| {
-                session.save(scratch).is_ok()
-            });
+            shared
+                .blobs
+                .keep_scene(&row.id, source.tag(), &mut |scratch| {
+                    session.save(scratch).is_ok()
+                });
             (session, source)
         }
     };

@@ -58,7 +58,7 @@ async fn delete(shared: &Arc<App>, id: &str, playback_stopped: bool) -> Result<(
             "session {id}: an estimate of its trials runs (a job works on it); try again shortly"
         )));
     }
-    let taken = shared.files.take_away(&id)?;
+    let taken = shared.blobs.take_away(&id)?;
     if let Err(e) = shared.db.delete_session(&id) {
         if let Some(taken) = taken {
             taken.restore()?;

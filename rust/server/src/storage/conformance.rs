@@ -1,13 +1,16 @@
-//! The conformance suite of the metadata store: what every implementation of
-//! [`MetadataStore`] must do, written once against the trait. The embedded store runs it
-//! (`storage::sqlite`'s tests); another implementation calls [`metadata_store`] on a fresh,
-//! empty store of its own.
+//! The conformance suites of the two storage seams: what every implementation of
+//! [`MetadataStore`] and of [`BlobStore`] must do, written once against the traits. The
+//! embedded stores run them (`storage::sqlite`'s and `storage::files`' tests); another
+//! implementation calls [`metadata_store`] or [`blob_store`] on a fresh, empty store of its
+//! own.
 
 use crate::Error;
 use crate::auth::{Caller, Role, UsageFull};
 use crate::config::PlaybackKind;
 use crate::session::estimate_settings::EstimateSettings;
 use crate::session::{NewSession, SessionState, Step};
+use crate::storage::blobs::{BlobStore, body_stream};
+use crate::storage::keys::SessionObject;
 use crate::storage::metadata::{JobEnd, MetadataStore, StepRecord};
 
 /// Runs every check on `store`, which must be empty.
@@ -308,4 +311,224 @@ fn deleting_a_session_removes_what_belongs_to_it(store: &dyn MetadataStore) {
     // The same server-made id may not come back, but a new one works as before.
     let new = new_session(None, PlaybackKind::Upload, None);
     assert!(store.insert_session("s1000000000000005", &new).unwrap().1);
+}
+
+/// Runs every check on `store`, which must be empty and without quotas.
+pub(crate) async fn blob_store(store: &dyn BlobStore) {
+    whole_objects_are_replaced_and_removed(store);
+    uploads_are_staged_checked_and_published_whole(store).await;
+    resumable_parts_keep_exactly_what_arrived(store).await;
+    sessions_are_taken_away_at_once(store);
+    scenes_are_kept_whole_with_their_tag(store);
+}
+
+const A: &str = "s2000000000000001";
+const B: &str = "s2000000000000002";
+
+fn chunks(parts: &[&'static [u8]], broken: bool) -> crate::storage::blobs::BodyStream<'static> {
+    let mut items: Vec<Result<axum::body::Bytes, String>> = parts
+        .iter()
+        .map(|p| Ok(axum::body::Bytes::from_static(p)))
+        .collect();
+    if broken {
+        items.push(Err("connection reset".into()));
+    }
+    body_stream(futures_util::stream::iter(items))
+}
+
+fn whole_objects_are_replaced_and_removed(store: &dyn BlobStore) {
+    store.create_session(A).unwrap();
+    store.create_session(B).unwrap();
+    for object in [
+        SessionObject::Trial(0),
+        SessionObject::Trial(3),
+        SessionObject::ResultsCsv,
+        SessionObject::ResultsJson,
+        SessionObject::Evidence,
+        SessionObject::Spans,
+        SessionObject::Thumbnail(5),
+        SessionObject::Timestamps,
+    ] {
+        assert!(!store.exists(A, object));
+        assert_eq!(store.get(A, object).unwrap(), None, "{object:?}");
+        assert_eq!(store.len(A, object).unwrap(), None);
+        store.put(A, object, b"first").unwrap();
+        store.put(A, object, b"second, longer").unwrap();
+        assert!(store.exists(A, object));
+        assert_eq!(store.get(A, object).unwrap().unwrap(), b"second, longer");
+        assert_eq!(store.len(A, object).unwrap(), Some(14));
+        // Another session's object of the same name is its own.
+        assert_eq!(store.get(B, object).unwrap(), None, "{object:?}");
+        store.remove(A, object).unwrap();
+        store.remove(A, object).unwrap();
+        assert_eq!(store.get(A, object).unwrap(), None);
+    }
+    store
+        .append_line(A, SessionObject::History, "{\"trials\":2}")
+        .unwrap();
+    store
+        .append_line(A, SessionObject::History, "{\"trials\":3}")
+        .unwrap();
+    assert_eq!(
+        store.get(A, SessionObject::History).unwrap().unwrap(),
+        b"{\"trials\":2}\n{\"trials\":3}\n"
+    );
+    store
+        .put(A, SessionObject::Trial(1), b"1 0 0 0 0 0 0 1\n")
+        .unwrap();
+    let local = std::fs::read(store.local_file(A, SessionObject::Trial(1))).unwrap();
+    assert_eq!(
+        local, b"1 0 0 0 0 0 0 1\n",
+        "a local file holds the object's bytes"
+    );
+}
+
+async fn uploads_are_staged_checked_and_published_whole(store: &dyn BlobStore) {
+    let refused = store
+        .receive(chunks(&[b"0123", b"4567"], false), 7, "recording")
+        .await;
+    assert!(
+        matches!(refused, Err(Error::TooLarge { limit: 7, .. })),
+        "{refused:?}"
+    );
+    let broken = store
+        .receive(chunks(&[b"0123"], true), 100, "recording")
+        .await;
+    assert!(broken.unwrap_err().to_string().contains("broke off"));
+    assert!(!store.exists(A, SessionObject::Recording));
+    let staged = store
+        .receive(chunks(&[b"0123", b"4567"], false), 8, "recording")
+        .await
+        .unwrap();
+    assert_eq!(staged.bytes, 8);
+    store.publish(staged, A, SessionObject::Recording).unwrap();
+    assert_eq!(
+        store.get(A, SessionObject::Recording).unwrap().unwrap(),
+        b"01234567"
+    );
+    let same = store
+        .receive(chunks(&[b"01234567"], false), 8, "recording")
+        .await
+        .unwrap();
+    assert!(
+        store
+            .same_content(&same, A, SessionObject::Recording)
+            .unwrap()
+    );
+    let other = store
+        .receive(chunks(&[b"01234568"], false), 8, "recording")
+        .await
+        .unwrap();
+    assert!(
+        !store
+            .same_content(&other, A, SessionObject::Recording)
+            .unwrap()
+    );
+    let bytes = store
+        .receive_bytes(chunks(&[b"ab", b"cd"], false), 4, "trajectory")
+        .await
+        .unwrap();
+    assert_eq!(bytes, b"abcd");
+    let room = store.reserve(Some(A), Some(4)).unwrap();
+    let over = store
+        .receive_bytes_into(chunks(&[b"ab", b"cde"], false), 4, "trajectory", room)
+        .await;
+    assert!(matches!(over, Err(Error::TooLarge { .. })), "{over:?}");
+}
+
+async fn resumable_parts_keep_exactly_what_arrived(store: &dyn BlobStore) {
+    let part = SessionObject::RecordingPart;
+    let room = store.reserve(Some(B), None).unwrap();
+    // A body that breaks off keeps what arrived.
+    let first = store
+        .append_to(
+            chunks(&[b"abc", b"def"], true),
+            B,
+            part,
+            0,
+            12,
+            "recording",
+            room,
+        )
+        .await
+        .unwrap();
+    assert_eq!(first.len, 6);
+    assert!(first.broken.is_some());
+    assert_eq!(store.len(B, part).unwrap(), Some(6));
+    // Resuming from another offset is refused; nothing changes.
+    let room = store.reserve(Some(B), None).unwrap();
+    let wrong = store
+        .append_to(chunks(&[b"xyz"], false), B, part, 3, 12, "recording", room)
+        .await;
+    assert!(wrong.is_err());
+    // A body longer than its range is refused and cut back to where it started.
+    let room = store.reserve(Some(B), None).unwrap();
+    let long = store
+        .append_to(
+            chunks(&[b"ghijklmn"], false),
+            B,
+            part,
+            6,
+            12,
+            "recording",
+            room,
+        )
+        .await;
+    assert!(long.is_err());
+    assert_eq!(store.len(B, part).unwrap(), Some(6));
+    let room = store.reserve(Some(B), None).unwrap();
+    let rest = store
+        .append_to(
+            chunks(&[b"ghi", b"jkl"], false),
+            B,
+            part,
+            6,
+            12,
+            "recording",
+            room,
+        )
+        .await
+        .unwrap();
+    assert_eq!((rest.len, rest.broken.is_none()), (12, true));
+    let staged = store.staged_part(B, 12);
+    store.publish(staged, B, SessionObject::Recording).unwrap();
+    assert_eq!(
+        store.get(B, SessionObject::Recording).unwrap().unwrap(),
+        b"abcdefghijkl"
+    );
+    assert!(!store.exists(B, part), "the part became the recording");
+}
+
+fn sessions_are_taken_away_at_once(store: &dyn BlobStore) {
+    store.put(B, SessionObject::Trial(0), b"trial").unwrap();
+    let taken = store.take_away(B).unwrap().expect("B has objects");
+    assert!(!store.exists(B, SessionObject::Trial(0)));
+    assert!(!store.exists(B, SessionObject::Recording));
+    taken.restore().unwrap();
+    assert_eq!(
+        store.get(B, SessionObject::Trial(0)).unwrap().unwrap(),
+        b"trial"
+    );
+    store.take_away(B).unwrap().unwrap().remove();
+    assert!(!store.exists(B, SessionObject::Recording));
+    assert!(store.take_away(B).unwrap().is_none());
+    // The other session is untouched.
+    assert!(store.exists(A, SessionObject::Recording));
+}
+
+fn scenes_are_kept_whole_with_their_tag(store: &dyn BlobStore) {
+    assert!(store.kept_scene(A).is_none());
+    let failed = store.keep_scene(A, "sim", &mut |_| false);
+    assert!(!failed);
+    assert!(store.kept_scene(A).is_none(), "a failed save keeps nothing");
+    let kept = store.keep_scene(A, "trial", &mut |dir| {
+        std::fs::create_dir_all(dir).is_ok() && std::fs::write(dir.join("plan.csv"), "x").is_ok()
+    });
+    assert!(kept);
+    let (dir, tag) = store.kept_scene(A).unwrap();
+    assert_eq!(tag, "trial");
+    assert!(dir.join("plan.csv").is_file());
+    assert_eq!(dir, store.scene_folder(A));
+    store.discard_scene(A);
+    assert!(store.kept_scene(A).is_none());
 }

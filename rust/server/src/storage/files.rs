@@ -7,8 +7,10 @@ use futures_util::{Stream, StreamExt};
 use tokio::io::AsyncWriteExt;
 
 use crate::Error;
+use crate::storage::blobs::{BlobStore, BodyStream, Upload};
 use crate::storage::keys::SessionObject;
 use crate::storage::quota::{DiskQuota, Reservation};
+use crate::storage::staged::{Appended, TakenAway, TempFile};
 
 /// The data directory's file layout. Every path is made here, from server-made ids and
 /// indices only (a session's objects are typed, [`SessionObject`]): no client-supplied name
@@ -33,6 +35,7 @@ use crate::storage::quota::{DiskQuota, Reservation};
 /// DATA/sessions/ID/spans.json         start and end of each sub-trajectory
 /// DATA/sessions/ID/thumbnails/K.jpg   sub-trajectory K's camera thumbnail
 /// DATA/sessions/ID/phone/             the phone session rebuilt for the scene (sitar-core folder)
+/// DATA/sessions/ID/adb-pull/          trials pulled from the phones before they are parsed
 /// ```
 #[derive(Debug, Clone)]
 pub(crate) struct Files {
@@ -110,192 +113,14 @@ impl Files {
         self
     }
 
-    /// Room for an upload into session `id`'s folder (`None`: a new session's, only the
-    /// global quota applies); `declared` bytes that cannot fit are refused at once.
-    pub fn reserve(
-        &self,
-        id: Option<&str>,
-        declared: Option<u64>,
-    ) -> Result<Reservation<'_>, Error> {
-        let dir = id.map(|id| self.session_dir(id));
-        self.quota.reserve(dir.as_deref(), declared)
-    }
-
-    pub fn session_dir(&self, id: &str) -> PathBuf {
+    fn session_dir(&self, id: &str) -> PathBuf {
         debug_assert!(is_server_id(id));
         self.root.join("sessions").join(id)
     }
 
     /// Where `object` of session `id` lives.
-    pub fn path(&self, id: &str, object: SessionObject) -> PathBuf {
+    fn path(&self, id: &str, object: SessionObject) -> PathBuf {
         self.session_dir(id).join(object.relative_path())
-    }
-
-    /// Whether session `id`'s `object` is stored.
-    pub fn exists(&self, id: &str, object: SessionObject) -> bool {
-        self.path(id, object).is_file()
-    }
-
-    /// Session `id`'s `object` whole; `None` when it is not stored.
-    pub fn get(&self, id: &str, object: SessionObject) -> Result<Option<Vec<u8>>, Error> {
-        let path = self.path(id, object);
-        match std::fs::read(&path) {
-            Ok(bytes) => Ok(Some(bytes)),
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
-            Err(e) => Err(Error::io("cannot read", &path, e)),
-        }
-    }
-
-    /// Stores session `id`'s `object` whole, replacing it atomically (readers see the old
-    /// bytes or the new, never a part).
-    pub fn put(&self, id: &str, object: SessionObject, bytes: &[u8]) -> Result<(), Error> {
-        self.write_atomic(&self.path(id, object), bytes)
-    }
-
-    /// Appends one line to session `id`'s `object` (a log: a crash may lose the last line,
-    /// never an earlier one).
-    pub fn append_line(&self, id: &str, object: SessionObject, line: &str) -> Result<(), Error> {
-        use std::io::Write as _;
-        let path = self.path(id, object);
-        std::fs::OpenOptions::new()
-            .create(true)
-            .append(true)
-            .open(&path)
-            .and_then(|mut f| writeln!(f, "{line}"))
-            .map_err(|e| Error::io("cannot append to", &path, e))
-    }
-
-    /// The length of session `id`'s `object`; `None` when it is not stored.
-    pub fn len(&self, id: &str, object: SessionObject) -> Result<Option<u64>, Error> {
-        let path = self.path(id, object);
-        match std::fs::metadata(&path) {
-            Ok(m) => Ok(Some(m.len())),
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
-            Err(e) => Err(Error::io("cannot stat", &path, e)),
-        }
-    }
-
-    /// Removes session `id`'s `object` if it is stored.
-    pub fn remove(&self, id: &str, object: SessionObject) -> Result<(), Error> {
-        let path = self.path(id, object);
-        match std::fs::remove_file(&path) {
-            Ok(()) => Ok(()),
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(()),
-            Err(e) => Err(Error::io("cannot remove", &path, e)),
-        }
-    }
-
-    /// A local file holding session `id`'s `object`, for tools that need a path (adb push,
-    /// the sim player, the MP4 check). In the embedded store it is the object's own file.
-    pub fn local_file(&self, id: &str, object: SessionObject) -> PathBuf {
-        self.path(id, object)
-    }
-
-    /// Moves an upload received with [`Files::receive`] into place as session `id`'s
-    /// `object` (atomically: readers see the old bytes or the new).
-    pub fn publish(&self, temp: TempFile, id: &str, object: SessionObject) -> Result<(), Error> {
-        temp.publish(&self.path(id, object))
-    }
-
-    /// Session `id`'s kept recording prefix as a staged upload of its length, to be checked
-    /// and published like any other ([`Files::publish`]).
-    pub fn staged_part(&self, id: &str, bytes: u64) -> TempFile {
-        TempFile {
-            path: self.path(id, SessionObject::RecordingPart),
-            bytes,
-        }
-    }
-
-    /// Whether the staged upload `temp` holds exactly the bytes of session `id`'s `object`.
-    pub fn same_content(
-        &self,
-        temp: &TempFile,
-        id: &str,
-        object: SessionObject,
-    ) -> Result<bool, Error> {
-        use std::io::Read;
-        let (a, b) = (temp.path.as_path(), self.path(id, object));
-        let open = |p: &Path| std::fs::File::open(p).map_err(|e| Error::io("cannot open", p, e));
-        let (mut fa, mut fb) = (open(a)?, open(&b)?);
-        let len = |f: &std::fs::File, p: &Path| {
-            f.metadata()
-                .map(|m| m.len())
-                .map_err(|e| Error::io("cannot stat", p, e))
-        };
-        if len(&fa, a)? != len(&fb, &b)? {
-            return Ok(false);
-        }
-        let (mut ba, mut bb) = (vec![0u8; 1 << 20], vec![0u8; 1 << 20]);
-        loop {
-            let n = fa
-                .read(&mut ba)
-                .map_err(|e| Error::io("cannot read", a, e))?;
-            if n == 0 {
-                return Ok(true);
-            }
-            fb.read_exact(&mut bb[..n])
-                .map_err(|e| Error::io("cannot read", &b, e))?;
-            if ba[..n] != bb[..n] {
-                return Ok(false);
-            }
-        }
-    }
-
-    /// Takes session `id`'s files out of sight at once (one rename of its folder into
-    /// `tmp/`, which every start empties), to be removed or put back with the answer.
-    /// `None` when the session has no files.
-    pub fn take_away(&self, id: &str) -> Result<Option<TakenAway>, Error> {
-        let dir = self.session_dir(id);
-        let trash = self.root.join("tmp").join(format!("deleted-{id}"));
-        match std::fs::rename(&dir, &trash) {
-            Ok(()) => Ok(Some(TakenAway { dir, trash })),
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
-            Err(e) => Err(Error::io("cannot move away", &dir, e)),
-        }
-    }
-
-    pub fn create_session_dirs(&self, id: &str) -> Result<(), Error> {
-        let dir = self.session_dir(id).join("trials");
-        std::fs::create_dir_all(&dir).map_err(|e| Error::io("cannot create", &dir, e))
-    }
-
-    /// The folder of the phone session rebuilt for session `id`'s scene (a `sitar_core`
-    /// session folder: the render plan and surface samples behind the report's 3-D view and
-    /// `scene.glb`); also the key that names the scene in caches, unique per data directory.
-    pub fn scene_folder(&self, id: &str) -> PathBuf {
-        self.session_dir(id).join("phone")
-    }
-
-    /// The kept scene of session `id`: its folder and the tag of what it was built from;
-    /// `None` when none is kept whole.
-    pub fn kept_scene(&self, id: &str) -> Option<(PathBuf, String)> {
-        let dir = self.scene_folder(id);
-        let tag = std::fs::read_to_string(dir.join(SCENE_TAG)).ok()?;
-        Some((dir, tag.trim().to_string()))
-    }
-
-    /// Forgets the kept scene of session `id` (built from what is no longer the best source).
-    pub fn discard_scene(&self, id: &str) {
-        let dir = self.scene_folder(id);
-        if dir.exists()
-            && let Err(e) = std::fs::remove_dir_all(&dir)
-        {
-            log::warn!("cannot remove {}: {e}", dir.display());
-        }
-    }
-
-    /// Keeps a scene of session `id` built from `tag`: `save` writes the folder into a scratch
-    /// folder, which is renamed into place whole (a concurrent reader sees all of it or
-    /// none). Whether it was kept.
-    pub fn keep_scene(&self, id: &str, tag: &str, save: impl FnOnce(&Path) -> bool) -> bool {
-        let scratch = self.root.join("tmp").join(format!("phone-{}", new_id()));
-        let kept = save(&scratch)
-            && std::fs::write(scratch.join(SCENE_TAG), tag).is_ok()
-            && std::fs::rename(&scratch, self.scene_folder(id)).is_ok();
-        if !kept {
-            let _ = std::fs::remove_dir_all(&scratch);
-        }
-        kept
     }
 
     fn temp_path(&self) -> PathBuf {
@@ -304,65 +129,18 @@ impl Files {
             .join(format!("upload-{}.part", new_id()))
     }
 
-    /// Streams `body` into a temporary file, refusing more than `limit` bytes (and what
-    /// would pass the global disk quota). The caller moves the result into place with
-    /// [`TempFile::publish`]; a body that breaks off leaves nothing.
-    pub async fn receive<S, E>(
-        &self,
-        mut body: S,
-        limit: u64,
-        what: &'static str,
-    ) -> Result<TempFile, Error>
-    where
-        S: Stream<Item = Result<Bytes, E>> + Unpin,
-        E: std::fmt::Display,
-    {
-        let mut temp = TempFile {
+    /// Writes small server-made content atomically (temp file + rename).
+    fn write_atomic(&self, dest: &Path, content: &[u8]) -> Result<(), Error> {
+        let temp = TempFile {
             path: self.temp_path(),
-            bytes: 0,
+            bytes: content.len() as u64,
         };
-        let file = tokio::fs::File::create(&temp.path)
-            .await
-            .map_err(|e| Error::io("cannot create", &temp.path, e))?;
-        let room = self.reserve(None, None)?;
-        let mut sink = Sink::new(file, &temp.path, 0, self.idle, room);
-        let outcome = sink.copy(&mut body, limit, what).await;
-        temp.bytes = sink.written;
-        if outcome.is_err() {
-            // The temporary file goes: its bytes stop counting.
-            sink.room.discard();
-        }
-        drop(sink);
-        match outcome {
-            Ok(()) => Ok(temp),
-            Err(Copy::BrokeOff(error) | Copy::Failed(error)) => Err(error),
-        }
+        std::fs::write(&temp.path, content)
+            .map_err(|e| Error::io("cannot write", &temp.path, e))?;
+        temp.publish(dest)
     }
 
-    /// Appends `body` to session `id`'s `object` (a kept prefix), which must be `offset`
-    /// bytes long, and refuses to grow it beyond `end` bytes. Returns the new length. A body
-    /// that breaks off keeps what arrived (a prefix is always valid); any other failure cuts
-    /// the object back to `offset`, so a refused request leaves nothing behind.
-    #[allow(clippy::too_many_arguments)]
-    pub async fn append_to<S, E>(
-        &self,
-        body: S,
-        id: &str,
-        object: SessionObject,
-        offset: u64,
-        end: u64,
-        what: &'static str,
-        room: Reservation<'_>,
-    ) -> Result<Appended, Error>
-    where
-        S: Stream<Item = Result<Bytes, E>> + Unpin,
-        E: std::fmt::Display,
-    {
-        let path = self.path(id, object);
-        self.append(body, &path, offset, end, what, room).await
-    }
-
-    /// [`Files::append_to`] at `path`.
+    /// [`BlobStore::append_to`] at `path`.
     async fn append<S, E>(
         &self,
         mut body: S,
@@ -426,24 +204,43 @@ impl Files {
         }
     }
 
-    /// Reads `body` into memory, refusing more than `limit` bytes (a trial: it is parsed
-    /// from these bytes and written once). A body that breaks off or stalls is a 400.
-    pub async fn receive_bytes<S, E>(
+    /// Streams `body` into a temporary file, refusing more than `limit` bytes (and what
+    /// would pass the global disk quota). The caller moves the result into place with
+    /// [`BlobStore::publish`]; a body that breaks off leaves nothing.
+    async fn receive_stream<S, E>(
         &self,
-        body: S,
+        mut body: S,
         limit: u64,
         what: &'static str,
-    ) -> Result<Vec<u8>, Error>
+    ) -> Result<TempFile, Error>
     where
         S: Stream<Item = Result<Bytes, E>> + Unpin,
         E: std::fmt::Display,
     {
-        self.receive_bytes_into(body, limit, what, self.reserve(None, None)?)
+        let mut temp = TempFile {
+            path: self.temp_path(),
+            bytes: 0,
+        };
+        let file = tokio::fs::File::create(&temp.path)
             .await
+            .map_err(|e| Error::io("cannot create", &temp.path, e))?;
+        let room = self.reserve(None, None)?;
+        let mut sink = Sink::new(file, &temp.path, 0, self.idle, room);
+        let outcome = sink.copy(&mut body, limit, what).await;
+        temp.bytes = sink.written;
+        if outcome.is_err() {
+            // The temporary file goes: its bytes stop counting.
+            sink.room.discard();
+        }
+        drop(sink);
+        match outcome {
+            Ok(()) => Ok(temp),
+            Err(Copy::BrokeOff(error) | Copy::Failed(error)) => Err(error),
+        }
     }
 
-    /// [`Files::receive_bytes`] of bytes that will be stored under `room`'s quotas.
-    pub async fn receive_bytes_into<S, E>(
+    /// Reads `body` into memory under `room`'s quotas, refusing more than `limit` bytes.
+    async fn read_stream<S, E>(
         &self,
         mut body: S,
         limit: u64,
@@ -469,48 +266,189 @@ impl Files {
             }
         }
     }
-
-    /// Writes small server-made content atomically (temp file + rename).
-    pub fn write_atomic(&self, dest: &Path, content: &[u8]) -> Result<(), Error> {
-        let temp = TempFile {
-            path: self.temp_path(),
-            bytes: content.len() as u64,
-        };
-        std::fs::write(&temp.path, content)
-            .map_err(|e| Error::io("cannot write", &temp.path, e))?;
-        temp.publish(dest)
-    }
 }
 
-/// A session's files taken out of sight by [`Files::take_away`].
-#[derive(Debug)]
-pub(crate) struct TakenAway {
-    dir: PathBuf,
-    trash: PathBuf,
-}
-
-impl TakenAway {
-    /// Puts the files back where they were (the delete did not happen).
-    pub fn restore(self) -> Result<(), Error> {
-        std::fs::rename(&self.trash, &self.dir)
-            .map_err(|e| Error::io("cannot move back", &self.dir, e))
+/// The embedded blob store: the data directory's session folders.
+impl BlobStore for Files {
+    fn reserve(&self, id: Option<&str>, declared: Option<u64>) -> Result<Reservation<'_>, Error> {
+        let dir = id.map(|id| self.session_dir(id));
+        self.quota.reserve(dir.as_deref(), declared)
     }
 
-    /// Removes the files for good; what a failure leaves, the next start removes.
-    pub fn remove(self) {
-        if let Err(e) = std::fs::remove_dir_all(&self.trash) {
-            log::warn!("cannot remove {}: {e}", self.trash.display());
+    fn exists(&self, id: &str, object: SessionObject) -> bool {
+        self.path(id, object).is_file()
+    }
+
+    fn get(&self, id: &str, object: SessionObject) -> Result<Option<Vec<u8>>, Error> {
+        let path = self.path(id, object);
+        match std::fs::read(&path) {
+            Ok(bytes) => Ok(Some(bytes)),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
+            Err(e) => Err(Error::io("cannot read", &path, e)),
         }
     }
-}
 
-/// What [`Files::append_to`] made of a body.
-#[derive(Debug)]
-pub(crate) struct Appended {
-    /// The file's length now.
-    pub len: u64,
-    /// Why the body broke off before its end (what arrived is kept), if it did.
-    pub broken: Option<Error>,
+    fn put(&self, id: &str, object: SessionObject, bytes: &[u8]) -> Result<(), Error> {
+        self.write_atomic(&self.path(id, object), bytes)
+    }
+
+    fn append_line(&self, id: &str, object: SessionObject, line: &str) -> Result<(), Error> {
+        use std::io::Write as _;
+        let path = self.path(id, object);
+        std::fs::OpenOptions::new()
+            .create(true)
+            .append(true)
+            .open(&path)
+            .and_then(|mut f| writeln!(f, "{line}"))
+            .map_err(|e| Error::io("cannot append to", &path, e))
+    }
+
+    fn len(&self, id: &str, object: SessionObject) -> Result<Option<u64>, Error> {
+        let path = self.path(id, object);
+        match std::fs::metadata(&path) {
+            Ok(m) => Ok(Some(m.len())),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
+            Err(e) => Err(Error::io("cannot stat", &path, e)),
+        }
+    }
+
+    fn remove(&self, id: &str, object: SessionObject) -> Result<(), Error> {
+        let path = self.path(id, object);
+        match std::fs::remove_file(&path) {
+            Ok(()) => Ok(()),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(()),
+            Err(e) => Err(Error::io("cannot remove", &path, e)),
+        }
+    }
+
+    fn local_file(&self, id: &str, object: SessionObject) -> PathBuf {
+        self.path(id, object)
+    }
+
+    fn publish(&self, temp: TempFile, id: &str, object: SessionObject) -> Result<(), Error> {
+        temp.publish(&self.path(id, object))
+    }
+
+    fn staged_part(&self, id: &str, bytes: u64) -> TempFile {
+        TempFile {
+            path: self.path(id, SessionObject::RecordingPart),
+            bytes,
+        }
+    }
+
+    fn same_content(
+        &self,
+        temp: &TempFile,
+        id: &str,
+        object: SessionObject,
+    ) -> Result<bool, Error> {
+        use std::io::Read;
+        let (a, b) = (temp.path.as_path(), self.path(id, object));
+        let open = |p: &Path| std::fs::File::open(p).map_err(|e| Error::io("cannot open", p, e));
+        let (mut fa, mut fb) = (open(a)?, open(&b)?);
+        let len = |f: &std::fs::File, p: &Path| {
+            f.metadata()
+                .map(|m| m.len())
+                .map_err(|e| Error::io("cannot stat", p, e))
+        };
+        if len(&fa, a)? != len(&fb, &b)? {
+            return Ok(false);
+        }
+        let (mut ba, mut bb) = (vec![0u8; 1 << 20], vec![0u8; 1 << 20]);
+        loop {
+            let n = fa
+                .read(&mut ba)
+                .map_err(|e| Error::io("cannot read", a, e))?;
+            if n == 0 {
+                return Ok(true);
+            }
+            fb.read_exact(&mut bb[..n])
+                .map_err(|e| Error::io("cannot read", &b, e))?;
+            if ba[..n] != bb[..n] {
+                return Ok(false);
+            }
+        }
+    }
+
+    fn take_away(&self, id: &str) -> Result<Option<TakenAway>, Error> {
+        let dir = self.session_dir(id);
+        let trash = self.root.join("tmp").join(format!("deleted-{id}"));
+        match std::fs::rename(&dir, &trash) {
+            Ok(()) => Ok(Some(TakenAway::new(dir, trash))),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
+            Err(e) => Err(Error::io("cannot move away", &dir, e)),
+        }
+    }
+
+    fn create_session(&self, id: &str) -> Result<(), Error> {
+        let dir = self.session_dir(id).join("trials");
+        std::fs::create_dir_all(&dir).map_err(|e| Error::io("cannot create", &dir, e))
+    }
+
+    fn scene_folder(&self, id: &str) -> PathBuf {
+        self.session_dir(id).join("phone")
+    }
+
+    fn kept_scene(&self, id: &str) -> Option<(PathBuf, String)> {
+        let dir = self.scene_folder(id);
+        let tag = std::fs::read_to_string(dir.join(SCENE_TAG)).ok()?;
+        Some((dir, tag.trim().to_string()))
+    }
+
+    fn discard_scene(&self, id: &str) {
+        let dir = self.scene_folder(id);
+        if dir.exists()
+            && let Err(e) = std::fs::remove_dir_all(&dir)
+        {
+            log::warn!("cannot remove {}: {e}", dir.display());
+        }
+    }
+
+    fn keep_scene(&self, id: &str, tag: &str, save: &mut dyn FnMut(&Path) -> bool) -> bool {
+        let scratch = self.root.join("tmp").join(format!("phone-{}", new_id()));
+        let kept = save(&scratch)
+            && std::fs::write(scratch.join(SCENE_TAG), tag).is_ok()
+            && std::fs::rename(&scratch, self.scene_folder(id)).is_ok();
+        if !kept {
+            let _ = std::fs::remove_dir_all(&scratch);
+        }
+        kept
+    }
+
+    fn receive<'a>(
+        &'a self,
+        body: BodyStream<'a>,
+        limit: u64,
+        what: &'static str,
+    ) -> Upload<'a, TempFile> {
+        Box::pin(self.receive_stream(body, limit, what))
+    }
+
+    fn receive_bytes_into<'a>(
+        &'a self,
+        body: BodyStream<'a>,
+        limit: u64,
+        what: &'static str,
+        room: Reservation<'a>,
+    ) -> Upload<'a, Vec<u8>> {
+        Box::pin(self.read_stream(body, limit, what, room))
+    }
+
+    fn append_to<'a>(
+        &'a self,
+        body: BodyStream<'a>,
+        id: &'a str,
+        object: SessionObject,
+        offset: u64,
+        end: u64,
+        what: &'static str,
+        room: Reservation<'a>,
+    ) -> Upload<'a, Appended> {
+        Box::pin(async move {
+            let path = self.path(id, object);
+            self.append(body, &path, offset, end, what, room).await
+        })
+    }
 }
 
 /// Why copying a body stopped.
@@ -619,35 +557,10 @@ impl<W: tokio::io::AsyncWrite + Unpin> Sink<'_, W> {
     }
 }
 
-/// An upload in `DATA/tmp`; removed on drop unless published.
-#[derive(Debug)]
-pub(crate) struct TempFile {
-    pub path: PathBuf,
-    pub bytes: u64,
-}
-
-impl TempFile {
-    /// Moves the file to `dest` (same file system: an atomic rename).
-    pub fn publish(self, dest: &Path) -> Result<(), Error> {
-        if let Some(parent) = dest.parent() {
-            std::fs::create_dir_all(parent).map_err(|e| Error::io("cannot create", parent, e))?;
-        }
-        std::fs::rename(&self.path, dest)
-            .map_err(|e| Error::io("cannot move upload to", dest, e))?;
-        std::mem::forget(self);
-        Ok(())
-    }
-}
-
-impl Drop for TempFile {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_file(&self.path);
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::storage::body_stream;
 
     #[test]
     fn ids_are_unique_and_path_safe() {
@@ -666,6 +579,18 @@ mod tests {
     }
 
     #[tokio::test]
+    async fn the_embedded_store_passes_the_conformance_suite() {
+        let dir = tempfile::tempdir().unwrap();
+        let files = Files::open(dir.path()).unwrap();
+        crate::storage::conformance::blob_store(&files).await;
+        // Nothing staged is left behind.
+        assert_eq!(
+            std::fs::read_dir(dir.path().join("tmp")).unwrap().count(),
+            0
+        );
+    }
+
+    #[tokio::test]
     async fn receive_enforces_the_limit_and_leaves_no_temp_file() {
         let dir = tempfile::tempdir().unwrap();
         let files = Files::open(dir.path()).unwrap();
@@ -675,7 +600,7 @@ mod tests {
             )
         };
         let err = files
-            .receive(chunks(), 3999, "recording")
+            .receive(body_stream(chunks()), 3999, "recording")
             .await
             .unwrap_err();
         assert!(matches!(err, Error::TooLarge { limit: 3999, .. }));
@@ -683,7 +608,10 @@ mod tests {
             std::fs::read_dir(dir.path().join("tmp")).unwrap().count(),
             0
         );
-        let temp = files.receive(chunks(), 4000, "recording").await.unwrap();
+        let temp = files
+            .receive(body_stream(chunks()), 4000, "recording")
+            .await
+            .unwrap();
         assert_eq!(temp.bytes, 4000);
         let dest = dir.path().join("sessions/x/recording");
         temp.publish(&dest).unwrap();
@@ -703,10 +631,13 @@ mod tests {
                 (0..3).map(|i| Ok::<_, std::io::Error>(Bytes::from(vec![i as u8; 10]))),
             )
         };
-        let bytes = files.receive_bytes(body(), 30, "trajectory").await.unwrap();
+        let bytes = files
+            .receive_bytes(body_stream(body()), 30, "trajectory")
+            .await
+            .unwrap();
         assert_eq!((bytes.len(), bytes[0], bytes[29]), (30, 0, 2));
         let err = files
-            .receive_bytes(body(), 29, "trajectory")
+            .receive_bytes(body_stream(body()), 29, "trajectory")
             .await
             .unwrap_err();
         assert!(
@@ -720,7 +651,7 @@ mod tests {
             "{err}"
         );
         let err = files
-            .receive_bytes(broken_after(2), 10_000, "trajectory")
+            .receive_bytes(body_stream(broken_after(2)), 10_000, "trajectory")
             .await
             .unwrap_err();
         assert!(err.to_string().contains("broke off"), "{err}");

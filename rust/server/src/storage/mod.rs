@@ -1,20 +1,27 @@
-//! Where bytes are kept, behind two seams: the metadata store ([`metadata`]: sessions,
-//! trials, jobs, devices, tokens, usage, share links, idempotency keys) and the data
-//! directory's files (`files`, with the disk quotas of `quota`). The embedded default is
-//! SQLite in `DATA/sitar.db` ([`sqlite`]) beside the files; only this folder speaks SQL or
-//! touches the data directory (`tests/layout.rs` checks the SQL). Every stored object of a
-//! session has a typed name ([`keys::SessionObject`]).
+//! Where bytes are kept, behind two seams named by meaning, with no SQL, connection or path
+//! types crossing them: the metadata store ([`metadata`]: sessions, trials, jobs, devices,
+//! tokens, usage, share links, idempotency keys) and the blob store ([`blobs`]: every byte of
+//! a session, named by [`keys::SessionObject`]). The embedded default is SQLite in
+//! `DATA/sitar.db` ([`sqlite`], opened by [`embedded`]) and the data directory's session
+//! folders ([`files`], with the disk quotas of [`quota`]); each instance's own files (admin
+//! token, TLS certificate) are [`instance`]'s. One conformance suite per seam
+//! (`conformance`) runs against any implementation. Only this folder speaks SQL or touches
+//! the data directory (`tests/layout.rs` checks both).
 
+pub(crate) mod blobs;
 pub(crate) mod embedded;
 pub(crate) mod files;
+pub(crate) mod instance;
 pub(crate) mod keys;
 pub(crate) mod metadata;
 pub(crate) mod quota;
 pub(crate) mod sqlite;
+pub(crate) mod staged;
 
 #[cfg(test)]
 pub(crate) mod conformance;
 
+pub(crate) use blobs::{BlobStore, body_stream};
 pub(crate) use metadata::{
     JobEnd, MetadataStore, SessionStore, StepRecord, TokenStore, UsageStore,
 };

@@ -27,6 +27,7 @@ use crate::ingest::evidence::{
     parse_evidence, parse_spans,
 };
 use crate::session::Session;
+use crate::storage::body_stream;
 
 /// The whole body, refused with a 413 once it passes `limit` (declared or sent) or the
 /// session's disk quota (507 past the server's).
@@ -39,10 +40,10 @@ async fn small_body(
     what: &'static str,
 ) -> Result<Vec<u8>, Error> {
     check_declared_length(headers, limit, what)?;
-    let room = shared.files.reserve(Some(id), declared_length(headers))?;
+    let room = shared.blobs.reserve(Some(id), declared_length(headers))?;
     shared
-        .files
-        .receive_bytes_into(body.into_data_stream(), limit, what, room)
+        .blobs
+        .receive_bytes_into(body_stream(body.into_data_stream()), limit, what, room)
         .await
 }
 
@@ -66,7 +67,7 @@ async fn under_lock(
     let _held = lock.lock().await;
     shared.session(id)?;
     store(&EvidenceFiles {
-        files: &shared.files,
+        blobs: &*shared.blobs,
         id,
     })
 }
@@ -184,7 +185,7 @@ pub(crate) async fn get_image(
 ) -> Result<Response, Error> {
     let (session, k) = session_and_index(&shared, &caller, &id, &k)?;
     let jpeg = EvidenceFiles {
-        files: &shared.files,
+        blobs: &*shared.blobs,
         id: &session.id,
     }
     .read_thumbnail(k)?
@@ -217,7 +218,7 @@ pub(crate) async fn list(
 ) -> Result<Response, Error> {
     let page = PageRequest::parse(query.as_deref())?;
     let files = EvidenceFiles {
-        files: &shared.files,
+        blobs: &*shared.blobs,
         id: &session.id,
     };
     let rows = files.evidence_rows()?.unwrap_or_default();

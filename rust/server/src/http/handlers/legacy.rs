@@ -19,8 +19,9 @@ use crate::http::helpers::{AppState, check_declared_length, content_type, json_v
 use crate::ingest::recordings::accept_recording;
 use crate::session::estimate_settings::EstimateSettings;
 use crate::session::{NewSession, SessionState};
-use crate::storage::files::TempFile;
+use crate::storage::body_stream;
 use crate::storage::keys::SessionObject;
+use crate::storage::staged::TempFile;
 
 /// How often a held legacy `POST /recording` looks at its session's state.
 const LEGACY_POLL: std::time::Duration = std::time::Duration::from_millis(100);
@@ -99,7 +100,7 @@ async fn multipart_field(
             .ok_or_else(|| Error::BadRequest(format!("multipart field {name:?} is missing")))?;
         // The client's file name is ignored: it never becomes a path.
         if field.name() == Some(name) {
-            return shared.files.receive(field, limit, name).await;
+            return shared.blobs.receive(body_stream(field), limit, name).await;
         }
     }
 }
@@ -164,7 +165,7 @@ pub(crate) async fn timestamps(
     let lock = shared.session_lock(&id);
     let _held = lock.lock().await;
     shared.session(&id)?;
-    shared.files.publish(temp, &id, SessionObject::Timestamps)?;
+    shared.blobs.publish(temp, &id, SessionObject::Timestamps)?;
     Ok(json_value(StatusCode::OK, &json!({"id": id})))
 }
 

@@ -162,7 +162,7 @@ pub(crate) async fn render_report(
         let phone = scene::load(&shared, &session).ok();
         let history = results_files::history(&shared, &session);
         // Unreadable evidence costs the regions their thumbnails, not the page.
-        let evidence = CameraEvidence::load(&shared.files, &session.id).unwrap_or_else(|e| {
+        let evidence = CameraEvidence::load(&*shared.blobs, &session.id).unwrap_or_else(|e| {
             log::warn!("report of {}: evidence left out: {e}", session.id);
             None
         });

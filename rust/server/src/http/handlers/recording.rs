@@ -31,6 +31,7 @@ use crate::http::helpers::{
 };
 use crate::ingest::recordings::accept_recording;
 use crate::session::{Session, SessionState, Step};
+use crate::storage::body_stream;
 use crate::storage::keys::SessionObject;
 
 /// Response header: the bytes of an interrupted upload the server keeps.
@@ -115,9 +116,9 @@ async fn whole(
     // The latest upload's prefix replaces any older one: a retry resumes from it.
     discard_part(shared, id)?;
     let declared = declared_length(headers);
-    let room = shared.files.reserve(Some(id), declared)?;
+    let room = shared.blobs.reserve(Some(id), declared)?;
     if let Some(total) = declared.filter(|&n| n > 0) {
-        shared.files.put(
+        shared.blobs.put(
             id,
             SessionObject::RecordingPartTotal,
             total.to_string().as_bytes(),
@@ -125,9 +126,9 @@ async fn whole(
     }
     write_key(shared, id, key.as_deref())?;
     let appended = shared
-        .files
+        .blobs
         .append_to(
-            body.into_data_stream(),
+            body_stream(body.into_data_stream()),
             id,
             SessionObject::RecordingPart,
             0,
@@ -144,12 +145,12 @@ async fn whole(
         }
     };
     if let Some(error) = appended.broken {
-        if appended.len == 0 || shared.files.exists(id, SessionObject::Recording) {
+        if appended.len == 0 || shared.blobs.exists(id, SessionObject::Recording) {
             discard_part(shared, id)?;
         }
         return Err(error);
     }
-    let temp = shared.files.staged_part(id, appended.len);
+    let temp = shared.blobs.staged_part(id, appended.len);
     let accepted = accept_recording(shared, row, temp);
     discard_part(shared, id)?;
     accepted?;
@@ -221,11 +222,11 @@ async fn resume(
     }
     check_total(shared, &row.id, range.total)?;
     let end = range.last + 1;
-    let room = shared.files.reserve(Some(&row.id), Some(range.len()))?;
+    let room = shared.blobs.reserve(Some(&row.id), Some(range.len()))?;
     let now = shared
-        .files
+        .blobs
         .append_to(
-            body.into_data_stream(),
+            body_stream(body.into_data_stream()),
             &row.id,
             SessionObject::RecordingPart,
             kept,
@@ -236,7 +237,7 @@ async fn resume(
         .await?
         .len;
     if now == range.total {
-        let temp = shared.files.staged_part(&row.id, now);
+        let temp = shared.blobs.staged_part(&row.id, now);
         let accepted = accept_recording(shared, row, temp);
         discard_part(shared, &row.id)?;
         accepted?;
@@ -269,7 +270,7 @@ fn uploaded(id: &str) -> Response {
 /// The kept prefix's length if it belongs to the upload with `key` (no key is the empty
 /// key); `None` when the prefix is another upload's, or has no key file.
 fn kept_for(shared: &App, id: &str, key: Option<&str>) -> Result<Option<u64>, Error> {
-    let Some(stored) = shared.files.get(id, SessionObject::RecordingPartKey)? else {
+    let Some(stored) = shared.blobs.get(id, SessionObject::RecordingPartKey)? else {
         return Ok(None);
     };
     if stored != key.unwrap_or("").as_bytes() {
@@ -277,14 +278,14 @@ fn kept_for(shared: &App, id: &str, key: Option<&str>) -> Result<Option<u64>, Er
     }
     Ok(Some(
         shared
-            .files
+            .blobs
             .len(id, SessionObject::RecordingPart)?
             .unwrap_or(0),
     ))
 }
 
 fn write_key(shared: &App, id: &str, key: Option<&str>) -> Result<(), Error> {
-    shared.files.put(
+    shared.blobs.put(
         id,
         SessionObject::RecordingPartKey,
         key.unwrap_or("").as_bytes(),
@@ -294,7 +295,7 @@ fn write_key(shared: &App, id: &str, key: Option<&str>) -> Result<(), Error> {
 /// The first chunk of a prefix fixes the recording's total size; a later chunk declaring
 /// another total is a conflict naming both (the bytes kept so far stay).
 fn check_total(shared: &App, id: &str, total: u64) -> Result<(), Error> {
-    let stored = shared.files.get(id, SessionObject::RecordingPartTotal)?;
+    let stored = shared.blobs.get(id, SessionObject::RecordingPartTotal)?;
     let fixed = stored.and_then(|bytes| String::from_utf8_lossy(&bytes).trim().parse::<u64>().ok());
     match fixed {
         Some(fixed) if fixed == total => Ok(()),
@@ -303,7 +304,7 @@ fn check_total(shared: &App, id: &str, total: u64) -> Result<(), Error> {
              chunk declared"
         ))),
         // None yet, or unreadable: this chunk fixes it.
-        None => shared.files.put(
+        None => shared.blobs.put(
             id,
             SessionObject::RecordingPartTotal,
             total.to_string().as_bytes(),
@@ -318,7 +319,7 @@ fn discard_part(shared: &App, id: &str) -> Result<(), Error> {
         SessionObject::RecordingPartTotal,
         SessionObject::RecordingPart,
     ] {
-        shared.files.remove(id, object)?;
+        shared.blobs.remove(id, object)?;
     }
     Ok(())
 }

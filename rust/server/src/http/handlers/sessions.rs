@@ -20,6 +20,7 @@ use crate::session::deletion;
 use crate::session::estimate_settings::EstimateSettings;
 use crate::session::status::status_json;
 use crate::session::{NewSession, SessionState};
+use crate::storage::body_stream;
 
 /// The largest `POST /v1/sessions` body: a few short keys need far less.
 pub(crate) const MAX_REQUEST_BYTES: u64 = 64 * 1024;
@@ -92,9 +93,9 @@ pub(crate) async fn create(
     // Checked before reading (the declared length) and while reading (the bytes).
     check_declared_length(&headers, MAX_REQUEST_BYTES, "session request")?;
     let body = shared
-        .files
+        .blobs
         .receive_bytes(
-            body.into_data_stream(),
+            body_stream(body.into_data_stream()),
             MAX_REQUEST_BYTES,
             "session request",
         )

@@ -114,7 +114,7 @@ pub(crate) async fn image(
         .filter(|k| *k < MAX_SUBTRAJECTORIES)
         .ok_or_else(none)?;
     let jpeg = EvidenceFiles {
-        files: &shared.files,
+        blobs: &*shared.blobs,
         id: &session.id,
     }
     .read_thumbnail(k)?

@@ -15,6 +15,7 @@ use crate::http::helpers::{
 use crate::ingest::trials::{self, Arrival};
 use crate::playback::jobs;
 use crate::session::Step;
+use crate::storage::body_stream;
 
 /// Takes one TUM text as the raw body: parsed from the bytes received, stored once, kept in
 /// memory; from the 2nd trial on a progressive estimate follows in the background.
@@ -45,11 +46,16 @@ pub(crate) async fn post(
     check_declared_length(&headers, limit, "trajectory")?;
     let key = idempotency_key(&headers)?;
     let room = shared
-        .files
+        .blobs
         .reserve(Some(&id), crate::http::helpers::declared_length(&headers))?;
     let bytes = shared
-        .files
-        .receive_bytes_into(body.into_data_stream(), limit, "trajectory", room)
+        .blobs
+        .receive_bytes_into(
+            body_stream(body.into_data_stream()),
+            limit,
+            "trajectory",
+            room,
+        )
         .await?;
     let trial = trials::parse_trial(&bytes, "trial")?;
     let lock = shared.session_lock(&id);

@@ -1,7 +1,6 @@
 //! The server's certificate: loaded from `--cert`/`--key`, or made once (rcgen) for the
 //! `--tls-name` names and kept in `DATA/tls/` (the key readable by the owner only).
 
-use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -9,6 +8,7 @@ use rustls::pki_types::pem::PemObject;
 use rustls::pki_types::{CertificateDer, PrivateKeyDer};
 
 use crate::Error;
+use crate::storage::instance;
 
 /// `sitar serve --tls`: where the certificate comes from.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
@@ -65,15 +65,14 @@ pub(crate) fn load(config: &TlsConfig, data_dir: &Path) -> Result<Tls, Error> {
     let (cert_path, key_path) = match (&config.cert, &config.key) {
         (Some(cert), Some(key)) => (cert.clone(), key.clone()),
         (None, None) => {
-            let dir = data_dir.join("tls");
-            let (cert, key) = (dir.join("cert.pem"), dir.join("key.pem"));
-            if !cert.exists() || !key.exists() {
+            let (cert, key, both) = instance::tls_pair(data_dir);
+            if !both {
                 let names = if config.names.is_empty() {
                     default_names()
                 } else {
                     config.names.clone()
                 };
-                make_self_signed(&dir, &cert, &key, names)?;
+                make_self_signed(data_dir, names)?;
             }
             (cert, key)
         }
@@ -109,9 +108,8 @@ pub(crate) fn load(config: &TlsConfig, data_dir: &Path) -> Result<Tls, Error> {
     })
 }
 
-/// Makes a self-signed certificate for `names` into `cert` and `key` (mode 0600).
-fn make_self_signed(dir: &Path, cert: &Path, key: &Path, names: Vec<String>) -> Result<(), Error> {
-    std::fs::create_dir_all(dir).map_err(|e| Error::io("cannot create", dir, e))?;
+/// Makes a self-signed certificate for `names` into the data directory (its key mode 0600).
+fn make_self_signed(data_dir: &Path, names: Vec<String>) -> Result<(), Error> {
     let mut params = rcgen::CertificateParams::new(names.clone())
         .map_err(|e| Error::Config(format!("--tls-name {names:?}: {e}")))?;
     params
@@ -122,31 +120,13 @@ fn make_self_signed(dir: &Path, cert: &Path, key: &Path, names: Vec<String>) -> 
     let made = params
         .self_signed(&pair)
         .map_err(|e| Error::Internal(format!("TLS self-signed certificate: {e}")))?;
-    write_file(key, &pair.serialize_pem(), true)?;
-    write_file(cert, &made.pem(), false)?;
+    instance::write_tls_pair(data_dir, &made.pem(), &pair.serialize_pem())?;
     log::info!(
         "made a self-signed TLS certificate for {} in {}",
         names.join(", "),
-        dir.display()
+        data_dir.display()
     );
     Ok(())
-}
-
-fn write_file(path: &Path, text: &str, private: bool) -> Result<(), Error> {
-    let mut options = std::fs::OpenOptions::new();
-    options.write(true).create(true).truncate(true);
-    #[cfg(unix)]
-    if private {
-        std::os::unix::fs::OpenOptionsExt::mode(&mut options, 0o600);
-    }
-    #[cfg(not(unix))]
-    let _ = private;
-    let mut file = options
-        .open(path)
-        .map_err(|e| Error::io("cannot create", path, e))?;
-    file.write_all(text.as_bytes())
-        .and_then(|()| file.sync_all())
-        .map_err(|e| Error::io("cannot write", path, e))
 }
 
 #[cfg(test)]

@@ -1,0 +1,64 @@
+//! Each instance's own files in its data directory, beside the stores: the admin token the
+//! first start writes (`DATA/admin.token`) and the self-signed TLS certificate of `--tls`
+//! (`DATA/tls/cert.pem`, `DATA/tls/key.pem`). Secrets are written readable by their owner
+//! only (mode 0600) and synced before they are used.
+
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+
+use crate::Error;
+
+/// The file in the data directory that holds the admin token made on first start.
+pub const ADMIN_TOKEN_FILE: &str = "admin.token";
+
+/// Where data directory `data_dir` keeps its admin token.
+pub(crate) fn admin_token_file(data_dir: &Path) -> PathBuf {
+    data_dir.join(ADMIN_TOKEN_FILE)
+}
+
+/// Writes the admin token to a file that must not exist yet, readable by its owner only.
+pub(crate) fn write_admin_token(data_dir: &Path, token: &str) -> Result<(), Error> {
+    write_secret(&admin_token_file(data_dir), &format!("{token}\n"), true)
+}
+
+/// The self-signed certificate and key of data directory `data_dir` (`tls/cert.pem`,
+/// `tls/key.pem`), and whether both exist.
+pub(crate) fn tls_pair(data_dir: &Path) -> (PathBuf, PathBuf, bool) {
+    let dir = data_dir.join("tls");
+    let (cert, key) = (dir.join("cert.pem"), dir.join("key.pem"));
+    let both = cert.exists() && key.exists();
+    (cert, key, both)
+}
+
+/// Writes a self-signed certificate and its key (mode 0600) into data directory `data_dir`.
+pub(crate) fn write_tls_pair(data_dir: &Path, cert_pem: &str, key_pem: &str) -> Result<(), Error> {
+    let (cert, key, _) = tls_pair(data_dir);
+    if let Some(dir) = cert.parent() {
+        std::fs::create_dir_all(dir).map_err(|e| Error::io("cannot create", dir, e))?;
+    }
+    write_secret(&key, key_pem, false)?;
+    write_file(&cert, cert_pem)
+}
+
+/// Writes `text` readable by its owner only; `new` refuses a file that exists already.
+fn write_secret(path: &Path, text: &str, new: bool) -> Result<(), Error> {
+    let mut options = std::fs::OpenOptions::new();
+    options.write(true);
+    if new {
+        options.create_new(true);
+    } else {
+        options.create(true).truncate(true);
+    }
+    #[cfg(unix)]
+    std::os::unix::fs::OpenOptionsExt::mode(&mut options, 0o600);
+    let mut file = options
+        .open(path)
+        .map_err(|e| Error::io("cannot create", path, e))?;
+    file.write_all(text.as_bytes())
+        .and_then(|()| file.sync_all())
+        .map_err(|e| Error::io("cannot write", path, e))
+}
+
+fn write_file(path: &Path, text: &str) -> Result<(), Error> {
+    std::fs::write(path, text).map_err(|e| Error::io("cannot write", path, e))
+}

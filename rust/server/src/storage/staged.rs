@@ -1,0 +1,69 @@
+//! What uploads and deletions leave in the blob store's hands: an upload staged whole
+//! ([`TempFile`]), what a resumable append made of a body ([`Appended`]), and a session's
+//! objects taken out of sight ([`TakenAway`]).
+
+use std::path::{Path, PathBuf};
+
+use crate::Error;
+
+/// A session's files taken out of sight by [`crate::storage::BlobStore::take_away`].
+#[derive(Debug)]
+pub(crate) struct TakenAway {
+    dir: PathBuf,
+    trash: PathBuf,
+}
+
+impl TakenAway {
+    /// Objects that were at `dir` and are at `trash` now.
+    pub(crate) fn new(dir: PathBuf, trash: PathBuf) -> TakenAway {
+        TakenAway { dir, trash }
+    }
+
+    /// Puts the files back where they were (the delete did not happen).
+    pub fn restore(self) -> Result<(), Error> {
+        std::fs::rename(&self.trash, &self.dir)
+            .map_err(|e| Error::io("cannot move back", &self.dir, e))
+    }
+
+    /// Removes the files for good; what a failure leaves, the next start removes.
+    pub fn remove(self) {
+        if let Err(e) = std::fs::remove_dir_all(&self.trash) {
+            log::warn!("cannot remove {}: {e}", self.trash.display());
+        }
+    }
+}
+
+/// What [`crate::storage::BlobStore::append_to`] made of a body.
+#[derive(Debug)]
+pub(crate) struct Appended {
+    /// The file's length now.
+    pub len: u64,
+    /// Why the body broke off before its end (what arrived is kept), if it did.
+    pub broken: Option<Error>,
+}
+
+/// An upload in `DATA/tmp`; removed on drop unless published.
+#[derive(Debug)]
+pub(crate) struct TempFile {
+    pub path: PathBuf,
+    pub bytes: u64,
+}
+
+impl TempFile {
+    /// Moves the file to `dest` (same file system: an atomic rename).
+    pub fn publish(self, dest: &Path) -> Result<(), Error> {
+        if let Some(parent) = dest.parent() {
+            std::fs::create_dir_all(parent).map_err(|e| Error::io("cannot create", parent, e))?;
+        }
+        std::fs::rename(&self.path, dest)
+            .map_err(|e| Error::io("cannot move upload to", dest, e))?;
+        std::mem::forget(self);
+        Ok(())
+    }
+}
+
+impl Drop for TempFile {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(&self.path);
+    }
+}
