@@ -4,7 +4,6 @@
 //! resuming after a restart.
 
 use std::sync::Arc;
-use std::sync::atomic::Ordering;
 use std::time::{Duration, Instant};
 
 use crate::Error;
@@ -12,40 +11,16 @@ use crate::app_state::{App, RunningJob};
 use crate::config::PlaybackKind;
 use crate::estimate::held_trials::Purpose;
 use crate::estimate::live_sessions::LiveSession;
-use crate::estimate::publishing::{self, Published};
-use crate::ingest::trials::{self, Arrival};
+use crate::ingest::trials;
 pub(crate) use crate::playback::queue::Begin;
 use crate::playback::queue::{Intent, Ticket};
-use crate::playback::{PlaybackJob, TrialOutput};
+use crate::playback::run::{self, Outcome, publish, too_few_after_cancel};
 use crate::session::{Session, SessionState, Step};
 use crate::storage::JobEnd;
 use crate::storage::keys::SessionObject;
 
 /// How long a delete waits for a playback it stopped to end.
 const STOP_WAIT: Duration = Duration::from_secs(15);
-
-/// How a job ended.
-enum Outcome {
-    Done,
-    /// The server is stopping: the session stays in flight for the next start.
-    Interrupted,
-    /// A delete stopped it: nothing is published, the session goes next.
-    Deleted,
-}
-
-/// Publishes the estimate over the live session's trials if any arrived since the last.
-async fn publish(
-    shared: &Arc<App>,
-    live: &Arc<LiveSession>,
-    id: &str,
-    purpose: Purpose,
-) -> Result<Option<Published>, Error> {
-    let (shared, id) = (shared.clone(), id.to_string());
-    live.publish(purpose, move |published| {
-        crate::estimate::results_files::write(&shared, &id, published)
-    })
-    .await
-}
 
 /// Ends a job's session: a failure is recorded (unless the server is stopping, which leaves
 /// the session in flight), the job row closed, the live session dropped.
@@ -219,11 +194,6 @@ pub(crate) async fn stop_playback(
     Ok(Stopped::Playing)
 }
 
-/// The reason a session cancelled after `count` trials fails with (an estimate needs 2).
-fn too_few_after_cancel(count: u32) -> String {
-    format!("cancelled by the client after {count} trial(s); an estimate needs 2")
-}
-
 /// Why a session that left the queue ends early.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum EndEarly {
@@ -267,201 +237,21 @@ pub(crate) fn finish_dequeued(shared: Arc<App>, id: String, why: EndEarly) -> Re
 
 /// Plays a session from the queue on a thread of its own (never one of tokio's blocking
 /// threads, which requests, file I/O and estimates need), publishing progressive estimates
-/// as trials arrive, then its final estimate.
+/// as trials arrive, then its final estimate. The steps are [`crate::playback::run`]'s.
 async fn play_and_estimate(shared: &Arc<App>, ticket: &Ticket) -> Result<Outcome, Error> {
-    let (id, begin, control) = (ticket.id.as_str(), ticket.begin, &ticket.control);
-    let cancel = control.cancel.clone();
-    // Marked running before anything else: a delete now waits for this job.
-    shared.set_running(
-        id,
-        Some(RunningJob {
-            cancel: cancel.clone(),
-            plan: None,
-            started: Instant::now(),
-            done_before: 0,
-            needed: 0,
-        }),
-    );
-    if shared.stopping() {
-        return Ok(Outcome::Interrupted);
-    }
-    if control.intent() == Intent::Delete {
-        return Ok(Outcome::Deleted);
-    }
-    let session = shared.session(id)?;
-    let backend = shared.backend(session.playback);
-    let done_before = shared.db.trial_count(id)?;
-    let needed = session.trials_total.saturating_sub(done_before);
-    let recording = shared.blobs.local_file(id, SessionObject::Recording);
-    let plan = {
-        let (backend, recording) = (backend.clone(), recording.clone());
-        tokio::task::spawn_blocking(move || backend.plan(&recording, needed))
-            .await
-            .map_err(|e| Error::Internal(format!("plan task: {e}")))??
+    let mut run = match run::start(shared, ticket).await? {
+        run::Started::Playing(run) => run,
+        run::Started::Ended(outcome) => return Ok(outcome),
     };
-    shared.set_running(
-        id,
-        Some(RunningJob {
-            cancel: cancel.clone(),
-            plan: Some(plan),
-            started: Instant::now(),
-            done_before,
-            needed,
-        }),
-    );
-    if begin == Begin::Start {
-        shared.lifecycle().start_playing(id)?;
+    run.publish_resumed().await?;
+    while let Some(batch) = run.next_batch().await {
+        run.store(batch)?;
+        run.publish_progressive().await?;
     }
-    let live = trials::live_session(shared, &session).await?;
-
-    let (tx, mut rx) = tokio::sync::mpsc::unbounded_channel::<TrialOutput>();
-    let job = PlaybackJob {
-        session: id.to_string(),
-        recording,
-        first_index: done_before,
-        trials: needed,
-        cancel: cancel.clone(),
-    };
-    let (played_tx, played_rx) = tokio::sync::oneshot::channel();
-    if cancel.load(Ordering::SeqCst) {
-        // Stopped before it began: nothing to play.
-        drop(tx);
-        let _ = played_tx.send(Ok(()));
-    } else {
-        std::thread::Builder::new()
-            .name(format!("sitar-play-{id}"))
-            .spawn(move || {
-                let sink = move |trial: TrialOutput| {
-                    let _ = tx.send(trial);
-                };
-                let _ = played_tx.send(backend.play(&job, &sink));
-            })
-            .map_err(|e| Error::Internal(format!("playback thread: {e}")))?;
+    if let Some(outcome) = run.end_playback().await? {
+        return Ok(outcome);
     }
-    if shared.stopping() {
-        cancel.store(true, Ordering::SeqCst);
-    }
-
-    let adaptive = session
-        .adaptive_min
-        .map(|min| (min.max(2), session.adaptive_k.max(1)));
-    let mut history = Vec::new();
-    let mut stop_reason: Option<String> = None;
-    let stop = |reason: String, stop_reason: &mut Option<String>| -> Result<(), Error> {
-        shared.lifecycle().stop(id, &reason)?;
-        *stop_reason = Some(reason);
-        cancel.store(true, Ordering::SeqCst);
-        Ok(())
-    };
-    if done_before >= 2
-        && let Some(p) = publish(shared, &live, id, Purpose::Progressive).await?
-    {
-        history.push((p.trials, p.classes));
-    }
-    while let Some(first) = rx.recv().await {
-        if control.intent() == Intent::Delete {
-            // The session goes: what the phones still deliver is dropped.
-            continue;
-        }
-        // Trials that queued up while the last estimate ran go in together.
-        let mut batch = vec![first];
-        while let Ok(more) = rx.try_recv() {
-            batch.push(more);
-        }
-        for trial in batch {
-            let arrival = Arrival {
-                key: None,
-                play_index: Some(trial.index),
-                source: &trial.source,
-            };
-            let bytes = trial.tum.as_bytes();
-            let stored = trials::parse_trial(bytes, "trial")
-                .and_then(|parsed| trials::store_trial(shared, &live, id, arrival, bytes, parsed));
-            match stored {
-                Ok(_) => {}
-                // The memory bound: what is there is estimated, nothing more is played.
-                Err(e @ (Error::TooLarge { .. } | Error::Busy(_))) if stop_reason.is_none() => {
-                    let count = shared.db.trial_count(id)?;
-                    stop(
-                        format!("memory bound: {e} (stopped after {count} trials)"),
-                        &mut stop_reason,
-                    )?;
-                }
-                Err(e) => log::warn!(
-                    "session {id}: trial {} from {} dropped: {e}",
-                    trial.index,
-                    trial.source
-                ),
-            }
-        }
-        let count = shared.db.trial_count(id)?;
-        if count < 2 || stop_reason.is_some() {
-            continue;
-        }
-        // Progressive results: a first picture from the 2nd trial on.
-        let Some(p) = publish(shared, &live, id, Purpose::Progressive).await? else {
-            continue;
-        };
-        history.push((p.trials, p.classes));
-        if let Some((min, k)) = adaptive
-            && count >= min
-            && count < session.trials_total
-            && publishing::classes_stable(&history, k)
-        {
-            stop(
-                format!(
-                    "adaptive stop: no window changed class over the last {k} trials (stopped after {count} of {})",
-                    session.trials_total
-                ),
-                &mut stop_reason,
-            )?;
-        }
-    }
-    let played = played_rx
-        .await
-        .map_err(|_| Error::Internal("the playback thread ended without an answer".into()))?;
-    if shared.stopping() {
-        return Ok(Outcome::Interrupted);
-    }
-    let intent = control.intent();
-    if intent == Intent::Delete {
-        return Ok(Outcome::Deleted);
-    }
-    let count = shared.db.trial_count(id)?;
-    match played {
-        Ok(()) if count < 2 && intent == Intent::Cancel => {
-            return Err(Error::Playback(too_few_after_cancel(count)));
-        }
-        Err(e) if count < 2 => return Err(e),
-        Err(e) => stop(
-            format!("playback failed after {count} trials: {e}"),
-            &mut stop_reason,
-        )?,
-        Ok(()) if count < 2 => {
-            return Err(Error::Playback(format!(
-                "only {count} trial(s) finished; an estimate needs 2"
-            )));
-        }
-        Ok(()) => {
-            if count < session.trials_total
-                && stop_reason.is_none()
-                && cancel.load(Ordering::SeqCst)
-            {
-                let reason = match intent {
-                    Intent::Cancel => format!(
-                        "cancelled by the client after {count} of {} trials",
-                        session.trials_total
-                    ),
-                    _ => format!("estimate requested after {count} trials"),
-                };
-                stop(reason, &mut stop_reason)?;
-            }
-        }
-    }
-    shared.lifecycle().start_estimating(id)?;
-    publish(shared, &live, id, Purpose::Final).await?;
-    shared.lifecycle().finish(id)?;
-    Ok(Outcome::Done)
+    run.estimate_final().await
 }
 
 /// After a restart: sessions in flight go back into the queue in their original order (or

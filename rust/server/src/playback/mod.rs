@@ -1,6 +1,7 @@
 pub(crate) mod adb;
 pub(crate) mod jobs;
 pub(crate) mod queue;
+pub(crate) mod run;
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
