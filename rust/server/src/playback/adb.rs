@@ -229,177 +229,250 @@ impl AdbPlayback {
         trial_s: f64,
         sink: &(dyn Fn(TrialOutput) + Sync),
     ) -> Result<(), Error> {
-        let cmd = Duration::from_secs(30);
-        let push = Duration::from_secs(600);
-        let dir = self.config.remote_dir();
-        let remote_rec = format!("{dir}/{}", contract::RECORDING_FILE);
-        let out_dir = format!("{dir}/{}", contract::OUTPUT_DIR);
-        let status_file = format!("{out_dir}/{}", contract::STATUS_FILE);
-        let recording = job.recording.to_string_lossy().into_owned();
-        self.on(serial, &["shell", "mkdir", "-p", &out_dir], cmd)?;
-        self.on(serial, &["push", &recording, &remote_rec], push)?;
-        let safe_serial: String = serial
-            .chars()
-            .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
-            .collect();
-        let pull_dir = job.recording.with_file_name("adb-pull");
-        std::fs::create_dir_all(&pull_dir).map_err(|e| Error::io("cannot create", &pull_dir, e))?;
+        let phone = self.push(serial, job)?;
         loop {
-            // Share: ⌈remaining / phones⌉, so D phones finish together.
-            let batch: Vec<u32> = {
-                let mut q = queue
-                    .lock()
-                    .map_err(|_| Error::Internal("queue lock".into()))?;
-                let phones = (*active.lock().map_err(|_| Error::Internal("lock".into()))?).max(1);
-                let share = q.len().div_ceil(phones);
-                q.drain(..share).collect()
-            };
+            let batch = take_share(queue, active)?;
             if batch.is_empty() || job.cancelled() {
                 return Ok(());
             }
-            let give_back = |from: usize, pulled: &HashSet<usize>| {
-                if let Ok(mut q) = queue.lock() {
-                    for (k, index) in batch.iter().enumerate().skip(from).rev() {
-                        if !pulled.contains(&k) {
-                            q.push_front(*index);
-                        }
-                    }
-                }
-            };
             let mut pulled: HashSet<usize> = HashSet::new();
-            let outcome = (|| -> Result<(), Error> {
-                // Last run's files: a stale trajectory or failure must not count for this one.
-                self.on(
-                    serial,
-                    &[
-                        "shell",
-                        "rm",
-                        "-f",
-                        &format!("{out_dir}/trajectory_*.txt"),
-                        &status_file,
-                    ],
-                    cmd,
-                )?;
-                let component = format!("{}/{}", self.config.package, self.config.activity);
-                let count = batch.len().to_string();
-                let first = batch[0];
-                let first_text = first.to_string();
-                let started_app = self.on(
-                    serial,
-                    &[
-                        "shell",
-                        "am",
-                        "start",
-                        "-S",
-                        "-W",
-                        "-n",
-                        &component,
-                        "--ei",
-                        contract::EXTRA_TRIALS,
-                        &count,
-                        "--ei",
-                        contract::EXTRA_FIRST,
-                        &first_text,
-                        "--es",
-                        contract::EXTRA_RECORDING,
-                        &remote_rec,
-                        "--es",
-                        contract::EXTRA_OUTPUT,
-                        &out_dir,
-                    ],
-                    cmd,
-                )?;
-                // `am` reports a missing activity on stdout ("Error type 3", "Error: Activity
-                // class {…} does not exist.") and still exits 0.
-                let errors: Vec<&str> = started_app
-                    .lines()
-                    .map(str::trim)
-                    .filter(|l| l.starts_with("Error"))
-                    .collect();
-                if !errors.is_empty() {
-                    return Err(Error::Playback(format!(
-                        "{serial}: am start -n {component}: {} (is the playback app installed? \
-                         see docs/playback-contract.md)",
-                        errors.join("; ")
-                    )));
-                }
-                let stop_app = || {
-                    let _ = self.on(
-                        serial,
-                        &["shell", "am", "force-stop", &self.config.package],
-                        cmd,
-                    );
-                };
-                let started = Instant::now();
-                while pulled.len() < batch.len() {
-                    if job.cancelled() {
-                        stop_app();
-                        return Ok(());
-                    }
-                    // Trial k is due by (k+1)·d·factor + slack.
-                    let due =
-                        trial_s * self.config.trial_timeout_factor * (pulled.len() + 1) as f64
-                            + self.config.trial_timeout_slack.as_secs_f64();
-                    if started.elapsed().as_secs_f64() > due {
-                        stop_app();
-                        return Err(Error::Playback(format!(
-                            "{serial}: trial {} not done after {due:.0} s",
-                            pulled.len()
-                        )));
-                    }
-                    std::thread::sleep(self.config.poll_interval);
-                    let listing = self.on(serial, &["shell", "ls", &out_dir], cmd)?;
-                    let mut ready: Vec<usize> = listing
-                        .split_whitespace()
-                        .filter_map(contract::trajectory_number)
-                        .filter_map(|n| n.checked_sub(first).map(|k| k as usize))
-                        .filter(|k| *k < batch.len() && !pulled.contains(k))
-                        .collect();
-                    ready.sort_unstable();
-                    for k in ready {
-                        let name = contract::trajectory_file(first + k as u32);
-                        let local = pull_dir.join(format!("{safe_serial}_{k}.txt"));
-                        let remote = format!("{out_dir}/{name}");
-                        self.on(serial, &["pull", &remote, &local.to_string_lossy()], cmd)?;
-                        let text = std::fs::read_to_string(&local)
-                            .map_err(|e| Error::io("cannot read", &local, e))?;
-                        let _ = std::fs::remove_file(&local);
-                        pulled.insert(k);
-                        sink(TrialOutput {
-                            index: batch[k],
-                            tum: text,
-                            source: format!("adb:{serial}"),
-                        });
-                    }
-                    if pulled.len() < batch.len()
-                        && listing
-                            .split_whitespace()
-                            .any(|f| f == contract::STATUS_FILE)
-                    {
-                        let status = self.on(serial, &["shell", "cat", &status_file], cmd)?;
-                        if let Some(message) = contract::failure(&status) {
-                            stop_app();
-                            return Err(Error::Playback(format!(
-                                "{serial}: the playback app failed: {}",
-                                if message.is_empty() {
-                                    "(no message)"
-                                } else {
-                                    message
-                                }
-                            )));
-                        }
-                    }
-                }
-                Ok(())
-            })();
-            if let Err(e) = outcome {
-                give_back(0, &pulled);
+            if let Err(e) = phone.run_batch(job, &batch, trial_s, sink, &mut pulled) {
+                give_back(queue, &batch, &pulled);
                 return Err(e);
             }
             if job.cancelled() {
                 return Ok(());
             }
         }
+    }
+
+    /// Step 1 on a phone: its output folder made and the recording pushed.
+    fn push<'a>(&'a self, serial: &'a str, job: &PlaybackJob) -> Result<Phone<'a>, Error> {
+        let dir = self.config.remote_dir();
+        let out_dir = format!("{dir}/{}", contract::OUTPUT_DIR);
+        let phone = Phone {
+            adb: self,
+            serial,
+            remote_rec: format!("{dir}/{}", contract::RECORDING_FILE),
+            status_file: format!("{out_dir}/{}", contract::STATUS_FILE),
+            out_dir,
+            pull_dir: job.recording.with_file_name("adb-pull"),
+            safe_serial: serial
+                .chars()
+                .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+                .collect(),
+        };
+        let recording = job.recording.to_string_lossy().into_owned();
+        phone.adb(&["shell", "mkdir", "-p", &phone.out_dir], COMMAND_TIMEOUT)?;
+        phone.adb(&["push", &recording, &phone.remote_rec], PUSH_TIMEOUT)?;
+        std::fs::create_dir_all(&phone.pull_dir)
+            .map_err(|e| Error::io("cannot create", &phone.pull_dir, e))?;
+        Ok(phone)
+    }
+}
+
+/// A bounded wait for one adb command, and for the recording's push.
+const COMMAND_TIMEOUT: Duration = Duration::from_secs(30);
+const PUSH_TIMEOUT: Duration = Duration::from_secs(600);
+
+/// This phone's share of the trials left: ⌈remaining / phones⌉, so D phones finish together.
+fn take_share(queue: &Mutex<VecDeque<u32>>, active: &Mutex<usize>) -> Result<Vec<u32>, Error> {
+    let mut q = queue
+        .lock()
+        .map_err(|_| Error::Internal("queue lock".into()))?;
+    let phones = (*active.lock().map_err(|_| Error::Internal("lock".into()))?).max(1);
+    let share = q.len().div_ceil(phones);
+    Ok(q.drain(..share).collect())
+}
+
+/// The trials of a failed batch that were not pulled go back to the front of the queue, in
+/// order, for another phone.
+fn give_back(queue: &Mutex<VecDeque<u32>>, batch: &[u32], pulled: &HashSet<usize>) {
+    if let Ok(mut q) = queue.lock() {
+        for (k, index) in batch.iter().enumerate().rev() {
+            if !pulled.contains(&k) {
+                q.push_front(*index);
+            }
+        }
+    }
+}
+
+/// One phone with the recording pushed: where the playback app reads and writes on it, and
+/// where its trials are pulled to.
+struct Phone<'a> {
+    adb: &'a AdbPlayback,
+    serial: &'a str,
+    remote_rec: String,
+    out_dir: String,
+    status_file: String,
+    pull_dir: std::path::PathBuf,
+    safe_serial: String,
+}
+
+impl Phone<'_> {
+    fn adb(&self, args: &[&str], timeout: Duration) -> Result<String, Error> {
+        self.adb.on(self.serial, args, timeout)
+    }
+
+    fn stop_app(&self) {
+        let _ = self.adb(
+            &["shell", "am", "force-stop", &self.adb.config.package],
+            COMMAND_TIMEOUT,
+        );
+    }
+
+    /// Step 2: plays `batch` (the app started once for all of them) and pulls each trial as
+    /// it appears, within its deadline; `pulled` holds the batch positions delivered.
+    fn run_batch(
+        &self,
+        job: &PlaybackJob,
+        batch: &[u32],
+        trial_s: f64,
+        sink: &(dyn Fn(TrialOutput) + Sync),
+        pulled: &mut HashSet<usize>,
+    ) -> Result<(), Error> {
+        // Last run's files: a stale trajectory or failure must not count for this one.
+        let stale = format!("{}/trajectory_*.txt", self.out_dir);
+        self.adb(
+            &["shell", "rm", "-f", &stale, &self.status_file],
+            COMMAND_TIMEOUT,
+        )?;
+        self.start_app(batch)?;
+        let config = &self.adb.config;
+        let started = Instant::now();
+        while pulled.len() < batch.len() {
+            if job.cancelled() {
+                self.stop_app();
+                return Ok(());
+            }
+            // Trial k is due by (k+1)·d·factor + slack.
+            let due = trial_s * config.trial_timeout_factor * (pulled.len() + 1) as f64
+                + config.trial_timeout_slack.as_secs_f64();
+            if started.elapsed().as_secs_f64() > due {
+                self.stop_app();
+                return Err(Error::Playback(format!(
+                    "{}: trial {} not done after {due:.0} s",
+                    self.serial,
+                    pulled.len()
+                )));
+            }
+            std::thread::sleep(config.poll_interval);
+            let listing = self.adb(&["shell", "ls", &self.out_dir], COMMAND_TIMEOUT)?;
+            self.pull_ready(&listing, batch, sink, pulled)?;
+            if pulled.len() < batch.len() {
+                self.check_status(&listing)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Starts the playback app for `batch` (docs/playback-contract.md).
+    fn start_app(&self, batch: &[u32]) -> Result<(), Error> {
+        let config = &self.adb.config;
+        let component = format!("{}/{}", config.package, config.activity);
+        let count = batch.len().to_string();
+        let first = batch[0].to_string();
+        let started_app = self.adb(
+            &[
+                "shell",
+                "am",
+                "start",
+                "-S",
+                "-W",
+                "-n",
+                &component,
+                "--ei",
+                contract::EXTRA_TRIALS,
+                &count,
+                "--ei",
+                contract::EXTRA_FIRST,
+                &first,
+                "--es",
+                contract::EXTRA_RECORDING,
+                &self.remote_rec,
+                "--es",
+                contract::EXTRA_OUTPUT,
+                &self.out_dir,
+            ],
+            COMMAND_TIMEOUT,
+        )?;
+        // `am` reports a missing activity on stdout ("Error type 3", "Error: Activity
+        // class {…} does not exist.") and still exits 0.
+        let errors: Vec<&str> = started_app
+            .lines()
+            .map(str::trim)
+            .filter(|l| l.starts_with("Error"))
+            .collect();
+        if errors.is_empty() {
+            return Ok(());
+        }
+        Err(Error::Playback(format!(
+            "{}: am start -n {component}: {} (is the playback app installed? \
+             see docs/playback-contract.md)",
+            self.serial,
+            errors.join("; ")
+        )))
+    }
+
+    /// Step 3: pulls every trial of `batch` the folder `listing` shows and hands it on.
+    fn pull_ready(
+        &self,
+        listing: &str,
+        batch: &[u32],
+        sink: &(dyn Fn(TrialOutput) + Sync),
+        pulled: &mut HashSet<usize>,
+    ) -> Result<(), Error> {
+        let first = batch[0];
+        let mut ready: Vec<usize> = listing
+            .split_whitespace()
+            .filter_map(contract::trajectory_number)
+            .filter_map(|n| n.checked_sub(first).map(|k| k as usize))
+            .filter(|k| *k < batch.len() && !pulled.contains(k))
+            .collect();
+        ready.sort_unstable();
+        for k in ready {
+            let name = contract::trajectory_file(first + k as u32);
+            let local = self.pull_dir.join(format!("{}_{k}.txt", self.safe_serial));
+            let remote = format!("{}/{name}", self.out_dir);
+            self.adb(
+                &["pull", &remote, &local.to_string_lossy()],
+                COMMAND_TIMEOUT,
+            )?;
+            let text =
+                std::fs::read_to_string(&local).map_err(|e| Error::io("cannot read", &local, e))?;
+            let _ = std::fs::remove_file(&local);
+            pulled.insert(k);
+            sink(TrialOutput {
+                index: batch[k],
+                tum: text,
+                source: format!("adb:{}", self.serial),
+            });
+        }
+        Ok(())
+    }
+
+    /// A failure the playback app reported in its status file ends the batch.
+    fn check_status(&self, listing: &str) -> Result<(), Error> {
+        if !listing
+            .split_whitespace()
+            .any(|f| f == contract::STATUS_FILE)
+        {
+            return Ok(());
+        }
+        let status = self.adb(&["shell", "cat", &self.status_file], COMMAND_TIMEOUT)?;
+        let Some(message) = contract::failure(&status) else {
+            return Ok(());
+        };
+        self.stop_app();
+        Err(Error::Playback(format!(
+            "{}: the playback app failed: {}",
+            self.serial,
+            if message.is_empty() {
+                "(no message)"
+            } else {
+                message
+            }
+        )))
     }
 }
 
