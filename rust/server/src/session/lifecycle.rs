@@ -82,23 +82,12 @@ impl<'a> Lifecycle<'a> {
 mod tests {
     use super::*;
     use crate::config::PlaybackKind;
-    use crate::session::estimate_settings::EstimateSettings;
-    use crate::session::record::NewSession;
     use crate::storage::sqlite::SqliteStore;
 
     fn db_with(playback: PlaybackKind) -> (tempfile::TempDir, SqliteStore) {
         let dir = tempfile::tempdir().unwrap();
         let db = SqliteStore::open(&dir.path().join("sitar.db")).unwrap();
-        let new = NewSession {
-            idempotency_key: None,
-            trials_total: 5,
-            playback,
-            settings: EstimateSettings::defaults(&crate::ServerConfig::new("unused")).unwrap(),
-            adaptive_min: None,
-            adaptive_k: 3,
-            legacy: false,
-            owner: None,
-        };
+        let new = crate::storage::conformance::new_session(None, playback, None);
         db.insert_session("a", &new).unwrap();
         (dir, db)
     }

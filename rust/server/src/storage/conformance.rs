@@ -25,7 +25,12 @@ pub(crate) fn metadata_store(store: &dyn MetadataStore) {
     deleting_a_session_removes_what_belongs_to_it(store);
 }
 
-fn new_session(key: Option<&str>, playback: PlaybackKind, owner: Option<i64>) -> NewSession<'_> {
+/// A session request with the server's defaults (5 trials), for the suites and unit tests.
+pub(crate) fn new_session(
+    key: Option<&str>,
+    playback: PlaybackKind,
+    owner: Option<i64>,
+) -> NewSession<'_> {
     NewSession {
         idempotency_key: key,
         trials_total: 5,
