@@ -1,6 +1,6 @@
 //! Live sessions: the parsed trials of every session in flight, held in memory with the
 //! estimator's state, so that each progressive estimate adds only the new trials' pairs and
-//! never re-reads a file (`held.rs`).
+//! never re-reads a file (`held_trials.rs`).
 //!
 //! **Memory.** A trial costs 64 bytes a pose (an `i64` stamp, a `DVec3` position, a `DQuat`
 //! orientation) plus about 100 bytes: 2 820 poses are 180 kB, 100 such trials 18 MB. The
@@ -237,7 +237,7 @@ impl LiveSession {
     ///
     /// This is the one function that calls the estimator: new trials join the session's
     /// incremental state (only their pairs are computed), or a one-shot estimate when there
-    /// is none (`held.rs` says when).
+    /// is none (`held_trials.rs` says when).
     pub async fn publish(
         self: &Arc<Self>,
         purpose: Purpose,
@@ -272,7 +272,7 @@ impl LiveSession {
         .map_err(|e| Error::Internal(format!("estimate of session {}: {e}", self.id)))?
     }
 
-    /// Whether the session's trials are estimated incrementally (see `held.rs`).
+    /// Whether the session's trials are estimated incrementally (see `held_trials.rs`).
     #[cfg(test)]
     async fn incremental(&self) -> bool {
         self.held.lock().await.incremental()

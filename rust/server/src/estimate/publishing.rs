@@ -1,5 +1,5 @@
 //! From an estimate to what is published: the results files and the classes adaptive
-//! stopping watches. (The estimate itself runs in `live.rs`, over the trials held in memory.)
+//! stopping watches. (The estimate itself runs in `live_sessions.rs`, over the trials held in memory.)
 
 use std::collections::{BTreeMap, HashSet};
 

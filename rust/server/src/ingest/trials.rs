@@ -1,6 +1,6 @@
 //! A trial's way in, for trials from the API and from playback phones alike: parsed once from
 //! the bytes received, checked, written once as its file, and kept parsed in the session's
-//! live session (`live.rs`) for every estimate after.
+//! live session (`estimate/live_sessions.rs`) for every estimate after.
 
 use std::sync::Arc;
 

@@ -1,4 +1,4 @@
-//! Thinning for display: what a long walk's page and 3-D view draw (`report.rs`,
+//! Thinning for display: what a long walk's page and 3-D view draw (`page.rs`,
 //! `scene_view.rs`), evenly spaced so the drawing keeps the walk's shape.
 
 /// Indices `0..n` thinned evenly to at most `max` (first and last kept).
