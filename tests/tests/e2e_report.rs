@@ -454,13 +454,20 @@ fn regions_show_the_camera_evidence_and_a_share_link_shows_the_same_view() {
 }
 
 /// The served bundle is `scripts/bundle-report`'s output for the committed `report.js` and
-/// vendored three.js (esbuild from `tools/npm`).
+/// three.js as `tools/npm` pins it (esbuild from there too): a rebuild from
+/// `tools/npm/node_modules` gives the committed bytes.
 #[test]
 fn the_served_bundle_is_built_from_report_js() {
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
-    if !root.join("tools/npm/node_modules/.bin/esbuild").exists() {
-        println!("SKIPPED the bundle check: run `npm ci --prefix tools/npm` (.ci/run does)");
-        return;
+    let modules = root.join("tools/npm/node_modules");
+    for needed in [".bin/esbuild", "three/package.json"] {
+        if !modules.join(needed).exists() {
+            println!(
+                "SKIPPED the bundle check: tools/npm/node_modules/{needed} is missing \
+                 (run `npm ci --prefix tools/npm`, as .ci/run does)"
+            );
+            return;
+        }
     }
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("report.bundle.js");
@@ -472,6 +479,17 @@ fn the_served_bundle_is_built_from_report_js() {
     let committed = std::fs::read(root.join("rust/server/assets/report.bundle.js")).unwrap();
     assert!(
         std::fs::read(&out).unwrap() == committed,
-        "rust/server/assets/report.bundle.js is stale: run scripts/vendor-three"
+        "rust/server/assets/report.bundle.js is stale: run scripts/bundle-report"
+    );
+    // The pinned three.js is the one bundled (three announces its revision).
+    let pinned: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(modules.join("three/package.json")).unwrap())
+            .unwrap();
+    let version = pinned["version"].as_str().unwrap();
+    let committed = String::from_utf8(committed).unwrap();
+    let revision = version.split('.').nth(1).unwrap();
+    assert!(
+        committed.contains(&format!("revision:\"{revision}\"")),
+        "the bundle is not three {version}"
     );
 }

@@ -1,7 +1,8 @@
 // The report's 3-D view: the walk in the room, from scene.json (glTF's frame: right-handed,
-// +Y up, metres). three.js is served by this backend (/assets/three/), so it works offline.
-import * as THREE from "./three/three.module.js";
-import { OrbitControls } from "./three/OrbitControls.js";
+// +Y up, metres). three.js comes from tools/npm (the pinned version); scripts/bundle-report
+// bundles the parts used into report.bundle.js, served by this backend, so it works offline.
+import * as THREE from "three";
+import { OrbitControls } from "three/addons/controls/OrbitControls.js";
 
 const CLASS_COLOURS = { low: 0x2f6fde, medium: 0xe0b100, high: 0xd62728, unknown: 0x9a9a9a };
 const VIRIDIS = [[68, 1, 84], [59, 82, 139], [33, 145, 140], [94, 201, 98], [253, 231, 37]];
