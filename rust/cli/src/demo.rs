@@ -29,7 +29,7 @@ pub struct Args {
     #[arg(long, default_value_t = 8.0)]
     speed: f64,
     /// Simulated playback phones.
-    #[arg(long, default_value_t = 2)]
+    #[arg(long, default_value_t = DEMO_DEVICES)]
     devices: u32,
     /// Seed of the walk and the trials.
     #[arg(long, default_value_t = 42)]
@@ -53,6 +53,9 @@ fn parse_display_rotation(text: &str) -> Result<i32, String> {
 }
 
 const DEMO_DIR: &str = "sitar-demo";
+
+/// The demo's simulated playback phones (also `sitar serve --sim-devices`'s default).
+pub const DEMO_DEVICES: u32 = 2;
 
 pub fn run(args: Args) -> Result<()> {
     let started = Instant::now();

@@ -26,6 +26,9 @@ pub(crate) fn accept_recording(
         return Err(Error::BadRequest("the recording is empty".into()));
     }
     crate::mp4_check::check_recording(session.playback, &temp.path)?;
+    if session.playback == PlaybackKind::Sim {
+        check_sim_header(&temp.path)?;
+    }
     let (id, bytes) = (&session.id, temp.bytes);
     let dest = shared.files.recording(id);
     if session.playback == PlaybackKind::Upload {
@@ -48,6 +51,39 @@ pub(crate) fn accept_recording(
     temp.publish(&dest)?;
     if shared.lifecycle().accept_recording(id, bytes)? == SessionState::Created {
         jobs::enqueue(shared, session, Begin::Start);
+    }
+    Ok(())
+}
+
+/// A `sim` session's recording must start with the `sitar-sim` header (magic and a format
+/// version this build reads): a 422 naming what is wrong at upload, not a session that
+/// fails later. Only the 12 header bytes are read; the body is checked when it is played.
+fn check_sim_header(path: &std::path::Path) -> Result<(), Error> {
+    use std::io::Read;
+    let mut head = Vec::with_capacity(12);
+    std::fs::File::open(path)
+        .and_then(|f| f.take(12).read_to_end(&mut head))
+        .map_err(|e| Error::io("cannot read", path, e))?;
+    let magic = sitar_sim::RECORDING_MAGIC;
+    if head.len() < 12 || head[..8] != magic[..] {
+        let start: String = head
+            .iter()
+            .take(8)
+            .map(|&b| if b.is_ascii_graphic() { b as char } else { '.' })
+            .collect();
+        return Err(Error::InvalidContent(format!(
+            "the recording is not a sitar-sim recording (as `sitar simulate` writes): it starts \
+             with {start:?}, not the {:?} header",
+            String::from_utf8_lossy(magic)
+        )));
+    }
+    let version = u32::from_le_bytes([head[8], head[9], head[10], head[11]]);
+    if version != sitar_sim::RECORDING_VERSION {
+        return Err(Error::InvalidContent(format!(
+            "the recording is a sitar-sim recording of format version {version}; this server \
+             reads version {}",
+            sitar_sim::RECORDING_VERSION
+        )));
     }
     Ok(())
 }
@@ -78,5 +114,39 @@ fn same_content(a: &std::path::Path, b: &std::path::Path) -> Result<bool, Error>
         if ba[..n] != bb[..n] {
             return Ok(false);
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_sim_recording_is_checked_by_its_header() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("rec");
+        let check = |bytes: &[u8]| {
+            std::fs::write(&path, bytes).unwrap();
+            check_sim_header(&path)
+        };
+        let mut good = sitar_sim::RECORDING_MAGIC.to_vec();
+        good.extend_from_slice(&sitar_sim::RECORDING_VERSION.to_le_bytes());
+        good.extend_from_slice(b"{}");
+        assert!(check(&good).is_ok());
+        let Err(Error::InvalidContent(garbage)) = check(b"definitely not a recording") else {
+            panic!("garbage accepted");
+        };
+        assert_eq!(
+            garbage,
+            "the recording is not a sitar-sim recording (as `sitar simulate` writes): it starts \
+             with \"definite\", not the \"SITARSIM\" header"
+        );
+        assert!(matches!(check(b"SITARSIM"), Err(Error::InvalidContent(_))));
+        let mut future = good.clone();
+        future[8] = 99;
+        let Err(Error::InvalidContent(version)) = check(&future) else {
+            panic!("version 99 accepted");
+        };
+        assert!(version.contains("format version 99"), "{version}");
     }
 }
