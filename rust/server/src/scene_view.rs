@@ -39,6 +39,17 @@ fn xyz(p: DVec3) -> [f64; 3] {
     [r4(p.x), r4(p.y), r4(p.z)]
 }
 
+/// The marker tier (the phone's thresholds searched in order, 10, 5, 2, 1 cm by default)
+/// an error of `error` reaches first, in the results' unit: the tier a marker was placed at.
+pub(crate) fn marker_tier(phone: &Phone, error: f64) -> Option<f64> {
+    phone
+        .config()
+        .marker_thresholds()
+        .iter()
+        .copied()
+        .find(|&t| error >= t)
+}
+
 /// The scene of `phone` (the backend's phone sessions are `arcore`, glTF's frame already;
 /// the conversion is stated all the same), its sub-trajectories `subs` as the report
 /// classifies them, and where the scene came from.
@@ -57,11 +68,15 @@ pub(crate) fn scene_json(
     };
     let plan = phone.render_plan();
     let markers = phone.markers().unwrap_or_default();
-    let surface: Vec<DVec3> = phone
+    let (surface, normals): (Vec<DVec3>, Vec<DVec3>) = phone
         .subtrajectories()
         .iter()
-        .filter_map(|s| s.depth.sample().map(|d| to_view(d.point)))
-        .collect();
+        .filter_map(|s| {
+            s.depth
+                .sample()
+                .map(|d| (to_view(d.point), to_view(d.normal)))
+        })
+        .unzip();
     let joints = thin(plan.joints.len(), MAX_VIEW_JOINTS);
     let frustums = thin(plan.frustums.len(), MAX_VIEW_FRUSTUMS);
     let surface_kept = thin(surface.len(), MAX_VIEW_SURFACE);
@@ -104,10 +119,13 @@ pub(crate) fn scene_json(
         "markers": markers_kept.iter().enumerate().map(|(i, m)| json!({
             "number": i + 1, "sub": m.subtrajectory, "class": m.class.name(),
             "error": r4(m.error_m * unit.scale),
+            "tier": marker_tier(phone, m.error_m).map(|t| r4(t * unit.scale)),
             "p": xyz(to_view(m.position)), "normal": xyz(to_view(m.normal)),
             "q": quat(m.rotation),
         })).collect::<Vec<_>>(),
         "surface": surface_kept.iter().flat_map(|&i| xyz(surface[i])).collect::<Vec<_>>(),
+        // The faced surface's unit normal at each surface point (the view draws a patch).
+        "surface_normals": surface_kept.iter().flat_map(|&i| xyz(normals[i])).collect::<Vec<_>>(),
         "start": plan.start.map(|p| xyz(to_view(p.position))),
         "stop": plan.stop.map(|p| xyz(to_view(p.position))),
         "downsampled": {
