@@ -343,6 +343,14 @@ async function main() {
         : `Sub-trajectory ${k}`;
     }
   });
+  // How many of the framed points (path, markers, surface points) the default view shows
+  // (tests read it: all of them).
+  camera.updateMatrixWorld();
+  const inView = framed.filter((p) => {
+    const q = p.clone().project(camera);
+    return Math.abs(q.x) <= 1 && Math.abs(q.y) <= 1 && q.z < 1;
+  }).length;
+  document.body.dataset.framed = `${inView}/${framed.length}`;
   performance.mark("scene-built");
   render();
   performance.mark("first-frame");
