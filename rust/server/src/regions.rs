@@ -167,6 +167,17 @@ pub(crate) fn regions(subs: &[SubRow], markers: &[Marker], radius_m: f64) -> Vec
     out
 }
 
+/// The marker tier (the phone's thresholds searched in order, 10, 5, 2, 1 cm by default)
+/// an error of `error` reaches first, in the results' unit: the tier a marker was placed at.
+pub(crate) fn marker_tier(phone: &Session, error: f64) -> Option<f64> {
+    phone
+        .config()
+        .marker_thresholds()
+        .iter()
+        .copied()
+        .find(|&t| error >= t)
+}
+
 /// Why a medium or high `region` has no marker, by the paper's marker rule (a marker needs
 /// a depth sample; it is never within `dedup_radius_m` of another; at most `max_regions`
 /// are placed): none when it has one.

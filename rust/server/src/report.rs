@@ -281,6 +281,9 @@ pub(crate) struct ReportInput<'a> {
 pub(crate) struct Standalone<'a> {
     /// The stored JPEG thumbnail of sub-trajectory k (none when there is none).
     pub thumbnail: &'a dyn Fn(u32) -> Option<Vec<u8>>,
+    /// What the 3-D view draws (`crate::scene_view`, as `scene.json` serves it), none
+    /// without a trajectory.
+    pub scene: Option<serde_json::Value>,
 }
 
 /// Path points of the static top view (a 10-minute walk logs 3 600).
@@ -394,7 +397,7 @@ fn marker_rows(a: &Analysis, phone: Option<&Phone>) -> Vec<serde_json::Value> {
                 "colour": colour(m.class),
                 "error": format!("{:.1}", m.error_m * unit.scale),
                 "tier": phone
-                    .and_then(|p| crate::scene_view::marker_tier(p, m.error_m))
+                    .and_then(|p| regions::marker_tier(p, m.error_m))
                     .map(|t| format!("≥ {}", unit.show(t))),
                 "position": format!("({:.2}, {:.2}, {:.2})", p.x, p.y, p.z),
                 "region": a.regions.iter().find(|r| r.markers.contains(&(i + 1))).map(|r| r.rank),
@@ -476,18 +479,18 @@ pub(crate) fn standalone_csp() -> String {
 
 /// Step 6: what a stand-alone page carries inline (style, script, scene data) and its
 /// Content-Security-Policy, which allows exactly those.
-fn inline_parts(input: &ReportInput<'_>, a: &Analysis) -> Result<serde_json::Value, Error> {
+fn inline_parts(alone: &Standalone<'_>) -> Result<serde_json::Value, Error> {
     // The script element ends at the first `</script`: the bundle must not hold one.
     if INLINE_SCRIPT.to_ascii_lowercase().contains("</script") {
         return Err(Error::Internal(
             "report.bundle.js holds </script: it cannot be inlined".into(),
         ));
     }
-    let scene = input.phone.map(|(phone, source)| {
-        crate::scene_view::scene_json(phone, &a.subs, a.thresholds, &a.unit, source.describe())
-    });
     // `<` only occurs inside JSON strings, where `\u003c` means the same: no `</script`.
-    let scene = scene.map(|s| s.to_string().replace('<', "\\u003c"));
+    let scene = alone
+        .scene
+        .as_ref()
+        .map(|s| s.to_string().replace('<', "\\u003c"));
     Ok(json!({
         "css": INLINE_CSS,
         "script": INLINE_SCRIPT,
@@ -513,8 +516,8 @@ pub(crate) fn render(input: &ReportInput<'_>) -> Result<String, Error> {
         a.subs.iter().map(|s| (s.t0, s.t1, s.error)).collect();
     let count = |c: ErrorClass| a.subs.iter().filter(|s| s.class == c).count();
     let trials = a.doc.trials;
-    let standalone = match input.standalone {
-        Some(_) => Some(inline_parts(input, &a)?),
+    let standalone = match &input.standalone {
+        Some(alone) => Some(inline_parts(alone)?),
         None => None,
     };
     let tiers: Vec<String> = phone

@@ -39,17 +39,6 @@ fn xyz(p: DVec3) -> [f64; 3] {
     [r4(p.x), r4(p.y), r4(p.z)]
 }
 
-/// The marker tier (the phone's thresholds searched in order, 10, 5, 2, 1 cm by default)
-/// an error of `error` reaches first, in the results' unit: the tier a marker was placed at.
-pub(crate) fn marker_tier(phone: &Phone, error: f64) -> Option<f64> {
-    phone
-        .config()
-        .marker_thresholds()
-        .iter()
-        .copied()
-        .find(|&t| error >= t)
-}
-
 /// The scene of `phone` (the backend's phone sessions are `arcore`, glTF's frame already;
 /// the conversion is stated all the same), its sub-trajectories `subs` as the report
 /// classifies them, and where the scene came from.
@@ -119,7 +108,7 @@ pub(crate) fn scene_json(
         "markers": markers_kept.iter().enumerate().map(|(i, m)| json!({
             "number": i + 1, "sub": m.subtrajectory, "class": m.class.name(),
             "error": r4(m.error_m * unit.scale),
-            "tier": marker_tier(phone, m.error_m).map(|t| r4(t * unit.scale)),
+            "tier": crate::regions::marker_tier(phone, m.error_m).map(|t| r4(t * unit.scale)),
             "p": xyz(to_view(m.position)), "normal": xyz(to_view(m.normal)),
             "q": quat(m.rotation),
         })).collect::<Vec<_>>(),

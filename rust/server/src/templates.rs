@@ -163,7 +163,7 @@ mod tests {
         let waiting = render(
             "waiting.html",
             &serde_json::json!({"id": hostile, "state": hostile, "waiting_for": hostile,
-                                "error": hostile, "failed": true, "played": 1, "total": 3}),
+                                "error": hostile, "is_failure": true, "played": 1, "total": 3}),
         )
         .unwrap();
         // A stand-alone page: its two inline scripts are the bundle and the scene data, and

@@ -207,7 +207,7 @@ fn waiting_page(
             "total": session.trials_total,
             "waiting_for": waiting_for,
             "error": session.error,
-            "failed": failed,
+            "is_failure": failed,
             "refresh_s": (refresh && !failed).then_some(report::REFRESH_S),
         }),
     )
@@ -241,6 +241,13 @@ pub(crate) async fn render_report(
             .ok()
             .flatten()
         };
+        // A stand-alone page carries the 3-D view's data (what `scene.json` serves).
+        let scene = phone.as_deref().filter(|_| standalone).map(|(p, source)| {
+            let thresholds = session.settings.thresholds(&shared.config);
+            let subs = crate::regions::sub_rows(p, thresholds);
+            let unit = report::Unit::of(&session);
+            crate::scene_view::scene_json(p, &subs, thresholds, &unit, source.describe())
+        });
         let html = report::render(&ReportInput {
             row: &session,
             results_json: &json,
@@ -251,6 +258,7 @@ pub(crate) async fn render_report(
             evidence: evidence.as_ref(),
             standalone: standalone.then_some(Standalone {
                 thumbnail: &thumbnail,
+                scene,
             }),
         })?;
         // The stand-alone page's policy is in its <meta>; the download's header repeats it.
