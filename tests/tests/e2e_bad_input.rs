@@ -25,6 +25,27 @@ fn bad_inputs_are_json_4xx_and_write_nothing_outside_the_data_dir() {
         415,
         "unsupported_media_type",
     );
+    // Every key is optional: no body, or `{}` unlabelled or labelled as curl does, is a
+    // session with the server's defaults.
+    for (ct, body) in [
+        (None, &b""[..]),
+        (Some("application/json"), b""),
+        (None, b"{}"),
+        (Some("application/x-www-form-urlencoded"), b"{}"),
+        (Some("application/json"), b" {} "),
+    ] {
+        let (s, _, b) = post("/v1/sessions", ct, body);
+        assert_eq!(s, 201, "{ct:?} {body:?}: {b}");
+        let created: serde_json::Value = serde_json::from_str(&b).unwrap();
+        let status = client(&server)
+            .status(created["id"].as_str().unwrap())
+            .unwrap();
+        assert_eq!(
+            status.trials_total,
+            sitar_server::ServerConfig::new("").default_trials,
+            "{b}"
+        );
+    }
     expect(
         post("/v1/sessions", Some("application/json"), b"{not json"),
         400,
@@ -143,25 +164,30 @@ fn bad_inputs_are_json_4xx_and_write_nothing_outside_the_data_dir() {
         400,
         "bad_request",
     );
-    // Not a sim recording: accepted as bytes, then the session fails with a reason.
-    let (s, _, _) = raw(
+    // Not a sim recording: refused at upload with one clear message, the session still
+    // waiting for a recording.
+    let (s, _, body) = raw(
         "PUT",
         &rec_url,
         Some("application/octet-stream"),
         b"definitely not a recording",
         &[],
     );
-    assert_eq!(s, 202);
-    let status = client
-        .wait(
-            &id,
-            std::time::Duration::from_millis(20),
-            std::time::Duration::from_secs(20),
-            &mut |_| {},
-        )
-        .unwrap();
-    assert_eq!(status.state, sitar_client::SessionState::Failed);
-    assert!(status.error.unwrap().contains("not a sitar-sim recording"));
+    assert_eq!(s, 422, "{body}");
+    let message = serde_json::from_str::<serde_json::Value>(&body).unwrap()["error"]["message"]
+        .as_str()
+        .unwrap()
+        .to_owned();
+    assert_eq!(
+        message.matches("not a sitar-sim recording").count(),
+        1,
+        "{message}"
+    );
+    assert!(message.contains("\"SITARSIM\" header"), "{message}");
+    assert_eq!(
+        client.status(&id).unwrap().state,
+        sitar_client::SessionState::Created
+    );
     expect(
         post(&format!("/v1/sessions/{id}/estimate"), None, b""),
         409,

@@ -43,16 +43,60 @@ fn netlog_strings(value: &serde_json::Value, key: &str, out: &mut Vec<String>) {
     }
 }
 
-/// Runs `scripts/report-screenshot` on `url` into `out` (1280 × 1000).
+/// Runs `scripts/report-screenshot` on `url` into `out` (1280 × 1000); it must end within
+/// two minutes, also on a page that reloads itself.
 fn shoot(url: &str, out: &Path) {
     let script = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../scripts/report-screenshot");
-    let status = Command::new(&script)
+    let mut child = Command::new(&script)
         .arg(url)
         .arg(out)
         .arg("1280x1000")
-        .status()
+        .stdout(std::process::Stdio::null())
+        .spawn()
         .unwrap();
+    let started = std::time::Instant::now();
+    let status = loop {
+        if let Some(status) = child.try_wait().unwrap() {
+            break status;
+        }
+        if started.elapsed() > std::time::Duration::from_secs(120) {
+            child.kill().unwrap();
+            panic!("scripts/report-screenshot {url} did not end in 2 minutes");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(100));
+    };
     assert!(status.success());
+}
+
+/// (drawn, blue, yellow) pixels of the 3-D canvas (background #f4f5f7) in a screenshot, and
+/// the canvas's size.
+fn canvas_pixels(png: &Path) -> (usize, usize, usize, usize) {
+    let (w, _h, px) = read_png(png);
+    let bg = [244u8, 245, 247];
+    let (mut x0, mut y0, mut x1, mut y1) = (usize::MAX, usize::MAX, 0, 0);
+    for (i, p) in px.iter().enumerate() {
+        if *p == bg {
+            let (x, y) = (i % w, i / w);
+            x0 = x0.min(x);
+            y0 = y0.min(y);
+            x1 = x1.max(x);
+            y1 = y1.max(y);
+        }
+    }
+    assert!(
+        x1 > x0 + 400 && y1 > y0 + 200,
+        "no canvas found: ({x0},{y0})–({x1},{y1})"
+    );
+    let (mut drawn, mut blue, mut yellow) = (0, 0, 0);
+    for y in y0..=y1 {
+        for x in x0..=x1 {
+            let [r, g, b] = px[y * w + x].map(i32::from);
+            drawn += usize::from([r, g, b] != [244, 245, 247]);
+            blue += usize::from(b > r + 60 && b > 150);
+            yellow += usize::from(r > 170 && g > 130 && b < 90);
+        }
+    }
+    (drawn, blue, yellow, (x1 - x0 + 1) * (y1 - y0 + 1))
 }
 
 /// Console lines of the page, besides SwiftShader's performance notes.
@@ -205,38 +249,7 @@ fn the_report_renders_the_walk_in_chromium_offline() {
 
     // The canvas (background #f4f5f7) shows the walk: enough drawn pixels, in the classes'
     // colours.
-    let (w, _h, px) = read_png(&out.join("screenshot.png"));
-    let bg = [244u8, 245, 247];
-    let (mut x0, mut y0, mut x1, mut y1) = (usize::MAX, usize::MAX, 0, 0);
-    for (i, p) in px.iter().enumerate() {
-        if *p == bg {
-            let (x, y) = (i % w, i / w);
-            x0 = x0.min(x);
-            y0 = y0.min(y);
-            x1 = x1.max(x);
-            y1 = y1.max(y);
-        }
-    }
-    assert!(
-        x1 > x0 + 400 && y1 > y0 + 200,
-        "no canvas found: ({x0},{y0})–({x1},{y1})"
-    );
-    let (mut drawn, mut blue, mut yellow, mut total) = (0usize, 0usize, 0usize, 0usize);
-    for y in y0..=y1 {
-        for x in x0..=x1 {
-            let [r, g, b] = px[y * w + x].map(i32::from);
-            total += 1;
-            if [r, g, b] != [244, 245, 247] {
-                drawn += 1;
-            }
-            if b > r + 60 && b > 150 {
-                blue += 1;
-            }
-            if r > 170 && g > 130 && b < 90 {
-                yellow += 1;
-            }
-        }
-    }
+    let (drawn, blue, yellow, total) = canvas_pixels(&out.join("screenshot.png"));
     let share = drawn as f64 / total as f64;
     assert!((0.02..0.9).contains(&share), "drawn share {share}");
     assert!(
@@ -244,7 +257,7 @@ fn the_report_renders_the_walk_in_chromium_offline() {
         "class colours: blue {blue}, yellow {yellow}"
     );
     println!(
-        "canvas ({x0},{y0})–({x1},{y1}): {:.1} % drawn, {blue} blue, {yellow} yellow px",
+        "canvas: {:.1} % drawn, {blue} blue, {yellow} yellow px",
         share * 100.0
     );
 }
@@ -453,14 +466,273 @@ fn regions_show_the_camera_evidence_and_a_share_link_shows_the_same_view() {
     server.stop();
 }
 
+/// The number in `<b …>N sub-trajectories</b>`-like text: the first integer after `key`.
+fn number_after(text: &str, key: &str) -> u64 {
+    let at = text
+        .find(key)
+        .unwrap_or_else(|| panic!("no {key:?} in {text}"))
+        + key.len();
+    let digits: String = text[at..]
+        .chars()
+        .skip_while(|c| !c.is_ascii_digit())
+        .take_while(|c| c.is_ascii_digit())
+        .collect();
+    digits.parse().unwrap()
+}
+
+/// `GET …/report?download=1` (what `sitar demo` writes): one file that shows the full page
+/// opened from disk in Chromium: the 3-D view ready with every framed point in view,
+/// thumbnails inline, the regions and markers tables, no console error, and no request at
+/// all (no server).
+#[test]
+fn the_saved_report_opens_from_disk_with_its_3d_view_and_thumbnails() {
+    if !Path::new("/usr/bin/chromium").exists() {
+        println!(
+            "SKIPPED the saved report in Chromium: /usr/bin/chromium is not installed (.ci/run installs it)"
+        );
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let server = start(sim_config(&dir.path().join("data"), 40.0, 2));
+    let recording = sitar_sim::Recording::demo(15.0, 30.0, 42).unwrap();
+    let rec_path = dir.path().join("walk.rec");
+    std::fs::write(&rec_path, recording.to_bytes()).unwrap();
+    let phone = phone_walk_with_evidence(&recording);
+    let folder = dir.path().join("phone");
+    phone.save(&folder).unwrap();
+    let client = client(&server);
+    let id = client
+        .create_session(&NewSession {
+            trials: 8,
+            setting: "trim_mean_30".into(),
+            playback: "sim".into(),
+            window_frames: None,
+            pose_relation: None,
+        })
+        .unwrap();
+    client
+        .upload_recording(&id, &rec_path, &mut |_, _| {})
+        .unwrap();
+    client.upload_evidence(&id, &folder).unwrap();
+    assert_eq!(wait_done(&client, &id).state, SessionState::Done);
+
+    let url = format!("{}/v1/sessions/{id}/report?download=1", server.url());
+    let response = agent()
+        .get(&url)
+        .header("authorization", format!("Bearer {ADMIN_TOKEN}"))
+        .call()
+        .unwrap();
+    let headers = response.headers().clone();
+    assert_eq!(
+        headers["content-disposition"],
+        format!("attachment; filename=\"report-{id}.html\"").as_str()
+    );
+    let csp = headers["content-security-policy"]
+        .to_str()
+        .unwrap()
+        .to_owned();
+    assert!(csp.contains("script-src 'sha256-"), "{csp}");
+    let (_, _, html) = get_bytes(&url, Some(ADMIN_TOKEN));
+    let html = String::from_utf8(html).unwrap();
+    // The file keeps its policy (the header's, less what only a header can say).
+    let meta = section(
+        &html,
+        "<meta http-equiv=\"Content-Security-Policy\" content=\"",
+        "\">",
+    );
+    let meta = meta[meta.rfind('"').unwrap() + 1..]
+        .replace("&#x27;", "'")
+        .replace("&#x2f;", "/");
+    assert_eq!(meta, csp.trim_end_matches("; frame-ancestors 'none'"));
+    assert!(
+        !html.contains("http-equiv=\"refresh\""),
+        "a finished report reloads"
+    );
+    // No server from here on.
+    server.stop();
+    let file = dir.path().join(format!("report-{id}.html"));
+    std::fs::write(&file, &html).unwrap();
+    let out = dir.path().join("saved");
+    shoot(&format!("file://{}", file.display()), &out);
+
+    let dom = std::fs::read_to_string(out.join("dom.html")).unwrap();
+    assert!(
+        dom.contains("data-view=\"ready\""),
+        "{}",
+        &dom[..dom.len().min(2000)]
+    );
+    // The default view frames the walk, the markers and the surface points.
+    let framed = &dom[dom.find("data-framed=\"").expect("no data-framed") + 13..];
+    let framed = &framed[..framed.find('"').unwrap()];
+    let (shown, all) = framed.split_once('/').unwrap();
+    assert_eq!(shown, all, "framed points in view: {framed}");
+    // One count of sub-trajectories: the summary's, the 3-D view's and the tables' agree.
+    let summary = section(&dom, "<p id=\"summary\">", "</p>");
+    let status_line = section(&dom, "<p id=\"view-status\"", "</p>");
+    let subs = number_after(summary, "<b>");
+    assert_eq!(
+        subs,
+        number_after(status_line, ">"),
+        "{summary} / {status_line}"
+    );
+    assert!(
+        summary.contains(" pairs)") && !summary.contains("(s)"),
+        "{summary}"
+    );
+    // Thumbnails inline, with the regions' causes; the markers with their tiers.
+    let regions = section(&dom, "<table id=\"regions\"", "</table>");
+    assert!(
+        regions.contains("<img src=\"data:image/jpeg;base64,/9j/"),
+        "{regions}"
+    );
+    let markers = section(&dom, "<table id=\"markers\"", "</table>");
+    assert!(markers.contains("<td class=\"tier\">≥ "), "{markers}");
+    assert!(dom.contains("id=\"marker-rule\""));
+    assert!(
+        !dom.contains("href=\"/") && !dom.contains("src=\"/"),
+        "server paths"
+    );
+    let console = console_lines(&out);
+    assert!(console.is_empty(), "console: {console:#?}");
+    // Nothing fetched: no request of the page's in the net log (Chromium's own background
+    // requests, refused by the script, aside), and the server is gone anyway.
+    let urls = requested_urls(&netlog(&out));
+    assert!(
+        urls.iter()
+            .all(|u| !u.contains("127.0.0.1") && !u.contains("localhost") && !u.contains("/v1/")),
+        "{urls:?}"
+    );
+    let (drawn, blue, yellow, total) = canvas_pixels(&out.join("screenshot.png"));
+    let share = drawn as f64 / total as f64;
+    assert!((0.02..0.9).contains(&share), "drawn share {share}");
+    assert!(blue > 200 && yellow > 200, "blue {blue}, yellow {yellow}");
+    println!(
+        "saved report: {} kB, {:.1} % of the canvas drawn, framed {framed}",
+        html.len() / 1000,
+        share * 100.0
+    );
+}
+
+/// While trials arrive: before the first estimate the report is an HTML page saying what it
+/// waits for and reloading itself; a partial estimate carries a banner and reloads; the
+/// final one has neither. The screenshot script ends on the reloading pages (the overview
+/// among them), with no console error.
+#[test]
+fn pages_while_trials_arrive_say_so_and_reload_until_done() {
+    if !Path::new("/usr/bin/chromium").exists() {
+        println!(
+            "SKIPPED pages while trials arrive: /usr/bin/chromium is not installed (.ci/run installs it)"
+        );
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    // One simulated phone at 3×: a 15 s trial takes 5 s, so a partial page stays partial
+    // for the screenshot's three Chromium runs.
+    let server = start(sim_config(&dir.path().join("data"), 3.0, 1));
+    let base = server.url();
+    let client = client(&server);
+    let id = client
+        .create_session(&NewSession {
+            trials: 6,
+            setting: "trim_mean_30".into(),
+            playback: "sim".into(),
+            window_frames: None,
+            pose_relation: None,
+        })
+        .unwrap();
+    let page = |id: &str| {
+        let (status, ct, body) = get_bytes(
+            &format!("{base}/v1/sessions/{id}/report"),
+            Some(ADMIN_TOKEN),
+        );
+        assert_eq!(status, 200, "{}", String::from_utf8_lossy(&body));
+        assert!(ct.starts_with("text/html"), "{ct}");
+        String::from_utf8(body).unwrap()
+    };
+    // Waiting: HTML, not a JSON 409, saying what it waits for.
+    let waiting = page(&id);
+    assert!(waiting.contains("<b>0 of 6 trials played</b>"), "{waiting}");
+    assert!(waiting.contains("<meta http-equiv=\"refresh\" content=\"5\">"));
+    let out = dir.path().join("waiting");
+    shoot(
+        &format!("{base}/v1/sessions/{id}/report?token={ADMIN_TOKEN}"),
+        &out,
+    );
+    assert!(
+        std::fs::read_to_string(out.join("dom.html"))
+            .unwrap()
+            .contains("id=\"waiting\"")
+    );
+    assert!(console_lines(&out).is_empty(), "{:#?}", console_lines(&out));
+
+    let recording = sim_recording(dir.path(), "walk.rec", 15.0, 42);
+    client
+        .upload_recording(&id, &recording, &mut |_, _| {})
+        .unwrap();
+    // A partial estimate: the banner with k of 6, and the reload.
+    let started = std::time::Instant::now();
+    let partial = loop {
+        let status = client.status(&id).unwrap();
+        assert_ne!(
+            status.state,
+            SessionState::Done,
+            "done before a partial page was seen"
+        );
+        if status.results_trials >= 2 {
+            break page(&id);
+        }
+        assert!(started.elapsed().as_secs() < 120);
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    };
+    let banner = section(&partial, "<p id=\"partial\"", "</p>");
+    let k = number_after(banner, "from <b>");
+    assert!((2..6).contains(&k), "{banner}");
+    assert!(banner.contains(&format!("{k} of 6 trials")), "{banner}");
+    assert!(partial.contains("<meta http-equiv=\"refresh\""));
+    assert_eq!(number_after(&partial, "id=\"trials\">"), k);
+    let out = dir.path().join("partial");
+    shoot(
+        &format!("{base}/v1/sessions/{id}/report?token={ADMIN_TOKEN}"),
+        &out,
+    );
+    let dom = std::fs::read_to_string(out.join("dom.html")).unwrap();
+    assert!(dom.contains("id=\"partial\""));
+    assert!(console_lines(&out).is_empty(), "{:#?}", console_lines(&out));
+
+    // Done: neither banner nor reload.
+    assert_eq!(wait_done(&client, &id).state, SessionState::Done);
+    let done = page(&id);
+    assert!(!done.contains("id=\"partial\"") && !done.contains("http-equiv=\"refresh\""));
+    assert!(
+        done.contains("6 trials</b> (15 pairs)"),
+        "{}",
+        section(&done, "<p id=\"summary\">", "</p>")
+    );
+
+    // The overview of one session reads right and the script ends on it too.
+    let out = dir.path().join("overview");
+    shoot(&format!("{base}/?token={ADMIN_TOKEN}"), &out);
+    let dom = std::fs::read_to_string(out.join("dom.html")).unwrap();
+    assert!(dom.contains("The one session;"), "{dom}");
+    assert!(console_lines(&out).is_empty(), "{:#?}", console_lines(&out));
+    server.stop();
+}
+
 /// The served bundle is `scripts/bundle-report`'s output for the committed `report.js` and
-/// vendored three.js (esbuild from `tools/npm`).
+/// three.js as `tools/npm` pins it (esbuild from there too): a rebuild from
+/// `tools/npm/node_modules` gives the committed bytes.
 #[test]
 fn the_served_bundle_is_built_from_report_js() {
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
-    if !root.join("tools/npm/node_modules/.bin/esbuild").exists() {
-        println!("SKIPPED the bundle check: run `npm ci --prefix tools/npm` (.ci/run does)");
-        return;
+    let modules = root.join("tools/npm/node_modules");
+    for needed in [".bin/esbuild", "three/package.json"] {
+        if !modules.join(needed).exists() {
+            println!(
+                "SKIPPED the bundle check: tools/npm/node_modules/{needed} is missing \
+                 (run `npm ci --prefix tools/npm`, as .ci/run does)"
+            );
+            return;
+        }
     }
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("report.bundle.js");
@@ -472,6 +744,17 @@ fn the_served_bundle_is_built_from_report_js() {
     let committed = std::fs::read(root.join("rust/server/assets/report.bundle.js")).unwrap();
     assert!(
         std::fs::read(&out).unwrap() == committed,
-        "rust/server/assets/report.bundle.js is stale: run scripts/vendor-three"
+        "rust/server/assets/report.bundle.js is stale: run scripts/bundle-report"
+    );
+    // The pinned three.js is the one bundled (three announces its revision).
+    let pinned: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(modules.join("three/package.json")).unwrap())
+            .unwrap();
+    let version = pinned["version"].as_str().unwrap();
+    let committed = String::from_utf8(committed).unwrap();
+    let revision = version.split('.').nth(1).unwrap();
+    assert!(
+        committed.contains(&format!("revision:\"{revision}\"")),
+        "the bundle is not three {version}"
     );
 }

@@ -134,7 +134,7 @@ fn check_report(html: &str, base: &str, id: &str) {
     // Counts in the user's terms: sub-trajectories and regions; the window count labelled.
     assert!(html.contains("<table id=\"regions\""));
     assert!(
-        html.contains("sub-trajectories ("),
+        html.contains("sub-trajectories</b> ("),
         "{}",
         &html[..html.len().min(800)]
     );

@@ -1,20 +1,23 @@
 //! `sitar demo`: the whole system end to end on one machine, no set-up.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result, bail};
 use sitar_client::{Client, NewSession, SessionOptions, SessionState};
-use sitar_core::{DisplayRotation, ErrorClass, SessionConfig};
+use sitar_core::{DisplayRotation, ErrorClass, Session as PhoneSession, SessionConfig};
 use sitar_server::{PlaybackKind, PresetToken, Role, Server, ServerConfig};
 use sitar_sim::Recording;
 
 /// Runs the whole system in one process: a simulated user walks a room with a blank wall and
 /// a glass pane, the phone logic (sitar-core) records the walk with depth, the recording goes
 /// to an in-process server (sim playback) through the HTTP client, the results come back and
-/// markers are placed; prints what was found and writes the report page.
+/// markers are placed; prints what was found and writes the report page (one file that opens
+/// from disk).
 #[derive(clap::Args, Debug)]
-#[command(after_help = "Example: sitar demo")]
+#[command(
+    after_help = "Examples:\n  sitar demo\n  sitar demo --serve   # then open the printed address"
+)]
 pub struct Args {
     /// Data directory of the in-process server (default: DEMO_DIR in the system temp dir).
     #[arg(long, value_name = "DIR")]
@@ -29,7 +32,7 @@ pub struct Args {
     #[arg(long, default_value_t = 8.0)]
     speed: f64,
     /// Simulated playback phones.
-    #[arg(long, default_value_t = 2)]
+    #[arg(long, default_value_t = DEMO_DEVICES)]
     devices: u32,
     /// Seed of the walk and the trials.
     #[arg(long, default_value_t = 42)]
@@ -41,6 +44,10 @@ pub struct Args {
     /// the screen; 90 is a phone held upright, 0 one held sideways.
     #[arg(long, default_value_t = 90, value_parser = parse_display_rotation)]
     display_rotation: i32,
+    /// After the demo, keep the backend running with its data and print the served
+    /// report's address (with its token) until Ctrl-C.
+    #[arg(long)]
+    serve: bool,
 }
 
 fn parse_display_rotation(text: &str) -> Result<i32, String> {
@@ -54,46 +61,31 @@ fn parse_display_rotation(text: &str) -> Result<i32, String> {
 
 const DEMO_DIR: &str = "sitar-demo";
 
-pub fn run(args: Args) -> Result<()> {
-    let started = Instant::now();
-    if args.trials < 2 {
-        bail!("--trials must be at least 2 (an estimate compares pairs of trials)");
-    }
-    let data = args
-        .data
-        .clone()
-        .unwrap_or_else(|| std::env::temp_dir().join(DEMO_DIR));
-    std::fs::create_dir_all(&data).with_context(|| format!("cannot create {}", data.display()))?;
+/// The demo's simulated playback phones (also `sitar serve --sim-devices`'s default).
+pub const DEMO_DEVICES: u32 = 2;
 
-    // 1. The backend, in-process on a free loopback port.
-    let mut config = ServerConfig::new(&data);
+/// The in-process backend: sim playback on `data`, the demo's own admin token.
+fn server_config(args: &Args, data: &Path, token: &str) -> ServerConfig {
+    let mut config = ServerConfig::new(data);
     config.playback = PlaybackKind::Sim;
     config.sim.speed = args.speed;
     config.sim.devices = args.devices;
     // The demo's own server plays what it is asked for.
     config.max_trials = config.max_trials.max(args.trials);
-    // The demo's own token, fresh each run (a new hash under the same name).
-    let token = sitar_server::new_token()?;
     config.preset_tokens = vec![PresetToken {
         name: "demo".into(),
         role: Role::Admin,
-        token: token.clone(),
+        token: token.to_owned(),
     }];
-    let server = Server::spawn(config, "127.0.0.1:0".parse()?)
-        .context("cannot start the in-process server")?;
-    println!(
-        "server      {} (sim playback, {} phones at {}×, data {})",
-        server.url(),
-        args.devices,
-        args.speed,
-        data.display()
-    );
+    config
+}
 
-    // 2. The user walks the room; the phone logic records poses and depth like on a phone.
+/// Step 1: the user walks the room; the phone logic records poses and depth like on a phone.
+fn walk(args: &Args) -> Result<(Recording, PhoneSession)> {
     let recording =
         Recording::demo(args.seconds, 30.0, args.seed).context("cannot simulate the walk")?;
     let display = DisplayRotation::from_degrees(args.display_rotation)?;
-    let mut session = recording.phone_session(
+    let session = recording.phone_session(
         SessionConfig::from_json(r#"{"convention":"arcore"}"#)?,
         display,
     )?;
@@ -109,12 +101,21 @@ pub fn run(args: Args) -> Result<()> {
         summary.depth_samples,
         summary.mean_depth_m
     );
+    Ok((recording, session))
+}
 
-    // 3. Upload through the client, as the phone's native library does.
+/// Step 2: the recording and the camera evidence go up through the client, as the phone's
+/// native library sends them. The session's id.
+fn upload(
+    client: &Client,
+    args: &Args,
+    data: &Path,
+    recording: &Recording,
+    session: &PhoneSession,
+) -> Result<String> {
     let rec_path = data.join("demo-recording.sitarsim");
     std::fs::write(&rec_path, recording.to_bytes())
         .with_context(|| format!("cannot write {}", rec_path.display()))?;
-    let client = Client::new(&server.url())?.with_server_token(&token)?;
     let request = NewSession {
         trials: args.trials,
         setting: sitar_core::DEFAULT_SETTING.into(),
@@ -129,13 +130,12 @@ pub fn run(args: Args) -> Result<()> {
     let id = client.create_session_with(&request, &options)?;
     let mut uploaded = 0;
     client.upload_recording(&id, &rec_path, &mut |sent, _| uploaded = sent)?;
-    let upload_done = Instant::now();
     println!(
         "session     {id}: {uploaded} bytes uploaded, {} trials playing",
         args.trials
     );
-    // The camera evidence (thumbnails, image properties, likely causes) goes along, as the
-    // native library sends it from the session folder: the report's regions show it.
+    // The camera evidence (thumbnails, image properties, likely causes): the report's
+    // regions show it.
     let phone_dir = data.join("demo-phone-session");
     session
         .save(&phone_dir)
@@ -143,8 +143,13 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(thumbnails) = client.upload_evidence(&id, &phone_dir)? {
         println!("evidence    {thumbnails} camera thumbnails and their image properties sent");
     }
+    Ok(id)
+}
 
-    // 4. Progress while the phones play; progressive results as they come.
+/// Step 3: progress while the phones play, progressive results as they come; fails unless
+/// the session ends done.
+fn wait(client: &Client, id: &str) -> Result<()> {
+    let started = Instant::now();
     let bar = indicatif::ProgressBar::new(1000);
     bar.set_style(
         indicatif::ProgressStyle::with_template("playback    [{bar:30}] {msg}")
@@ -153,7 +158,7 @@ pub fn run(args: Args) -> Result<()> {
     let mut last_results = 0;
     let mut first_results_s = None;
     let status = client.wait(
-        &id,
+        id,
         Duration::from_millis(100),
         Duration::from_secs(600),
         &mut |s| {
@@ -168,7 +173,7 @@ pub fn run(args: Args) -> Result<()> {
             ));
             if s.results_trials > last_results {
                 last_results = s.results_trials;
-                let t = upload_done.elapsed().as_secs_f64();
+                let t = started.elapsed().as_secs_f64();
                 first_results_s.get_or_insert(t);
                 let line = format!(
                     "results     after {t:.1} s: estimate from {} trials",
@@ -190,7 +195,7 @@ pub fn run(args: Args) -> Result<()> {
             status.error.unwrap_or_default()
         );
     }
-    let total_s = upload_done.elapsed().as_secs_f64();
+    let total_s = started.elapsed().as_secs_f64();
     println!(
         "done        {} trials in {total_s:.1} s (first results after {:.1} s){}",
         status.trials_done,
@@ -200,14 +205,23 @@ pub fn run(args: Args) -> Result<()> {
             .map(|r| format!("; {r}"))
             .unwrap_or_default()
     );
+    Ok(())
+}
 
-    // 5. Results back on the phone: colours and markers.
-    let csv = client.results_csv(&id)?;
+/// Step 4: results back on the phone: markers placed, and checked against the room's truly
+/// hard surfaces.
+fn markers(
+    client: &Client,
+    id: &str,
+    recording: &Recording,
+    session: &mut PhoneSession,
+) -> Result<()> {
+    let csv = client.results_csv(id)?;
     session.load_results(&csv)?;
     let markers = session.markers()?;
     println!(
-        "regions     {} marker(s){}",
-        markers.len(),
+        "regions     {}{}",
+        plural(markers.len(), "marker"),
         if session.results_unreliable() {
             " (results flagged unreliable)"
         } else {
@@ -270,15 +284,76 @@ pub fn run(args: Args) -> Result<()> {
             format!(" (missed: {})", missed.join(", "))
         }
     );
-
-    // 6. The report page.
-    let report = data.join(format!("report-{id}.html"));
-    std::fs::write(&report, client.report_html(&id)?)
-        .with_context(|| format!("cannot write {}", report.display()))?;
-    println!("report      {}", report.display());
-    println!("total       {:.1} s", started.elapsed().as_secs_f64());
-    server.stop();
     Ok(())
+}
+
+/// `1 marker`, `3 markers`.
+fn plural(n: usize, one: &str) -> String {
+    format!("{n} {one}{}", if n == 1 { "" } else { "s" })
+}
+
+/// Step 5: the report as one file that opens from disk (`GET …/report?download=1`: script,
+/// style, scene data and thumbnails inline), written into `data`.
+fn write_report(server_url: &str, token: &str, id: &str, data: &Path) -> Result<PathBuf> {
+    let url = format!("{server_url}/v1/sessions/{id}/report?download=1");
+    let html = ureq::get(&url)
+        .header("authorization", &format!("Bearer {token}"))
+        .call()
+        .and_then(|mut r| r.body_mut().with_config().limit(256 << 20).read_to_string())
+        .with_context(|| format!("cannot fetch the report of {id}"))?;
+    let report = data.join(format!("report-{id}.html"));
+    std::fs::write(&report, html).with_context(|| format!("cannot write {}", report.display()))?;
+    Ok(report)
+}
+
+pub fn run(args: Args) -> Result<()> {
+    let started = Instant::now();
+    if args.trials < 2 {
+        bail!("--trials must be at least 2 (an estimate compares pairs of trials)");
+    }
+    let data = args
+        .data
+        .clone()
+        .unwrap_or_else(|| std::env::temp_dir().join(DEMO_DIR));
+    std::fs::create_dir_all(&data).with_context(|| format!("cannot create {}", data.display()))?;
+    // The demo's own token, fresh each run (a new hash under the same name).
+    let token = sitar_server::new_token()?;
+    // The backend, in-process on a free loopback port.
+    let server = Server::spawn(server_config(&args, &data, &token), "127.0.0.1:0".parse()?)
+        .context("cannot start the in-process server")?;
+    println!(
+        "server      {} (sim playback, {} phones at {}×, data {})",
+        server.url(),
+        args.devices,
+        args.speed,
+        data.display()
+    );
+    let (recording, mut session) = walk(&args)?;
+    let client = Client::new(&server.url())?.with_server_token(&token)?;
+    let id = upload(&client, &args, &data, &recording, &session)?;
+    wait(&client, &id)?;
+    markers(&client, &id, &recording, &mut session)?;
+    let report = write_report(&server.url(), &token, &id, &data)?;
+    println!("report      {} (opens from disk)", report.display());
+    println!("total       {:.1} s", started.elapsed().as_secs_f64());
+    let url = server.url();
+    server.stop();
+    if args.serve {
+        serve(&args, &data, &token, &url, &id)?;
+    }
+    Ok(())
+}
+
+/// `--serve`: the backend again on the same address, until Ctrl-C, with the served report's
+/// URL (its token included: the page keeps it in a cookie).
+fn serve(args: &Args, data: &Path, token: &str, url: &str, id: &str) -> Result<()> {
+    let addr: std::net::SocketAddr = url
+        .trim_start_matches("http://")
+        .parse()
+        .with_context(|| format!("the demo's server address {url}"))?;
+    println!("served      {url}/v1/sessions/{id}/report?token={token}");
+    println!("            (the backend keeps running with the demo's data: Ctrl-C stops it)");
+    Server::run(server_config(args, data, token), addr).context("the demo's server stopped")
 }
 
 #[cfg(test)]
@@ -297,19 +372,28 @@ mod tests {
             seed: 7,
             adaptive: None,
             display_rotation: 90,
+            serve: false,
         };
         run(args).unwrap();
         let names: Vec<String> = std::fs::read_dir(dir.path())
             .unwrap()
             .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
             .collect();
-        assert!(
-            names
-                .iter()
-                .any(|n| n.starts_with("report-s") && n.ends_with(".html")),
-            "{names:?}"
-        );
+        let report = names
+            .iter()
+            .find(|n| n.starts_with("report-s") && n.ends_with(".html"))
+            .unwrap_or_else(|| panic!("{names:?}"));
         assert!(names.iter().any(|n| n == "sitar.db"));
+        // The page stands alone: its script, style and scene inline, nothing to fetch.
+        let html = std::fs::read_to_string(dir.path().join(report)).unwrap();
+        assert!(html.contains("<script type=\"module\">"));
+        assert!(html.contains("<script type=\"application/json\" id=\"scene-data\">"));
+        assert!(html.contains("<style>"));
+        assert!(!html.contains("src=\"/"), "a server path in the saved page");
+        assert!(
+            !html.contains("href=\"/"),
+            "a server link in the saved page"
+        );
     }
 
     #[test]

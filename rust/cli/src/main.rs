@@ -35,7 +35,7 @@ mod traj;
 
 use std::process::ExitCode;
 
-use clap::{Parser, Subcommand};
+use clap::{FromArgMatches, Parser, Subcommand};
 
 /// SiTAR: situated trajectory analysis for AR — pose error without ground truth.
 ///
@@ -65,27 +65,76 @@ enum Command {
     Scene(scene::Args),
 }
 
+/// The commands of `sitar --help`, by what a person comes for (a test checks that every
+/// command is in exactly one group).
+const GROUPS: &[(&str, &[&str])] = &[
+    ("Getting started", &["demo", "simulate"]),
+    ("Backend (the server phones talk to)", &["serve", "token"]),
+    (
+        "evo-compatible (evo's command lines)",
+        &["ape", "rpe", "traj", "res"],
+    ),
+    ("SiTAR analysis", &["estimate", "evaluate", "scene"]),
+    ("Tools", &["completions", "man", "help"]),
+];
+
+/// The first sentence of a command's about (up to a colon or a full stop).
+fn short_about(about: &str) -> &str {
+    let end = about
+        .find(": ")
+        .into_iter()
+        .chain(about.find(". "))
+        .min()
+        .unwrap_or(about.len());
+    about[..end].trim_end_matches('.')
+}
+
+/// The command line, its top-level help listing the commands in [`GROUPS`].
+fn cli() -> clap::Command {
+    let command = <Cli as clap::CommandFactory>::command();
+    let width = GROUPS
+        .iter()
+        .flat_map(|(_, names)| names.iter().map(|n| n.len()))
+        .max()
+        .unwrap_or(0);
+    let mut list = String::new();
+    for (title, names) in GROUPS {
+        list.push_str(&format!("{title}:\n"));
+        for name in *names {
+            let about = command
+                .find_subcommand(name)
+                .and_then(|c| c.get_about())
+                .map(|a| a.to_string())
+                .unwrap_or_else(|| "Prints this message or the help of the given command".into());
+            list.push_str(&format!("  {name:width$}  {}\n", short_about(&about)));
+        }
+        list.push('\n');
+    }
+    // Braces are the template's own syntax; the abouts have none (checked by a test).
+    command.help_template(format!(
+        "{{before-help}}{{about-with-newline}}\n{{usage-heading}} {{usage}}\n\n{list}\
+         Options:\n{{options}}{{after-help}}"
+    ))
+}
+
 fn main() -> ExitCode {
     canvas::register_font();
-    let argv = match config::expand(
-        std::env::args_os().collect(),
-        &<Cli as clap::CommandFactory>::command(),
-    ) {
+    let argv = match config::expand(std::env::args_os().collect(), &cli()) {
         Ok(argv) => argv,
         Err(error) => {
             eprintln!("sitar: error: {}", one_line(&error));
             return ExitCode::FAILURE;
         }
     };
-    let result = match Cli::parse_from(argv).command {
+    let matches = cli().get_matches_from(argv);
+    let parsed = Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit());
+    let result = match parsed.command {
         Command::Rpe(args) => rpe::run(args),
         Command::Ape(args) => ape::run(args),
         Command::Traj(args) => traj::run(args),
         Command::Res(args) => res::run(args),
-        Command::Completions(args) => {
-            shell::completions(args, &mut <Cli as clap::CommandFactory>::command())
-        }
-        Command::Man(args) => shell::man(args, <Cli as clap::CommandFactory>::command()),
+        Command::Completions(args) => shell::completions(args, &mut cli()),
+        Command::Man(args) => shell::man(args, cli()),
         Command::Estimate(args) => estimate::run(args),
         Command::Evaluate(args) => evaluate::run(args),
         Command::Simulate(args) => simulate::run(args),
@@ -120,4 +169,36 @@ fn one_line(error: &anyhow::Error) -> String {
         line.push_str(&text);
     }
     line.replace('\n', " ")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_help_lists_every_command_once_in_its_group() {
+        let mut command = cli();
+        command.build();
+        let mut names: Vec<&str> = command.get_subcommands().map(|c| c.get_name()).collect();
+        names.sort_unstable();
+        let mut grouped: Vec<&str> = GROUPS.iter().flat_map(|(_, n)| n.iter().copied()).collect();
+        grouped.sort_unstable();
+        assert_eq!(grouped, names);
+        let help = command.render_help().to_string();
+        let at = |text: &str| help.find(text).unwrap_or_else(|| panic!("{text}: {help}"));
+        assert!(at("Getting started:") < at("  demo "));
+        assert!(at("  demo ") < at("Backend"));
+        assert!(at("Backend") < at("  serve ") && at("  serve ") < at("evo-compatible"));
+        assert!(at("  ape ") < at("SiTAR analysis:") && at("  estimate ") < at("Tools:"));
+        assert!(
+            help.contains("  serve        Runs the SiTAR backend\n"),
+            "{help}"
+        );
+        assert!(at("Options:") > at("  man "));
+        assert!(!help.contains("Commands:"), "{help}");
+        for sub in command.get_subcommands() {
+            let about = sub.get_about().map(|a| a.to_string()).unwrap_or_default();
+            assert!(!about.contains('{') && !about.contains('}'), "{about}");
+        }
+    }
 }

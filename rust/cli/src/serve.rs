@@ -11,7 +11,7 @@ use sitar_server::{AdbConfig, Limits, PlaybackKind, Server, ServerConfig, TlsCon
 /// Runs the SiTAR backend: HTTP API (versioned and the original app's legacy routes),
 /// SQLite storage in DIR, playback on phones over adb (or the simulator), estimation.
 #[derive(clap::Args, Debug)]
-#[command(after_help = "Example: sitar serve --playback sim --data sitar-data")]
+#[command(after_help = LAN_HELP)]
 pub struct Args {
     /// Address to listen on.
     #[arg(long, default_value = "127.0.0.1:8000")]
@@ -19,7 +19,10 @@ pub struct Args {
     /// Data directory (SQLite database and files; created if missing).
     #[arg(long, value_name = "DIR", default_value = "sitar-data")]
     data: PathBuf,
-    /// Playback backend for the legacy `POST /recording` route and `GET /v1/devices`.
+    /// How trials are played for sessions that do not name a playback (`POST /v1/sessions`
+    /// without `playback`), for the legacy `POST /recording` route and `GET /v1/devices`:
+    /// adb drives phones over USB, sim plays on simulated phones. Sessions may always ask
+    /// for `upload` (the app sends its own trials).
     #[arg(long, value_enum, default_value_t = Playback::Adb)]
     playback: Playback,
     /// The adb executable.
@@ -41,10 +44,11 @@ pub struct Args {
     /// Sim playback speed (1 = real time).
     #[arg(long, default_value_t = 1.0)]
     sim_speed: f64,
-    /// Simulated playback phones.
-    #[arg(long, default_value_t = 1)]
+    /// Simulated playback phones (as many as `sitar demo` uses).
+    #[arg(long, default_value_t = crate::demo::DEMO_DEVICES)]
     sim_devices: u32,
-    /// Trials for sessions created by the legacy route.
+    /// Trials of a session that does not ask for a number (`POST /v1/sessions` without
+    /// `trials`, the legacy route).
     #[arg(long, default_value_t = 5)]
     trials: u32,
     /// Largest recording accepted, in MiB.
@@ -130,6 +134,22 @@ pub struct Args {
     #[arg(long = "tls-name", value_name = "NAME", requires = "tls")]
     tls_names: Vec<String>,
 }
+
+/// The end of `sitar serve --help`: how phones on a LAN reach the backend.
+const LAN_HELP: &str = "\
+For phones on a LAN:
+  The default --addr 127.0.0.1:8000 is reachable from this machine only. Listen on every
+  interface with --addr 0.0.0.0:8000, let the port through the firewall (e.g.
+  `sudo ufw allow 8000/tcp`) and give the app http://LAN-ADDRESS:8000 (`ip -4 addr`
+  shows this machine's LAN address; the phone must be on the same network). Give each
+  app its own token (`sitar token create --data DIR --role app --name PHONE`, revoked with
+  `sitar token revoke`). With --tls the app uses https://: a self-signed certificate is
+  made for this machine's LAN address and name, and its SHA-256 fingerprint is printed for
+  the app to pin.
+
+Examples:
+  sitar serve --playback sim --data sitar-data
+  sitar serve --addr 0.0.0.0:8000 --tls --data sitar-data";
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
 enum Playback {

@@ -850,9 +850,14 @@ fn the_demo_sends_the_camera_evidence_and_its_report_shows_it() {
         .lines()
         .find_map(|l| l.strip_prefix("report      "))
         .unwrap_or_else(|| panic!("no report line in:\n{out}"));
-    let html = std::fs::read_to_string(report.trim()).unwrap();
+    let path = report
+        .trim()
+        .strip_suffix(" (opens from disk)")
+        .unwrap_or_else(|| panic!("{report}"));
+    let html = std::fs::read_to_string(path).unwrap();
+    // The saved page carries its thumbnails inline (it opens with no server).
     assert!(
-        html.contains("image.jpg"),
+        html.contains("<img src=\"data:image"),
         "no region thumbnail in the report"
     );
     assert!(

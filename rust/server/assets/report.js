@@ -1,7 +1,8 @@
 // The report's 3-D view: the walk in the room, from scene.json (glTF's frame: right-handed,
-// +Y up, metres). three.js is served by this backend (/assets/three/), so it works offline.
-import * as THREE from "./three/three.module.js";
-import { OrbitControls } from "./three/OrbitControls.js";
+// +Y up, metres). three.js comes from tools/npm (the pinned version); scripts/bundle-report
+// bundles the parts used into report.bundle.js, served by this backend, so it works offline.
+import * as THREE from "three";
+import { OrbitControls } from "three/addons/controls/OrbitControls.js";
 
 const CLASS_COLOURS = { low: 0x2f6fde, medium: 0xe0b100, high: 0xd62728, unknown: 0x9a9a9a };
 const VIRIDIS = [[68, 1, 84], [59, 82, 139], [33, 145, 140], [94, 201, 98], [253, 231, 37]];
@@ -70,7 +71,14 @@ async function main() {
   performance.mark("modules-ready");
   const canvas = $("view3d");
   let data;
-  try {
+  // A saved report (`?download=1`, the demo's page) carries its scene inline: no server.
+  const inline = document.getElementById("scene-data");
+  if (inline) {
+    data = JSON.parse(inline.textContent);
+    performance.mark("scene-fetched");
+    performance.mark("scene-parsed");
+  }
+  if (!data) try {
     // The owner's page and a share link's fetch the scene from different places.
     const response = await fetch(document.body.dataset.scene);
     performance.mark("scene-fetched");
@@ -101,15 +109,18 @@ async function main() {
     status("No trajectory yet.");
     return;
   }
-  // The camera frames the walk; the grid also covers what it faced (surface points, markers).
+  // The camera frames the walk and what it faced (surface points, markers); sizes of the
+  // drawn things follow the walk's own extent.
   const box = new THREE.Box3().setFromPoints(joints);
   const framed = joints.slice();
   for (let i = 0; i + 2 < data.surface.length; i += 3) framed.push(new THREE.Vector3(data.surface[i], data.surface[i + 1], data.surface[i + 2]));
   for (const m of data.markers) framed.push(new THREE.Vector3(...m.p));
   const room = new THREE.Box3().setFromPoints(framed);
-  const centre = box.getCenter(new THREE.Vector3());
   const size = box.getSize(new THREE.Vector3());
   const span = Math.max(size.x, size.z, 1);
+  // A marker sign reaches past its point: the frame keeps most of it.
+  room.expandByScalar(0.25 * Math.max(1.5, span / 4));
+  const sphere = room.getBoundingSphere(new THREE.Sphere());
 
   // Grid (1 m cells) on the floor under the walk, and axes at the origin.
   const floorY = box.min.y - 1.2;
@@ -181,10 +192,32 @@ async function main() {
   const frustums = new THREE.LineSegments(new THREE.BufferGeometry().setFromPoints(fr), new THREE.LineBasicMaterial({ color: 0x555555 }));
   scene.add(frustums);
 
-  // Surface points the depth samples hit.
+  // Surface points the depth samples hit, each with a 30 cm patch of the surface it lies
+  // on (square, across its normal): the faced walls, floor and objects, seen in 3-D.
+  const surface = new THREE.Group();
   const surfaceGeometry = new THREE.BufferGeometry();
   surfaceGeometry.setAttribute("position", new THREE.Float32BufferAttribute(data.surface, 3));
-  const surface = new THREE.Points(surfaceGeometry, new THREE.PointsMaterial({ color: 0x8c564b, size: 0.05, sizeAttenuation: true }));
+  surface.add(new THREE.Points(surfaceGeometry, new THREE.PointsMaterial({ color: 0x8c564b, size: 0.05, sizeAttenuation: true })));
+  const normals = data.surface_normals || [];
+  const patches = [];
+  const half = 0.15, nrm = new THREE.Vector3(), a = new THREE.Vector3(), b = new THREE.Vector3();
+  for (let i = 0; i + 2 < normals.length && i + 2 < data.surface.length; i += 3) {
+    nrm.set(normals[i], normals[i + 1], normals[i + 2]);
+    if (nrm.lengthSq() < 1e-6) continue;
+    nrm.normalize();
+    a.set(0, 1, 0);
+    if (Math.abs(nrm.y) > 0.9) a.set(1, 0, 0);
+    a.cross(nrm).normalize().multiplyScalar(half);
+    b.crossVectors(nrm, a).normalize().multiplyScalar(half);
+    const p = new THREE.Vector3(data.surface[i], data.surface[i + 1], data.surface[i + 2]);
+    const c = [p.clone().add(a).add(b), p.clone().add(a).sub(b), p.clone().sub(a).sub(b), p.clone().sub(a).add(b)];
+    patches.push(c[0], c[1], c[2], c[0], c[2], c[3]);
+  }
+  if (patches.length) {
+    const patchGeometry = new THREE.BufferGeometry().setFromPoints(patches);
+    surface.add(new THREE.Mesh(patchGeometry, new THREE.MeshBasicMaterial({
+      color: 0xb08d7a, transparent: true, opacity: 0.35, side: THREE.DoubleSide, depthWrite: false })));
+  }
   scene.add(surface);
 
   // Markers: a warning sign on the surface (local +Y = normal) and an upright exclamation point.
@@ -224,17 +257,38 @@ async function main() {
 
   // Camera and controls.
   const camera = new THREE.PerspectiveCamera(50, canvas.clientWidth / canvas.clientHeight || 16 / 9, 0.01, 500);
+  camera.updateProjectionMatrix();
   const controls = new OrbitControls(camera, canvas);
-  function home() {
-    camera.up.set(0, 1, 0);
-    camera.position.set(centre.x + span * 0.9, centre.y + span * 0.9, centre.z + span * 1.1);
-    controls.target.copy(centre);
+  // The nearest distance along `dir` (from the camera to the centre) at which all eight
+  // corners of the box round the walk, the markers and the surface points are in view.
+  function distance(dir) {
+    const tanV = Math.tan(THREE.MathUtils.degToRad(camera.fov) / 2);
+    const tanH = tanV * camera.aspect;
+    const right = new THREE.Vector3().crossVectors(camera.up, dir);
+    if (right.lengthSq() < 1e-9) right.set(1, 0, 0);
+    right.normalize();
+    const up = new THREE.Vector3().crossVectors(dir, right).normalize();
+    let d = 0.5;
+    const c = new THREE.Vector3();
+    for (let i = 0; i < 8; i++) {
+      c.set(i & 1 ? room.max.x : room.min.x, i & 2 ? room.max.y : room.min.y, i & 4 ? room.max.z : room.min.z).sub(sphere.center);
+      const depth = c.dot(dir);
+      d = Math.max(d, depth + Math.abs(c.dot(right)) / tanH, depth + Math.abs(c.dot(up)) / tanV);
+    }
+    return d * 1.04;
+  }
+  function look(dir) {
+    camera.position.copy(sphere.center).addScaledVector(dir, distance(dir));
+    controls.target.copy(sphere.center);
     controls.update();
   }
+  function home() {
+    camera.up.set(0, 1, 0);
+    look(new THREE.Vector3(0.55, 0.6, 0.75).normalize());
+  }
   function top() {
-    camera.position.set(centre.x, centre.y + span * 1.6, centre.z + 1e-3);
-    controls.target.copy(centre);
-    controls.update();
+    camera.up.set(0, 1, 0);
+    look(new THREE.Vector3(0, 1, 1e-3).normalize());
   }
   home();
 
@@ -277,7 +331,8 @@ async function main() {
     if (!hit) return;
     const m = hit.object.userData.marker;
     if (m) {
-      $("picked").textContent = `Marker M${m.number}: sub-trajectory ${m.sub}, ${m.class}, error ${m.error.toFixed(1)} ${data.unit}`;
+      $("picked").textContent = `Marker M${m.number}: sub-trajectory ${m.sub}, ${m.class}, error ${m.error.toFixed(1)} ${data.unit}` +
+        (m.tier === undefined || m.tier === null ? "" : `, placed at the ≥ ${m.tier} ${data.unit} tier`);
     } else {
       const ring = Math.floor(hit.faceIndex / (2 * radial));
       const k = subOf[ringJoint[Math.min(ring, ringJoint.length - 1)]];
@@ -288,6 +343,14 @@ async function main() {
         : `Sub-trajectory ${k}`;
     }
   });
+  // How many of the framed points (path, markers, surface points) the default view shows
+  // (tests read it: all of them).
+  camera.updateMatrixWorld();
+  const inView = framed.filter((p) => {
+    const q = p.clone().project(camera);
+    return Math.abs(q.x) <= 1 && Math.abs(q.y) <= 1 && q.z < 1;
+  }).length;
+  document.body.dataset.framed = `${inView}/${framed.length}`;
   performance.mark("scene-built");
   render();
   performance.mark("first-frame");

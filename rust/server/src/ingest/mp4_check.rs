@@ -20,14 +20,47 @@ use crate::config::PlaybackKind;
 /// file of millions of tiny boxes costs no more than this many reads.
 const MAX_BOXES: usize = 4096;
 
-/// The upload hook: a recording for a session played over adb must be an MP4
-/// (`sim` sessions take `sitar-sim` recordings, `upload` sessions are not played).
+/// The upload hook: a recording for a session played over adb must be an MP4, one for a
+/// `sim` session a `sitar-sim` recording (`upload` sessions are not played).
 pub(crate) fn check_recording(playback: PlaybackKind, path: &Path) -> Result<(), Error> {
-    if playback == PlaybackKind::Adb {
-        check_mp4_file(path)
-    } else {
-        Ok(())
+    match playback {
+        PlaybackKind::Adb => check_mp4_file(path),
+        PlaybackKind::Sim => check_sim_header(path),
+        PlaybackKind::Upload => Ok(()),
     }
+}
+
+/// A `sim` session's recording must start with the `sitar-sim` header (magic and a format
+/// version this build reads): a 422 naming what is wrong at upload, not a session that
+/// fails later. Only the 12 header bytes are read; the body is checked when it is played.
+fn check_sim_header(path: &std::path::Path) -> Result<(), Error> {
+    use std::io::Read;
+    let mut head = Vec::with_capacity(12);
+    std::fs::File::open(path)
+        .and_then(|f| f.take(12).read_to_end(&mut head))
+        .map_err(|e| Error::io("cannot read", path, e))?;
+    let magic = sitar_sim::RECORDING_MAGIC;
+    if head.len() < 12 || head[..8] != magic[..] {
+        let start: String = head
+            .iter()
+            .take(8)
+            .map(|&b| if b.is_ascii_graphic() { b as char } else { '.' })
+            .collect();
+        return Err(Error::InvalidContent(format!(
+            "the recording is not a sitar-sim recording (as `sitar simulate` writes): it starts \
+             with {start:?}, not the {:?} header",
+            String::from_utf8_lossy(magic)
+        )));
+    }
+    let version = u32::from_le_bytes([head[8], head[9], head[10], head[11]]);
+    if version != sitar_sim::RECORDING_VERSION {
+        return Err(Error::InvalidContent(format!(
+            "the recording is a sitar-sim recording of format version {version}; this server \
+             reads version {}",
+            sitar_sim::RECORDING_VERSION
+        )));
+    }
+    Ok(())
 }
 
 /// Checks that the file at `path` is an MP4: an [`Error::InvalidContent`] (422)
@@ -291,7 +324,10 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("recording");
         std::fs::write(&path, b"SITARSIM recording, not an mp4").unwrap();
-        assert!(check_recording(PlaybackKind::Sim, &path).is_ok());
+        assert!(
+            check_recording(PlaybackKind::Sim, &path).is_err(),
+            "not a sim header"
+        );
         assert!(check_recording(PlaybackKind::Upload, &path).is_ok());
         assert!(matches!(
             check_recording(PlaybackKind::Adb, &path),
@@ -316,5 +352,34 @@ mod tests {
             check_mp4_file(&dir.path().join("missing")),
             Err(Error::Io { .. })
         ));
+    }
+
+    #[test]
+    fn a_sim_recording_is_checked_by_its_header() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("rec");
+        let check = |bytes: &[u8]| {
+            std::fs::write(&path, bytes).unwrap();
+            check_sim_header(&path)
+        };
+        let mut good = sitar_sim::RECORDING_MAGIC.to_vec();
+        good.extend_from_slice(&sitar_sim::RECORDING_VERSION.to_le_bytes());
+        good.extend_from_slice(b"{}");
+        assert!(check(&good).is_ok());
+        let Err(Error::InvalidContent(garbage)) = check(b"definitely not a recording") else {
+            panic!("garbage accepted");
+        };
+        assert_eq!(
+            garbage,
+            "the recording is not a sitar-sim recording (as `sitar simulate` writes): it starts \
+             with \"definite\", not the \"SITARSIM\" header"
+        );
+        assert!(matches!(check(b"SITARSIM"), Err(Error::InvalidContent(_))));
+        let mut future = good.clone();
+        future[8] = 99;
+        let Err(Error::InvalidContent(version)) = check(&future) else {
+            panic!("version 99 accepted");
+        };
+        assert!(version.contains("format version 99"), "{version}");
     }
 }

@@ -126,6 +126,14 @@ fn grouped(subs: &[(f64, f64, Option<f64>)]) -> Vec<(f64, f64, Option<f64>)> {
         .collect()
 }
 
+/// Rows of marker labels at the top of the error chart.
+const LABEL_ROWS: usize = 3;
+
+/// The width of `text` at font size 11 in px, generously (digits and capitals ≈ 7 px).
+fn label_width(text: &str) -> f64 {
+    7.0 * text.chars().count() as f64
+}
+
 /// Error over time: class bands, one step per sub-trajectory (gaps where no window matched;
 /// grouped past `MAX_CHART_STEPS`), dashed lines at the markers' times. `scale` turns the
 /// unit into the shown one (m → cm).
@@ -182,16 +190,28 @@ pub(crate) fn error_over_time(
         svg,
         r##"<path id="error-line" d="{path}" fill="none" stroke="#222" stroke-width="1.2"/>"##
     );
+    // Labels that would touch go one row down (up to `LABEL_ROWS`); past that, the line
+    // keeps its label as a tooltip only.
+    let mut row_ends = [f64::MIN; LABEL_ROWS];
     for &(number, t) in markers {
         let x = frame.x(t);
+        let label = format!("M{number}");
+        let width = label_width(&label);
         let _ = write!(
             svg,
-            r##"<line class="marker-time" x1="{x:.1}" y1="{t:.1}" x2="{x:.1}" y2="{b:.1}" stroke="#7b2cbf" stroke-dasharray="4 3"/><text x="{tx:.1}" y="{ty:.1}" font-size="11" fill="#7b2cbf">M{number}</text>"##,
+            r##"<line class="marker-time" x1="{x:.1}" y1="{t:.1}" x2="{x:.1}" y2="{b:.1}" stroke="#7b2cbf" stroke-dasharray="4 3"><title>{label}</title></line>"##,
             t = TOP,
             b = h - BOTTOM,
-            tx = x + 3.0,
-            ty = TOP + 12.0,
         );
+        let tx = x + 3.0;
+        if let Some(row) = row_ends.iter().position(|&end| tx >= end + 2.0) {
+            row_ends[row] = tx + width;
+            let _ = write!(
+                svg,
+                r##"<text class="marker-label" x="{tx:.1}" y="{ty:.1}" font-size="11" fill="#7b2cbf">{label}</text>"##,
+                ty = TOP + 12.0 + 12.0 * row as f64,
+            );
+        }
     }
     svg.push_str("</svg>");
     svg
@@ -309,6 +329,47 @@ pub(crate) fn history(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Marker labels at nearby times never overlap: each text's box ends before the next
+    /// one on its row starts.
+    #[test]
+    fn marker_labels_never_overlap() {
+        let t = Thresholds {
+            medium: 0.05,
+            high: 0.1,
+        };
+        let subs: Vec<(f64, f64, Option<f64>)> = (0..100)
+            .map(|i| (f64::from(i) * 0.3, f64::from(i + 1) * 0.3, Some(0.06)))
+            .collect();
+        // M2 and M3 at the same moment, M4 just after, then ten more close together.
+        let mut markers = vec![(1, 2.0), (2, 9.0), (3, 9.0), (4, 9.1)];
+        markers.extend((5..15).map(|n| (n, 20.0 + 0.05 * n as f64)));
+        let svg = error_over_time(&subs, t, &markers, 100.0, "error (cm)");
+        let mut boxes: Vec<(f64, f64, f64)> = Vec::new();
+        for text in svg.split(r#"<text class="marker-label" "#).skip(1) {
+            let number = |key: &str| -> f64 {
+                let at = text.find(&format!("{key}=\"")).unwrap() + key.len() + 2;
+                text[at..text[at..].find('"').unwrap() + at]
+                    .parse()
+                    .unwrap()
+            };
+            let label = &text[text.find('>').unwrap() + 1..text.find("</text>").unwrap()];
+            boxes.push((number("x"), number("x") + label_width(label), number("y")));
+        }
+        assert!(boxes.len() >= 4 && boxes.len() < markers.len(), "{boxes:?}");
+        for (i, a) in boxes.iter().enumerate() {
+            for b in &boxes[i + 1..] {
+                let same_row = (a.2 - b.2).abs() < 1.0;
+                assert!(
+                    !same_row || a.1 <= b.0 || b.1 <= a.0,
+                    "{a:?} overlaps {b:?}"
+                );
+            }
+        }
+        // Every marker keeps its line and its name as a tooltip.
+        assert_eq!(svg.matches(r#"class="marker-time""#).count(), markers.len());
+        assert!(svg.contains("<title>M14</title>"));
+    }
 
     #[test]
     fn ticks_are_round() {

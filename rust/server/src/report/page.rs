@@ -10,6 +10,8 @@
 
 use std::fmt::Write;
 
+use base64::Engine as _;
+use base64::engine::general_purpose::STANDARD as BASE64;
 use serde::Deserialize;
 use serde_json::json;
 use sitar_core::{Convention, ErrorClass, Session as Phone, Thresholds};
@@ -127,6 +129,7 @@ fn top_view(phone: &Phone, subs: &[SubRow]) -> String {
         );
         g += 1.0;
     }
+    axis_labels(&mut svg, lo, span, margin);
     // A long walk is thinned for display (the SVG stays small); a segment takes the class
     // of the joint it starts at.
     let kept = crate::report::thinning::thin(pts.len(), MAX_TOP_VIEW_POINTS);
@@ -180,6 +183,58 @@ fn top_view(phone: &Phone, subs: &[SubRow]) -> String {
     svg
 }
 
+/// The top view's reading aids: each 1 m grid line's coordinate on the edges, the axes'
+/// names and directions, and a scale bar (1 m, or 5 m for a large walk). `lo` is the walk's
+/// lower corner, `span` its larger side and `margin` the frame round it, all in metres.
+fn axis_labels(svg: &mut String, lo: glam::DVec3, span: f64, margin: f64) {
+    let font = span / 38.0;
+    let (left, top) = (lo.x - margin, lo.z - margin);
+    let (right, bottom) = (lo.x + span + margin, lo.z + span + margin);
+    let _ = write!(
+        svg,
+        r##"<g class="axis-labels" font-size="{font:.3}" fill="#555">"##
+    );
+    let mut g = left.ceil();
+    while g <= right - 2.0 * font {
+        let _ = write!(
+            svg,
+            r#"<text x="{g}" y="{:.3}" text-anchor="middle">{:.0}</text>"#,
+            top + font * 1.1,
+            g + 0.0
+        );
+        g += 1.0;
+    }
+    let mut g = (top + 2.0 * font).ceil();
+    while g <= bottom - 2.5 * font {
+        let _ = write!(
+            svg,
+            r#"<text x="{:.3}" y="{:.3}">{:.0}</text>"#,
+            left + font * 0.3,
+            g + font * 0.35,
+            g + 0.0
+        );
+        g += 1.0;
+    }
+    let _ = write!(
+        svg,
+        r#"<text class="axis" x="{:.3}" y="{:.3}" text-anchor="end">x (m) →</text><text class="axis" x="{:.3}" y="{:.3}">z (m) ↓</text>"#,
+        right - font * 0.3,
+        top + font * 2.3,
+        left + font * 0.3,
+        bottom - font * 0.5,
+    );
+    let bar = if span > 12.0 { 5.0 } else { 1.0 };
+    let (x1, y) = (right - font, bottom - font * 0.8);
+    let _ = write!(
+        svg,
+        r##"<g class="scale-bar"><line x1="{:.3}" y1="{y:.3}" x2="{x1:.3}" y2="{y:.3}" stroke="#222" stroke-width="{:.4}"/><text x="{:.3}" y="{:.3}" text-anchor="middle" fill="#222">{bar} m</text></g></g>"##,
+        x1 - bar,
+        font * 0.25,
+        x1 - bar / 2.0,
+        y - font * 0.4,
+    );
+}
+
 /// rmse, mean, median, max of `values` (none when empty).
 fn statistics(values: &[f64]) -> Option<[f64; 4]> {
     if values.is_empty() {
@@ -217,6 +272,18 @@ pub(crate) struct ReportInput<'a> {
     pub base: &'a str,
     /// The phone's camera evidence, when it sent any.
     pub evidence: Option<&'a CameraEvidence>,
+    /// Some for a page that stands alone (`?download=1`, the demo's file): everything
+    /// inline, nothing fetched.
+    pub standalone: Option<Standalone<'a>>,
+}
+
+/// What a stand-alone page needs besides the served one's input.
+pub(crate) struct Standalone<'a> {
+    /// The stored JPEG thumbnail of sub-trajectory k (none when there is none).
+    pub thumbnail: &'a dyn Fn(u32) -> Option<Vec<u8>>,
+    /// What the 3-D view draws (`crate::scene_view`, as `scene.json` serves it), none
+    /// without a trajectory.
+    pub scene: Option<serde_json::Value>,
 }
 
 /// Path points of the static top view (a 10-minute walk logs 3 600).
@@ -225,10 +292,25 @@ const MAX_TOP_VIEW_POINTS: usize = 1_500;
 /// Regions and markers listed on the page (the counts above the tables are of all).
 const MAX_TABLE_ROWS: usize = 100;
 
-pub(crate) fn render(input: &ReportInput<'_>) -> Result<String, Error> {
+/// Seconds between reloads of a page whose estimate is still partial.
+pub(crate) const REFRESH_S: u32 = 5;
+
+/// The session's sub-trajectories, markers and regions as the page shows them.
+struct Analysis {
+    thresholds: Thresholds,
+    unit: Unit,
+    doc: ResultsDoc,
+    subs: Vec<SubRow>,
+    markers: Vec<sitar_core::Marker>,
+    regions: Vec<regions::Region>,
+    /// The errors of the sub-trajectories with an estimate.
+    errors: Vec<f64>,
+}
+
+/// Step 1: the results read, the walk classified, regions found and their evidence attached.
+fn analyse(input: &ReportInput<'_>) -> Result<Analysis, Error> {
     let row = input.row;
     let thresholds: Thresholds = row.settings.thresholds(input.config);
-    let unit = Unit::of(row);
     let doc: ResultsDoc = serde_json::from_str(input.results_json)
         .map_err(|e| Error::Internal(format!("results.json of {} is unreadable: {e}", row.id)))?;
     let (subs, markers) = match input.phone {
@@ -242,22 +324,31 @@ pub(crate) fn render(input: &ReportInput<'_>) -> Result<String, Error> {
     let mut found = regions::regions(&subs, &markers, radius);
     if let Some(evidence) = input.evidence {
         let base = input.base;
-        region_evidence::attach(&mut found, &subs, evidence, &|k| {
-            format!("{base}subtrajectories/{k}/image.jpg")
-        });
+        let image_url = |k: u32| match &input.standalone {
+            // Inline: the page opens from disk.
+            Some(alone) => (alone.thumbnail)(k)
+                .map(|jpeg| format!("data:image/jpeg;base64,{}", BASE64.encode(jpeg)))
+                .unwrap_or_default(),
+            None => format!("{base}subtrajectories/{k}/image.jpg"),
+        };
+        region_evidence::attach(&mut found, &subs, evidence, &image_url);
     }
-    let errors: Vec<f64> = subs.iter().filter_map(|s| s.error).collect();
-    let count = |c: ErrorClass| subs.iter().filter(|s| s.class == c).count();
-    let stats = statistics(&errors);
-    let marker_times: Vec<(usize, f64)> = markers
-        .iter()
-        .enumerate()
-        .filter_map(|(i, m)| subs.get(m.subtrajectory as usize).map(|s| (i + 1, s.t0)))
-        .collect();
-    let y_label = format!("error ({})", unit.name);
-    let timeline: Vec<(f64, f64, Option<f64>)> =
-        subs.iter().map(|s| (s.t0, s.t1, s.error)).collect();
-    let region_rows: Vec<serde_json::Value> = found
+    let errors = subs.iter().filter_map(|s| s.error).collect();
+    Ok(Analysis {
+        thresholds,
+        unit: Unit::of(row),
+        doc,
+        subs,
+        markers,
+        regions: found,
+        errors,
+    })
+}
+
+/// Step 2: the regions table.
+fn region_rows(a: &Analysis, phone: Option<&Phone>) -> Vec<serde_json::Value> {
+    let unit = &a.unit;
+    a.regions
         .iter()
         .take(MAX_TABLE_ROWS)
         .map(|r| {
@@ -278,7 +369,8 @@ pub(crate) fn render(input: &ReportInput<'_>) -> Result<String, Error> {
                     format!("({:.2}, {:.2}, {:.2})", p.x, p.y, p.z)
                 }),
                 "markers": r.markers.iter().map(|m| format!("M{m}")).collect::<Vec<_>>().join(", "),
-                "thumbnail_url": evidence.and_then(|e| e.thumbnail_url.as_deref()),
+                "no_marker": phone.and_then(|p| regions::why_no_marker(r, &a.subs, &a.markers, p.config())),
+                "thumbnail_url": evidence.and_then(|e| e.thumbnail_url.as_deref()).filter(|u| !u.is_empty()),
                 "pictured": evidence.and_then(|e| e.pictured),
                 "covered": evidence.map(|e| e.covered),
                 "causes": evidence.map(|e| e.causes.iter().map(|c| json!({
@@ -286,8 +378,13 @@ pub(crate) fn render(input: &ReportInput<'_>) -> Result<String, Error> {
                 })).collect::<Vec<_>>()),
             })
         })
-        .collect();
-    let marker_rows: Vec<serde_json::Value> = markers
+        .collect()
+}
+
+/// Step 3: the markers table, each with the tier it was placed at.
+fn marker_rows(a: &Analysis, phone: Option<&Phone>) -> Vec<serde_json::Value> {
+    let unit = &a.unit;
+    a.markers
         .iter()
         .enumerate()
         .take(MAX_TABLE_ROWS)
@@ -299,21 +396,28 @@ pub(crate) fn render(input: &ReportInput<'_>) -> Result<String, Error> {
                 "class": m.class.name(),
                 "colour": colour(m.class),
                 "error": format!("{:.1}", m.error_m * unit.scale),
+                "tier": phone
+                    .and_then(|p| regions::marker_tier(p, m.error_m))
+                    .map(|t| format!("≥ {}", unit.show(t))),
                 "position": format!("({:.2}, {:.2}, {:.2})", p.x, p.y, p.z),
-                "region": found.iter().find(|r| r.markers.contains(&(i + 1))).map(|r| r.rank),
+                "region": a.regions.iter().find(|r| r.markers.contains(&(i + 1))).map(|r| r.rank),
             })
         })
-        .collect();
-    let trials = doc.trials;
-    let settings = vec![
+        .collect()
+}
+
+/// Step 4: the settings table.
+fn settings_rows(row: &Session, a: &Analysis) -> Vec<(&'static str, String)> {
+    let unit = &a.unit;
+    vec![
         ("Session", row.id.clone()),
         ("State", row.state.as_str().to_string()),
         (
             "Statistic",
-            if doc.setting.is_empty() {
+            if a.doc.setting.is_empty() {
                 row.settings.setting.to_string()
             } else {
-                doc.setting.clone()
+                a.doc.setting.clone()
             },
         ),
         ("Window", format!("{} frames", row.settings.window_frames)),
@@ -327,8 +431,8 @@ pub(crate) fn render(input: &ReportInput<'_>) -> Result<String, Error> {
             "Thresholds",
             format!(
                 "medium ≥ {}, high ≥ {}",
-                unit.show(thresholds.medium),
-                unit.show(thresholds.high)
+                unit.show(a.thresholds.medium),
+                unit.show(a.thresholds.high)
             ),
         ),
         (
@@ -343,40 +447,124 @@ pub(crate) fn render(input: &ReportInput<'_>) -> Result<String, Error> {
                 .clone()
                 .unwrap_or_else(|| "all trials played".into()),
         ),
-    ];
+    ]
+}
+
+/// Step 5: whether the estimate is still partial (trials are arriving), for the banner
+/// and the page's reload.
+fn partial(row: &Session, doc: &ResultsDoc) -> Option<serde_json::Value> {
+    use crate::session::SessionState;
+    let finished = matches!(row.state, SessionState::Done | SessionState::Failed);
+    (!finished).then(|| {
+        json!({
+            "trials": doc.trials,
+            "total": row.trials_total,
+            "state": row.state.as_str(),
+        })
+    })
+}
+
+/// The style and script a stand-alone page carries inline.
+const INLINE_CSS: &str = include_str!("../../assets/site.css");
+const INLINE_SCRIPT: &str = include_str!("../../assets/report.bundle.js");
+
+/// The Content-Security-Policy of a stand-alone page: its inline script and style by hash.
+pub(crate) fn standalone_csp() -> String {
+    let hash = |text: &str| {
+        let digest = ring::digest::digest(&ring::digest::SHA256, text.as_bytes());
+        format!("'sha256-{}'", BASE64.encode(digest.as_ref()))
+    };
+    templates::standalone_csp(&hash(INLINE_SCRIPT), &hash(INLINE_CSS))
+}
+
+/// Step 6: what a stand-alone page carries inline (style, script, scene data) and its
+/// Content-Security-Policy, which allows exactly those.
+fn inline_parts(alone: &Standalone<'_>) -> Result<serde_json::Value, Error> {
+    // The script element ends at the first `</script`: the bundle must not hold one.
+    if INLINE_SCRIPT.to_ascii_lowercase().contains("</script") {
+        return Err(Error::Internal(
+            "report.bundle.js holds </script: it cannot be inlined".into(),
+        ));
+    }
+    // `<` only occurs inside JSON strings, where `\u003c` means the same: no `</script`.
+    let scene = alone
+        .scene
+        .as_ref()
+        .map(|s| s.to_string().replace('<', "\\u003c"));
+    Ok(json!({
+        "css": INLINE_CSS,
+        "script": INLINE_SCRIPT,
+        "scene": scene,
+        "csp": standalone_csp(),
+    }))
+}
+
+/// The report page: the steps above into `templates/report.html`.
+pub(crate) fn render(input: &ReportInput<'_>) -> Result<String, Error> {
+    let row = input.row;
+    let a = analyse(input)?;
+    let phone = input.phone.map(|(p, _)| p);
+    let (unit, thresholds) = (&a.unit, a.thresholds);
+    let marker_times: Vec<(usize, f64)> = a
+        .markers
+        .iter()
+        .enumerate()
+        .filter_map(|(i, m)| a.subs.get(m.subtrajectory as usize).map(|s| (i + 1, s.t0)))
+        .collect();
+    let y_label = format!("error ({})", unit.name);
+    let timeline: Vec<(f64, f64, Option<f64>)> =
+        a.subs.iter().map(|s| (s.t0, s.t1, s.error)).collect();
+    let count = |c: ErrorClass| a.subs.iter().filter(|s| s.class == c).count();
+    let trials = a.doc.trials;
+    let standalone = match &input.standalone {
+        Some(alone) => Some(inline_parts(alone)?),
+        None => None,
+    };
+    let tiers: Vec<String> = phone
+        .map(|p| p.config().marker_thresholds().to_vec())
+        .unwrap_or_default()
+        .iter()
+        .map(|t| unit.show(*t))
+        .collect();
     let context = json!({
         "id": row.id,
         "unit": unit.name,
-        // Completed ones, as the phone counts them (a last one may have a midpoint only).
-        "subtrajectories": input
-            .phone
-            .and_then(|(p, _)| p.summary())
-            .map_or(subs.len(), |s| s.subtrajectories as usize),
-        "estimated": errors.len(),
+        // Every sub-trajectory the walk has, the same count as the 3-D view's, the tables'
+        // and the charts' (a last one may have its midpoint only).
+        "subtrajectories": a.subs.len(),
+        "estimated": a.errors.len(),
         "high": count(ErrorClass::High),
         "medium": count(ErrorClass::Medium),
         "low": count(ErrorClass::Low),
-        "regions": region_rows,
-        "region_count": found.len(),
-        "markers": marker_rows,
-        "marker_count": markers.len(),
+        "regions": region_rows(&a, phone),
+        "region_count": a.regions.len(),
+        "markers": marker_rows(&a, phone),
+        "marker_count": a.markers.len(),
+        "max_markers": phone.map(|p| p.config().max_regions),
+        "marker_radius": phone.map(|p| p.config().dedup_radius_m),
+        "tiers": tiers.join(", "),
+        "medium_at": unit.show(thresholds.medium),
+        "high_at": unit.show(thresholds.high),
         "has_evidence": input.evidence.is_some(),
         "base": input.base,
-        "windows": doc.windows.len(),
+        "windows": a.doc.windows.len(),
         "window_frames": row.settings.window_frames,
         "trials": trials,
         "pairs": trials * trials.saturating_sub(1) / 2,
-        "stats": stats.map(|s| s.map(|v| unit.show(v))),
+        "partial": partial(row, &a.doc),
+        "refresh_s": REFRESH_S,
+        "standalone": standalone,
+        "stats": statistics(&a.errors).map(|s| s.map(|v| unit.show(v))),
         "source": input.phone.map(|(_, s)| s.describe()),
-        "top_view": input.phone.map(|(p, _)| top_view(p, &subs)).unwrap_or_default(),
-        "error_chart": if subs.is_empty() { String::new() } else {
+        "top_view": phone.map(|p| top_view(p, &a.subs)).unwrap_or_default(),
+        "error_chart": if a.subs.is_empty() { String::new() } else {
             charts::error_over_time(&timeline, thresholds, &marker_times, unit.scale, &y_label)
         },
-        "histogram": if errors.is_empty() { String::new() } else {
-            charts::histogram(&errors, thresholds, unit.scale, &y_label)
+        "histogram": if a.errors.is_empty() { String::new() } else {
+            charts::histogram(&a.errors, thresholds, unit.scale, &y_label)
         },
-        "settings": settings,
-        "history_chart": history_chart(&input.history, thresholds, &unit, &y_label),
+        "settings": settings_rows(row, &a),
+        "history_chart": history_chart(&input.history, thresholds, unit, &y_label),
         "history": input.history.iter().map(|h| json!({
             "trials": h["trials"],
             "mean": unit.show(h["mean"].as_f64().unwrap_or(0.0)),
@@ -465,6 +653,13 @@ mod tests {
         let subs = regions::sub_rows(&phone, thresholds);
         assert_eq!(subs.len(), 39_000);
         let svg = top_view(&phone, &subs);
+        // Read at a glance: the axes named, a scale bar, the grid lines' coordinates.
+        assert!(svg.contains(">x (m) →</text>") && svg.contains(">z (m) ↓</text>"));
+        assert!(svg.contains(r#"<g class="scale-bar">"#) && svg.contains(">1 m</text>"));
+        assert!(
+            svg.contains(r#"text-anchor="middle">-6</text>"#),
+            "no x = -6 m label"
+        );
         assert_eq!(
             svg.matches("<line class=\"seg ").count(),
             MAX_TOP_VIEW_POINTS - 1

@@ -7,7 +7,7 @@
 //! hard, however often the walk passed it.
 
 use glam::DVec3;
-use sitar_core::{ErrorClass, Marker, Session, Thresholds};
+use sitar_core::{ErrorClass, Marker, Session, SessionConfig, Thresholds};
 
 /// One sub-trajectory as the report shows it.
 #[derive(Debug, Clone)]
@@ -167,6 +167,63 @@ pub(crate) fn regions(subs: &[SubRow], markers: &[Marker], radius_m: f64) -> Vec
     out
 }
 
+/// The marker tier (the phone's thresholds searched in order, 10, 5, 2, 1 cm by default)
+/// an error of `error` reaches first, in the results' unit: the tier a marker was placed at.
+pub(crate) fn marker_tier(phone: &Session, error: f64) -> Option<f64> {
+    phone
+        .config()
+        .marker_thresholds()
+        .iter()
+        .copied()
+        .find(|&t| error >= t)
+}
+
+/// Why a medium or high `region` has no marker, by the paper's marker rule (a marker needs
+/// a depth sample; it is never within `dedup_radius_m` of another; at most `max_regions`
+/// are placed): none when it has one.
+pub(crate) fn why_no_marker(
+    region: &Region,
+    subs: &[SubRow],
+    markers: &[Marker],
+    config: &SessionConfig,
+) -> Option<String> {
+    if !region.markers.is_empty() {
+        return None;
+    }
+    let sampled: Vec<DVec3> = region
+        .subtrajectories
+        .iter()
+        .filter_map(|k| subs.iter().find(|s| s.index == *k))
+        .filter(|s| s.error.is_some())
+        .filter_map(|s| s.surface)
+        .collect();
+    if sampled.is_empty() {
+        return Some(
+            "no depth sample: the camera measured no surface here (glass, a mirror, or out \
+             of depth range?), and a marker needs one"
+                .into(),
+        );
+    }
+    let radius = config.dedup_radius_m;
+    let near = markers
+        .iter()
+        .enumerate()
+        .find(|(_, m)| sampled.iter().all(|p| p.distance(m.position) <= radius));
+    if let Some((i, _)) = near {
+        return Some(format!(
+            "within {radius} m of marker M{}, which stands for this place",
+            i + 1
+        ));
+    }
+    if markers.len() >= config.max_regions {
+        return Some(format!(
+            "over the maximum: the phone places at most {} markers, the worst tiers first",
+            config.max_regions
+        ));
+    }
+    Some("its faced surface points lie within the markers' radius of other markers".into())
+}
+
 fn mean_surface(members: &[&SubRow]) -> Option<DVec3> {
     let points: Vec<DVec3> = members.iter().filter_map(|s| s.surface).collect();
     (!points.is_empty()).then(|| points.iter().sum::<DVec3>() / points.len() as f64)
@@ -216,6 +273,50 @@ mod tests {
         assert_eq!((r[0].t0, r[0].t1), (1.0, 7.0));
         assert_eq!(r[1].subtrajectories, vec![4]);
         assert_eq!(r[1].rank, 2);
+    }
+
+    #[test]
+    fn a_region_without_a_marker_says_why() {
+        let wall = DVec3::new(0.0, 1.0, 2.0);
+        let config = SessionConfig::default();
+        let marker = |p: DVec3, k: u32| Marker {
+            position: p,
+            rotation: glam::DQuat::IDENTITY,
+            upright: glam::DQuat::IDENTITY,
+            normal: DVec3::Z,
+            class: ErrorClass::High,
+            subtrajectory: k,
+            error_m: 0.12,
+        };
+        // Glass: no surface point.
+        let subs = vec![sub(0, 0.2, None), sub(1, 0.01, Some(wall))];
+        let r = regions(&subs, &[], 0.5);
+        let why = why_no_marker(&r[0], &subs, &[], &config).unwrap();
+        assert!(why.starts_with("no depth sample"), "{why}");
+        // Next to marker 1 (of another stretch, 0.3 m away).
+        let subs = vec![
+            sub(0, 0.2, Some(wall)),
+            sub(1, 0.01, None),
+            sub(2, 0.07, Some(wall + DVec3::X * 0.3)),
+        ];
+        let markers = [marker(wall, 0)];
+        let r = regions(&subs, &markers, 0.0);
+        assert_eq!(r.len(), 2);
+        assert_eq!(r[0].markers, vec![1]);
+        assert_eq!(why_no_marker(&r[0], &subs, &markers, &config), None);
+        let why = why_no_marker(&r[1], &subs, &markers, &config).unwrap();
+        assert_eq!(
+            why,
+            "within 0.5 m of marker M1, which stands for this place"
+        );
+        // Three markers elsewhere: the maximum.
+        let far = |x: f64| marker(DVec3::new(x, 0.0, 9.0), 9);
+        let markers = [far(0.0), far(2.0), far(4.0)];
+        let why = why_no_marker(&r[1], &subs, &markers, &config).unwrap();
+        assert!(
+            why.starts_with("over the maximum: the phone places at most 3"),
+            "{why}"
+        );
     }
 
     #[test]

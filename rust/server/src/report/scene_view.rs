@@ -57,11 +57,15 @@ pub(crate) fn scene_json(
     };
     let plan = phone.render_plan();
     let markers = phone.markers().unwrap_or_default();
-    let surface: Vec<DVec3> = phone
+    let (surface, normals): (Vec<DVec3>, Vec<DVec3>) = phone
         .subtrajectories()
         .iter()
-        .filter_map(|s| s.depth.sample().map(|d| to_view(d.point)))
-        .collect();
+        .filter_map(|s| {
+            s.depth
+                .sample()
+                .map(|d| (to_view(d.point), to_view(d.normal)))
+        })
+        .unzip();
     let joints = thin(plan.joints.len(), MAX_VIEW_JOINTS);
     let frustums = thin(plan.frustums.len(), MAX_VIEW_FRUSTUMS);
     let surface_kept = thin(surface.len(), MAX_VIEW_SURFACE);
@@ -104,10 +108,13 @@ pub(crate) fn scene_json(
         "markers": markers_kept.iter().enumerate().map(|(i, m)| json!({
             "number": i + 1, "sub": m.subtrajectory, "class": m.class.name(),
             "error": r4(m.error_m * unit.scale),
+            "tier": crate::report::regions::marker_tier(phone, m.error_m).map(|t| r4(t * unit.scale)),
             "p": xyz(to_view(m.position)), "normal": xyz(to_view(m.normal)),
             "q": quat(m.rotation),
         })).collect::<Vec<_>>(),
         "surface": surface_kept.iter().flat_map(|&i| xyz(surface[i])).collect::<Vec<_>>(),
+        // The faced surface's unit normal at each surface point (the view draws a patch).
+        "surface_normals": surface_kept.iter().flat_map(|&i| xyz(normals[i])).collect::<Vec<_>>(),
         "start": plan.start.map(|p| xyz(to_view(p.position))),
         "stop": plan.stop.map(|p| xyz(to_view(p.position))),
         "downsampled": {

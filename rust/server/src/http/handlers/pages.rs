@@ -4,7 +4,7 @@
 
 use std::fmt::Write;
 
-use axum::extract::State;
+use axum::extract::{RawQuery, State};
 use axum::response::Response;
 use serde_json::json;
 
@@ -13,8 +13,9 @@ use crate::auth::Admin;
 use crate::config::PlaybackKind;
 use crate::estimate::results_files::{self, Form};
 use crate::http::helpers::{AppState, Found};
+use crate::ingest::evidence::EvidenceFiles;
 use crate::report::index_ranges::index_ranges;
-use crate::report::page::{self, ReportInput};
+use crate::report::page::{self, ReportInput, Standalone};
 use crate::report::region_evidence::CameraEvidence;
 use crate::report::scene;
 use crate::report::templates;
@@ -140,22 +141,87 @@ fn settings_label(settings: &crate::session::estimate_settings::EstimateSettings
     label
 }
 
-/// `GET /v1/sessions/{id}/report`: the latest results on the walk (see `crate::report::page`).
+/// `GET /v1/sessions/{id}/report`: the latest results on the walk (see `crate::report::page`);
+/// with `?download=1` the same page as one file that opens from disk.
 pub(crate) async fn report(
     State(shared): AppState,
     Found(session): Found,
+    RawQuery(query): RawQuery,
 ) -> Result<Response, Error> {
     let base = format!("/v1/sessions/{}/", session.id);
-    Ok(templates::page(render_report(shared, session, base).await?))
+    report_answer(shared, session, base, wants_download(query.as_deref())).await
+}
+
+/// Whether a query asks for the page as a file (`download=1`, `download=true`, `download`).
+pub(crate) fn wants_download(query: Option<&str>) -> bool {
+    query.unwrap_or("").split('&').any(|pair| {
+        let (key, value) = pair.split_once('=').unwrap_or((pair, "1"));
+        key == "download" && matches!(value, "1" | "true" | "yes")
+    })
+}
+
+/// The report as a page, or as a stand-alone file to save (`report-ID.html`). Before the
+/// first estimate both are the waiting page (which a saved file never refreshes).
+pub(crate) async fn report_answer(
+    shared: std::sync::Arc<crate::app_state::App>,
+    session: crate::session::Session,
+    base: String,
+    download: bool,
+) -> Result<Response, Error> {
+    if session.results_trials == 0 {
+        let html = waiting_page(&shared, &session, !download)?;
+        return Ok(templates::page(html));
+    }
+    let file_name = format!("report-{}.html", session.id);
+    let (html, csp) = render_report(shared, session, base, download).await?;
+    Ok(match csp {
+        Some(csp) => templates::attachment_page(html, &file_name, &csp),
+        None => templates::page(html),
+    })
+}
+
+/// The page of a session with no estimate yet: what it waits for ("2 of 8 trials played"),
+/// reloading itself every few seconds unless the session failed (then it says why).
+fn waiting_page(
+    shared: &crate::app_state::App,
+    session: &crate::session::Session,
+    refresh: bool,
+) -> Result<String, Error> {
+    use crate::session::SessionState;
+    let status = status_json(shared, session)?;
+    let failed = session.state == SessionState::Failed;
+    let waiting_for = match session.state {
+        SessionState::Created => "its recording (or, for an upload session, its trials)",
+        SessionState::Uploaded if session.playback == PlaybackKind::Upload => "its trials",
+        SessionState::Uploaded => "a playback phone",
+        SessionState::Playing => "the second trial: an estimate compares pairs of trials",
+        SessionState::Estimating => "the estimate, which is running",
+        SessionState::Done | SessionState::Failed => "nothing",
+    };
+    templates::render(
+        "waiting.html",
+        &json!({
+            "id": session.id,
+            "state": session.state.as_str(),
+            "played": status["trials_done"].as_u64().unwrap_or(0),
+            "total": session.trials_total,
+            "waiting_for": waiting_for,
+            "error": session.error,
+            "is_failure": failed,
+            "refresh_s": (refresh && !failed).then_some(page::REFRESH_S),
+        }),
+    )
 }
 
 /// The report page of `session`: for its owner and for a share link alike; `base` is where
-/// this reader fetches the session's data (`/v1/sessions/ID/` or `/share/TOKEN/`).
+/// this reader fetches the session's data (`/v1/sessions/ID/` or `/share/TOKEN/`). A
+/// `standalone` page carries everything inline and comes with its Content-Security-Policy.
 pub(crate) async fn render_report(
     shared: std::sync::Arc<crate::app_state::App>,
     session: crate::session::Session,
     base: String,
-) -> Result<String, Error> {
+    standalone: bool,
+) -> Result<(String, Option<String>), Error> {
     let json = results_files::read(&shared, &session, Form::Json)?;
     tokio::task::spawn_blocking(move || {
         // No trajectory (e.g. trials without a readable reference) still gets a page.
@@ -166,7 +232,23 @@ pub(crate) async fn render_report(
             log::warn!("report of {}: evidence left out: {e}", session.id);
             None
         });
-        page::render(&ReportInput {
+        let thumbnail = |k: u32| {
+            EvidenceFiles {
+                blobs: &*shared.blobs,
+                id: &session.id,
+            }
+            .read_thumbnail(k as usize)
+            .ok()
+            .flatten()
+        };
+        // A stand-alone page carries the 3-D view's data (what `scene.json` serves).
+        let scene = phone.as_deref().filter(|_| standalone).map(|(p, source)| {
+            let thresholds = session.settings.thresholds(&shared.config);
+            let subs = crate::report::regions::sub_rows(p, thresholds);
+            let unit = page::Unit::of(&session);
+            crate::report::scene_view::scene_json(p, &subs, thresholds, &unit, source.describe())
+        });
+        let html = page::render(&ReportInput {
             row: &session,
             results_json: &json,
             config: &shared.config,
@@ -174,7 +256,14 @@ pub(crate) async fn render_report(
             history,
             base: &base,
             evidence: evidence.as_ref(),
-        })
+            standalone: standalone.then_some(Standalone {
+                thumbnail: &thumbnail,
+                scene,
+            }),
+        })?;
+        // The stand-alone page's policy is in its <meta>; the download's header repeats it.
+        let csp = standalone.then(page::standalone_csp);
+        Ok((html, csp))
     })
     .await
     .map_err(|e| Error::Internal(format!("report: {e}")))?
@@ -189,5 +278,21 @@ mod tests {
         assert_eq!(utc(0), "1970-01-01 00:00:00");
         // 2024-02-29 12:34:56 UTC (a leap day).
         assert_eq!(utc(1_709_210_096_000), "2024-02-29 12:34:56");
+    }
+
+    #[test]
+    fn a_download_is_asked_for_by_the_query() {
+        for yes in [
+            "download=1",
+            "download",
+            "a=b&download=true",
+            "download=yes&x",
+        ] {
+            assert!(wants_download(Some(yes)), "{yes}");
+        }
+        for no in ["", "download=0", "downloads=1", "x=download"] {
+            assert!(!wants_download(Some(no)), "{no}");
+        }
+        assert!(!wants_download(None));
     }
 }

@@ -85,10 +85,17 @@ pub(crate) async fn create(
     headers: HeaderMap,
     body: axum::body::Body,
 ) -> Result<Response, Error> {
-    if content_type(&headers) != "application/json" {
-        return Err(Error::UnsupportedMediaType(
-            "POST /v1/sessions takes application/json".into(),
-        ));
+    // Every key is optional: no body at all is a session with the defaults, as is `{}`
+    // sent unlabelled or with curl's default label (`curl -X POST`, `curl -d '{}'`).
+    let ct = content_type(&headers);
+    if !matches!(
+        ct.as_str(),
+        "application/json" | "" | crate::http::helpers::CURL_DEFAULT_CONTENT_TYPE
+    ) {
+        return Err(Error::UnsupportedMediaType(format!(
+            "POST /v1/sessions takes application/json (or no body), not {}",
+            short(&ct, QUOTE_LIMIT)
+        )));
     }
     // Checked before reading (the declared length) and while reading (the bytes).
     check_declared_length(&headers, MAX_REQUEST_BYTES, "session request")?;
@@ -100,7 +107,11 @@ pub(crate) async fn create(
             "session request",
         )
         .await?;
-    let req = parse_create_request(&body)?;
+    let req = if body.iter().all(u8::is_ascii_whitespace) {
+        parse_create_request(b"{}")?
+    } else {
+        parse_create_request(&body)?
+    };
     let trials = req.trials.unwrap_or(shared.config.default_trials);
     if trials == 0 {
         return Err(Error::BadRequest("trials: 0 is below 1".into()));

@@ -2,7 +2,7 @@
 //! (a URL with its own random token, stored hashed), `DELETE /v1/sessions/{id}/share` revokes
 //! every link of the session, and `GET /share/{token}` opens the report without an account.
 //! The page fetches its data through the same token (`GET /share/{token}/scene.json`, the
-//! downloads, the regions' thumbnails): one session's data, nothing else.
+//! downloads, the regions' thumbnails, `report` as one file): one session's data, nothing else.
 
 use axum::extract::{Path, RawQuery, State};
 use axum::http::{HeaderMap, StatusCode, header};
@@ -77,8 +77,7 @@ pub(crate) async fn view(
     let session = shared_session(&shared, &token)?;
     // The token is lower-case hex (checked by the lookup): safe in a URL path as it is.
     let base = format!("/share/{token}/");
-    let html = super::pages::render_report(shared.clone(), session, base).await?;
-    Ok(crate::report::templates::page(html))
+    super::pages::report_answer(shared.clone(), session, base, false).await
 }
 
 /// `GET /share/{token}/{name}`: the shared session's 3-D scene data and downloads, by a
@@ -97,6 +96,11 @@ pub(crate) async fn data(
         "trials.zip" => super::scene::trials_zip(shared, session).await,
         "results.csv" => super::results::csv(shared, session).await,
         "results.json" => super::results::json(shared, session, query).await,
+        // The report as one file that opens from disk (`report?download=1`).
+        "report" => {
+            let base = format!("/share/{token}/");
+            super::pages::report_answer(shared.0, session.0, base, true).await
+        }
         _ => Err(Error::NotFound(format!("a share link has no {name:?}"))),
     }
 }
