@@ -100,6 +100,7 @@ mod depth;
 mod error;
 mod evidence;
 mod evidence_table;
+mod guide;
 mod image;
 mod markers;
 mod persist;
@@ -110,6 +111,7 @@ mod results;
 mod session;
 mod thumbnail;
 mod tum;
+pub mod venue;
 
 pub use classes::{DEFAULT_SETTING, ErrorClass, Thresholds};
 pub use config::SessionConfig;
@@ -123,6 +125,7 @@ pub use evidence::{
     NO_DEPTH_VALID_SHARE, OVEREXPOSED_SHARE, SessionMedians, likely_causes,
 };
 pub use evidence_table::EVIDENCE_HEADER;
+pub use guide::{Guide, ScreenView};
 pub use image::{
     FAST_THRESHOLD, ImageProperties, LumaImage, MAX_FAST_WIDTH, SATURATED_LUMA, fast_corners,
 };
@@ -137,3 +140,4 @@ pub use session::{
 };
 pub use thumbnail::{THUMBNAIL_QUALITY, downsample_rotated, encode_jpeg, thumbnail_size};
 pub use tum::{parse_tum_ns, to_tum};
+pub use venue::{Alignment, AnchorObservation, Tracking, VenueMap};
