@@ -91,14 +91,14 @@ namespace Sitar
 
         /// <summary>
         /// The colour (r, g, b, a in 0…1) a venue cell is drawn with: surface cells as
-        /// translucent tiles in the class colours of the paper (green low, yellow medium, red
+        /// translucent tiles in the class colours of the paper (blue low, yellow medium, red
         /// high, grey unknown), path cells as a faint trail of the same colours.
         /// </summary>
         public static void CellColor(CellKind kind, ErrorClass c, out float r, out float g, out float b, out float a)
         {
             switch (c)
             {
-                case ErrorClass.Low: r = 0.20f; g = 0.80f; b = 0.20f; break;
+                case ErrorClass.Low: r = 0.15f; g = 0.35f; b = 0.95f; break;
                 case ErrorClass.Medium: r = 1.00f; g = 0.85f; b = 0.10f; break;
                 case ErrorClass.High: r = 0.90f; g = 0.10f; b = 0.10f; break;
                 default: r = 0.60f; g = 0.60f; b = 0.60f; break;
