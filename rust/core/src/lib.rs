@@ -96,6 +96,7 @@
 mod classes;
 mod config;
 mod convention;
+mod csv_rows;
 mod depth;
 mod error;
 mod evidence;

@@ -272,33 +272,9 @@ impl Session {
 fn parse_table(text: &str) -> Result<Vec<SubTrajectory>, Error> {
     const SRC: &str = "subtrajectories.csv";
     let columns: Vec<&str> = HEADER.split(',').collect();
-    let mut lines = text.lines().enumerate();
-    match lines.next() {
-        Some((_, h)) if h.trim() == HEADER || h.trim() == header(ErrorUnit::Degrees) => {}
-        _ => {
-            return Err(Error::parse(
-                SRC,
-                1,
-                "header",
-                format!("expected `{HEADER}`"),
-            ));
-        }
-    }
+    let degrees = header(ErrorUnit::Degrees);
     let mut subs = Vec::new();
-    for (i, line) in lines {
-        let line_no = i + 1;
-        if line.trim().is_empty() {
-            continue;
-        }
-        let cells: Vec<&str> = line.split(',').collect();
-        if cells.len() != columns.len() {
-            return Err(Error::parse(
-                SRC,
-                line_no,
-                "row",
-                format!("expected {} fields, found {}", columns.len(), cells.len()),
-            ));
-        }
+    for (line_no, cells) in crate::csv_rows::rows(text, SRC, &[HEADER, &degrees])? {
         let cell =
             |name: &str| -> &str { cells[columns.iter().position(|c| *c == name).unwrap_or(0)] };
         fn num<T: std::str::FromStr>(line: usize, name: &str, s: &str) -> Result<T, Error> {

@@ -150,33 +150,8 @@ pub fn anchors_csv(observations: &[AnchorObservation]) -> String {
 /// Parses `anchors.csv` text; errors name `source`, the line and the column.
 pub fn parse_anchors_csv(text: &str, source: &str) -> Result<Vec<AnchorObservation>, Error> {
     let columns: Vec<&str> = ANCHORS_HEADER.split(',').collect();
-    let mut lines = text.lines().enumerate();
-    match lines.next() {
-        Some((_, h)) if h.trim() == ANCHORS_HEADER => {}
-        _ => {
-            return Err(Error::parse(
-                source,
-                1,
-                "header",
-                format!("expected `{ANCHORS_HEADER}`"),
-            ));
-        }
-    }
     let mut out = Vec::new();
-    for (i, line) in lines {
-        let line_no = i + 1;
-        if line.trim().is_empty() {
-            continue;
-        }
-        let cells: Vec<&str> = line.split(',').collect();
-        if cells.len() != columns.len() {
-            return Err(Error::parse(
-                source,
-                line_no,
-                "row",
-                format!("expected {} fields, found {}", columns.len(), cells.len()),
-            ));
-        }
+    for (line_no, cells) in crate::csv_rows::rows(text, source, &[ANCHORS_HEADER])? {
         let number = |j: usize| -> Result<f64, Error> {
             match cells[j].parse::<f64>() {
                 Ok(v) if v.is_finite() => Ok(v),

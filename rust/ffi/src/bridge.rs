@@ -622,6 +622,26 @@ pub fn session_venue_cell_list(h: SitarHandle) -> Result<Vec<SitarVenueCell>, Er
     })
 }
 
+/// The screen of a `guide` call in the session's convention (the arguments checked).
+fn screen_view(
+    s: &Session,
+    camera: &SitarPose,
+    vfov_deg: f64,
+    width_px: i32,
+    height_px: i32,
+    margin_px: f64,
+) -> Result<ScreenView, Error> {
+    let convention = s.config().convention;
+    Ok(ScreenView::new(
+        camera.to_core(),
+        convention,
+        vfov_deg,
+        width_px,
+        height_px,
+        margin_px,
+    )?)
+}
+
 /// Where each marker, then each high venue surface cell, is shown on the screen, into the
 /// caller's array.
 #[allow(clippy::too_many_arguments)] // the C signature the issue fixes
@@ -634,21 +654,10 @@ pub fn session_guide(
     margin_px: f64,
     out: Fill<'_, SitarGuide>,
 ) -> Result<(), Error> {
-    let camera = camera.to_core();
     with_session(h, |s| {
-        let view = ScreenView::new(
-            camera,
-            s.config().convention,
-            vfov_deg,
-            width_px,
-            height_px,
-            margin_px,
-        )?;
-        let n = s.guide_targets().count();
-        out.write(
-            n,
-            s.guide_targets().map(|t| SitarGuide::from(view.guide(t))),
-        )
+        let view = screen_view(s, camera, vfov_deg, width_px, height_px, margin_px)?;
+        let guides = s.guide_targets().map(|t| SitarGuide::from(view.guide(t)));
+        out.write(s.guide_targets().count(), guides)
     })
 }
 
@@ -661,16 +670,8 @@ pub fn session_guide_list(
     height_px: i32,
     margin_px: f64,
 ) -> Result<Vec<SitarGuide>, Error> {
-    let camera = camera.to_core();
     with_session(h, |s| {
-        let view = ScreenView::new(
-            camera,
-            s.config().convention,
-            vfov_deg,
-            width_px,
-            height_px,
-            margin_px,
-        )?;
+        let view = screen_view(s, camera, vfov_deg, width_px, height_px, margin_px)?;
         Ok(s.guide_targets()
             .map(|t| SitarGuide::from(view.guide(t)))
             .collect())

@@ -2,12 +2,12 @@
 //! `sitar_session_guide` through their C entry points: the argument checks and codes issue 25
 //! fixes, the array convention, agreement with `sitar-core`, and no allocation per call.
 
-use std::ffi::{c_char, CString};
+use std::ffi::CString;
 
 use sitar::{
-    sitar_last_error, sitar_session_anchor, sitar_session_free, sitar_session_guide,
-    sitar_session_load_venue, sitar_session_markers, sitar_session_new, sitar_session_start,
-    sitar_session_venue_cells, SitarGuide, SitarMarker, SitarPose, SitarVenueCell,
+    sitar_session_anchor, sitar_session_free, sitar_session_guide, sitar_session_load_venue,
+    sitar_session_markers, sitar_session_new, sitar_session_start, sitar_session_venue_cells,
+    SitarGuide, SitarMarker, SitarPose, SitarVenueCell,
 };
 
 #[path = "../../core/tests/support/counting_allocator.rs"]
@@ -17,20 +17,13 @@ mod venue_session;
 
 use venue_session::{anchor_pose, camera, map_json, venue_session};
 
-const OK: i32 = 0;
-const ERR_NULL: i32 = -1;
-const ERR_INVALID_ARGUMENT: i32 = -2;
-const ERR_INVALID_STATE: i32 = -4;
-const ERR_PARSE: i32 = -5;
-const ERR_BUFFER_TOO_SMALL: i32 = -8;
+#[path = "support/c_abi.rs"]
+mod c_abi;
 
-fn last_error() -> String {
-    let mut buf = [0 as c_char; 512];
-    let mut len = 0usize;
-    sitar_last_error(buf.as_mut_ptr(), buf.len(), &mut len);
-    let bytes: Vec<u8> = buf[..len].iter().map(|&c| c as u8).collect();
-    String::from_utf8(bytes).unwrap()
-}
+use c_abi::{
+    last_error, ERR_BUFFER_TOO_SMALL, ERR_INVALID_ARGUMENT, ERR_INVALID_STATE, ERR_NULL, ERR_PARSE,
+    OK,
+};
 
 #[test]
 fn anchor_arguments_and_states_are_checked() {
@@ -181,37 +174,17 @@ fn guide_lists_markers_then_high_surface_cells_as_core_computes_them() {
     assert_eq!(targets.len(), 3 + 9); // cells 0, 6, 12, … (i % 6 == 0) are high surface ones
 
     let cam = camera(30);
+    let guide = |out: *mut SitarGuide, capacity: usize, len: &mut usize| {
+        sitar_session_guide(h, &cam, 60.0, 1080, 1920, 40.0, out, capacity, len)
+    };
     let mut len = 0usize;
     assert_eq!(
-        sitar_session_guide(
-            h,
-            &cam,
-            60.0,
-            1080,
-            1920,
-            40.0,
-            std::ptr::null_mut(),
-            0,
-            &mut len
-        ),
+        guide(std::ptr::null_mut(), 0, &mut len),
         ERR_BUFFER_TOO_SMALL
     );
     assert_eq!(len, targets.len());
     let mut out = vec![SitarGuide::default(); 16];
-    assert_eq!(
-        sitar_session_guide(
-            h,
-            &cam,
-            60.0,
-            1080,
-            1920,
-            40.0,
-            out.as_mut_ptr(),
-            16,
-            &mut len
-        ),
-        OK
-    );
+    assert_eq!(guide(out.as_mut_ptr(), 16, &mut len), OK);
     let view = sitar_core::ScreenView::new(
         cam.to_core(),
         sitar_core::Convention::Unity,
@@ -262,43 +235,33 @@ fn guide_and_venue_cells_do_not_allocate() {
         1,
         &mut n_guides,
     );
+    let guide = |cam: &SitarPose, capacity: usize, n: &mut usize, out: &mut [SitarGuide]| {
+        sitar_session_guide(
+            h,
+            cam,
+            60.0,
+            1080,
+            1920,
+            40.0,
+            out.as_mut_ptr(),
+            capacity,
+            n,
+        )
+    };
     let before = counting_allocator::allocations();
     for i in 0..1_000 {
         let cam = SitarPose {
             px: 0.01 * f64::from(i),
             ..cam
         };
-        assert_eq!(
-            sitar_session_guide(
-                h,
-                &cam,
-                60.0,
-                1080,
-                1920,
-                40.0,
-                guides.as_mut_ptr(),
-                64,
-                &mut n_guides
-            ),
-            OK
-        );
+        assert_eq!(guide(&cam, 64, &mut n_guides, &mut guides), OK);
         assert_eq!(
             sitar_session_venue_cells(h, cells.as_mut_ptr(), 64, &mut n_cells),
             OK
         );
         // Too small: the count is set, still nothing allocated.
         assert_eq!(
-            sitar_session_guide(
-                h,
-                &cam,
-                60.0,
-                1080,
-                1920,
-                40.0,
-                guides.as_mut_ptr(),
-                2,
-                &mut n_guides
-            ),
+            guide(&cam, 2, &mut n_guides, &mut guides),
             ERR_BUFFER_TOO_SMALL
         );
     }
