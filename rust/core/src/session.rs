@@ -181,22 +181,29 @@ pub(crate) struct LoadedVenue {
     pub(crate) alignment: Result<Alignment, NotAligned>,
     /// The map's cells in this session's world frame (empty while not aligned).
     pub(crate) cells: Vec<WorldCell>,
+    /// Observations of its anchor so far, and their number at the last alignment.
+    pub(crate) observed: usize,
+    pub(crate) aligned_at: usize,
 }
 
 impl LoadedVenue {
     fn new(map: VenueMap, anchors: &[AnchorObservation]) -> Self {
+        let observed = anchors.iter().filter(|o| o.anchor == map.anchor).count();
         let mut v = Self {
             alignment: Err(NotAligned {
                 reason: String::new(),
             }),
             map,
             cells: Vec::new(),
+            observed,
+            aligned_at: 0,
         };
         v.realign(anchors);
         v
     }
 
     fn realign(&mut self, anchors: &[AnchorObservation]) {
+        self.aligned_at = self.observed;
         self.alignment = crate::venue::align(anchors, &self.map.anchor);
         self.cells = match &self.alignment {
             Ok(a) => crate::venue::world_cells(&self.map, a),
@@ -808,7 +815,8 @@ impl Session {
     /// [`crate::venue::check_anchor_id`]): the pose the platform reports for the tracked image
     /// (world-from-image, in the session's convention and world frame; image +X to its
     /// right) and its tracking state. Kept in order, saved as `anchors.csv`; an observation of
-    /// the loaded venue's anchor updates the alignment at once (only `full` ones move it). Calls before
+    /// the loaded venue's anchor updates the alignment (only `full` ones move it): at once for the
+    /// first 32, then whenever their number has grown by 1/32. Calls before
     /// start or after stop are [`Error::InvalidState`].
     pub fn anchor(
         &mut self,
@@ -833,7 +841,13 @@ impl Session {
         if let Some(venue) = &mut self.venue
             && venue.map.anchor == anchor_id
         {
-            venue.realign(&self.anchors);
+            venue.observed += 1;
+            // Realigned at once while few observations exist, then whenever their number has
+            // grown by 1/32 since the last time: a median over thousands barely moves with one
+            // more, and this keeps the work per observation O(log n) amortised.
+            if venue.observed - venue.aligned_at > venue.aligned_at / 32 {
+                venue.realign(&self.anchors);
+            }
         }
         Ok(())
     }
@@ -1381,6 +1395,25 @@ mod tests {
         let loaded = Session::load(dir.path()).unwrap();
         assert_eq!(loaded.anchors(), s.anchors());
         assert_eq!(loaded.markers().unwrap(), markers);
+    }
+
+    #[test]
+    fn the_alignment_follows_the_observations_within_a_32nd() {
+        use crate::venue::Tracking;
+        let mut s = Session::new(SessionConfig::default());
+        s.start(0, pose(0)).unwrap();
+        s.load_venue(crate::venue::tests::MAP).unwrap();
+        for i in 1..=2_000i64 {
+            let x = 0.001 * (i % 7) as f64;
+            let image = Pose::new(DVec3::new(x, 1.0, 3.0), DQuat::IDENTITY);
+            s.anchor(i, "lobby-a", image, Tracking::Full).unwrap();
+            let a = s.alignment().unwrap().as_ref().unwrap();
+            let used = (a.observations + a.rejected) as i64;
+            assert!(used * 33 >= i * 32 && used <= i, "{used} of {i}");
+            if i <= 32 {
+                assert_eq!(used, i, "every one of the first 32 realigns");
+            }
+        }
     }
 
     #[test]

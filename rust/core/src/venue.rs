@@ -213,14 +213,20 @@ fn wrap(a: f64) -> f64 {
     if w <= -std::f64::consts::PI { w + t } else { w }
 }
 
-/// The median of `v` (sorted in place; the mean of the middle two for an even count).
+/// The median of `v` (reordered in place, O(n) by selection; the mean of the middle two for an
+/// even count). `v` must not be empty.
 fn median(v: &mut [f64]) -> f64 {
-    v.sort_by(f64::total_cmp);
     let n = v.len();
+    let (below, &mut upper, _) = v.select_nth_unstable_by(n / 2, f64::total_cmp);
     if n.is_multiple_of(2) {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
+        let lower = below
+            .iter()
+            .copied()
+            .max_by(f64::total_cmp)
+            .unwrap_or(upper);
+        0.5 * (lower + upper)
     } else {
-        v[n / 2]
+        upper
     }
 }
 
@@ -593,6 +599,14 @@ pub(crate) mod tests {
     }
 
     use std::f64::consts::{FRAC_PI_2, PI};
+
+    #[test]
+    fn median_by_selection() {
+        assert_eq!(median(&mut [3.0]), 3.0);
+        assert_eq!(median(&mut [4.0, 1.0, 3.0, 2.0]), 2.5);
+        assert_eq!(median(&mut [5.0, -1.0, 9.0, 0.0, 2.0]), 2.0);
+        assert_eq!(median(&mut [1.0, 1.0, 7.0, 1.0]), 1.0);
+    }
 
     #[test]
     fn headings_of_a_levelled_image_x() {
