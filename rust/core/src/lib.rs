@@ -81,8 +81,19 @@
 //! ## Persistence
 //!
 //! [`Session::save`] writes a folder (`config.json`, `trajectory.txt` TUM in integer ns,
-//! `subtrajectories.csv` with depth/normal/error/class, `results.json`, `session.json`);
+//! `subtrajectories.csv` with depth/normal/error/class, `anchors.csv`, `results.json`,
+//! `session.json`);
 //! [`Session::load`] reads it back exactly. The formats are documented on [`Session::save`].
+//!
+//! ## Venues and guidance
+//!
+//! [`Session::anchor`] records observations of a venue's printed anchor image; [`venue::align`]
+//! puts a session into the venue frame from its `full` observations (robust medians, with
+//! their spread), the one estimate the phone and the backend share; [`VenueMap`] is the
+//! backend's `map.json`, which [`Session::load_venue`] aligns to and [`Session::venue_cells`]
+//! returns in the session's world frame. [`ScreenView::guide`] places a target on the screen or
+//! on an ellipse inside its edge; [`Session::guide_into`] does it for every marker and high
+//! venue cell without allocating.
 //!
 //! ## Errors
 //!
