@@ -1,7 +1,8 @@
 //! The Unity package's UnityEngine-free logic on Mono: `SitarPlaybackRun.cs`
 //! (the playback phone: launches, pause/resume, a second launch, failures,
 //! the trajectory and status files) with the real `PlaybackLogger` of
-//! `SitarSession.cs` over the host-built `libsitar.so`, and `SitarJson.cs`,
+//! `SitarSession.cs` over the host-built `libsitar.so`, `SitarVenueView.cs` (edge arrows from
+//! the real library's guide, the kineticon, the venue layer's colours), and `SitarJson.cs`,
 //! whose documents are parsed here with serde_json. Compiled with `mcs`
 //! (warnings as errors) with `unity-plugin/Tests~/LogicTest.cs`. Skipped,
 //! loudly, where `mcs` or `mono` is missing.
@@ -31,8 +32,9 @@ fn unity_playback_logic_and_json_run_on_mono_with_the_real_library() {
             .arg(plugin.join("Runtime/SitarSession.cs"))
             .arg(plugin.join("Runtime/SitarJson.cs"))
             .arg(plugin.join("Runtime/SitarPlaybackRun.cs"))
+            .arg(plugin.join("Runtime/SitarVenueView.cs"))
             .arg(plugin.join("Tests~/LogicTest.cs")),
-        "mcs (SitarPlaybackRun, SitarJson, LogicTest)",
+        "mcs (SitarPlaybackRun, SitarJson, SitarVenueView, LogicTest)",
     );
     let work = dir.path().join("work");
     std::fs::create_dir(&work).unwrap();

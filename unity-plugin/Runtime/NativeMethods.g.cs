@@ -193,6 +193,53 @@ namespace Sitar
         internal static extern int sitar_session_export_gltf(ulong h, byte* path);
 
         /// <summary>
+        ///  Records an observation of the venue's anchor image `anchor_id` (1…64 bytes of UTF-8,
+        ///  no comma, quote or control character): `pose` is the pose the platform reports for the
+        ///  tracked image (world-from-image, the session's convention; image +X to its right),
+        ///  `tracking` 0 none, 1 limited, 2 full (only full observations align). Saved as
+        ///  `anchors.csv`. A bad id, a non-finite pose or another tracking value is
+        ///  `SITAR_ERR_INVALID_ARGUMENT` naming it; before start or after stop
+        ///  `SITAR_ERR_INVALID_STATE`.
+        /// </summary>
+        [DllImport(__DllName, EntryPoint = "sitar_session_anchor", CallingConvention = CallingConvention.Cdecl, ExactSpelling = true)]
+        internal static extern int sitar_session_anchor(ulong h, long t_ns, byte* anchor_id, SitarPose* pose, int tracking);
+
+        /// <summary>
+        ///  Loads a venue map (the backend's `GET /v1/venues/{id}/map.json`) and aligns the
+        ///  session to it from its anchor observations, refined as more arrive. A malformed map is
+        ///  `SITAR_ERR_PARSE` naming the key; a map of another convention
+        ///  `SITAR_ERR_INVALID_ARGUMENT`.
+        /// </summary>
+        [DllImport(__DllName, EntryPoint = "sitar_session_load_venue", CallingConvention = CallingConvention.Cdecl, ExactSpelling = true)]
+        internal static extern int sitar_session_load_venue(ulong h, byte* map_json);
+
+        /// <summary>
+        ///  The venue's cells in this session's world frame, in the map's order (array-output
+        ///  convention). `SITAR_ERR_INVALID_STATE` without a venue or before a full observation of
+        ///  its anchor. Allocation-free.
+        /// </summary>
+        [DllImport(__DllName, EntryPoint = "sitar_session_venue_cells", CallingConvention = CallingConvention.Cdecl, ExactSpelling = true)]
+        internal static extern int sitar_session_venue_cells(ulong h, SitarVenueCell* @out, System.UIntPtr capacity, System.UIntPtr* out_len);
+
+        /// <summary>
+        ///  Where each marker (in `sitar_session_markers` order), then each high-class venue
+        ///  surface cell (in `sitar_session_venue_cells` order), is shown on a `width_px` ×
+        ///  `height_px` screen (origin top-left, y down) seen by `camera` (the display-oriented
+        ///  camera pose, the session's convention) with vertical field of view `vfov_deg`: with
+        ///  `(x, y, z)` the target in the camera's frame (x right, y up, z along the view) and
+        ///  `f = (height_px/2) / tan(vfov_deg/2)`, a target with z &gt; 0 projecting onto the
+        ///  screen at `(width_px/2 + f·x/z, height_px/2 − f·y/z)` is `on_screen = 1` there; any
+        ///  other is pinned to the ellipse with semi-axes `width_px/2 − margin_px`,
+        ///  `height_px/2 − margin_px` around the centre in the direction `d = (f·x, −f·y)`
+        ///  (behind the camera it keeps its side). `angle_rad = atan2(d_y, d_x)`, `distance_m`
+        ///  from the camera. Array-output convention; pure and allocation-free. vfov outside
+        ///  (0, 180), a size ≤ 0 or a margin outside [0, half the shorter side) is
+        ///  `SITAR_ERR_INVALID_ARGUMENT`.
+        /// </summary>
+        [DllImport(__DllName, EntryPoint = "sitar_session_guide", CallingConvention = CallingConvention.Cdecl, ExactSpelling = true)]
+        internal static extern int sitar_session_guide(ulong h, SitarPose* camera, double vfov_deg, int width_px, int height_px, double margin_px, SitarGuide* @out, System.UIntPtr capacity, System.UIntPtr* out_len);
+
+        /// <summary>
         ///  Loads a saved session folder as a new session.
         /// </summary>
         [DllImport(__DllName, EntryPoint = "sitar_session_load", CallingConvention = CallingConvention.Cdecl, ExactSpelling = true)]
@@ -633,6 +680,72 @@ namespace Sitar
         ///  Thumbnail height in display orientation (0 without an image).
         /// </summary>
         public uint thumbnail_height;
+    }
+
+    /// <summary>
+    ///  Where a target is shown on the screen (`sitar_session_guide`): its projection, or, when it
+    ///  is off the screen or behind the camera, the point on the ellipse inside the screen's edge
+    ///  in its direction.
+    /// </summary>
+    [StructLayout(LayoutKind.Sequential)]
+    internal unsafe partial struct SitarGuide
+    {
+        /// <summary>
+        ///  1 when the target projects onto the screen, else 0.
+        /// </summary>
+        public int on_screen;
+        /// <summary>
+        ///  Pixel x from the left.
+        /// </summary>
+        public double x_px;
+        /// <summary>
+        ///  Pixel y from the top.
+        /// </summary>
+        public double y_px;
+        /// <summary>
+        ///  `atan2(d_y, d_x)` with `d = (f·x, −f·y)`: 0 points right, positive clockwise on screen.
+        /// </summary>
+        public double angle_rad;
+        /// <summary>
+        ///  The target's distance from the camera (m).
+        /// </summary>
+        public double distance_m;
+    }
+
+    /// <summary>
+    ///  A venue map cell in the current session's world frame (`sitar_session_venue_cells`).
+    /// </summary>
+    [StructLayout(LayoutKind.Sequential)]
+    internal unsafe partial struct SitarVenueCell
+    {
+        /// <summary>
+        ///  Centre x.
+        /// </summary>
+        public double px;
+        /// <summary>
+        ///  Centre y.
+        /// </summary>
+        public double py;
+        /// <summary>
+        ///  Centre z.
+        /// </summary>
+        public double pz;
+        /// <summary>
+        ///  0 path (where cameras were), 1 surface (what they looked at).
+        /// </summary>
+        public int kind;
+        /// <summary>
+        ///  0 unknown, 1 low, 2 medium, 3 high.
+        /// </summary>
+        public int error_class;
+        /// <summary>
+        ///  Sessions with a sub-trajectory in the cell.
+        /// </summary>
+        public uint sessions;
+        /// <summary>
+        ///  The cell's error: the 30 % trimmed mean of its sub-trajectories' errors (m).
+        /// </summary>
+        public double error_m;
     }
 
     /// <summary>

@@ -70,6 +70,55 @@ namespace Sitar
         High = 3,
     }
 
+    /// <summary>How well the platform tracked the venue's anchor image in one observation.</summary>
+    public enum Tracking
+    {
+        /// <summary>Not tracked (AR Foundation TrackingState.None).</summary>
+        None = 0,
+        /// <summary>Limited (TrackingState.Limited): recorded, never used for alignment.</summary>
+        Limited = 1,
+        /// <summary>Fully tracked (TrackingState.Tracking): the observations that align.</summary>
+        Full = 2,
+    }
+
+    /// <summary>A venue map cell's kind.</summary>
+    public enum CellKind
+    {
+        /// <summary>Where cameras were (sub-trajectory midpoints).</summary>
+        Path = 0,
+        /// <summary>What cameras looked at (surface points).</summary>
+        Surface = 1,
+    }
+
+    /// <summary>
+    /// A venue map cell in this session's world frame (the layout of the native
+    /// SitarVenueCell, so an array of them is filled in place).
+    /// </summary>
+    [StructLayout(LayoutKind.Sequential)]
+    public struct VenueCell
+    {
+        public double Px, Py, Pz;
+        public CellKind Kind;
+        public ErrorClass ErrorClass;
+        /// <summary>Sessions with a sub-trajectory in the cell.</summary>
+        public uint Sessions;
+        /// <summary>The cell's error (m): 30 % trimmed mean of its sub-trajectories' errors.</summary>
+        public double ErrorM;
+    }
+
+    /// <summary>
+    /// Where a target is shown: its projection when on screen, else the point on the ellipse
+    /// inside the screen's edge in its direction (the layout of the native SitarGuide).
+    /// Pixels from the top-left, y down; AngleRad 0 points right, positive clockwise.
+    /// </summary>
+    [StructLayout(LayoutKind.Sequential)]
+    public struct Guide
+    {
+        private int onScreen;
+        public double XPx, YPx, AngleRad, DistanceM;
+        public bool OnScreen { get { return onScreen != 0; } }
+    }
+
     /// <summary>What Stop reports (counting as in ARCHITECTURE.md).</summary>
     public struct Summary
     {
@@ -561,6 +610,68 @@ namespace Sitar
                 plan.Frustums[i] = new Frustum { Pose = Pose.FromNative(frus[i].pose), Subtrajectory = frus[i].subtrajectory, ErrorClass = (ErrorClass)frus[i].error_class };
             }
             return plan;
+        }
+
+        /// <summary>
+        /// An observation of the venue's anchor image: the pose AR Foundation reports for the
+        /// ARTrackedImage (world-from-image; image +X to its right) and its tracking state.
+        /// An empty or over-long id (> 64 bytes), a non-finite pose or an unknown tracking
+        /// value is InvalidArgument; before Start or after Stop InvalidState.
+        /// </summary>
+        public void Anchor(long tNs, string anchorId, Pose imagePose, Tracking tracking)
+        {
+            SitarPose p = imagePose.ToNative();
+            fixed (byte* a = Native.Utf8(anchorId))
+            {
+                Native.Check(NativeMethods.sitar_session_anchor(Id, tNs, a, &p, (int)tracking));
+            }
+        }
+
+        /// <summary>Loads the venue's map.json; the session is aligned once the anchor is fully tracked.</summary>
+        public void LoadVenue(string mapJson)
+        {
+            fixed (byte* t = Native.Utf8(mapJson))
+            {
+                Native.Check(NativeMethods.sitar_session_load_venue(Id, t));
+            }
+        }
+
+        /// <summary>
+        /// Fills <paramref name="buffer"/> with the venue's cells in this session's world frame
+        /// and returns their number; when it is larger than the buffer nothing is written (grow
+        /// the buffer and call again). No allocation. InvalidState before the anchor is fully
+        /// tracked.
+        /// </summary>
+        public int VenueCells(VenueCell[] buffer)
+        {
+            UIntPtr len;
+            int st;
+            fixed (VenueCell* p = buffer)
+            {
+                st = NativeMethods.sitar_session_venue_cells(Id, (SitarVenueCell*)p, Native.Cap(buffer), &len);
+            }
+            if (st != (int)SitarErrorCode.BufferTooSmall) Native.Check(st);
+            return (int)len.ToUInt64();
+        }
+
+        /// <summary>
+        /// Where each marker (Markers() order), then each high venue surface cell, is shown on
+        /// a widthPx × heightPx screen seen by <paramref name="camera"/> (the display-oriented
+        /// camera pose) with vertical field of view vfovDeg; off-screen targets are pinned to
+        /// the ellipse marginPx inside the edges. Fills <paramref name="buffer"/> and returns
+        /// the number of targets (nothing written when it exceeds the buffer). No allocation.
+        /// </summary>
+        public int Guide(Pose camera, double vfovDeg, int widthPx, int heightPx, double marginPx, Guide[] buffer)
+        {
+            SitarPose c = camera.ToNative();
+            UIntPtr len;
+            int st;
+            fixed (Guide* p = buffer)
+            {
+                st = NativeMethods.sitar_session_guide(Id, &c, vfovDeg, widthPx, heightPx, marginPx, (SitarGuide*)p, Native.Cap(buffer), &len);
+            }
+            if (st != (int)SitarErrorCode.BufferTooSmall) Native.Check(st);
+            return (int)len.ToUInt64();
         }
 
         /// <summary>The logged poses as TUM text (integer nanoseconds).</summary>

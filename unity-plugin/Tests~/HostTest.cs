@@ -281,6 +281,50 @@ static class HostTest
         }
     }
 
+    const string VenueMap = "{\"id\":\"v0123456789abcdef\",\"name\":\"Hall\",\"anchor\":\"hall\",\"cell_m\":0.25,"
+        + "\"convention\":\"unity\",\"unit\":\"m\",\"sessions\":[],\"cells\":["
+        + "{\"center\":[1.0,0.0,0.5],\"kind\":\"path\",\"sessions\":1,\"subtrajectories\":2,\"error_m\":0.02,\"class\":\"low\",\"directions\":[2,0,0,0,0,0,0,0]},"
+        + "{\"center\":[0.0,1.0,0.0],\"kind\":\"surface\",\"sessions\":2,\"subtrajectories\":3,\"error_m\":0.3,\"class\":\"high\",\"directions\":[0,0,3,0,0,0,0,0]}]}";
+
+    static void Venue()
+    {
+        using (var s = new SitarSession())
+        {
+            double q = Math.Sqrt(0.5);
+            // On the floor 2 m ahead, its +X turned 90° about +Y (to −Z).
+            var image = new Pose(0, 0, 2, 0, q, 0, q);
+            ExpectSitar(SitarErrorCode.InvalidState, "not recording", () => s.Anchor(0, "hall", image, Tracking.Full));
+            s.Start(0, PoseAt(0));
+            ExpectSitar(SitarErrorCode.InvalidArgument, "anchor_id", () => s.Anchor(1, "", image, Tracking.Full));
+            ExpectSitar(SitarErrorCode.InvalidArgument, "anchor_id", () => s.Anchor(1, new string('x', 65), image, Tracking.Full));
+            ExpectSitar(SitarErrorCode.InvalidArgument, "pose", () => s.Anchor(1, "hall", new Pose(double.NaN, 0, 2, 0, q, 0, q), Tracking.Full));
+            ExpectSitar(SitarErrorCode.InvalidArgument, "tracking", () => s.Anchor(1, "hall", image, (Tracking)5));
+            ExpectSitar(SitarErrorCode.Null, "anchor_id", () => s.Anchor(1, null, image, Tracking.Full));
+            var cells = new VenueCell[1];
+            ExpectSitar(SitarErrorCode.InvalidState, "no venue", () => s.VenueCells(cells));
+            s.LoadVenue(VenueMap);
+            s.Anchor(1, "hall", image, Tracking.Limited);
+            ExpectSitar(SitarErrorCode.InvalidState, "full tracking", () => s.VenueCells(cells));
+            s.Anchor(2, "hall", image, Tracking.Full);
+            Check(s.VenueCells(cells) == 2 && cells[0].ErrorM == 0, "too small: count only");
+            cells = new VenueCell[2];
+            Check(s.VenueCells(cells) == 2, "two cells");
+            Near(cells[0].Px, 0.5, "cell x", 1e-12);
+            Near(cells[0].Pz, 1.0, "cell z", 1e-12);
+            Check(cells[0].Kind == CellKind.Path && cells[0].ErrorClass == ErrorClass.Low && cells[0].Sessions == 1, "path cell");
+            Check(cells[1].Kind == CellKind.Surface && cells[1].ErrorClass == ErrorClass.High && cells[1].ErrorM == 0.3, "surface cell");
+            var guides = new Guide[4];
+            Check(s.Guide(new Pose(0, 1, 0, 0, 0, 0, 1), 60, 1080, 1920, 40, guides) == 1, "one target");
+            Check(guides[0].OnScreen, "ahead is on screen");
+            Near(guides[0].XPx, 540, "centre x");
+            Near(guides[0].YPx, 960, "centre y");
+            Near(guides[0].DistanceM, 2, "distance");
+            s.Guide(new Pose(0.3, 1, 0, 0, 1, 0, 0), 60, 1080, 1920, 40, guides);
+            Check(!guides[0].OnScreen && guides[0].XPx > 540, "behind, to the right");
+            ExpectSitar(SitarErrorCode.InvalidArgument, "vfov_deg", () => s.Guide(new Pose(0, 0, 0, 0, 0, 0, 1), 0, 1080, 1920, 40, guides));
+        }
+    }
+
     static int Main(string[] args)
     {
         Check(SitarSession.Version == args[0], "version " + SitarSession.Version);
@@ -289,6 +333,7 @@ static class HostTest
         Playback(args[1]);
         Upload(args[1]);
         WindowSettings(args[1]);
+        Venue();
         Console.WriteLine("PASSED " + checks + " checks");
         return 0;
     }

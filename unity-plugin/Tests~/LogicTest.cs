@@ -212,6 +212,52 @@ static class LogicTest
         }
     }
 
+    /// <summary>Edge arrows from the real library's guide, the kineticon, the layer colours.</summary>
+    static void VenueLayer()
+    {
+        string map = "{\"id\":\"v0123456789abcdef\",\"name\":\"Hall\",\"anchor\":\"hall\",\"cell_m\":0.25,"
+            + "\"convention\":\"unity\",\"unit\":\"m\",\"sessions\":[],\"cells\":["
+            + "{\"center\":[0.0,1.0,0.0],\"kind\":\"surface\",\"sessions\":2,\"subtrajectories\":3,\"error_m\":0.3,\"class\":\"high\",\"directions\":[0,0,3,0,0,0,0,0]},"
+            + "{\"center\":[3.0,1.0,0.0],\"kind\":\"surface\",\"sessions\":2,\"subtrajectories\":3,\"error_m\":0.2,\"class\":\"high\",\"directions\":[0,0,3,0,0,0,0,0]}]}";
+        using (var s = new SitarSession())
+        {
+            s.Start(0, new Pose(0, 0, 0, 0, 0, 0, 1));
+            s.LoadVenue(map);
+            s.Anchor(1, "hall", new Pose(0, 0, 2, 0, 0, 0, 1), Tracking.Full);
+            // Camera at (0, 1, 0) looking +Z: cell 0 (0, 1, 2) ahead; cell 1 (3, 1, 2) off to the right.
+            var guides = new Guide[4];
+            int n = s.Guide(new Pose(0, 1, 0, 0, 0, 0, 1), 60, 1080, 1920, 40, guides);
+            Check(n == 2 && guides[0].OnScreen && !guides[1].OnScreen, "one target on screen, one off");
+            var arrows = new EdgeArrow[4];
+            int k = VenueView.EdgeArrows(guides, n, 1920, arrows);
+            Check(k == 1 && arrows[0].Index == 1, "one arrow, for the off-screen cell");
+            Check(Math.Abs(arrows[0].X - 1040) < 1e-3 && Math.Abs(arrows[0].Y - 960) < 1e-3, "at the right end of the ellipse: " + arrows[0].X + ", " + arrows[0].Y);
+            Check(Math.Abs(arrows[0].RotationDeg) < 1e-6, "pointing right");
+            // Above and behind: Unity's y is up, its rotation counter-clockwise (+90°).
+            guides[1] = new Guide();
+            n = s.Guide(new Pose(0, -5, 0, 0, 1, 0, 0), 60, 1080, 1920, 40, guides);
+            k = VenueView.EdgeArrows(guides, n, 1920, arrows);
+            Check(k == 2 && Math.Abs(arrows[0].RotationDeg - 90) < 1e-3 && arrows[0].Y > 960, "up and behind: " + arrows[0].RotationDeg + " at y " + arrows[0].Y);
+            Check(VenueView.EdgeArrows(guides, n, 1920, new EdgeArrow[1]) == 1, "as many arrows as fit");
+        }
+
+        var kin = new Kineticon { PulseSeconds = 3, PulsesPerSecond = 1.5, Amplitude = 0.4 };
+        Check(kin.Scale(2, false, 10) == 1, "not seen yet: still");
+        Check(kin.Scale(2, true, 10) == 1, "first seen: the pulse starts at rest");
+        Check(kin.Scale(2, true, 10 + 1.0 / 3) > 1.3, "a third of a second later: swung out");
+        Check(kin.Scale(2, false, 11) > 1, "keeps pulsing out of view within its first seconds");
+        Check(kin.Scale(2, true, 13.01) == 1, "after its first seconds: still");
+        Check(kin.Scale(0, true, 13.01) == 1 && kin.Scale(0, true, 13.5) > 1, "each marker has its own clock");
+        kin.Reset();
+        Check(kin.Scale(2, true, 20) == 1 && kin.Scale(2, true, 20 + 1.0 / 3) > 1.3, "reset: pulses again");
+
+        float r, g, b, a, a2;
+        VenueView.CellColor(CellKind.Surface, ErrorClass.High, out r, out g, out b, out a);
+        Check(r > 0.8f && g < 0.2f && a > 0.3f && a < 1, "high surface: translucent red");
+        VenueView.CellColor(CellKind.Path, ErrorClass.High, out r, out g, out b, out a2);
+        Check(a2 < a, "path cells: a fainter trail");
+    }
+
     static int Main(string[] args)
     {
         string work = args[0];
@@ -220,6 +266,7 @@ static class LogicTest
         ASecondLaunchReplacesTheRunningOne(work);
         FailuresReachTheStatusFile(work);
         Json();
+        VenueLayer();
         Console.WriteLine("PASSED " + checks + " checks");
         return 0;
     }

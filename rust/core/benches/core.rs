@@ -256,9 +256,35 @@ fn bench_image(c: &mut Criterion) {
     });
 }
 
+/// The venue alignment the phone recomputes on every anchor observation: `align` over 300
+/// (10 s at 30 Hz) and 18 000 (10 min) full observations.
+fn bench_venue(c: &mut Criterion) {
+    use sitar_core::Tracking;
+    use sitar_core::venue::{AnchorObservation, align};
+    for n in [300usize, 18_000] {
+        let observations: Vec<AnchorObservation> = (0..n)
+            .map(|i| {
+                let e = ((i * 7919) % 1000) as f64 / 1000.0 - 0.5;
+                AnchorObservation {
+                    t_ns: i as i64,
+                    anchor: "hall".to_owned(),
+                    pose: Pose::new(
+                        DVec3::new(1.0 + 0.01 * e, 1.5, 2.0 - 0.01 * e),
+                        DQuat::from_rotation_y(0.4 + 0.01 * e),
+                    ),
+                    tracking: Tracking::Full,
+                }
+            })
+            .collect();
+        c.bench_function(&format!("venue/align_{n}_observations"), |b| {
+            b.iter(|| align(black_box(&observations), "hall"))
+        });
+    }
+}
+
 criterion_group! {
     name = benches;
     config = Criterion::default().warm_up_time(Duration::from_millis(500)).measurement_time(Duration::from_secs(2)).sample_size(30);
-    targets = bench_frame, bench_depth, bench_markers, bench_image
+    targets = bench_frame, bench_depth, bench_markers, bench_image, bench_venue
 }
 criterion_main!(benches);

@@ -54,6 +54,10 @@ pub struct SessionConfig {
     /// Longest side of the midpoint thumbnails in pixels (default 160; 8…1024).
     #[serde(default = "default_thumbnail_px")]
     pub thumbnail_px: u32,
+    /// The venue the session's recording joins on upload (a venue id, `v` and 16 lowercase
+    /// hex digits, as `POST /v1/venues` returns it; default none).
+    #[serde(default)]
+    pub venue: Option<String>,
 }
 
 fn default_images() -> bool {
@@ -85,6 +89,7 @@ impl Default for SessionConfig {
             data_dir: None,
             images: true,
             thumbnail_px: 160,
+            venue: None,
         }
     }
 }
@@ -118,6 +123,7 @@ const KEYS: &[&str] = &[
     "data_dir",
     "images",
     "thumbnail_px",
+    "venue",
 ];
 
 fn config_err(key: &str, message: impl Into<String>) -> Error {
@@ -166,6 +172,7 @@ impl SessionConfig {
                 "data_dir" => config.data_dir = field(k, value)?,
                 "images" => config.images = field(k, value)?,
                 "thumbnail_px" => config.thumbnail_px = field(k, value)?,
+                "venue" => config.venue = field(k, value)?,
                 _ => {
                     return Err(config_err(
                         k,
@@ -239,6 +246,18 @@ impl SessionConfig {
         non_negative("medium_threshold_deg", self.medium_threshold_deg)?;
         non_negative("unreliable_mean_error_m", self.unreliable_mean_error_m)?;
         non_negative("unreliable_mean_error_deg", self.unreliable_mean_error_deg)?;
+        if let Some(v) = &self.venue
+            && !(v.len() == 17
+                && v.starts_with('v')
+                && v[1..]
+                    .bytes()
+                    .all(|b| b.is_ascii_digit() || (b'a'..=b'f').contains(&b)))
+        {
+            return Err(config_err(
+                "venue",
+                format!("`{v}` is not a venue id (`v` and 16 lowercase hex digits)"),
+            ));
+        }
         if !(8..=1024).contains(&self.thumbnail_px) {
             return Err(config_err(
                 "thumbnail_px",
@@ -297,6 +316,17 @@ mod tests {
         match err {
             Error::Config { key, .. } => key,
             other => panic!("expected a config error, got {other}"),
+        }
+    }
+
+    #[test]
+    fn venue_is_a_venue_id() {
+        let c = SessionConfig::from_json(r#"{"venue":"v0123456789abcdef"}"#).unwrap();
+        assert_eq!(c.venue.as_deref(), Some("v0123456789abcdef"));
+        assert_eq!(SessionConfig::from_json(&c.to_json()).unwrap(), c);
+        for bad in [r#""lobby""#, r#""v0123456789ABCDEF""#, r#""v0123""#, "3"] {
+            let e = SessionConfig::from_json(&format!(r#"{{"venue":{bad}}}"#)).unwrap_err();
+            assert_eq!(key_of(e), "venue");
         }
     }
 

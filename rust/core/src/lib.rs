@@ -81,8 +81,19 @@
 //! ## Persistence
 //!
 //! [`Session::save`] writes a folder (`config.json`, `trajectory.txt` TUM in integer ns,
-//! `subtrajectories.csv` with depth/normal/error/class, `results.json`, `session.json`);
+//! `subtrajectories.csv` with depth/normal/error/class, `anchors.csv`, `results.json`,
+//! `session.json`);
 //! [`Session::load`] reads it back exactly. The formats are documented on [`Session::save`].
+//!
+//! ## Venues and guidance
+//!
+//! [`Session::anchor`] records observations of a venue's printed anchor image; [`venue::align`]
+//! puts a session into the venue frame from its `full` observations (robust medians, with
+//! their spread), the one estimate the phone and the backend share; [`VenueMap`] is the
+//! backend's `map.json`, which [`Session::load_venue`] aligns to and [`Session::venue_cells`]
+//! returns in the session's world frame. [`ScreenView::guide`] places a target on the screen or
+//! on an ellipse inside its edge; [`Session::guide_into`] does it for every marker and high
+//! venue cell without allocating.
 //!
 //! ## Errors
 //!
@@ -96,10 +107,12 @@
 mod classes;
 mod config;
 mod convention;
+mod csv_rows;
 mod depth;
 mod error;
 mod evidence;
 mod evidence_table;
+mod guide;
 mod image;
 mod markers;
 mod persist;
@@ -110,6 +123,7 @@ mod results;
 mod session;
 mod thumbnail;
 mod tum;
+pub mod venue;
 
 pub use classes::{DEFAULT_SETTING, ErrorClass, Thresholds};
 pub use config::SessionConfig;
@@ -123,6 +137,7 @@ pub use evidence::{
     NO_DEPTH_VALID_SHARE, OVEREXPOSED_SHARE, SessionMedians, likely_causes,
 };
 pub use evidence_table::EVIDENCE_HEADER;
+pub use guide::{Guide, ScreenView};
 pub use image::{
     FAST_THRESHOLD, ImageProperties, LumaImage, MAX_FAST_WIDTH, SATURATED_LUMA, fast_corners,
 };
@@ -137,3 +152,4 @@ pub use session::{
 };
 pub use thumbnail::{THUMBNAIL_QUALITY, downsample_rotated, encode_jpeg, thumbnail_size};
 pub use tum::{parse_tum_ns, to_tum};
+pub use venue::{Alignment, AnchorObservation, Tracking, VenueMap};

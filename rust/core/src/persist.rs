@@ -64,6 +64,7 @@ impl Session {
     /// | `subtrajectories.csv` | one row per sub-trajectory, columns below |
     /// | `results.json` | the results in their JSON form (only once results were loaded) |
     /// | `evidence.csv`, `thumbnails/<k>.jpg` | what the camera saw at each midpoint (format: [`crate::EVIDENCE_HEADER`]) |
+    /// | `anchors.csv` | every anchor observation: `t_ns,anchor,px,py,pz,qx,qy,qz,qw,tracking` (world-from-image pose; `none`, `limited` or `full`); a folder without it has none |
     /// | `session.json` | recorder state: `version`, `state`, `frames`, `start`/`stop` (`{t_ns, pose}`), `last_t_ns`, `last_position`, `length_m`, `sub_start_ns`, `frame_intervals_ns`, `path_m` (per logged pose), `lookup_tolerance_ns` (only if set) |
     ///
     /// `subtrajectories.csv` columns: `index,start_ns,mid_ns,end_ns,depth,pixel_x,pixel_y,
@@ -138,6 +139,10 @@ impl Session {
             let _ = writeln!(csv, ",{},{class}", opt(e));
         }
         write_file(&dir.join("subtrajectories.csv"), &csv)?;
+        write_file(
+            &dir.join("anchors.csv"),
+            &crate::venue::anchors_csv(&self.anchors),
+        )?;
 
         let results_path = dir.join("results.json");
         match &self.results {
@@ -247,6 +252,11 @@ impl Session {
             session.check_results(r)?;
         }
         session.results = results;
+        let anchors_path = dir.join("anchors.csv");
+        if anchors_path.exists() {
+            session.anchors =
+                crate::venue::parse_anchors_csv(&read_file(&anchors_path)?, "anchors.csv")?;
+        }
         session.tolerance_ns = None;
         session
             .set_lookup_tolerance_ns(file.lookup_tolerance_ns)
@@ -254,6 +264,7 @@ impl Session {
         if session.state == SessionState::Stopped {
             session.tolerance_ns = Some(session.compute_tolerance_ns());
         }
+        session.refresh_markers();
         Ok(session)
     }
 }
@@ -261,33 +272,9 @@ impl Session {
 fn parse_table(text: &str) -> Result<Vec<SubTrajectory>, Error> {
     const SRC: &str = "subtrajectories.csv";
     let columns: Vec<&str> = HEADER.split(',').collect();
-    let mut lines = text.lines().enumerate();
-    match lines.next() {
-        Some((_, h)) if h.trim() == HEADER || h.trim() == header(ErrorUnit::Degrees) => {}
-        _ => {
-            return Err(Error::parse(
-                SRC,
-                1,
-                "header",
-                format!("expected `{HEADER}`"),
-            ));
-        }
-    }
+    let degrees = header(ErrorUnit::Degrees);
     let mut subs = Vec::new();
-    for (i, line) in lines {
-        let line_no = i + 1;
-        if line.trim().is_empty() {
-            continue;
-        }
-        let cells: Vec<&str> = line.split(',').collect();
-        if cells.len() != columns.len() {
-            return Err(Error::parse(
-                SRC,
-                line_no,
-                "row",
-                format!("expected {} fields, found {}", columns.len(), cells.len()),
-            ));
-        }
+    for (line_no, cells) in crate::csv_rows::rows(text, SRC, &[HEADER, &degrees])? {
         let cell =
             |name: &str| -> &str { cells[columns.iter().position(|c| *c == name).unwrap_or(0)] };
         fn num<T: std::str::FromStr>(line: usize, name: &str, s: &str) -> Result<T, Error> {

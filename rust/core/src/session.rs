@@ -7,9 +7,11 @@ use crate::depth::sample_surface;
 use crate::evidence::{DepthProperties, Evidence, MotionProperties, SessionMedians, likely_causes};
 use crate::markers::{MarkerCandidate, select_markers};
 use crate::thumbnail::{PixelScratch, downsample_rotated, encode_jpeg};
+use crate::venue::{Alignment, AnchorObservation, NotAligned, Tracking, VenueMap, WorldCell};
 use crate::{
-    DepthImage, DepthSample, DisplayRotation, Error, ErrorClass, ImageProperties, Intrinsics,
-    InvalidDepth, LumaImage, Marker, Pose, RenderPlan, Results, SessionConfig,
+    DepthImage, DepthSample, DisplayRotation, Error, ErrorClass, Guide, ImageProperties,
+    Intrinsics, InvalidDepth, LumaImage, Marker, Pose, RenderPlan, Results, ScreenView,
+    SessionConfig,
 };
 
 /// What a frame asks of the app (bit set; the C ABI's `out_flags`).
@@ -162,6 +164,52 @@ pub struct Session {
     pub(crate) tolerance_ns: Option<i64>,
     /// A lookup tolerance set by the app, replacing the default.
     pub(crate) tolerance_override_ns: Option<i64>,
+    /// The markers of the current results and depth samples (empty without results), kept
+    /// so that [`Session::guide_into`] needs no allocation.
+    pub(crate) markers: Vec<Marker>,
+    /// Every anchor observation, in call order.
+    pub(crate) anchors: Vec<AnchorObservation>,
+    /// The venue loaded with [`Session::load_venue`], its alignment and its cells in the
+    /// world frame.
+    pub(crate) venue: Option<LoadedVenue>,
+}
+
+/// A venue map and this session's place in it.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct LoadedVenue {
+    pub(crate) map: VenueMap,
+    pub(crate) alignment: Result<Alignment, NotAligned>,
+    /// The map's cells in this session's world frame (empty while not aligned).
+    pub(crate) cells: Vec<WorldCell>,
+    /// Observations of its anchor so far, and their number at the last alignment.
+    pub(crate) observed: usize,
+    pub(crate) aligned_at: usize,
+}
+
+impl LoadedVenue {
+    fn new(map: VenueMap, anchors: &[AnchorObservation]) -> Self {
+        let observed = anchors.iter().filter(|o| o.anchor == map.anchor).count();
+        let mut v = Self {
+            alignment: Err(NotAligned {
+                reason: String::new(),
+            }),
+            map,
+            cells: Vec::new(),
+            observed,
+            aligned_at: 0,
+        };
+        v.realign(anchors);
+        v
+    }
+
+    fn realign(&mut self, anchors: &[AnchorObservation]) {
+        self.aligned_at = self.observed;
+        self.alignment = crate::venue::align(anchors, &self.map.anchor);
+        self.cells = match &self.alignment {
+            Ok(a) => crate::venue::world_cells(&self.map, a),
+            Err(_) => Vec::new(),
+        };
+    }
 }
 
 /// Frames pre-reserved: ten minutes at 30 fps without regrowth on the frame path.
@@ -194,6 +242,9 @@ impl Session {
             results: None,
             tolerance_ns: None,
             tolerance_override_ns: None,
+            markers: Vec::new(),
+            anchors: Vec::new(),
+            venue: None,
         }
     }
 
@@ -355,6 +406,7 @@ impl Session {
         match result {
             Ok(sample) => {
                 sub.depth = DepthStatus::Valid(sample);
+                self.refresh_markers();
                 Ok(())
             }
             Err(Error::InvalidDepth(why)) => {
@@ -505,6 +557,7 @@ impl Session {
         self.stop = Some((t_ns, pose));
         self.state = SessionState::Stopped;
         self.tolerance_ns = Some(self.compute_tolerance_ns());
+        self.refresh_markers();
         Ok(self.make_summary())
     }
 
@@ -588,6 +641,7 @@ impl Session {
         let results = Results::parse(csv_or_json)?;
         self.check_results(&results)?;
         self.results = Some(results);
+        self.refresh_markers();
         Ok(())
     }
 
@@ -638,6 +692,7 @@ impl Session {
             return Err(Error::arg("tolerance_ns", format!("{t} is negative")));
         }
         self.tolerance_override_ns = tolerance_ns;
+        self.refresh_markers();
         Ok(())
     }
 
@@ -755,6 +810,128 @@ impl Session {
     pub fn trajectory_tum(&self) -> String {
         crate::tum::to_tum(self.logged.iter().map(|l| (l.t_ns, &l.pose)))
     }
+
+    /// Records an observation of anchor image `anchor_id` (1…64 bytes; see
+    /// [`crate::venue::check_anchor_id`]): the pose the platform reports for the tracked image
+    /// (world-from-image, in the session's convention and world frame; image +X to its
+    /// right) and its tracking state. Kept in order, saved as `anchors.csv`; an observation of
+    /// the loaded venue's anchor updates the alignment (only `full` ones move it): at once for the
+    /// first 32, then whenever their number has grown by 1/32. Calls before
+    /// start or after stop are [`Error::InvalidState`].
+    pub fn anchor(
+        &mut self,
+        t_ns: i64,
+        anchor_id: &str,
+        pose: Pose,
+        tracking: Tracking,
+    ) -> Result<(), Error> {
+        if self.state != SessionState::Recording {
+            return Err(Error::InvalidState(
+                "anchor: the session is not recording (observations go between start and stop)",
+            ));
+        }
+        crate::venue::check_anchor_id(anchor_id)?;
+        let pose = pose.validated("pose")?;
+        self.anchors.push(AnchorObservation {
+            t_ns,
+            anchor: anchor_id.to_owned(),
+            pose,
+            tracking,
+        });
+        if let Some(venue) = &mut self.venue
+            && venue.map.anchor == anchor_id
+        {
+            venue.observed += 1;
+            // Realigned at once while few observations exist, then whenever their number has
+            // grown by 1/32 since the last time: a median over thousands barely moves with one
+            // more, and this keeps the work per observation O(log n) amortised.
+            if venue.observed - venue.aligned_at > venue.aligned_at / 32 {
+                venue.realign(&self.anchors);
+            }
+        }
+        Ok(())
+    }
+
+    /// Every anchor observation, in call order.
+    pub fn anchors(&self) -> &[AnchorObservation] {
+        &self.anchors
+    }
+
+    /// Loads a venue map (`map.json` of `GET /v1/venues/{id}/map.json`, see
+    /// [`VenueMap::from_json`]) and aligns this session to it from the observations so far.
+    /// A map of another convention than the session's is an [`Error::InvalidArgument`] naming
+    /// both. Replaces an earlier venue.
+    pub fn load_venue(&mut self, map_json: &str) -> Result<(), Error> {
+        let map = VenueMap::from_json(map_json)?;
+        if map.convention != self.config.convention {
+            return Err(Error::arg(
+                "map_json",
+                format!(
+                    "the venue's sessions are in convention {}, this session in {}",
+                    map.convention.name(),
+                    self.config.convention.name()
+                ),
+            ));
+        }
+        self.venue = Some(LoadedVenue::new(map, &self.anchors));
+        Ok(())
+    }
+
+    /// The loaded venue map, if any.
+    pub fn venue(&self) -> Option<&VenueMap> {
+        self.venue.as_ref().map(|v| &v.map)
+    }
+
+    /// This session's alignment to the loaded venue (`None` without a venue).
+    pub fn alignment(&self) -> Option<&Result<Alignment, NotAligned>> {
+        self.venue.as_ref().map(|v| &v.alignment)
+    }
+
+    /// The loaded venue's cells in this session's world frame, in the map's order.
+    /// [`Error::InvalidState`] without a venue or before a `full` observation of its anchor.
+    pub fn venue_cells(&self) -> Result<&[WorldCell], Error> {
+        match &self.venue {
+            None => Err(Error::InvalidState("venue_cells: no venue loaded")),
+            Some(v) if v.alignment.is_err() => Err(Error::InvalidState(
+                "venue_cells: the venue's anchor has not been seen with full tracking yet",
+            )),
+            Some(v) => Ok(&v.cells),
+        }
+    }
+
+    /// The targets [`Session::guide_into`] guides to, in order: each marker (as
+    /// [`Session::markers`] lists them once results are loaded, refreshed when results, depth
+    /// samples or the lookup tolerance change), then each venue surface cell of class high
+    /// in [`Session::venue_cells`] order (none while not aligned).
+    pub fn guide_targets(&self) -> impl Iterator<Item = DVec3> + '_ {
+        let cells = self.venue.as_ref().map_or(&[][..], |v| v.cells.as_slice());
+        self.markers.iter().map(|m| m.position).chain(
+            cells
+                .iter()
+                .filter(|c| {
+                    c.kind == crate::venue::CellKind::Surface && c.class == ErrorClass::High
+                })
+                .map(|c| c.position),
+        )
+    }
+
+    /// Where each of [`Session::guide_targets`] is shown on `view`'s screen, written to `out`
+    /// when it has room for all of them (else nothing is written). Returns their number.
+    /// Allocation-free.
+    pub fn guide_into(&self, view: &ScreenView, out: &mut [Guide]) -> usize {
+        let n = self.guide_targets().count();
+        if n <= out.len() {
+            for (slot, target) in out.iter_mut().zip(self.guide_targets()) {
+                *slot = view.guide(target);
+            }
+        }
+        n
+    }
+
+    /// Recomputes the kept markers (after results, a depth sample or the tolerance changed).
+    pub(crate) fn refresh_markers(&mut self) {
+        self.markers = self.markers().unwrap_or_default();
+    }
 }
 
 /// Share of the 5×5 window around `(x, y)` with depth (pixels outside the image count as
@@ -780,6 +957,7 @@ fn depth_window_share(image: &DepthImage<'_>, x: u32, y: u32) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::Convention;
     use crate::depth::testing::phone_k;
     use glam::DQuat;
 
@@ -1112,6 +1290,130 @@ mod tests {
             err.to_string().contains("pose_relation trans_part"),
             "{err}"
         );
+    }
+
+    #[test]
+    fn anchors_venue_cells_and_guide() {
+        use crate::venue::{CellKind, Tracking};
+        let image = |x: f64| Pose::new(DVec3::new(x, 1.0, 3.0), DQuat::from_rotation_x(1.2));
+        let mut s = Session::new(SessionConfig::default());
+        assert!(matches!(
+            s.anchor(0, "lobby-a", image(0.0), Tracking::Full),
+            Err(Error::InvalidState(_))
+        ));
+        s.start(1_000, pose(0)).unwrap();
+        for (id, name) in [("", "anchor_id"), ("a,b", "anchor_id")] {
+            assert!(matches!(s.anchor(1, id, image(0.0), Tracking::Full),
+                Err(Error::InvalidArgument { name: n, .. }) if n == name));
+        }
+        let nan = Pose::new(DVec3::new(f64::NAN, 0.0, 0.0), DQuat::IDENTITY);
+        assert!(matches!(
+            s.anchor(1, "lobby-a", nan, Tracking::Full),
+            Err(Error::InvalidArgument { name: "pose", .. })
+        ));
+        assert!(matches!(s.venue_cells(), Err(Error::InvalidState(_))));
+        let arcore_map = crate::venue::tests::MAP.replace("\"unity\"", "\"arcore\"");
+        assert!(matches!(
+            s.load_venue(&arcore_map),
+            Err(Error::InvalidArgument {
+                name: "map_json",
+                ..
+            })
+        ));
+        s.load_venue(crate::venue::tests::MAP).unwrap();
+        // Not seen yet, then seen with limited tracking only: not aligned.
+        assert!(matches!(s.venue_cells(), Err(Error::InvalidState(_))));
+        s.anchor(2, "lobby-a", image(5.0), Tracking::Limited)
+            .unwrap();
+        assert!(matches!(s.venue_cells(), Err(Error::InvalidState(_))));
+        assert!(
+            s.alignment()
+                .unwrap()
+                .as_ref()
+                .unwrap_err()
+                .reason
+                .contains("full")
+        );
+        s.anchor(3, "lobby-a", image(0.0), Tracking::Full).unwrap();
+        let cells = s.venue_cells().unwrap();
+        assert!((cells[0].position - DVec3::new(1.0, 1.0, 5.0)).length() < 1e-12);
+        // A second full observation refines it: the median of the two.
+        s.anchor(4, "lobby-a", image(0.02), Tracking::Full).unwrap();
+        let cells = s.venue_cells().unwrap().to_vec();
+        assert!((cells[0].position - DVec3::new(1.01, 1.0, 5.0)).length() < 1e-12);
+        assert_eq!(cells[1].kind, CellKind::Surface);
+
+        // Guide targets: the markers, then the high surface cell.
+        let wall = vec![2000u16; 256 * 192];
+        let depth = DepthImage::new(&wall, 256, 192, 512).unwrap();
+        let k = Intrinsics {
+            cx: 128.0,
+            cy: 96.0,
+            ..phone_k()
+        };
+        for i in 1..=60 {
+            if s.frame(1_000 + i * DT, pose(i)).unwrap().is_midpoint() {
+                s.depth(&depth, &k, DisplayRotation::Deg0).unwrap();
+            }
+        }
+        s.stop(1_000 + 61 * DT, pose(61)).unwrap();
+        let starts: Vec<i64> = s.subtrajectories().iter().map(|x| x.start_ns).collect();
+        let csv: String = std::iter::once("start,error\n".to_owned())
+            .chain(
+                starts
+                    .iter()
+                    .zip([0.12, 0.03, 0.3, 0.11, 0.02, 0.06])
+                    .map(|(t, e)| format!("{t},{e}\n")),
+            )
+            .collect();
+        s.load_results(&csv).unwrap();
+        let markers = s.markers().unwrap();
+        let targets: Vec<DVec3> = s.guide_targets().collect();
+        let mut expected: Vec<DVec3> = markers.iter().map(|m| m.position).collect();
+        expected.push(cells[1].position);
+        assert_eq!(targets, expected);
+        let view = ScreenView::new(pose(0), Convention::Unity, 60.0, 1080, 1920, 40.0).unwrap();
+        let mut out = vec![Guide::default(); targets.len() - 1];
+        assert_eq!(s.guide_into(&view, &mut out), targets.len());
+        assert!(
+            out.iter().all(|g| *g == Guide::default()),
+            "nothing written when too small"
+        );
+        out.push(Guide::default());
+        assert_eq!(s.guide_into(&view, &mut out), targets.len());
+        assert_eq!(out[0], view.guide(targets[0]));
+        assert_eq!(out[targets.len() - 1], view.guide(cells[1].position));
+
+        assert!(matches!(
+            s.anchor(9, "lobby-a", image(0.0), Tracking::Full),
+            Err(Error::InvalidState(_))
+        ));
+        let dir = tempfile::tempdir().unwrap();
+        s.save(dir.path()).unwrap();
+        let text = std::fs::read_to_string(dir.path().join("anchors.csv")).unwrap();
+        assert_eq!(text.lines().count(), 4);
+        let loaded = Session::load(dir.path()).unwrap();
+        assert_eq!(loaded.anchors(), s.anchors());
+        assert_eq!(loaded.markers().unwrap(), markers);
+    }
+
+    #[test]
+    fn the_alignment_follows_the_observations_within_a_32nd() {
+        use crate::venue::Tracking;
+        let mut s = Session::new(SessionConfig::default());
+        s.start(0, pose(0)).unwrap();
+        s.load_venue(crate::venue::tests::MAP).unwrap();
+        for i in 1..=2_000i64 {
+            let x = 0.001 * (i % 7) as f64;
+            let image = Pose::new(DVec3::new(x, 1.0, 3.0), DQuat::IDENTITY);
+            s.anchor(i, "lobby-a", image, Tracking::Full).unwrap();
+            let a = s.alignment().unwrap().as_ref().unwrap();
+            let used = (a.observations + a.rejected) as i64;
+            assert!(used * 33 >= i * 32 && used <= i, "{used} of {i}");
+            if i <= 32 {
+                assert_eq!(used, i, "every one of the first 32 realigns");
+            }
+        }
     }
 
     #[test]

@@ -49,3 +49,46 @@ fn image_properties_allocate_nothing() {
     assert!(p.corners_per_10k > 0.0);
     assert_eq!(after - before, 0, "ImageProperties::measure allocated");
 }
+
+#[test]
+fn guide_and_venue_cells_allocate_nothing() {
+    use sitar_core::{Convention, Guide, ScreenView, Tracking};
+    let cells: Vec<String> = (0..50)
+        .map(|i| {
+            format!(
+                r#"{{"center":[{},1.0,{}],"kind":"{}","sessions":2,"subtrajectories":3,"error_m":0.2,"class":"high","directions":[0,0,0,0,0,0,0,3]}}"#,
+                0.25 * f64::from(i % 10),
+                0.25 * f64::from(i / 10),
+                if i % 2 == 0 { "surface" } else { "path" }
+            )
+        })
+        .collect();
+    let map = format!(
+        r#"{{"id":"v0123456789abcdef","name":"Hall","anchor":"hall","cell_m":0.25,"convention":"unity","unit":"m","sessions":[],"cells":[{}]}}"#,
+        cells.join(",")
+    );
+    let mut session = Session::new(SessionConfig::default());
+    session.start(0, Pose::IDENTITY).unwrap();
+    session.load_venue(&map).unwrap();
+    session
+        .anchor(
+            1,
+            "hall",
+            Pose::new(DVec3::new(0.0, 0.0, 2.0), DQuat::IDENTITY),
+            Tracking::Full,
+        )
+        .unwrap();
+    let camera = Pose::new(DVec3::new(0.5, 1.5, -1.0), DQuat::from_rotation_y(0.3));
+    let mut out = vec![Guide::default(); 64];
+    let before = allocations();
+    let view = ScreenView::new(camera, Convention::Unity, 60.0, 1080, 1920, 40.0).unwrap();
+    let mut n = 0;
+    for _ in 0..1_000 {
+        n = session.guide_into(&view, &mut out);
+        n += session.venue_cells().unwrap().len();
+    }
+    let after = allocations();
+    assert_eq!(n, 25 + 50);
+    assert!(out[..25].iter().any(|g| g.on_screen) && out[..25].iter().any(|g| !g.on_screen));
+    assert_eq!(after - before, 0, "guide_into / venue_cells allocated");
+}

@@ -268,6 +268,40 @@ typedef struct {
   int32_t error_class;
 } SitarFrustum;
 
+// A venue map cell in the current session's world frame (`sitar_session_venue_cells`).
+typedef struct {
+  // Centre x.
+  double px;
+  // Centre y.
+  double py;
+  // Centre z.
+  double pz;
+  // 0 path (where cameras were), 1 surface (what they looked at).
+  int32_t kind;
+  // 0 unknown, 1 low, 2 medium, 3 high.
+  int32_t error_class;
+  // Sessions with a sub-trajectory in the cell.
+  uint32_t sessions;
+  // The cell's error: the 30 % trimmed mean of its sub-trajectories' errors (m).
+  double error_m;
+} SitarVenueCell;
+
+// Where a target is shown on the screen (`sitar_session_guide`): its projection, or, when it
+// is off the screen or behind the camera, the point on the ellipse inside the screen's edge
+// in its direction.
+typedef struct {
+  // 1 when the target projects onto the screen, else 0.
+  int32_t on_screen;
+  // Pixel x from the left.
+  double x_px;
+  // Pixel y from the top.
+  double y_px;
+  // `atan2(d_y, d_x)` with `d = (f·x, −f·y)`: 0 points right, positive clockwise on screen.
+  double angle_rad;
+  // The target's distance from the camera (m).
+  double distance_m;
+} SitarGuide;
+
 // A snapshot of a background upload job.
 typedef struct {
   // A `SitarJobState` value.
@@ -414,6 +448,56 @@ int32_t sitar_session_save(SitarHandle h, const char *dir);
 // tube by class, joints, frustums, start/stop, markers and surface points, in glTF's
 // frame (right-handed, +Y up, metres). `SITAR_ERR_INVALID_STATE` before `start`.
 int32_t sitar_session_export_gltf(SitarHandle h, const char *path);
+
+// Records an observation of the venue's anchor image `anchor_id` (1…64 bytes of UTF-8,
+// no comma, quote or control character): `pose` is the pose the platform reports for the
+// tracked image (world-from-image, the session's convention; image +X to its right),
+// `tracking` 0 none, 1 limited, 2 full (only full observations align). Saved as
+// `anchors.csv`. A bad id, a non-finite pose or another tracking value is
+// `SITAR_ERR_INVALID_ARGUMENT` naming it; before start or after stop
+// `SITAR_ERR_INVALID_STATE`.
+int32_t sitar_session_anchor(SitarHandle h,
+                             int64_t t_ns,
+                             const char *anchor_id,
+                             const SitarPose *pose,
+                             int32_t tracking);
+
+// Loads a venue map (the backend's `GET /v1/venues/{id}/map.json`) and aligns the
+// session to it from its anchor observations, refined as more arrive. A malformed map is
+// `SITAR_ERR_PARSE` naming the key; a map of another convention
+// `SITAR_ERR_INVALID_ARGUMENT`.
+int32_t sitar_session_load_venue(SitarHandle h, const char *map_json);
+
+// The venue's cells in this session's world frame, in the map's order (array-output
+// convention). `SITAR_ERR_INVALID_STATE` without a venue or before a full observation of
+// its anchor. Allocation-free.
+int32_t sitar_session_venue_cells(SitarHandle h,
+                                  SitarVenueCell *out,
+                                  size_t capacity,
+                                  size_t *out_len);
+
+// Where each marker (in `sitar_session_markers` order), then each high-class venue
+// surface cell (in `sitar_session_venue_cells` order), is shown on a `width_px` ×
+// `height_px` screen (origin top-left, y down) seen by `camera` (the display-oriented
+// camera pose, the session's convention) with vertical field of view `vfov_deg`: with
+// `(x, y, z)` the target in the camera's frame (x right, y up, z along the view) and
+// `f = (height_px/2) / tan(vfov_deg/2)`, a target with z > 0 projecting onto the
+// screen at `(width_px/2 + f·x/z, height_px/2 − f·y/z)` is `on_screen = 1` there; any
+// other is pinned to the ellipse with semi-axes `width_px/2 − margin_px`,
+// `height_px/2 − margin_px` around the centre in the direction `d = (f·x, −f·y)`
+// (behind the camera it keeps its side). `angle_rad = atan2(d_y, d_x)`, `distance_m`
+// from the camera. Array-output convention; pure and allocation-free. vfov outside
+// (0, 180), a size ≤ 0 or a margin outside [0, half the shorter side) is
+// `SITAR_ERR_INVALID_ARGUMENT`.
+int32_t sitar_session_guide(SitarHandle h,
+                            const SitarPose *camera,
+                            double vfov_deg,
+                            int32_t width_px,
+                            int32_t height_px,
+                            double margin_px,
+                            SitarGuide *out,
+                            size_t capacity,
+                            size_t *out_len);
 
 // Loads a saved session folder as a new session.
 int32_t sitar_session_load(const char *dir, SitarHandle *out);

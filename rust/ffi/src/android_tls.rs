@@ -14,7 +14,7 @@ use jni::Env;
 use crate::error::Error;
 
 /// The app's `android.content.Context` as a JNI entry point received it, with the `Env` of
-/// that call (the conversion of a `JavaContext` parameter in `declare.rs`).
+/// that call (the conversion of a `JavaContext` parameter in `exports_macro.rs`).
 pub(crate) struct JavaContext<'a, 'l> {
     #[cfg_attr(not(target_os = "android"), allow(dead_code))]
     env: &'a mut Env<'l>,

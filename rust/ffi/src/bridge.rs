@@ -5,7 +5,10 @@ use std::ffi::CStr;
 use std::path::{Path, PathBuf};
 use std::sync::{LazyLock, Mutex, MutexGuard};
 
-use sitar_core::{DepthImage, DisplayRotation, LumaImage, PlaybackLogger, Session, SessionConfig};
+use sitar_core::{
+    DepthImage, DisplayRotation, LumaImage, PlaybackLogger, ScreenView, Session, SessionConfig,
+    Tracking,
+};
 
 use sitar_client::UploadJob;
 
@@ -13,8 +16,8 @@ pub(crate) use crate::android_tls::platform_tls_init;
 use crate::error::Error;
 use crate::registry::{Registry, SitarHandle};
 use crate::types::{
-    SitarEvidence, SitarFrustum, SitarIntrinsics, SitarJobProgress, SitarJoint, SitarMarker,
-    SitarPose, SitarSegment, SitarSubtrajectoryResult, SitarSummary,
+    SitarEvidence, SitarFrustum, SitarGuide, SitarIntrinsics, SitarJobProgress, SitarJoint,
+    SitarMarker, SitarPose, SitarSegment, SitarSubtrajectoryResult, SitarSummary, SitarVenueCell,
 };
 
 static SESSIONS: LazyLock<Registry<Mutex<Session>>> = LazyLock::new(|| Registry::new("session"));
@@ -552,6 +555,127 @@ pub fn upload_cancel(job: SitarHandle) -> Result<(), Error> {
 pub fn upload_free(job: SitarHandle) -> Result<(), Error> {
     UPLOADS.remove(job)?.cancel();
     Ok(())
+}
+
+/// An array output the caller owns (C's `out, capacity, out_len`): [`Fill::write`] sets the
+/// count and writes the items only when all of them fit — no allocation.
+#[derive(Debug)]
+pub struct Fill<'a, T> {
+    items: &'a mut [T],
+    out_len: &'a mut usize,
+}
+
+impl<'a, T> Fill<'a, T> {
+    /// Room for `items.len()` items; `*out_len` receives the count.
+    pub fn new(items: &'a mut [T], out_len: &'a mut usize) -> Self {
+        Self { items, out_len }
+    }
+
+    /// `*out_len = n`; when `n` items fit, writes `items` (which yields `n`), else
+    /// [`Error::BufferTooSmall`] and nothing written.
+    pub fn write(self, n: usize, items: impl Iterator<Item = T>) -> Result<(), Error> {
+        *self.out_len = n;
+        if n > self.items.len() {
+            return Err(Error::BufferTooSmall {
+                needed: n,
+                capacity: self.items.len(),
+            });
+        }
+        for (slot, item) in self.items.iter_mut().zip(items) {
+            *slot = item;
+        }
+        Ok(())
+    }
+}
+
+/// Records an observation of anchor image `anchor_id` (1…64 bytes): the pose the platform
+/// reports for the tracked image and `tracking` (0 none, 1 limited, 2 full).
+pub fn session_anchor(
+    h: SitarHandle,
+    t_ns: i64,
+    anchor_id: &str,
+    pose: &SitarPose,
+    tracking: i32,
+) -> Result<(), Error> {
+    let pose = pose.to_core();
+    let tracking = Tracking::from_code(tracking)?;
+    with_session(h, |s| Ok(s.anchor(t_ns, anchor_id, pose, tracking)?))
+}
+
+/// Loads a venue map (`map.json`) and aligns the session to it.
+pub fn session_load_venue(h: SitarHandle, map_json: &str) -> Result<(), Error> {
+    with_session(h, |s| Ok(s.load_venue(map_json)?))
+}
+
+/// The venue's cells in the session's world frame, into the caller's array.
+pub fn session_venue_cells(h: SitarHandle, out: Fill<'_, SitarVenueCell>) -> Result<(), Error> {
+    with_session(h, |s| {
+        let cells = s.venue_cells()?;
+        out.write(cells.len(), cells.iter().map(SitarVenueCell::from))
+    })
+}
+
+/// [`session_venue_cells`] as a list (JNI).
+pub fn session_venue_cell_list(h: SitarHandle) -> Result<Vec<SitarVenueCell>, Error> {
+    with_session(h, |s| {
+        Ok(s.venue_cells()?.iter().map(SitarVenueCell::from).collect())
+    })
+}
+
+/// The screen of a `guide` call in the session's convention (the arguments checked).
+fn screen_view(
+    s: &Session,
+    camera: &SitarPose,
+    vfov_deg: f64,
+    width_px: i32,
+    height_px: i32,
+    margin_px: f64,
+) -> Result<ScreenView, Error> {
+    let convention = s.config().convention;
+    Ok(ScreenView::new(
+        camera.to_core(),
+        convention,
+        vfov_deg,
+        width_px,
+        height_px,
+        margin_px,
+    )?)
+}
+
+/// Where each marker, then each high venue surface cell, is shown on the screen, into the
+/// caller's array.
+#[allow(clippy::too_many_arguments)] // the C signature the issue fixes
+pub fn session_guide(
+    h: SitarHandle,
+    camera: &SitarPose,
+    vfov_deg: f64,
+    width_px: i32,
+    height_px: i32,
+    margin_px: f64,
+    out: Fill<'_, SitarGuide>,
+) -> Result<(), Error> {
+    with_session(h, |s| {
+        let view = screen_view(s, camera, vfov_deg, width_px, height_px, margin_px)?;
+        let guides = s.guide_targets().map(|t| SitarGuide::from(view.guide(t)));
+        out.write(s.guide_targets().count(), guides)
+    })
+}
+
+/// [`session_guide`] as a list (JNI).
+pub fn session_guide_list(
+    h: SitarHandle,
+    camera: &SitarPose,
+    vfov_deg: f64,
+    width_px: i32,
+    height_px: i32,
+    margin_px: f64,
+) -> Result<Vec<SitarGuide>, Error> {
+    with_session(h, |s| {
+        let view = screen_view(s, camera, vfov_deg, width_px, height_px, margin_px)?;
+        Ok(s.guide_targets()
+            .map(|t| SitarGuide::from(view.guide(t)))
+            .collect())
+    })
 }
 
 /// Panics on purpose (feature `testing`): proves panics become errors.

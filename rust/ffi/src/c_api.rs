@@ -93,6 +93,25 @@ pub(crate) fn luma_arg<'a>(
     crate::bridge::LumaView::new(data, width, height, row_stride_bytes)
 }
 
+/// An array output `(out, capacity, out_len)` as a [`crate::bridge::Fill`], checked before
+/// the work that fills it.
+pub(crate) fn fill_arg<'a, T>(
+    out_ptr: *mut T,
+    capacity: usize,
+    out_len: *mut usize,
+) -> Result<crate::bridge::Fill<'a, T>, Error> {
+    check_array_out(out_ptr, capacity, out_len)?;
+    let out_len = out(out_len, "out_len")?;
+    let items: &mut [T] = if capacity == 0 {
+        &mut []
+    } else {
+        // SAFETY: non-NULL (checked above for capacity > 0); the caller guarantees room for
+        // `capacity` items, valid for the call.
+        unsafe { std::slice::from_raw_parts_mut(out_ptr, capacity) }
+    };
+    Ok(crate::bridge::Fill::new(items, out_len))
+}
+
 /// Checks an array output before the work that fills it.
 pub(crate) fn check_array_out<T>(
     out_ptr: *mut T,

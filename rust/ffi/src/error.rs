@@ -1,6 +1,6 @@
 use std::str::Utf8Error;
 
-crate::decl::c_enum! {
+crate::descriptors::c_enum! {
     /// Status codes of every C ABI function (`int32_t`); negative is an error.
     ///
     /// JNI reports the same codes as `SitarException.code`.

@@ -1,4 +1,4 @@
-//! Every export of `libsitar.so`, declared once (the syntax: [`crate::declare`]). Each
+//! Every export of `libsitar.so`, declared once (the syntax: [`crate::exports_macro`]). Each
 //! line makes the C entry point `sitar_*` (header `include/sitar.h`, C#
 //! `NativeMethods.g.cs`) and/or the JNI entry point `Java_io_github_sitar_Native_*`
 //! (`Native.kt`) around the safe function of the same name in `bridge.rs`.
@@ -16,11 +16,11 @@ use jni::EnvUnowned;
 use crate::bridge::{PlanEnds, RenderPlanC, SitarErrorAt};
 use crate::registry::SitarHandle;
 use crate::types::{
-    SitarEvidence, SitarFrustum, SitarIntrinsics, SitarJobProgress, SitarJoint, SitarMarker,
-    SitarPose, SitarSegment, SitarSubtrajectoryResult, SitarSummary,
+    SitarEvidence, SitarFrustum, SitarGuide, SitarIntrinsics, SitarJobProgress, SitarJoint,
+    SitarMarker, SitarPose, SitarSegment, SitarSubtrajectoryResult, SitarSummary, SitarVenueCell,
 };
 
-crate::declare::exports! {
+crate::exports_macro::exports! {
     /// The library version as a static NUL-terminated string (never freed).
     fn version() -> &'static std::ffi::CStr
         => c sitar_version(static) jni version;
@@ -157,6 +157,57 @@ crate::declare::exports! {
     /// frame (right-handed, +Y up, metres). `SITAR_ERR_INVALID_STATE` before `start`.
     fn session_export_gltf(h: SitarHandle, path: &Path)
         => c sitar_session_export_gltf() jni sessionExportGltf;
+
+    /// Records an observation of the venue's anchor image `anchor_id` (1…64 bytes of UTF-8,
+    /// no comma, quote or control character): `pose` is the pose the platform reports for the
+    /// tracked image (world-from-image, the session's convention; image +X to its right),
+    /// `tracking` 0 none, 1 limited, 2 full (only full observations align). Saved as
+    /// `anchors.csv`. A bad id, a non-finite pose or another tracking value is
+    /// `SITAR_ERR_INVALID_ARGUMENT` naming it; before start or after stop
+    /// `SITAR_ERR_INVALID_STATE`.
+    fn session_anchor(h: SitarHandle, t_ns: i64, anchor_id: &str, pose: &SitarPose,
+        tracking: i32)
+        => c sitar_session_anchor() jni sessionAnchor;
+
+    /// Loads a venue map (the backend's `GET /v1/venues/{id}/map.json`) and aligns the
+    /// session to it from its anchor observations, refined as more arrive. A malformed map is
+    /// `SITAR_ERR_PARSE` naming the key; a map of another convention
+    /// `SITAR_ERR_INVALID_ARGUMENT`.
+    fn session_load_venue(h: SitarHandle, map_json: &str)
+        => c sitar_session_load_venue() jni sessionLoadVenue;
+
+    /// The venue's cells in this session's world frame, in the map's order (array-output
+    /// convention). `SITAR_ERR_INVALID_STATE` without a venue or before a full observation of
+    /// its anchor. Allocation-free.
+    fn session_venue_cells(h: SitarHandle, out: Fill<SitarVenueCell>)
+        => c sitar_session_venue_cells();
+
+    /// The venue's cells in this session's world frame (`VenueCellLayout` items).
+    fn session_venue_cell_list(h: SitarHandle) -> Vec<SitarVenueCell>
+        => jni sessionVenueCells;
+
+    /// Where each marker (in `sitar_session_markers` order), then each high-class venue
+    /// surface cell (in `sitar_session_venue_cells` order), is shown on a `width_px` ×
+    /// `height_px` screen (origin top-left, y down) seen by `camera` (the display-oriented
+    /// camera pose, the session's convention) with vertical field of view `vfov_deg`: with
+    /// `(x, y, z)` the target in the camera's frame (x right, y up, z along the view) and
+    /// `f = (height_px/2) / tan(vfov_deg/2)`, a target with z > 0 projecting onto the
+    /// screen at `(width_px/2 + f·x/z, height_px/2 − f·y/z)` is `on_screen = 1` there; any
+    /// other is pinned to the ellipse with semi-axes `width_px/2 − margin_px`,
+    /// `height_px/2 − margin_px` around the centre in the direction `d = (f·x, −f·y)`
+    /// (behind the camera it keeps its side). `angle_rad = atan2(d_y, d_x)`, `distance_m`
+    /// from the camera. Array-output convention; pure and allocation-free. vfov outside
+    /// (0, 180), a size ≤ 0 or a margin outside [0, half the shorter side) is
+    /// `SITAR_ERR_INVALID_ARGUMENT`.
+    fn session_guide(h: SitarHandle, camera: &SitarPose, vfov_deg: f64, width_px: i32,
+        height_px: i32, margin_px: f64, out: Fill<SitarGuide>)
+        => c sitar_session_guide();
+
+    /// Where each marker, then each high venue surface cell, is shown (`GuideLayout` items;
+    /// see `sitar_session_guide`).
+    fn session_guide_list(h: SitarHandle, camera: &SitarPose, vfov_deg: f64, width_px: i32,
+        height_px: i32, margin_px: f64) -> Vec<SitarGuide>
+        => jni sessionGuide;
 
     /// Loads a saved session folder as a new session.
     fn session_load(dir: &Path) -> SitarHandle

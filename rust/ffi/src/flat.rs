@@ -7,12 +7,12 @@ use jni::objects::JDoubleArray;
 use jni::Env;
 
 use crate::bridge::{PlanEnds, RenderPlanC, SitarErrorAt};
-use crate::decl::FlatLayout;
+use crate::descriptors::FlatLayout;
 use crate::error::Error;
 use crate::jni_api::{doubles, IntoJava};
 use crate::types::{
-    SitarEvidence, SitarFrustum, SitarJobProgress, SitarJoint, SitarMarker, SitarPose,
-    SitarSegment, SitarSubtrajectoryResult, SitarSummary,
+    SitarEvidence, SitarFrustum, SitarGuide, SitarJobProgress, SitarJoint, SitarMarker, SitarPose,
+    SitarSegment, SitarSubtrajectoryResult, SitarSummary, SitarVenueCell,
 };
 
 /// A struct with a flat layout.
@@ -126,6 +126,8 @@ flat_layouts! {
     SitarSegment as Segment { cx, cy, cz, qx, qy, qz, qw, length, subtrajectory, error_class }
     SitarJoint as Joint { px, py, pz, subtrajectory, error_class }
     SitarFrustum as Frustum { pose: SitarPose, subtrajectory, error_class }
+    SitarGuide as Guide { on_screen, x_px, y_px, angle_rad, distance_m }
+    SitarVenueCell as VenueCell { px, py, pz, kind, error_class, sessions, error_m }
     RenderPlanHeader as RenderPlan { segments, joints, frustums, has_start, has_stop }
     SitarJobProgress as UploadProgress {
         state, error_code, progress, eta_s, bytes_sent, bytes_total, trials_done, trials_total,
@@ -200,6 +202,8 @@ mod tests {
         assert_eq!(SitarFrustum::WIDTH, 9);
         assert_eq!(SitarJobProgress::WIDTH, 10);
         assert_eq!(SitarEvidence::WIDTH, 16);
+        assert_eq!(SitarGuide::WIDTH, 5);
+        assert_eq!(SitarVenueCell::WIDTH, 7);
         for l in FLAT_LAYOUTS {
             let width: usize = l.fields.iter().map(|f| f.1).sum();
             let rust = match l.kotlin {
@@ -214,6 +218,8 @@ mod tests {
                 "RenderPlan" => RenderPlanHeader::WIDTH,
                 "UploadProgress" => SitarJobProgress::WIDTH,
                 "Evidence" => SitarEvidence::WIDTH,
+                "Guide" => SitarGuide::WIDTH,
+                "VenueCell" => SitarVenueCell::WIDTH,
                 other => panic!("unknown layout {other}"),
             };
             assert_eq!(width, rust, "{}", l.kotlin);

@@ -10,7 +10,7 @@
 //!   library in `android/` (`Native.kt`).
 //!
 //! Both are made from one declaration per export (`src/exports.rs`, the `exports!` macro
-//! of `src/declare.rs`), which also describes each entry point ([`C_EXPORTS`],
+//! of `src/exports_macro.rs`), which also describes each entry point ([`C_EXPORTS`],
 //! [`JNI_EXPORTS`], [`FLAT_LAYOUTS`]) so that the header, the C# bindings, `Native.kt`, the
 //! Kotlin array layouts and the Kotlin and C# status enums are generated from the same
 //! place (`tests/generated_bindings.rs`, which fails when a committed file differs).
@@ -44,10 +44,10 @@ mod android_tls;
 mod bridge;
 mod c_api;
 #[doc(hidden)]
-pub mod decl;
-mod declare;
+pub mod descriptors;
 mod error;
 mod exports;
+mod exports_macro;
 mod flat;
 mod guard;
 mod jni_api;

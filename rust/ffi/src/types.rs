@@ -219,7 +219,71 @@ impl SitarEvidence {
     }
 }
 
-crate::decl::c_enum! {
+/// Where a target is shown on the screen (`sitar_session_guide`): its projection, or, when it
+/// is off the screen or behind the camera, the point on the ellipse inside the screen's edge
+/// in its direction.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct SitarGuide {
+    /// 1 when the target projects onto the screen, else 0.
+    pub on_screen: i32,
+    /// Pixel x from the left.
+    pub x_px: f64,
+    /// Pixel y from the top.
+    pub y_px: f64,
+    /// `atan2(d_y, d_x)` with `d = (f·x, −f·y)`: 0 points right, positive clockwise on screen.
+    pub angle_rad: f64,
+    /// The target's distance from the camera (m).
+    pub distance_m: f64,
+}
+
+impl From<sitar_core::Guide> for SitarGuide {
+    fn from(g: sitar_core::Guide) -> Self {
+        Self {
+            on_screen: i32::from(g.on_screen),
+            x_px: g.x_px,
+            y_px: g.y_px,
+            angle_rad: g.angle_rad,
+            distance_m: g.distance_m,
+        }
+    }
+}
+
+/// A venue map cell in the current session's world frame (`sitar_session_venue_cells`).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct SitarVenueCell {
+    /// Centre x.
+    pub px: f64,
+    /// Centre y.
+    pub py: f64,
+    /// Centre z.
+    pub pz: f64,
+    /// 0 path (where cameras were), 1 surface (what they looked at).
+    pub kind: i32,
+    /// 0 unknown, 1 low, 2 medium, 3 high.
+    pub error_class: i32,
+    /// Sessions with a sub-trajectory in the cell.
+    pub sessions: u32,
+    /// The cell's error: the 30 % trimmed mean of its sub-trajectories' errors (m).
+    pub error_m: f64,
+}
+
+impl From<&sitar_core::venue::WorldCell> for SitarVenueCell {
+    fn from(c: &sitar_core::venue::WorldCell) -> Self {
+        Self {
+            px: c.position.x,
+            py: c.position.y,
+            pz: c.position.z,
+            kind: c.kind as i32,
+            error_class: c.class as i32,
+            sessions: c.sessions,
+            error_m: c.error_m,
+        }
+    }
+}
+
+crate::descriptors::c_enum! {
     /// States of a background upload job (`SitarJobProgress.state`).
     pub enum SitarJobState as kotlin UploadState, csharp UploadState {
         /// Creating the server session.

@@ -15,7 +15,7 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use sitar::decl::CEnum;
+use sitar::descriptors::CEnum;
 use sitar::{SitarJobState, SitarStatus, C_EXPORTS, FLAT_LAYOUTS, JNI_EXPORTS};
 
 const REGENERATE: &str = "SITAR_REGENERATE=1 cargo test -p sitar-ffi --test generated_bindings";

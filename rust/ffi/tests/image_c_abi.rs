@@ -2,21 +2,20 @@
 //! through their C entry points: every display rotation, every bad input the contract names
 //! (NULL, sizes, stride, rotation, state, stale handle), and the evidence they lead to.
 
-use std::ffi::c_char;
-
 use sitar::{
-    sitar_last_error, sitar_session_depth, sitar_session_frame, sitar_session_free,
-    sitar_session_image, sitar_session_new, sitar_session_start, sitar_session_stop,
+    sitar_session_depth, sitar_session_frame, sitar_session_free, sitar_session_image,
+    sitar_session_new, sitar_session_start, sitar_session_stop,
     sitar_session_subtrajectory_evidence, sitar_session_thumbnail, SitarEvidence, SitarIntrinsics,
     SitarPose,
 };
 
-const OK: i32 = 0;
-const ERR_NULL: i32 = -1;
-const ERR_INVALID_ARGUMENT: i32 = -2;
-const ERR_INVALID_HANDLE: i32 = -3;
-const ERR_INVALID_STATE: i32 = -4;
-const ERR_BUFFER_TOO_SMALL: i32 = -8;
+#[path = "support/c_abi.rs"]
+mod c_abi;
+
+use c_abi::{
+    last_error, ERR_BUFFER_TOO_SMALL, ERR_INVALID_ARGUMENT, ERR_INVALID_HANDLE, ERR_INVALID_STATE,
+    ERR_NULL, OK,
+};
 const DT: i64 = 33_333_333;
 
 const W: i32 = 64;
@@ -30,14 +29,6 @@ fn pose(i: i64) -> SitarPose {
         qw: 1.0,
         ..SitarPose::default()
     }
-}
-
-fn last_error() -> String {
-    let mut buf = [0 as c_char; 512];
-    let mut len = 0usize;
-    sitar_last_error(buf.as_mut_ptr(), buf.len(), &mut len);
-    let bytes: Vec<u8> = buf[..len].iter().map(|&c| c as u8).collect();
-    String::from_utf8(bytes).unwrap()
 }
 
 /// A padded plane: a bright top-left quadrant, dots for texture, 0xEE in the padding.

@@ -86,6 +86,17 @@ namespace Sitar.Unity
         bool recording;
         uint drawnRevision;
         readonly List<GameObject> spawned = new List<GameObject>();
+        readonly List<GameObject> markerObjects = new List<GameObject>();
+        long lastFrameNs;
+
+        /// <summary>The current session (null before the first Start).</summary>
+        public SitarSession Session { get { return session; } }
+        /// <summary>Whether frames are being recorded (between Start and Stop).</summary>
+        public bool IsRecording { get { return recording; } }
+        /// <summary>The timestamp of the latest camera frame (ns), for anchor observations.</summary>
+        public long LastFrameNs { get { return lastFrameNs; } }
+        /// <summary>The marker objects drawn, in SitarSession.Markers() order (SitarVenue pulses them).</summary>
+        public IReadOnlyList<GameObject> MarkerObjects { get { return markerObjects; } }
 
         void Awake()
         {
@@ -153,6 +164,7 @@ namespace Sitar.Unity
         {
             if (!args.timestampNs.HasValue) return;
             long t = args.timestampNs.Value;
+            lastFrameNs = t;
             if (startPending)
             {
                 startPending = false;
@@ -364,6 +376,7 @@ namespace Sitar.Unity
         {
             foreach (GameObject g in spawned) Destroy(g);
             spawned.Clear();
+            markerObjects.Clear();
             if (unreliableWarning != null) unreliableWarning.SetActive(false);
         }
 
@@ -433,14 +446,16 @@ namespace Sitar.Unity
             foreach (Marker m in markers)
             {
                 bool high = m.ErrorClass == ErrorClass.High;
+                GameObject g;
                 if (style == VisualizationStyle.ExclamationPoints)
                 {
-                    Spawn(high ? errorAreaHighPrefab : errorAreaMediumPrefab, V(m.Px, m.Py, m.Pz), Quaternion.identity, ErrorClass.Unknown);
+                    g = Spawn(high ? errorAreaHighPrefab : errorAreaMediumPrefab, V(m.Px, m.Py, m.Pz), Quaternion.identity, ErrorClass.Unknown);
                 }
                 else
                 {
-                    Spawn(high ? errorPatchHighPrefab : errorPatchMediumPrefab, V(m.Px, m.Py, m.Pz), Q(m.Qx, m.Qy, m.Qz, m.Qw), ErrorClass.Unknown);
+                    g = Spawn(high ? errorPatchHighPrefab : errorPatchMediumPrefab, V(m.Px, m.Py, m.Pz), Q(m.Qx, m.Qy, m.Qz, m.Qw), ErrorClass.Unknown);
                 }
+                markerObjects.Add(g); // null without a prefab: the index still follows Markers()
             }
         }
 

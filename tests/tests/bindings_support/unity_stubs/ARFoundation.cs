@@ -6,6 +6,7 @@
 // types (left out here); ARCameraManager and AROcclusionManager derive from it
 // too, but the package uses none of its members on them.
 using System;
+using System.Collections.Generic;
 using UnityEngine.XR.ARSubsystems;
 
 namespace UnityEngine.XR.ARFoundation
@@ -36,5 +37,27 @@ namespace UnityEngine.XR.ARFoundation
     public sealed class AROcclusionManager : MonoBehaviour
     {
         public bool TryAcquireEnvironmentDepthCpuImage(out XRCpuImage cpuImage) { throw null; }
+    }
+
+    /// <summary>The real one derives from ARTrackable&lt;XRTrackedImage, ARTrackedImage&gt;.</summary>
+    public sealed class ARTrackedImage : MonoBehaviour
+    {
+        public XRReferenceImage referenceImage { get { throw null; } }
+        public TrackingState trackingState { get { throw null; } }
+        public Vector2 size { get { throw null; } }
+    }
+
+    public struct ARTrackedImagesChangedEventArgs : IEquatable<ARTrackedImagesChangedEventArgs>
+    {
+        public List<ARTrackedImage> added { get { throw null; } }
+        public List<ARTrackedImage> updated { get { throw null; } }
+        public List<ARTrackedImage> removed { get { throw null; } }
+        public bool Equals(ARTrackedImagesChangedEventArgs other) { throw null; }
+    }
+
+    /// <summary>The real one derives from ARTrackableManager&lt;…&gt;.</summary>
+    public sealed class ARTrackedImageManager : MonoBehaviour
+    {
+        public event Action<ARTrackedImagesChangedEventArgs> trackedImagesChanged { add { throw null; } remove { throw null; } }
     }
 }

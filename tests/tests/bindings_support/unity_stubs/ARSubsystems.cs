@@ -40,4 +40,17 @@ namespace UnityEngine.XR.ARSubsystems
     }
 
     public class XRSessionSubsystemDescriptor { }
+
+    public enum TrackingState
+    {
+        None = 0,
+        Limited = 1,
+        Tracking = 2,
+    }
+
+    public struct XRReferenceImage : IEquatable<XRReferenceImage>
+    {
+        public string name { get { throw null; } }
+        public bool Equals(XRReferenceImage other) { throw null; }
+    }
 }

@@ -86,6 +86,7 @@ namespace UnityEngine
         public float y;
         public float z;
         public Vector3(float x, float y, float z) { throw null; }
+        public static Vector3 zero { get { throw null; } }
     }
 
     public struct Quaternion
@@ -96,6 +97,7 @@ namespace UnityEngine
         public float w;
         public Quaternion(float x, float y, float z, float w) { throw null; }
         public static Quaternion identity { get { throw null; } }
+        public static Quaternion Euler(float x, float y, float z) { throw null; }
     }
 
     /// <summary>Name-collision sentinel (see the header): the real struct has these fields.</summary>
@@ -138,6 +140,23 @@ namespace UnityEngine
     {
         public static ScreenOrientation orientation { get { throw null; } set { throw null; } }
         public static int sleepTimeout { get { throw null; } set { throw null; } }
+        public static int width { get { throw null; } }
+        public static int height { get { throw null; } }
+    }
+
+    public class Time
+    {
+        public static float time { get { throw null; } }
+    }
+
+    public class TextAsset : Object
+    {
+        public string text { get { throw null; } }
+    }
+
+    public sealed class Camera : Behaviour
+    {
+        public float fieldOfView { get { throw null; } set { throw null; } }
     }
 
     public sealed class SleepTimeout

@@ -4,6 +4,9 @@ public class GLES20 {
     public static final int GL_DEPTH_BUFFER_BIT = 0x00000100;
     public static final int GL_DEPTH_TEST = 0x0B71;
     public static final int GL_FLOAT = 0x1406;
+    public static final int GL_BLEND = 0x0BE2;
+    public static final int GL_SRC_ALPHA = 0x0302;
+    public static final int GL_ONE_MINUS_SRC_ALPHA = 0x0303;
     public static final int GL_TRIANGLE_STRIP = 0x0005;
     public static final int GL_LINE_STRIP = 0x0003;
     public static final int GL_POINTS = 0x0000;
@@ -26,6 +29,8 @@ public class GLES20 {
     public static native void glClearColor(float red, float green, float blue, float alpha);
     public static native void glClear(int mask);
     public static native void glEnable(int cap);
+    public static native void glDisable(int cap);
+    public static native void glBlendFunc(int sfactor, int dfactor);
     public static native void glDisable(int cap);
     public static native void glDepthMask(boolean flag);
     public static native void glLineWidth(float width);

@@ -249,6 +249,49 @@ private fun windowSettings(tmp: File) {
     long.close()
 }
 
+/** A venue map of two cells around its anchor `hall`: a low path cell and a high surface cell. */
+private const val VENUE_MAP = """{"id":"v0123456789abcdef","name":"Hall","anchor":"hall","cell_m":0.25,
+    "convention":"unity","unit":"m","sessions":[{"id":"s1","aligned":false,"reason":"never fully tracked"}],
+    "cells":[{"center":[1.0,0.0,0.5],"kind":"path","sessions":1,"subtrajectories":2,"error_m":0.02,"class":"low","directions":[2,0,0,0,0,0,0,0]},
+    {"center":[0.0,1.0,0.0],"kind":"surface","sessions":2,"subtrajectories":3,"error_m":0.3,"class":"high","directions":[0,0,3,0,0,0,0,0]}]}"""
+
+private fun venue() {
+    val s = SitarSession()
+    // The image lies on the floor 2 m ahead of the start, its +X turned 90° about +Y (to −Z).
+    val q = Math.sqrt(0.5)
+    val image = Pose(0.0, 0.0, 2.0, 0.0, q, 0.0, q)
+    expectSitar(SitarStatus.INVALID_STATE, "not recording") { s.anchor(0, "hall", image, Tracking.FULL) }
+    s.start(0, poseAt(0))
+    expectSitar(SitarStatus.INVALID_ARGUMENT, "anchor_id") { s.anchor(1, "", image, Tracking.FULL) }
+    expectSitar(SitarStatus.INVALID_ARGUMENT, "anchor_id") { s.anchor(1, "x".repeat(65), image, Tracking.FULL) }
+    expectSitar(SitarStatus.INVALID_ARGUMENT, "pose") { s.anchor(1, "hall", image.copy(px = Double.NaN), Tracking.FULL) }
+    expectSitar(SitarStatus.INVALID_ARGUMENT, "tracking") { Native.sessionAnchor(1, 1, "hall", 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 7).let { } }
+    expectSitar(SitarStatus.INVALID_STATE, "no venue") { s.venueCells() }
+    s.loadVenue(VENUE_MAP)
+    expectSitar(SitarStatus.PARSE, "cells") { s.loadVenue(VENUE_MAP.replace("\"surface\"", "\"wall\"")) }
+    s.anchor(1, "hall", image, Tracking.LIMITED)
+    expectSitar(SitarStatus.INVALID_STATE, "full tracking") { s.venueCells() }
+    s.anchor(2, "hall", image, Tracking.FULL)
+    val cells = s.venueCells()
+    check(cells.size == 2, "two cells $cells")
+    // Venue (1, 0, 0.5) turned 90° about +Y is (0.5, 0, −1); plus the anchor at (0, 0, 2).
+    near(cells[0].position.x, 0.5, "cell x", 1e-12)
+    near(cells[0].position.z, 1.0, "cell z", 1e-12)
+    check(cells[0].kind == CellKind.PATH && cells[0].errorClass == ErrorClass.LOW && cells[0].sessions == 1, "${cells[0]}")
+    check(cells[1].kind == CellKind.SURFACE && cells[1].errorClass == ErrorClass.HIGH && cells[1].errorM == 0.3, "${cells[1]}")
+    // Guide: no markers (no results), the high surface cell at (0, 1, 2) straight ahead of a
+    // camera at (0, 1, 0) looking +Z, and behind one looking −Z (kept below: straight behind).
+    val ahead = s.guide(Pose(0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0), 60.0, 1080, 1920, 40.0)
+    check(ahead.size == 1 && ahead[0].onScreen, "ahead $ahead")
+    near(ahead[0].xPx, 540.0, "centre x")
+    near(ahead[0].yPx, 960.0, "centre y")
+    near(ahead[0].distanceM, 2.0, "distance")
+    val behind = s.guide(Pose(0.3, 1.0, 0.0, 0.0, 1.0, 0.0, 0.0), 60.0, 1080, 1920, 40.0)
+    check(!behind[0].onScreen && behind[0].xPx > 540.0, "behind, to the right: $behind")
+    expectSitar(SitarStatus.INVALID_ARGUMENT, "vfov_deg") { s.guide(Pose.IDENTITY, 0.0, 1080, 1920, 40.0) }
+    s.close()
+}
+
 fun main(args: Array<String>) {
     val tmp = File(args[1])
     check(SitarSession.version() == args[0], "version ${SitarSession.version()}")
@@ -268,5 +311,6 @@ fun main(args: Array<String>) {
     playback(tmp)
     upload(tmp)
     windowSettings(tmp)
+    venue()
     println("PASSED $checks checks")
 }

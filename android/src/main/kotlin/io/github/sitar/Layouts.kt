@@ -122,6 +122,30 @@ internal object FrustumLayout {
     const val SIZE = 9
 }
 
+/** Offsets into the flat `DoubleArray` of a `SitarGuide` (`rust/ffi/src/flat.rs`). */
+internal object GuideLayout {
+    const val ON_SCREEN = 0
+    const val X_PX = 1
+    const val Y_PX = 2
+    const val ANGLE_RAD = 3
+    const val DISTANCE_M = 4
+    /** Doubles per item. */
+    const val SIZE = 5
+}
+
+/** Offsets into the flat `DoubleArray` of a `SitarVenueCell` (`rust/ffi/src/flat.rs`). */
+internal object VenueCellLayout {
+    const val PX = 0
+    const val PY = 1
+    const val PZ = 2
+    const val KIND = 3
+    const val ERROR_CLASS = 4
+    const val SESSIONS = 5
+    const val ERROR_M = 6
+    /** Doubles per item. */
+    const val SIZE = 7
+}
+
 /** Offsets into the flat `DoubleArray` of a `RenderPlanHeader` (`rust/ffi/src/flat.rs`). */
 internal object RenderPlanLayout {
     const val SEGMENTS = 0

@@ -38,6 +38,10 @@ internal object Native {
     @JvmStatic external fun sessionTrajectoryTum(h: Long): String
     @JvmStatic external fun sessionSave(h: Long, dir: String)
     @JvmStatic external fun sessionExportGltf(h: Long, path: String)
+    @JvmStatic external fun sessionAnchor(h: Long, tNs: Long, anchorId: String, px: Double, py: Double, pz: Double, qx: Double, qy: Double, qz: Double, qw: Double, tracking: Int)
+    @JvmStatic external fun sessionLoadVenue(h: Long, mapJson: String)
+    @JvmStatic external fun sessionVenueCells(h: Long): DoubleArray
+    @JvmStatic external fun sessionGuide(h: Long, px: Double, py: Double, pz: Double, qx: Double, qy: Double, qz: Double, qw: Double, vfovDeg: Double, widthPx: Int, heightPx: Int, marginPx: Double): DoubleArray
     @JvmStatic external fun sessionLoad(dir: String): Long
 
     @JvmStatic external fun playbackNew(configJson: String): Long

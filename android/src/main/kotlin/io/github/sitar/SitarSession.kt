@@ -89,6 +89,33 @@ class SitarSession private constructor(handle: Long) : AutoCloseable {
     /** What to draw: segments, joints, frustums, start and stop, each with its class. */
     fun renderPlan(): RenderPlan = RenderPlan.of(Native.sessionRenderPlan(handle))
 
+    /**
+     * An observation of the venue's anchor image: the pose ARCore reports for the
+     * `AugmentedImage` (`centerPose`, world-from-image; image +X to its right) and its
+     * tracking state. An empty or over-long id (> 64 bytes), a non-finite pose or an unknown
+     * tracking value is [SitarStatus.INVALID_ARGUMENT]; before start or after stop
+     * [SitarStatus.INVALID_STATE].
+     */
+    fun anchor(tNs: Long, anchorId: String, imagePose: Pose, tracking: Tracking) =
+        Native.sessionAnchor(handle, tNs, anchorId, imagePose.px, imagePose.py, imagePose.pz,
+            imagePose.qx, imagePose.qy, imagePose.qz, imagePose.qw, tracking.code)
+
+    /** Loads the venue's `map.json`; the session is aligned once its anchor is fully tracked. */
+    fun loadVenue(mapJson: String) = Native.sessionLoadVenue(handle, mapJson)
+
+    /** The venue's cells in this session's world frame ([SitarStatus.INVALID_STATE] before the anchor is fully tracked). */
+    fun venueCells(): List<VenueCell> = VenueCell.list(Native.sessionVenueCells(handle))
+
+    /**
+     * Where each marker ([markers] order), then each high venue surface cell, is shown on a
+     * [widthPx] × [heightPx] screen seen by [camera] (the display-oriented camera pose) with
+     * vertical field of view [vfovDeg]; off-screen targets are pinned to the ellipse
+     * [marginPx] inside the edges, keeping their side when behind the camera.
+     */
+    fun guide(camera: Pose, vfovDeg: Double, widthPx: Int, heightPx: Int, marginPx: Double): List<Guide> =
+        Guide.list(Native.sessionGuide(handle, camera.px, camera.py, camera.pz, camera.qx, camera.qy,
+            camera.qz, camera.qw, vfovDeg, widthPx, heightPx, marginPx))
+
     /** The logged poses as TUM text (integer nanoseconds). */
     fun trajectoryTum(): String = Native.sessionTrajectoryTum(handle)
 

@@ -233,3 +233,54 @@ data class UploadProgress(
         }
     }
 }
+
+/** How well the platform tracked the venue's anchor image in one observation. */
+enum class Tracking(val code: Int) {
+    /** Not tracked (ARCore `TrackingState.STOPPED`). */
+    NONE(0),
+    /** Last known pose only (`TrackingMethod.LAST_KNOWN_POSE`, or `PAUSED`): recorded, not used to align. */
+    LIMITED(1),
+    /** Fully tracked (`TrackingMethod.FULL_TRACKING`): the observations that align. */
+    FULL(2);
+}
+
+/** A venue map cell's kind: where cameras were, or what they looked at. */
+enum class CellKind(val code: Int) {
+    PATH(0), SURFACE(1);
+
+    companion object {
+        @JvmStatic fun of(code: Int): CellKind = if (code == 1) SURFACE else PATH
+    }
+}
+
+/** A venue map cell in this session's world frame; the error in metres. */
+data class VenueCell(
+    val position: Vec3, val kind: CellKind, val errorClass: ErrorClass, val sessions: Int, val errorM: Double
+) {
+    internal companion object {
+        fun at(v: DoubleArray, i: Int) = VenueCell(
+            Vec3(v[i + VenueCellLayout.PX], v[i + VenueCellLayout.PY], v[i + VenueCellLayout.PZ]),
+            CellKind.of(v[i + VenueCellLayout.KIND].toInt()),
+            ErrorClass.of(v[i + VenueCellLayout.ERROR_CLASS].toInt()),
+            v[i + VenueCellLayout.SESSIONS].toInt(), v[i + VenueCellLayout.ERROR_M]
+        )
+
+        fun list(v: DoubleArray) = (0 until v.size / VenueCellLayout.SIZE).map { at(v, it * VenueCellLayout.SIZE) }
+    }
+}
+
+/**
+ * Where a target is shown: its projection when [onScreen], else the point on the ellipse
+ * inside the screen's edge in its direction. Pixels from the top-left, y down; [angleRad] 0
+ * points right, positive clockwise on screen.
+ */
+data class Guide(val onScreen: Boolean, val xPx: Double, val yPx: Double, val angleRad: Double, val distanceM: Double) {
+    internal companion object {
+        fun at(v: DoubleArray, i: Int) = Guide(
+            v[i + GuideLayout.ON_SCREEN] != 0.0, v[i + GuideLayout.X_PX], v[i + GuideLayout.Y_PX],
+            v[i + GuideLayout.ANGLE_RAD], v[i + GuideLayout.DISTANCE_M]
+        )
+
+        fun list(v: DoubleArray) = (0 until v.size / GuideLayout.SIZE).map { at(v, it * GuideLayout.SIZE) }
+    }
+}

@@ -1,6 +1,9 @@
 package io.github.sitar.recorder
 
+import io.github.sitar.CellKind
+import io.github.sitar.ErrorClass
 import io.github.sitar.Pose
+import io.github.sitar.Tracking
 import io.github.sitar.SitarSession
 
 // Host test of the recorder sample's logic (RecorderFlow, Json, DepthInput) on
@@ -147,10 +150,50 @@ private fun json() {
     }
 }
 
+/** The venue logic with a real session: tracking states, edge arrows from its guide, the kineticon, the colours. */
+private fun venue() {
+    check(VenueAnchor.tracking(tracking = true, paused = false, fullTracking = true) == Tracking.FULL, "tracked image: full")
+    check(VenueAnchor.tracking(tracking = true, paused = false, fullTracking = false) == Tracking.LIMITED, "last known pose: limited")
+    check(VenueAnchor.tracking(tracking = false, paused = true, fullTracking = false) == Tracking.LIMITED, "paused: limited")
+    check(VenueAnchor.tracking(tracking = false, paused = false, fullTracking = false) == Tracking.NONE, "stopped: none")
+
+    // ARCore convention: the camera looks along −Z. A high surface cell 2 m ahead of the anchor's
+    // centre and one 3 m to its right.
+    val map = """{"id":"v0123456789abcdef","name":"Hall","anchor":"${VenueAnchor.ID}","cell_m":0.25,
+        "convention":"arcore","unit":"m","sessions":[],"cells":[
+        {"center":[0.0,1.0,0.0],"kind":"surface","sessions":2,"subtrajectories":3,"error_m":0.3,"class":"high","directions":[0,0,3,0,0,0,0,0]},
+        {"center":[3.0,1.0,0.0],"kind":"surface","sessions":2,"subtrajectories":3,"error_m":0.2,"class":"high","directions":[0,0,3,0,0,0,0,0]}]}"""
+    val s = SitarSession(Json.obj("convention" to "arcore"))
+    s.start(0, Pose.IDENTITY)
+    s.loadVenue(map)
+    s.anchor(1, VenueAnchor.ID, Pose(0.0, 0.0, -2.0, 0.0, 0.0, 0.0, 1.0), VenueAnchor.tracking(tracking = true, paused = false, fullTracking = true))
+    val guides = s.guide(Pose(0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0), 60.0, 1080, 1920, 40.0)
+    check(guides.size == 2 && guides[0].onScreen && !guides[1].onScreen, "one cell ahead, one out of view: $guides")
+    val arrows = VenueView.edgeArrows(guides)
+    check(arrows.size == 1 && arrows[0].index == 1, "one arrow: $arrows")
+    check(Math.abs(arrows[0].x - 1040f) < 1e-3 && Math.abs(arrows[0].y - 960f) < 1e-3 && arrows[0].rotationDeg == 0f, "right edge, pointing right: ${arrows[0]}")
+    // Above and behind (camera turned around, 5 m below): the arrow points up, −90° clockwise.
+    val up = VenueView.edgeArrows(s.guide(Pose(0.0, -5.0, 0.0, 0.0, 1.0, 0.0, 0.0), 60.0, 1080, 1920, 40.0))
+    check(up.size == 2 && Math.abs(up[0].rotationDeg + 90f) < 1e-3 && up[0].y < 960f, "up and behind: $up")
+    s.close()
+
+    val k = Kineticon(pulseSeconds = 3.0, pulsesPerSecond = 1.5, amplitude = 0.4)
+    check(k.scale(1, false, 5.0) == 1.0, "unseen: still")
+    check(k.scale(1, true, 5.0) == 1.0 && k.scale(1, true, 5.0 + 1.0 / 3) > 1.3, "first seen: pulses")
+    check(k.scale(1, true, 8.01) == 1.0, "after its first seconds: still")
+    k.reset()
+    check(k.scale(1, true, 9.0) == 1.0 && k.scale(1, true, 9.0 + 1.0 / 3) > 1.3, "reset: pulses again")
+
+    val tile = VenueView.cellColor(CellKind.SURFACE, ErrorClass.HIGH)
+    val trail = VenueView.cellColor(CellKind.PATH, ErrorClass.HIGH)
+    check(tile[0] > 0.8f && tile[3] in 0.3f..0.9f && trail[3] < tile[3], "translucent red tile, fainter trail")
+}
+
 fun main() {
     startAndStopWithTheButtons()
     aPauseEndsTheRecordingCleanly()
     depthInputs()
     json()
+    venue()
     println("PASSED $checks checks")
 }

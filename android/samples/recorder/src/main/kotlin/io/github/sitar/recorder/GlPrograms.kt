@@ -5,9 +5,11 @@ import android.opengl.GLES20
 import android.opengl.Matrix
 import com.google.ar.core.Coordinates2d
 import com.google.ar.core.Frame
+import io.github.sitar.CellKind
 import io.github.sitar.ErrorClass
 import io.github.sitar.Marker
 import io.github.sitar.RenderPlan
+import io.github.sitar.VenueCell
 import java.nio.ByteBuffer
 import java.nio.ByteOrder
 import java.nio.FloatBuffer
@@ -111,8 +113,11 @@ class PlanDrawing {
         )
     }
 
-    /** Draws [plan] and [markers] with the camera's [view] and [projection] matrices. */
-    fun draw(plan: RenderPlan, markers: List<Marker>, view: FloatArray, projection: FloatArray) {
+    /**
+     * Draws [plan] and [markers] with the camera's [view] and [projection] matrices; marker `i`
+     * is drawn [markerScale]`(i)` times its size (the kineticon's pulse).
+     */
+    fun draw(plan: RenderPlan, markers: List<Marker>, view: FloatArray, projection: FloatArray, markerScale: (Int) -> Float = { 1f }) {
         Matrix.multiplyMM(mvp, 0, projection, 0, view, 0)
         GLES20.glUseProgram(program)
         GLES20.glUniformMatrix4fv(GLES20.glGetUniformLocation(program, "u_Mvp"), 1, false, mvp, 0)
@@ -128,18 +133,42 @@ class PlanDrawing {
             start = end + 1
         }
         for (f in plan.frustums) shape(GLES20.GL_POINTS, listOf(Triple(f.pose.px, f.pose.py, f.pose.pz)), f.errorClass, 20f)
-        for (m in markers) shape(GLES20.GL_POINTS, listOf(Triple(m.position.x, m.position.y, m.position.z)), m.errorClass, 60f)
+        for ((i, m) in markers.withIndex()) {
+            shape(GLES20.GL_POINTS, listOf(Triple(m.position.x, m.position.y, m.position.z)), m.errorClass, 60f * markerScale(i))
+        }
+    }
+
+    /**
+     * The venue map layer: surface cells as translucent square tiles coloured by class, path
+     * cells as a faint trail of small dots ([VenueView.cellColor]).
+     */
+    fun drawVenue(cells: List<VenueCell>, view: FloatArray, projection: FloatArray) {
+        Matrix.multiplyMM(mvp, 0, projection, 0, view, 0)
+        GLES20.glUseProgram(program)
+        GLES20.glUniformMatrix4fv(GLES20.glGetUniformLocation(program, "u_Mvp"), 1, false, mvp, 0)
+        GLES20.glEnable(GLES20.GL_BLEND)
+        GLES20.glBlendFunc(GLES20.GL_SRC_ALPHA, GLES20.GL_ONE_MINUS_SRC_ALPHA)
+        for (c in cells) {
+            val surface = c.kind == CellKind.SURFACE
+            points(GLES20.GL_POINTS, listOf(Triple(c.position.x, c.position.y, c.position.z)),
+                VenueView.cellColor(c.kind, c.errorClass), if (surface) 48f else 12f)
+        }
+        GLES20.glDisable(GLES20.GL_BLEND)
     }
 
     private fun shape(mode: Int, points: List<Triple<Double, Double, Double>>, errorClass: ErrorClass, size: Float) {
+        val c = colour(errorClass)
+        points(mode, points, floatArrayOf(c[0], c[1], c[2], 1f), size)
+    }
+
+    private fun points(mode: Int, points: List<Triple<Double, Double, Double>>, rgba: FloatArray, size: Float) {
         val n = minOf(points.size, buffer.capacity() / 3)
         buffer.clear()
         for (i in 0 until n) {
             buffer.put(points[i].first.toFloat()).put(points[i].second.toFloat()).put(points[i].third.toFloat())
         }
         buffer.rewind()
-        val c = colour(errorClass)
-        GLES20.glUniform4f(GLES20.glGetUniformLocation(program, "u_Color"), c[0], c[1], c[2], 1f)
+        GLES20.glUniform4f(GLES20.glGetUniformLocation(program, "u_Color"), rgba[0], rgba[1], rgba[2], rgba[3])
         GLES20.glUniform1f(GLES20.glGetUniformLocation(program, "u_Size"), size)
         val position = GLES20.glGetAttribLocation(program, "a_Position")
         GLES20.glVertexAttribPointer(position, 3, GLES20.GL_FLOAT, false, 0, buffer)

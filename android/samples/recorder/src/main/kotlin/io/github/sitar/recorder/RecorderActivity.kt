@@ -21,6 +21,8 @@ import android.widget.FrameLayout
 import android.widget.ImageView
 import android.widget.LinearLayout
 import android.widget.TextView
+import com.google.ar.core.AugmentedImage
+import com.google.ar.core.AugmentedImageDatabase
 import com.google.ar.core.Config
 import com.google.ar.core.Frame
 import com.google.ar.core.RecordingConfig
@@ -30,6 +32,7 @@ import com.google.ar.core.exceptions.CameraNotAvailableException
 import com.google.ar.core.exceptions.NotYetAvailableException
 import com.google.ar.core.exceptions.RecordingFailedException
 import com.google.ar.core.exceptions.UnavailableException
+import io.github.sitar.Guide
 import io.github.sitar.Marker
 import io.github.sitar.Pose
 import io.github.sitar.RenderPlan
@@ -37,10 +40,12 @@ import io.github.sitar.Sitar
 import io.github.sitar.SitarException
 import io.github.sitar.SitarSession
 import io.github.sitar.UploadJob
+import io.github.sitar.VenueCell
 import io.github.sitar.finished
 import io.github.sitar.UploadState
 import io.github.sitar.finished
 import java.io.File
+import java.io.IOException
 import javax.microedition.khronos.egl.EGLConfig
 import javax.microedition.khronos.opengles.GL10
 
@@ -52,6 +57,13 @@ import javax.microedition.khronos.opengles.GL10
  * and stop is [RecorderFlow]; a pause of the app ends a running recording
  * cleanly (both the mp4 and the SiTAR session stop at the last frame) and says
  * so. Set [SERVER_URL] to where `sitar serve` runs.
+ *
+ * In a venue: ARCore tracks the venue's printed anchor image ([VenueAnchor], an Augmented
+ * Images database of the committed image) and every observation goes to the session; with the
+ * venue's `map.json` at `<external files>/venue-map.json` the session is aligned to it once the
+ * image is fully tracked, its cells are drawn (the "Venue map" button toggles them), arrows at
+ * the screen's edge point to markers and high venue cells out of view, and each marker pulses
+ * for its first seconds in view ([Kineticon]).
  */
 class RecorderActivity : Activity(), GLSurfaceView.Renderer {
     private lateinit var surface: GLSurfaceView
@@ -75,6 +87,13 @@ class RecorderActivity : Activity(), GLSurfaceView.Renderer {
     private lateinit var evidenceImage: ImageView
     private val view = FloatArray(16)
     private val projection = FloatArray(16)
+    private lateinit var arrowLayer: FrameLayout
+    private val arrowViews = mutableListOf<TextView>()
+    private val kineticon = Kineticon()
+    private val startedAt = System.nanoTime()
+    @Volatile private var venueCells: List<VenueCell> = emptyList()
+    @Volatile private var mapShown = true
+    private var venueFrames = 0
 
     private val mp4: File get() = File(getExternalFilesDir(null), "recording.mp4")
 
@@ -108,8 +127,15 @@ class RecorderActivity : Activity(), GLSurfaceView.Renderer {
         evidenceImage = ImageView(this)
         controls.addView(evidenceText, wrap)
         controls.addView(evidenceImage, wrap)
+        val mapButton = Button(this)
+        mapButton.setText("Venue map")
+        mapButton.setOnClickListener { mapShown = !mapShown }
+        controls.addView(mapButton, wrap)
         val root = FrameLayout(this)
-        root.addView(surface, ViewGroup.LayoutParams(ViewGroup.LayoutParams.MATCH_PARENT, ViewGroup.LayoutParams.MATCH_PARENT))
+        val fill = ViewGroup.LayoutParams(ViewGroup.LayoutParams.MATCH_PARENT, ViewGroup.LayoutParams.MATCH_PARENT)
+        root.addView(surface, fill)
+        arrowLayer = FrameLayout(this)
+        root.addView(arrowLayer, fill)
         root.addView(controls, wrap)
         setContentView(root)
     }
@@ -124,6 +150,7 @@ class RecorderActivity : Activity(), GLSurfaceView.Renderer {
             Session(this).also { created ->
                 val config = created.config
                 if (created.isDepthModeSupported(Config.DepthMode.AUTOMATIC)) config.setDepthMode(Config.DepthMode.AUTOMATIC)
+                anchorDatabase(created)?.let { config.setAugmentedImageDatabase(it) }
                 created.configure(config)
                 session = created
                 sensorOrientation = backCameraOrientation(created)
@@ -170,6 +197,68 @@ class RecorderActivity : Activity(), GLSurfaceView.Renderer {
         session = null
     }
 
+    /** The venue's anchor image as ARCore's Augmented Images database (null if the asset is missing). */
+    private fun anchorDatabase(s: Session): AugmentedImageDatabase? = try {
+        val bitmap = assets.open(VenueAnchor.ASSET).use { BitmapFactory.decodeStream(it) }
+        AugmentedImageDatabase(s).also { it.addImage(VenueAnchor.ID, bitmap, VenueAnchor.WIDTH_M) }
+    } catch (e: IOException) {
+        Log.w(TAG, "no venue anchor image: $e")
+        null
+    }
+
+    /** Every update of the anchor image this frame, to the session (while recording). */
+    private fun reportAnchor(frame: Frame) {
+        val s = sitar ?: return
+        if (flow.state != RecorderFlow.State.RECORDING) return
+        for (image in frame.getUpdatedTrackables(AugmentedImage::class.java)) {
+            if (image.name != VenueAnchor.ID) continue
+            val state = image.trackingState
+            val tracking = VenueAnchor.tracking(state == TrackingState.TRACKING, state == TrackingState.PAUSED,
+                image.trackingMethod == AugmentedImage.TrackingMethod.FULL_TRACKING)
+            val c = image.centerPose
+            s.anchor(frame.timestamp, VenueAnchor.ID,
+                Pose(c.tx().toDouble(), c.ty().toDouble(), c.tz().toDouble(), c.qx().toDouble(), c.qy().toDouble(), c.qz().toDouble(), c.qw().toDouble()),
+                tracking)
+        }
+    }
+
+    /** The venue layer, the marker pulses and the edge arrows of this frame. */
+    private fun drawVenue(s: SitarSession, frame: Frame, p: RenderPlan?) {
+        // The alignment is refined as observations arrive: refresh the cells twice a second.
+        if (venueFrames++ % 15 == 0) {
+            venueCells = try { s.venueCells() } catch (e: SitarException) { emptyList() }
+        }
+        if (mapShown && venueCells.isNotEmpty()) drawing.drawVenue(venueCells, view, projection)
+        // projection[5] = 1 / tan(vfov / 2) of the display-oriented projection.
+        val vfovDeg = Math.toDegrees(2.0 * Math.atan(1.0 / projection[5]))
+        val guides = try { s.guide(pose(frame), vfovDeg, viewWidth, viewHeight, EDGE_MARGIN_PX) } catch (e: SitarException) { emptyList<Guide>() }
+        val nowS = (System.nanoTime() - startedAt) / 1e9
+        if (p != null) {
+            drawing.draw(p, markers, view, projection) { i -> if (i < guides.size) kineticon.scale(i, guides[i].onScreen, nowS).toFloat() else 1f }
+        }
+        val arrows = VenueView.edgeArrows(guides)
+        runOnUiThread { showArrows(arrows) }
+    }
+
+    /** One arrow view per off-screen target, pooled. */
+    private fun showArrows(arrows: List<EdgeArrow>) {
+        while (arrowViews.size < arrows.size) {
+            val v = TextView(this)
+            v.setText("\u27A4")
+            v.setTextColor(-0x1)
+            arrowLayer.addView(v, ViewGroup.LayoutParams(ViewGroup.LayoutParams.WRAP_CONTENT, ViewGroup.LayoutParams.WRAP_CONTENT))
+            arrowViews += v
+        }
+        for ((i, v) in arrowViews.withIndex()) {
+            val a = arrows.getOrNull(i)
+            v.setVisibility(if (a == null) android.view.View.INVISIBLE else android.view.View.VISIBLE)
+            if (a == null) continue
+            v.setX(a.x)
+            v.setY(a.y)
+            v.setRotation(a.rotationDeg)
+        }
+    }
+
     private fun backCameraOrientation(s: Session): Int = try {
         val cameras = getSystemService(Context.CAMERA_SERVICE) as CameraManager
         cameras.getCameraCharacteristics(s.cameraConfig.cameraId).get(CameraCharacteristics.SENSOR_ORIENTATION) ?: 90
@@ -214,14 +303,16 @@ class RecorderActivity : Activity(), GLSurfaceView.Renderer {
                 is Action.Stop -> finishRecording(action)
                 Action.None -> Unit
             }
+            reportAnchor(frame)
         } catch (e: SitarException) {
             Log.w(TAG, "SiTAR: ${e.message}")
         }
         val p = plan
-        if (p != null && tracking) {
+        val current = sitar
+        if (tracking && (p != null || current != null)) {
             camera.getViewMatrix(view, 0)
             camera.getProjectionMatrix(projection, 0, 0.05f, 100f)
-            drawing.draw(p, markers, view, projection)
+            if (current != null) drawVenue(current, frame, p) else if (p != null) drawing.draw(p, markers, view, projection)
         }
     }
 
@@ -235,6 +326,17 @@ class RecorderActivity : Activity(), GLSurfaceView.Renderer {
         val config = Json.obj("convention" to "arcore", "server_url" to SERVER_URL)
         val created = SitarSession(config)
         created.start(start.tNs, start.pose)
+        // The venue's map (`GET /v1/venues/{id}/map.json`, e.g. pushed with adb): aligned once the anchor is seen.
+        val map = File(getExternalFilesDir(null), "venue-map.json")
+        if (map.isFile) {
+            try {
+                created.loadVenue(map.readText())
+            } catch (e: SitarException) {
+                flow.say("The venue map was not loaded: ${e.message}")
+            }
+        }
+        kineticon.reset()
+        venueCells = emptyList()
         sitar?.close()
         sitar = created
     }
@@ -372,5 +474,7 @@ class RecorderActivity : Activity(), GLSurfaceView.Renderer {
         const val TRIALS = 10
         const val CAMERA_REQUEST = 1
         const val POLL_MS = 500L
+        /** The edge arrows' ellipse lies this far inside the screen's edges. */
+        const val EDGE_MARGIN_PX = 80.0
     }
 }

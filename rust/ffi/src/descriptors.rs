@@ -70,7 +70,7 @@ macro_rules! c_enum {
         impl $name {
             /// What the generator needs to know of this enum.
             #[doc(hidden)]
-            pub const DECL: $crate::decl::CEnum = $crate::decl::CEnum {
+            pub const DECL: $crate::descriptors::CEnum = $crate::descriptors::CEnum {
                 name: stringify!($name),
                 kotlin: stringify!($kotlin),
                 csharp: stringify!($csharp),

@@ -1,5 +1,5 @@
 //! `exports!`: one declaration per export, from which the C entry point, the JNI entry point
-//! and their descriptors ([`crate::decl`], for the generated headers and `Native.kt`) are
+//! and their descriptors ([`crate::descriptors`], for the generated headers and `Native.kt`) are
 //! made. The pattern is libsignal's `bridge_fn`: the export is a safe Rust function
 //! returning `Result<_, Error>` (in `bridge.rs`); the declaration says how each bridge
 //! reaches it.
@@ -22,6 +22,8 @@
 //! |---|---|---|
 //! | `SitarHandle`, `i64` | the same | `Long` |
 //! | `i32` | `int32_t` | `Int` |
+//! | `f64` | `double` | `Double` |
+//! | `Fill<T>` (a [`crate::bridge::Fill`]: the array output written in place, no allocation; C only, declare it last) | `T *name, size_t capacity, size_t *out_len` (the array convention) | — |
 //! | `u32` | `uint32_t` | `Int`, negative → `INVALID_ARGUMENT` |
 //! | `&str`, `&Path` | `const char *` (NULL → `SITAR_ERR_NULL`, bad UTF-8 → `INVALID_ARGUMENT`) | `String` |
 //! | `Option<&str>` | `const char *`, NULL = `None` | `String?` |
@@ -63,19 +65,19 @@ macro_rules! exports {
             => $(c $cname:ident $couts:tt)? $(jni $jname:ident)? ;
     )*) => {
         $(
-            $crate::declare::exports!(@c [$(#[doc = $doc])*] [$($feature)?] $name
+            $crate::exports_macro::exports!(@c [$(#[doc = $doc])*] [$($feature)?] $name
                 [$($ret)?] [$($params)*] $(c $cname $couts)?);
-            $crate::declare::exports!(@jni [$(#[doc = $doc])*] [$($feature)?] $name
+            $crate::exports_macro::exports!(@jni [$(#[doc = $doc])*] [$($feature)?] $name
                 [$($ret)?] [$($params)*] $(jni $jname)?);
         )*
 
         /// Every C entry point, for the header and the C# bindings.
         #[doc(hidden)]
-        pub const C_EXPORTS: &[$crate::decl::Export] = &[$($( $cname::DECL, )?)*];
+        pub const C_EXPORTS: &[$crate::descriptors::Export] = &[$($( $cname::DECL, )?)*];
 
         /// Every JNI entry point, for `Native.kt`.
         #[doc(hidden)]
-        pub const JNI_EXPORTS: &[$crate::decl::Export] = &[$($( $jname::DECL, )?)*];
+        pub const JNI_EXPORTS: &[$crate::descriptors::Export] = &[$($( $jname::DECL, )?)*];
     };
 
     // ---- Both bridges: the parameter walk ----------------------------------------------
@@ -85,75 +87,82 @@ macro_rules! exports {
     // are C: [signature] [conversions] [call arguments]; JNI: the same and [Kotlin parameters].
 
     (@params $bridge:tt $state:tt $n:ident : $($rest:tt)*) => {
-        $crate::declare::exports!(@split $bridge $state $n [] $($rest)*);
+        $crate::exports_macro::exports!(@split $bridge $state $n [] $($rest)*);
     };
     // The kind's tokens run up to the next comma.
     (@split $bridge:tt $state:tt $n:ident $kind:tt , $($rest:tt)*) => {
-        $crate::declare::exports!(@kind $bridge [$bridge $state [$($rest)*]] $n $kind);
+        $crate::exports_macro::exports!(@kind $bridge [$bridge $state [$($rest)*]] $n $kind);
     };
     (@split $bridge:tt $state:tt $n:ident $kind:tt) => {
-        $crate::declare::exports!(@kind $bridge [$bridge $state []] $n $kind);
+        $crate::exports_macro::exports!(@kind $bridge [$bridge $state []] $n $kind);
     };
     (@split $bridge:tt $state:tt $n:ident [$($kind:tt)*] $t:tt $($rest:tt)*) => {
-        $crate::declare::exports!(@split $bridge $state $n [$($kind)* $t] $($rest)*);
+        $crate::exports_macro::exports!(@split $bridge $state $n [$($kind)* $t] $($rest)*);
     };
     // What a kind adds, one group per accumulator.
     (@push [$bridge:tt [$head:tt $([$($acc:tt)*])*] [$($rest:tt)*]] $([$($add:tt)*])*) => {
-        $crate::declare::exports!(@params $bridge [$head $([$($acc)* $($add)*])*] $($rest)*);
+        $crate::exports_macro::exports!(@params $bridge [$head $([$($acc)* $($add)*])*] $($rest)*);
     };
 
     // ---- C ---------------------------------------------------------------------------
 
     (@c $docs:tt $feat:tt $name:ident $ret:tt $params:tt) => {};
     (@c $docs:tt $feat:tt $name:ident [] $params:tt c $cname:ident $couts:tt) => {
-        $crate::declare::exports!(@c $docs $feat $name [()] $params c $cname $couts);
+        $crate::exports_macro::exports!(@c $docs $feat $name [()] $params c $cname $couts);
     };
     (@c $docs:tt $feat:tt $name:ident [$ret:ty] [$($params:tt)*] c $cname:ident $couts:tt) => {
-        $crate::declare::exports!(@params c [[$docs $feat $name $cname $couts [$ret]] [] [] []]
+        $crate::exports_macro::exports!(@params c [[$docs $feat $name $cname $couts [$ret]] [] [] []]
             $($params)*);
     };
 
     // Parameter kinds: [C parameters] [conversion] [argument].
     (@kind c $k:tt $n:ident [SitarHandle]) => {
-        $crate::declare::exports!(@push $k [$n: SitarHandle,] [] [$n,]);
+        $crate::exports_macro::exports!(@push $k [$n: SitarHandle,] [] [$n,]);
     };
     (@kind c $k:tt $n:ident [i64]) => {
-        $crate::declare::exports!(@push $k [$n: i64,] [] [$n,]);
+        $crate::exports_macro::exports!(@push $k [$n: i64,] [] [$n,]);
     };
     (@kind c $k:tt $n:ident [i32]) => {
-        $crate::declare::exports!(@push $k [$n: i32,] [] [$n,]);
+        $crate::exports_macro::exports!(@push $k [$n: i32,] [] [$n,]);
     };
     (@kind c $k:tt $n:ident [u32]) => {
-        $crate::declare::exports!(@push $k [$n: u32,] [] [$n,]);
+        $crate::exports_macro::exports!(@push $k [$n: u32,] [] [$n,]);
+    };
+    (@kind c $k:tt $n:ident [f64]) => {
+        $crate::exports_macro::exports!(@push $k [$n: f64,] [] [$n,]);
+    };
+    (@kind c $k:tt $n:ident [Fill < $t:ident >]) => {
+        $crate::exports_macro::exports!(@push $k [$n: *mut $t, capacity: usize, out_len: *mut usize,]
+            [let $n = $crate::c_api::fill_arg($n, capacity, out_len)?;] [$n,]);
     };
     (@kind c $k:tt $n:ident [&str]) => {
-        $crate::declare::exports!(@push $k [$n: *const c_char,]
+        $crate::exports_macro::exports!(@push $k [$n: *const c_char,]
             [let $n = $crate::c_api::text_arg($n, stringify!($n))?;] [$n,]);
     };
     (@kind c $k:tt $n:ident [Option<&str>]) => {
-        $crate::declare::exports!(@push $k [$n: *const c_char,]
+        $crate::exports_macro::exports!(@push $k [$n: *const c_char,]
             [let $n = $crate::c_api::optional_text_arg($n, stringify!($n))?;] [$n,]);
     };
     (@kind c $k:tt $n:ident [&Path]) => {
-        $crate::declare::exports!(@push $k [$n: *const c_char,]
+        $crate::exports_macro::exports!(@push $k [$n: *const c_char,]
             [let $n = ::std::path::Path::new($crate::c_api::text_arg($n, stringify!($n))?);]
             [$n,]);
     };
     (@kind c $k:tt $n:ident [&SitarPose]) => {
-        $crate::declare::exports!(@push $k [$n: *const SitarPose,]
+        $crate::exports_macro::exports!(@push $k [$n: *const SitarPose,]
             [let $n = $crate::c_api::arg($n, stringify!($n))?;] [$n,]);
     };
     (@kind c $k:tt $n:ident [&SitarIntrinsics]) => {
-        $crate::declare::exports!(@push $k [$n: *const SitarIntrinsics,]
+        $crate::exports_macro::exports!(@push $k [$n: *const SitarIntrinsics,]
             [let $n = $crate::c_api::arg($n, stringify!($n))?;] [$n,]);
     };
     (@kind c $k:tt $n:ident [DepthPointer]) => {
-        $crate::declare::exports!(@push $k
+        $crate::exports_macro::exports!(@push $k
             [$n: *const u16, width: i32, height: i32, row_stride_bytes: i32,]
             [let $n = $crate::c_api::depth_arg($n, width, height, row_stride_bytes)?;] [$n,]);
     };
     (@kind c $k:tt $n:ident [LumaPointer]) => {
-        $crate::declare::exports!(@push $k
+        $crate::exports_macro::exports!(@push $k
             [$n: *const u8, width: i32, height: i32, row_stride_bytes: i32,]
             [let $n = $crate::c_api::luma_arg($n, width, height, row_stride_bytes)?;] [$n,]);
     };
@@ -161,7 +170,7 @@ macro_rules! exports {
     // Every parameter walked: the call of the safe function, as a block.
     (@params c [[$docs:tt $feat:tt $name:ident $cname:ident $couts:tt [$ret:ty]]
         [$($sig:tt)*] [$($conv:tt)*] [$($args:tt)*]]) => {
-        $crate::declare::exports!(@c_emit $couts [$ret] [$docs $feat $cname [$($sig)*]] $name
+        $crate::exports_macro::exports!(@c_emit $couts [$ret] [$docs $feat $cname [$($sig)*]] $name
             { $($conv)* $crate::bridge::$name($($args)*)? });
     };
 
@@ -170,20 +179,20 @@ macro_rules! exports {
     // checks).
     (@c_emit (static) [$ret:ty] $fn:tt $name:ident $call:block) => {
         // Cannot fail or panic: no guard, and the C string itself is returned.
-        $crate::declare::exports!(@c_item $fn [] [*const c_char] {
+        $crate::exports_macro::exports!(@c_item $fn [] [*const c_char] {
             let version: ::std::result::Result<$ret, _> = $crate::bridge::$name();
             version.map_or(c"".as_ptr(), ::std::ffi::CStr::as_ptr)
         });
     };
     (@c_emit () [$ret:ty] $fn:tt $name:ident $call:block) => {
-        $crate::declare::exports!(@c_fn $fn [] {
+        $crate::exports_macro::exports!(@c_fn $fn [] {
             // A result the C side does not take (e.g. the path written) is dropped.
             let _: $ret = $call;
             Ok(())
         });
     };
     (@c_emit (text) [$ret:ty] $fn:tt $name:ident $call:block) => {
-        $crate::declare::exports!(@c_fn $fn [buf: *mut c_char, cap: usize, out_len: *mut usize,] {
+        $crate::exports_macro::exports!(@c_fn $fn [buf: *mut c_char, cap: usize, out_len: *mut usize,] {
             $crate::c_api::check_array_out(buf, cap, out_len)?;
             let text: $ret = $call;
             $crate::c_api::copy_text(::core::convert::AsRef::<str>::as_ref(&text), buf, cap,
@@ -191,7 +200,7 @@ macro_rules! exports {
         });
     };
     (@c_emit (items: $item:ty) [$ret:ty] $fn:tt $name:ident $call:block) => {
-        $crate::declare::exports!(@c_fn $fn
+        $crate::exports_macro::exports!(@c_fn $fn
             [out: *mut $item, capacity: usize, out_len: *mut usize,] {
             $crate::c_api::check_array_out(out, capacity, out_len)?;
             let items: $ret = $call;
@@ -200,7 +209,7 @@ macro_rules! exports {
         });
     };
     (@c_emit ($o:ident : $ot:ty) [$ret:ty] $fn:tt $name:ident $call:block) => {
-        $crate::declare::exports!(@c_fn $fn [$o: *mut $ot,] {
+        $crate::exports_macro::exports!(@c_fn $fn [$o: *mut $ot,] {
             let $o = $crate::c_api::out($o, stringify!($o))?;
             let result: $ret = $call;
             *$o = ::core::convert::Into::into(result);
@@ -208,7 +217,7 @@ macro_rules! exports {
         });
     };
     (@c_emit ($($o:ident : $ot:ty),+) [$ret:ty] $fn:tt $name:ident $call:block) => {
-        $crate::declare::exports!(@c_fn $fn [$($o: *mut $ot,)+] {
+        $crate::exports_macro::exports!(@c_fn $fn [$($o: *mut $ot,)+] {
             $( let $o = $crate::c_api::out($o, stringify!($o))?; )+
             let result: $ret = $call;
             $crate::c_api::WriteOuts::write_outs(result, ($($o,)+));
@@ -218,7 +227,7 @@ macro_rules! exports {
 
     // A guarded C entry point: the status of `$body`'s result, its message kept.
     (@c_fn $fn:tt $outs:tt $body:block) => {
-        $crate::declare::exports!(@c_item $fn $outs [i32] {
+        $crate::exports_macro::exports!(@c_item $fn $outs [i32] {
             $crate::guard::run_ffi_safe(|| $body)
         });
     };
@@ -229,7 +238,7 @@ macro_rules! exports {
         #[no_mangle]
         pub extern "C" fn $cname($($p: $t,)* $($o: $ot,)*) -> $ret $body
 
-        $crate::declare::exports!(@decl [$($doc)*] [$($feature)?] $cname
+        $crate::exports_macro::exports!(@decl [$($doc)*] [$($feature)?] $cname
             [&[$( (stringify!($p), stringify!($t)), )* $( (stringify!($o), stringify!($ot)), )*]]
             [stringify!($ret)]);
     };
@@ -238,46 +247,50 @@ macro_rules! exports {
 
     (@jni $docs:tt $feat:tt $name:ident $ret:tt $params:tt) => {};
     (@jni $docs:tt $feat:tt $name:ident [] $params:tt jni $jname:ident) => {
-        $crate::declare::exports!(@jni $docs $feat $name [()] $params jni $jname);
+        $crate::exports_macro::exports!(@jni $docs $feat $name [()] $params jni $jname);
     };
     (@jni $docs:tt $feat:tt $name:ident [$ret:ty] [$($params:tt)*] jni $jname:ident) => {
-        $crate::declare::exports!(@params [jni env] [[$docs $feat $name $jname [$ret]]
+        $crate::exports_macro::exports!(@params [jni env] [[$docs $feat $name $jname [$ret]]
             [] [] [] []] $($params)*);
     };
 
     // Parameter kinds: [JNI parameters] [conversion] [argument] [Kotlin parameters].
     (@kind [jni $env:ident] $k:tt $n:ident [SitarHandle]) => {
-        $crate::declare::exports!(@push $k [$n: jlong,] [let $n = $n as u64;] [$n,]
+        $crate::exports_macro::exports!(@push $k [$n: jlong,] [let $n = $n as u64;] [$n,]
             [(stringify!($n), "Long"),]);
     };
     (@kind [jni $env:ident] $k:tt $n:ident [i64]) => {
-        $crate::declare::exports!(@push $k [$n: jlong,] [] [$n,] [(stringify!($n), "Long"),]);
+        $crate::exports_macro::exports!(@push $k [$n: jlong,] [] [$n,] [(stringify!($n), "Long"),]);
     };
     (@kind [jni $env:ident] $k:tt $n:ident [i32]) => {
-        $crate::declare::exports!(@push $k [$n: jint,] [] [$n,] [(stringify!($n), "Int"),]);
+        $crate::exports_macro::exports!(@push $k [$n: jint,] [] [$n,] [(stringify!($n), "Int"),]);
+    };
+    (@kind [jni $env:ident] $k:tt $n:ident [f64]) => {
+        $crate::exports_macro::exports!(@push $k [$n: jdouble,] [] [$n,]
+            [(stringify!($n), "Double"),]);
     };
     (@kind [jni $env:ident] $k:tt $n:ident [u32]) => {
-        $crate::declare::exports!(@push $k [$n: jint,]
+        $crate::exports_macro::exports!(@push $k [$n: jint,]
             [let $n = $crate::jni_api::non_negative($n, stringify!($n))?;] [$n,]
             [(stringify!($n), "Int"),]);
     };
     (@kind [jni $env:ident] $k:tt $n:ident [&str]) => {
-        $crate::declare::exports!(@push $k [$n: JString<'l>,]
+        $crate::exports_macro::exports!(@push $k [$n: JString<'l>,]
             [let $n = $crate::jni_api::string($env, &$n, stringify!($n))?;] [&$n,]
             [(stringify!($n), "String"),]);
     };
     (@kind [jni $env:ident] $k:tt $n:ident [Option<&str>]) => {
-        $crate::declare::exports!(@push $k [$n: JString<'l>,]
+        $crate::exports_macro::exports!(@push $k [$n: JString<'l>,]
             [let $n = $crate::jni_api::optional_string($env, &$n, stringify!($n))?;]
             [$n.as_deref(),] [(stringify!($n), "String?"),]);
     };
     (@kind [jni $env:ident] $k:tt $n:ident [&Path]) => {
-        $crate::declare::exports!(@push $k [$n: JString<'l>,]
+        $crate::exports_macro::exports!(@push $k [$n: JString<'l>,]
             [let $n = $crate::jni_api::path($env, &$n, stringify!($n))?;] [&$n,]
             [(stringify!($n), "String"),]);
     };
     (@kind [jni $env:ident] $k:tt $n:ident [&SitarPose]) => {
-        $crate::declare::exports!(@push $k
+        $crate::exports_macro::exports!(@push $k
             [px: jdouble, py: jdouble, pz: jdouble, qx: jdouble, qy: jdouble, qz: jdouble,
                 qw: jdouble,]
             [let $n = SitarPose { px, py, pz, qx, qy, qz, qw };]
@@ -286,39 +299,39 @@ macro_rules! exports {
                 ("qy", "Double"), ("qz", "Double"), ("qw", "Double"),]);
     };
     (@kind [jni $env:ident] $k:tt $n:ident [&SitarIntrinsics]) => {
-        $crate::declare::exports!(@push $k
+        $crate::exports_macro::exports!(@push $k
             [fx: jdouble, fy: jdouble, cx: jdouble, cy: jdouble,]
             [let $n = SitarIntrinsics { fx, fy, cx, cy };]
             [&$n,]
             [("fx", "Double"), ("fy", "Double"), ("cx", "Double"), ("cy", "Double"),]);
     };
     (@kind [jni $env:ident] $k:tt $n:ident [DirectBuffer]) => {
-        $crate::declare::exports!(@image_buffer $env $k $n depth_from_buffer);
+        $crate::exports_macro::exports!(@image_buffer $env $k $n depth_from_buffer);
     };
     (@kind [jni $env:ident] $k:tt $n:ident [LumaBuffer]) => {
-        $crate::declare::exports!(@image_buffer $env $k $n luma_from_buffer);
+        $crate::exports_macro::exports!(@image_buffer $env $k $n luma_from_buffer);
     };
     // The elements are held (a JNI critical section) until the bridge call returns, so no
     // JNI call may follow: parameters after a `ShortArray` or a `ByteArray` must be ones
     // whose conversion calls no JNI (numbers, a pose, intrinsics).
     (@kind [jni $env:ident] $k:tt $n:ident [ShortArray]) => {
-        $crate::declare::exports!(@image_array $env $k $n ShortArray JShortArray u16 Depth
+        $crate::exports_macro::exports!(@image_array $env $k $n ShortArray JShortArray u16 Depth
             DepthView);
     };
     // Holds the call's `Env` until the bridge call returns: declare it last.
     (@kind [jni $env:ident] $k:tt $n:ident [JavaContext]) => {
-        $crate::declare::exports!(@push $k [$n: JObject<'l>,]
+        $crate::exports_macro::exports!(@push $k [$n: JObject<'l>,]
             [let $n = $crate::android_tls::JavaContext::new($env, $n, stringify!($n))?;] [$n,]
             [(stringify!($n), "Any"),]);
     };
     (@kind [jni $env:ident] $k:tt $n:ident [ByteArray]) => {
-        $crate::declare::exports!(@image_array $env $k $n ByteArray JByteArray u8 Luma
+        $crate::exports_macro::exports!(@image_array $env $k $n ByteArray JByteArray u8 Luma
             LumaView);
     };
 
     // An image in a direct `ByteBuffer` and its `width, height, rowStrideBytes`.
     (@image_buffer $env:ident $k:tt $n:ident $view:ident) => {
-        $crate::declare::exports!(@push $k
+        $crate::exports_macro::exports!(@push $k
             [$n: JByteBuffer<'l>, width: jint, height: jint, row_stride_bytes: jint,]
             [let $n = $crate::jni_api::$view($env, &$n, width, height, row_stride_bytes)?;]
             [$n,]
@@ -329,7 +342,7 @@ macro_rules! exports {
     // height, rowStrideBytes`; checked as an `ArrayImage::$image`, wrapped as a `$view`.
     (@image_array $env:ident $k:tt $n:ident $kotlin:ident $array:ident $sample:ident
         $image:ident $view:ident) => {
-        $crate::declare::exports!(@push $k
+        $crate::exports_macro::exports!(@push $k
             [$n: $array<'l>, width: jint, height: jint, row_stride_bytes: jint,]
             [
                 let needed = $crate::jni_api::image_array_len($env, &$n,
@@ -374,7 +387,7 @@ macro_rules! exports {
             })
         }
 
-        $crate::declare::exports!(@decl [$($doc)*] [$($feature)?] $jname [&[$($kt)*]]
+        $crate::exports_macro::exports!(@decl [$($doc)*] [$($feature)?] $jname [&[$($kt)*]]
             [<$ret as $crate::jni_api::IntoJava<'static>>::KOTLIN]);
     };
 
@@ -387,12 +400,12 @@ macro_rules! exports {
         pub(crate) mod $export {
             #[allow(unused_imports)]
             use super::*;
-            pub(crate) const DECL: $crate::decl::Export = $crate::decl::Export {
+            pub(crate) const DECL: $crate::descriptors::Export = $crate::descriptors::Export {
                 name: stringify!($export),
                 doc: concat!($($doc, "\n",)*),
                 params: $params,
                 returns: $returns,
-                feature: $crate::declare::exports!(@feature $($feature)?),
+                feature: $crate::exports_macro::exports!(@feature $($feature)?),
             };
         }
     };

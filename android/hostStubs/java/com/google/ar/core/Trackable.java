@@ -1,0 +1,5 @@
+package com.google.ar.core;
+
+public interface Trackable {
+    TrackingState getTrackingState();
+}
