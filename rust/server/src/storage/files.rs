@@ -1,3 +1,8 @@
+//! The embedded blob store ([`BlobStore`]): the data directory's session folders, written
+//! with temp files renamed into place (atomic replace), bodies streamed with 1 MiB buffered
+//! writes, one idle timer per body and the disk quotas counted as bytes arrive; `tmp/` is
+//! emptied at every start, so nothing partial survives a crash.
+
 use std::hash::{BuildHasher, Hasher};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
