@@ -120,6 +120,28 @@ struct JobProgress {
     results_trials: u32,
 }
 
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+struct VenueCell {
+    px: f64,
+    py: f64,
+    pz: f64,
+    kind: i32,
+    error_class: i32,
+    sessions: u32,
+    error_m: f64,
+}
+
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+struct Guide {
+    on_screen: i32,
+    x_px: f64,
+    y_px: f64,
+    angle_rad: f64,
+    distance_m: f64,
+}
+
 type H = u64;
 
 /// The C ABI as function pointers resolved from the library.
@@ -157,6 +179,11 @@ struct Api {
     upload_server_id: extern "C" fn(H, *mut c_char, usize, *mut usize) -> i32,
     upload_cancel: extern "C" fn(H) -> i32,
     upload_free: extern "C" fn(H) -> i32,
+    anchor: extern "C" fn(H, i64, *const c_char, *const Pose, i32) -> i32,
+    load_venue: extern "C" fn(H, *const c_char) -> i32,
+    venue_cells: extern "C" fn(H, *mut VenueCell, usize, *mut usize) -> i32,
+    #[allow(clippy::type_complexity)]
+    guide: extern "C" fn(H, *const Pose, f64, i32, i32, f64, *mut Guide, usize, *mut usize) -> i32,
     testing_panic: extern "C" fn() -> i32,
 }
 
@@ -207,6 +234,10 @@ fn api() -> &'static Api {
             upload_server_id: sym!("sitar_upload_server_id"),
             upload_cancel: sym!("sitar_upload_cancel"),
             upload_free: sym!("sitar_upload_free"),
+            anchor: sym!("sitar_session_anchor"),
+            load_venue: sym!("sitar_session_load_venue"),
+            venue_cells: sym!("sitar_session_venue_cells"),
+            guide: sym!("sitar_session_guide"),
             testing_panic: sym!("sitar_testing_panic"),
         }
     })
@@ -565,6 +596,190 @@ fn whole_session_through_the_c_abi() {
     assert_eq!((class, err), (3, 0.2));
 
     assert_eq!((a.session_free)(loaded), OK);
+    assert_eq!((a.session_free)(h), OK);
+}
+
+/// A venue of two cells around its anchor `hall`: a low path cell and a high surface cell.
+const VENUE_MAP: &str = r#"{"id":"v0123456789abcdef","name":"Hall","anchor":"hall","cell_m":0.25,
+    "convention":"unity","unit":"m","sessions":[],"cells":[
+    {"center":[1.0,0.0,0.5],"kind":"path","sessions":1,"subtrajectories":2,"error_m":0.02,"class":"low","directions":[2,0,0,0,0,0,0,0]},
+    {"center":[0.0,1.0,0.0],"kind":"surface","sessions":2,"subtrajectories":3,"error_m":0.3,"class":"high","directions":[0,0,3,0,0,0,0,0]}]}"#;
+
+#[test]
+fn venue_anchor_cells_and_guide_through_the_c_abi() {
+    let a = api();
+    let h = new_session("{}");
+    // The image on the floor 2 m ahead, its +X turned 90° about +Y (to −Z).
+    let q = 0.5f64.sqrt();
+    let image = Pose {
+        pz: 2.0,
+        qy: q,
+        qw: q,
+        ..Pose::default()
+    };
+    let hall = c("hall");
+    expect_err(
+        (a.anchor)(h, 0, hall.as_ptr().cast(), &image, 2),
+        ERR_INVALID_STATE,
+        "not recording",
+    );
+    assert_eq!((a.start)(h, 0, &pose_at(0)), OK);
+    let long = c(&"x".repeat(65));
+    expect_err(
+        (a.anchor)(h, 1, long.as_ptr().cast(), &image, 2),
+        ERR_INVALID_ARGUMENT,
+        "anchor_id",
+    );
+    expect_err(
+        (a.anchor)(h, 1, hall.as_ptr().cast(), &image, 3),
+        ERR_INVALID_ARGUMENT,
+        "tracking",
+    );
+    let mut len = 7usize;
+    let mut cells = [VenueCell::default(); 4];
+    expect_err(
+        (a.venue_cells)(h, cells.as_mut_ptr(), 4, &mut len),
+        ERR_INVALID_STATE,
+        "no venue",
+    );
+    let map = c(VENUE_MAP);
+    assert_eq!((a.load_venue)(h, map.as_ptr().cast()), OK);
+    let bad = c(&VENUE_MAP.replace("\"surface\"", "\"wall\""));
+    expect_err(
+        (a.load_venue)(h, bad.as_ptr().cast()),
+        ERR_PARSE,
+        "cells[1].kind",
+    );
+    assert_eq!((a.anchor)(h, 1, hall.as_ptr().cast(), &image, 1), OK);
+    expect_err(
+        (a.venue_cells)(h, cells.as_mut_ptr(), 4, &mut len),
+        ERR_INVALID_STATE,
+        "full tracking",
+    );
+    assert_eq!((a.anchor)(h, 2, hall.as_ptr().cast(), &image, 2), OK);
+    assert_eq!(
+        (a.venue_cells)(h, cells.as_mut_ptr(), 1, &mut len),
+        ERR_BUFFER_TOO_SMALL
+    );
+    assert_eq!(len, 2);
+    assert_eq!((a.venue_cells)(h, cells.as_mut_ptr(), 4, &mut len), OK);
+    // Venue (1, 0, 0.5) turned 90° about +Y is (0.5, 0, −1); the anchor is at (0, 0, 2).
+    let c0 = cells[0];
+    assert!(
+        (c0.px - 0.5).abs() < 1e-12 && c0.py.abs() < 1e-12 && (c0.pz - 1.0).abs() < 1e-12,
+        "{c0:?}"
+    );
+    assert_eq!(
+        (c0.kind, c0.error_class, c0.sessions, c0.error_m),
+        (0, 1, 1, 0.02)
+    );
+    assert_eq!(
+        (cells[1].kind, cells[1].error_class, cells[1].sessions),
+        (1, 3, 2)
+    );
+
+    // No markers (no results): one guide entry, the high surface cell at (0, 1, 2).
+    let ahead = Pose {
+        py: 1.0,
+        qw: 1.0,
+        ..Pose::default()
+    };
+    let mut guides = [Guide::default(); 2];
+    assert_eq!(
+        (a.guide)(
+            h,
+            &ahead,
+            60.0,
+            1080,
+            1920,
+            40.0,
+            guides.as_mut_ptr(),
+            2,
+            &mut len
+        ),
+        OK
+    );
+    assert_eq!(len, 1);
+    let g = guides[0];
+    assert_eq!(g.on_screen, 1);
+    assert!(
+        (g.x_px - 540.0).abs() < 1e-9
+            && (g.y_px - 960.0).abs() < 1e-9
+            && (g.distance_m - 2.0).abs() < 1e-12,
+        "{g:?}"
+    );
+    // Turned around, 0.3 m to the side: the cell is behind, on the right; pinned to the ellipse.
+    let behind = Pose {
+        px: 0.3,
+        py: 1.0,
+        qy: 1.0,
+        ..Pose::default()
+    };
+    assert_eq!(
+        (a.guide)(
+            h,
+            &behind,
+            60.0,
+            1080,
+            1920,
+            40.0,
+            guides.as_mut_ptr(),
+            2,
+            &mut len
+        ),
+        OK
+    );
+    let g = guides[0];
+    assert_eq!(g.on_screen, 0);
+    assert!(g.x_px > 540.0 && g.angle_rad.abs() < 1e-12, "{g:?}");
+    let (ex, ey) = ((g.x_px - 540.0) / 500.0, (g.y_px - 960.0) / 920.0);
+    assert!(
+        (ex * ex + ey * ey - 1.0).abs() < 1e-9,
+        "on the ellipse: {g:?}"
+    );
+    assert_eq!(
+        (a.guide)(
+            h,
+            &ahead,
+            60.0,
+            1080,
+            1920,
+            40.0,
+            std::ptr::null_mut(),
+            2,
+            &mut len
+        ),
+        ERR_NULL
+    );
+    assert_eq!(
+        (a.guide)(
+            h,
+            &ahead,
+            60.0,
+            1080,
+            1920,
+            40.0,
+            std::ptr::null_mut(),
+            0,
+            &mut len
+        ),
+        ERR_BUFFER_TOO_SMALL
+    );
+    expect_err(
+        (a.guide)(
+            h,
+            &ahead,
+            190.0,
+            1080,
+            1920,
+            40.0,
+            guides.as_mut_ptr(),
+            2,
+            &mut len,
+        ),
+        ERR_INVALID_ARGUMENT,
+        "vfov_deg",
+    );
     assert_eq!((a.session_free)(h), OK);
 }
 

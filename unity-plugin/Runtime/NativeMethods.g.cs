@@ -231,7 +231,8 @@ namespace Sitar
         ///  screen at `(width_px/2 + f·x/z, height_px/2 − f·y/z)` is `on_screen = 1` there; any
         ///  other is pinned to the ellipse with semi-axes `width_px/2 − margin_px`,
         ///  `height_px/2 − margin_px` around the centre in the direction `d = (f·x, −f·y)`
-        ///  (behind the camera it keeps its side). `angle_rad = atan2(d_y, d_x)`, `distance_m`
+        ///  (behind the camera it keeps its side; straight behind, d = 0, it points down).
+        ///  `angle_rad = atan2(d_y, d_x)`, `distance_m`
         ///  from the camera. Array-output convention; pure and allocation-free. vfov outside
         ///  (0, 180), a size ≤ 0 or a margin outside [0, half the shorter side) is
         ///  `SITAR_ERR_INVALID_ARGUMENT`.
