@@ -265,10 +265,22 @@ fn bad_inputs_are_json_4xx_and_write_nothing_outside_the_data_dir() {
         409,
         "conflict",
     );
+    // The report before any estimate is an HTML page saying what it waits for (a browser
+    // opens it), while the results themselves are still a JSON 409.
+    let (status, ct, page) = raw(
+        "GET",
+        &format!("{base}/v1/sessions/{up}/report"),
+        None,
+        b"",
+        &[],
+    );
+    assert_eq!(status, 200, "{page}");
+    assert!(ct.starts_with("text/html"), "{ct}");
+    assert!(page.contains("<b>0 of 3 trials played</b>"), "{page}");
     expect(
         raw(
             "GET",
-            &format!("{base}/v1/sessions/{up}/report"),
+            &format!("{base}/v1/sessions/{up}/results.json"),
             None,
             b"",
             &[],

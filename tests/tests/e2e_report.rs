@@ -68,6 +68,71 @@ fn shoot(url: &str, out: &Path) {
     assert!(status.success());
 }
 
+/// Whether Chromium is missing (then the test says it skipped `what`).
+fn chromium_missing(what: &str) -> bool {
+    let missing = !Path::new("/usr/bin/chromium").exists();
+    if missing {
+        println!("SKIPPED {what}: /usr/bin/chromium is not installed (.ci/run installs it)");
+    }
+    missing
+}
+
+/// The 3-D canvas in the screenshot `png` shows the walk: enough drawn pixels, in the
+/// classes' colours (low blue, medium yellow). The drawn share of the canvas.
+fn assert_walk_drawn(png: &Path) -> f64 {
+    let (drawn, blue, yellow, total) = canvas_pixels(png);
+    let share = drawn as f64 / total as f64;
+    assert!((0.02..0.9).contains(&share), "drawn share {share}");
+    assert!(
+        blue > 200 && yellow > 200,
+        "class colours: blue {blue}, yellow {yellow}"
+    );
+    println!(
+        "canvas: {:.1} % drawn, {blue} blue, {yellow} yellow px",
+        share * 100.0
+    );
+    share
+}
+
+/// The demo's walk (it has problem regions) in `dir`: the recording's file, and the phone
+/// session that recorded it with images and depth, saved with its evidence into the
+/// returned folder.
+fn demo_walk_with_evidence(dir: &Path) -> (PathBuf, sitar_core::Session, PathBuf) {
+    let recording = sitar_sim::Recording::demo(15.0, 30.0, 42).unwrap();
+    let rec_path = dir.join("walk.rec");
+    std::fs::write(&rec_path, recording.to_bytes()).unwrap();
+    let phone = phone_walk_with_evidence(&recording);
+    let folder = dir.join("phone");
+    phone.save(&folder).unwrap();
+    (rec_path, phone, folder)
+}
+
+/// A sim session of 8 trials (`trim_mean_30`) of `recording`, with the phone's evidence from
+/// `evidence` when given, played to the end: its id.
+fn played_session(
+    client: &sitar_client::Client,
+    recording: &Path,
+    evidence: Option<&Path>,
+) -> String {
+    let id = client
+        .create_session(&NewSession {
+            trials: 8,
+            setting: "trim_mean_30".into(),
+            playback: "sim".into(),
+            window_frames: None,
+            pose_relation: None,
+        })
+        .unwrap();
+    client
+        .upload_recording(&id, recording, &mut |_, _| {})
+        .unwrap();
+    if let Some(folder) = evidence {
+        client.upload_evidence(&id, folder).unwrap();
+    }
+    assert_eq!(wait_done(client, &id).state, SessionState::Done);
+    id
+}
+
 /// (drawn, blue, yellow) pixels of the 3-D canvas (background #f4f5f7) in a screenshot, and
 /// the canvas's size.
 fn canvas_pixels(png: &Path) -> (usize, usize, usize, usize) {
@@ -136,10 +201,7 @@ fn section<'a>(dom: &'a str, open: &str, close: &str) -> &'a str {
 
 #[test]
 fn the_report_renders_the_walk_in_chromium_offline() {
-    if !Path::new("/usr/bin/chromium").exists() {
-        println!(
-            "SKIPPED the report in Chromium: /usr/bin/chromium is not installed (.ci/run installs it)"
-        );
+    if chromium_missing("the report in Chromium") {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
@@ -147,19 +209,7 @@ fn the_report_renders_the_walk_in_chromium_offline() {
     let recording = sim_recording(dir.path(), "walk.rec", 15.0, 42);
     let server = start(sim_config(&dir.path().join("data"), 40.0, 2));
     let client = client(&server);
-    let id = client
-        .create_session(&NewSession {
-            trials: 8,
-            setting: "trim_mean_30".into(),
-            playback: "sim".into(),
-            window_frames: None,
-            pose_relation: None,
-        })
-        .unwrap();
-    client
-        .upload_recording(&id, &recording, &mut |_, _| {})
-        .unwrap();
-    assert_eq!(wait_done(&client, &id).state, SessionState::Done);
+    let id = played_session(&client, &recording, None);
     // The markers the phone places with these results.
     let rec = sitar_sim::Recording::from_bytes(&std::fs::read(&recording).unwrap()).unwrap();
     let mut phone = rec
@@ -249,25 +299,12 @@ fn the_report_renders_the_walk_in_chromium_offline() {
 
     // The canvas (background #f4f5f7) shows the walk: enough drawn pixels, in the classes'
     // colours.
-    let (drawn, blue, yellow, total) = canvas_pixels(&out.join("screenshot.png"));
-    let share = drawn as f64 / total as f64;
-    assert!((0.02..0.9).contains(&share), "drawn share {share}");
-    assert!(
-        blue > 200 && yellow > 200,
-        "class colours: blue {blue}, yellow {yellow}"
-    );
-    println!(
-        "canvas: {:.1} % drawn, {blue} blue, {yellow} yellow px",
-        share * 100.0
-    );
+    assert_walk_drawn(&out.join("screenshot.png"));
 }
 
 #[test]
 fn regions_show_the_camera_evidence_and_a_share_link_shows_the_same_view() {
-    if !Path::new("/usr/bin/chromium").exists() {
-        println!(
-            "SKIPPED evidence and share in Chromium: /usr/bin/chromium is not installed (.ci/run installs it)"
-        );
+    if chromium_missing("evidence and share in Chromium") {
         return;
     }
     use sitar_client::{JobOptions, JobState, UploadJob};
@@ -275,14 +312,9 @@ fn regions_show_the_camera_evidence_and_a_share_link_shows_the_same_view() {
     let dir = tempfile::tempdir().unwrap();
     let server = start(sim_config(&dir.path().join("data"), 40.0, 2));
     let base = server.url();
-    // The demo's walk (it has problem regions), recorded with images and depth by the phone
-    // logic; the upload job sends the recording and the session folder's evidence.
-    let recording = sitar_sim::Recording::demo(15.0, 30.0, 42).unwrap();
-    let rec_path = dir.path().join("walk.rec");
-    std::fs::write(&rec_path, recording.to_bytes()).unwrap();
-    let mut phone = phone_walk_with_evidence(&recording);
-    let folder = dir.path().join("phone");
-    phone.save(&folder).unwrap();
+    // The demo's walk, recorded with images and depth by the phone logic; the upload job
+    // sends the recording and the session folder's evidence.
+    let (rec_path, mut phone, folder) = demo_walk_with_evidence(dir.path());
     let app = client_with(&server, APP_TOKEN);
     let mut options = JobOptions::new(NewSession {
         trials: 6,
@@ -486,35 +518,14 @@ fn number_after(text: &str, key: &str) -> u64 {
 /// all (no server).
 #[test]
 fn the_saved_report_opens_from_disk_with_its_3d_view_and_thumbnails() {
-    if !Path::new("/usr/bin/chromium").exists() {
-        println!(
-            "SKIPPED the saved report in Chromium: /usr/bin/chromium is not installed (.ci/run installs it)"
-        );
+    if chromium_missing("the saved report in Chromium") {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
     let server = start(sim_config(&dir.path().join("data"), 40.0, 2));
-    let recording = sitar_sim::Recording::demo(15.0, 30.0, 42).unwrap();
-    let rec_path = dir.path().join("walk.rec");
-    std::fs::write(&rec_path, recording.to_bytes()).unwrap();
-    let phone = phone_walk_with_evidence(&recording);
-    let folder = dir.path().join("phone");
-    phone.save(&folder).unwrap();
+    let (rec_path, _, folder) = demo_walk_with_evidence(dir.path());
     let client = client(&server);
-    let id = client
-        .create_session(&NewSession {
-            trials: 8,
-            setting: "trim_mean_30".into(),
-            playback: "sim".into(),
-            window_frames: None,
-            pose_relation: None,
-        })
-        .unwrap();
-    client
-        .upload_recording(&id, &rec_path, &mut |_, _| {})
-        .unwrap();
-    client.upload_evidence(&id, &folder).unwrap();
-    assert_eq!(wait_done(&client, &id).state, SessionState::Done);
+    let id = played_session(&client, &rec_path, Some(&folder));
 
     let url = format!("{}/v1/sessions/{id}/report?download=1", server.url());
     let response = agent()
@@ -602,10 +613,7 @@ fn the_saved_report_opens_from_disk_with_its_3d_view_and_thumbnails() {
             .all(|u| !u.contains("127.0.0.1") && !u.contains("localhost") && !u.contains("/v1/")),
         "{urls:?}"
     );
-    let (drawn, blue, yellow, total) = canvas_pixels(&out.join("screenshot.png"));
-    let share = drawn as f64 / total as f64;
-    assert!((0.02..0.9).contains(&share), "drawn share {share}");
-    assert!(blue > 200 && yellow > 200, "blue {blue}, yellow {yellow}");
+    let share = assert_walk_drawn(&out.join("screenshot.png"));
     println!(
         "saved report: {} kB, {:.1} % of the canvas drawn, framed {framed}",
         html.len() / 1000,
@@ -619,10 +627,7 @@ fn the_saved_report_opens_from_disk_with_its_3d_view_and_thumbnails() {
 /// among them), with no console error.
 #[test]
 fn pages_while_trials_arrive_say_so_and_reload_until_done() {
-    if !Path::new("/usr/bin/chromium").exists() {
-        println!(
-            "SKIPPED pages while trials arrive: /usr/bin/chromium is not installed (.ci/run installs it)"
-        );
+    if chromium_missing("pages while trials arrive") {
         return;
     }
     let dir = tempfile::tempdir().unwrap();

@@ -866,3 +866,65 @@ fn the_demo_sends_the_camera_evidence_and_its_report_shows_it() {
     );
     assert!(!html.contains("No camera evidence uploaded"));
 }
+
+/// `sitar demo --serve`: after the demo the backend keeps running and prints the served
+/// report's address with its token; that address opens the report (a browser's first
+/// visit: the token becomes a cookie), and Ctrl-C (SIGINT) stops the backend cleanly.
+#[test]
+fn the_demo_serves_its_report_until_ctrl_c() {
+    use std::io::BufRead;
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("demo");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_sitar"))
+        .args(["demo", "--serve", "--data", p(&data), "--trials", "2"])
+        .args(["--seconds", "4", "--speed", "40"])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let stdout = std::io::BufReader::new(child.stdout.take().unwrap());
+    let mut lines = stdout.lines();
+    let url = lines
+        .by_ref()
+        .map_while(Result::ok)
+        .find_map(|l| l.strip_prefix("served      ").map(str::to_owned))
+        .expect("no `served` line");
+    assert!(url.contains("/report?token=sitar_"), "{url}");
+    // The backend comes up again on the same address: poll its health for a while.
+    let origin = &url[..url.find("/v1/").unwrap()];
+    let started = std::time::Instant::now();
+    let addr = origin.trim_start_matches("http://");
+    while std::net::TcpStream::connect(addr).is_err() {
+        assert!(
+            started.elapsed().as_secs() < 20,
+            "the backend did not come back"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(100));
+    }
+    let token = &url[url.find("token=").unwrap() + 6..];
+    let report = url.replace(&format!("?token={token}"), "");
+    let (status, ct, page) = sitar_tests::get_bytes(&report, Some(token));
+    assert_eq!(status, 200);
+    assert!(ct.starts_with("text/html"), "{ct}");
+    assert!(String::from_utf8_lossy(&page).contains("<h1>SiTAR report</h1>"));
+    let pid = child.id().to_string();
+    assert!(
+        Command::new("kill")
+            .args(["-INT", &pid])
+            .status()
+            .unwrap()
+            .success()
+    );
+    let started = std::time::Instant::now();
+    let status = loop {
+        if let Some(status) = child.try_wait().unwrap() {
+            break status;
+        }
+        assert!(
+            started.elapsed().as_secs() < 20,
+            "Ctrl-C did not stop the demo's backend"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    };
+    assert!(status.success(), "{status:?}");
+}

@@ -79,18 +79,27 @@ fn view_point(p: glam::DVec3) -> glam::DVec3 {
     Convention::Arcore.convert_vector(p, Convention::Arcore)
 }
 
-/// Static top view (x right, z down the page, as the 3-D view's top view): the path coloured
-/// by class, markers and start/stop. Numbers only.
+/// Static top view (x right, z down the page, as the 3-D view's top view), framing the
+/// path, the markers and the faced surface points: the path coloured by class, the surface
+/// points, markers and start/stop, grid coordinates, axis names and a scale bar. Numbers only.
 fn top_view(phone: &Phone, subs: &[SubRow]) -> String {
     let joints = phone.render_plan().joints;
     if joints.len() < 2 {
         return String::new();
     }
     let pts: Vec<glam::DVec3> = joints.iter().map(|j| view_point(j.position)).collect();
+    let markers = phone.markers().unwrap_or_default();
+    // The frame holds the walk, the markers and the faced surface points.
     let (mut lo, mut hi) = (glam::DVec3::MAX, glam::DVec3::MIN);
-    for p in &pts {
-        lo = lo.min(*p);
-        hi = hi.max(*p);
+    let faced = subs.iter().filter_map(|s| s.surface).map(view_point);
+    for p in pts
+        .iter()
+        .copied()
+        .chain(markers.iter().map(|m| view_point(m.position)))
+        .chain(faced)
+    {
+        lo = lo.min(p);
+        hi = hi.max(p);
     }
     let span = (hi.x - lo.x).max(hi.z - lo.z).max(0.5);
     let margin = span * 0.06;
@@ -154,20 +163,35 @@ fn top_view(phone: &Phone, subs: &[SubRow]) -> String {
         );
     }
     svg.push_str("</g>");
-    if let Ok(markers) = phone.markers() {
-        for (i, m) in markers.iter().enumerate() {
-            let p = view_point(m.position);
-            let _ = write!(
-                svg,
-                r##"<circle class="marker" cx="{:.3}" cy="{:.3}" r="{:.3}" fill="{}" stroke="#000" stroke-width="{:.4}"><title>marker {}</title></circle>"##,
-                p.x,
-                p.z,
-                stroke * 4.0,
-                colour(m.class),
-                stroke / 2.0,
-                i + 1
-            );
-        }
+    // The faced surface points (thinned like the path), under the markers.
+    let surface: Vec<glam::DVec3> = subs
+        .iter()
+        .filter_map(|s| s.surface)
+        .map(view_point)
+        .collect();
+    let _ = write!(svg, r##"<g class="surface" fill="#8c564b">"##);
+    for i in crate::thinning::thin(surface.len(), MAX_TOP_VIEW_POINTS) {
+        let _ = write!(
+            svg,
+            r#"<circle cx="{:.3}" cy="{:.3}" r="{:.3}"/>"#,
+            surface[i].x,
+            surface[i].z,
+            stroke * 1.5
+        );
+    }
+    svg.push_str("</g>");
+    for (i, m) in markers.iter().enumerate() {
+        let p = view_point(m.position);
+        let _ = write!(
+            svg,
+            r##"<circle class="marker" cx="{:.3}" cy="{:.3}" r="{:.3}" fill="{}" stroke="#000" stroke-width="{:.4}"><title>marker {}</title></circle>"##,
+            p.x,
+            p.z,
+            stroke * 4.0,
+            colour(m.class),
+            stroke / 2.0,
+            i + 1
+        );
     }
     let (s, e) = (pts[0], pts[pts.len() - 1]);
     let _ = write!(
@@ -716,6 +740,64 @@ mod tests {
         assert_eq!(errors.len(), 39_000);
         let max = statistics(&errors).unwrap()[3];
         assert!((max - 0.12).abs() < 1e-4, "{max}");
+    }
+
+    /// The demo's walk: its markers stand on the wall at x ≈ 2.5 m, past the path's own
+    /// extent; the top view's frame holds them and every faced surface point.
+    #[test]
+    fn the_top_view_frames_the_markers_and_the_faced_surfaces() {
+        let recording = sitar_sim::Recording::demo(15.0, 30.0, 42).unwrap();
+        let mut phone = recording
+            .phone_session(
+                sitar_core::SessionConfig::from_json(r#"{"convention":"arcore"}"#).unwrap(),
+                sitar_core::DisplayRotation::Deg90,
+            )
+            .unwrap();
+        // An error that rises along the walk: every class, and markers.
+        let windows: Vec<serde_json::Value> = phone
+            .subtrajectories()
+            .iter()
+            .map(|s| json!({"start": s.start_ns, "error_m": 0.003 * f64::from(s.index)}))
+            .collect();
+        let results = json!({"version": 1, "setting": "median", "trials": 3,
+            "pose_relation": "trans_part", "window_frames": 10, "unit": "m", "windows": windows});
+        phone.load_results(&results.to_string()).unwrap();
+        let thresholds = Thresholds {
+            medium: 0.05,
+            high: 0.10,
+        };
+        let subs = regions::sub_rows(&phone, thresholds);
+        let markers = phone.markers().unwrap();
+        assert!(!markers.is_empty());
+        let svg = top_view(&phone, &subs);
+        let view: Vec<f64> = svg
+            .split("viewBox=\"")
+            .nth(1)
+            .and_then(|v| v.split('"').next())
+            .unwrap()
+            .split(' ')
+            .map(|n| n.parse().unwrap())
+            .collect();
+        let inside = |p: glam::DVec3| {
+            (view[0]..=view[0] + view[2]).contains(&p.x)
+                && (view[1]..=view[1] + view[3]).contains(&p.z)
+        };
+        for m in &markers {
+            assert!(
+                inside(m.position),
+                "marker at {} outside {view:?}",
+                m.position
+            );
+        }
+        let faced: Vec<glam::DVec3> = subs.iter().filter_map(|s| s.surface).collect();
+        assert!(faced.iter().all(|p| inside(*p)), "{view:?}");
+        assert_eq!(
+            svg.matches(r#"<circle class="marker""#).count(),
+            markers.len()
+        );
+        let dots = svg.split(r#"<g class="surface""#).nth(1).unwrap();
+        let dots = &dots[..dots.find("</g>").unwrap()];
+        assert_eq!(dots.matches("<circle").count(), faced.len());
     }
 
     #[test]
