@@ -170,7 +170,7 @@ fn top_view(phone: &Phone, subs: &[SubRow]) -> String {
         .map(view_point)
         .collect();
     let _ = write!(svg, r##"<g class="surface" fill="#8c564b">"##);
-    for i in crate::thinning::thin(surface.len(), MAX_TOP_VIEW_POINTS) {
+    for i in crate::report::thinning::thin(surface.len(), MAX_TOP_VIEW_POINTS) {
         let _ = write!(
             svg,
             r#"<circle cx="{:.3}" cy="{:.3}" r="{:.3}"/>"#,
@@ -305,7 +305,7 @@ pub(crate) struct ReportInput<'a> {
 pub(crate) struct Standalone<'a> {
     /// The stored JPEG thumbnail of sub-trajectory k (none when there is none).
     pub thumbnail: &'a dyn Fn(u32) -> Option<Vec<u8>>,
-    /// What the 3-D view draws (`crate::scene_view`, as `scene.json` serves it), none
+    /// What the 3-D view draws (`crate::report::scene_view`, as `scene.json` serves it), none
     /// without a trajectory.
     pub scene: Option<serde_json::Value>,
 }
