@@ -256,7 +256,7 @@ impl AdbPlayback {
             remote_rec: format!("{dir}/{}", contract::RECORDING_FILE),
             status_file: format!("{out_dir}/{}", contract::STATUS_FILE),
             out_dir,
-            pull_dir: job.recording.with_file_name("adb-pull"),
+            pull_dir: job.work_dir.clone(),
             safe_serial: serial
                 .chars()
                 .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })

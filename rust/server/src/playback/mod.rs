@@ -39,8 +39,11 @@ impl PlaybackPlan {
 pub struct PlaybackJob {
     /// The session the trials belong to.
     pub session: String,
-    /// The recording in the data directory.
+    /// A local file holding the recording (the blob store's).
     pub recording: PathBuf,
+    /// A local folder for the job's working files (adb's pulled trials), the blob store's:
+    /// it goes with the session.
+    pub work_dir: PathBuf,
     /// Playback index of the first trial to run (after a restart: the trials already stored).
     pub first_index: u32,
     /// How many trials to run.
@@ -237,6 +240,7 @@ mod tests {
         let job = PlaybackJob {
             session: "s".into(),
             recording: PathBuf::new(),
+            work_dir: PathBuf::new(),
             first_index: 0,
             trials: 1,
             cancel: Arc::new(AtomicBool::new(true)),

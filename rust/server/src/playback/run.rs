@@ -120,6 +120,7 @@ pub(crate) async fn start<'a>(
     let job = PlaybackJob {
         session: id.to_string(),
         recording,
+        work_dir: shared.blobs.playback_folder(id),
         first_index: done_before,
         trials: needed,
         cancel: cancel.clone(),

@@ -118,6 +118,10 @@ pub(crate) trait BlobStore: Send + Sync {
     /// `None` when it has none.
     fn take_away(&self, id: &str) -> Result<Option<TakenAway>, Error>;
 
+    /// A local folder for session `id`'s playback working files (trials pulled from the
+    /// phones before they are parsed); removed with the session.
+    fn playback_folder(&self, id: &str) -> PathBuf;
+
     /// The local folder of the phone session rebuilt for session `id`'s scene (a cache:
     /// rebuilt when missing); also its key in in-memory caches.
     fn scene_folder(&self, id: &str) -> PathBuf;

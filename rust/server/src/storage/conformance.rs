@@ -534,6 +534,7 @@ fn scenes_are_kept_whole_with_their_tag(store: &dyn BlobStore) {
     assert_eq!(tag, "trial");
     assert!(dir.join("plan.csv").is_file());
     assert_eq!(dir, store.scene_folder(A));
+    assert_ne!(store.playback_folder(A), store.playback_folder(B));
     store.discard_scene(A);
     assert!(store.kept_scene(A).is_none());
 }

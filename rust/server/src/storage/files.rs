@@ -390,6 +390,10 @@ impl BlobStore for Files {
         std::fs::create_dir_all(&dir).map_err(|e| Error::io("cannot create", &dir, e))
     }
 
+    fn playback_folder(&self, id: &str) -> PathBuf {
+        self.session_dir(id).join("adb-pull")
+    }
+
     fn scene_folder(&self, id: &str) -> PathBuf {
         self.session_dir(id).join("phone")
     }
