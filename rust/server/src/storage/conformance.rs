@@ -443,57 +443,25 @@ async fn uploads_are_staged_checked_and_published_whole(store: &dyn BlobStore) {
 
 async fn resumable_parts_keep_exactly_what_arrived(store: &dyn BlobStore) {
     let part = SessionObject::RecordingPart;
-    let room = store.reserve(Some(B), None).unwrap();
+    // Appends `parts` (breaking off after them when `broken`) at `offset` of a 12-byte upload.
+    let append = async |parts: &[&'static [u8]], broken: bool, offset: u64| {
+        let room = store.reserve(Some(B), None).unwrap();
+        let body = chunks(parts, broken);
+        store
+            .append_to(body, B, part, offset, 12, "recording", room)
+            .await
+    };
     // A body that breaks off keeps what arrived.
-    let first = store
-        .append_to(
-            chunks(&[b"abc", b"def"], true),
-            B,
-            part,
-            0,
-            12,
-            "recording",
-            room,
-        )
-        .await
-        .unwrap();
+    let first = append(&[b"abc", b"def"], true, 0).await.unwrap();
     assert_eq!(first.len, 6);
     assert!(first.broken.is_some());
     assert_eq!(store.len(B, part).unwrap(), Some(6));
     // Resuming from another offset is refused; nothing changes.
-    let room = store.reserve(Some(B), None).unwrap();
-    let wrong = store
-        .append_to(chunks(&[b"xyz"], false), B, part, 3, 12, "recording", room)
-        .await;
-    assert!(wrong.is_err());
+    assert!(append(&[b"xyz"], false, 3).await.is_err());
     // A body longer than its range is refused and cut back to where it started.
-    let room = store.reserve(Some(B), None).unwrap();
-    let long = store
-        .append_to(
-            chunks(&[b"ghijklmn"], false),
-            B,
-            part,
-            6,
-            12,
-            "recording",
-            room,
-        )
-        .await;
-    assert!(long.is_err());
+    assert!(append(&[b"ghijklmn"], false, 6).await.is_err());
     assert_eq!(store.len(B, part).unwrap(), Some(6));
-    let room = store.reserve(Some(B), None).unwrap();
-    let rest = store
-        .append_to(
-            chunks(&[b"ghi", b"jkl"], false),
-            B,
-            part,
-            6,
-            12,
-            "recording",
-            room,
-        )
-        .await
-        .unwrap();
+    let rest = append(&[b"ghi", b"jkl"], false, 6).await.unwrap();
     assert_eq!((rest.len, rest.broken.is_none()), (12, true));
     let staged = store.staged_part(B, 12);
     store.publish(staged, B, SessionObject::Recording).unwrap();
