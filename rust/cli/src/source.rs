@@ -237,6 +237,8 @@ pub struct Named {
     pub trajectory: Trajectory,
     /// The path as given on the command line (evo's `name`).
     pub name: String,
+    /// Every quaternion was read with unit norm (by numpy's `allclose`, as evo's check).
+    pub unit_quaternions: bool,
 }
 
 /// Reference and estimate as read, with whether they have stamps (KITTI has none).
@@ -310,7 +312,11 @@ fn finish(
         trajectory.len(),
         if timed { "stamps and poses" } else { "poses" }
     ))?;
-    Ok(Named { trajectory, name })
+    Ok(Named {
+        trajectory,
+        name,
+        unit_quaternions: report.quaternions_off_unit == 0,
+    })
 }
 
 /// Reads both inputs of `ape`/`rpe`.

@@ -8,12 +8,11 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use glam::{DMat3, DMat4, DQuat, DVec3};
-use sitar_estimator::{Alignment, Trajectory, align_first, write_tum};
+use sitar_estimator::{Alignment, TimeUnit, Trajectory, align_first, write_tum};
 
 use crate::canvas::{self, Page};
 use crate::console::{Console, SEP, UsabilityArgs};
 use crate::figures::{Drawing, PALETTE, Path3, Series};
-use crate::metric::seconds;
 use crate::metric_args::PlaneArg;
 use crate::plot::{PAGE, PlotMode};
 use crate::source::{
@@ -226,6 +225,8 @@ struct Bundle {
     reference: Option<(String, Trajectory)>,
     synced_refs: BTreeMap<String, Trajectory>,
     synced: bool,
+    /// Trajectories read with quaternions off unit norm (evo's check calls them invalid).
+    off_unit: std::collections::BTreeSet<String>,
 }
 
 pub fn run(args: Args) -> Result<()> {
@@ -258,12 +259,16 @@ pub fn run(args: Args) -> Result<()> {
         }
     }
     console.debug(SEP)?;
-    let read = |path: &Path| -> Result<(String, Trajectory)> {
+    let mut off_unit = std::collections::BTreeSet::new();
+    let mut read = |path: &Path| -> Result<(String, Trajectory)> {
         let named = match kind {
             Kind::Tum => read_tum_evo(path, options.time_unit, &console)?,
             Kind::Euroc => read_euroc_evo(path, &console)?,
             Kind::Kitti => read_kitti_evo(path, &console)?,
         };
+        if !named.unit_quaternions {
+            off_unit.insert(named.name.clone());
+        }
         Ok((named.name, named.trajectory))
     };
     let mut bundle = Bundle {
@@ -271,6 +276,7 @@ pub fn run(args: Args) -> Result<()> {
         reference: None,
         synced_refs: BTreeMap::new(),
         synced: false,
+        off_unit: Default::default(),
     };
     for file in &files {
         if options.reference.as_ref() == Some(file) {
@@ -285,6 +291,7 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(path) = &options.reference {
         bundle.reference = Some(read(path)?);
     }
+    bundle.off_unit = off_unit;
     manipulate(&mut bundle, kind, &options, &console)?;
     print_infos(&bundle, &options, kind, &console)?;
     if options.plot || options.save_plot.is_some() {
@@ -341,7 +348,13 @@ fn manipulate(bundle: &mut Bundle, kind: Kind, options: &Options, console: &Cons
                 crate::pyfmt::repr(options.t_offset)
             ))?;
             for s in &mut t.stamps {
-                *s += offset;
+                // evo adds the offset to its float seconds, rounding as it goes.
+                *s = match t.time_unit {
+                    TimeUnit::Seconds => {
+                        sitar_estimator::seconds_to_ns(t.time_unit.seconds(*s) + options.t_offset)
+                    }
+                    TimeUnit::Nanoseconds => *s + offset,
+                };
             }
         }
     }
@@ -565,6 +578,7 @@ fn compact(name: &str, options: &Options) -> String {
 fn print_traj_info(
     name: &str,
     t: &Trajectory,
+    unit_quaternions: bool,
     options: &Options,
     kind: Kind,
     console: &Console,
@@ -576,7 +590,8 @@ fn print_traj_info(
     if !(console.is_verbose() || options.full_check) {
         let mut line = format!("{} poses, {:.3}m path length", t.len(), t.path_length());
         if timed {
-            let duration = seconds(t.stamps[t.len() - 1]) - seconds(t.stamps[0]);
+            let duration =
+                t.time_unit.seconds(t.stamps[t.len() - 1]) - t.time_unit.seconds(t.stamps[0]);
             line += &format!(", {duration:.3}s duration");
         }
         return console.info(&format!("infos:\t{line}"));
@@ -598,9 +613,12 @@ fn print_traj_info(
     ];
     if timed {
         let (first, last) = (t.stamps[0], t.stamps[t.len() - 1]);
-        infos.push(("duration (s)".into(), repr(seconds(last) - seconds(first))));
-        infos.push(("t_start (s)".into(), repr(seconds(first))));
-        infos.push(("t_end (s)".into(), repr(seconds(last))));
+        infos.push((
+            "duration (s)".into(),
+            repr(t.time_unit.seconds(last) - t.time_unit.seconds(first)),
+        ));
+        infos.push(("t_start (s)".into(), repr(t.time_unit.seconds(first))));
+        infos.push(("t_end (s)".into(), repr(t.time_unit.seconds(last))));
     }
     infos.sort();
     console.info(&dict("infos", &infos))?;
@@ -608,7 +626,15 @@ fn print_traj_info(
         let mut checks = vec![
             ("array shapes".to_owned(), "ok".to_owned()),
             ("SE(3) conform".to_owned(), "yes".to_owned()),
-            ("quaternions".to_owned(), "ok".to_owned()),
+            (
+                "quaternions".to_owned(),
+                if unit_quaternions {
+                    "ok"
+                } else {
+                    "invalid (must be unit quaternions)"
+                }
+                .to_owned(),
+            ),
         ];
         if timed {
             checks.push(("nr. of stamps".into(), "ok".into()));
@@ -658,12 +684,12 @@ fn statistics(t: &Trajectory, timed: bool) -> Result<Vec<(String, f64)>> {
     let mut speeds = Vec::with_capacity(t.len() - 1);
     let mut steps = Vec::with_capacity(t.len() - 1);
     for i in 0..t.len() - 1 {
-        let dt = seconds(t.stamps[i + 1]) - seconds(t.stamps[i]);
+        let dt = t.time_unit.seconds(t.stamps[i + 1]) - t.time_unit.seconds(t.stamps[i]);
         if dt <= 0.0 {
             bail!(
                 "bad timestamps: {} & {}",
-                crate::pyfmt::repr(seconds(t.stamps[i])),
-                crate::pyfmt::repr(seconds(t.stamps[i + 1]))
+                crate::pyfmt::repr(t.time_unit.seconds(t.stamps[i])),
+                crate::pyfmt::repr(t.time_unit.seconds(t.stamps[i + 1]))
             );
         }
         speeds.push((t.positions[i + 1] - t.positions[i]).length() / dt);
@@ -688,12 +714,26 @@ fn statistics(t: &Trajectory, timed: bool) -> Result<Vec<(String, f64)>> {
 
 fn print_infos(bundle: &Bundle, options: &Options, kind: Kind, console: &Console) -> Result<()> {
     for (name, t) in &bundle.trajectories {
-        print_traj_info(&compact(name, options), t, options, kind, console)?;
+        // Transformed poses have quaternions re-derived from their matrices (unit norm).
+        let unit = !bundle.off_unit.contains(name) || rederives_quaternions(options);
+        print_traj_info(&compact(name, options), t, unit, options, kind, console)?;
     }
     if let Some((name, t)) = &bundle.reference {
-        print_traj_info(&compact(name, options), t, options, kind, console)?;
+        let unit = !bundle.off_unit.contains(name);
+        print_traj_info(&compact(name, options), t, unit, options, kind, console)?;
     }
     Ok(())
+}
+
+/// Whether evo re-derives the (non-reference) trajectories' quaternions from transformed
+/// pose matrices: any alignment, transformation or projection.
+fn rederives_quaternions(options: &Options) -> bool {
+    options.align
+        || options.correct_scale
+        || options.align_origin
+        || options.transform_left.is_some()
+        || options.transform_right.is_some()
+        || options.project_to_plane.is_some()
 }
 
 /// The file stem evo exports a trajectory under.
@@ -706,12 +746,7 @@ fn file_stem(name: &str) -> String {
 fn export(bundle: &Bundle, options: &Options, kind: Kind, console: &Console) -> Result<()> {
     // evo re-derives quaternions from the pose matrices once it has transformed the poses,
     // with w ≥ 0; sitar writes the same sign.
-    let transformed = options.align
-        || options.correct_scale
-        || options.align_origin
-        || options.transform_left.is_some()
-        || options.transform_right.is_some()
-        || options.project_to_plane.is_some();
+    let transformed = rederives_quaternions(options);
     let canonical = |name: &String, t: &Trajectory| -> Trajectory {
         let mut t = t.clone();
         let is_reference = bundle.reference.as_ref().is_some_and(|(r, _)| r == name);
@@ -790,9 +825,12 @@ fn stats_table(bundle: &Bundle, kind: Kind) -> Result<String> {
         ];
         if timed {
             let (first, last) = (t.stamps[0], t.stamps[t.len() - 1]);
-            rows.push(("duration (s)".into(), seconds(last) - seconds(first)));
-            rows.push(("t_start (s)".into(), seconds(first)));
-            rows.push(("t_end (s)".into(), seconds(last)));
+            rows.push((
+                "duration (s)".into(),
+                t.time_unit.seconds(last) - t.time_unit.seconds(first),
+            ));
+            rows.push(("t_start (s)".into(), t.time_unit.seconds(first)));
+            rows.push(("t_end (s)".into(), t.time_unit.seconds(last)));
         }
         rows.extend(statistics(t, timed).unwrap_or_default());
         columns.push((name.clone(), rows));
@@ -835,7 +873,7 @@ fn plot(bundle: &Bundle, options: &Options, kind: Kind, console: &Console) -> Re
     };
     let x = |t: &Trajectory, i: usize| -> f64 {
         if timed {
-            seconds(t.stamps[i]) - seconds(start.unwrap_or(0))
+            t.time_unit.seconds(t.stamps[i]) - t.time_unit.seconds(start.unwrap_or(0))
         } else {
             i as f64
         }
@@ -899,7 +937,7 @@ fn plot(bundle: &Bundle, options: &Options, kind: Kind, console: &Console) -> Re
     };
     let speed = |t: &Trajectory, i: usize| {
         let j = i.min(t.len().saturating_sub(2));
-        let dt = seconds(t.stamps[j + 1]) - seconds(t.stamps[j]);
+        let dt = t.time_unit.seconds(t.stamps[j + 1]) - t.time_unit.seconds(t.stamps[j]);
         if dt > 0.0 {
             (t.positions[j + 1] - t.positions[j]).length() / dt
         } else {

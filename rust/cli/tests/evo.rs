@@ -13,8 +13,17 @@ fn golden() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/golden/evo")
 }
 
+/// evo's test data (TUM RGB-D, EuRoC) and evo's outputs on it.
+fn golden_real() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/golden/evo_real")
+}
+
 fn cases() -> Vec<Value> {
-    let text = std::fs::read_to_string(golden().join("expected.json")).unwrap();
+    cases_in(&golden())
+}
+
+fn cases_in(dir: &Path) -> Vec<Value> {
+    let text = std::fs::read_to_string(dir.join("expected.json")).unwrap();
     serde_json::from_str::<Value>(&text)
         .unwrap()
         .as_array()
@@ -193,6 +202,30 @@ fn check_archive(name: &str, path: &Path, want: &Value) {
             close(name, &format!("{array}[{k}]"), *g, *w, tolerance);
         }
     }
+    // Arrays recorded as the bits of evo's float64s: equal to the last bit.
+    for (array, bits) in want
+        .get("bits")
+        .and_then(Value::as_object)
+        .into_iter()
+        .flatten()
+    {
+        let got: Vec<u64> = npy_values(entry(&format!("{array}.npy")))
+            .iter()
+            .map(|v| v.to_bits())
+            .collect();
+        let want: Vec<u64> = bits
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|b| b.as_u64().unwrap())
+            .collect();
+        assert_eq!(got.len(), want.len(), "{name}: {array} length");
+        let differing = got.iter().zip(&want).filter(|(g, w)| g != w).count();
+        assert_eq!(
+            differing, 0,
+            "{name}: {differing} values of {array} differ from evo's bits"
+        );
+    }
 }
 
 /// Files saved by evo (`%.18e` numbers) and by sitar agree word by word, numbers to 1e-9.
@@ -237,13 +270,105 @@ fn sitar_prints_saves_and_warns_as_evo_does() {
     let ours = tempfile::tempdir().unwrap();
     for case in &cases {
         let name = case["name"].as_str().unwrap();
-        let tool = case["tool"].as_str().unwrap();
-        let source = if tool == "res" {
+        let source = if case["tool"] == "res" {
             evo_archives.clone()
         } else {
             golden().join("data")
         };
-        let dir = workdir(&source);
+        let dir = run_case(case, &source);
+        if case.get("archive").is_some() {
+            std::fs::copy(
+                dir.path().join("result.zip"),
+                ours.path().join(format!("{name}.zip")),
+            )
+            .unwrap();
+        }
+    }
+    evo_res_reads_sitar_archives(ours.path(), &evo_archives);
+}
+
+/// evo's own sample files (TUM fr1/xyz and fr2/desk, EuRoC V1_02): association decided
+/// as evo's float64 seconds decide it (the fr2/desk tie at 1311868226.310950), every
+/// statistic and error to 1e-9, `timestamps` and `seconds_from_start` equal to the bit.
+#[test]
+fn real_files_to_the_last_digit() {
+    let cases = cases_in(&golden_real());
+    assert!(cases.len() >= 10);
+    for case in &cases {
+        run_case(case, &golden_real().join("data"));
+    }
+}
+
+/// SiTAR's extras on the same files: `--format csv|json` and the older `sitar rpe REF EST`
+/// form print every error evo's archive holds (1e-9), so the association behind them is
+/// evo's too.
+#[test]
+fn csv_json_and_the_older_form_associate_as_evo() {
+    let cases = cases_in(&golden_real());
+    let errors_of = |name: &str| -> Vec<f64> {
+        let case = cases.iter().find(|c| c["name"] == name).unwrap();
+        let values = case["archive"]["arrays"]["error_array"].as_array().unwrap();
+        values.iter().map(|v| v.as_f64().unwrap()).collect()
+    };
+    let dir = workdir(&golden_real().join("data"));
+    let (gt, est) = ("fr2_desk_groundtruth.txt", "fr2_desk_ORB.txt");
+    let pairs = ["-d", "10", "--all_pairs", "-a"];
+    let runs: [(&str, Vec<&str>, &str); 3] = [
+        (
+            "ape_fr2_desk",
+            vec!["ape", "tum", gt, est, "-a", "--format", "csv"],
+            "csv",
+        ),
+        (
+            "rpe_fr2_desk_all_pairs",
+            [&["rpe", "tum", gt, est][..], &pairs, &["--format", "csv"]].concat(),
+            "csv",
+        ),
+        (
+            "rpe_fr2_desk_all_pairs",
+            [&["rpe", gt, est][..], &pairs, &["--format", "json"]].concat(),
+            "json",
+        ),
+    ];
+    for (golden_case, args, format) in runs {
+        let args: Vec<String> = args.iter().map(|a| a.to_string()).collect();
+        let out = sitar(&args, dir.path());
+        assert!(
+            out.status.success(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let text = String::from_utf8(out.stdout).unwrap();
+        let got: Vec<f64> = if format == "csv" {
+            text.lines()
+                .skip(1)
+                .take_while(|l| !l.is_empty())
+                .map(|l| l.rsplit(',').next().unwrap().parse().unwrap())
+                .collect()
+        } else {
+            let json: Value = serde_json::from_str(&text).unwrap();
+            json["errors"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|e| e["error"].as_f64().unwrap())
+                .collect()
+        };
+        let want = errors_of(golden_case);
+        assert_eq!(got.len(), want.len(), "{args:?}: number of errors");
+        for (k, (g, w)) in got.iter().zip(&want).enumerate() {
+            close(golden_case, &format!("{format} error {k}"), *g, *w, 1e-9);
+        }
+    }
+}
+
+/// Runs one golden case in a copy of `source` and checks stdout, warnings, the archive
+/// and the saved files against evo's; returns the directory it ran in.
+fn run_case(case: &Value, source: &Path) -> tempfile::TempDir {
+    {
+        let name = case["name"].as_str().unwrap();
+        let tool = case["tool"].as_str().unwrap();
+        let dir = workdir(source);
         let mut args = vec![tool.to_owned()];
         args.extend(strings(&case["args"]));
         if case.get("archive").is_some() {
@@ -266,15 +391,10 @@ fn sitar_prints_saves_and_warns_as_evo_does() {
         }
         if let Some(archive) = case.get("archive") {
             check_archive(name, &dir.path().join("result.zip"), archive);
-            std::fs::copy(
-                dir.path().join("result.zip"),
-                ours.path().join(format!("{name}.zip")),
-            )
-            .unwrap();
         }
         check_saved(name, dir.path(), case["saved"].as_object().unwrap());
+        dir
     }
-    evo_res_reads_sitar_archives(ours.path(), &evo_archives);
 }
 
 /// evo's `evo_res` reads every archive sitar wrote and prints the statistics it prints for

@@ -191,7 +191,10 @@ pub use sitar_core::{DEFAULT_SETTING, ErrorClass, Thresholds};
 pub use statistics::{
     Setting, Statistics, interquartile_range, mean, mean_inliers, median, quantile, trim_mean,
 };
-pub use sync::{associate, associate_trajectories, matching_time_indices, seconds_to_ns};
+pub use sync::{
+    associate, associate_trajectories, match_trajectories, matching_time_indices,
+    matching_time_indices_seconds, seconds_to_ns,
+};
 pub use trajectory::{
     Plane, QUATERNION_NORM_TOLERANCE, TimeUnit, Trajectory, euler_sxyz, pairwise_sum,
 };
