@@ -15,6 +15,7 @@ mod demo;
 mod estimate;
 mod evaluate;
 mod figures;
+mod hints;
 mod input;
 mod logging;
 mod metric;
@@ -77,7 +78,10 @@ fn main() -> ExitCode {
             return ExitCode::FAILURE;
         }
     };
-    let result = match Cli::parse_from(argv).command {
+    let command = <Cli as clap::CommandFactory>::command();
+    let cli = Cli::try_parse_from(argv)
+        .unwrap_or_else(|e| hints::canonical_suggestions(e, &command).exit());
+    let result = match cli.command {
         Command::Rpe(args) => rpe::run(args),
         Command::Ape(args) => ape::run(args),
         Command::Traj(args) => traj::run(args),

@@ -262,20 +262,46 @@ pub fn evo_read_options(unit: StampUnit) -> ReadOptions {
 
 /// Reads one TUM file by evo's rules, telling `console` what it met.
 pub fn read_tum_evo(path: &Path, unit: StampUnit, console: &Console) -> Result<Named> {
-    let (trajectory, report) = read_tum_with(path, &evo_read_options(unit))?;
+    let (trajectory, report) = read_tum_with(path, &evo_read_options(unit))
+        .map_err(|e| with_format_hint(e.into(), path, "tum"))?;
     finish(path, trajectory, &report, true, console)
 }
 
 /// Reads one EuRoC ground-truth file by evo's rules.
 pub fn read_euroc_evo(path: &Path, console: &Console) -> Result<Named> {
-    let (trajectory, report) = read_euroc_csv_with(path, &evo_read_options(StampUnit::Ns))?;
+    let (trajectory, report) = read_euroc_csv_with(path, &evo_read_options(StampUnit::Ns))
+        .map_err(|e| with_format_hint(e.into(), path, "euroc"))?;
     finish(path, trajectory, &report, true, console)
 }
 
 /// Reads one KITTI file.
 pub fn read_kitti_evo(path: &Path, console: &Console) -> Result<Named> {
-    let trajectory = read_kitti(path)?;
+    let trajectory = read_kitti(path).map_err(|e| with_format_hint(e.into(), path, "kitti"))?;
     finish(path, trajectory, &ReadReport::default(), false, console)
+}
+
+/// `error` (reading `path` as `given`), with a hint naming the format the file does read
+/// as, if one does: `ape euroc` on a TUM file suggests `tum`.
+fn with_format_hint(error: anyhow::Error, path: &Path, given: &str) -> anyhow::Error {
+    let options = evo_read_options(StampUnit::S);
+    let readers: [(&str, &dyn Fn() -> bool); 3] = [
+        ("tum", &|| {
+            read_tum_with(path, &options).is_ok_and(|t| !t.0.is_empty())
+        }),
+        ("euroc", &|| {
+            read_euroc_csv_with(path, &options).is_ok_and(|t| !t.0.is_empty())
+        }),
+        ("kitti", &|| read_kitti(path).is_ok_and(|t| !t.is_empty())),
+    ];
+    match readers
+        .iter()
+        .find(|(name, reads)| *name != given && reads())
+    {
+        Some((name, _)) => anyhow::anyhow!(
+            "{error:#} (the file reads as the {name} format: use `{name}` in place of `{given}`)"
+        ),
+        None => error,
+    }
 }
 
 fn finish(

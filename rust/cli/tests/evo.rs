@@ -362,6 +362,42 @@ fn csv_json_and_the_older_form_associate_as_evo() {
     }
 }
 
+/// Usage hints name what the usage shows (`--all_pairs`, not its alias), and a file given
+/// in the wrong format gets a hint naming the format it reads as.
+#[test]
+fn hints_name_the_right_spelling_and_format() {
+    let dir = workdir(&golden_real().join("data"));
+    let run = |args: &[&str]| {
+        let args: Vec<String> = args.iter().map(|a| a.to_string()).collect();
+        let out = sitar(&args, dir.path());
+        assert!(!out.status.success(), "{args:?} succeeded");
+        String::from_utf8(out.stderr).unwrap()
+    };
+    let (gt, est) = ("fr2_desk_groundtruth.txt", "fr2_desk_ORB.txt");
+    let usage = run(&["rpe", "tum", gt, est, "--all-pair"]);
+    assert!(usage.contains("'--all_pairs'"), "{usage}");
+    assert!(!usage.contains("--all-pairs"), "{usage}");
+    for (args, hint) in [
+        (
+            vec!["ape", "euroc", gt, est],
+            "use `tum` in place of `euroc`",
+        ),
+        (
+            vec!["ape", "kitti", gt, est],
+            "use `tum` in place of `kitti`",
+        ),
+        (
+            vec!["rpe", "tum", "V102_groundtruth.csv", "V102.txt"],
+            "use `euroc` in place of `tum`",
+        ),
+        (vec!["traj", "euroc", est], "use `tum` in place of `euroc`"),
+    ] {
+        let stderr = run(&args);
+        assert!(stderr.starts_with("sitar: error: "), "{stderr}");
+        assert!(stderr.contains(hint), "{args:?}: {stderr}");
+    }
+}
+
 /// Runs one golden case in a copy of `source` and checks stdout, warnings, the archive
 /// and the saved files against evo's; returns the directory it ran in.
 fn run_case(case: &Value, source: &Path) -> tempfile::TempDir {
