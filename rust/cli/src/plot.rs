@@ -3,11 +3,11 @@
 //! below (evo's colour-mapped `--plot_mode` plot), as SVG.
 
 use std::ops::Range;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
-use anyhow::Result;
-use clap::ValueEnum;
 use plotters::prelude::*;
+
+use crate::figure::{DrawResult, ErrorFigure, Path3, PlotMode, Sample};
 
 /// The `--plot` and `--plot-mode` flags of `sitar estimate`.
 #[derive(clap::Args, Debug)]
@@ -28,79 +28,6 @@ pub struct PlotArgs {
     pub plot_mode: PlotMode,
 }
 
-/// Plane of the trajectory panel: horizontal axis, then vertical axis; or 3-D.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, ValueEnum)]
-pub enum PlotMode {
-    /// x horizontal, y vertical.
-    Xy,
-    /// x horizontal, z vertical: the top view of y-up (ARCore, Unity) poses.
-    #[default]
-    Xz,
-    /// y horizontal, z vertical.
-    Yz,
-    /// z horizontal, x vertical.
-    Zx,
-    /// z horizontal, y vertical.
-    Zy,
-    /// y horizontal, x vertical.
-    Yx,
-    /// 3-D, x, y and z (evo's default).
-    Xyz,
-}
-
-impl PlotMode {
-    /// Indices of the horizontal and the vertical coordinate (`None` for 3-D).
-    fn axes(self) -> Option<[usize; 2]> {
-        match self {
-            PlotMode::Xy => Some([0, 1]),
-            PlotMode::Xz => Some([0, 2]),
-            PlotMode::Yz => Some([1, 2]),
-            PlotMode::Zx => Some([2, 0]),
-            PlotMode::Zy => Some([2, 1]),
-            PlotMode::Yx => Some([1, 0]),
-            PlotMode::Xyz => None,
-        }
-    }
-}
-
-/// One error to draw: where on the x-axis, where on the trajectory, and how large.
-pub struct Sample {
-    /// Position on the x-axis of the error panel (seconds from start, index or metres).
-    pub x: f64,
-    /// Position (m) on the coloured trajectory; `None`: not drawn on the trajectory panel.
-    pub position: Option<[f64; 3]>,
-    /// The error.
-    pub error: f64,
-}
-
-/// What the error figure shows.
-pub struct ErrorFigure {
-    /// Title above the panels.
-    pub title: String,
-    /// Name of the error ("APE", "RPE", "estimated error").
-    pub metric: &'static str,
-    /// Unit of the error ("m", "deg", "rad", or "" for full transformations).
-    pub unit: String,
-    /// Label of the error panel's x-axis.
-    pub x_label: String,
-    /// Horizontal lines with a legend on the error panel (`("mean", value)`, …).
-    pub lines: Vec<(&'static str, f64)>,
-    /// A band (low, high) drawn behind the error, labelled "std" (evo: mean ± std).
-    pub std_band: Option<(f64, f64)>,
-    /// Name of the dashed trajectory (the reference), if any.
-    pub reference_name: String,
-    /// Every position (m) of the dashed reference; empty: none.
-    pub reference: Vec<[f64; 3]>,
-    /// Name of the trajectory carrying the coloured errors ("estimate", "trial 0").
-    pub trajectory_name: String,
-    /// Every position (m) of that trajectory, drawn as a grey line under the dots.
-    pub trajectory: Vec<[f64; 3]>,
-    /// The errors, in order; non-finite ones are left out of both panels.
-    pub samples: Vec<Sample>,
-    /// Colour-map limits (default: the smallest and largest error drawn).
-    pub colour_range: Option<(f64, f64)>,
-}
-
 /// Colour of the error line (matplotlib's first colour, as evo's).
 const ERROR_COLOUR: RGBColor = RGBColor(0x1F, 0x77, 0xB4);
 /// Colours of the horizontal lines, in order.
@@ -116,13 +43,6 @@ const REFERENCE_COLOUR: RGBColor = RGBColor(0x44, 0x44, 0x44);
 const TRAJECTORY_COLOUR: RGBColor = RGBColor(160, 160, 160);
 /// Font of tick labels and axis descriptions (plotters' default shrinks with the panel).
 const LABEL_FONT: (&str, u32) = ("sans-serif", 13);
-/// Size of the two-panel figure, pixels.
-pub const SIZE: (u32, u32) = (1000, 1150);
-/// Size of one evo figure ("raw", "map"), pixels.
-pub const PAGE: (u32, u32) = (1000, 760);
-
-/// The result of drawing.
-pub type DrawResult<T> = Result<T, Box<dyn std::error::Error>>;
 /// Height of the error-over-time panel.
 const ERROR_PANEL_HEIGHT: u32 = 400;
 /// Width of the colour bar beside the trajectory panel.
@@ -151,12 +71,6 @@ fn viridis(t: f64) -> RGBColor {
     let (a, b) = (VIRIDIS[k], VIRIDIS[k + 1]);
     let lerp = |a: u8, b: u8| (f64::from(a) + f * (f64::from(b) - f64::from(a))).round() as u8;
     RGBColor(lerp(a.0, b.0), lerp(a.1, b.1), lerp(a.2, b.2))
-}
-
-/// Draws `figure` (both panels) and writes it to `path`, SVG, PNG or PDF by the extension;
-/// the error names the file.
-pub fn write(path: &Path, mode: PlotMode, figure: &ErrorFigure) -> Result<()> {
-    crate::canvas::save_one(path, SIZE, &crate::canvas::Page::Both(figure, mode))
 }
 
 /// Both panels on one page: the title, the error over time, the trajectory coloured by error.
@@ -520,7 +434,7 @@ where
 pub fn paths<DB: DrawingBackend>(
     area: &DrawingArea<DB, plotters::coord::Shift>,
     mode: PlotMode,
-    paths: &[crate::figures::Path3],
+    paths: &[Path3],
 ) -> DrawResult<()>
 where
     DB::ErrorType: 'static,
@@ -736,6 +650,7 @@ fn equal_scale(points: &[(f64, f64)], pixels: (u32, u32)) -> (Range<f64>, Range<
 #[cfg(test)]
 mod tests {
     use super::*;
+    use clap::ValueEnum;
 
     #[test]
     fn viridis_ends_and_clamps() {

@@ -9,8 +9,7 @@ use anyhow::{Result, bail};
 use crate::archive::ResultArchive;
 use crate::canvas::{self, Page};
 use crate::console::{Console, SEP, UsabilityArgs};
-use crate::figures::{Drawing, PALETTE, Series};
-use crate::plot::PAGE;
+use crate::figure::{Drawing, PAGE, PALETTE, Series};
 
 /// Tool for processing one or multiple result files, as evo_res.
 #[derive(clap::Args, Debug)]
