@@ -71,7 +71,7 @@ pub struct ErrorFigure {
     pub x_label: String,
     /// Horizontal lines with a legend on the error panel (`("mean", value)`, …).
     pub lines: Vec<(&'static str, f64)>,
-    /// A band (low, high) drawn behind the error, labelled "std" (evo: mean ± std).
+    /// A band (low, high) drawn behind the error, labelled "std" (evo: mean ± std/2).
     pub std_band: Option<(f64, f64)>,
     /// Name of the dashed trajectory (the reference), if any.
     pub reference_name: String,

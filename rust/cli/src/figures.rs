@@ -46,7 +46,7 @@ pub fn error_figure(outcome: &Outcome, output: &OutputArgs) -> Result<ErrorFigur
             ("median", stats.median),
             ("mean", stats.mean),
         ],
-        std_band: Some((stats.mean - stats.std, stats.mean + stats.std)),
+        std_band: Some(std_band(stats.mean, stats.std)),
         reference_name: "reference".into(),
         reference: reference.positions.iter().map(|p| p.to_array()).collect(),
         trajectory_name: match outcome.metric {
@@ -73,6 +73,12 @@ pub fn error_figure(outcome: &Outcome, output: &OutputArgs) -> Result<ErrorFigur
             .collect(),
         colour_range: Some((low, high)),
     })
+}
+
+/// evo's "std" band of the raw plot: mean ± std/2 (the `axhspan` of evo's
+/// `plot.error_array`), one std wide.
+pub fn std_band(mean: f64, std: f64) -> (f64, f64) {
+    (mean - std / 2.0, mean + std / 2.0)
 }
 
 /// numpy's default percentile (linear interpolation between closest ranks).
@@ -119,4 +125,15 @@ pub fn collection(outcome: &Outcome, output: &OutputArgs, console: &Console) -> 
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_std_band_is_one_std_wide_around_the_mean() {
+        assert_eq!(std_band(2.0, 1.0), (1.5, 2.5));
+        assert_eq!(std_band(0.0, 0.0), (0.0, 0.0));
+    }
 }

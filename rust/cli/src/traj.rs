@@ -912,6 +912,24 @@ fn stats_table(bundle: &Bundle, kind: Kind) -> Result<String> {
     Ok(out)
 }
 
+/// evo's speeds plot of `t`: the speed between each pose and the one before, at the newer
+/// pose's `x`; steps whose stamps do not increase are left out and counted.
+fn speeds(t: &Trajectory, x: impl Fn(usize) -> f64) -> (Vec<(f64, f64)>, usize) {
+    let mut skipped = 0;
+    let points = (1..t.len())
+        .filter_map(|i| {
+            let dt = t.time_unit.seconds(t.stamps[i]) - t.time_unit.seconds(t.stamps[i - 1]);
+            if dt > 0.0 {
+                Some((x(i), (t.positions[i] - t.positions[i - 1]).length() / dt))
+            } else {
+                skipped += 1;
+                None
+            }
+        })
+        .collect();
+    (points, skipped)
+}
+
 /// evo_traj's figures: trajectories, xyz, rpy and (with stamps) speeds.
 fn plot(bundle: &Bundle, options: &Options, kind: Kind, console: &Console) -> Result<()> {
     let timed = kind != Kind::Kitti;
@@ -988,19 +1006,25 @@ fn plot(bundle: &Bundle, options: &Options, kind: Kind, console: &Console) -> Re
             panel("yaw (deg)", &|t, i| euler(t, i, 2)),
         ],
     };
-    let speed = |t: &Trajectory, i: usize| {
-        let j = i.min(t.len().saturating_sub(2));
-        let dt = t.time_unit.seconds(t.stamps[j + 1]) - t.time_unit.seconds(t.stamps[j]);
-        if dt > 0.0 {
-            (t.positions[j + 1] - t.positions[j]).length() / dt
-        } else {
-            f64::NAN
+    let mut speed_series = Vec::new();
+    for (name, t, c, dashed) in &all {
+        let (points, skipped) = speeds(t, |i| x(t, i));
+        if skipped > 0 {
+            console.warn(&format!(
+                "{name}: {skipped} zero or negative time step(s) left out of the speeds plot"
+            ));
         }
-    };
+        speed_series.push(Series {
+            name: name.clone(),
+            points,
+            colour: colour(c),
+            dashed: *dashed,
+        });
+    }
     let speeds = Drawing::Panels {
         title: "speeds".into(),
         x_label: x_label.into(),
-        panels: vec![panel("v (m/s)", &speed)],
+        panels: vec![("v (m/s)".to_owned(), speed_series)],
     };
     let mut pages = vec![
         ("trajectories", Page::Other(&trajectories)),
@@ -1063,6 +1087,19 @@ mod tests {
             synced: false,
             off_unit: Default::default(),
         }
+    }
+
+    #[test]
+    fn speeds_skip_repeated_stamps() {
+        let s = TimeUnit::Seconds;
+        let t = line(vec![0, 1_000_000_000, 1_000_000_000, 3_000_000_000], s);
+        let (points, skipped) = speeds(&t, |i| i as f64);
+        assert_eq!(skipped, 1);
+        // (1,1)-(0,0) over 1 s; (3,9)-(2,4) over 2 s; the repeated stamp left out.
+        assert_eq!(points.len(), 2);
+        assert_eq!(points[0], (1.0, 2f64.sqrt()));
+        assert_eq!(points[1], (3.0, 26f64.sqrt() / 2.0));
+        assert!(points.iter().all(|p| p.1 >= 0.0));
     }
 
     #[test]
