@@ -2,6 +2,7 @@
 //! evo_res's stacked line panels, trajectory plots and statistics bars.
 
 use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use crate::figure::{DrawResult, Drawing, PALETTE, Path3, PlotMode, Series};
 
@@ -72,6 +73,14 @@ where
 {
     let xs = span(series.iter().flat_map(|s| s.points.iter().map(|p| p.0)));
     let ys = span(series.iter().flat_map(|s| s.points.iter().map(|p| p.1)));
+    // Absolute Unix seconds: ticks relative to an offset named in the label, as evo's.
+    let offset = crate::plot::axis_offset(&xs);
+    let x_decimals = crate::plot::decimals(xs.end - xs.start);
+    let x_desc = if offset == 0.0 {
+        x_label.to_owned()
+    } else {
+        format!("{x_label} + {offset}")
+    };
     let mut chart = ChartBuilder::on(area)
         .margin(8)
         .x_label_area_size(35)
@@ -80,7 +89,8 @@ where
     chart
         .configure_mesh()
         .max_light_lines(1)
-        .x_desc(x_label)
+        .x_label_formatter(&|x| crate::plot::tick(x - offset, x_decimals))
+        .x_desc(x_desc)
         .y_desc(y_label)
         .label_style(("sans-serif", 12))
         .axis_desc_style(("sans-serif", 12))
@@ -135,22 +145,26 @@ where
         .x_label_area_size(35)
         .y_label_area_size(70)
         .build_cartesian_2d(0.0..(max * 1.1).max(1e-12), 0.0..rows as f64)?;
-    let names = groups.to_vec();
     chart
         .configure_mesh()
         .disable_y_mesh()
-        .y_labels(rows)
-        .y_label_formatter(&move |y| {
-            let k = (*y - 0.5).round();
-            if (y - 0.5 - k).abs() < 1e-6 && k >= 0.0 {
-                names.get(k as usize).cloned().unwrap_or_default()
-            } else {
-                String::new()
-            }
-        })
+        .y_labels(0)
         .x_desc(x_label)
         .label_style(("sans-serif", 12))
         .draw()?;
+    // The statistic's name left of its group of bars (evo's category labels): plotters'
+    // own ticks fall where its tick rule puts them, not at the groups' centres.
+    let base = area.get_base_pixel();
+    let label =
+        TextStyle::from(("sans-serif", 13).into_font()).pos(Pos::new(HPos::Right, VPos::Center));
+    for (g, name) in groups.iter().enumerate() {
+        let (x, y) = chart.backend_coord(&(0.0, g as f64 + 0.5));
+        area.draw(&Text::new(
+            name.clone(),
+            (x - base.0 - 8, y - base.1),
+            label.clone(),
+        ))?;
+    }
     for (s, (name, values)) in series.iter().enumerate() {
         let colour = PALETTE[s % PALETTE.len()];
         let h = 0.8 / per as f64;

@@ -6,6 +6,7 @@ use std::ops::Range;
 use std::path::PathBuf;
 
 use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use crate::figure::{DrawResult, ErrorFigure, Path3, PlotMode, Sample};
 
@@ -364,7 +365,7 @@ where
     DB::ErrorType: 'static,
 {
     let mut chart = space_chart(map_area, figure.trajectory.iter().chain(&figure.reference))?;
-    let point = |p: &[f64; 3]| (p[0], p[1], p[2]);
+    let point = z_up;
     // Dashes: every other short run of the reference's segments.
     let reference: Vec<(f64, f64, f64)> = figure.reference.iter().map(point).collect();
     let dash = (reference.len() / 150).max(1);
@@ -404,9 +405,9 @@ where
     let bar_decimals = decimals(bar_range.end - bar_range.start);
     let mut bar = ChartBuilder::on(bar_area)
         .margin(10)
-        .margin_right(0)
+        .margin_right(28)
         .x_label_area_size(40)
-        .right_y_label_area_size(100)
+        .right_y_label_area_size(72)
         .build_cartesian_2d(0.0..1.0, bar_range.clone())?;
     const STEPS: usize = 64;
     let span = bar_range.end - bar_range.start;
@@ -486,8 +487,7 @@ where
             let mut chart = space_chart(area, paths.iter().flat_map(|p| &p.points))?;
             for path in paths {
                 let style = path.colour.stroke_width(if path.dashed { 1 } else { 2 });
-                let points: Vec<(f64, f64, f64)> =
-                    path.points.iter().map(|p| (p[0], p[1], p[2])).collect();
+                let points: Vec<(f64, f64, f64)> = path.points.iter().map(z_up).collect();
                 let dash = if path.dashed {
                     (points.len() / 150).max(1)
                 } else {
@@ -533,12 +533,18 @@ where
     DB::ErrorType: 'static,
 {
     let ([rx, ry, rz], d) = cube(points);
+    let ranges = [rx.clone(), ry.clone(), rz.clone()];
+    // z up, as evo (matplotlib) draws it: plotters' vertical axis is its second, so it
+    // holds z; its first holds y and its depth axis x, a cyclic exchange that keeps the
+    // axes right-handed on screen (points go through [`z_up`]).
     let mut chart = ChartBuilder::on(area)
         .margin(20)
-        .build_cartesian_3d(rx, ry, rz)?;
+        .margin_left(45)
+        .margin_bottom(45)
+        .build_cartesian_3d(ry, rz, rx)?;
     chart.with_projection(|mut p| {
         p.pitch = 0.45;
-        p.yaw = 0.6;
+        p.yaw = 0.6 - std::f64::consts::FRAC_PI_2;
         p.scale = 0.85;
         p.into_matrix()
     });
@@ -550,7 +556,65 @@ where
         .y_formatter(&|&y| tick(y, d))
         .z_formatter(&|&z| tick(z, d))
         .draw()?;
+    axis_labels(area, &chart, &ranges)?;
     Ok(chart)
+}
+
+/// A point in plotters' 3-D coordinates with z up: (y, z, x).
+fn z_up(p: &[f64; 3]) -> (f64, f64, f64) {
+    (p[1], p[2], p[0])
+}
+
+/// evo's axis labels of a 3-D plot, `x (m)`, `y (m)`, `z (m)`: each beside the middle of
+/// its axis's lowest (for z: leftmost) edge on screen, pushed away from the cube's centre.
+fn axis_labels<DB: DrawingBackend>(
+    area: &DrawingArea<DB, plotters::coord::Shift>,
+    chart: &ChartContext<
+        '_,
+        DB,
+        plotters::coord::cartesian::Cartesian3d<
+            plotters::coord::types::RangedCoordf64,
+            plotters::coord::types::RangedCoordf64,
+            plotters::coord::types::RangedCoordf64,
+        >,
+    >,
+    ranges: &[Range<f64>; 3],
+) -> DrawResult<()>
+where
+    DB::ErrorType: 'static,
+{
+    let base = area.get_base_pixel();
+    let screen = |p: [f64; 3]| {
+        let (x, y) = plotters::coord::CoordTranslate::translate(chart.as_coord_spec(), &z_up(&p));
+        (f64::from(x - base.0), f64::from(y - base.1))
+    };
+    let ends = |k: usize| [ranges[k].start, ranges[k].end];
+    let centre = screen([0, 1, 2].map(|k| (ranges[k].start + ranges[k].end) / 2.0));
+    let style = TextStyle::from(LABEL_FONT.into_font()).pos(Pos::new(HPos::Center, VPos::Center));
+    for (axis, name) in ["x (m)", "y (m)", "z (m)"].into_iter().enumerate() {
+        let (a, b) = ((axis + 1) % 3, (axis + 2) % 3);
+        // The middles of the four edges parallel to this axis.
+        let middles = ends(a).into_iter().flat_map(|va| {
+            ends(b).into_iter().map(move |vb| {
+                let mut p = [0.0; 3];
+                p[axis] = (ranges[axis].start + ranges[axis].end) / 2.0;
+                (p[a], p[b]) = (va, vb);
+                p
+            })
+        });
+        let key = |m: &(f64, f64)| if axis == 2 { -m.0 } else { m.1 };
+        let Some(middle) = middles.map(screen).max_by(|m, n| key(m).total_cmp(&key(n))) else {
+            continue;
+        };
+        let (dx, dy) = (middle.0 - centre.0, middle.1 - centre.1);
+        let length = dx.hypot(dy).max(1.0);
+        let at = (
+            (middle.0 + 40.0 * dx / length) as i32,
+            (middle.1 + 40.0 * dy / length) as i32,
+        );
+        area.draw(&Text::new(name, at, style.clone()))?;
+    }
+    Ok(())
 }
 
 /// The legend of a chart's labelled series, on a translucent white box.
@@ -607,7 +671,7 @@ fn padded(values: impl Iterator<Item = f64>, fallback: f64) -> Range<f64> {
 }
 
 /// A tick label with `decimals` decimals, without a minus on zero.
-fn tick(value: f64, decimals: usize) -> String {
+pub fn tick(value: f64, decimals: usize) -> String {
     let text = format!("{value:.decimals$}");
     match text.strip_prefix('-') {
         Some(rest) if rest.chars().all(|c| c == '0' || c == '.') => rest.to_owned(),
@@ -615,8 +679,23 @@ fn tick(value: f64, decimals: usize) -> String {
     }
 }
 
+/// The offset of an axis whose values are large beside their spread (absolute Unix seconds
+/// over a minute), as matplotlib's: its ticks show `value - offset` and its label
+/// `+ offset`, so "1311 868 210.0" becomes "10.0". 0 when the values need none (an offset
+/// would save fewer than 4 digits). The offset is the range's start rounded down to the
+/// power of ten just above its width.
+pub fn axis_offset(range: &Range<f64>) -> f64 {
+    let width = range.end - range.start;
+    let magnitude = range.start.abs().max(range.end.abs());
+    if !(width > 0.0 && magnitude.is_finite()) || magnitude < 1e4 * width {
+        return 0.0;
+    }
+    let step = 10f64.powf(width.log10().ceil());
+    (range.start / step).floor() * step
+}
+
 /// Decimals for tick labels over a range of width `span` (about two significant digits).
-fn decimals(span: f64) -> usize {
+pub fn decimals(span: f64) -> usize {
     if span > 0.0 && span.is_finite() {
         (1.0 - span.log10().floor()).clamp(0.0, 9.0) as usize
     } else {
@@ -651,6 +730,24 @@ fn equal_scale(points: &[(f64, f64)], pixels: (u32, u32)) -> (Range<f64>, Range<
 mod tests {
     use super::*;
     use clap::ValueEnum;
+
+    #[test]
+    fn large_time_axes_get_an_offset() {
+        // fr1/xyz: 30 s of Unix seconds.
+        let range = 1_305_031_098.6..1_305_031_128.7;
+        assert_eq!(axis_offset(&range), 1_305_031_000.0);
+        assert_eq!(
+            tick(range.start - axis_offset(&range), decimals(3.0)),
+            "98.6"
+        );
+        assert_eq!(axis_offset(&(0.0..30.0)), 0.0);
+        assert_eq!(axis_offset(&(-2.0..3.5)), 0.0);
+        assert_eq!(axis_offset(&(1000.0..1000.0)), 0.0);
+        assert_eq!(
+            axis_offset(&(-1_305_031_128.7..-1_305_031_098.6)),
+            -1_305_031_200.0
+        );
+    }
 
     #[test]
     fn viridis_ends_and_clamps() {

@@ -398,6 +398,101 @@ fn hints_name_the_right_spelling_and_format() {
     }
 }
 
+/// What evo's figures show, in sitar's SVGs of the real files: x/y/z axis labels on the 3-D
+/// map and trajectory plots, an offset time axis, the colour bar's label, the statistics'
+/// names beside evo_res's bars, and a warning for the repeated stamp left out of the speeds.
+#[test]
+fn figures_carry_evo_labels() {
+    let dir = workdir(&golden_real().join("data"));
+    let run = |args: &[&str]| {
+        let args: Vec<String> = args.iter().map(|a| a.to_string()).collect();
+        let out = sitar(&args, dir.path());
+        assert!(
+            out.status.success(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        String::from_utf8(out.stderr).unwrap()
+    };
+    let texts = |file: &str| -> Vec<String> {
+        let svg = std::fs::read_to_string(dir.path().join(file)).unwrap();
+        svg.split("<text")
+            .skip(1)
+            .filter_map(|t| {
+                Some(
+                    t.split_once('>')?
+                        .1
+                        .split_once("</text>")?
+                        .0
+                        .trim()
+                        .to_owned(),
+                )
+            })
+            .collect()
+    };
+    let has = |file: &str, want: &[&str]| {
+        let got = texts(file);
+        for w in want {
+            assert!(
+                got.iter().any(|t| t == w),
+                "{file}: no text '{w}' among {got:?}"
+            );
+        }
+    };
+    let (gt, est) = (
+        "freiburg1_xyz-groundtruth.txt",
+        "freiburg1_xyz-rgbdslam.txt",
+    );
+    run(&[
+        "ape",
+        "tum",
+        gt,
+        est,
+        "-a",
+        "--save_plot",
+        "ape.svg",
+        "--save_results",
+        "a.zip",
+    ]);
+    has("ape_map.svg", &["x (m)", "y (m)", "z (m)", "APE (m)"]);
+    has("ape_raw.svg", &["rmse", "median", "mean", "std"]);
+    run(&[
+        "ape",
+        "tum",
+        "fr2_desk_groundtruth.txt",
+        "fr2_desk_ORB.txt",
+        "-a",
+        "--save_results",
+        "b.zip",
+    ]);
+    run(&["traj", "tum", est, "--ref", gt, "--save_plot", "t.svg"]);
+    has("t_trajectories.svg", &["x (m)", "y (m)", "z (m)"]);
+    has("t_xyz.svg", &["t (s) + 1305031000", "x (m)", "100", "125"]);
+    run(&[
+        "res",
+        "a.zip",
+        "b.zip",
+        "--use_filenames",
+        "--save_plot",
+        "r.svg",
+    ]);
+    has(
+        "r_stats.svg",
+        &["rmse", "mean", "median", "std", "min", "max"],
+    );
+    let warned = run(&[
+        "traj",
+        "tum",
+        "fr2_desk_groundtruth.txt",
+        "--save_plot",
+        "s.svg",
+    ]);
+    assert!(
+        warned.contains("1 zero or negative time step(s) left out of the speeds plot"),
+        "{warned}"
+    );
+}
+
 /// Runs one golden case in a copy of `source` and checks stdout, warnings, the archive
 /// and the saved files against evo's; returns the directory it ran in.
 fn run_case(case: &Value, source: &Path) -> tempfile::TempDir {
