@@ -150,4 +150,27 @@ pub enum Drawing {
         /// (result name, one value per group).
         series: Vec<(String, Vec<f64>)>,
     },
+    /// The distribution of each result's values (evo_res's histogram, box and violin plots).
+    Distributions {
+        /// Title.
+        title: String,
+        /// Label of the values (`APE (m)`).
+        label: String,
+        /// How the distributions are drawn.
+        kind: DistributionKind,
+        /// (result name, values) per result.
+        groups: Vec<(String, Vec<f64>)>,
+    },
+}
+
+/// How evo_res draws distributions.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DistributionKind {
+    /// One density histogram with its kernel density line per result, side by side
+    /// (seaborn's `distplot` on a `FacetGrid`).
+    Histogram,
+    /// A box per result: quartiles, median, whiskers within 1.5 IQR, outliers.
+    Box,
+    /// A violin per result: the mirrored kernel density with the box inside.
+    Violin,
 }

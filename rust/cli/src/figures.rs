@@ -6,6 +6,7 @@ use anyhow::Result;
 
 use crate::canvas::{self, Page};
 use crate::console::Console;
+use crate::distribution::percentile;
 use crate::figure::{ErrorFigure, PAGE, SIZE, Sample};
 use crate::metric::{Metric, Outcome};
 use crate::metric_args::{OutputArgs, XDimension};
@@ -79,19 +80,6 @@ pub fn error_figure(outcome: &Outcome, output: &OutputArgs) -> Result<ErrorFigur
 /// `plot.error_array`), one std wide.
 pub fn std_band(mean: f64, std: f64) -> (f64, f64) {
     (mean - std / 2.0, mean + std / 2.0)
-}
-
-/// numpy's default percentile (linear interpolation between closest ranks).
-pub fn percentile(values: &[f64], p: f64) -> f64 {
-    let mut sorted: Vec<f64> = values.iter().copied().filter(|v| !v.is_nan()).collect();
-    if sorted.is_empty() {
-        return f64::NAN;
-    }
-    sorted.sort_by(f64::total_cmp);
-    let rank = p / 100.0 * (sorted.len() - 1) as f64;
-    let (k, f) = (rank.floor() as usize, rank - rank.floor());
-    let next = sorted[(k + 1).min(sorted.len() - 1)];
-    sorted[k] + f * (next - sorted[k])
 }
 
 /// SiTAR's `--plot FILE` of `ape`/`rpe`: both panels in one file.

@@ -12,6 +12,7 @@ mod compare;
 mod config;
 mod console;
 mod demo;
+mod distribution;
 mod estimate;
 mod evaluate;
 mod figure;

@@ -400,7 +400,8 @@ fn hints_name_the_right_spelling_and_format() {
 
 /// What evo's figures show, in sitar's SVGs of the real files: x/y/z axis labels on the 3-D
 /// map and trajectory plots, an offset time axis, the colour bar's label, the statistics'
-/// names beside evo_res's bars, and a warning for the repeated stamp left out of the speeds.
+/// names beside evo_res's bars, its histogram, box and violin figures, and a warning for the
+/// repeated stamp left out of the speeds.
 #[test]
 fn figures_carry_evo_labels() {
     let dir = workdir(&golden_real().join("data"));
@@ -479,6 +480,15 @@ fn figures_carry_evo_labels() {
     has(
         "r_stats.svg",
         &["rmse", "mean", "median", "std", "min", "max"],
+    );
+    has(
+        "r_histogram.svg",
+        &["estimate = a.zip", "estimate = b.zip", "Density", "APE (m)"],
+    );
+    has("r_box_plot.svg", &["a.zip", "b.zip", "estimate", "APE (m)"]);
+    has(
+        "r_violin_histogram.svg",
+        &["a.zip", "b.zip", "estimate", "APE (m)"],
     );
     let warned = run(&[
         "traj",
