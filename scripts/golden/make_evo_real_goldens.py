@@ -18,16 +18,16 @@ Usage (from the repository root; needs `pip install evo==1.38.1` and a checkout 
 repository for its test/data):
     python3 scripts/golden/make_evo_real_goldens.py /path/to/evo/test/data
 """
-import io
 import json
 import pathlib
 import shutil
-import subprocess
 import sys
 import tempfile
-import zipfile
 
 import numpy as np
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+from make_evo_cli_goldens import load_archive, run  # noqa: E402  (evo's archive, evo's run)
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 OUT = ROOT / "rust/cli/tests/golden/evo_real"
@@ -64,31 +64,16 @@ CASES = [
 EXACT = ["timestamps", "seconds_from_start"]
 
 
-def load_archive(path):
-    with zipfile.ZipFile(path) as z:
-        arrays = {}
-        bits = {}
-        for name in z.namelist():
-            if name.endswith(".npy"):
-                array = np.load(io.BytesIO(z.read(name)))
-                if name[:-4] in EXACT:
-                    bits[name[:-4]] = [int(b) for b in array.astype("<f8").view("<u8")]
-                else:
-                    arrays[name[:-4]] = array.tolist()
-        return {
-            "info": json.loads(z.read("info.json")),
-            "stats": json.loads(z.read("stats.json")),
-            "arrays": arrays,
-            "bits": bits,
-            "entries": z.namelist(),
-        }
-
-
-def run(tool, args, cwd):
-    done = subprocess.run([f"evo_{tool}", *args, "--no_warnings"], cwd=cwd, capture_output=True, text=True)
-    if done.returncode != 0:
-        raise SystemExit(f"evo_{tool} {' '.join(args)} failed:\n{done.stdout}{done.stderr}")
-    return done.stdout
+def load_archive_exact(path):
+    """evo's archive as make_evo_cli_goldens.load_archive reads it, with the EXACT arrays
+    as the integers of their float64 bits (Python floats are float64, so exactly)."""
+    archive = load_archive(path)
+    archive["bits"] = {
+        name: [int(b) for b in np.array(archive["arrays"].pop(name), dtype="<f8").view("<u8")]
+        for name in EXACT
+        if name in archive["arrays"]
+    }
+    return archive
 
 
 def main():
@@ -116,7 +101,7 @@ def main():
             stdout = run(tool, args + extra, work)
             case = {"name": name, "tool": tool, "args": args, "stdout": stdout, "saved": {}}
             if extra:
-                case["archive"] = load_archive(work / "result.zip")
+                case["archive"] = load_archive_exact(work / "result.zip")
             expected.append(case)
             print(f"{name}: {len(stdout.splitlines())} lines")
     (OUT / "expected.json").write_text(json.dumps(expected) + "\n")

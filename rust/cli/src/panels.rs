@@ -16,50 +16,48 @@ pub fn draw<DB: DrawingBackend>(
 where
     DB::ErrorType: 'static,
 {
-    {
-        root.fill(&WHITE)?;
-        match drawing {
-            Drawing::Panels {
-                title,
-                x_label,
-                panels,
-            } => {
-                let (top, body) = root.split_vertically(50);
-                crate::plot::title_lines(&top, title)?;
-                let areas = body.split_evenly((panels.len().max(1), 1));
-                for (area, (y_label, series)) in areas.iter().zip(panels) {
-                    lines_panel(area, x_label, y_label, series)?;
-                }
-                Ok(())
+    root.fill(&WHITE)?;
+    match drawing {
+        Drawing::Panels {
+            title,
+            x_label,
+            panels,
+        } => {
+            let (top, body) = root.split_vertically(50);
+            crate::plot::title_lines(&top, title)?;
+            let areas = body.split_evenly((panels.len().max(1), 1));
+            for (area, (y_label, series)) in areas.iter().zip(panels) {
+                lines_panel(area, x_label, y_label, series)?;
             }
-            Drawing::Trajectories { title, mode, paths } => {
-                let (top, body) = root.split_vertically(50);
-                crate::plot::title_lines(&top, title)?;
-                trajectories_panel(&body, *mode, paths)
-            }
-            Drawing::Bars {
-                title,
-                x_label,
-                groups,
-                series,
-            } => {
-                let (top, body) = root.split_vertically(50);
-                crate::plot::title_lines(&top, title)?;
-                bars_panel(&body, x_label, groups, series)
-            }
-            Drawing::Distributions {
-                title,
-                label,
-                kind,
-                groups,
-            } => {
-                let (top, body) = root.split_vertically(50);
-                crate::plot::title_lines(&top, title)?;
-                match kind {
-                    DistributionKind::Histogram => histograms(&body, label, groups),
-                    DistributionKind::Box | DistributionKind::Violin => {
-                        boxes_or_violins(&body, label, *kind, groups)
-                    }
+            Ok(())
+        }
+        Drawing::Trajectories { title, mode, paths } => {
+            let (top, body) = root.split_vertically(50);
+            crate::plot::title_lines(&top, title)?;
+            trajectories_panel(&body, *mode, paths)
+        }
+        Drawing::Bars {
+            title,
+            x_label,
+            groups,
+            series,
+        } => {
+            let (top, body) = root.split_vertically(50);
+            crate::plot::title_lines(&top, title)?;
+            bars_panel(&body, x_label, groups, series)
+        }
+        Drawing::Distributions {
+            title,
+            label,
+            kind,
+            groups,
+        } => {
+            let (top, body) = root.split_vertically(50);
+            crate::plot::title_lines(&top, title)?;
+            match kind {
+                DistributionKind::Histogram => histograms(&body, label, groups),
+                DistributionKind::Box | DistributionKind::Violin => {
+                    boxes_or_violins(&body, label, *kind, groups)
                 }
             }
         }

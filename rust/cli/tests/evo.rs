@@ -255,6 +255,16 @@ fn sitar(args: &[String], dir: &Path) -> std::process::Output {
         .expect("run sitar")
 }
 
+/// Runs sitar in `dir`, asserting that it succeeds (or, `succeed` false, fails); its stdout
+/// and stderr.
+fn sitar_expect(dir: &Path, args: &[&str], succeed: bool) -> (String, String) {
+    let args: Vec<String> = args.iter().map(|a| a.to_string()).collect();
+    let out = sitar(&args, dir);
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert_eq!(out.status.success(), succeed, "{args:?}: {stderr}");
+    (String::from_utf8(out.stdout).unwrap(), stderr)
+}
+
 #[test]
 fn sitar_prints_saves_and_warns_as_evo_does() {
     let cases = cases();
@@ -331,14 +341,7 @@ fn csv_json_and_the_older_form_associate_as_evo() {
         ),
     ];
     for (golden_case, args, format) in runs {
-        let args: Vec<String> = args.iter().map(|a| a.to_string()).collect();
-        let out = sitar(&args, dir.path());
-        assert!(
-            out.status.success(),
-            "{args:?}: {}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        let text = String::from_utf8(out.stdout).unwrap();
+        let (text, _) = sitar_expect(dir.path(), &args, true);
         let got: Vec<f64> = if format == "csv" {
             text.lines()
                 .skip(1)
@@ -367,12 +370,7 @@ fn csv_json_and_the_older_form_associate_as_evo() {
 #[test]
 fn hints_name_the_right_spelling_and_format() {
     let dir = workdir(&golden_real().join("data"));
-    let run = |args: &[&str]| {
-        let args: Vec<String> = args.iter().map(|a| a.to_string()).collect();
-        let out = sitar(&args, dir.path());
-        assert!(!out.status.success(), "{args:?} succeeded");
-        String::from_utf8(out.stderr).unwrap()
-    };
+    let run = |args: &[&str]| sitar_expect(dir.path(), args, false).1;
     let (gt, est) = ("fr2_desk_groundtruth.txt", "fr2_desk_ORB.txt");
     let usage = run(&["rpe", "tum", gt, est, "--all-pair"]);
     assert!(usage.contains("'--all_pairs'"), "{usage}");
@@ -405,16 +403,7 @@ fn hints_name_the_right_spelling_and_format() {
 #[test]
 fn figures_carry_evo_labels() {
     let dir = workdir(&golden_real().join("data"));
-    let run = |args: &[&str]| {
-        let args: Vec<String> = args.iter().map(|a| a.to_string()).collect();
-        let out = sitar(&args, dir.path());
-        assert!(
-            out.status.success(),
-            "{args:?}: {}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        String::from_utf8(out.stderr).unwrap()
-    };
+    let run = |args: &[&str]| sitar_expect(dir.path(), args, true).1;
     let texts = |file: &str| -> Vec<String> {
         let svg = std::fs::read_to_string(dir.path().join(file)).unwrap();
         svg.split("<text")
