@@ -37,16 +37,40 @@ impl TimeUnit {
     pub fn seconds(self, t_ns: i64) -> f64 {
         const EXACT: u64 = 1 << 53;
         match self {
-            TimeUnit::Seconds if t_ns.unsigned_abs() >= EXACT => {
-                // ns and 10⁹ are no longer both exact floats: the correctly rounded
-                // quotient is the parse of the exact decimal.
-                let exact = self.format_stamp(t_ns);
-                exact.parse().unwrap_or(t_ns as f64 / 1e9)
-            }
+            TimeUnit::Seconds if t_ns.unsigned_abs() >= EXACT => nearest_quotient(t_ns),
             // Below 2⁵³ both operands are exact, so the one division rounds correctly.
             TimeUnit::Seconds | TimeUnit::Nanoseconds => t_ns as f64 / 1e9,
         }
     }
+}
+
+/// The float nearest `t_ns / 10⁹` (ties to even) for |t_ns| ≥ 2⁵³, where `t_ns as f64` would
+/// round first: a close guess, then the nearest of it and its two neighbours, compared
+/// exactly in integers (every candidate is `m·2^e` with e < 0 here).
+fn nearest_quotient(t_ns: i64) -> f64 {
+    let abs = t_ns.unsigned_abs();
+    let (whole, fraction) = (abs / 1_000_000_000, abs % 1_000_000_000);
+    let guess = whole as f64 + fraction as f64 / 1e9;
+    let parts = |c: f64| {
+        let bits = c.to_bits();
+        let mantissa = (bits & ((1 << 52) - 1)) | (1 << 52);
+        (i128::from(mantissa), ((bits >> 52) & 0x7ff) as i32 - 1075)
+    };
+    let below = f64::from_bits(guess.to_bits() - 1);
+    let lowest_exponent = parts(below).1;
+    let target = i128::from(abs) << -lowest_exponent;
+    let error = |c: f64| {
+        let (m, e) = parts(c);
+        (((m * 1_000_000_000) << (e - lowest_exponent)) - target).abs()
+    };
+    let mut best = below;
+    for candidate in [guess, f64::from_bits(guess.to_bits() + 1)] {
+        let (d, b) = (error(candidate), error(best));
+        if d < b || (d == b && parts(candidate).0 & 1 == 0) {
+            best = candidate;
+        }
+    }
+    if t_ns < 0 { -best } else { best }
 }
 
 /// Stamped poses (world-from-camera). Stamps are nanoseconds, orientations unit quaternions.
@@ -583,15 +607,22 @@ mod tests {
         assert_eq!(TimeUnit::Nanoseconds.seconds(ns), ns as f64 / 1e9);
         assert_eq!(TimeUnit::Seconds.seconds(-1_500_000_000), -1.5);
         assert_eq!(TimeUnit::Seconds.seconds(i64::MIN), i64::MIN as f64 / 1e9);
+        for ns in [1 << 53, (1 << 53) + 1, i64::MAX, -i64::MAX] {
+            let text = TimeUnit::Seconds.format_stamp(ns);
+            assert_eq!(
+                TimeUnit::Seconds.seconds(ns),
+                text.parse::<f64>().unwrap(),
+                "{ns}"
+            );
+        }
     }
 
     proptest::proptest! {
         /// Seconds read with up to 9 decimals come back as the float Rust (and Python) parse
-        /// from the same decimal.
+        /// from the same decimal, over the whole range of i64 nanoseconds.
         #[test]
-        fn seconds_equal_the_parsed_decimal(whole in 0u64..4_000_000_000, frac in 0u64..1_000_000_000) {
-            let ns = (whole * 1_000_000_000 + frac) as i64;
-            let text = format!("{whole}.{frac:09}");
+        fn seconds_equal_the_parsed_decimal(ns in proptest::num::i64::ANY) {
+            let text = TimeUnit::Seconds.format_stamp(ns);
             proptest::prop_assert_eq!(TimeUnit::Seconds.seconds(ns), text.parse::<f64>().unwrap());
         }
     }
