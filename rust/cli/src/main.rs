@@ -7,6 +7,7 @@
 
 mod ape;
 mod archive;
+mod bag;
 mod canvas;
 mod compare;
 mod config;

@@ -106,8 +106,19 @@ pub enum Source {
         reference: PathBuf,
         estimate: PathBuf,
     },
-    /// A ROS bag format (not supported).
-    Bag(&'static str),
+    /// A ROS bag and two of its topics.
+    Bag {
+        /// `bag` (ROS 1, not supported) or `bag2`.
+        kind: &'static str,
+        /// The bag (a directory, `.mcap` or `.db3`).
+        bag: String,
+        /// The reference topic.
+        reference: String,
+        /// The estimate topic.
+        estimate: String,
+        /// The sync options.
+        sync: SyncArgs,
+    },
 }
 
 /// Defines a clap subcommand enum of evo's formats whose variants carry `$options`.
@@ -151,7 +162,8 @@ macro_rules! format_subcommands {
                 #[command(flatten)]
                 options: $options,
             },
-            /// ROS bag files: not supported by sitar (convert the topics to TUM first).
+            /// ROS 1 bag files: not supported by sitar (convert the bag to ROS 2 or the topics to
+            /// TUM first).
             Bag {
                 /// ROS bag file.
                 bag: String,
@@ -164,7 +176,9 @@ macro_rules! format_subcommands {
                 #[command(flatten)]
                 options: $options,
             },
-            /// ROS 2 bag / MCAP files: not supported by sitar.
+            /// ROS 2 bags: a bag directory, an .mcap or a .db3 file, with the topics of
+            /// PoseStamped, PoseWithCovarianceStamped, TransformStamped, PointStamped or
+            /// Odometry messages.
             #[command(alias = "mcap")]
             Bag2 {
                 /// ROS 2 bag file.
@@ -222,8 +236,38 @@ macro_rules! format_subcommands {
                         },
                         options,
                     ),
-                    Self::Bag { options, .. } => (Source::Bag("bag"), options),
-                    Self::Bag2 { options, .. } => (Source::Bag("bag2"), options),
+                    Self::Bag {
+                        bag,
+                        ref_topic,
+                        est_topic,
+                        sync,
+                        options,
+                    } => (
+                        Source::Bag {
+                            kind: "bag",
+                            bag,
+                            reference: ref_topic,
+                            estimate: est_topic,
+                            sync,
+                        },
+                        options,
+                    ),
+                    Self::Bag2 {
+                        bag,
+                        ref_topic,
+                        est_topic,
+                        sync,
+                        options,
+                    } => (
+                        Source::Bag {
+                            kind: "bag2",
+                            bag,
+                            reference: ref_topic,
+                            estimate: est_topic,
+                            sync,
+                        },
+                        options,
+                    ),
                 }
             }
         }
@@ -375,13 +419,35 @@ pub fn load(source: &Source, console: &Console) -> Result<Loaded> {
             estimate: read_kitti_evo(estimate, console)?,
             sync: None,
         }),
-        Source::Bag(kind) => bail!(not_supported_bag(kind)),
+        Source::Bag { kind, .. } if *kind == "bag" => bail!(not_supported_bag(kind)),
+        Source::Bag {
+            bag,
+            reference,
+            estimate,
+            sync,
+            ..
+        } => {
+            let topics = crate::bag::open(bag, console)?;
+            let named = |topic: &String| -> Result<Named> {
+                let read = crate::bag::trajectory(&topics, topic, bag, console)?;
+                Ok(Named {
+                    trajectory: read.trajectory,
+                    name: topic.clone(),
+                    unit_quaternions: read.quaternions_off_unit == 0,
+                })
+            };
+            Ok(Loaded {
+                reference: named(reference)?,
+                estimate: named(estimate)?,
+                sync: Some(sync.clone()),
+            })
+        }
     }
 }
 
-/// The error for a ROS bag format.
+/// The error for a ROS bag format sitar does not read.
 pub fn not_supported_bag(kind: &str) -> String {
     format!(
-        "the {kind} format (ROS bags) is not supported by sitar: export the topics to TUM files (for example with evo_traj {kind} BAG TOPIC --save_as_tum) and use the tum format"
+        "the {kind} format (ROS 1 bags) is not supported by sitar: export the topics to TUM files (for example with evo_traj {kind} BAG TOPIC --save_as_tum) and use the tum format, or convert the bag to ROS 2 (rosbags-convert) and use bag2"
     )
 }

@@ -73,7 +73,8 @@ enum Format {
         #[command(flatten)]
         options: Options,
     },
-    /// ROS 2 bag / MCAP files: not supported by sitar.
+    /// ROS 2 bags: a bag directory, an .mcap or a .db3 file; topics of the pose types evo
+    /// reads (--ref is a topic too).
     #[command(alias = "mcap")]
     Bag2 {
         /// ROS 2 bag file.
@@ -226,9 +227,14 @@ struct Bundle {
     synced: bool,
     /// Trajectories read with quaternions off unit norm (evo's check calls them invalid).
     off_unit: std::collections::BTreeSet<String>,
+    /// The trajectories are a bag's topics (named by topic, never shortened).
+    from_bag: bool,
+    /// A bag topic's frame (evo's `meta.frame_id`), by name.
+    frames: BTreeMap<String, String>,
 }
 
 pub fn run(args: Args) -> Result<()> {
+    let mut bag2 = None;
     let (kind, files, options) = match args.format {
         Format::Tum {
             traj_files,
@@ -243,7 +249,15 @@ pub fn run(args: Args) -> Result<()> {
             options,
         } => (Kind::Kitti, pose_files, options),
         Format::Bag { .. } => bail!(not_supported_bag("bag")),
-        Format::Bag2 { .. } => bail!(not_supported_bag("bag2")),
+        Format::Bag2 {
+            bag,
+            topics,
+            all_topics,
+            options,
+        } => {
+            bag2 = Some((bag, topics, all_topics));
+            (Kind::Tum, Vec::new(), options)
+        }
     };
     let console = Console::new(&options.usability)?;
     for (used, flag) in [
@@ -276,6 +290,8 @@ pub fn run(args: Args) -> Result<()> {
         synced_refs: BTreeMap::new(),
         synced: false,
         off_unit: Default::default(),
+        from_bag: bag2.is_some(),
+        frames: BTreeMap::new(),
     };
     for file in &files {
         if options.reference.as_ref() == Some(file) {
@@ -287,16 +303,72 @@ pub fn run(args: Args) -> Result<()> {
             None => bundle.trajectories.push((name, trajectory)),
         }
     }
-    if let Some(path) = &options.reference {
+    if let Some(path) = options.reference.as_ref().filter(|_| bag2.is_none()) {
         bundle.reference = Some(read(path)?);
     }
     bundle.off_unit = off_unit;
+    if let Some((bag, topics, all_topics)) = &bag2 {
+        read_bag_topics(&mut bundle, bag, topics, *all_topics, &options, &console)?;
+    }
     manipulate(&mut bundle, kind, &options, &console)?;
     print_infos(&bundle, &options, kind, &console)?;
     if options.plot || options.save_plot.is_some() {
         plot(&bundle, &options, kind, &console)?;
     }
     export(&bundle, &options, kind, &console)
+}
+
+/// evo_traj's topics of a ROS 2 bag: those given, and with `--all_topics` every topic of a
+/// pose type evo reads (sorted; `--ref` left out of them), each named by its topic; `--ref`
+/// is a topic too.
+fn read_bag_topics(
+    bundle: &mut Bundle,
+    bag: &str,
+    topics: &[String],
+    all_topics: bool,
+    options: &Options,
+    console: &Console,
+) -> Result<()> {
+    if topics.is_empty() && !all_topics {
+        bail!("No topics used - specify topics or set --all_topics.");
+    }
+    let content = crate::bag::open(bag, console)?;
+    let reference = options
+        .reference
+        .as_ref()
+        .map(|r| r.to_string_lossy().into_owned());
+    let mut chosen = topics.to_vec();
+    if all_topics {
+        chosen.extend(crate::bag::supported_topics(&content));
+        chosen.retain(|t| Some(t) != reference.as_ref());
+        if chosen.is_empty() {
+            bail!(
+                "{bag}: found no topics of supported types (geometry_msgs/msg/PoseStamped, PoseWithCovarianceStamped, TransformStamped, PointStamped, nav_msgs/msg/Odometry)"
+            );
+        }
+    }
+    let mut read = |topic: &String| -> Result<Trajectory> {
+        let read = crate::bag::trajectory(&content, topic, bag, console)?;
+        if read.quaternions_off_unit > 0 {
+            bundle.off_unit.insert(topic.clone());
+        }
+        bundle.frames.insert(topic.clone(), read.frame_id);
+        Ok(read.trajectory)
+    };
+    let mut trajectories: Vec<(String, Trajectory)> = Vec::new();
+    for topic in chosen {
+        if trajectories.iter().all(|(n, _)| *n != topic) {
+            let trajectory = read(&topic)?;
+            trajectories.push((topic, trajectory));
+        }
+    }
+    let reference = match reference {
+        Some(topic) => Some((topic.clone(), read(&topic)?)),
+        None => None,
+    };
+    bundle.trajectories = trajectories;
+    bundle.reference = reference;
+    Ok(())
 }
 
 /// evo_traj's steps in its order: downsample, motion filter, merge, time offset, sync,
@@ -616,9 +688,9 @@ fn apply_transform(t: &mut Trajectory, m: DMat4, right: bool, propagate: bool) -
     Ok(())
 }
 
-/// evo's compact name: the file stem unless --show_full_names.
-fn compact(name: &str, options: &Options) -> String {
-    if options.show_full_names {
+/// evo's compact name: the file stem unless --show_full_names (a bag's topic stays whole).
+fn compact(name: &str, options: &Options, from_bag: bool) -> String {
+    if options.show_full_names || from_bag {
         name.to_owned()
     } else {
         Path::new(name)
@@ -632,6 +704,7 @@ fn print_traj_info(
     name: &str,
     t: &Trajectory,
     unit_quaternions: bool,
+    frame_id: Option<&str>,
     options: &Options,
     kind: Kind,
     console: &Console,
@@ -675,6 +748,9 @@ fn print_traj_info(
     }
     infos.sort();
     console.info(&dict("infos", &infos))?;
+    if let Some(frame) = frame_id {
+        console.info(&dict("meta", &[("frame_id".to_owned(), frame.to_owned())]))?;
+    }
     if options.full_check {
         let mut checks = vec![
             ("array shapes".to_owned(), "ok".to_owned()),
@@ -769,11 +845,27 @@ fn print_infos(bundle: &Bundle, options: &Options, kind: Kind, console: &Console
     for (name, t) in &bundle.trajectories {
         // Transformed poses have quaternions re-derived from their matrices (unit norm).
         let unit = !bundle.off_unit.contains(name) || rederives_quaternions(options);
-        print_traj_info(&compact(name, options), t, unit, options, kind, console)?;
+        print_traj_info(
+            &compact(name, options, bundle.from_bag),
+            t,
+            unit,
+            bundle.frames.get(name).map(String::as_str),
+            options,
+            kind,
+            console,
+        )?;
     }
     if let Some((name, t)) = &bundle.reference {
         let unit = !bundle.off_unit.contains(name);
-        print_traj_info(&compact(name, options), t, unit, options, kind, console)?;
+        print_traj_info(
+            &compact(name, options, bundle.from_bag),
+            t,
+            unit,
+            bundle.frames.get(name).map(String::as_str),
+            options,
+            kind,
+            console,
+        )?;
     }
     Ok(())
 }
@@ -951,11 +1043,21 @@ fn plot(bundle: &Bundle, options: &Options, kind: Kind, console: &Console) -> Re
     };
     let mut all: Vec<(String, &Trajectory, RGBColor3, bool)> = Vec::new();
     if let Some((name, r)) = &bundle.reference {
-        all.push((compact(name, options), r, RGBColor3(0x44, 0x44, 0x44), true));
+        all.push((
+            compact(name, options, bundle.from_bag),
+            r,
+            RGBColor3(0x44, 0x44, 0x44),
+            true,
+        ));
     }
     for (k, (name, t)) in bundle.trajectories.iter().enumerate() {
         let c = PALETTE[k % PALETTE.len()];
-        all.push((compact(name, options), t, RGBColor3(c.0, c.1, c.2), false));
+        all.push((
+            compact(name, options, bundle.from_bag),
+            t,
+            RGBColor3(c.0, c.1, c.2),
+            false,
+        ));
     }
     let colour = |c: &RGBColor3| plotters::style::RGBColor(c.0, c.1, c.2);
     let trajectories = Drawing::Trajectories {
@@ -1086,6 +1188,8 @@ mod tests {
             synced_refs: BTreeMap::new(),
             synced: false,
             off_unit: Default::default(),
+            from_bag: false,
+            frames: BTreeMap::new(),
         }
     }
 

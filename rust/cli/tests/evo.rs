@@ -492,6 +492,77 @@ fn figures_carry_evo_labels() {
     );
 }
 
+/// ROS 2 bags made by rosbags from the fr1/xyz trajectories (both storages, every pose
+/// message type evo reads): the printed text, and the archive's statistics and errors to
+/// 1e-9, against evo_ape/evo_rpe/evo_traj `bag2` (topics, `--all_topics`) on the same bags.
+#[test]
+fn ros2_bags_as_evo_reads_them() {
+    let golden = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/golden/evo_bags");
+    let cases = cases_in(&golden);
+    assert!(cases.len() >= 5);
+    let dir = tempfile::tempdir().unwrap();
+    for bag in ["fr1_mcap", "fr1_db3"] {
+        std::fs::create_dir(dir.path().join(bag)).unwrap();
+        for entry in std::fs::read_dir(golden.join(bag)).unwrap() {
+            let path = entry.unwrap().path();
+            std::fs::copy(&path, dir.path().join(bag).join(path.file_name().unwrap())).unwrap();
+        }
+    }
+    for case in &cases {
+        let name = case["name"].as_str().unwrap();
+        let mut args = vec![case["tool"].as_str().unwrap().to_owned()];
+        args.extend(strings(&case["args"]));
+        let archived = case.get("stats").is_some();
+        if archived {
+            args.extend(["--save_results".into(), format!("{name}.zip")]);
+        }
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let (stdout, stderr) = sitar_expect(dir.path(), &args, true);
+        let (want, warnings) = evo_lines(case["stdout"].as_str().unwrap());
+        assert_text(name, &stdout, &want, 1e-6);
+        for w in warnings {
+            assert!(stderr.contains(&w), "{name}: evo warned '{w}': {stderr}");
+        }
+        if !archived {
+            continue;
+        }
+        let entries = zip_entries(&dir.path().join(format!("{name}.zip")));
+        let entry = |n: &str| &entries.iter().find(|(k, _)| k == n).unwrap().1;
+        let stats: Value = serde_json::from_slice(entry("stats.json")).unwrap();
+        for (k, v) in case["stats"].as_object().unwrap() {
+            close(
+                name,
+                k,
+                stats[k].as_f64().unwrap(),
+                v.as_f64().unwrap(),
+                1e-9,
+            );
+        }
+        let errors = npy_values(entry("error_array.npy"));
+        let want = case["errors"].as_array().unwrap();
+        assert_eq!(errors.len(), want.len(), "{name}: errors");
+        for (k, (g, w)) in errors.iter().zip(want).enumerate() {
+            close(name, &format!("error {k}"), *g, w.as_f64().unwrap(), 1e-9);
+        }
+    }
+    // What evo does not read is named with its topic and type.
+    let (_, stderr) = sitar_expect(
+        dir.path(),
+        &["ape", "bag2", "fr1_mcap", "/ground_truth", "/cmd_vel"],
+        false,
+    );
+    assert!(
+        stderr.contains("/cmd_vel") && stderr.contains("geometry_msgs/msg/Twist"),
+        "{stderr}"
+    );
+    let (_, stderr) = sitar_expect(
+        dir.path(),
+        &["rpe", "bag2", "fr1_db3", "/ground_truth", "/none"],
+        false,
+    );
+    assert!(stderr.contains("no messages for topic '/none'"), "{stderr}");
+}
+
 /// Runs one golden case in a copy of `source` and checks stdout, warnings, the archive
 /// and the saved files against evo's; returns the directory it ran in.
 fn run_case(case: &Value, source: &Path) -> tempfile::TempDir {
@@ -574,8 +645,11 @@ fn bag_formats_and_viewers_are_refused_clearly() {
     let dir = workdir(&golden().join("data"));
     for (args, message) in [
         (vec!["ape", "bag", "x.bag", "/a", "/b"], "not supported"),
-        (vec!["rpe", "bag2", "x", "/a", "/b"], "not supported"),
-        (vec!["rpe", "mcap", "x", "/a", "/b"], "not supported"),
+        (vec!["rpe", "bag2", "x", "/a", "/b"], "x: cannot read"),
+        (
+            vec!["rpe", "mcap", "gt.txt", "/a", "/b"],
+            "MCAP: Bad magic number",
+        ),
         (vec!["traj", "bag", "x.bag", "/a"], "not supported"),
         (
             vec!["ape", "tum", "gt.txt", "est_a.txt", "--rerun"],

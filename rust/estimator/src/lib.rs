@@ -160,6 +160,7 @@ mod incremental;
 mod metrics;
 mod pairwise;
 mod ranking;
+mod rosbag;
 mod sorted_runs;
 mod statistics;
 mod sync;
@@ -185,6 +186,10 @@ pub use metrics::{
 };
 pub use ranking::{
     MIN_FIT_ERROR_M, SweepPoint, ThresholdSweep, fit_scale, median_ratio, spearman, threshold_sweep,
+};
+pub use rosbag::{
+    BagTrajectory, PoseMessage, StampedPoseValue, TopicMessages, decode_pose, read_mcap,
+    topic_trajectory,
 };
 /// The class rule and its defaults, shared with the phone and the backend.
 pub use sitar_core::{DEFAULT_SETTING, ErrorClass, Thresholds};
