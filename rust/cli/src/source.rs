@@ -198,6 +198,11 @@ macro_rules! format_subcommands {
             /// The inputs and the options.
             pub fn split(self) -> (crate::source::Source, $options) {
                 use crate::source::Source;
+                let bag_kind = if matches!(self, Self::Bag { .. }) {
+                    "bag"
+                } else {
+                    "bag2"
+                };
                 match self {
                     Self::Tum {
                         ref_file,
@@ -242,17 +247,8 @@ macro_rules! format_subcommands {
                         est_topic,
                         sync,
                         options,
-                    } => (
-                        Source::Bag {
-                            kind: "bag",
-                            bag,
-                            reference: ref_topic,
-                            estimate: est_topic,
-                            sync,
-                        },
-                        options,
-                    ),
-                    Self::Bag2 {
+                    }
+                    | Self::Bag2 {
                         bag,
                         ref_topic,
                         est_topic,
@@ -260,7 +256,7 @@ macro_rules! format_subcommands {
                         options,
                     } => (
                         Source::Bag {
-                            kind: "bag2",
+                            kind: bag_kind,
                             bag,
                             reference: ref_topic,
                             estimate: est_topic,

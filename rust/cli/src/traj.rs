@@ -842,21 +842,13 @@ fn statistics(t: &Trajectory, timed: bool) -> Result<Vec<(String, f64)>> {
 }
 
 fn print_infos(bundle: &Bundle, options: &Options, kind: Kind, console: &Console) -> Result<()> {
-    for (name, t) in &bundle.trajectories {
-        // Transformed poses have quaternions re-derived from their matrices (unit norm).
-        let unit = !bundle.off_unit.contains(name) || rederives_quaternions(options);
-        print_traj_info(
-            &compact(name, options, bundle.from_bag),
-            t,
-            unit,
-            bundle.frames.get(name).map(String::as_str),
-            options,
-            kind,
-            console,
-        )?;
-    }
-    if let Some((name, t)) = &bundle.reference {
-        let unit = !bundle.off_unit.contains(name);
+    let trajectories = bundle.trajectories.iter().map(|(n, t)| (n, t, false));
+    let reference = bundle.reference.iter().map(|(n, t)| (n, t, true));
+    for (name, t, is_reference) in trajectories.chain(reference) {
+        // Transformed poses (not the reference) have quaternions re-derived from their
+        // matrices (unit norm).
+        let unit =
+            !bundle.off_unit.contains(name) || (!is_reference && rederives_quaternions(options));
         print_traj_info(
             &compact(name, options, bundle.from_bag),
             t,
