@@ -8,7 +8,7 @@ use std::sync::Once;
 use anyhow::{Context, Result, bail};
 use plotters::prelude::*;
 
-use crate::plot::{DrawResult, ErrorFigure, PlotMode};
+use crate::figure::{DrawResult, Drawing, ErrorFigure, PlotMode, SIZE};
 
 /// DejaVu Sans (Bitstream Vera licence, `assets/DejaVuSans.LICENSE`): plotters' bitmap text
 /// needs a font file, and a fresh machine may have none.
@@ -32,8 +32,8 @@ pub enum Page<'a> {
     Raw(&'a ErrorFigure),
     /// evo's "map" figure: the trajectories coloured by error.
     Map(&'a ErrorFigure, PlotMode),
-    /// Any other figure, drawn by `crate::figures`.
-    Other(&'a crate::figures::Drawing),
+    /// Any other figure, drawn by `crate::panels`.
+    Other(&'a Drawing),
 }
 
 impl Page<'_> {
@@ -48,7 +48,7 @@ impl Page<'_> {
             Page::Both(figure, mode) => crate::plot::both(root, *mode, figure),
             Page::Raw(figure) => crate::plot::raw(root, figure),
             Page::Map(figure, mode) => crate::plot::map(root, *mode, figure),
-            Page::Other(drawing) => drawing.draw(root),
+            Page::Other(drawing) => crate::panels::draw(root, drawing),
         }
     }
 }
@@ -213,4 +213,10 @@ pub fn show(
         }
     }
     Ok(true)
+}
+
+/// Draws `figure` (both panels) and writes it to `path`, SVG, PNG or PDF by the extension;
+/// the error names the file.
+pub fn write_error_figure(path: &Path, mode: PlotMode, figure: &ErrorFigure) -> Result<()> {
+    save_one(path, SIZE, &Page::Both(figure, mode))
 }

@@ -9,9 +9,10 @@ use sitar_estimator::{
 };
 
 use crate::compare::{file_name, unit};
+use crate::figure::{ErrorFigure, Sample};
 use crate::input::{self, Format, progress_bar};
 use crate::output::{OutputFormat, emit};
-use crate::plot::{self, ErrorFigure, PlotArgs, Sample};
+use crate::plot::PlotArgs;
 use crate::source::StampUnit;
 
 /// Estimates each window's pose error from repeated trials, without ground truth.
@@ -110,7 +111,7 @@ pub fn run(args: Args) -> Result<()> {
     let result = estimate(&trials, &options).context("estimating")?;
     if let Some(path) = &args.plot.plot {
         let figure = error_figure(&args, &files[0], &trials[0], &result);
-        plot::write(path, args.plot.plot_mode, &figure)?;
+        crate::canvas::write_error_figure(path, args.plot.plot_mode, &figure)?;
     }
     let text = match args.format {
         OutputFormat::Csv => result.to_legacy_csv(),

@@ -1,24 +1,15 @@
 //! The figures of `ape`, `rpe`, `traj` and `res`, as evo draws them: what goes on them is
-//! decided here, the drawing itself is in `plot.rs` and the file formats in `canvas.rs`.
+//! decided here; the model is `figure.rs`, the drawing `plot.rs` and `panels.rs`, the file
+//! formats `canvas.rs`.
 
 use anyhow::Result;
-use plotters::prelude::*;
 
 use crate::canvas::{self, Page};
 use crate::console::Console;
+use crate::distribution::percentile;
+use crate::figure::{ErrorFigure, PAGE, SIZE, Sample};
 use crate::metric::{Metric, Outcome};
 use crate::metric_args::{OutputArgs, XDimension};
-use crate::plot::{DrawResult, ErrorFigure, PAGE, PlotMode, SIZE, Sample};
-
-/// evo's colour cycle (seaborn "deep"), for several trajectories or results.
-pub const PALETTE: [RGBColor; 6] = [
-    RGBColor(0x4C, 0x72, 0xB0),
-    RGBColor(0xDD, 0x84, 0x52),
-    RGBColor(0x55, 0xA8, 0x68),
-    RGBColor(0xC4, 0x4E, 0x52),
-    RGBColor(0x81, 0x72, 0xB3),
-    RGBColor(0x93, 0x78, 0x60),
-];
 
 /// The error figure of a metric outcome, with evo's x dimension and colour-map limits.
 pub fn error_figure(outcome: &Outcome, output: &OutputArgs) -> Result<ErrorFigure> {
@@ -56,7 +47,7 @@ pub fn error_figure(outcome: &Outcome, output: &OutputArgs) -> Result<ErrorFigur
             ("median", stats.median),
             ("mean", stats.mean),
         ],
-        std_band: Some((stats.mean - stats.std, stats.mean + stats.std)),
+        std_band: Some(std_band(stats.mean, stats.std)),
         reference_name: "reference".into(),
         reference: reference.positions.iter().map(|p| p.to_array()).collect(),
         trajectory_name: match outcome.metric {
@@ -85,17 +76,10 @@ pub fn error_figure(outcome: &Outcome, output: &OutputArgs) -> Result<ErrorFigur
     })
 }
 
-/// numpy's default percentile (linear interpolation between closest ranks).
-pub fn percentile(values: &[f64], p: f64) -> f64 {
-    let mut sorted: Vec<f64> = values.iter().copied().filter(|v| !v.is_nan()).collect();
-    if sorted.is_empty() {
-        return f64::NAN;
-    }
-    sorted.sort_by(f64::total_cmp);
-    let rank = p / 100.0 * (sorted.len() - 1) as f64;
-    let (k, f) = (rank.floor() as usize, rank - rank.floor());
-    let next = sorted[(k + 1).min(sorted.len() - 1)];
-    sorted[k] + f * (next - sorted[k])
+/// evo's "std" band of the raw plot: mean ± std/2 (the `axhspan` of evo's
+/// `plot.error_array`), one std wide.
+pub fn std_band(mean: f64, std: f64) -> (f64, f64) {
+    (mean - std / 2.0, mean + std / 2.0)
 }
 
 /// SiTAR's `--plot FILE` of `ape`/`rpe`: both panels in one file.
@@ -131,221 +115,13 @@ pub fn collection(outcome: &Outcome, output: &OutputArgs, console: &Console) -> 
     Ok(())
 }
 
-/// A named line of a figure.
-pub struct Series {
-    /// Legend name.
-    pub name: String,
-    /// Points.
-    pub points: Vec<(f64, f64)>,
-    /// Colour.
-    pub colour: RGBColor,
-    /// Dashed (evo's reference style).
-    pub dashed: bool,
-}
+#[cfg(test)]
+mod tests {
+    use super::*;
 
-/// A named 3-D path of a trajectory figure.
-pub struct Path3 {
-    /// Legend name.
-    pub name: String,
-    /// Positions (m).
-    pub points: Vec<[f64; 3]>,
-    /// Colour.
-    pub colour: RGBColor,
-    /// Dashed (the reference).
-    pub dashed: bool,
-}
-
-/// Figures other than the error figure.
-pub enum Drawing {
-    /// Stacked panels of lines over a shared x-axis (evo_traj's xyz, rpy and speed plots,
-    /// evo_res's raw plot).
-    Panels {
-        /// Title.
-        title: String,
-        /// x-axis label.
-        x_label: String,
-        /// (y-axis label, lines) per panel, top to bottom.
-        panels: Vec<(String, Vec<Series>)>,
-    },
-    /// Trajectories in a plane or in 3-D (evo_traj's trajectory plot).
-    Trajectories {
-        /// Title.
-        title: String,
-        /// Plane or 3-D.
-        mode: PlotMode,
-        /// The paths.
-        paths: Vec<Path3>,
-    },
-    /// Horizontal bars per statistic, one per result (evo_res's stats plot).
-    Bars {
-        /// Title.
-        title: String,
-        /// x-axis label (the metric's unit).
-        x_label: String,
-        /// Statistic names (rows).
-        groups: Vec<String>,
-        /// (result name, one value per group).
-        series: Vec<(String, Vec<f64>)>,
-    },
-}
-
-impl Drawing {
-    /// Draws the figure on `root`.
-    pub fn draw<DB: DrawingBackend>(
-        &self,
-        root: &DrawingArea<DB, plotters::coord::Shift>,
-    ) -> DrawResult<()>
-    where
-        DB::ErrorType: 'static,
-    {
-        root.fill(&WHITE)?;
-        match self {
-            Drawing::Panels {
-                title,
-                x_label,
-                panels,
-            } => {
-                let (top, body) = root.split_vertically(50);
-                crate::plot::title_lines(&top, title)?;
-                let areas = body.split_evenly((panels.len().max(1), 1));
-                for (area, (y_label, series)) in areas.iter().zip(panels) {
-                    lines_panel(area, x_label, y_label, series)?;
-                }
-                Ok(())
-            }
-            Drawing::Trajectories { title, mode, paths } => {
-                let (top, body) = root.split_vertically(50);
-                crate::plot::title_lines(&top, title)?;
-                trajectories_panel(&body, *mode, paths)
-            }
-            Drawing::Bars {
-                title,
-                x_label,
-                groups,
-                series,
-            } => {
-                let (top, body) = root.split_vertically(50);
-                crate::plot::title_lines(&top, title)?;
-                bars_panel(&body, x_label, groups, series)
-            }
-        }
+    #[test]
+    fn the_std_band_is_one_std_wide_around_the_mean() {
+        assert_eq!(std_band(2.0, 1.0), (1.5, 2.5));
+        assert_eq!(std_band(0.0, 0.0), (0.0, 0.0));
     }
-}
-
-fn span(values: impl Iterator<Item = f64>) -> std::ops::Range<f64> {
-    let (lo, hi) = values
-        .filter(|v| v.is_finite())
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
-            (l.min(v), h.max(v))
-        });
-    if lo > hi {
-        return 0.0..1.0;
-    }
-    let pad = ((hi - lo) * 0.05).max(1e-9);
-    lo - pad..hi + pad
-}
-
-fn lines_panel<DB: DrawingBackend>(
-    area: &DrawingArea<DB, plotters::coord::Shift>,
-    x_label: &str,
-    y_label: &str,
-    series: &[Series],
-) -> DrawResult<()>
-where
-    DB::ErrorType: 'static,
-{
-    let xs = span(series.iter().flat_map(|s| s.points.iter().map(|p| p.0)));
-    let ys = span(series.iter().flat_map(|s| s.points.iter().map(|p| p.1)));
-    let mut chart = ChartBuilder::on(area)
-        .margin(8)
-        .x_label_area_size(35)
-        .y_label_area_size(60)
-        .build_cartesian_2d(xs, ys)?;
-    chart
-        .configure_mesh()
-        .max_light_lines(1)
-        .x_desc(x_label)
-        .y_desc(y_label)
-        .label_style(("sans-serif", 12))
-        .axis_desc_style(("sans-serif", 12))
-        .draw()?;
-    for s in series {
-        let style = s.colour.stroke_width(1);
-        if s.dashed {
-            chart
-                .draw_series(DashedLineSeries::new(s.points.clone(), 6, 4, style))?
-                .label(s.name.as_str())
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], style));
-        } else {
-            chart
-                .draw_series(LineSeries::new(s.points.clone(), style))?
-                .label(s.name.as_str())
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], style));
-        }
-    }
-    crate::plot::legend(&mut chart, SeriesLabelPosition::UpperRight)?;
-    Ok(())
-}
-
-fn trajectories_panel<DB: DrawingBackend>(
-    area: &DrawingArea<DB, plotters::coord::Shift>,
-    mode: PlotMode,
-    paths: &[Path3],
-) -> DrawResult<()>
-where
-    DB::ErrorType: 'static,
-{
-    crate::plot::paths(area, mode, paths)
-}
-
-fn bars_panel<DB: DrawingBackend>(
-    area: &DrawingArea<DB, plotters::coord::Shift>,
-    x_label: &str,
-    groups: &[String],
-    series: &[(String, Vec<f64>)],
-) -> DrawResult<()>
-where
-    DB::ErrorType: 'static,
-{
-    let max = series
-        .iter()
-        .flat_map(|s| s.1.iter().copied())
-        .filter(|v| v.is_finite())
-        .fold(0.0f64, f64::max);
-    let rows = groups.len().max(1);
-    let per = series.len().max(1);
-    let mut chart = ChartBuilder::on(area)
-        .margin(10)
-        .x_label_area_size(35)
-        .y_label_area_size(70)
-        .build_cartesian_2d(0.0..(max * 1.1).max(1e-12), 0.0..rows as f64)?;
-    let names = groups.to_vec();
-    chart
-        .configure_mesh()
-        .disable_y_mesh()
-        .y_labels(rows)
-        .y_label_formatter(&move |y| {
-            let k = (*y - 0.5).round();
-            if (y - 0.5 - k).abs() < 1e-6 && k >= 0.0 {
-                names.get(k as usize).cloned().unwrap_or_default()
-            } else {
-                String::new()
-            }
-        })
-        .x_desc(x_label)
-        .label_style(("sans-serif", 12))
-        .draw()?;
-    for (s, (name, values)) in series.iter().enumerate() {
-        let colour = PALETTE[s % PALETTE.len()];
-        let h = 0.8 / per as f64;
-        chart
-            .draw_series(values.iter().enumerate().map(|(g, &v)| {
-                let y0 = g as f64 + 0.1 + s as f64 * h;
-                Rectangle::new([(0.0, y0), (v.max(0.0), y0 + h)], colour.filled())
-            }))?
-            .label(name.as_str())
-            .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 20, y + 5)], colour.filled()));
-    }
-    crate::plot::legend(&mut chart, SeriesLabelPosition::LowerRight)?;
-    Ok(())
 }

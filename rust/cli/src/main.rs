@@ -7,19 +7,24 @@
 
 mod ape;
 mod archive;
+mod bag;
 mod canvas;
 mod compare;
 mod config;
 mod console;
 mod demo;
+mod distribution;
 mod estimate;
 mod evaluate;
+mod figure;
 mod figures;
+mod hints;
 mod input;
 mod logging;
 mod metric;
 mod metric_args;
 mod output;
+mod panels;
 mod pdf;
 mod plot;
 mod pyfmt;
@@ -126,7 +131,11 @@ fn main() -> ExitCode {
             return ExitCode::FAILURE;
         }
     };
-    let matches = cli().get_matches_from(argv);
+    let command = cli();
+    let matches = command
+        .clone()
+        .try_get_matches_from(argv)
+        .unwrap_or_else(|e| hints::canonical_suggestions(e, &command).exit());
     let parsed = Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit());
     let result = match parsed.command {
         Command::Rpe(args) => rpe::run(args),

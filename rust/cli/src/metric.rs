@@ -4,7 +4,7 @@
 use anyhow::{Context, Result, bail};
 use sitar_estimator::{
     Alignment, DeltaUnit, PoseErrors, PoseRelation, RpeOptions, Similarity, Statistics, Trajectory,
-    align_first, ape, delta_pairs, matching_time_indices, rpe, seconds_to_ns, umeyama,
+    align_first, ape, delta_pairs, match_trajectories, rpe, seconds_to_ns, umeyama,
 };
 
 use crate::archive::{Array, ResultArchive};
@@ -260,7 +260,7 @@ pub fn synchronise(
             console.info(&format!("Using time range end: {}s", crate::pyfmt::repr(t)))?;
         }
         reference
-            .reduce_to_time_range(t_start.map(seconds_to_ns), t_end.map(seconds_to_ns))
+            .reduce_to_time_range(t_start, t_end)
             .context("--t_start/--t_end")?;
         if reference.is_empty() {
             bail!("{}: no poses within --t_start/--t_end", names.0);
@@ -272,22 +272,17 @@ pub fn synchronise(
     } else {
         (&estimate, &reference)
     };
-    let offset = seconds_to_ns(if second_longer {
+    let offset_s = if second_longer {
         sync.t_offset
     } else {
         -sync.t_offset
-    });
+    };
     if !long.is_sorted() {
         console.warn("Timestamps aren't sorted, using slower linear matching.");
     } else {
         console.debug("Timestamps are sorted, using binary search for matching.")?;
     }
-    let (ids_short, ids_long) = matching_time_indices(
-        &short.stamps,
-        &long.stamps,
-        seconds_to_ns(sync.t_max_diff),
-        offset,
-    );
+    let (ids_short, ids_long) = match_trajectories(short, long, sync.t_max_diff, offset_s);
     if ids_short.is_empty() {
         bail!(
             "found no matching timestamps between {} and {} with max. time diff {} (s) and time offset {} (s)",
@@ -301,6 +296,7 @@ pub fn synchronise(
     let long_synced = match sync.sync_method {
         SyncMethod::NearestTime => long.reduce_to_ids(&ids_long),
         SyncMethod::Interpolation => {
+            let offset = seconds_to_ns(offset_s);
             let at: Vec<i64> = short_synced.stamps.iter().map(|&t| t - offset).collect();
             long.interpolate(&at)
                 .context("--sync_method interpolation")?
@@ -437,12 +433,6 @@ pub fn align_logged(
     Ok((applied, fitted))
 }
 
-/// A nanosecond stamp as evo's float seconds (the correctly rounded quotient, which is
-/// what Python reads from a decimal with up to 9 digits after the point).
-pub fn seconds(ns: i64) -> f64 {
-    ns as f64 / 1e9
-}
-
 /// "all" or "consecutive", as evo names the pairing.
 fn pairs_word(options: &RpeOptions) -> &'static str {
     if options.all_pairs {
@@ -563,10 +553,9 @@ impl Outcome {
             );
             // RPE drops the first pose again: it only anchors the distances.
             let skip = usize::from(matches!(self.metric, Metric::Rpe(_)));
-            let t0 = estimate.stamps[0];
             // Seconds as evo holds them (floats), differences taken in floats as evo does.
-            let stamps: Vec<f64> = estimate.stamps.iter().map(|&t| seconds(t)).collect();
-            let from_start: Vec<f64> = stamps.iter().map(|&t| t - seconds(t0)).collect();
+            let stamps = estimate.seconds();
+            let from_start: Vec<f64> = stamps.iter().map(|&t| t - stamps[0]).collect();
             arrays.push((
                 "seconds_from_start".into(),
                 Array::vector(from_start[skip..].to_vec()),

@@ -6,8 +6,8 @@ use std::path::PathBuf;
 use clap::ValueEnum;
 use sitar_estimator::Plane;
 
+use crate::figure::PlotMode;
 use crate::output::OutputFormat;
-use crate::plot::PlotMode;
 
 /// evo's algorithm options of `ape` and `rpe` (the pose relation is per tool).
 #[derive(clap::Args, Debug, Clone)]

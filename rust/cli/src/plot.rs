@@ -3,11 +3,12 @@
 //! below (evo's colour-mapped `--plot_mode` plot), as SVG.
 
 use std::ops::Range;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
-use anyhow::Result;
-use clap::ValueEnum;
 use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
+
+use crate::figure::{DrawResult, ErrorFigure, Path3, PlotMode, Sample};
 
 /// The `--plot` and `--plot-mode` flags of `sitar estimate`.
 #[derive(clap::Args, Debug)]
@@ -28,79 +29,6 @@ pub struct PlotArgs {
     pub plot_mode: PlotMode,
 }
 
-/// Plane of the trajectory panel: horizontal axis, then vertical axis; or 3-D.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, ValueEnum)]
-pub enum PlotMode {
-    /// x horizontal, y vertical.
-    Xy,
-    /// x horizontal, z vertical: the top view of y-up (ARCore, Unity) poses.
-    #[default]
-    Xz,
-    /// y horizontal, z vertical.
-    Yz,
-    /// z horizontal, x vertical.
-    Zx,
-    /// z horizontal, y vertical.
-    Zy,
-    /// y horizontal, x vertical.
-    Yx,
-    /// 3-D, x, y and z (evo's default).
-    Xyz,
-}
-
-impl PlotMode {
-    /// Indices of the horizontal and the vertical coordinate (`None` for 3-D).
-    fn axes(self) -> Option<[usize; 2]> {
-        match self {
-            PlotMode::Xy => Some([0, 1]),
-            PlotMode::Xz => Some([0, 2]),
-            PlotMode::Yz => Some([1, 2]),
-            PlotMode::Zx => Some([2, 0]),
-            PlotMode::Zy => Some([2, 1]),
-            PlotMode::Yx => Some([1, 0]),
-            PlotMode::Xyz => None,
-        }
-    }
-}
-
-/// One error to draw: where on the x-axis, where on the trajectory, and how large.
-pub struct Sample {
-    /// Position on the x-axis of the error panel (seconds from start, index or metres).
-    pub x: f64,
-    /// Position (m) on the coloured trajectory; `None`: not drawn on the trajectory panel.
-    pub position: Option<[f64; 3]>,
-    /// The error.
-    pub error: f64,
-}
-
-/// What the error figure shows.
-pub struct ErrorFigure {
-    /// Title above the panels.
-    pub title: String,
-    /// Name of the error ("APE", "RPE", "estimated error").
-    pub metric: &'static str,
-    /// Unit of the error ("m", "deg", "rad", or "" for full transformations).
-    pub unit: String,
-    /// Label of the error panel's x-axis.
-    pub x_label: String,
-    /// Horizontal lines with a legend on the error panel (`("mean", value)`, …).
-    pub lines: Vec<(&'static str, f64)>,
-    /// A band (low, high) drawn behind the error, labelled "std" (evo: mean ± std).
-    pub std_band: Option<(f64, f64)>,
-    /// Name of the dashed trajectory (the reference), if any.
-    pub reference_name: String,
-    /// Every position (m) of the dashed reference; empty: none.
-    pub reference: Vec<[f64; 3]>,
-    /// Name of the trajectory carrying the coloured errors ("estimate", "trial 0").
-    pub trajectory_name: String,
-    /// Every position (m) of that trajectory, drawn as a grey line under the dots.
-    pub trajectory: Vec<[f64; 3]>,
-    /// The errors, in order; non-finite ones are left out of both panels.
-    pub samples: Vec<Sample>,
-    /// Colour-map limits (default: the smallest and largest error drawn).
-    pub colour_range: Option<(f64, f64)>,
-}
-
 /// Colour of the error line (matplotlib's first colour, as evo's).
 const ERROR_COLOUR: RGBColor = RGBColor(0x1F, 0x77, 0xB4);
 /// Colours of the horizontal lines, in order.
@@ -116,13 +44,6 @@ const REFERENCE_COLOUR: RGBColor = RGBColor(0x44, 0x44, 0x44);
 const TRAJECTORY_COLOUR: RGBColor = RGBColor(160, 160, 160);
 /// Font of tick labels and axis descriptions (plotters' default shrinks with the panel).
 const LABEL_FONT: (&str, u32) = ("sans-serif", 13);
-/// Size of the two-panel figure, pixels.
-pub const SIZE: (u32, u32) = (1000, 1150);
-/// Size of one evo figure ("raw", "map"), pixels.
-pub const PAGE: (u32, u32) = (1000, 760);
-
-/// The result of drawing.
-pub type DrawResult<T> = Result<T, Box<dyn std::error::Error>>;
 /// Height of the error-over-time panel.
 const ERROR_PANEL_HEIGHT: u32 = 400;
 /// Width of the colour bar beside the trajectory panel.
@@ -151,12 +72,6 @@ fn viridis(t: f64) -> RGBColor {
     let (a, b) = (VIRIDIS[k], VIRIDIS[k + 1]);
     let lerp = |a: u8, b: u8| (f64::from(a) + f * (f64::from(b) - f64::from(a))).round() as u8;
     RGBColor(lerp(a.0, b.0), lerp(a.1, b.1), lerp(a.2, b.2))
-}
-
-/// Draws `figure` (both panels) and writes it to `path`, SVG, PNG or PDF by the extension;
-/// the error names the file.
-pub fn write(path: &Path, mode: PlotMode, figure: &ErrorFigure) -> Result<()> {
-    crate::canvas::save_one(path, SIZE, &crate::canvas::Page::Both(figure, mode))
 }
 
 /// Both panels on one page: the title, the error over time, the trajectory coloured by error.
@@ -450,7 +365,7 @@ where
     DB::ErrorType: 'static,
 {
     let mut chart = space_chart(map_area, figure.trajectory.iter().chain(&figure.reference))?;
-    let point = |p: &[f64; 3]| (p[0], p[1], p[2]);
+    let point = z_up;
     // Dashes: every other short run of the reference's segments.
     let reference: Vec<(f64, f64, f64)> = figure.reference.iter().map(point).collect();
     let dash = (reference.len() / 150).max(1);
@@ -490,9 +405,9 @@ where
     let bar_decimals = decimals(bar_range.end - bar_range.start);
     let mut bar = ChartBuilder::on(bar_area)
         .margin(10)
-        .margin_right(0)
+        .margin_right(28)
         .x_label_area_size(40)
-        .right_y_label_area_size(100)
+        .right_y_label_area_size(72)
         .build_cartesian_2d(0.0..1.0, bar_range.clone())?;
     const STEPS: usize = 64;
     let span = bar_range.end - bar_range.start;
@@ -520,7 +435,7 @@ where
 pub fn paths<DB: DrawingBackend>(
     area: &DrawingArea<DB, plotters::coord::Shift>,
     mode: PlotMode,
-    paths: &[crate::figures::Path3],
+    paths: &[Path3],
 ) -> DrawResult<()>
 where
     DB::ErrorType: 'static,
@@ -572,8 +487,7 @@ where
             let mut chart = space_chart(area, paths.iter().flat_map(|p| &p.points))?;
             for path in paths {
                 let style = path.colour.stroke_width(if path.dashed { 1 } else { 2 });
-                let points: Vec<(f64, f64, f64)> =
-                    path.points.iter().map(|p| (p[0], p[1], p[2])).collect();
+                let points: Vec<(f64, f64, f64)> = path.points.iter().map(z_up).collect();
                 let dash = if path.dashed {
                     (points.len() / 150).max(1)
                 } else {
@@ -619,12 +533,18 @@ where
     DB::ErrorType: 'static,
 {
     let ([rx, ry, rz], d) = cube(points);
+    let ranges = [rx.clone(), ry.clone(), rz.clone()];
+    // z up, as evo (matplotlib) draws it: plotters' vertical axis is its second, so it
+    // holds z; its first holds y and its depth axis x, a cyclic exchange that keeps the
+    // axes right-handed on screen (points go through [`z_up`]).
     let mut chart = ChartBuilder::on(area)
         .margin(20)
-        .build_cartesian_3d(rx, ry, rz)?;
+        .margin_left(45)
+        .margin_bottom(45)
+        .build_cartesian_3d(ry, rz, rx)?;
     chart.with_projection(|mut p| {
         p.pitch = 0.45;
-        p.yaw = 0.6;
+        p.yaw = 0.6 - std::f64::consts::FRAC_PI_2;
         p.scale = 0.85;
         p.into_matrix()
     });
@@ -636,7 +556,65 @@ where
         .y_formatter(&|&y| tick(y, d))
         .z_formatter(&|&z| tick(z, d))
         .draw()?;
+    axis_labels(area, &chart, &ranges)?;
     Ok(chart)
+}
+
+/// A point in plotters' 3-D coordinates with z up: (y, z, x).
+fn z_up(p: &[f64; 3]) -> (f64, f64, f64) {
+    (p[1], p[2], p[0])
+}
+
+/// evo's axis labels of a 3-D plot, `x (m)`, `y (m)`, `z (m)`: each beside the middle of
+/// its axis's lowest (for z: leftmost) edge on screen, pushed away from the cube's centre.
+fn axis_labels<DB: DrawingBackend>(
+    area: &DrawingArea<DB, plotters::coord::Shift>,
+    chart: &ChartContext<
+        '_,
+        DB,
+        plotters::coord::cartesian::Cartesian3d<
+            plotters::coord::types::RangedCoordf64,
+            plotters::coord::types::RangedCoordf64,
+            plotters::coord::types::RangedCoordf64,
+        >,
+    >,
+    ranges: &[Range<f64>; 3],
+) -> DrawResult<()>
+where
+    DB::ErrorType: 'static,
+{
+    let base = area.get_base_pixel();
+    let screen = |p: [f64; 3]| {
+        let (x, y) = plotters::coord::CoordTranslate::translate(chart.as_coord_spec(), &z_up(&p));
+        (f64::from(x - base.0), f64::from(y - base.1))
+    };
+    let ends = |k: usize| [ranges[k].start, ranges[k].end];
+    let centre = screen([0, 1, 2].map(|k| (ranges[k].start + ranges[k].end) / 2.0));
+    let style = TextStyle::from(LABEL_FONT.into_font()).pos(Pos::new(HPos::Center, VPos::Center));
+    for (axis, name) in ["x (m)", "y (m)", "z (m)"].into_iter().enumerate() {
+        let (a, b) = ((axis + 1) % 3, (axis + 2) % 3);
+        // The middles of the four edges parallel to this axis.
+        let middles = ends(a).into_iter().flat_map(|va| {
+            ends(b).into_iter().map(move |vb| {
+                let mut p = [0.0; 3];
+                p[axis] = (ranges[axis].start + ranges[axis].end) / 2.0;
+                (p[a], p[b]) = (va, vb);
+                p
+            })
+        });
+        let key = |m: &(f64, f64)| if axis == 2 { -m.0 } else { m.1 };
+        let Some(middle) = middles.map(screen).max_by(|m, n| key(m).total_cmp(&key(n))) else {
+            continue;
+        };
+        let (dx, dy) = (middle.0 - centre.0, middle.1 - centre.1);
+        let length = dx.hypot(dy).max(1.0);
+        let at = (
+            (middle.0 + 40.0 * dx / length) as i32,
+            (middle.1 + 40.0 * dy / length) as i32,
+        );
+        area.draw(&Text::new(name, at, style.clone()))?;
+    }
+    Ok(())
 }
 
 /// The legend of a chart's labelled series, on a translucent white box.
@@ -693,7 +671,7 @@ fn padded(values: impl Iterator<Item = f64>, fallback: f64) -> Range<f64> {
 }
 
 /// A tick label with `decimals` decimals, without a minus on zero.
-fn tick(value: f64, decimals: usize) -> String {
+pub fn tick(value: f64, decimals: usize) -> String {
     let text = format!("{value:.decimals$}");
     match text.strip_prefix('-') {
         Some(rest) if rest.chars().all(|c| c == '0' || c == '.') => rest.to_owned(),
@@ -701,8 +679,23 @@ fn tick(value: f64, decimals: usize) -> String {
     }
 }
 
+/// The offset of an axis whose values are large beside their spread (absolute Unix seconds
+/// over a minute), as matplotlib's: its ticks show `value - offset` and its label
+/// `+ offset`, so "1311 868 210.0" becomes "10.0". 0 when the values need none (an offset
+/// would save fewer than 4 digits). The offset is the range's start rounded down to the
+/// power of ten just above its width.
+pub fn axis_offset(range: &Range<f64>) -> f64 {
+    let width = range.end - range.start;
+    let magnitude = range.start.abs().max(range.end.abs());
+    if !(width > 0.0 && magnitude.is_finite()) || magnitude < 1e4 * width {
+        return 0.0;
+    }
+    let step = 10f64.powf(width.log10().ceil());
+    (range.start / step).floor() * step
+}
+
 /// Decimals for tick labels over a range of width `span` (about two significant digits).
-fn decimals(span: f64) -> usize {
+pub fn decimals(span: f64) -> usize {
     if span > 0.0 && span.is_finite() {
         (1.0 - span.log10().floor()).clamp(0.0, 9.0) as usize
     } else {
@@ -736,6 +729,25 @@ fn equal_scale(points: &[(f64, f64)], pixels: (u32, u32)) -> (Range<f64>, Range<
 #[cfg(test)]
 mod tests {
     use super::*;
+    use clap::ValueEnum;
+
+    #[test]
+    fn large_time_axes_get_an_offset() {
+        // fr1/xyz: 30 s of Unix seconds.
+        let range = 1_305_031_098.6..1_305_031_128.7;
+        assert_eq!(axis_offset(&range), 1_305_031_000.0);
+        assert_eq!(
+            tick(range.start - axis_offset(&range), decimals(3.0)),
+            "98.6"
+        );
+        assert_eq!(axis_offset(&(0.0..30.0)), 0.0);
+        assert_eq!(axis_offset(&(-2.0..3.5)), 0.0);
+        assert_eq!(axis_offset(&(1000.0..1000.0)), 0.0);
+        assert_eq!(
+            axis_offset(&(-1_305_031_128.7..-1_305_031_098.6)),
+            -1_305_031_200.0
+        );
+    }
 
     #[test]
     fn viridis_ends_and_clamps() {

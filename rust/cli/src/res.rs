@@ -9,8 +9,7 @@ use anyhow::{Result, bail};
 use crate::archive::ResultArchive;
 use crate::canvas::{self, Page};
 use crate::console::{Console, SEP, UsabilityArgs};
-use crate::figures::{Drawing, PALETTE, Series};
-use crate::plot::PAGE;
+use crate::figure::{DistributionKind, Drawing, PAGE, PALETTE, Series};
 
 /// Tool for processing one or multiple result files, as evo_res.
 #[derive(clap::Args, Debug)]
@@ -41,7 +40,8 @@ pub struct Args {
     #[arg(long = "plot_markers")]
     plot_markers: bool,
     /// Path to save the plots: PNG, SVG or PDF by the extension (FILE_raw.png,
-    /// FILE_stats.png; one PDF with both pages).
+    /// FILE_stats.png, FILE_box_plot.png, FILE_histogram.png, FILE_violin_histogram.png, as
+    /// evo; one PDF with every page).
     #[arg(long = "save_plot", value_name = "FILE")]
     save_plot: Option<PathBuf>,
     /// Path to a file to save the statistics in a table (CSV, one row per result).
@@ -388,6 +388,7 @@ fn plot(
         .filter(|k| keys.iter().any(|x| x == *k))
         .map(|k| (*k).to_owned())
         .collect();
+    let stats_label = label.clone();
     let stats = Drawing::Bars {
         title: title.to_owned(),
         x_label: label,
@@ -405,7 +406,30 @@ fn plot(
             })
             .collect(),
     };
-    let pages = [("raw", Page::Other(&raw)), ("stats", Page::Other(&stats))];
+    let distributions = |kind| Drawing::Distributions {
+        title: title.to_owned(),
+        label: stats_label.clone(),
+        kind,
+        groups: results
+            .iter()
+            .map(|r| {
+                let values = r.archive.array("error_array").map(|a| a.data.clone());
+                (r.label.clone(), values.unwrap_or_default())
+            })
+            .collect(),
+    };
+    let (box_plot, histogram, violin) = (
+        distributions(DistributionKind::Box),
+        distributions(DistributionKind::Histogram),
+        distributions(DistributionKind::Violin),
+    );
+    let pages = [
+        ("raw", Page::Other(&raw)),
+        ("stats", Page::Other(&stats)),
+        ("box_plot", Page::Other(&box_plot)),
+        ("histogram", Page::Other(&histogram)),
+        ("violin_histogram", Page::Other(&violin)),
+    ];
     if args.plot {
         canvas::show(PAGE, &pages, console)?;
     }

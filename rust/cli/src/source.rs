@@ -106,8 +106,19 @@ pub enum Source {
         reference: PathBuf,
         estimate: PathBuf,
     },
-    /// A ROS bag format (not supported).
-    Bag(&'static str),
+    /// A ROS bag and two of its topics.
+    Bag {
+        /// `bag` (ROS 1, not supported) or `bag2`.
+        kind: &'static str,
+        /// The bag (a directory, `.mcap` or `.db3`).
+        bag: String,
+        /// The reference topic.
+        reference: String,
+        /// The estimate topic.
+        estimate: String,
+        /// The sync options.
+        sync: SyncArgs,
+    },
 }
 
 /// Defines a clap subcommand enum of evo's formats whose variants carry `$options`.
@@ -151,7 +162,8 @@ macro_rules! format_subcommands {
                 #[command(flatten)]
                 options: $options,
             },
-            /// ROS bag files: not supported by sitar (convert the topics to TUM first).
+            /// ROS 1 bag files: not supported by sitar (convert the bag to ROS 2 or the topics to
+            /// TUM first).
             Bag {
                 /// ROS bag file.
                 bag: String,
@@ -164,7 +176,9 @@ macro_rules! format_subcommands {
                 #[command(flatten)]
                 options: $options,
             },
-            /// ROS 2 bag / MCAP files: not supported by sitar.
+            /// ROS 2 bags: a bag directory, an .mcap or a .db3 file, with the topics of
+            /// PoseStamped, PoseWithCovarianceStamped, TransformStamped, PointStamped or
+            /// Odometry messages.
             #[command(alias = "mcap")]
             Bag2 {
                 /// ROS 2 bag file.
@@ -184,6 +198,11 @@ macro_rules! format_subcommands {
             /// The inputs and the options.
             pub fn split(self) -> (crate::source::Source, $options) {
                 use crate::source::Source;
+                let bag_kind = if matches!(self, Self::Bag { .. }) {
+                    "bag"
+                } else {
+                    "bag2"
+                };
                 match self {
                     Self::Tum {
                         ref_file,
@@ -222,8 +241,29 @@ macro_rules! format_subcommands {
                         },
                         options,
                     ),
-                    Self::Bag { options, .. } => (Source::Bag("bag"), options),
-                    Self::Bag2 { options, .. } => (Source::Bag("bag2"), options),
+                    Self::Bag {
+                        bag,
+                        ref_topic,
+                        est_topic,
+                        sync,
+                        options,
+                    }
+                    | Self::Bag2 {
+                        bag,
+                        ref_topic,
+                        est_topic,
+                        sync,
+                        options,
+                    } => (
+                        Source::Bag {
+                            kind: bag_kind,
+                            bag,
+                            reference: ref_topic,
+                            estimate: est_topic,
+                            sync,
+                        },
+                        options,
+                    ),
                 }
             }
         }
@@ -237,6 +277,8 @@ pub struct Named {
     pub trajectory: Trajectory,
     /// The path as given on the command line (evo's `name`).
     pub name: String,
+    /// Every quaternion was read with unit norm (by numpy's `allclose`, as evo's check).
+    pub unit_quaternions: bool,
 }
 
 /// Reference and estimate as read, with whether they have stamps (KITTI has none).
@@ -260,20 +302,46 @@ pub fn evo_read_options(unit: StampUnit) -> ReadOptions {
 
 /// Reads one TUM file by evo's rules, telling `console` what it met.
 pub fn read_tum_evo(path: &Path, unit: StampUnit, console: &Console) -> Result<Named> {
-    let (trajectory, report) = read_tum_with(path, &evo_read_options(unit))?;
+    let (trajectory, report) = read_tum_with(path, &evo_read_options(unit))
+        .map_err(|e| with_format_hint(e.into(), path, "tum"))?;
     finish(path, trajectory, &report, true, console)
 }
 
 /// Reads one EuRoC ground-truth file by evo's rules.
 pub fn read_euroc_evo(path: &Path, console: &Console) -> Result<Named> {
-    let (trajectory, report) = read_euroc_csv_with(path, &evo_read_options(StampUnit::Ns))?;
+    let (trajectory, report) = read_euroc_csv_with(path, &evo_read_options(StampUnit::Ns))
+        .map_err(|e| with_format_hint(e.into(), path, "euroc"))?;
     finish(path, trajectory, &report, true, console)
 }
 
 /// Reads one KITTI file.
 pub fn read_kitti_evo(path: &Path, console: &Console) -> Result<Named> {
-    let trajectory = read_kitti(path)?;
+    let trajectory = read_kitti(path).map_err(|e| with_format_hint(e.into(), path, "kitti"))?;
     finish(path, trajectory, &ReadReport::default(), false, console)
+}
+
+/// `error` (reading `path` as `given`), with a hint naming the format the file does read
+/// as, if one does: `ape euroc` on a TUM file suggests `tum`.
+fn with_format_hint(error: anyhow::Error, path: &Path, given: &str) -> anyhow::Error {
+    let options = evo_read_options(StampUnit::S);
+    let readers: [(&str, &dyn Fn() -> bool); 3] = [
+        ("tum", &|| {
+            read_tum_with(path, &options).is_ok_and(|t| !t.0.is_empty())
+        }),
+        ("euroc", &|| {
+            read_euroc_csv_with(path, &options).is_ok_and(|t| !t.0.is_empty())
+        }),
+        ("kitti", &|| read_kitti(path).is_ok_and(|t| !t.is_empty())),
+    ];
+    match readers
+        .iter()
+        .find(|(name, reads)| *name != given && reads())
+    {
+        Some((name, _)) => anyhow::anyhow!(
+            "{error:#} (the file reads as the {name} format: use `{name}` in place of `{given}`)"
+        ),
+        None => error,
+    }
 }
 
 fn finish(
@@ -310,7 +378,11 @@ fn finish(
         trajectory.len(),
         if timed { "stamps and poses" } else { "poses" }
     ))?;
-    Ok(Named { trajectory, name })
+    Ok(Named {
+        trajectory,
+        name,
+        unit_quaternions: report.quaternions_off_unit == 0,
+    })
 }
 
 /// Reads both inputs of `ape`/`rpe`.
@@ -343,13 +415,35 @@ pub fn load(source: &Source, console: &Console) -> Result<Loaded> {
             estimate: read_kitti_evo(estimate, console)?,
             sync: None,
         }),
-        Source::Bag(kind) => bail!(not_supported_bag(kind)),
+        Source::Bag { kind, .. } if *kind == "bag" => bail!(not_supported_bag(kind)),
+        Source::Bag {
+            bag,
+            reference,
+            estimate,
+            sync,
+            ..
+        } => {
+            let topics = crate::bag::open(bag, console)?;
+            let named = |topic: &String| -> Result<Named> {
+                let read = crate::bag::trajectory(&topics, topic, bag, console)?;
+                Ok(Named {
+                    trajectory: read.trajectory,
+                    name: topic.clone(),
+                    unit_quaternions: read.quaternions_off_unit == 0,
+                })
+            };
+            Ok(Loaded {
+                reference: named(reference)?,
+                estimate: named(estimate)?,
+                sync: Some(sync.clone()),
+            })
+        }
     }
 }
 
-/// The error for a ROS bag format.
+/// The error for a ROS bag format sitar does not read.
 pub fn not_supported_bag(kind: &str) -> String {
     format!(
-        "the {kind} format (ROS bags) is not supported by sitar: export the topics to TUM files (for example with evo_traj {kind} BAG TOPIC --save_as_tum) and use the tum format"
+        "the {kind} format (ROS 1 bags) is not supported by sitar: export the topics to TUM files (for example with evo_traj {kind} BAG TOPIC --save_as_tum) and use the tum format, or convert the bag to ROS 2 (rosbags-convert) and use bag2"
     )
 }

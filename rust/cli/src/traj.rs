@@ -8,14 +8,12 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use glam::{DMat3, DMat4, DQuat, DVec3};
-use sitar_estimator::{Alignment, Trajectory, align_first, write_tum};
+use sitar_estimator::{Alignment, TimeUnit, Trajectory, align_first, write_tum};
 
 use crate::canvas::{self, Page};
 use crate::console::{Console, SEP, UsabilityArgs};
-use crate::figures::{Drawing, PALETTE, Path3, Series};
-use crate::metric::seconds;
+use crate::figure::{Drawing, PAGE, PALETTE, Path3, PlotMode, Series};
 use crate::metric_args::PlaneArg;
-use crate::plot::{PAGE, PlotMode};
 use crate::source::{
     StampUnit, SyncMethod, not_supported_bag, read_euroc_evo, read_kitti_evo, read_tum_evo,
 };
@@ -75,7 +73,8 @@ enum Format {
         #[command(flatten)]
         options: Options,
     },
-    /// ROS 2 bag / MCAP files: not supported by sitar.
+    /// ROS 2 bags: a bag directory, an .mcap or a .db3 file; topics of the pose types evo
+    /// reads (--ref is a topic too).
     #[command(alias = "mcap")]
     Bag2 {
         /// ROS 2 bag file.
@@ -226,9 +225,16 @@ struct Bundle {
     reference: Option<(String, Trajectory)>,
     synced_refs: BTreeMap<String, Trajectory>,
     synced: bool,
+    /// Trajectories read with quaternions off unit norm (evo's check calls them invalid).
+    off_unit: std::collections::BTreeSet<String>,
+    /// The trajectories are a bag's topics (named by topic, never shortened).
+    from_bag: bool,
+    /// A bag topic's frame (evo's `meta.frame_id`), by name.
+    frames: BTreeMap<String, String>,
 }
 
 pub fn run(args: Args) -> Result<()> {
+    let mut bag2 = None;
     let (kind, files, options) = match args.format {
         Format::Tum {
             traj_files,
@@ -243,7 +249,15 @@ pub fn run(args: Args) -> Result<()> {
             options,
         } => (Kind::Kitti, pose_files, options),
         Format::Bag { .. } => bail!(not_supported_bag("bag")),
-        Format::Bag2 { .. } => bail!(not_supported_bag("bag2")),
+        Format::Bag2 {
+            bag,
+            topics,
+            all_topics,
+            options,
+        } => {
+            bag2 = Some((bag, topics, all_topics));
+            (Kind::Tum, Vec::new(), options)
+        }
     };
     let console = Console::new(&options.usability)?;
     for (used, flag) in [
@@ -258,12 +272,16 @@ pub fn run(args: Args) -> Result<()> {
         }
     }
     console.debug(SEP)?;
-    let read = |path: &Path| -> Result<(String, Trajectory)> {
+    let mut off_unit = std::collections::BTreeSet::new();
+    let mut read = |path: &Path| -> Result<(String, Trajectory)> {
         let named = match kind {
             Kind::Tum => read_tum_evo(path, options.time_unit, &console)?,
             Kind::Euroc => read_euroc_evo(path, &console)?,
             Kind::Kitti => read_kitti_evo(path, &console)?,
         };
+        if !named.unit_quaternions {
+            off_unit.insert(named.name.clone());
+        }
         Ok((named.name, named.trajectory))
     };
     let mut bundle = Bundle {
@@ -271,6 +289,9 @@ pub fn run(args: Args) -> Result<()> {
         reference: None,
         synced_refs: BTreeMap::new(),
         synced: false,
+        off_unit: Default::default(),
+        from_bag: bag2.is_some(),
+        frames: BTreeMap::new(),
     };
     for file in &files {
         if options.reference.as_ref() == Some(file) {
@@ -282,8 +303,12 @@ pub fn run(args: Args) -> Result<()> {
             None => bundle.trajectories.push((name, trajectory)),
         }
     }
-    if let Some(path) = &options.reference {
+    if let Some(path) = options.reference.as_ref().filter(|_| bag2.is_none()) {
         bundle.reference = Some(read(path)?);
+    }
+    bundle.off_unit = off_unit;
+    if let Some((bag, topics, all_topics)) = &bag2 {
+        read_bag_topics(&mut bundle, bag, topics, *all_topics, &options, &console)?;
     }
     manipulate(&mut bundle, kind, &options, &console)?;
     print_infos(&bundle, &options, kind, &console)?;
@@ -293,57 +318,68 @@ pub fn run(args: Args) -> Result<()> {
     export(&bundle, &options, kind, &console)
 }
 
+/// evo_traj's topics of a ROS 2 bag: those given, and with `--all_topics` every topic of a
+/// pose type evo reads (sorted; `--ref` left out of them), each named by its topic; `--ref`
+/// is a topic too.
+fn read_bag_topics(
+    bundle: &mut Bundle,
+    bag: &str,
+    topics: &[String],
+    all_topics: bool,
+    options: &Options,
+    console: &Console,
+) -> Result<()> {
+    if topics.is_empty() && !all_topics {
+        bail!("No topics used - specify topics or set --all_topics.");
+    }
+    let content = crate::bag::open(bag, console)?;
+    let reference = options
+        .reference
+        .as_ref()
+        .map(|r| r.to_string_lossy().into_owned());
+    let mut chosen = topics.to_vec();
+    if all_topics {
+        chosen.extend(crate::bag::supported_topics(&content));
+        chosen.retain(|t| Some(t) != reference.as_ref());
+        if chosen.is_empty() {
+            bail!(
+                "{bag}: found no topics of supported types (geometry_msgs/msg/PoseStamped, PoseWithCovarianceStamped, TransformStamped, PointStamped, nav_msgs/msg/Odometry)"
+            );
+        }
+    }
+    let mut read = |topic: &String| -> Result<Trajectory> {
+        let read = crate::bag::trajectory(&content, topic, bag, console)?;
+        if read.quaternions_off_unit > 0 {
+            bundle.off_unit.insert(topic.clone());
+        }
+        bundle.frames.insert(topic.clone(), read.frame_id);
+        Ok(read.trajectory)
+    };
+    let mut trajectories: Vec<(String, Trajectory)> = Vec::new();
+    for topic in chosen {
+        if trajectories.iter().all(|(n, _)| *n != topic) {
+            let trajectory = read(&topic)?;
+            trajectories.push((topic, trajectory));
+        }
+    }
+    let reference = match reference {
+        Some(topic) => Some((topic.clone(), read(&topic)?)),
+        None => None,
+    };
+    bundle.trajectories = trajectories;
+    bundle.reference = reference;
+    Ok(())
+}
+
 /// evo_traj's steps in its order: downsample, motion filter, merge, time offset, sync,
 /// alignment, transformation, projection.
 fn manipulate(bundle: &mut Bundle, kind: Kind, options: &Options, console: &Console) -> Result<()> {
-    let all =
-        |bundle: &mut Bundle, f: &mut dyn FnMut(&mut Trajectory) -> Result<()>| -> Result<()> {
-            for (_, t) in &mut bundle.trajectories {
-                f(t)?;
-            }
-            if let Some((_, t)) = &mut bundle.reference {
-                f(t)?;
-            }
-            Ok(())
-        };
-    if let Some(n) = options.downsample {
-        console.debug(SEP)?;
-        console.info(&format!("Downsampling trajectories to max {n} poses."))?;
-        all(bundle, &mut |t| Ok(t.downsample(n)?))?;
-    }
-    if let Some(filter) = &options.motion_filter {
-        console.debug(SEP)?;
-        console.info(&format!(
-            "Filtering trajectories with motion filter thresholds: {:.6} m, {:.6} deg",
-            filter[0], filter[1]
-        ))?;
-        all(bundle, &mut |t| Ok(t.motion_filter(filter[0], filter[1])?))?;
-    }
+    filter(bundle, options, console)?;
     if options.merge {
-        if kind == Kind::Kitti {
-            bail!("Can't merge KITTI files.");
-        }
-        if bundle.trajectories.is_empty() {
-            bail!("No trajectories to merge.");
-        }
-        let parts: Vec<Trajectory> = bundle.trajectories.iter().map(|(_, t)| t.clone()).collect();
-        bundle.trajectories = vec![("merged_trajectory".into(), Trajectory::merge(&parts))];
+        merge(bundle, kind)?;
     }
     if options.t_offset != 0.0 {
-        console.debug(SEP)?;
-        let offset = sitar_estimator::seconds_to_ns(options.t_offset);
-        for (name, t) in &mut bundle.trajectories {
-            if kind == Kind::Kitti {
-                bail!("{name} doesn't have timestamps - can't add time offset.");
-            }
-            console.info(&format!(
-                "Adding time offset to {name}: {} (s)",
-                crate::pyfmt::repr(options.t_offset)
-            ))?;
-            for s in &mut t.stamps {
-                *s += offset;
-            }
-        }
+        add_time_offset(bundle, kind, options.t_offset, console)?;
     }
     if options.n_to_align != -1 && !(options.align || options.correct_scale) {
         bail!("--n_to_align is useless without --align or/and --correct_scale");
@@ -354,102 +390,204 @@ fn manipulate(bundle: &mut Bundle, kind: Kind, options: &Options, console: &Cons
         || options.correct_scale
         || options.align_origin;
     if needs_sync {
-        let Some((ref_name, reference)) = bundle.reference.clone() else {
-            bail!("Can't align or sync without a reference! (--ref)  *grunt*");
-        };
-        bundle.synced = true;
-        if kind == Kind::Kitti {
-            for (name, _) in &bundle.trajectories {
-                bundle.synced_refs.insert(name.clone(), reference.clone());
-            }
-        } else {
-            console.debug(SEP)?;
-            let sync = crate::source::SyncArgs {
-                t_max_diff: options.t_max_diff,
-                sync_method: options.sync_method,
-                ..Default::default()
-            };
-            for (name, t) in &mut bundle.trajectories {
-                console.debug(&format!("Syncing {name} with reference."))?;
-                let (r, e) = crate::metric::synchronise(
-                    reference.clone(),
-                    t.clone(),
-                    &sync,
-                    (&ref_name, name),
-                    console,
-                )?;
-                *t = e;
-                bundle.synced_refs.insert(name.clone(), r);
-            }
-        }
-        let n = match options.n_to_align {
-            -1 => None,
-            n if n > 0 => Some(n as usize),
-            n => bail!("--n_to_align must be -1 (all poses) or positive, got {n}"),
-        };
-        if options.align || options.correct_scale {
-            console.debug(SEP)?;
-            let alignment = match (options.align, options.correct_scale) {
-                (true, true) => Alignment::Sim3,
-                (true, false) => Alignment::Se3,
-                _ => Alignment::ScaleOnly,
-            };
-            for (name, t) in &mut bundle.trajectories {
-                console.debug(&format!("Aligning {name} to reference."))?;
-                let r = &bundle.synced_refs[name];
-                if r.len() != t.len() {
-                    bail!(
-                        "{name}: {} poses, the reference {}: align needs equal numbers (KITTI poses pair by index)",
-                        t.len(),
-                        r.len()
-                    );
-                }
-                crate::metric::align_logged(t, r, alignment, n, console)
-                    .with_context(|| format!("aligning {name}"))?;
-            }
-        }
-        if options.align_origin {
-            console.debug(SEP)?;
-            for (name, t) in &mut bundle.trajectories {
-                console.debug(&format!("Aligning {name}'s origin to reference."))?;
-                let r = &bundle.synced_refs[name];
-                align_first(t, r, Alignment::Origin, None)
-                    .with_context(|| format!("aligning {name}'s origin"))?;
-            }
-        }
+        sync_with_reference(bundle, kind, options, console)?;
+        align_to_reference(bundle, options, console)?;
     }
     if let Some(path) = options
         .transform_left
         .as_ref()
         .or(options.transform_right.as_ref())
     {
-        let mut transform = load_transform(path)?;
-        if options.invert_transform {
-            transform = transform.inverse();
-        }
-        let right = options.transform_right.is_some();
-        console.debug(SEP)?;
-        console.debug(&format!(
-            "Applying a {}-multiplicative transformation:\n{transform}",
-            if right { "right" } else { "left" }
-        ))?;
-        for (_, t) in &mut bundle.trajectories {
-            apply_transform(t, transform, right, options.propagate_transform)?;
-        }
+        transform(bundle, path, options, console)?;
     }
     if let Some(plane) = options.project_to_plane {
+        project(bundle, plane, console)?;
+    }
+    Ok(())
+}
+
+/// Applies `f` to every trajectory, the reference included.
+fn each(bundle: &mut Bundle, f: &mut dyn FnMut(&mut Trajectory) -> Result<()>) -> Result<()> {
+    for (_, t) in &mut bundle.trajectories {
+        f(t)?;
+    }
+    if let Some((_, t)) = &mut bundle.reference {
+        f(t)?;
+    }
+    Ok(())
+}
+
+/// `--downsample` and `--motion_filter` on every trajectory, the reference included.
+fn filter(bundle: &mut Bundle, options: &Options, console: &Console) -> Result<()> {
+    if let Some(n) = options.downsample {
         console.debug(SEP)?;
-        console.debug(&format!(
-            "Projecting trajectories to {} plane.",
-            plane.name()
+        console.info(&format!("Downsampling trajectories to max {n} poses."))?;
+        each(bundle, &mut |t| Ok(t.downsample(n)?))?;
+    }
+    if let Some(filter) = &options.motion_filter {
+        console.debug(SEP)?;
+        console.info(&format!(
+            "Filtering trajectories with motion filter thresholds: {:.6} m, {:.6} deg",
+            filter[0], filter[1]
         ))?;
-        all(bundle, &mut |t| {
-            t.project(plane.plane());
-            Ok(())
-        })?;
-        for r in bundle.synced_refs.values_mut() {
-            r.project(plane.plane());
+        each(bundle, &mut |t| Ok(t.motion_filter(filter[0], filter[1])?))?;
+    }
+    Ok(())
+}
+
+/// `--merge`: the trajectories (not the reference) become one, sorted by stamp.
+fn merge(bundle: &mut Bundle, kind: Kind) -> Result<()> {
+    if kind == Kind::Kitti {
+        bail!("Can't merge KITTI files.");
+    }
+    if bundle.trajectories.is_empty() {
+        bail!("No trajectories to merge.");
+    }
+    let parts: Vec<Trajectory> = bundle.trajectories.iter().map(|(_, t)| t.clone()).collect();
+    bundle.trajectories = vec![("merged_trajectory".into(), Trajectory::merge(&parts))];
+    Ok(())
+}
+
+/// `--t_offset` on the trajectories (not the reference): evo adds it to its float seconds,
+/// rounding as it goes; nanosecond stamps add it in integers.
+fn add_time_offset(
+    bundle: &mut Bundle,
+    kind: Kind,
+    t_offset: f64,
+    console: &Console,
+) -> Result<()> {
+    console.debug(SEP)?;
+    let offset = sitar_estimator::seconds_to_ns(t_offset);
+    for (name, t) in &mut bundle.trajectories {
+        if kind == Kind::Kitti {
+            bail!("{name} doesn't have timestamps - can't add time offset.");
         }
+        console.info(&format!(
+            "Adding time offset to {name}: {} (s)",
+            crate::pyfmt::repr(t_offset)
+        ))?;
+        let unit = t.time_unit;
+        for s in &mut t.stamps {
+            *s = match unit {
+                TimeUnit::Seconds => sitar_estimator::seconds_to_ns(unit.seconds(*s) + t_offset),
+                TimeUnit::Nanoseconds => *s + offset,
+            };
+        }
+    }
+    Ok(())
+}
+
+/// Each trajectory synchronised with the reference (KITTI: paired by index), keeping the
+/// reference's synchronised copy per trajectory.
+fn sync_with_reference(
+    bundle: &mut Bundle,
+    kind: Kind,
+    options: &Options,
+    console: &Console,
+) -> Result<()> {
+    let Some((ref_name, reference)) = bundle.reference.clone() else {
+        bail!("Can't align or sync without a reference! (--ref)  *grunt*");
+    };
+    bundle.synced = true;
+    if kind == Kind::Kitti {
+        for (name, _) in &bundle.trajectories {
+            bundle.synced_refs.insert(name.clone(), reference.clone());
+        }
+        return Ok(());
+    }
+    console.debug(SEP)?;
+    let sync = crate::source::SyncArgs {
+        t_max_diff: options.t_max_diff,
+        sync_method: options.sync_method,
+        ..Default::default()
+    };
+    for (name, t) in &mut bundle.trajectories {
+        console.debug(&format!("Syncing {name} with reference."))?;
+        let (r, e) = crate::metric::synchronise(
+            reference.clone(),
+            t.clone(),
+            &sync,
+            (&ref_name, name),
+            console,
+        )?;
+        *t = e;
+        bundle.synced_refs.insert(name.clone(), r);
+    }
+    Ok(())
+}
+
+/// `-a`, `-s`, `--n_to_align` and `--align_origin` of the synchronised trajectories.
+fn align_to_reference(bundle: &mut Bundle, options: &Options, console: &Console) -> Result<()> {
+    let n = match options.n_to_align {
+        -1 => None,
+        n if n > 0 => Some(n as usize),
+        n => bail!("--n_to_align must be -1 (all poses) or positive, got {n}"),
+    };
+    if options.align || options.correct_scale {
+        console.debug(SEP)?;
+        let alignment = match (options.align, options.correct_scale) {
+            (true, true) => Alignment::Sim3,
+            (true, false) => Alignment::Se3,
+            _ => Alignment::ScaleOnly,
+        };
+        for (name, t) in &mut bundle.trajectories {
+            console.debug(&format!("Aligning {name} to reference."))?;
+            let r = &bundle.synced_refs[name];
+            if r.len() != t.len() {
+                bail!(
+                    "{name}: {} poses, the reference {}: align needs equal numbers (KITTI poses pair by index)",
+                    t.len(),
+                    r.len()
+                );
+            }
+            crate::metric::align_logged(t, r, alignment, n, console)
+                .with_context(|| format!("aligning {name}"))?;
+        }
+    }
+    if options.align_origin {
+        console.debug(SEP)?;
+        for (name, t) in &mut bundle.trajectories {
+            console.debug(&format!("Aligning {name}'s origin to reference."))?;
+            let r = &bundle.synced_refs[name];
+            align_first(t, r, Alignment::Origin, None)
+                .with_context(|| format!("aligning {name}'s origin"))?;
+        }
+    }
+    Ok(())
+}
+
+/// `--transform_left|right FILE` (`--invert_transform`, `--propagate_transform`) on the
+/// trajectories (not the reference).
+fn transform(bundle: &mut Bundle, path: &Path, options: &Options, console: &Console) -> Result<()> {
+    let mut transform = load_transform(path)?;
+    if options.invert_transform {
+        transform = transform.inverse();
+    }
+    let right = options.transform_right.is_some();
+    console.debug(SEP)?;
+    console.debug(&format!(
+        "Applying a {}-multiplicative transformation:\n{transform}",
+        if right { "right" } else { "left" }
+    ))?;
+    for (_, t) in &mut bundle.trajectories {
+        apply_transform(t, transform, right, options.propagate_transform)?;
+    }
+    Ok(())
+}
+
+/// `--project_to_plane` on every trajectory and synchronised reference.
+fn project(bundle: &mut Bundle, plane: PlaneArg, console: &Console) -> Result<()> {
+    console.debug(SEP)?;
+    console.debug(&format!(
+        "Projecting trajectories to {} plane.",
+        plane.name()
+    ))?;
+    each(bundle, &mut |t| {
+        t.project(plane.plane());
+        Ok(())
+    })?;
+    for r in bundle.synced_refs.values_mut() {
+        r.project(plane.plane());
     }
     Ok(())
 }
@@ -550,9 +688,9 @@ fn apply_transform(t: &mut Trajectory, m: DMat4, right: bool, propagate: bool) -
     Ok(())
 }
 
-/// evo's compact name: the file stem unless --show_full_names.
-fn compact(name: &str, options: &Options) -> String {
-    if options.show_full_names {
+/// evo's compact name: the file stem unless --show_full_names (a bag's topic stays whole).
+fn compact(name: &str, options: &Options, from_bag: bool) -> String {
+    if options.show_full_names || from_bag {
         name.to_owned()
     } else {
         Path::new(name)
@@ -565,6 +703,8 @@ fn compact(name: &str, options: &Options) -> String {
 fn print_traj_info(
     name: &str,
     t: &Trajectory,
+    unit_quaternions: bool,
+    frame_id: Option<&str>,
     options: &Options,
     kind: Kind,
     console: &Console,
@@ -576,7 +716,8 @@ fn print_traj_info(
     if !(console.is_verbose() || options.full_check) {
         let mut line = format!("{} poses, {:.3}m path length", t.len(), t.path_length());
         if timed {
-            let duration = seconds(t.stamps[t.len() - 1]) - seconds(t.stamps[0]);
+            let duration =
+                t.time_unit.seconds(t.stamps[t.len() - 1]) - t.time_unit.seconds(t.stamps[0]);
             line += &format!(", {duration:.3}s duration");
         }
         return console.info(&format!("infos:\t{line}"));
@@ -598,17 +739,31 @@ fn print_traj_info(
     ];
     if timed {
         let (first, last) = (t.stamps[0], t.stamps[t.len() - 1]);
-        infos.push(("duration (s)".into(), repr(seconds(last) - seconds(first))));
-        infos.push(("t_start (s)".into(), repr(seconds(first))));
-        infos.push(("t_end (s)".into(), repr(seconds(last))));
+        infos.push((
+            "duration (s)".into(),
+            repr(t.time_unit.seconds(last) - t.time_unit.seconds(first)),
+        ));
+        infos.push(("t_start (s)".into(), repr(t.time_unit.seconds(first))));
+        infos.push(("t_end (s)".into(), repr(t.time_unit.seconds(last))));
     }
     infos.sort();
     console.info(&dict("infos", &infos))?;
+    if let Some(frame) = frame_id {
+        console.info(&dict("meta", &[("frame_id".to_owned(), frame.to_owned())]))?;
+    }
     if options.full_check {
         let mut checks = vec![
             ("array shapes".to_owned(), "ok".to_owned()),
             ("SE(3) conform".to_owned(), "yes".to_owned()),
-            ("quaternions".to_owned(), "ok".to_owned()),
+            (
+                "quaternions".to_owned(),
+                if unit_quaternions {
+                    "ok"
+                } else {
+                    "invalid (must be unit quaternions)"
+                }
+                .to_owned(),
+            ),
         ];
         if timed {
             checks.push(("nr. of stamps".into(), "ok".into()));
@@ -658,12 +813,12 @@ fn statistics(t: &Trajectory, timed: bool) -> Result<Vec<(String, f64)>> {
     let mut speeds = Vec::with_capacity(t.len() - 1);
     let mut steps = Vec::with_capacity(t.len() - 1);
     for i in 0..t.len() - 1 {
-        let dt = seconds(t.stamps[i + 1]) - seconds(t.stamps[i]);
+        let dt = t.time_unit.seconds(t.stamps[i + 1]) - t.time_unit.seconds(t.stamps[i]);
         if dt <= 0.0 {
             bail!(
                 "bad timestamps: {} & {}",
-                crate::pyfmt::repr(seconds(t.stamps[i])),
-                crate::pyfmt::repr(seconds(t.stamps[i + 1]))
+                crate::pyfmt::repr(t.time_unit.seconds(t.stamps[i])),
+                crate::pyfmt::repr(t.time_unit.seconds(t.stamps[i + 1]))
             );
         }
         speeds.push((t.positions[i + 1] - t.positions[i]).length() / dt);
@@ -687,13 +842,35 @@ fn statistics(t: &Trajectory, timed: bool) -> Result<Vec<(String, f64)>> {
 }
 
 fn print_infos(bundle: &Bundle, options: &Options, kind: Kind, console: &Console) -> Result<()> {
-    for (name, t) in &bundle.trajectories {
-        print_traj_info(&compact(name, options), t, options, kind, console)?;
-    }
-    if let Some((name, t)) = &bundle.reference {
-        print_traj_info(&compact(name, options), t, options, kind, console)?;
+    let trajectories = bundle.trajectories.iter().map(|(n, t)| (n, t, false));
+    let reference = bundle.reference.iter().map(|(n, t)| (n, t, true));
+    for (name, t, is_reference) in trajectories.chain(reference) {
+        // Transformed poses (not the reference) have quaternions re-derived from their
+        // matrices (unit norm).
+        let unit =
+            !bundle.off_unit.contains(name) || (!is_reference && rederives_quaternions(options));
+        print_traj_info(
+            &compact(name, options, bundle.from_bag),
+            t,
+            unit,
+            bundle.frames.get(name).map(String::as_str),
+            options,
+            kind,
+            console,
+        )?;
     }
     Ok(())
+}
+
+/// Whether evo re-derives the (non-reference) trajectories' quaternions from transformed
+/// pose matrices: any alignment, transformation or projection.
+fn rederives_quaternions(options: &Options) -> bool {
+    options.align
+        || options.correct_scale
+        || options.align_origin
+        || options.transform_left.is_some()
+        || options.transform_right.is_some()
+        || options.project_to_plane.is_some()
 }
 
 /// The file stem evo exports a trajectory under.
@@ -706,12 +883,7 @@ fn file_stem(name: &str) -> String {
 fn export(bundle: &Bundle, options: &Options, kind: Kind, console: &Console) -> Result<()> {
     // evo re-derives quaternions from the pose matrices once it has transformed the poses,
     // with w ≥ 0; sitar writes the same sign.
-    let transformed = options.align
-        || options.correct_scale
-        || options.align_origin
-        || options.transform_left.is_some()
-        || options.transform_right.is_some()
-        || options.project_to_plane.is_some();
+    let transformed = rederives_quaternions(options);
     let canonical = |name: &String, t: &Trajectory| -> Trajectory {
         let mut t = t.clone();
         let is_reference = bundle.reference.as_ref().is_some_and(|(r, _)| r == name);
@@ -790,9 +962,12 @@ fn stats_table(bundle: &Bundle, kind: Kind) -> Result<String> {
         ];
         if timed {
             let (first, last) = (t.stamps[0], t.stamps[t.len() - 1]);
-            rows.push(("duration (s)".into(), seconds(last) - seconds(first)));
-            rows.push(("t_start (s)".into(), seconds(first)));
-            rows.push(("t_end (s)".into(), seconds(last)));
+            rows.push((
+                "duration (s)".into(),
+                t.time_unit.seconds(last) - t.time_unit.seconds(first),
+            ));
+            rows.push(("t_start (s)".into(), t.time_unit.seconds(first)));
+            rows.push(("t_end (s)".into(), t.time_unit.seconds(last)));
         }
         rows.extend(statistics(t, timed).unwrap_or_default());
         columns.push((name.clone(), rows));
@@ -821,6 +996,24 @@ fn stats_table(bundle: &Bundle, kind: Kind) -> Result<String> {
     Ok(out)
 }
 
+/// evo's speeds plot of `t`: the speed between each pose and the one before, at the newer
+/// pose's `x`; steps whose stamps do not increase are left out and counted.
+fn speeds(t: &Trajectory, x: impl Fn(usize) -> f64) -> (Vec<(f64, f64)>, usize) {
+    let mut skipped = 0;
+    let points = (1..t.len())
+        .filter_map(|i| {
+            let dt = t.time_unit.seconds(t.stamps[i]) - t.time_unit.seconds(t.stamps[i - 1]);
+            if dt > 0.0 {
+                Some((x(i), (t.positions[i] - t.positions[i - 1]).length() / dt))
+            } else {
+                skipped += 1;
+                None
+            }
+        })
+        .collect();
+    (points, skipped)
+}
+
 /// evo_traj's figures: trajectories, xyz, rpy and (with stamps) speeds.
 fn plot(bundle: &Bundle, options: &Options, kind: Kind, console: &Console) -> Result<()> {
     let timed = kind != Kind::Kitti;
@@ -835,18 +1028,28 @@ fn plot(bundle: &Bundle, options: &Options, kind: Kind, console: &Console) -> Re
     };
     let x = |t: &Trajectory, i: usize| -> f64 {
         if timed {
-            seconds(t.stamps[i]) - seconds(start.unwrap_or(0))
+            t.time_unit.seconds(t.stamps[i]) - t.time_unit.seconds(start.unwrap_or(0))
         } else {
             i as f64
         }
     };
     let mut all: Vec<(String, &Trajectory, RGBColor3, bool)> = Vec::new();
     if let Some((name, r)) = &bundle.reference {
-        all.push((compact(name, options), r, RGBColor3(0x44, 0x44, 0x44), true));
+        all.push((
+            compact(name, options, bundle.from_bag),
+            r,
+            RGBColor3(0x44, 0x44, 0x44),
+            true,
+        ));
     }
     for (k, (name, t)) in bundle.trajectories.iter().enumerate() {
         let c = PALETTE[k % PALETTE.len()];
-        all.push((compact(name, options), t, RGBColor3(c.0, c.1, c.2), false));
+        all.push((
+            compact(name, options, bundle.from_bag),
+            t,
+            RGBColor3(c.0, c.1, c.2),
+            false,
+        ));
     }
     let colour = |c: &RGBColor3| plotters::style::RGBColor(c.0, c.1, c.2);
     let trajectories = Drawing::Trajectories {
@@ -897,19 +1100,25 @@ fn plot(bundle: &Bundle, options: &Options, kind: Kind, console: &Console) -> Re
             panel("yaw (deg)", &|t, i| euler(t, i, 2)),
         ],
     };
-    let speed = |t: &Trajectory, i: usize| {
-        let j = i.min(t.len().saturating_sub(2));
-        let dt = seconds(t.stamps[j + 1]) - seconds(t.stamps[j]);
-        if dt > 0.0 {
-            (t.positions[j + 1] - t.positions[j]).length() / dt
-        } else {
-            f64::NAN
+    let mut speed_series = Vec::new();
+    for (name, t, c, dashed) in &all {
+        let (points, skipped) = speeds(t, |i| x(t, i));
+        if skipped > 0 {
+            console.warn(&format!(
+                "{name}: {skipped} zero or negative time step(s) left out of the speeds plot"
+            ));
         }
-    };
+        speed_series.push(Series {
+            name: name.clone(),
+            points,
+            colour: colour(c),
+            dashed: *dashed,
+        });
+    }
     let speeds = Drawing::Panels {
         title: "speeds".into(),
         x_label: x_label.into(),
-        panels: vec![panel("v (m/s)", &speed)],
+        panels: vec![("v (m/s)".to_owned(), speed_series)],
     };
     let mut pages = vec![
         ("trajectories", Page::Other(&trajectories)),
@@ -938,6 +1147,116 @@ struct RGBColor3(u8, u8, u8);
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn quiet() -> Console {
+        Console::new(&UsabilityArgs {
+            no_warnings: true,
+            silent: true,
+            ..Default::default()
+        })
+        .unwrap()
+    }
+
+    fn line(stamps: Vec<i64>, time_unit: TimeUnit) -> Trajectory {
+        let n = stamps.len();
+        Trajectory {
+            stamps,
+            positions: (0..n)
+                .map(|i| DVec3::new(i as f64, (i * i) as f64, 0.0))
+                .collect(),
+            orientations: vec![DQuat::IDENTITY; n],
+            time_unit,
+        }
+    }
+
+    fn bundle(trajectories: Vec<Trajectory>, reference: Option<Trajectory>) -> Bundle {
+        Bundle {
+            trajectories: trajectories
+                .into_iter()
+                .enumerate()
+                .map(|(i, t)| (format!("t{i}"), t))
+                .collect(),
+            reference: reference.map(|r| ("ref".to_owned(), r)),
+            synced_refs: BTreeMap::new(),
+            synced: false,
+            off_unit: Default::default(),
+            from_bag: false,
+            frames: BTreeMap::new(),
+        }
+    }
+
+    #[test]
+    fn speeds_skip_repeated_stamps() {
+        let s = TimeUnit::Seconds;
+        let t = line(vec![0, 1_000_000_000, 1_000_000_000, 3_000_000_000], s);
+        let (points, skipped) = speeds(&t, |i| i as f64);
+        assert_eq!(skipped, 1);
+        // (1,1)-(0,0) over 1 s; (3,9)-(2,4) over 2 s; the repeated stamp left out.
+        assert_eq!(points.len(), 2);
+        assert_eq!(points[0], (1.0, 2f64.sqrt()));
+        assert_eq!(points[1], (3.0, 26f64.sqrt() / 2.0));
+        assert!(points.iter().all(|p| p.1 >= 0.0));
+    }
+
+    #[test]
+    fn merge_and_time_offset_steps() {
+        let s = TimeUnit::Seconds;
+        let mut b = bundle(vec![line(vec![0, 20], s), line(vec![10], s)], None);
+        merge(&mut b, Kind::Tum).unwrap();
+        assert_eq!(b.trajectories.len(), 1);
+        assert_eq!(b.trajectories[0].1.stamps, [0, 10, 20]);
+        assert!(merge(&mut bundle(vec![], None), Kind::Tum).is_err());
+        assert!(merge(&mut bundle(vec![line(vec![0], s)], None), Kind::Kitti).is_err());
+        // Seconds: evo's float addition (1311868226.31095 + 0.5 rounds to a float 238 ns
+        // apart from its neighbours); nanoseconds: integers.
+        let stamp = 1_311_868_226_310_950_000;
+        let mut b = bundle(vec![line(vec![stamp], s)], Some(line(vec![stamp], s)));
+        add_time_offset(&mut b, Kind::Tum, 0.5, &quiet()).unwrap();
+        let want = s.seconds(stamp) + 0.5;
+        assert_eq!(s.seconds(b.trajectories[0].1.stamps[0]), want);
+        assert_eq!(
+            b.reference.as_ref().unwrap().1.stamps,
+            [stamp],
+            "reference kept"
+        );
+        let ns = TimeUnit::Nanoseconds;
+        let mut b = bundle(vec![line(vec![stamp], ns)], None);
+        add_time_offset(&mut b, Kind::Tum, 0.5, &quiet()).unwrap();
+        assert_eq!(b.trajectories[0].1.stamps, [stamp + 500_000_000]);
+    }
+
+    #[test]
+    fn sync_align_and_project_steps() {
+        let s = TimeUnit::Seconds;
+        let reference = line(vec![0, 1_000_000_000, 2_000_000_000], s);
+        let mut moved = line(vec![0, 1_000_000_000, 2_000_000_000, 9_000_000_000], s);
+        moved.transform(DQuat::IDENTITY, DVec3::Y, 1.0);
+        let mut b = bundle(vec![moved], Some(reference));
+        let console = quiet();
+        #[derive(clap::Parser)]
+        struct Cli {
+            #[command(flatten)]
+            args: Args,
+        }
+        let cli = <Cli as clap::Parser>::parse_from(["traj", "tum", "x", "--ref", "y", "-a"]);
+        let Format::Tum { options, .. } = &cli.args.format else {
+            panic!("parsed as tum")
+        };
+        sync_with_reference(&mut b, Kind::Tum, options, &console).unwrap();
+        assert_eq!(
+            b.trajectories[0].1.len(),
+            3,
+            "the unmatched pose is dropped"
+        );
+        align_to_reference(&mut b, options, &console).unwrap();
+        let aligned = &b.trajectories[0].1;
+        assert!(aligned.positions[2].abs_diff_eq(DVec3::new(2.0, 4.0, 0.0), 1e-9));
+        project(&mut b, PlaneArg::Xz, &console).unwrap();
+        assert!(b.trajectories[0].1.positions.iter().all(|p| p.y == 0.0));
+        assert!(
+            sync_with_reference(&mut bundle(vec![], None), Kind::Tum, options, &console).is_err()
+        );
+    }
 
     #[test]
     fn transforms_left_right_and_propagated() {

@@ -13,8 +13,17 @@ fn golden() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/golden/evo")
 }
 
+/// evo's test data (TUM RGB-D, EuRoC) and evo's outputs on it.
+fn golden_real() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/golden/evo_real")
+}
+
 fn cases() -> Vec<Value> {
-    let text = std::fs::read_to_string(golden().join("expected.json")).unwrap();
+    cases_in(&golden())
+}
+
+fn cases_in(dir: &Path) -> Vec<Value> {
+    let text = std::fs::read_to_string(dir.join("expected.json")).unwrap();
     serde_json::from_str::<Value>(&text)
         .unwrap()
         .as_array()
@@ -193,6 +202,30 @@ fn check_archive(name: &str, path: &Path, want: &Value) {
             close(name, &format!("{array}[{k}]"), *g, *w, tolerance);
         }
     }
+    // Arrays recorded as the bits of evo's float64s: equal to the last bit.
+    for (array, bits) in want
+        .get("bits")
+        .and_then(Value::as_object)
+        .into_iter()
+        .flatten()
+    {
+        let got: Vec<u64> = npy_values(entry(&format!("{array}.npy")))
+            .iter()
+            .map(|v| v.to_bits())
+            .collect();
+        let want: Vec<u64> = bits
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|b| b.as_u64().unwrap())
+            .collect();
+        assert_eq!(got.len(), want.len(), "{name}: {array} length");
+        let differing = got.iter().zip(&want).filter(|(g, w)| g != w).count();
+        assert_eq!(
+            differing, 0,
+            "{name}: {differing} values of {array} differ from evo's bits"
+        );
+    }
 }
 
 /// Files saved by evo (`%.18e` numbers) and by sitar agree word by word, numbers to 1e-9.
@@ -222,6 +255,16 @@ fn sitar(args: &[String], dir: &Path) -> std::process::Output {
         .expect("run sitar")
 }
 
+/// Runs sitar in `dir`, asserting that it succeeds (or, `succeed` false, fails); its stdout
+/// and stderr.
+fn sitar_expect(dir: &Path, args: &[&str], succeed: bool) -> (String, String) {
+    let args: Vec<String> = args.iter().map(|a| a.to_string()).collect();
+    let out = sitar(&args, dir);
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert_eq!(out.status.success(), succeed, "{args:?}: {stderr}");
+    (String::from_utf8(out.stdout).unwrap(), stderr)
+}
+
 #[test]
 fn sitar_prints_saves_and_warns_as_evo_does() {
     let cases = cases();
@@ -237,13 +280,296 @@ fn sitar_prints_saves_and_warns_as_evo_does() {
     let ours = tempfile::tempdir().unwrap();
     for case in &cases {
         let name = case["name"].as_str().unwrap();
-        let tool = case["tool"].as_str().unwrap();
-        let source = if tool == "res" {
+        let source = if case["tool"] == "res" {
             evo_archives.clone()
         } else {
             golden().join("data")
         };
-        let dir = workdir(&source);
+        let dir = run_case(case, &source);
+        if case.get("archive").is_some() {
+            std::fs::copy(
+                dir.path().join("result.zip"),
+                ours.path().join(format!("{name}.zip")),
+            )
+            .unwrap();
+        }
+    }
+    evo_res_reads_sitar_archives(ours.path(), &evo_archives);
+}
+
+/// evo's own sample files (TUM fr1/xyz and fr2/desk, EuRoC V1_02): association decided
+/// as evo's float64 seconds decide it (the fr2/desk tie at 1311868226.310950), every
+/// statistic and error to 1e-9, `timestamps` and `seconds_from_start` equal to the bit.
+#[test]
+fn real_files_to_the_last_digit() {
+    let cases = cases_in(&golden_real());
+    assert!(cases.len() >= 10);
+    for case in &cases {
+        run_case(case, &golden_real().join("data"));
+    }
+}
+
+/// SiTAR's extras on the same files: `--format csv|json` and the older `sitar rpe REF EST`
+/// form print every error evo's archive holds (1e-9), so the association behind them is
+/// evo's too.
+#[test]
+fn csv_json_and_the_older_form_associate_as_evo() {
+    let cases = cases_in(&golden_real());
+    let errors_of = |name: &str| -> Vec<f64> {
+        let case = cases.iter().find(|c| c["name"] == name).unwrap();
+        let values = case["archive"]["arrays"]["error_array"].as_array().unwrap();
+        values.iter().map(|v| v.as_f64().unwrap()).collect()
+    };
+    let dir = workdir(&golden_real().join("data"));
+    let (gt, est) = ("fr2_desk_groundtruth.txt", "fr2_desk_ORB.txt");
+    let pairs = ["-d", "10", "--all_pairs", "-a"];
+    let runs: [(&str, Vec<&str>, &str); 3] = [
+        (
+            "ape_fr2_desk",
+            vec!["ape", "tum", gt, est, "-a", "--format", "csv"],
+            "csv",
+        ),
+        (
+            "rpe_fr2_desk_all_pairs",
+            [&["rpe", "tum", gt, est][..], &pairs, &["--format", "csv"]].concat(),
+            "csv",
+        ),
+        (
+            "rpe_fr2_desk_all_pairs",
+            [&["rpe", gt, est][..], &pairs, &["--format", "json"]].concat(),
+            "json",
+        ),
+    ];
+    for (golden_case, args, format) in runs {
+        let (text, _) = sitar_expect(dir.path(), &args, true);
+        let got: Vec<f64> = if format == "csv" {
+            text.lines()
+                .skip(1)
+                .take_while(|l| !l.is_empty())
+                .map(|l| l.rsplit(',').next().unwrap().parse().unwrap())
+                .collect()
+        } else {
+            let json: Value = serde_json::from_str(&text).unwrap();
+            json["errors"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|e| e["error"].as_f64().unwrap())
+                .collect()
+        };
+        let want = errors_of(golden_case);
+        assert_eq!(got.len(), want.len(), "{args:?}: number of errors");
+        for (k, (g, w)) in got.iter().zip(&want).enumerate() {
+            close(golden_case, &format!("{format} error {k}"), *g, *w, 1e-9);
+        }
+    }
+}
+
+/// Usage hints name what the usage shows (`--all_pairs`, not its alias), and a file given
+/// in the wrong format gets a hint naming the format it reads as.
+#[test]
+fn hints_name_the_right_spelling_and_format() {
+    let dir = workdir(&golden_real().join("data"));
+    let run = |args: &[&str]| sitar_expect(dir.path(), args, false).1;
+    let (gt, est) = ("fr2_desk_groundtruth.txt", "fr2_desk_ORB.txt");
+    let usage = run(&["rpe", "tum", gt, est, "--all-pair"]);
+    assert!(usage.contains("'--all_pairs'"), "{usage}");
+    assert!(!usage.contains("--all-pairs"), "{usage}");
+    for (args, hint) in [
+        (
+            vec!["ape", "euroc", gt, est],
+            "use `tum` in place of `euroc`",
+        ),
+        (
+            vec!["ape", "kitti", gt, est],
+            "use `tum` in place of `kitti`",
+        ),
+        (
+            vec!["rpe", "tum", "V102_groundtruth.csv", "V102.txt"],
+            "use `euroc` in place of `tum`",
+        ),
+        (vec!["traj", "euroc", est], "use `tum` in place of `euroc`"),
+    ] {
+        let stderr = run(&args);
+        assert!(stderr.starts_with("sitar: error: "), "{stderr}");
+        assert!(stderr.contains(hint), "{args:?}: {stderr}");
+    }
+}
+
+/// What evo's figures show, in sitar's SVGs of the real files: x/y/z axis labels on the 3-D
+/// map and trajectory plots, an offset time axis, the colour bar's label, the statistics'
+/// names beside evo_res's bars, its histogram, box and violin figures, and a warning for the
+/// repeated stamp left out of the speeds.
+#[test]
+fn figures_carry_evo_labels() {
+    let dir = workdir(&golden_real().join("data"));
+    let run = |args: &[&str]| sitar_expect(dir.path(), args, true).1;
+    let texts = |file: &str| -> Vec<String> {
+        let svg = std::fs::read_to_string(dir.path().join(file)).unwrap();
+        svg.split("<text")
+            .skip(1)
+            .filter_map(|t| {
+                Some(
+                    t.split_once('>')?
+                        .1
+                        .split_once("</text>")?
+                        .0
+                        .trim()
+                        .to_owned(),
+                )
+            })
+            .collect()
+    };
+    let has = |file: &str, want: &[&str]| {
+        let got = texts(file);
+        for w in want {
+            assert!(
+                got.iter().any(|t| t == w),
+                "{file}: no text '{w}' among {got:?}"
+            );
+        }
+    };
+    let (gt, est) = (
+        "freiburg1_xyz-groundtruth.txt",
+        "freiburg1_xyz-rgbdslam.txt",
+    );
+    run(&[
+        "ape",
+        "tum",
+        gt,
+        est,
+        "-a",
+        "--save_plot",
+        "ape.svg",
+        "--save_results",
+        "a.zip",
+    ]);
+    has("ape_map.svg", &["x (m)", "y (m)", "z (m)", "APE (m)"]);
+    has("ape_raw.svg", &["rmse", "median", "mean", "std"]);
+    run(&[
+        "ape",
+        "tum",
+        "fr2_desk_groundtruth.txt",
+        "fr2_desk_ORB.txt",
+        "-a",
+        "--save_results",
+        "b.zip",
+    ]);
+    run(&["traj", "tum", est, "--ref", gt, "--save_plot", "t.svg"]);
+    has("t_trajectories.svg", &["x (m)", "y (m)", "z (m)"]);
+    has("t_xyz.svg", &["t (s) + 1305031000", "x (m)", "100", "125"]);
+    run(&[
+        "res",
+        "a.zip",
+        "b.zip",
+        "--use_filenames",
+        "--save_plot",
+        "r.svg",
+    ]);
+    has(
+        "r_stats.svg",
+        &["rmse", "mean", "median", "std", "min", "max"],
+    );
+    has(
+        "r_histogram.svg",
+        &["estimate = a.zip", "estimate = b.zip", "Density", "APE (m)"],
+    );
+    has("r_box_plot.svg", &["a.zip", "b.zip", "estimate", "APE (m)"]);
+    has(
+        "r_violin_histogram.svg",
+        &["a.zip", "b.zip", "estimate", "APE (m)"],
+    );
+    let warned = run(&[
+        "traj",
+        "tum",
+        "fr2_desk_groundtruth.txt",
+        "--save_plot",
+        "s.svg",
+    ]);
+    assert!(
+        warned.contains("1 zero or negative time step(s) left out of the speeds plot"),
+        "{warned}"
+    );
+}
+
+/// ROS 2 bags made by rosbags from the fr1/xyz trajectories (both storages, every pose
+/// message type evo reads): the printed text, and the archive's statistics and errors to
+/// 1e-9, against evo_ape/evo_rpe/evo_traj `bag2` (topics, `--all_topics`) on the same bags.
+#[test]
+fn ros2_bags_as_evo_reads_them() {
+    let golden = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/golden/evo_bags");
+    let cases = cases_in(&golden);
+    assert!(cases.len() >= 5);
+    let dir = tempfile::tempdir().unwrap();
+    for bag in ["fr1_mcap", "fr1_db3"] {
+        std::fs::create_dir(dir.path().join(bag)).unwrap();
+        for entry in std::fs::read_dir(golden.join(bag)).unwrap() {
+            let path = entry.unwrap().path();
+            std::fs::copy(&path, dir.path().join(bag).join(path.file_name().unwrap())).unwrap();
+        }
+    }
+    for case in &cases {
+        let name = case["name"].as_str().unwrap();
+        let mut args = vec![case["tool"].as_str().unwrap().to_owned()];
+        args.extend(strings(&case["args"]));
+        let archived = case.get("stats").is_some();
+        if archived {
+            args.extend(["--save_results".into(), format!("{name}.zip")]);
+        }
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let (stdout, stderr) = sitar_expect(dir.path(), &args, true);
+        let (want, warnings) = evo_lines(case["stdout"].as_str().unwrap());
+        assert_text(name, &stdout, &want, 1e-6);
+        for w in warnings {
+            assert!(stderr.contains(&w), "{name}: evo warned '{w}': {stderr}");
+        }
+        if !archived {
+            continue;
+        }
+        let entries = zip_entries(&dir.path().join(format!("{name}.zip")));
+        let entry = |n: &str| &entries.iter().find(|(k, _)| k == n).unwrap().1;
+        let stats: Value = serde_json::from_slice(entry("stats.json")).unwrap();
+        for (k, v) in case["stats"].as_object().unwrap() {
+            close(
+                name,
+                k,
+                stats[k].as_f64().unwrap(),
+                v.as_f64().unwrap(),
+                1e-9,
+            );
+        }
+        let errors = npy_values(entry("error_array.npy"));
+        let want = case["errors"].as_array().unwrap();
+        assert_eq!(errors.len(), want.len(), "{name}: errors");
+        for (k, (g, w)) in errors.iter().zip(want).enumerate() {
+            close(name, &format!("error {k}"), *g, w.as_f64().unwrap(), 1e-9);
+        }
+    }
+    // What evo does not read is named with its topic and type.
+    let (_, stderr) = sitar_expect(
+        dir.path(),
+        &["ape", "bag2", "fr1_mcap", "/ground_truth", "/cmd_vel"],
+        false,
+    );
+    assert!(
+        stderr.contains("/cmd_vel") && stderr.contains("geometry_msgs/msg/Twist"),
+        "{stderr}"
+    );
+    let (_, stderr) = sitar_expect(
+        dir.path(),
+        &["rpe", "bag2", "fr1_db3", "/ground_truth", "/none"],
+        false,
+    );
+    assert!(stderr.contains("no messages for topic '/none'"), "{stderr}");
+}
+
+/// Runs one golden case in a copy of `source` and checks stdout, warnings, the archive
+/// and the saved files against evo's; returns the directory it ran in.
+fn run_case(case: &Value, source: &Path) -> tempfile::TempDir {
+    {
+        let name = case["name"].as_str().unwrap();
+        let tool = case["tool"].as_str().unwrap();
+        let dir = workdir(source);
         let mut args = vec![tool.to_owned()];
         args.extend(strings(&case["args"]));
         if case.get("archive").is_some() {
@@ -266,15 +592,10 @@ fn sitar_prints_saves_and_warns_as_evo_does() {
         }
         if let Some(archive) = case.get("archive") {
             check_archive(name, &dir.path().join("result.zip"), archive);
-            std::fs::copy(
-                dir.path().join("result.zip"),
-                ours.path().join(format!("{name}.zip")),
-            )
-            .unwrap();
         }
         check_saved(name, dir.path(), case["saved"].as_object().unwrap());
+        dir
     }
-    evo_res_reads_sitar_archives(ours.path(), &evo_archives);
 }
 
 /// evo's `evo_res` reads every archive sitar wrote and prints the statistics it prints for
@@ -324,8 +645,11 @@ fn bag_formats_and_viewers_are_refused_clearly() {
     let dir = workdir(&golden().join("data"));
     for (args, message) in [
         (vec!["ape", "bag", "x.bag", "/a", "/b"], "not supported"),
-        (vec!["rpe", "bag2", "x", "/a", "/b"], "not supported"),
-        (vec!["rpe", "mcap", "x", "/a", "/b"], "not supported"),
+        (vec!["rpe", "bag2", "x", "/a", "/b"], "x: cannot read"),
+        (
+            vec!["rpe", "mcap", "gt.txt", "/a", "/b"],
+            "MCAP: Bad magic number",
+        ),
         (vec!["traj", "bag", "x.bag", "/a"], "not supported"),
         (
             vec!["ape", "tum", "gt.txt", "est_a.txt", "--rerun"],

@@ -99,6 +99,9 @@ pub struct ReadReport {
     /// Quaternions whose norm was further than [`crate::QUATERNION_NORM_TOLERANCE`] from 1
     /// and that were normalised.
     pub normalised_quaternions: usize,
+    /// Quaternions whose norm differs from 1 by more than numpy's `allclose` allows
+    /// (1e-5 + 1e-8): evo's `check` calls such a trajectory's quaternions invalid.
+    pub quaternions_off_unit: usize,
     /// The text started with a UTF-8 byte-order mark (skipped).
     pub byte_order_mark: bool,
 }
@@ -492,11 +495,13 @@ fn parse_stamp(token: &str, tokens: &Tokens<'_>) -> Result<Stamp, Error> {
         Ok(_) => return Err(fail(format!("timestamp '{token}' is not finite"))),
         Err(_) => return Err(fail(format!("timestamp '{token}' is not a number"))),
     };
-    let ns = (seconds * 1e9).round();
-    if ns.abs() >= 9.2e18 {
+    if seconds.abs() >= 9.2e9 {
         return Err(fail(format!("timestamp '{token}' out of range")));
     }
-    Ok(Stamp::Seconds(ns as i64))
+    // The float's exact value to the nanosecond, so that evo's float (what Python parses)
+    // comes back from `TimeUnit::seconds` unchanged (EuRoC-derived TUM files write stamps
+    // as `1.403715529112143517e+09`).
+    Ok(Stamp::Seconds(crate::sync::seconds_to_ns(seconds)))
 }
 
 /// Whitespace tokens of one line, remembering where each starts for error columns.
@@ -641,6 +646,9 @@ impl Rows {
 
     fn push(&mut self, stamp: Stamp, p: DVec3, q: DQuat, tokens: &Tokens<'_>) -> Result<(), Error> {
         let norm = q.length();
+        if (norm - 1.0).abs() > 1e-8 + 1e-5 {
+            self.report.quaternions_off_unit += 1;
+        }
         let tolerance = crate::trajectory::QUATERNION_NORM_TOLERANCE;
         if (norm - 1.0).abs() > tolerance {
             if !(self.options.normalise_quaternions && norm > f64::EPSILON && norm.is_finite()) {
@@ -898,6 +906,7 @@ mod tests {
         let (t, report) = evo("1 0 0 0 0 0 0 1.01\n2 0 0 0 0.1 0 0 0.995\n");
         assert!((t.orientations[0].length() - 1.0).abs() < 1e-15);
         assert_eq!(report.normalised_quaternions, 1);
+        assert_eq!(report.quaternions_off_unit, 2);
         assert!(parse_tum_with("1 0 0 0 0 0 0 0\n", "x", &ReadOptions::EVO).is_err());
     }
 

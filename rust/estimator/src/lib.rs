@@ -160,6 +160,7 @@ mod incremental;
 mod metrics;
 mod pairwise;
 mod ranking;
+mod rosbag;
 mod sorted_runs;
 mod statistics;
 mod sync;
@@ -186,12 +187,19 @@ pub use metrics::{
 pub use ranking::{
     MIN_FIT_ERROR_M, SweepPoint, ThresholdSweep, fit_scale, median_ratio, spearman, threshold_sweep,
 };
+pub use rosbag::{
+    BagTrajectory, PoseMessage, StampedPoseValue, TopicMessages, decode_pose, read_mcap,
+    topic_trajectory,
+};
 /// The class rule and its defaults, shared with the phone and the backend.
 pub use sitar_core::{DEFAULT_SETTING, ErrorClass, Thresholds};
 pub use statistics::{
     Setting, Statistics, interquartile_range, mean, mean_inliers, median, quantile, trim_mean,
 };
-pub use sync::{associate, associate_trajectories, matching_time_indices, seconds_to_ns};
+pub use sync::{
+    associate, associate_trajectories, match_trajectories, matching_time_indices,
+    matching_time_indices_seconds, seconds_to_ns,
+};
 pub use trajectory::{
     Plane, QUATERNION_NORM_TOLERANCE, TimeUnit, Trajectory, euler_sxyz, pairwise_sum,
 };

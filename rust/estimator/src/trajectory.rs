@@ -29,6 +29,48 @@ impl TimeUnit {
             }
         }
     }
+
+    /// A stamp as the float64 seconds evo holds. Read as seconds: the float nearest the
+    /// decimal, which is what Python's `float()` makes of a TUM stamp written with up to 9
+    /// decimals. Read as nanoseconds: evo's `float(ns) / 1e9` (its EuRoC reader), rounded twice
+    /// above 2⁵³ ns as there.
+    pub fn seconds(self, t_ns: i64) -> f64 {
+        const EXACT: u64 = 1 << 53;
+        match self {
+            TimeUnit::Seconds if t_ns.unsigned_abs() >= EXACT => nearest_quotient(t_ns),
+            // Below 2⁵³ both operands are exact, so the one division rounds correctly.
+            TimeUnit::Seconds | TimeUnit::Nanoseconds => t_ns as f64 / 1e9,
+        }
+    }
+}
+
+/// The float nearest `t_ns / 10⁹` (ties to even) for |t_ns| ≥ 2⁵³, where `t_ns as f64` would
+/// round first: a close guess, then the nearest of it and its two neighbours, compared
+/// exactly in integers (every candidate is `m·2^e` with e < 0 here).
+fn nearest_quotient(t_ns: i64) -> f64 {
+    let abs = t_ns.unsigned_abs();
+    let (whole, fraction) = (abs / 1_000_000_000, abs % 1_000_000_000);
+    let guess = whole as f64 + fraction as f64 / 1e9;
+    let parts = |c: f64| {
+        let bits = c.to_bits();
+        let mantissa = (bits & ((1 << 52) - 1)) | (1 << 52);
+        (i128::from(mantissa), ((bits >> 52) & 0x7ff) as i32 - 1075)
+    };
+    let below = f64::from_bits(guess.to_bits() - 1);
+    let lowest_exponent = parts(below).1;
+    let target = i128::from(abs) << -lowest_exponent;
+    let error = |c: f64| {
+        let (m, e) = parts(c);
+        (((m * 1_000_000_000) << (e - lowest_exponent)) - target).abs()
+    };
+    let mut best = below;
+    for candidate in [guess, f64::from_bits(guess.to_bits() + 1)] {
+        let (d, b) = (error(candidate), error(best));
+        if d < b || (d == b && parts(candidate).0 & 1 == 0) {
+            best = candidate;
+        }
+    }
+    if t_ns < 0 { -best } else { best }
 }
 
 /// Stamped poses (world-from-camera). Stamps are nanoseconds, orientations unit quaternions.
@@ -187,6 +229,14 @@ impl Trajectory {
         out
     }
 
+    /// The stamps as evo's float64 seconds (see [`TimeUnit::seconds`]).
+    pub fn seconds(&self) -> Vec<f64> {
+        self.stamps
+            .iter()
+            .map(|&t| self.time_unit.seconds(t))
+            .collect()
+    }
+
     /// True when no stamp is below the one before it (repeats allowed).
     pub fn is_sorted(&self) -> bool {
         self.stamps.windows(2).all(|w| w[0] <= w[1])
@@ -253,25 +303,26 @@ impl Trajectory {
     }
 
     /// Keeps the poses with `start ≤ stamp ≤ end` (ns; `None`: the first or last stamp), as
-    /// evo's `reduce_to_time_range`.
+    /// evo's `reduce_to_time_range`, on the float64 seconds evo holds
+    /// ([`Trajectory::seconds`]): keeps the poses with `start ≤ stamp ≤ end` (seconds;
+    /// `None`: the first or last stamp).
     pub fn reduce_to_time_range(
         &mut self,
-        start: Option<i64>,
-        end: Option<i64>,
+        start: Option<f64>,
+        end: Option<f64>,
     ) -> Result<(), Error> {
-        let (Some(&first), Some(&last)) = (self.stamps.first(), self.stamps.last()) else {
+        let seconds = self.seconds();
+        let (Some(&first), Some(&last)) = (seconds.first(), seconds.last()) else {
             return Err(Error::InvalidTrajectory("trajectory is empty".into()));
         };
         let (start, end) = (start.unwrap_or(first), end.unwrap_or(last));
         if start > end {
             return Err(Error::InvalidArgument(format!(
-                "start time is greater than end time ({} > {} s)",
-                start as f64 * 1e-9,
-                end as f64 * 1e-9
+                "start time is greater than end time ({start} > {end} s)"
             )));
         }
         let ids: Vec<usize> = (0..self.len())
-            .filter(|&i| (start..=end).contains(&self.stamps[i]))
+            .filter(|&i| seconds[i] >= start && seconds[i] <= end)
             .collect();
         *self = self.reduce_to_ids(&ids);
         Ok(())
@@ -502,10 +553,9 @@ mod tests {
             [0.0, 4.0, 8.0]
         );
         let mut t = line(10);
-        t.reduce_to_time_range(Some(2_000_000_000), Some(4_500_000_000))
-            .unwrap();
+        t.reduce_to_time_range(Some(2.0), Some(4.5)).unwrap();
         assert_eq!(t.stamps, [2_000_000_000, 3_000_000_000, 4_000_000_000]);
-        assert!(line(3).reduce_to_time_range(Some(5), Some(4)).is_err());
+        assert!(line(3).reduce_to_time_range(Some(5.0), Some(4.0)).is_err());
         let mut a = line(3);
         a.stamps = vec![0, 20, 40];
         let mut b = line(2);
@@ -543,6 +593,38 @@ mod tests {
         assert!(
             (e[0] - 0.1).abs() < 1e-12 && (e[1] - 0.2).abs() < 1e-12 && (e[2] - 0.3).abs() < 1e-12
         );
+    }
+
+    #[test]
+    fn seconds_as_python_reads_them() {
+        // Python: float("1311868226.310950") == 1311868226.31095 (nearest float); the
+        // naive ns as f64 / 1e9 is one ulp off for this stamp.
+        let ns = 1_311_868_226_310_950_000;
+        let want: f64 = "1311868226.310950".parse().unwrap();
+        assert_eq!(TimeUnit::Seconds.seconds(ns), want);
+        assert_ne!(ns as f64 / 1e9, want);
+        // evo's EuRoC reader: float(ns) / 1e9, kept as it rounds.
+        assert_eq!(TimeUnit::Nanoseconds.seconds(ns), ns as f64 / 1e9);
+        assert_eq!(TimeUnit::Seconds.seconds(-1_500_000_000), -1.5);
+        assert_eq!(TimeUnit::Seconds.seconds(i64::MIN), i64::MIN as f64 / 1e9);
+        for ns in [1 << 53, (1 << 53) + 1, i64::MAX, -i64::MAX] {
+            let text = TimeUnit::Seconds.format_stamp(ns);
+            assert_eq!(
+                TimeUnit::Seconds.seconds(ns),
+                text.parse::<f64>().unwrap(),
+                "{ns}"
+            );
+        }
+    }
+
+    proptest::proptest! {
+        /// Seconds read with up to 9 decimals come back as the float Rust (and Python) parse
+        /// from the same decimal, over the whole range of i64 nanoseconds.
+        #[test]
+        fn seconds_equal_the_parsed_decimal(ns in proptest::num::i64::ANY) {
+            let text = TimeUnit::Seconds.format_stamp(ns);
+            proptest::prop_assert_eq!(TimeUnit::Seconds.seconds(ns), text.parse::<f64>().unwrap());
+        }
     }
 
     #[test]
