@@ -685,20 +685,12 @@ fn venue_anchor_cells_and_guide_through_the_c_abi() {
         ..Pose::default()
     };
     let mut guides = [Guide::default(); 2];
-    assert_eq!(
-        (a.guide)(
-            h,
-            &ahead,
-            60.0,
-            1080,
-            1920,
-            40.0,
-            guides.as_mut_ptr(),
-            2,
-            &mut len
-        ),
-        OK
-    );
+    // A 1080 × 1920 portrait screen with a 40 px margin, as in every call below.
+    let guide =
+        |camera: &Pose, vfov_deg: f64, out: *mut Guide, capacity: usize, len: &mut usize| {
+            (a.guide)(h, camera, vfov_deg, 1080, 1920, 40.0, out, capacity, len)
+        };
+    assert_eq!(guide(&ahead, 60.0, guides.as_mut_ptr(), 2, &mut len), OK);
     assert_eq!(len, 1);
     let g = guides[0];
     assert_eq!(g.on_screen, 1);
@@ -715,20 +707,7 @@ fn venue_anchor_cells_and_guide_through_the_c_abi() {
         qy: 1.0,
         ..Pose::default()
     };
-    assert_eq!(
-        (a.guide)(
-            h,
-            &behind,
-            60.0,
-            1080,
-            1920,
-            40.0,
-            guides.as_mut_ptr(),
-            2,
-            &mut len
-        ),
-        OK
-    );
+    assert_eq!(guide(&behind, 60.0, guides.as_mut_ptr(), 2, &mut len), OK);
     let g = guides[0];
     assert_eq!(g.on_screen, 0);
     assert!(g.x_px > 540.0 && g.angle_rad.abs() < 1e-12, "{g:?}");
@@ -738,45 +717,15 @@ fn venue_anchor_cells_and_guide_through_the_c_abi() {
         "on the ellipse: {g:?}"
     );
     assert_eq!(
-        (a.guide)(
-            h,
-            &ahead,
-            60.0,
-            1080,
-            1920,
-            40.0,
-            std::ptr::null_mut(),
-            2,
-            &mut len
-        ),
+        guide(&ahead, 60.0, std::ptr::null_mut(), 2, &mut len),
         ERR_NULL
     );
     assert_eq!(
-        (a.guide)(
-            h,
-            &ahead,
-            60.0,
-            1080,
-            1920,
-            40.0,
-            std::ptr::null_mut(),
-            0,
-            &mut len
-        ),
+        guide(&ahead, 60.0, std::ptr::null_mut(), 0, &mut len),
         ERR_BUFFER_TOO_SMALL
     );
     expect_err(
-        (a.guide)(
-            h,
-            &ahead,
-            190.0,
-            1080,
-            1920,
-            40.0,
-            guides.as_mut_ptr(),
-            2,
-            &mut len,
-        ),
+        guide(&ahead, 190.0, guides.as_mut_ptr(), 2, &mut len),
         ERR_INVALID_ARGUMENT,
         "vfov_deg",
     );
