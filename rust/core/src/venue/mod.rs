@@ -27,6 +27,8 @@ mod builder;
 mod contribution;
 mod map;
 #[cfg(test)]
+mod map_tests;
+#[cfg(test)]
 pub(crate) mod tests;
 mod trim_mean;
 
