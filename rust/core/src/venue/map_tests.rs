@@ -393,9 +393,11 @@ fn removing_every_session_empties_the_map() {
     );
     let c = Contribution::from_files(&files(&r, Convention::Unity, "s"), "a").unwrap();
     let mut b = MapBuilder::new(spec(Convention::Unity));
-    b.add(c.clone());
-    b.add(c);
+    b.add(&c);
+    b.add(&c);
     assert_eq!(b.len(), 1);
+    let spec = spec(Convention::Unity);
+    assert_eq!(build_map(&spec, &[c.clone(), c.clone()], 1), build_map(&spec, &[c], 1));
     assert_eq!(b.map(1).cells.len(), 2);
     assert_eq!(b.map(1).cells[0].subtrajectories, 1);
     assert!(b.remove("s"));
@@ -458,7 +460,7 @@ proptest! {
         let mut present: Vec<usize> = Vec::new();
         for (s, add) in ops {
             if add {
-                builder.add(contributions[s].clone());
+                builder.add(&contributions[s]);
                 if !present.contains(&s) { present.push(s); }
             } else {
                 prop_assert_eq!(builder.remove(&format!("s{s}")), present.contains(&s));
