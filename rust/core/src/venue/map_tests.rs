@@ -397,7 +397,10 @@ fn removing_every_session_empties_the_map() {
     b.add(&c);
     assert_eq!(b.len(), 1);
     let spec = spec(Convention::Unity);
-    assert_eq!(build_map(&spec, &[c.clone(), c.clone()], 1), build_map(&spec, &[c], 1));
+    assert_eq!(
+        build_map(&spec, &[c.clone(), c.clone()], 1),
+        build_map(&spec, &[c], 1)
+    );
     assert_eq!(b.map(1).cells.len(), 2);
     assert_eq!(b.map(1).cells[0].subtrajectories, 1);
     assert!(b.remove("s"));
