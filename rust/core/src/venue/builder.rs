@@ -18,7 +18,8 @@ pub struct VenueSpec {
     pub name: String,
     /// The anchor id its sessions observe.
     pub anchor: String,
-    /// Cell edge (m).
+    /// Cell edge (m): finite and > 0 (the backend keeps it within 0.05…2); another value
+    /// gives meaningless cells, never a panic.
     pub cell_m: f64,
     /// The convention of the map's coordinates (its sessions').
     pub convention: Convention,

@@ -448,6 +448,34 @@ proptest! {
         prop_assert_eq!(sectors as usize, walk.len());
     }
 
+    /// Garbage in any of the files (text inserted, the rest cut) is an error or a
+    /// contribution, never a panic; an error names the file it is about.
+    #[test]
+    fn damaged_files_never_panic(which in 0usize..4, at in 0.0..1.0f64, cut in any::<bool>(),
+        junk in "[0-9a-z,.\\- \n]{0,12}") {
+        let r = record(Convention::Arcore, DVec3::new(1.0, 2.0, 3.0), 0.3,
+            &[camera(DVec3::ZERO, 0.0), camera(DVec3::X, 1.0), camera(DVec3::Z, 2.0)],
+            &[Some(DVec3::Z), None, Some(DVec3::X)], &[Some(0.1), Some(0.2), None]);
+        let mut texts = [r.anchors.clone(), r.trajectory.clone(), r.subs.clone(), r.results.clone()];
+        let text = &mut texts[which];
+        let mut i = (at * text.len() as f64) as usize;
+        while !text.is_char_boundary(i) { i -= 1; }
+        if cut { text.truncate(i); } else { text.insert_str(i, &junk); }
+        let f = SessionFiles { session: "s", convention: Convention::Arcore,
+            anchors_csv: Some(&texts[0]), trajectory_txt: Some(&texts[1]),
+            subtrajectories_csv: Some(&texts[2]), results_json: Some(&texts[3]) };
+        match Contribution::from_files(&f, "a") {
+            Ok(c) => { let _ = build_map(&spec(Convention::Unity), &[c], 1); }
+            Err(Error::Parse { source_name, field, .. }) => {
+                // The damaged file, or (a pose cut from the log) the row whose midpoint
+                // trajectory.txt no longer has.
+                let names = ["anchors.csv", "trajectory.txt", "subtrajectories.csv", "results.csv"];
+                prop_assert!(source_name == names[which] || field == "mid_ns", "{} {}", source_name, field);
+            }
+            Err(other) => prop_assert!(false, "{other}"),
+        }
+    }
+
     /// The builder's incremental map equals a rebuild from scratch after any sequence of
     /// adds and removes.
     #[test]
