@@ -380,7 +380,7 @@ impl TfBuffer {
                 )));
             }
             quaternions_off_unit += usize::from((norm - 1.0).abs() > 1e-8 + 1e-5);
-            *q = *q / norm;
+            *q /= norm;
         }
         Ok(BagTrajectory {
             trajectory: out,

@@ -648,4 +648,15 @@ mod tests {
         assert_eq!(TimeUnit::Seconds.format_stamp(-5), "-0.000000005");
         assert_eq!(TimeUnit::Nanoseconds.format_stamp(42), "42");
     }
+
+    /// ROS stamps are evo's `sec + nanosec * 1e-9`, which is not always the float nearest
+    /// the decimal (Python: 63 + 817077201 * 1e-9 == 63.817077201000004).
+    #[test]
+    fn ros_stamps_are_evos_sum() {
+        let ns = 63_817_077_201;
+        assert_eq!(TimeUnit::RosStamp.seconds(ns), 63.817_077_201_000_004);
+        assert_eq!(TimeUnit::Seconds.seconds(ns), 63.817_077_201);
+        assert_eq!(TimeUnit::RosStamp.format_stamp(ns), "63.817077201");
+        assert!(TimeUnit::RosStamp.is_seconds() && !TimeUnit::Nanoseconds.is_seconds());
+    }
 }
