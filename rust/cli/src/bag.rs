@@ -12,8 +12,8 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use sitar_estimator::{
-    BagTrajectory, PoseMessage, TfId, TopicMessages, read_mcap, read_ros1_bag, tf_trajectory,
-    topic_trajectory,
+    BagTrajectory, PoseMessage, TfId, TopicMessages, read_mcap_topics, read_ros1_bag_topics,
+    tf_trajectory, topic_trajectory,
 };
 
 use crate::console::Console;
@@ -109,8 +109,9 @@ fn bag2_files(path: &Path) -> Result<Vec<PathBuf>> {
     Ok(files)
 }
 
-/// Every topic of the ROS 2 bag at `path`.
-pub fn read_bag2(path: &Path) -> Result<BTreeMap<String, TopicMessages>> {
+/// Every topic of the ROS 2 bag at `path`, with the messages of the `wanted` ones.
+pub fn read_bag2(path: &Path, wanted: &Wanted) -> Result<BTreeMap<String, TopicMessages>> {
+    let wanted = |topic: &str| wanted.wants(topic);
     let compression = if path.is_dir() {
         compression(path)?
     } else {
@@ -129,16 +130,16 @@ pub fn read_bag2(path: &Path) -> Result<BTreeMap<String, TopicMessages>> {
                 // SQLite opens files only: the expanded database goes to a temporary file.
                 let mut temporary = tempfile::NamedTempFile::new()?;
                 std::io::Write::write_all(&mut temporary, &bytes)?;
-                read_sqlite3(temporary.path())
+                read_sqlite3(temporary.path(), &wanted)
             } else {
-                read_mcap(&bytes).map_err(anyhow::Error::from)
+                read_mcap_topics(&bytes, &wanted).map_err(anyhow::Error::from)
             }
         } else if sqlite {
-            read_sqlite3(file)
+            read_sqlite3(file, &wanted)
         } else {
             let bytes =
                 std::fs::read(file).with_context(|| format!("{}: cannot read", file.display()))?;
-            read_mcap(&bytes).map_err(anyhow::Error::from)
+            read_mcap_topics(&bytes, &wanted).map_err(anyhow::Error::from)
         };
         for (topic, part) in read.with_context(|| format!("{}", file.display()))? {
             let entry = topics.entry(topic.clone()).or_default();
@@ -160,8 +161,11 @@ pub fn read_bag2(path: &Path) -> Result<BTreeMap<String, TopicMessages>> {
 }
 
 /// The topics and messages of a ROS 2 bag's sqlite3 storage (rosbag2's `topics` and
-/// `messages` tables), messages by stamp.
-fn read_sqlite3(path: &Path) -> Result<BTreeMap<String, TopicMessages>> {
+/// `messages` tables), messages by stamp, of the `wanted` topics only.
+fn read_sqlite3(
+    path: &Path,
+    wanted: &dyn Fn(&str) -> bool,
+) -> Result<BTreeMap<String, TopicMessages>> {
     let flags = rusqlite::OpenFlags::SQLITE_OPEN_READ_ONLY;
     let db = rusqlite::Connection::open_with_flags(path, flags)?;
     let mut names = BTreeMap::new();
@@ -179,7 +183,16 @@ fn read_sqlite3(path: &Path) -> Result<BTreeMap<String, TopicMessages>> {
         topics.entry(name.clone()).or_default().type_name = type_name;
         names.insert(id, name);
     }
-    let mut statement = db.prepare("SELECT topic_id, data FROM messages ORDER BY timestamp, id")?;
+    // The ids are the database's integers: the list is no injection.
+    let ids: Vec<String> = names
+        .iter()
+        .filter(|(_, name)| wanted(name))
+        .map(|(id, _)| id.to_string())
+        .collect();
+    let mut statement = db.prepare(&format!(
+        "SELECT topic_id, data FROM messages WHERE topic_id IN ({}) ORDER BY timestamp, id",
+        ids.join(",")
+    ))?;
     let rows = statement.query_map([], |r| Ok((r.get::<_, i64>(0)?, r.get::<_, Vec<u8>>(1)?)))?;
     for row in rows {
         let (id, data) = row?;
@@ -224,17 +237,55 @@ pub fn trajectory(
     Ok(read)
 }
 
-/// Reads a bag of evo's format `kind` (`bag`: ROS 1; `bag2`: ROS 2), saying so as evo does.
-pub fn open(kind: &str, bag: &str, console: &Console) -> Result<BTreeMap<String, TopicMessages>> {
+/// The topics whose messages a command reads: all, or those named (a tf id names its tf
+/// and static topics).
+pub enum Wanted {
+    /// Every topic (`--all_topics`).
+    All,
+    /// These topics.
+    Topics(std::collections::BTreeSet<String>),
+}
+
+impl Wanted {
+    /// The topics of `names` (topics or tf ids).
+    pub fn named<'a>(names: impl IntoIterator<Item = &'a String>) -> Self {
+        let mut topics = std::collections::BTreeSet::new();
+        for name in names {
+            match TfId::parse(name) {
+                Ok(Some(tf)) => topics.extend([tf.topic, tf.static_topic]),
+                _ => {
+                    topics.insert(name.clone());
+                }
+            }
+        }
+        Self::Topics(topics)
+    }
+
+    fn wants(&self, topic: &str) -> bool {
+        match self {
+            Wanted::All => true,
+            Wanted::Topics(topics) => topics.contains(topic),
+        }
+    }
+}
+
+/// Reads a bag of evo's format `kind` (`bag`: ROS 1; `bag2`: ROS 2), the messages of the
+/// `wanted` topics only, saying so as evo does.
+pub fn open(
+    kind: &str,
+    bag: &str,
+    wanted: &Wanted,
+    console: &Console,
+) -> Result<BTreeMap<String, TopicMessages>> {
     console.debug(&format!("Opening bag file {bag}"))?;
     let path = Path::new(bag);
     if !path.exists() {
         bail!("{bag}: cannot read: the file does not exist");
     }
     if kind == "bag" {
-        Ok(read_ros1_bag(path)?)
+        Ok(read_ros1_bag_topics(path, &|topic| wanted.wants(topic))?)
     } else {
-        read_bag2(path)
+        read_bag2(path, wanted)
     }
 }
 

@@ -424,7 +424,8 @@ pub fn load(source: &Source, console: &Console) -> Result<Loaded> {
             estimate,
             sync,
         } => {
-            let topics = crate::bag::open(kind, bag, console)?;
+            let wanted = crate::bag::Wanted::named([reference, estimate]);
+            let topics = crate::bag::open(kind, bag, &wanted, console)?;
             let named = |topic: &String| -> Result<Named> {
                 let read = crate::bag::trajectory(&topics, topic, bag, console)?;
                 Ok(Named {

@@ -355,11 +355,16 @@ fn read_bag_topics(
     if topics.is_empty() && !all_topics {
         bail!("No topics used - specify topics or set --all_topics.");
     }
-    let content = crate::bag::open(kind, bag, console)?;
     let reference = options
         .reference
         .as_ref()
         .map(|r| r.to_string_lossy().into_owned());
+    let wanted = if all_topics {
+        crate::bag::Wanted::All
+    } else {
+        crate::bag::Wanted::named(topics.iter().chain(&reference))
+    };
+    let content = crate::bag::open(kind, bag, &wanted, console)?;
     let mut chosen = topics.to_vec();
     if all_topics {
         chosen.extend(crate::bag::supported_topics(&content));

@@ -334,7 +334,16 @@ mod tests {
         std::fs::create_dir_all(&dir).unwrap();
         std::fs::write(dir.join("t.bag"), ros1_bag(&topics)).unwrap();
         let ros1 = crate::read_ros1_bag(&dir.join("t.bag")).unwrap();
+        // Unwanted topics are listed with their type, without their messages.
+        let skipped = crate::read_ros1_bag_topics(&dir.join("t.bag"), &|_| false).unwrap();
         std::fs::remove_dir_all(&dir).unwrap();
+        for skipped in [
+            skipped,
+            crate::read_mcap_topics(&mcap, &|t| t != "/est").unwrap(),
+        ] {
+            assert_eq!(skipped["/est"].type_name, TYPE_NAME);
+            assert!(skipped["/est"].messages.is_empty());
+        }
         for topics in [read, ros1] {
             assert_eq!(topics["/est"].type_name, TYPE_NAME);
             let back = topic_trajectory("/est", &topics["/est"]).unwrap();

@@ -191,10 +191,10 @@ pub use metrics::{
 pub use ranking::{
     MIN_FIT_ERROR_M, SweepPoint, ThresholdSweep, fit_scale, median_ratio, spearman, threshold_sweep,
 };
-pub use ros1::{decode_ros1_pose, read_ros1_bag};
+pub use ros1::{decode_ros1_pose, read_ros1_bag, read_ros1_bag_topics};
 pub use rosbag::{
     BagTrajectory, Encoding, PoseMessage, StampedPoseValue, TopicMessages, decode_pose,
-    decode_pose_as, read_mcap, topic_trajectory,
+    decode_pose_as, read_mcap, read_mcap_topics, topic_trajectory,
 };
 /// The class rule and its defaults, shared with the phone and the backend.
 pub use sitar_core::{DEFAULT_SETTING, ErrorClass, Thresholds};

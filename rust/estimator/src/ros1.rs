@@ -219,6 +219,14 @@ fn check_header(path: &Path) -> Result<(), Error> {
 /// none), types named as rosbags names them (`geometry_msgs/msg/PoseStamped`), messages in
 /// the bag's time order.
 pub fn read_ros1_bag(path: &Path) -> Result<BTreeMap<String, TopicMessages>, Error> {
+    read_ros1_bag_topics(path, &|_| true)
+}
+
+/// [`read_ros1_bag`] keeping the messages of the topics `wanted` says yes to only.
+pub fn read_ros1_bag_topics(
+    path: &Path,
+    wanted: &dyn Fn(&str) -> bool,
+) -> Result<BTreeMap<String, TopicMessages>, Error> {
     check_header(path)?;
     let read = || -> Result<BTreeMap<String, TopicMessages>, String> {
         let bag = rosbag::RosBag::new(path).map_err(|e| e.to_string())?;
@@ -234,7 +242,11 @@ pub fn read_ros1_bag(path: &Path) -> Result<BTreeMap<String, TopicMessages>, Err
                         connections.insert(c.id, (c.topic.to_owned(), ros2_type_name(c.tp)));
                     }
                     rosbag::MessageRecord::MessageData(m) => {
-                        stamped.push((m.time, m.conn_id, m.data.to_vec()));
+                        // Connections come before their messages in a chunk.
+                        let skip = connections.get(&m.conn_id).is_some_and(|c| !wanted(&c.0));
+                        if !skip {
+                            stamped.push((m.time, m.conn_id, m.data.to_vec()));
+                        }
                     }
                 }
             }

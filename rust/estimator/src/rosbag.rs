@@ -230,6 +230,15 @@ pub struct TopicMessages {
 /// Every topic of an MCAP file (topics advertised without messages included, with none),
 /// messages in log-time order.
 pub fn read_mcap(bytes: &[u8]) -> Result<BTreeMap<String, TopicMessages>, Error> {
+    read_mcap_topics(bytes, &|_| true)
+}
+
+/// [`read_mcap`] keeping the messages of the topics `wanted` says yes to only (the others
+/// are listed with their types and no messages): a bag's images are never copied.
+pub fn read_mcap_topics(
+    bytes: &[u8],
+    wanted: &dyn Fn(&str) -> bool,
+) -> Result<BTreeMap<String, TopicMessages>, Error> {
     let bad = |e: mcap::McapError| Error::InvalidArgument(format!("MCAP: {e}"));
     let mut topics: BTreeMap<String, TopicMessages> = BTreeMap::new();
     if let Some(summary) = mcap::Summary::read(bytes).map_err(bad)? {
@@ -250,6 +259,9 @@ pub fn read_mcap(bytes: &[u8]) -> Result<BTreeMap<String, TopicMessages>, Error>
                 .as_ref()
                 .map(|s| s.name.clone())
                 .unwrap_or_default();
+        }
+        if !wanted(&channel.topic) {
+            continue;
         }
         let messages = stamped.entry(channel.topic.clone()).or_default();
         messages.push((message.log_time, message.data.into_owned()));
