@@ -193,10 +193,10 @@ struct Options {
     /// Save the poses in KITTI format (as NAME.kitti in the current directory).
     #[arg(long = "save_as_kitti")]
     save_as_kitti: bool,
-    /// Save the trajectories in a ROS 1 bag as <date>.bag (geometry_msgs/PoseStamped topics).
+    /// Save the trajectories in a ROS 1 bag as DATE.bag (YYYY-MM-DD-hh-mm-ss; PoseStamped topics).
     #[arg(long = "save_as_bag")]
     save_as_bag: bool,
-    /// Save the trajectories in a ROS 2 bag (MCAP storage) as the directory <date>.
+    /// Save the trajectories in a ROS 2 bag (MCAP storage) as the directory DATE.
     #[arg(long = "save_as_bag2")]
     save_as_bag2: bool,
     /// Don't shorten input file paths when displaying trajectory names.
