@@ -12,8 +12,8 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use sitar_estimator::{
-    BagTrajectory, PoseMessage, TfId, TopicMessages, read_mcap_topics, read_ros1_bag_topics,
-    tf_trajectory, topic_trajectory,
+    BagTrajectory, PoseMessage, TfId, TopicMessages, read_mcap_from, read_mcap_topics,
+    read_ros1_bag_topics, tf_trajectory, topic_trajectory,
 };
 
 use crate::console::Console;
@@ -137,9 +137,10 @@ pub fn read_bag2(path: &Path, wanted: &Wanted) -> Result<BTreeMap<String, TopicM
         } else if sqlite {
             read_sqlite3(file, &wanted)
         } else {
-            let bytes =
-                std::fs::read(file).with_context(|| format!("{}: cannot read", file.display()))?;
-            read_mcap_topics(&bytes, &wanted).map_err(anyhow::Error::from)
+            let source = std::fs::File::open(file)
+                .with_context(|| format!("{}: cannot read", file.display()))?;
+            // Streamed: a bag of many gigabytes is not read into memory.
+            read_mcap_from(source, &wanted).map_err(anyhow::Error::from)
         };
         for (topic, part) in read.with_context(|| format!("{}", file.display()))? {
             let entry = topics.entry(topic.clone()).or_default();

@@ -194,7 +194,7 @@ pub use ranking::{
 pub use ros1::{decode_ros1_pose, read_ros1_bag, read_ros1_bag_topics};
 pub use rosbag::{
     BagTrajectory, Encoding, PoseMessage, StampedPoseValue, TopicMessages, decode_pose,
-    decode_pose_as, read_mcap, read_mcap_topics, topic_trajectory,
+    decode_pose_as, read_mcap, read_mcap_from, read_mcap_topics, topic_trajectory,
 };
 /// The class rule and its defaults, shared with the phone and the backend.
 pub use sitar_core::{DEFAULT_SETTING, ErrorClass, Thresholds};

@@ -239,38 +239,75 @@ pub fn read_mcap_topics(
     bytes: &[u8],
     wanted: &dyn Fn(&str) -> bool,
 ) -> Result<BTreeMap<String, TopicMessages>, Error> {
+    read_mcap_from(bytes, wanted)
+}
+
+/// The largest MCAP record (a chunk, compressed or not) the streaming reader buffers.
+const MAX_MCAP_RECORD: usize = 1 << 30;
+
+/// [`read_mcap_topics`] from a reader, streamed (Foxglove's sans-I/O reader): the file is
+/// never held whole, only one record (at most 1 GiB) and the wanted topics' messages.
+pub fn read_mcap_from(
+    mut input: impl std::io::Read,
+    wanted: &dyn Fn(&str) -> bool,
+) -> Result<BTreeMap<String, TopicMessages>, Error> {
+    use mcap::records::Record;
+    use mcap::sans_io::linear_reader::{LinearReadEvent, LinearReader, LinearReaderOptions};
     let bad = |e: mcap::McapError| Error::InvalidArgument(format!("MCAP: {e}"));
+    let options = LinearReaderOptions::default().with_record_length_limit(MAX_MCAP_RECORD);
+    let mut reader = LinearReader::new_with_options(options);
+    let mut schemas: BTreeMap<u16, String> = BTreeMap::new();
+    let mut channels: BTreeMap<u16, (String, bool)> = BTreeMap::new();
     let mut topics: BTreeMap<String, TopicMessages> = BTreeMap::new();
-    if let Some(summary) = mcap::Summary::read(bytes).map_err(bad)? {
-        for channel in summary.channels.values() {
-            let type_name = channel.schema.as_ref().map(|s| s.name.clone());
-            topics.entry(channel.topic.clone()).or_default().type_name =
-                type_name.unwrap_or_default();
+    let mut stamped: BTreeMap<u16, Vec<(u64, Vec<u8>)>> = BTreeMap::new();
+    while let Some(event) = reader.next_event() {
+        match event.map_err(bad)? {
+            LinearReadEvent::ReadRequest(need) => {
+                let read = input
+                    .read(reader.insert(need))
+                    .map_err(|e| Error::InvalidArgument(format!("MCAP: {e}")))?;
+                reader.notify_read(read);
+            }
+            LinearReadEvent::Record { opcode, data } => match mcap::parse_record(opcode, data)
+                .map_err(bad)?
+            {
+                Record::Schema { header, .. } => {
+                    schemas.insert(header.id, header.name);
+                }
+                Record::Channel(channel) => {
+                    let type_name = schemas.get(&channel.schema_id).cloned().unwrap_or_default();
+                    let entry = topics.entry(channel.topic.clone()).or_default();
+                    if entry.type_name.is_empty() {
+                        entry.type_name = type_name;
+                    }
+                    let keep = wanted(&channel.topic);
+                    channels.insert(channel.id, (channel.topic, keep));
+                }
+                Record::Message { header, data } => {
+                    let Some((_, keep)) = channels.get(&header.channel_id) else {
+                        return Err(Error::InvalidArgument(format!(
+                            "MCAP: a message on channel {}, which no channel record defines",
+                            header.channel_id
+                        )));
+                    };
+                    if *keep {
+                        let messages = stamped.entry(header.channel_id).or_default();
+                        messages.push((header.log_time, data.into_owned()));
+                    }
+                }
+                _ => {}
+            },
         }
-    }
-    let mut stamped: BTreeMap<String, Vec<(u64, Vec<u8>)>> = BTreeMap::new();
-    for message in mcap::MessageStream::new(bytes).map_err(bad)? {
-        let message = message.map_err(bad)?;
-        let channel = &message.channel;
-        let entry = topics.entry(channel.topic.clone()).or_default();
-        if entry.type_name.is_empty() {
-            entry.type_name = channel
-                .schema
-                .as_ref()
-                .map(|s| s.name.clone())
-                .unwrap_or_default();
-        }
-        if !wanted(&channel.topic) {
-            continue;
-        }
-        let messages = stamped.entry(channel.topic.clone()).or_default();
-        messages.push((message.log_time, message.data.into_owned()));
     }
     // Log-time order (stable), as rosbags (evo's reader) yields a bag's messages.
-    for (topic, mut messages) in stamped {
+    for (channel, mut messages) in stamped {
         messages.sort_by_key(|m| m.0);
+        let topic = channels
+            .get(&channel)
+            .map(|c| c.0.clone())
+            .unwrap_or_default();
         let entry = topics.entry(topic).or_default();
-        entry.messages = messages.into_iter().map(|m| m.1).collect();
+        entry.messages.extend(messages.into_iter().map(|m| m.1));
     }
     Ok(topics)
 }
