@@ -8,7 +8,7 @@ use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
 use ureq::Agent;
 
-use crate::{Error, NewSession, SessionOptions, SessionStatus};
+use crate::{Error, NewSession, SessionFrame, SessionOptions, SessionStatus};
 
 /// Header carrying the client-made key that makes `POST` requests safe to retry.
 pub const IDEMPOTENCY_HEADER: &str = "Idempotency-Key";
@@ -39,7 +39,7 @@ pub struct Client {
     pinned: Arc<Mutex<Option<(Agent, Agent)>>>,
 }
 
-enum Payload<'a> {
+pub(crate) enum Payload<'a> {
     Empty,
     Json(String),
     Text(&'a str),
@@ -183,8 +183,26 @@ impl Client {
         req: &NewSession,
         options: &SessionOptions,
     ) -> Result<String, Error> {
+        self.create_session_in(req, options, &SessionFrame::default())
+    }
+
+    /// Like [`Client::create_session_with`], in `frame`: the phone's convention and the venue
+    /// the session joins (sent only when set; the server answers 422 naming a venue the
+    /// caller cannot see, 409 naming both conventions when the venue's sessions use another).
+    pub fn create_session_in(
+        &self,
+        req: &NewSession,
+        options: &SessionOptions,
+        frame: &SessionFrame,
+    ) -> Result<String, Error> {
         let mut body =
             serde_json::to_value(req).map_err(|e| Error::InvalidArgument(e.to_string()))?;
+        if let Some(convention) = &frame.convention {
+            body["convention"] = convention.as_str().into();
+        }
+        if let Some(venue) = &frame.venue {
+            body["venue"] = venue.as_str().into();
+        }
         if let Some(min) = options.adaptive_min_trials {
             body["adaptive_min_trials"] = min.into();
         }
@@ -318,6 +336,17 @@ impl Client {
     /// one small file, so a retry sends them again. Returns how many thumbnails were sent;
     /// `Ok(None)` when `dir` has no `evidence.csv` (nothing is sent).
     pub fn upload_evidence(&self, id: &str, dir: &Path) -> Result<Option<usize>, Error> {
+        self.upload_evidence_files(id, dir, true)
+    }
+
+    /// [`Client::upload_evidence`]; `with_spans` false leaves out `subtrajectories.csv` (the
+    /// upload job sends it with the phone's log, before the recording).
+    pub(crate) fn upload_evidence_files(
+        &self,
+        id: &str,
+        dir: &Path,
+        with_spans: bool,
+    ) -> Result<Option<usize>, Error> {
         let id = check_session_id(id)?;
         let read = |path: std::path::PathBuf| {
             std::fs::read(&path).map_err(|source| Error::Io { path, source })
@@ -327,7 +356,7 @@ impl Client {
             return Ok(None);
         }
         let spans = dir.join("subtrajectories.csv");
-        if spans.is_file() {
+        if with_spans && spans.is_file() {
             let body = read(spans)?;
             let url = format!("/v1/sessions/{id}/subtrajectories.csv");
             self.request("PUT", &url, Payload::Bytes(&body, "text/csv"), None)?;
@@ -457,7 +486,7 @@ impl Client {
         self.request("GET", "/v1/devices", Payload::Empty, None)
     }
 
-    fn request(
+    pub(crate) fn request(
         &self,
         method: &str,
         path: &str,

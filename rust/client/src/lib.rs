@@ -51,6 +51,7 @@ mod client;
 mod error;
 mod job;
 mod job_run;
+mod phone_logs;
 mod pin;
 pub mod platform_tls;
 #[cfg(test)]
@@ -60,4 +61,5 @@ mod types;
 pub use client::{Client, IDEMPOTENCY_HEADER, UPLOAD_OFFSET_HEADER, check_session_id};
 pub use error::Error;
 pub use job::{JobOptions, JobProgress, JobState, SinkError, UPLOAD_SHARE, UploadJob};
-pub use types::{NewSession, SessionOptions, SessionState, SessionStatus};
+pub use phone_logs::{PHONE_LOG_FILES, PhoneLogsSent};
+pub use types::{NewSession, SessionFrame, SessionOptions, SessionState, SessionStatus};

@@ -31,6 +31,22 @@ pub struct SessionOptions {
     pub adaptive_k: Option<u32>,
 }
 
+/// Which world frame a session's poses are in: the phone's coordinate convention and the
+/// venue whose shared frame the session joins (`POST /v1/sessions` keys `"convention"` and
+/// `"venue"`). `None` sends nothing, so a backend that predates venues still takes the session;
+/// build one with `..SessionFrame::default()`.
+#[derive(Debug, Clone, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub struct SessionFrame {
+    /// `"unity"` or `"arcore"` (the session config's `convention`); `None` leaves the
+    /// server's default (`unity`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub convention: Option<String>,
+    /// The venue the session joins (an id from `POST /v1/venues`, `v` and 16 hex digits);
+    /// `None` joins none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub venue: Option<String>,
+}
+
 /// Life cycle of a session on the server.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
