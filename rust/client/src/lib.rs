@@ -16,7 +16,10 @@
 //! continue) a session, send the recording resumably, poll, ask for the estimate of an
 //! `upload` session once all trials arrived, and hand every published result (progressive,
 //! then final) to a sink; the app polls [`JobProgress`] snapshots and may cancel. The native
-//! library bridges it one-to-one (`sitar_upload_*`).
+//! library bridges it one-to-one (`sitar_upload_*`). With the phone's session folder the job
+//! also sends the phone's own log ([`Client::upload_phone_logs`]: `trajectory.txt`,
+//! `subtrajectories.csv`, `anchors.csv`) before the recording, and its camera evidence after;
+//! [`SessionFrame`] puts the session's convention and venue into the session request.
 //!
 //! ```
 //! use sitar_client::{Client, Error, NewSession};
