@@ -8,7 +8,7 @@
 
 use std::time::{Duration, Instant};
 
-use sitar_client::{JobOptions, JobState, NewSession, SessionFrame, UploadJob};
+use sitar_client::{JobOptions, JobState, NewSession, SessionFrame, UploadJob, VenueAlignment};
 use sitar_core::{Pose, Session, SessionConfig, Tracking};
 use sitar_sim::Recording;
 use sitar_tests::*;
@@ -116,16 +116,20 @@ fn the_upload_job_puts_a_phone_session_into_its_venue() {
 
     // The backend knows the venue and aligns the session from the anchors.csv it was sent:
     // the full observations only, and they agree exactly.
-    let (status, st) = call("GET", &format!("{}/v1/sessions/{id}", server.url()), "");
-    assert_eq!(status, 200, "{st}");
-    assert_eq!(st["venue"], venue.as_str(), "{st}");
-    let alignment = &st["alignment"];
-    assert_eq!(alignment["anchor"], "hall", "{st}");
-    assert_eq!(alignment["observations"], full as u64, "{st}");
-    assert!(
-        alignment["position_spread_m"].as_f64().unwrap() < 1e-9,
-        "{st}"
-    );
+    let st = client_with(&server, APP_TOKEN).status(&id).unwrap();
+    assert_eq!(st.venue.as_deref(), Some(venue.as_str()));
+    match st.alignment {
+        Some(VenueAlignment::Aligned {
+            anchor,
+            observations,
+            position_spread_m,
+            heading_spread_deg,
+        }) => {
+            assert_eq!((anchor.as_str(), observations as usize), ("hall", full));
+            assert!(position_spread_m < 1e-9 && heading_spread_deg < 1e-6);
+        }
+        other => panic!("not aligned: {other:?}"),
+    }
 
     // The phone's own log, as the job sent it.
     let (status, _, tum) = get_bytes(

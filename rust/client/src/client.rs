@@ -1177,6 +1177,41 @@ mod tests {
     }
 
     #[test]
+    fn status_reads_the_venue_and_both_forms_of_alignment() {
+        const HEAD: &str = r#""id":"s1","state":"done","progress":1.0,"eta_s":null,"trials_done":2,"trials_total":2,"error":null"#;
+        let parse = |extra: &str| -> SessionStatus {
+            serde_json::from_str(&format!("{{{HEAD}{extra}}}")).unwrap()
+        };
+        let aligned = parse(
+            r#","venue":"v0123456789abcdef","alignment":{"anchor":"hall","observations":12,"position_spread_m":0.004,"heading_spread_deg":0.3}"#,
+        );
+        assert_eq!(aligned.venue.as_deref(), Some("v0123456789abcdef"));
+        assert_eq!(
+            aligned.alignment,
+            Some(crate::VenueAlignment::Aligned {
+                anchor: "hall".into(),
+                observations: 12,
+                position_spread_m: 0.004,
+                heading_spread_deg: 0.3,
+            })
+        );
+        let not = parse(
+            r#","venue":"v0123456789abcdef","alignment":{"error":"no full observation of hall"}"#,
+        );
+        assert_eq!(
+            not.alignment,
+            Some(crate::VenueAlignment::NotAligned {
+                error: "no full observation of hall".into()
+            })
+        );
+        // Null, or absent (an older backend): none.
+        for extra in [r#","venue":null,"alignment":null"#, ""] {
+            let st = parse(extra);
+            assert_eq!((st.venue, st.alignment), (None, None));
+        }
+    }
+
+    #[test]
     fn ids_and_keys_are_checked_and_unique() {
         assert!(check_session_id("a-B_9").is_ok());
         for bad in ["", "../x", "a/b", "a b", "a%2e"] {

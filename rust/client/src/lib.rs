@@ -65,4 +65,6 @@ pub use client::{Client, IDEMPOTENCY_HEADER, UPLOAD_OFFSET_HEADER, check_session
 pub use error::Error;
 pub use job::{JobOptions, JobProgress, JobState, SinkError, UPLOAD_SHARE, UploadJob};
 pub use phone_logs::{PHONE_LOG_FILES, PhoneLogsSent};
-pub use types::{NewSession, SessionFrame, SessionOptions, SessionState, SessionStatus};
+pub use types::{
+    NewSession, SessionFrame, SessionOptions, SessionState, SessionStatus, VenueAlignment,
+};
