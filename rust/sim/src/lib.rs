@@ -60,6 +60,7 @@
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
 
+mod anchor;
 mod camera;
 mod checks;
 mod error;
@@ -73,8 +74,10 @@ mod recording;
 mod room;
 mod scenes;
 mod trial;
+mod venue_users;
 mod walk;
 
+pub use anchor::{ANCHOR_SURFACE, AnchorSensor, DEMO_ANCHOR_ID, PrintedAnchor, Sighting};
 pub use camera::{DepthCamera, Intrinsics, View};
 pub use error::Error;
 pub use luma::LumaCamera;
@@ -82,6 +85,7 @@ pub use ransac_tracker::RansacModel;
 pub use recording::{RECORDING_MAGIC, RECORDING_VERSION, Recording, Tracker};
 pub use room::{Hit, Room, Surface, SurfaceKind};
 pub use trial::{DriftModel, TrialOptions, play_trial, play_trial_with, simulate_trials};
+pub use venue_users::{MAX_VENUE_USERS, Venue, VenueTruth, VenueUser};
 pub use walk::{FIRST_STAMP_NS, Walk, look_rotation};
 
 /// The trajectory type of the trials and the ground truth (from `sitar-estimator`).
