@@ -74,6 +74,7 @@ mod recording;
 mod room;
 mod scenes;
 mod trial;
+mod venue_truth;
 mod venue_users;
 mod walk;
 
@@ -85,6 +86,7 @@ pub use ransac_tracker::RansacModel;
 pub use recording::{RECORDING_MAGIC, RECORDING_VERSION, Recording, Tracker};
 pub use room::{Hit, Room, Surface, SurfaceKind};
 pub use trial::{DriftModel, TrialOptions, play_trial, play_trial_with, simulate_trials};
+pub use venue_truth::{CellTruth, ProblemCellScore};
 pub use venue_users::{MAX_VENUE_USERS, Venue, VenueTruth, VenueUser};
 pub use walk::{FIRST_STAMP_NS, Walk, look_rotation};
 
