@@ -12,10 +12,9 @@
 //! problem cells on hard surfaces over problem cells; recall is hard-surface cells flagged
 //! over hard-surface cells in the map. Counts are summed over the venues.
 
-use sitar_core::venue::{Contribution, SessionFiles, VenueSpec, build_map};
-use sitar_core::{Convention, DisplayRotation, SessionConfig, Thresholds};
-use sitar_estimator::{EstimateOptions, estimate};
-use sitar_sim::{ProblemCellScore, Venue, VenueUser, simulate_trials};
+use sitar_core::Convention;
+use sitar_core::venue::{VenueSpec, build_map};
+use sitar_sim::{ProblemCellScore, Venue};
 
 type Res<T> = Result<T, Box<dyn std::error::Error>>;
 
@@ -36,8 +35,11 @@ fn main() -> Res<()> {
         let contributions = venue
             .users
             .iter()
-            .map(|u| contribution(u, &venue, trials, &scratch))
-            .collect::<Res<Vec<_>>>()?;
+            .map(|u| {
+                let id = format!("s{:016x}", u.seed);
+                u.contribution(&id, &venue.anchor.id, trials, &scratch.join(&id))
+            })
+            .collect::<Result<Vec<_>, _>>()?;
         let spec = VenueSpec {
             id: "v0000000000000001".into(),
             name: "demo room".into(),
@@ -105,38 +107,4 @@ fn print_row(venue: &str, users: usize, min_sessions: u32, s: &ProblemCellScore)
             elsewhere.join(", ")
         );
     }
-}
-
-/// One user's session as the backend would hold it: the phone's files and the estimate of
-/// its played trials.
-fn contribution(
-    user: &VenueUser,
-    venue: &Venue,
-    trials: u32,
-    scratch: &std::path::Path,
-) -> Res<Contribution> {
-    let config = SessionConfig::from_json(r#"{"convention":"arcore","images":false}"#)?;
-    let session = user.phone_session(config, DisplayRotation::Deg90)?;
-    let dir = scratch.join(format!("seed_{}", user.seed));
-    session.save(&dir)?;
-    let read = |name: &str| std::fs::read_to_string(dir.join(name));
-    let (trajectory, anchors, subs) = (
-        read("trajectory.txt")?,
-        read("anchors.csv")?,
-        read("subtrajectories.csv")?,
-    );
-    let played = simulate_trials(&user.recording, trials);
-    let results = estimate(&played, &EstimateOptions::default())?.to_json(Thresholds::DEFAULT_M);
-    let id = format!("s{:016x}", user.seed);
-    Ok(Contribution::from_files(
-        &SessionFiles {
-            session: &id,
-            convention: Convention::Arcore,
-            anchors_csv: Some(&anchors),
-            trajectory_txt: Some(&trajectory),
-            subtrajectories_csv: Some(&subs),
-            results_json: Some(&results),
-        },
-        &venue.anchor.id,
-    )?)
 }

@@ -74,6 +74,7 @@ mod recording;
 mod room;
 mod scenes;
 mod trial;
+mod venue_session;
 mod venue_truth;
 mod venue_users;
 mod walk;
