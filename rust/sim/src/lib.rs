@@ -26,6 +26,12 @@
 //!   [`Recording::dark_wall`]): facing an unlit wall every trial coasts on the same IMU data,
 //!   all trials agree, and the estimate falls far below the true error.
 //!
+//! * A [`Venue`]: the demo room with a [`PrintedAnchor`] on a wall, walked by several users,
+//!   each phone in its own world frame, observing the anchor through an [`AnchorSensor`]
+//!   (frustum, range, view angle, occlusion; `full`/`limited`; noise growing with distance
+//!   and angle), with each user's truth ([`VenueTruth`]) and the room surface under any
+//!   venue-frame point ([`Venue::truth_at`], [`Venue::score_problem_cells`]).
+//!
 //! Everything is deterministic from a seed (ChaCha8 streams: one for the walk, one for the
 //! error all trials share, one for the RANSAC front end's observations, one per trial index).
 //!
