@@ -15,8 +15,6 @@ use crate::playback::{Playback, PlaybackPlan, SimPlayback, UploadPlayback};
 use crate::session::{Lifecycle, NewSession, Session};
 use crate::storage::BlobStore;
 use crate::storage::MetadataStore;
-use crate::storage::embedded::open_metadata;
-use crate::storage::files::Files;
 
 /// What a running job knows that the database does not: timing and the cancel flag.
 #[derive(Debug, Clone)]
@@ -64,10 +62,7 @@ pub(crate) struct App {
 
 impl App {
     pub fn open(config: ServerConfig) -> Result<App, Error> {
-        let blobs = Files::open(&config.data_dir)?
-            .with_idle_timeout(config.upload_idle_timeout)
-            .with_quotas(config.session_disk_quota, config.disk_quota);
-        let db = open_metadata(&config.data_dir)?;
+        let (db, blobs) = crate::storage::open::open(&config)?;
         Ok(App {
             sim: Arc::new(SimPlayback::new(config.sim.clone())),
             adb: Arc::new(AdbPlayback::new(config.adb.clone())),
@@ -83,7 +78,7 @@ impl App {
             estimates: tokio::sync::Semaphore::new(config.estimate_workers.max(1)),
             config,
             db,
-            blobs: Arc::new(blobs),
+            blobs,
             running: Mutex::new(HashMap::new()),
             session_locks: Mutex::new(HashMap::new()),
             shutdown: AtomicBool::new(false),

@@ -151,8 +151,16 @@ impl Default for AdbConfig {
 /// Everything `sitar serve` can be told.
 #[derive(Debug, Clone)]
 pub struct ServerConfig {
-    /// Where the SQLite database and all files live. Nothing is written outside it.
+    /// Where the SQLite database and all files live. Nothing is written outside it. With
+    /// `database` and `store`, the instance's own files only: admin token, TLS certificate,
+    /// staged uploads, local copies.
     pub data_dir: PathBuf,
+    /// A Postgres URL (`postgres://…`; `PG*` variables fill in what it leaves out) for the
+    /// metadata that several instances share; `None` (the default): SQLite in `data_dir`.
+    pub database: Option<String>,
+    /// An S3-compatible bucket (`s3://BUCKET/PREFIX`; endpoint, region and credentials from
+    /// the `AWS_*` variables) for every session's bytes; `None` (the default): `data_dir`.
+    pub store: Option<String>,
     /// Backend for the legacy `POST /recording` route and for sessions that name none.
     pub playback: PlaybackKind,
     /// Largest accepted recording (default 2 GiB).
@@ -244,6 +252,8 @@ impl ServerConfig {
     pub fn new(data_dir: impl Into<PathBuf>) -> ServerConfig {
         ServerConfig {
             data_dir: data_dir.into(),
+            database: None,
+            store: None,
             playback: PlaybackKind::Adb,
             max_recording_bytes: 2 << 30,
             max_trajectory_bytes: 64 << 20,

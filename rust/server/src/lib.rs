@@ -101,8 +101,8 @@ mod session;
 mod storage;
 
 pub use auth::{
-    ADMIN_TOKEN_FILE, Limits, PresetToken, Role, TokenInfo, create_token, list_tokens, new_token,
-    revoke_token,
+    ADMIN_TOKEN_FILE, Limits, PresetToken, Role, TokenInfo, create_token, create_token_at,
+    list_tokens, list_tokens_at, new_token, revoke_token, revoke_token_at,
 };
 pub use config::{AdbConfig, PlaybackKind, ServerConfig, SimConfig};
 pub use error::Error;

@@ -66,8 +66,16 @@ pub(crate) fn ensure_admin_token(
     }
     let token = secret::new_token()?;
     instance::write_admin_token(data_dir, &token)?;
-    db.insert_token(ADMIN_TOKEN_NAME, Role::Admin, &token)?;
-    Ok(Some(token))
+    match db.insert_token(ADMIN_TOKEN_NAME, Role::Admin, &token) {
+        Ok(()) => Ok(Some(token)),
+        // Another instance on the same database made it first: this one's file goes.
+        Err(Error::Conflict(_)) => {
+            let _ = std::fs::remove_file(&file);
+            log::info!("another instance made the admin token first (its DATA/admin.token)");
+            Ok(None)
+        }
+        Err(e) => Err(e),
+    }
 }
 
 #[cfg(test)]

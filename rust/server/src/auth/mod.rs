@@ -21,5 +21,8 @@ pub(crate) use middleware::{CallerName, authenticate};
 pub use role::Role;
 pub use secret::new_token;
 pub(crate) use tokens::check_token_name;
-pub use tokens::{TokenInfo, create_token, list_tokens, revoke_token};
+pub use tokens::{
+    TokenInfo, create_token, create_token_at, list_tokens, list_tokens_at, revoke_token,
+    revoke_token_at,
+};
 pub(crate) use usage::{DAY_HOURS, HOUR_MS, UsageFull};

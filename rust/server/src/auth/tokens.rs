@@ -8,7 +8,7 @@ use std::path::Path;
 use crate::Error;
 use crate::auth::role::Role;
 use crate::auth::secret;
-use crate::storage::embedded::open_metadata;
+use crate::storage::open::open_metadata;
 
 /// A token as `sitar token list` shows it: never the token itself.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -42,19 +42,40 @@ pub(crate) fn check_token_name(name: &str) -> Result<(), Error> {
 /// Makes a token named `name` with `role` in the data directory's database and returns it
 /// (the only time it is shown: only its hash is stored).
 pub fn create_token(data_dir: &Path, role: Role, name: &str) -> Result<String, Error> {
-    let token = secret::new_token()?;
-    open_metadata(data_dir)?.insert_token(name, role, &token)?;
-    Ok(token)
+    create_token_at(data_dir, None, role, name)
 }
 
 /// The tokens of the data directory's database, oldest first.
 pub fn list_tokens(data_dir: &Path) -> Result<Vec<TokenInfo>, Error> {
-    open_metadata(data_dir)?.tokens()
+    list_tokens_at(data_dir, None)
 }
 
 /// Revokes the token named `name`: its next request is answered 401. Whether it existed.
 pub fn revoke_token(data_dir: &Path, name: &str) -> Result<bool, Error> {
-    open_metadata(data_dir)?.revoke_token(name)
+    revoke_token_at(data_dir, None, name)
+}
+
+/// [`create_token`] in the Postgres database at `database` when given (`sitar token create
+/// --database URL`), else in the data directory's.
+pub fn create_token_at(
+    data_dir: &Path,
+    database: Option<&str>,
+    role: Role,
+    name: &str,
+) -> Result<String, Error> {
+    let token = secret::new_token()?;
+    open_metadata(data_dir, database)?.insert_token(name, role, &token)?;
+    Ok(token)
+}
+
+/// [`list_tokens`] of the Postgres database at `database` when given.
+pub fn list_tokens_at(data_dir: &Path, database: Option<&str>) -> Result<Vec<TokenInfo>, Error> {
+    open_metadata(data_dir, database)?.tokens()
+}
+
+/// [`revoke_token`] in the Postgres database at `database` when given.
+pub fn revoke_token_at(data_dir: &Path, database: Option<&str>, name: &str) -> Result<bool, Error> {
+    open_metadata(data_dir, database)?.revoke_token(name)
 }
 
 #[cfg(test)]

@@ -118,6 +118,20 @@ impl Files {
         self
     }
 
+    /// The same files counting every upload against `quota` (the cluster store stages its
+    /// uploads here, counted against the bucket's quotas).
+    pub fn with_quota(mut self, quota: std::sync::Arc<DiskQuota>) -> Files {
+        self.quota = quota;
+        self
+    }
+
+    /// A fresh path in `DATA/tmp` (emptied at every start).
+    pub fn temp_path(&self) -> PathBuf {
+        self.root
+            .join("tmp")
+            .join(format!("upload-{}.part", new_id()))
+    }
+
     fn session_dir(&self, id: &str) -> PathBuf {
         debug_assert!(is_server_id(id));
         self.root.join("sessions").join(id)
@@ -126,12 +140,6 @@ impl Files {
     /// Where `object` of session `id` lives.
     fn path(&self, id: &str, object: SessionObject) -> PathBuf {
         self.session_dir(id).join(object.relative_path())
-    }
-
-    fn temp_path(&self) -> PathBuf {
-        self.root
-            .join("tmp")
-            .join(format!("upload-{}.part", new_id()))
     }
 
     /// Writes small server-made content atomically (temp file + rename).
@@ -146,7 +154,7 @@ impl Files {
     }
 
     /// [`BlobStore::append_to`] at `path`.
-    async fn append<S, E>(
+    pub(crate) async fn append<S, E>(
         &self,
         mut body: S,
         path: &Path,
@@ -276,8 +284,7 @@ impl Files {
 /// The embedded blob store: the data directory's session folders.
 impl BlobStore for Files {
     fn reserve(&self, id: Option<&str>, declared: Option<u64>) -> Result<Reservation<'_>, Error> {
-        let dir = id.map(|id| self.session_dir(id));
-        self.quota.reserve(dir.as_deref(), declared)
+        self.quota.reserve(id, declared)
     }
 
     fn exists(&self, id: &str, object: SessionObject) -> bool {

@@ -9,12 +9,16 @@
 //! the data directory (`tests/layout.rs` checks both).
 
 pub(crate) mod blobs;
+pub(crate) mod blocking;
 pub(crate) mod embedded;
 pub(crate) mod files;
 pub(crate) mod instance;
 pub(crate) mod keys;
 pub(crate) mod metadata;
+pub(crate) mod open;
+pub(crate) mod postgres;
 pub(crate) mod quota;
+pub(crate) mod s3;
 pub(crate) mod sqlite;
 pub(crate) mod staged;
 

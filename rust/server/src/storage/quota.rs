@@ -1,7 +1,8 @@
 //! Disk quotas: bytes one session may keep (`session_disk_quota`, 413 beyond) and bytes all
-//! of them may keep together (`disk_quota`, 507 beyond). Usage is what the data directory
-//! holds — measured by walking it, at most every [`WALK_TTL`] — plus the bytes of uploads
-//! streaming now, counted as they are written, so concurrent uploads cannot overrun it.
+//! of them may keep together (`disk_quota`, 507 beyond). Usage is what the store holds —
+//! measured by walking the data directory (or listing the bucket: [`Measure`]), at most every
+//! [`Measure::reuse_for`] — plus the bytes of uploads streaming now, counted as they are
+//! written, so concurrent uploads cannot overrun it.
 
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
@@ -13,10 +14,38 @@ use crate::Error;
 /// A walk of the data directory is reused this long (one walk stats every file).
 const WALK_TTL: Duration = Duration::from_secs(5);
 
+/// How the bytes a store holds are measured.
+pub(crate) trait Measure: Send + Sync + std::fmt::Debug {
+    /// Bytes the whole store holds.
+    fn total(&self) -> u64;
+    /// Bytes session `id` holds.
+    fn session(&self, id: &str) -> u64;
+    /// How long a measure of the whole store is reused.
+    fn reuse_for(&self) -> Duration;
+}
+
+/// The data directory: its files, walked.
+#[derive(Debug)]
+struct Folder(PathBuf);
+
+impl Measure for Folder {
+    fn total(&self) -> u64 {
+        disk_usage(&self.0)
+    }
+
+    fn session(&self, id: &str) -> u64 {
+        disk_usage(&self.0.join("sessions").join(id))
+    }
+
+    fn reuse_for(&self) -> Duration {
+        WALK_TTL
+    }
+}
+
 /// The quotas and the bytes counted against them.
 #[derive(Debug)]
 pub(crate) struct DiskQuota {
-    root: PathBuf,
+    measure: Box<dyn Measure>,
     session_bytes: u64,
     global_bytes: u64,
     /// Bytes of uploads streaming now.
@@ -28,9 +57,19 @@ pub(crate) struct DiskQuota {
 }
 
 impl DiskQuota {
+    /// The quotas of data directory `root`.
     pub fn new(root: &Path, session_bytes: u64, global_bytes: u64) -> DiskQuota {
+        DiskQuota::measured(
+            Box::new(Folder(root.to_path_buf())),
+            session_bytes,
+            global_bytes,
+        )
+    }
+
+    /// The quotas of a store measured by `measure`.
+    pub fn measured(measure: Box<dyn Measure>, session_bytes: u64, global_bytes: u64) -> DiskQuota {
         DiskQuota {
-            root: root.to_path_buf(),
+            measure,
             session_bytes,
             global_bytes,
             in_flight: AtomicU64::new(0),
@@ -44,12 +83,12 @@ impl DiskQuota {
         let walked = {
             let mut walked = self.walked.lock().unwrap_or_else(|p| p.into_inner());
             match *walked {
-                Some((at, bytes)) if at.elapsed() < WALK_TTL => bytes,
+                Some((at, bytes)) if at.elapsed() < self.measure.reuse_for() => bytes,
                 _ => {
                     // Taken before the walk: an upload finishing during it is counted twice
                     // (for one interval), never missed.
                     let finished = self.since_walk.load(Ordering::SeqCst);
-                    let bytes = disk_usage(&self.root);
+                    let bytes = self.measure.total();
                     self.since_walk.fetch_sub(finished, Ordering::SeqCst);
                     *walked = Some((Instant::now(), bytes));
                     bytes
@@ -61,17 +100,19 @@ impl DiskQuota {
             .saturating_add(self.in_flight.load(Ordering::SeqCst))
     }
 
-    /// Room left for an upload into the folder `session_dir` (`None`: an upload that makes
-    /// a new session, only the global quota applies). Refuses at once when `declared` bytes
-    /// would not fit.
+    /// Room left for an upload into session `id` (`None`: an upload that makes a new
+    /// session, only the global quota applies). Refuses at once when `declared` bytes would
+    /// not fit.
     pub fn reserve(
         &self,
-        session_dir: Option<&Path>,
+        id: Option<&str>,
         declared: Option<u64>,
     ) -> Result<Reservation<'_>, Error> {
-        let session_room = match session_dir {
-            Some(dir) => self.session_bytes.saturating_sub(disk_usage(dir)),
-            None => u64::MAX,
+        let session_room = match id {
+            Some(id) if self.session_bytes != u64::MAX => {
+                self.session_bytes.saturating_sub(self.measure.session(id))
+            }
+            _ => u64::MAX,
         };
         let reservation = Reservation {
             quota: self,
@@ -113,7 +154,10 @@ impl Reservation<'_> {
         if self.written.saturating_add(more) > self.session_room {
             return Err(self.quota.session_full());
         }
-        if self.quota.used().saturating_add(more) > self.quota.global_bytes {
+        // An unlimited quota measures nothing (a bucket is listed to be measured).
+        if self.quota.global_bytes != u64::MAX
+            && self.quota.used().saturating_add(more) > self.quota.global_bytes
+        {
             return Err(self.quota.disk_full());
         }
         Ok(())
@@ -186,9 +230,9 @@ mod tests {
         assert_eq!(quota.used(), 700);
 
         // 400 left in the session: declared too much is refused before reading.
-        let err = quota.reserve(Some(&session), Some(401)).unwrap_err();
+        let err = quota.reserve(Some("s1"), Some(401)).unwrap_err();
         assert_eq!(err.status_and_code().0.as_u16(), 413, "{err}");
-        let mut upload = quota.reserve(Some(&session), None).unwrap();
+        let mut upload = quota.reserve(Some("s1"), None).unwrap();
         upload.add(400).unwrap();
         assert_eq!(upload.add(1).unwrap_err().status_and_code().0.as_u16(), 413);
 

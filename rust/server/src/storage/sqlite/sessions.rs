@@ -24,7 +24,7 @@ const REQUEST: &str = "trials_total || '/' || playback || '/' || setting || '/' 
 
 impl NewSession<'_> {
     /// The request as [`REQUEST`] reads it back from a row.
-    fn request_summary(&self) -> String {
+    pub(crate) fn request_summary(&self) -> String {
         format!(
             "{}/{}/{}/{}/{}/{}/{}/{}",
             self.trials_total,

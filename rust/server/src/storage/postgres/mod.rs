@@ -1,0 +1,232 @@
+//! The cluster metadata store: Postgres, for several `sitar serve` instances on one database
+//! (`sitar serve --database postgres://…`). Same tables and guarantees as the embedded
+//! SQLite store ([`crate::storage::sqlite`]), one file per concern; the schema is versioned
+//! ([`migrations`], applied at start). Calls run on a fixed set of connection threads
+//! ([`pool`]: why threads, and the bounds).
+//!
+//! Connection settings: the URL first, then the usual `PG*` variables for what it leaves out
+//! (`PGHOST`, `PGPORT`, `PGUSER`, `PGPASSWORD`, `PGDATABASE`, `PGAPPNAME`,
+//! `PGCONNECT_TIMEOUT`). Connections are plain TCP or a Unix socket (no TLS): keep the
+//! database on a private network or the same host.
+
+use std::str::FromStr;
+
+use crate::Error;
+
+mod jobs;
+mod migrations;
+mod pool;
+mod sessions;
+mod tokens;
+mod trials;
+mod usage;
+
+/// Connections (and threads) per instance.
+pub(crate) const CONNECTIONS: usize = 8;
+
+/// The cluster metadata store.
+pub(crate) struct PgStore {
+    pool: pool::Pool,
+}
+
+/// Whether `url` names a Postgres database (`postgres://` or `postgresql://`).
+pub(crate) fn is_postgres_url(url: &str) -> bool {
+    url.starts_with("postgres://") || url.starts_with("postgresql://")
+}
+
+/// The connection settings of `url`, with the `PG*` variables for what it leaves out.
+pub(crate) fn config(url: &str) -> Result<postgres::Config, Error> {
+    let mut config = postgres::Config::from_str(url)
+        .map_err(|e| Error::Config(format!("--database {}: {e}", redact(url))))?;
+    let var = |name: &str| std::env::var(name).ok().filter(|v| !v.is_empty());
+    if config.get_hosts().is_empty()
+        && let Some(host) = var("PGHOST")
+    {
+        if host.starts_with('/') {
+            config.host_path(host);
+        } else {
+            config.host(&host);
+        }
+    }
+    if config.get_hosts().is_empty() {
+        config.host("localhost");
+    }
+    if config.get_ports().is_empty()
+        && let Some(port) = var("PGPORT")
+    {
+        let port: u16 = port
+            .parse()
+            .map_err(|_| Error::Config(format!("PGPORT: {port:?} is not a port number")))?;
+        config.port(port);
+    }
+    if config.get_user().is_none() {
+        let user = var("PGUSER")
+            .or_else(|| var("USER"))
+            .unwrap_or_else(|| "postgres".into());
+        config.user(&user);
+    }
+    if config.get_password().is_none()
+        && let Some(password) = var("PGPASSWORD")
+    {
+        config.password(password);
+    }
+    if config.get_dbname().is_none()
+        && let Some(db) = var("PGDATABASE")
+    {
+        config.dbname(&db);
+    }
+    if config.get_application_name().is_none() {
+        config.application_name(&var("PGAPPNAME").unwrap_or_else(|| "sitar".into()));
+    }
+    if config.get_connect_timeout().is_none() {
+        let secs = var("PGCONNECT_TIMEOUT")
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(10);
+        config.connect_timeout(std::time::Duration::from_secs(secs));
+    }
+    Ok(config)
+}
+
+/// `url` without its password, for messages.
+pub(crate) fn redact(url: &str) -> String {
+    match (url.find("://"), url.rfind('@')) {
+        (Some(scheme), Some(at)) if at > scheme => {
+            let credentials = &url[scheme + 3..at];
+            match credentials.find(':') {
+                Some(colon) => format!(
+                    "{}{}:***{}",
+                    &url[..scheme + 3],
+                    &credentials[..colon],
+                    &url[at..]
+                ),
+                None => url.to_string(),
+            }
+        }
+        _ => url.to_string(),
+    }
+}
+
+impl PgStore {
+    /// Connects to `url` and applies the migrations the database lacks.
+    pub fn open(url: &str) -> Result<PgStore, Error> {
+        let config = config(url)?;
+        let pool = pool::Pool::open(config, CONNECTIONS).map_err(|e| match e {
+            Error::Database(why) => Error::Database(format!("{}: {why}", redact(url))),
+            other => other,
+        })?;
+        pool.run(|c| migrations::migrate(c).map(|_| ()))?;
+        Ok(PgStore { pool })
+    }
+}
+
+/// A column that must fit a `u32`; an error naming the column otherwise.
+pub(super) fn u32_column(row: &postgres::Row, index: usize, column: &str) -> Result<u32, String> {
+    let value: i64 = row.try_get(index).map_err(|e| format!("{column}: {e}"))?;
+    u32::try_from(value).map_err(|_| format!("{column}: {value} is out of range"))
+}
+
+#[cfg(test)]
+pub(crate) mod test_database;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_cluster_store_passes_the_conformance_suite() {
+        let Some(url) = test_database::fresh("conformance") else {
+            return;
+        };
+        let store = PgStore::open(&url).unwrap();
+        crate::storage::conformance::metadata_store(&store);
+        // What it stored is there for another instance on the same database.
+        drop(store);
+        let again = PgStore::open(&url).unwrap();
+        use crate::storage::SessionStore;
+        assert!(again.session("s1000000000000005").unwrap().is_some());
+    }
+
+    #[test]
+    fn migrations_run_once_and_a_newer_schema_is_refused() {
+        let Some(url) = test_database::fresh("migrations") else {
+            return;
+        };
+        let store = PgStore::open(&url).unwrap();
+        let versions = store
+            .pool
+            .run(|c| {
+                Ok(c.query(
+                    "SELECT version FROM schema_migrations ORDER BY version",
+                    &[],
+                )?
+                .iter()
+                .map(|r| r.get::<_, i64>(0))
+                .collect::<Vec<_>>())
+            })
+            .unwrap();
+        assert_eq!(versions, (1..=migrations::latest()).collect::<Vec<_>>());
+        // Two more instances on the same database apply nothing again.
+        std::thread::scope(|s| {
+            let a = s.spawn(|| PgStore::open(&url).map(|_| ()));
+            let b = s.spawn(|| PgStore::open(&url).map(|_| ()));
+            a.join().unwrap().unwrap();
+            b.join().unwrap().unwrap();
+        });
+        store
+            .pool
+            .run(|c| {
+                c.execute(
+                    "INSERT INTO schema_migrations VALUES (999, 'future', 0)",
+                    &[],
+                )?;
+                Ok(())
+            })
+            .unwrap();
+        let err = PgStore::open(&url).err().unwrap().to_string();
+        assert!(err.contains("version 999"), "{err}");
+    }
+
+    #[test]
+    fn a_database_that_is_down_is_named_without_its_password() {
+        // A port nothing listens on (the test database's own port + 1 is not promised to be
+        // free; port 9 of loopback is "discard", closed on these machines).
+        let err = PgStore::open("postgres://sitar:secret@127.0.0.1:9/sitar")
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(err.contains("sitar:***@127.0.0.1:9"), "{err}");
+        assert!(!err.contains("secret"), "{err}");
+        let bad = PgStore::open("postgres://[::1").err().unwrap().to_string();
+        assert!(bad.contains("--database"), "{bad}");
+    }
+
+    #[test]
+    fn a_busy_connection_thread_is_never_a_tokio_worker() {
+        let Some(url) = test_database::fresh("runtime") else {
+            return;
+        };
+        let store = std::sync::Arc::new(PgStore::open(&url).unwrap());
+        use crate::storage::TokenStore;
+        // Called from async tasks on both runtime flavours: no panic, right answers.
+        let multi = tokio::runtime::Builder::new_multi_thread()
+            .worker_threads(2)
+            .build()
+            .unwrap();
+        let s = store.clone();
+        multi.block_on(async move {
+            let tasks: Vec<_> = (0..16)
+                .map(|i| {
+                    let s = s.clone();
+                    tokio::spawn(async move { s.has_token(&format!("t{i}")).unwrap() })
+                })
+                .collect();
+            for t in tasks {
+                assert!(!t.await.unwrap());
+            }
+        });
+        let single = tokio::runtime::Builder::new_current_thread()
+            .build()
+            .unwrap();
+        single.block_on(async { assert!(!store.has_token("x").unwrap()) });
+    }
+}
