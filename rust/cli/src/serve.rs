@@ -16,9 +16,21 @@ pub struct Args {
     /// Address to listen on.
     #[arg(long, default_value = "127.0.0.1:8000")]
     addr: SocketAddr,
-    /// Data directory (SQLite database and files; created if missing).
+    /// Data directory (SQLite database and files; created if missing). With --database and
+    /// --store: this instance's own files only (admin token, TLS certificate, staged
+    /// uploads, bounded local copies of objects).
     #[arg(long, value_name = "DIR", default_value = "sitar-data")]
     data: PathBuf,
+    /// Postgres for the metadata several instances share, instead of DIR/sitar.db
+    /// (postgres://USER@HOST:PORT/DATABASE; the PG* variables fill in what it leaves out).
+    /// Migrations are applied at start.
+    #[arg(long, value_name = "URL")]
+    database: Option<String>,
+    /// An S3-compatible bucket for every session's bytes, instead of DIR/sessions
+    /// (s3://BUCKET/PREFIX; endpoint, region and credentials from AWS_ENDPOINT_URL,
+    /// AWS_REGION, AWS_ACCESS_KEY_ID, AWS_SECRET_ACCESS_KEY, AWS_ALLOW_HTTP).
+    #[arg(long, value_name = "URL")]
+    store: Option<String>,
     /// How trials are played for sessions that do not name a playback (`POST /v1/sessions`
     /// without `playback`), for the legacy `POST /recording` route and `GET /v1/devices`:
     /// adb drives phones over USB, sim plays on simulated phones. Sessions may always ask
@@ -160,6 +172,8 @@ enum Playback {
 pub fn run(args: Args) -> Result<()> {
     crate::logging::init(args.log_level);
     let mut config = ServerConfig::new(&args.data);
+    config.database = args.database.clone();
+    config.store = args.store.clone();
     config.playback = match args.playback {
         Playback::Adb => PlaybackKind::Adb,
         Playback::Sim => PlaybackKind::Sim,
@@ -208,8 +222,20 @@ pub fn run(args: Args) -> Result<()> {
     config.retention = args
         .keep_days
         .map(|days| Duration::from_secs(u64::from(days) * 86_400));
+    let stores = match (&args.database, &args.store) {
+        (None, None) => String::new(),
+        (database, store) => format!(
+            " (metadata in {}, bytes in {})",
+            if database.is_some() {
+                "Postgres"
+            } else {
+                "DIR/sitar.db"
+            },
+            store.as_deref().unwrap_or("DIR/sessions")
+        ),
+    };
     eprintln!(
-        "sitar serve: data {}, playback {}{}, {} playback and {} estimate workers; \
+        "sitar serve: data {}{stores}, playback {}{}, {} playback and {} estimate workers; \
          Ctrl-C or SIGTERM stops",
         args.data.display(),
         config.playback.as_str(),

@@ -1,10 +1,38 @@
-//! `sitar token create|list|revoke --data DIR`: the backend's access tokens, in its database
-//! (they work while `sitar serve` runs on the same data directory).
+//! `sitar token create|list|revoke --data DIR` (or `--database URL`): the backend's access
+//! tokens, in its database (they work while `sitar serve` runs on the same data directory or
+//! Postgres database).
 
 use std::path::PathBuf;
 
 use anyhow::{Context, Result, bail};
-use sitar_server::{Role, create_token, list_tokens, revoke_token};
+use sitar_server::{Role, create_token_at, list_tokens_at, revoke_token_at};
+
+/// Where the tokens are: a data directory's database, or the Postgres of `serve --database`.
+#[derive(clap::Args, Debug)]
+#[group(required = true, multiple = false)]
+struct Database {
+    /// Data directory of `sitar serve`.
+    #[arg(long, value_name = "DIR")]
+    data: Option<PathBuf>,
+    /// The Postgres database of `sitar serve --database` (postgres://…; PG* variables fill
+    /// in what it leaves out).
+    #[arg(long, value_name = "URL")]
+    database: Option<String>,
+}
+
+impl Database {
+    /// What the messages name: the directory, or "the database" (never its URL's password).
+    fn name(&self) -> String {
+        match &self.data {
+            Some(dir) => format!("--data {}", dir.display()),
+            None => "--database".to_owned(),
+        }
+    }
+
+    fn data(&self) -> PathBuf {
+        self.data.clone().unwrap_or_else(|| PathBuf::from("."))
+    }
+}
 
 /// Manages the backend's access tokens (only their hashes are stored).
 #[derive(clap::Args, Debug)]
@@ -20,9 +48,8 @@ pub struct Args {
 enum Command {
     /// Makes a token and prints it as the only line on stdout (shown this once).
     Create {
-        /// Data directory of `sitar serve`.
-        #[arg(long, value_name = "DIR")]
-        data: PathBuf,
+        #[command(flatten)]
+        data: Database,
         /// `app` (its own sessions) or `admin` (everything).
         #[arg(long, value_parser = parse_role)]
         role: Role,
@@ -32,15 +59,13 @@ enum Command {
     },
     /// Lists the tokens: name, role, created, last used (never the token).
     List {
-        /// Data directory of `sitar serve`.
-        #[arg(long, value_name = "DIR")]
-        data: PathBuf,
+        #[command(flatten)]
+        data: Database,
     },
     /// Revokes the token NAME: its next request is refused.
     Revoke {
-        /// Data directory of `sitar serve`.
-        #[arg(long, value_name = "DIR")]
-        data: PathBuf,
+        #[command(flatten)]
+        data: Database,
         /// The token's name.
         name: String,
     },
@@ -60,13 +85,13 @@ fn utc(ms: i64) -> String {
 pub fn run(args: Args) -> Result<()> {
     match args.command {
         Command::Create { data, role, name } => {
-            let token = create_token(&data, role, &name)
-                .with_context(|| format!("sitar token create --data {}", data.display()))?;
+            let token = create_token_at(&data.data(), data.database.as_deref(), role, &name)
+                .with_context(|| format!("sitar token create {}", data.name()))?;
             println!("{token}");
         }
         Command::List { data } => {
-            let tokens = list_tokens(&data)
-                .with_context(|| format!("sitar token list --data {}", data.display()))?;
+            let tokens = list_tokens_at(&data.data(), data.database.as_deref())
+                .with_context(|| format!("sitar token list {}", data.name()))?;
             println!("{:<24} {:<6} {:<21} last used", "name", "role", "created");
             for t in tokens {
                 println!(
@@ -79,10 +104,10 @@ pub fn run(args: Args) -> Result<()> {
             }
         }
         Command::Revoke { data, name } => {
-            if !revoke_token(&data, &name)
-                .with_context(|| format!("sitar token revoke --data {}", data.display()))?
+            if !revoke_token_at(&data.data(), data.database.as_deref(), &name)
+                .with_context(|| format!("sitar token revoke {}", data.name()))?
             {
-                bail!("no token named {name:?} in {}", data.display());
+                bail!("no token named {name:?} in {}", data.name());
             }
             eprintln!("sitar token: revoked {name:?}");
         }

@@ -201,6 +201,37 @@ mod tests {
     }
 
     #[test]
+    fn connections_the_server_dropped_are_made_again() {
+        let Some(url) = test_database::fresh("reconnect") else {
+            return;
+        };
+        let store = PgStore::open(&url).unwrap();
+        use crate::storage::TokenStore;
+        store
+            .insert_token(
+                "before",
+                crate::auth::Role::App,
+                "sitar_reconnectAAAAAAAAAAAAAAAAAAAA",
+            )
+            .unwrap();
+        // What a Postgres restart does to every connection: the server ends them.
+        let mut admin = config(&url).unwrap().connect(postgres::NoTls).unwrap();
+        let dropped = admin
+            .execute(
+                "SELECT pg_terminate_backend(pid) FROM pg_stat_activity \
+                 WHERE datname = current_database() AND pid <> pg_backend_pid()",
+                &[],
+            )
+            .unwrap();
+        assert!(dropped >= 1, "{dropped}");
+        std::thread::sleep(pool::CHECK_IDLE_AFTER + std::time::Duration::from_millis(200));
+        // Every connection of the pool answers again (more calls than connections).
+        for _ in 0..2 * CONNECTIONS {
+            assert!(store.has_token("before").unwrap());
+        }
+    }
+
+    #[test]
     fn a_busy_connection_thread_is_never_a_tokio_worker() {
         let Some(url) = test_database::fresh("runtime") else {
             return;

@@ -24,9 +24,10 @@ use crate::Error;
 /// How long a caller waits for a free connection before its request fails.
 pub(super) const CHECKOUT_WAIT: Duration = Duration::from_secs(30);
 
-/// A connection unused this long is checked before use: after a Postgres restart its first
-/// query would otherwise fail.
-const CHECK_IDLE_AFTER: Duration = Duration::from_secs(5);
+/// A connection unused this long is checked (an empty query) before use: after a Postgres
+/// restart its first query would otherwise fail. A busy connection is never idle this long;
+/// one that breaks while busy fails that call (500, the client retries) and is made again.
+pub(super) const CHECK_IDLE_AFTER: Duration = Duration::from_secs(1);
 
 /// Work sent to a connection thread.
 type Job = Box<dyn FnOnce(&mut Connection) + Send>;

@@ -1,0 +1,294 @@
+//! `sitar serve --database postgres://… --store s3://…` as an operator runs it: the real
+//! binary on loopback against a real Postgres and a real S3-compatible store (SeaweedFS,
+//! started by `scripts/cluster-services`). A sim session goes upload → playback → done, and
+//! its results are byte-identical to the embedded server's for the same recording. Without
+//! `SITAR_TEST_DATABASE_URL` and `SITAR_TEST_S3_URL` the tests print SKIPPED.
+
+use std::io::{BufRead, BufReader};
+use std::path::Path;
+use std::process::{Child, Command, Stdio};
+use std::sync::mpsc::{Receiver, channel};
+use std::time::{Duration, Instant};
+
+/// A running `sitar serve`, its output lines and its URL.
+struct Serving {
+    child: Child,
+    lines: Receiver<String>,
+    seen: Vec<String>,
+    url: String,
+}
+
+impl Serving {
+    /// Starts `sitar serve` with sim playback on a free port and `extra` arguments.
+    fn start(data: &Path, extra: &[&str]) -> Serving {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_sitar"))
+            .args(["serve", "--addr", "127.0.0.1:0", "--playback", "sim"])
+            .args(["--sim-speed", "30", "--sim-devices", "2", "--data"])
+            .arg(data)
+            .args(extra)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("run sitar serve");
+        let (tx, lines) = channel();
+        let out = child.stdout.take().unwrap();
+        let err = child.stderr.take().unwrap();
+        let tx_out = tx.clone();
+        std::thread::spawn(move || {
+            for line in BufReader::new(out).lines().map_while(Result::ok) {
+                if tx_out.send(line).is_err() {
+                    return;
+                }
+            }
+        });
+        std::thread::spawn(move || {
+            for line in BufReader::new(err).lines().map_while(Result::ok) {
+                if tx.send(line).is_err() {
+                    return;
+                }
+            }
+        });
+        let mut serving = Serving {
+            child,
+            lines,
+            seen: Vec::new(),
+            url: String::new(),
+        };
+        let listening = serving.wait_for("listening on http://");
+        serving.url = listening[listening.find("http://").unwrap()..].to_string();
+        serving
+    }
+
+    /// Waits for an output line containing `needle`; panics with what was seen after 60 s.
+    fn wait_for(&mut self, needle: &str) -> String {
+        if let Some(line) = self.seen.iter().find(|l| l.contains(needle)) {
+            return line.clone();
+        }
+        let deadline = Instant::now() + Duration::from_secs(60);
+        while let Some(left) = deadline.checked_duration_since(Instant::now()) {
+            match self.lines.recv_timeout(left) {
+                Ok(line) => {
+                    self.seen.push(line.clone());
+                    if line.contains(needle) {
+                        return line;
+                    }
+                }
+                Err(_) => break,
+            }
+        }
+        panic!("no line with {needle:?} in {:#?}", self.seen);
+    }
+
+    fn client(&self, token: &str) -> sitar_client::Client {
+        sitar_client::Client::new(&self.url)
+            .unwrap()
+            .with_server_token(token)
+            .unwrap()
+    }
+}
+
+impl Drop for Serving {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// The test services' URLs, or `None` after printing SKIPPED.
+fn services(test: &str) -> Option<(String, String)> {
+    let var = |name: &str| std::env::var(name).ok().filter(|v| !v.is_empty());
+    match (var("SITAR_TEST_DATABASE_URL"), var("SITAR_TEST_S3_URL")) {
+        (Some(db), Some(s3)) => Some((db, s3)),
+        _ => {
+            println!(
+                "SKIPPED {test}: SITAR_TEST_DATABASE_URL and SITAR_TEST_S3_URL are not both set \
+                 (scripts/cluster-services start)"
+            );
+            None
+        }
+    }
+}
+
+/// A fresh database on the test server (made with `psql`), or `None` after printing SKIPPED.
+fn fresh_database(test: &str, url: &str) -> Option<String> {
+    let name = format!("sitar_cli_{test}_{}", std::process::id());
+    let made = Command::new("psql")
+        .args([url, "-q", "-c"])
+        .arg(format!("DROP DATABASE IF EXISTS {name} WITH (FORCE)"))
+        .args(["-c", &format!("CREATE DATABASE {name}")])
+        .output();
+    match made {
+        Ok(out) if out.status.success() => {
+            let base = url.rsplit_once('/').map_or(url, |(base, _)| base);
+            Some(format!("{base}/{name}"))
+        }
+        Ok(out) => {
+            println!(
+                "SKIPPED {test}: psql cannot make a database: {}",
+                String::from_utf8_lossy(&out.stderr)
+            );
+            None
+        }
+        Err(e) => {
+            println!("SKIPPED {test}: no psql: {e}");
+            None
+        }
+    }
+}
+
+/// Runs a sim session of `trials` trials on `recording`; its status, CSV and JSON results.
+fn run_session(
+    client: &sitar_client::Client,
+    recording: &Path,
+    trials: u32,
+) -> (String, sitar_client::SessionStatus, String, String) {
+    let id = client
+        .create_session(&sitar_client::NewSession {
+            trials,
+            setting: "trim_mean_30".into(),
+            playback: "sim".into(),
+            window_frames: None,
+            pose_relation: None,
+        })
+        .unwrap();
+    client
+        .upload_recording(&id, recording, &mut |_, _| {})
+        .unwrap();
+    let status = client
+        .wait(
+            &id,
+            Duration::from_millis(50),
+            Duration::from_secs(120),
+            &mut |_| {},
+        )
+        .unwrap();
+    let csv = client.results_csv(&id).unwrap();
+    let json = client.results_json(&id).unwrap();
+    (id, status, csv, json)
+}
+
+fn admin_token(data: &Path) -> String {
+    std::fs::read_to_string(data.join("admin.token"))
+        .unwrap()
+        .trim()
+        .to_string()
+}
+
+/// Every regular file under `dir`.
+fn files_under(dir: &Path) -> Vec<std::path::PathBuf> {
+    let mut out = Vec::new();
+    let mut pending = vec![dir.to_path_buf()];
+    while let Some(dir) = pending.pop() {
+        for entry in std::fs::read_dir(&dir).into_iter().flatten().flatten() {
+            let path = entry.path();
+            if path.is_dir() {
+                pending.push(path);
+            } else {
+                out.push(path);
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn a_cluster_instance_plays_a_session_as_the_embedded_one_does() {
+    let Some((database, store)) = services("serve_cluster") else {
+        return;
+    };
+    let Some(database) = fresh_database("serve_cluster", &database) else {
+        return;
+    };
+    let store = format!("{store}/serve-cluster-{}", std::process::id());
+    let dir = tempfile::tempdir().unwrap();
+    let recording = dir.path().join("walk.rec");
+    let rec = sitar_sim::Recording::demo(6.0, 30.0, 11).unwrap();
+    std::fs::write(&recording, rec.to_bytes()).unwrap();
+
+    // The embedded server: the reference.
+    let embedded_data = dir.path().join("embedded");
+    let embedded = Serving::start(&embedded_data, &[]);
+    let client = embedded.client(&admin_token(&embedded_data));
+    let (_, status, csv, json) = run_session(&client, &recording, 5);
+    assert_eq!(status.state, sitar_client::SessionState::Done, "{status:?}");
+    drop(embedded);
+
+    // The cluster instance: the first on an empty database writes the admin token.
+    let a_data = dir.path().join("instance-a");
+    let cluster = ["--database", database.as_str(), "--store", store.as_str()];
+    let mut a = Serving::start(&a_data, &cluster);
+    a.wait_for("metadata in Postgres");
+    let admin = admin_token(&a_data);
+    // `sitar token create --database` makes a token the running instance accepts.
+    let out = Command::new(env!("CARGO_BIN_EXE_sitar"))
+        .args(["token", "create", "--role", "app", "--name", "lab-phone"])
+        .args(["--database", &database])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let app = String::from_utf8(out.stdout).unwrap().trim().to_string();
+    let (id, status, cluster_csv, cluster_json) = run_session(&a.client(&app), &recording, 5);
+    assert_eq!(status.state, sitar_client::SessionState::Done, "{status:?}");
+    assert_eq!(status.results_trials, 5, "{status:?}");
+    assert_eq!(
+        cluster_csv, csv,
+        "CSV results differ from the embedded server's"
+    );
+    assert_eq!(
+        cluster_json, json,
+        "JSON results differ from the embedded server's"
+    );
+    // Nothing of the session is in the instance's folder: no database file, no session file.
+    assert!(!a_data.join("sitar.db").exists());
+    let kept: Vec<_> = files_under(&a_data.join("sessions"));
+    assert!(kept.is_empty(), "{kept:?}");
+
+    // A second instance on the same database and store: no admin token of its own, and it
+    // answers for the session the first one played.
+    let b_data = dir.path().join("instance-b");
+    let b = Serving::start(&b_data, &cluster);
+    assert!(!b_data.join("admin.token").exists());
+    let from_b = b.client(&admin);
+    assert_eq!(from_b.results_csv(&id).unwrap(), csv);
+    assert_eq!(
+        from_b.status(&id).unwrap().state,
+        sitar_client::SessionState::Done
+    );
+    // Deleted through B, it is gone for A too.
+    from_b.delete_session(&id).unwrap();
+    assert_eq!(
+        a.client(&admin).status(&id).unwrap_err().status(),
+        Some(404)
+    );
+}
+
+#[test]
+fn a_store_that_does_not_answer_is_named_at_start() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_sitar"))
+        .args(["serve", "--addr", "127.0.0.1:0", "--data"])
+        .arg(dir.path())
+        .args(["--database", "postgres://sitar:hunter2@127.0.0.1:9/nowhere"])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("127.0.0.1:9"), "{err}");
+    assert!(
+        !err.contains("hunter2"),
+        "the password is never shown: {err}"
+    );
+    let out = Command::new(env!("CARGO_BIN_EXE_sitar"))
+        .args(["serve", "--addr", "127.0.0.1:0", "--data"])
+        .arg(dir.path())
+        .args(["--store", "ftp://bucket/x"])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("s3://BUCKET/PREFIX"), "{err}");
+}
