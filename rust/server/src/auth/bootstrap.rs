@@ -70,7 +70,7 @@ pub(crate) fn ensure_admin_token(
         Ok(()) => Ok(Some(token)),
         // Another instance on the same database made it first: this one's file goes.
         Err(Error::Conflict(_)) => {
-            let _ = std::fs::remove_file(&file);
+            instance::remove_admin_token(data_dir);
             log::info!("another instance made the admin token first (its DATA/admin.token)");
             Ok(None)
         }

@@ -21,6 +21,12 @@ pub(crate) fn write_admin_token(data_dir: &Path, token: &str) -> Result<(), Erro
     write_secret(&admin_token_file(data_dir), &format!("{token}\n"), true)
 }
 
+/// Removes the admin token file this instance wrote when another instance on the same
+/// database made the admin token first.
+pub(crate) fn remove_admin_token(data_dir: &Path) {
+    let _ = std::fs::remove_file(admin_token_file(data_dir));
+}
+
 /// The self-signed certificate and key of data directory `data_dir` (`tls/cert.pem`,
 /// `tls/key.pem`), and whether both exist.
 pub(crate) fn tls_pair(data_dir: &Path) -> (PathBuf, PathBuf, bool) {

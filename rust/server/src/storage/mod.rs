@@ -5,8 +5,9 @@
 //! `DATA/sitar.db` ([`sqlite`], opened by [`embedded`]) and the data directory's session
 //! folders ([`files`], with the disk quotas of [`quota`]); each instance's own files (admin
 //! token, TLS certificate) are [`instance`]'s. One conformance suite per seam
-//! (`conformance`) runs against any implementation. Only this folder speaks SQL or touches
-//! the data directory (`tests/layout.rs` checks both).
+//! (`conformance`) runs against any implementation. The cluster implementations, for several
+//! instances on one database and bucket, are [`postgres`] and [`s3`] ([`open`] picks). Only
+//! this folder speaks SQL or touches the data directory (`tests/layout.rs` checks both).
 
 pub(crate) mod blobs;
 pub(crate) mod blocking;
