@@ -187,11 +187,12 @@ pub(crate) async fn list(s3: &AmazonS3, key: &Key) -> Result<Vec<object_store::O
 
 /// Uploads the local file `path` as `key`: one PUT when small, else a multipart upload of
 /// [`PART_BYTES`] parts (nothing is visible until it completes; an abandoned one is aborted).
+/// The stored object's entity tag.
 pub(crate) async fn upload_file(
     s3: Arc<AmazonS3>,
     path: std::path::PathBuf,
     key: Key,
-) -> Result<(), Error> {
+) -> Result<Option<String>, Error> {
     use tokio::io::AsyncReadExt;
     let mut file = tokio::fs::File::open(&path)
         .await
@@ -209,7 +210,7 @@ pub(crate) async fn upload_file(
         return s3
             .put(&key, PutPayload::from(bytes))
             .await
-            .map(|_| ())
+            .map(|put| put.e_tag)
             .map_err(|e| s3_error(&key, e));
     }
     let upload = s3
@@ -238,7 +239,7 @@ pub(crate) async fn upload_file(
     writer
         .finish()
         .await
-        .map(|_| ())
+        .map(|put| put.e_tag)
         .map_err(|e| s3_error(&key, e))
 }
 

@@ -31,6 +31,7 @@ use crate::storage::staged::{Appended, TakenAway, TempFile};
 
 pub(crate) mod cache;
 mod client;
+mod local_parts;
 mod parts;
 mod trash;
 
@@ -82,8 +83,11 @@ pub(crate) struct S3Blobs {
     /// against the bucket's quotas.
     staging: Files,
     cache: Arc<LocalCache>,
-    /// Staged recordings made of kept parts: publishing one removes the parts.
-    joined: Mutex<std::collections::HashMap<PathBuf, String>>,
+    /// Staged recordings made of kept parts: publishing one removes the parts; a recording
+    /// that is one part whole is published by a server-side copy of that part.
+    joined: Mutex<std::collections::HashMap<PathBuf, (String, Option<Key>)>>,
+    /// Local copies of the parts this instance stored.
+    local_parts: local_parts::LocalParts,
 }
 
 impl S3Blobs {
@@ -119,6 +123,7 @@ impl S3Blobs {
             bucket,
             staging,
             joined: Mutex::new(Default::default()),
+            local_parts: Default::default(),
         })
     }
 
@@ -130,7 +135,16 @@ impl S3Blobs {
 
     fn upload(&self, path: PathBuf, key: Key) -> Result<(), Error> {
         let s3 = self.bucket.s3.clone();
-        self.bucket.block(client::upload_file(s3, path, key))
+        self.bucket
+            .block(client::upload_file(s3, path, key))
+            .map(|_| ())
+    }
+
+    /// Removes session `id`'s parts and their local copies.
+    fn remove_parts(&self, id: &str) -> Result<(), Error> {
+        self.local_parts
+            .forget_under(&self.bucket.key(&parts::folder(id)));
+        parts::remove(&self.bucket, id)
     }
 }
 
@@ -180,7 +194,7 @@ impl BlobStore for S3Blobs {
 
     fn put(&self, id: &str, object: SessionObject, bytes: &[u8]) -> Result<(), Error> {
         if object == SessionObject::RecordingPart {
-            parts::remove(&self.bucket, id)?;
+            self.remove_parts(id)?;
             return self
                 .bucket
                 .put(parts::part_key(&self.bucket, id, 0), bytes.to_vec());
@@ -198,7 +212,7 @@ impl BlobStore for S3Blobs {
 
     fn remove(&self, id: &str, object: SessionObject) -> Result<(), Error> {
         if object == SessionObject::RecordingPart {
-            return parts::remove(&self.bucket, id);
+            return self.remove_parts(id);
         }
         self.cache.forget(&self.cache.object_path(id, object));
         self.bucket.delete(self.key(id, object))
@@ -268,13 +282,17 @@ impl BlobStore for S3Blobs {
                 .append(body, &temp.path, 0, end - offset, what, room)
                 .await?;
             if appended.len > 0 {
-                let (s3, key) = (
-                    self.bucket.s3.clone(),
-                    parts::part_key(&self.bucket, id, offset),
-                );
-                self.bucket
-                    .spawn(client::upload_file(s3, temp.path.clone(), key))
+                let key = parts::part_key(&self.bucket, id, offset);
+                let s3 = self.bucket.s3.clone();
+                let e_tag = self
+                    .bucket
+                    .spawn(client::upload_file(s3, temp.path.clone(), key.clone()))
                     .await?;
+                if let Some(e_tag) = e_tag {
+                    let file = temp.path.clone();
+                    std::mem::forget(temp);
+                    self.local_parts.keep(key, file, e_tag);
+                }
             }
             Ok(Appended {
                 len: offset + appended.len,
@@ -284,32 +302,63 @@ impl BlobStore for S3Blobs {
     }
 
     fn publish(&self, temp: TempFile, id: &str, object: SessionObject) -> Result<(), Error> {
-        self.upload(temp.path.clone(), self.key(id, object))?;
-        self.cache.forget(&self.cache.object_path(id, object));
         let joined = self
             .joined
             .lock()
             .unwrap_or_else(|p| p.into_inner())
             .remove(&temp.path);
-        if let Some(session) = joined {
-            parts::remove(&self.bucket, &session)?;
+        let dest = self.key(id, object);
+        let copied = match &joined {
+            Some((_, Some(part))) => {
+                let (s3, from, to) = (self.bucket.s3.clone(), part.clone(), dest.clone());
+                let copy = self.bucket.block(async move {
+                    use object_store::ObjectStoreExt;
+                    s3.copy(&from, &to)
+                        .await
+                        .map_err(|e| client::s3_error(&from, e))
+                });
+                // A copy the store refuses (e.g. past its size for one copy): sent instead.
+                copy.map_err(|e| log::info!("session {id}: {e}; the recording is sent again"))
+                    .is_ok()
+            }
+            _ => false,
+        };
+        if !copied {
+            self.upload(temp.path.clone(), dest)?;
+        }
+        self.cache.forget(&self.cache.object_path(id, object));
+        if let Some((session, _)) = joined {
+            self.remove_parts(&session)?;
         }
         drop(temp);
         Ok(())
     }
 
     /// The kept parts joined into a staged file (empty, so that publishing fails naming it,
-    /// when they cannot be read).
+    /// when they cannot be read). A recording this instance received whole is its own local
+    /// copy of the one part: nothing is read back from the bucket.
     fn staged_part(&self, id: &str, bytes: u64) -> TempFile {
         let path = self.staging.temp_path();
-        if let Err(e) = parts::gather(&self.bucket, id, bytes, &path) {
-            log::warn!("session {id}: cannot join the kept upload: {e}");
-            let _ = std::fs::remove_file(&path);
-        } else {
-            self.joined
-                .lock()
-                .unwrap_or_else(|p| p.into_inner())
-                .insert(path.clone(), id.to_string());
+        let joined = parts::parts(&self.bucket, id).and_then(|(found, _)| match &found[..] {
+            [one]
+                if one.bytes == bytes
+                    && self.local_parts.link(&one.key, one.e_tag.as_deref(), &path) =>
+            {
+                Ok(Some(one.key.clone()))
+            }
+            _ => parts::gather(&self.bucket, id, bytes, &path).map(|()| None),
+        });
+        match joined {
+            Ok(part) => {
+                let mut joined = self.joined.lock().unwrap_or_else(|p| p.into_inner());
+                // A staged recording dropped unpublished (refused by its check) is gone.
+                joined.retain(|staged, _| staged.exists());
+                joined.insert(path.clone(), (id.to_string(), part));
+            }
+            Err(e) => {
+                log::warn!("session {id}: cannot join the kept upload: {e}");
+                let _ = std::fs::remove_file(&path);
+            }
         }
         TempFile { path, bytes }
     }
@@ -336,6 +385,8 @@ impl BlobStore for S3Blobs {
     }
 
     fn take_away(&self, id: &str) -> Result<Option<TakenAway>, Error> {
+        self.local_parts
+            .forget_under(&self.bucket.key(&parts::folder(id)));
         let taken = trash::take_away(&self.bucket, &self.cache, id)?;
         match taken {
             Some(t) => Ok(Some(TakenAway::put_aside(Box::new(t)))),

@@ -19,8 +19,13 @@ pub(crate) fn part_key(bucket: &Bucket, id: &str, offset: u64) -> Key {
     bucket.key(&format!("{}/{offset:020}", folder(id)))
 }
 
-/// One stored part: (offset, bytes, key).
-pub(crate) type Part = (u64, u64, Key);
+/// One stored part.
+pub(crate) struct Part {
+    pub offset: u64,
+    pub bytes: u64,
+    pub key: Key,
+    pub e_tag: Option<String>,
+}
 
 /// Session `id`'s parts in order, and the length they make: the
 /// parts that follow on from each other from offset 0 (a part that does not, which no
@@ -31,20 +36,25 @@ pub(crate) fn parts(bucket: &Bucket, id: &str) -> Result<(Vec<Part>, u64), Error
         .into_iter()
         .filter_map(|meta| {
             let offset = meta.location.filename()?.parse::<u64>().ok()?;
-            Some((offset, meta.size, meta.location))
+            Some(Part {
+                offset,
+                bytes: meta.size,
+                key: meta.location,
+                e_tag: meta.e_tag,
+            })
         })
         .collect();
-    found.sort_by_key(|p| p.0);
+    found.sort_by_key(|p| p.offset);
     let mut len = 0;
     let mut kept = Vec::new();
     for part in found {
-        if part.0 == len {
-            len += part.1;
+        if part.offset == len {
+            len += part.bytes;
             kept.push(part);
         } else {
             log::warn!(
                 "session {id}: part at {} does not follow on from {len}, ignored",
-                part.0
+                part.offset
             );
         }
     }
@@ -75,7 +85,7 @@ pub(crate) fn gather(
     }
     let mut file = std::fs::File::create(path).map_err(|e| Error::io("cannot create", path, e))?;
     let mut written = 0;
-    for (_, _, key) in parts {
+    for Part { key, .. } in parts {
         if written >= bytes {
             break;
         }
