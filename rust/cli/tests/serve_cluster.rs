@@ -258,12 +258,89 @@ fn a_cluster_instance_plays_a_session_as_the_embedded_one_does() {
         from_b.status(&id).unwrap().state,
         sitar_client::SessionState::Done
     );
+    // A recording begun on A is resumed on B: the first half's part is in the bucket.
+    let bytes = std::fs::read(&recording).unwrap();
+    let resumed = a.client(&app);
+    let id2 = resumed
+        .create_session(&sitar_client::NewSession {
+            trials: 2,
+            setting: "trim_mean_30".into(),
+            playback: "sim".into(),
+            window_frames: None,
+            pose_relation: None,
+        })
+        .unwrap();
+    let half = bytes.len() / 2;
+    let total = bytes.len();
+    let first = put_range(&a.url, &app, &id2, &bytes[..half], 0, total);
+    assert_eq!(first, "200", "the first half is kept for a resume");
+    let offset = head_offset(&b.url, &app, &id2);
+    assert_eq!(offset, half, "instance B sees what A kept");
+    let second = put_range(&b.url, &app, &id2, &bytes[half..], half, total);
+    assert_eq!(second, "202");
+    let done = b
+        .client(&app)
+        .wait(
+            &id2,
+            Duration::from_millis(50),
+            Duration::from_secs(120),
+            &mut |_| {},
+        )
+        .unwrap();
+    assert_eq!(done.state, sitar_client::SessionState::Done, "{done:?}");
+
     // Deleted through B, it is gone for A too.
     from_b.delete_session(&id).unwrap();
     assert_eq!(
         a.client(&admin).status(&id).unwrap_err().status(),
         Some(404)
     );
+}
+
+/// `PUT`s `chunk` as bytes `offset…` of a `total`-byte recording of session `id` (one
+/// upload key); the HTTP status.
+fn put_range(
+    url: &str,
+    token: &str,
+    id: &str,
+    chunk: &[u8],
+    offset: usize,
+    total: usize,
+) -> String {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("chunk");
+    std::fs::write(&file, chunk).unwrap();
+    let range = format!(
+        "Content-Range: bytes {offset}-{}/{total}",
+        offset + chunk.len() - 1
+    );
+    let out = Command::new("curl")
+        .args(["-s", "-o", "/dev/null", "-w", "%{http_code}", "-T"])
+        .arg(&file)
+        .args(["-H", &format!("Authorization: Bearer {token}")])
+        .args(["-H", "Idempotency-Key: cluster-resume", "-H", &range])
+        .arg(format!("{url}/v1/sessions/{id}/recording"))
+        .output()
+        .expect("curl");
+    String::from_utf8_lossy(&out.stdout).trim().to_string()
+}
+
+/// The `Upload-Offset` a `HEAD` of session `id`'s recording answers for the upload key.
+fn head_offset(url: &str, token: &str, id: &str) -> usize {
+    let out = Command::new("curl")
+        .args(["-s", "-I", "-H", &format!("Authorization: Bearer {token}")])
+        .args(["-H", "Idempotency-Key: cluster-resume"])
+        .arg(format!("{url}/v1/sessions/{id}/recording"))
+        .output()
+        .expect("curl");
+    let head = String::from_utf8_lossy(&out.stdout).to_string();
+    head.lines()
+        .find_map(|l| {
+            let (name, value) = l.split_once(':')?;
+            name.eq_ignore_ascii_case("upload-offset")
+                .then(|| value.trim().parse().ok())?
+        })
+        .unwrap_or_else(|| panic!("no Upload-Offset in {head}"))
 }
 
 #[test]
