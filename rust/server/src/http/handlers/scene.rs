@@ -7,6 +7,7 @@ use axum::response::{IntoResponse, Response};
 use crate::Error;
 use crate::http::helpers::{AppState, Found, blocking};
 use crate::report::scene;
+use crate::storage::keys::SessionObject;
 
 /// A download: `body` as the file `file_name` of type `content_type`.
 fn attachment(content_type: &'static str, file_name: &str, body: Vec<u8>) -> Response {
@@ -59,12 +60,20 @@ pub(crate) async fn json(
 }
 
 /// `GET /v1/sessions/{id}/trajectory.tum`: the user's trajectory as the phone logged it
-/// (start, midpoints, endpoints; TUM, integer nanoseconds, the phone session's convention).
+/// (start, midpoints, endpoints; TUM, integer nanoseconds): the phone's own `trajectory.txt`
+/// when it sent one, else as the scene rebuilt it.
 pub(crate) async fn trajectory(
     State(shared): AppState,
     Found(session): Found,
 ) -> Result<Response, Error> {
     let tum = blocking("trajectory", move || {
+        if let Some(sent) = shared
+            .blobs
+            .get(&session.id, SessionObject::PhoneTrajectory)?
+        {
+            return String::from_utf8(sent)
+                .map_err(|e| Error::Internal(format!("stored trajectory.txt: {e}")));
+        }
         scene::load(&shared, &session).map(|loaded| loaded.0.trajectory_tum())
     })
     .await?;
