@@ -16,7 +16,7 @@ use crate::app_state::App;
 use crate::auth::{Caller, check_token_name};
 use crate::error::short;
 use crate::http::helpers::{
-    AppState, check_declared_length, content_type, json_value, visible_venue,
+    AppState, blocking, check_declared_length, content_type, json_value, visible_venue,
 };
 use crate::http::pagination::list_limit;
 use crate::storage::body_stream;
@@ -186,6 +186,49 @@ pub(crate) async fn get(
         doc["members"] = shared.db.members(&venue.id)?.into();
     }
     Ok(json_value(StatusCode::OK, &doc))
+}
+
+/// `?min_sessions=N` (1 … 100 000, default 1); anything else is a 400 naming the parameter.
+fn min_sessions(query: Option<&str>) -> Result<u32, Error> {
+    let mut n = 1;
+    for pair in query.unwrap_or("").split('&').filter(|p| !p.is_empty()) {
+        let (key, value) = pair.split_once('=').unwrap_or((pair, ""));
+        if key != "min_sessions" {
+            return Err(Error::BadRequest(format!(
+                "unknown query parameter {:?}: only min_sessions is known",
+                short(key, QUOTE_LIMIT)
+            )));
+        }
+        n = value
+            .parse()
+            .ok()
+            .filter(|n| (1..=100_000).contains(n))
+            .ok_or_else(|| {
+                Error::BadRequest(format!(
+                    "min_sessions {:?} is not a whole number from 1 to 100000",
+                    short(value, QUOTE_LIMIT)
+                ))
+            })?;
+    }
+    Ok(n)
+}
+
+/// `GET /v1/venues/{id}/map.json[?min_sessions=N]`: the venue map (sitar-core's
+/// `VenueMap`), built from its sessions' files now.
+pub(crate) async fn map_json(
+    State(shared): AppState,
+    caller: Caller,
+    Path(id): Path<String>,
+    RawQuery(query): RawQuery,
+) -> Result<Response, Error> {
+    let min_sessions = min_sessions(query.as_deref())?;
+    let (venue, _) = visible_venue(&shared, &caller, &id)?;
+    let map = blocking("venue map", move || {
+        crate::venue::map::venue_map(&*shared.db, &*shared.blobs, &venue, min_sessions)
+    })
+    .await?;
+    let value = serde_json::to_value(&map).map_err(|e| Error::Internal(format!("map: {e}")))?;
+    Ok(json_value(StatusCode::OK, &value))
 }
 
 /// The venue, if the caller may manage it (a member: 403; anyone else: 404).
