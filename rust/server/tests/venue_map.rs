@@ -345,6 +345,43 @@ fn the_venue_map_is_built_from_its_sessions_files_and_follows_them() {
         map["cells"].as_array().unwrap().len()
     );
 
+    // The report: both sessions with their spread, coverage in words; strangers get 404.
+    let page = get(&server, &member, &format!("/v1/venues/{venue}/report"));
+    assert_eq!(page.status, 200, "{}", page.body);
+    for needed in [
+        "<svg id=\"topview\"",
+        &first,
+        &second,
+        "seen only from the",
+        "0.0 cm",
+        "Hall",
+    ] {
+        assert!(page.body.contains(needed), "{needed}: {}", page.body);
+    }
+    assert!(
+        page.body.contains("(yours)"),
+        "the member's own session is marked"
+    );
+    let file = get(
+        &server,
+        &owner,
+        &format!("/v1/venues/{venue}/report?download=1"),
+    );
+    assert_eq!(file.status, 200);
+    let head = file.head.to_ascii_lowercase();
+    assert!(
+        head.contains("content-disposition: attachment; filename=\"venue-"),
+        "{head}"
+    );
+    assert!(
+        head.contains("style-src 'sha256-") && !file.body.contains("/assets/"),
+        "{head}"
+    );
+    assert_eq!(
+        get(&server, &stranger, &format!("/v1/venues/{venue}/report")).status,
+        404
+    );
+
     // A session not yet finished and one without anchors bring no cells, and say so.
     let body = json!({"playback": "upload", "venue": venue}).to_string();
     let a = call(

@@ -11,3 +11,4 @@ pub(crate) mod scene;
 pub(crate) mod scene_view;
 pub(crate) mod templates;
 pub(crate) mod thinning;
+pub(crate) mod venue_page;

@@ -21,6 +21,7 @@ fn environment() -> &'static Environment<'static> {
                 include_str!("../../templates/overview.html"),
             ),
             ("waiting.html", include_str!("../../templates/waiting.html")),
+            ("venue.html", include_str!("../../templates/venue.html")),
         ] {
             // A template that does not compile is a bug caught by every test of the pages.
             if let Err(e) = env.add_template(name, source) {

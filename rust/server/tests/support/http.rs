@@ -9,6 +9,8 @@ use sitar_server::ServerHandle;
 /// A status and the body as text (and JSON, when it is JSON).
 pub struct Answer {
     pub status: u16,
+    /// The status line and headers.
+    pub head: String,
     pub body: String,
 }
 
@@ -62,6 +64,7 @@ pub fn call(
         .unwrap_or_else(|| panic!("no status line: {text:?}"));
     Answer {
         status,
+        head: head.to_owned(),
         body: body.to_owned(),
     }
 }

@@ -231,6 +231,41 @@ pub(crate) async fn map_json(
     Ok(json_value(StatusCode::OK, &value))
 }
 
+/// `GET /v1/venues/{id}/report[?download=1]`: the venue's page (`crate::report::venue_page`);
+/// with `download=1` the same page as one file that opens from disk.
+pub(crate) async fn report(
+    State(shared): AppState,
+    caller: Caller,
+    Path(id): Path<String>,
+    RawQuery(query): RawQuery,
+) -> Result<Response, Error> {
+    let download = query.as_deref().unwrap_or("").split('&').any(|pair| {
+        let (key, value) = pair.split_once('=').unwrap_or((pair, "1"));
+        key == "download" && matches!(value, "1" | "true" | "yes")
+    });
+    let (venue, _) = visible_venue(&shared, &caller, &id)?;
+    let html = blocking("venue report", move || {
+        crate::report::venue_page::VenueReport {
+            db: &*shared.db,
+            blobs: &*shared.blobs,
+            venue: &venue,
+            caller: &caller,
+            standalone: download,
+        }
+        .render()
+    })
+    .await?;
+    Ok(if download {
+        crate::report::templates::attachment_page(
+            html,
+            &format!("venue-{id}.html"),
+            &crate::report::venue_page::standalone_csp(),
+        )
+    } else {
+        crate::report::templates::page(html)
+    })
+}
+
 /// The venue, if the caller may manage it (a member: 403; anyone else: 404).
 fn managed(shared: &App, caller: &Caller, id: &str) -> Result<Venue, Error> {
     let (venue, standing) = visible_venue(shared, caller, id)?;
