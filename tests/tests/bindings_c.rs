@@ -19,6 +19,7 @@ const ERR_INVALID_ARGUMENT: i32 = -2;
 const ERR_INVALID_HANDLE: i32 = -3;
 const ERR_INVALID_STATE: i32 = -4;
 const ERR_PARSE: i32 = -5;
+const ERR_NETWORK: i32 = -7;
 const ERR_BUFFER_TOO_SMALL: i32 = -8;
 const ERR_PANIC: i32 = -99;
 
@@ -1598,6 +1599,31 @@ fn an_upload_asks_the_backend_for_the_session_window_settings() {
             r#""trials":4,"window_frames":10,"pose_relation":"trans_part""#,
             serde_json::json!({"trials":4,"setting":"trim_mean_30","playback":"adb"}),
         ),
+        (
+            r#"{"convention":"unity"}"#,
+            r#""trials":4"#,
+            serde_json::json!({"trials":4,"setting":"trim_mean_30","playback":"adb"}),
+        ),
+        // ARCore poses and a venue: the backend learns where each camera looks and which
+        // venue's frame the session joins.
+        (
+            r#"{"convention":"arcore","venue":"v0123456789abcdef"}"#,
+            r#""trials":4"#,
+            serde_json::json!({"trials":4,"setting":"trim_mean_30","playback":"adb",
+                               "convention":"arcore","venue":"v0123456789abcdef"}),
+        ),
+        (
+            r#"{"convention":"arcore"}"#,
+            r#""trials":3,"playback":"sim""#,
+            serde_json::json!({"trials":3,"setting":"trim_mean_30","playback":"sim",
+                               "convention":"arcore"}),
+        ),
+        (
+            r#"{"venue":"v00000000000000ff","subtrajectory_frames":20}"#,
+            r#""trials":4"#,
+            serde_json::json!({"trials":4,"setting":"trim_mean_30","playback":"adb",
+                               "window_frames":20,"venue":"v00000000000000ff"}),
+        ),
     ] {
         let h = new_session(config);
         let (url, body) = capture_session_request();
@@ -1637,6 +1663,200 @@ fn an_upload_asks_the_backend_for_the_session_window_settings() {
             expect_err(status, ERR_INVALID_ARGUMENT, needle);
         }
     }
+    assert_eq!((a.session_free)(h), OK);
+}
+
+/// One request as a capturing server saw it.
+#[derive(Debug, Clone)]
+struct Captured {
+    method: String,
+    path: String,
+    body: Vec<u8>,
+}
+
+/// A backend stand-in that records every request: it creates session `s1`, answers each PUT
+/// of the phone's log with `log_status` (`refused` with a 422 naming a cell, to that file),
+/// and every other request with a 400 "captured" that ends the job.
+fn capture_phone_logs(
+    refused: Option<&'static str>,
+) -> (String, std::sync::Arc<std::sync::Mutex<Vec<Captured>>>) {
+    use std::io::{BufRead, BufReader, Read, Write};
+    let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+    let url = format!("http://{}", listener.local_addr().unwrap());
+    let seen = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
+    let log = seen.clone();
+    std::thread::spawn(move || {
+        for stream in listener.incoming() {
+            let Ok(mut stream) = stream else { return };
+            let mut reader = BufReader::new(stream.try_clone().unwrap());
+            let mut request = String::new();
+            if reader.read_line(&mut request).unwrap_or(0) == 0 {
+                continue;
+            }
+            let mut parts = request.split_whitespace();
+            let method = parts.next().unwrap_or_default().to_owned();
+            let path = parts.next().unwrap_or_default().to_owned();
+            let mut length = 0;
+            let mut line = String::new();
+            while reader.read_line(&mut line).map(|n| n > 2).unwrap_or(false) {
+                if let Some(v) = line.to_ascii_lowercase().strip_prefix("content-length:") {
+                    length = v.trim().parse().unwrap();
+                }
+                line.clear();
+            }
+            let mut body = vec![0u8; length];
+            reader.read_exact(&mut body).unwrap();
+            let file = path.strip_prefix("/v1/sessions/s1/").unwrap_or_default();
+            let (status, answer) = match (method.as_str(), path.as_str()) {
+                ("POST", "/v1/sessions") => ("201 Created", r#"{"id":"s1"}"#.to_owned()),
+                ("PUT", _) if Some(file) == refused => (
+                    "422 Unprocessable Entity",
+                    format!(
+                        r#"{{"error":{{"code":"invalid_content","message":"{file} line 2, column qw: not a number"}}}}"#
+                    ),
+                ),
+                ("PUT", _)
+                    if ["trajectory.txt", "subtrajectories.csv", "anchors.csv"].contains(&file) =>
+                {
+                    ("200 OK", r#"{"stored":true}"#.to_owned())
+                }
+                _ => (
+                    "400 Bad Request",
+                    r#"{"error":{"code":"bad_request","message":"captured"}}"#.to_owned(),
+                ),
+            };
+            log.lock().unwrap().push(Captured { method, path, body });
+            let _ = write!(
+                stream,
+                "HTTP/1.1 {status}\r\ncontent-type: application/json\r\ncontent-length: {}\r\nconnection: close\r\n\r\n{answer}",
+                answer.len()
+            );
+        }
+    });
+    (url, seen)
+}
+
+/// Records 20 frames with depth at the midpoints and three observations of the anchor
+/// `hall` (two full, one limited).
+fn record_in_venue(h: H) {
+    let a = api();
+    let depth = vec![2000u16; (W * HGT) as usize];
+    let hall = c("hall");
+    let image = Pose {
+        pz: 2.0,
+        qw: 1.0,
+        ..Pose::default()
+    };
+    assert_eq!((a.start)(h, 0, &pose_at(0)), OK);
+    for i in 1..=20 {
+        let mut flags = 0;
+        assert_eq!((a.frame)(h, i * FRAME_NS, &pose_at(i), &mut flags), OK);
+        if flags == 1 {
+            assert_eq!((a.depth)(h, depth.as_ptr(), W, HGT, W * 2, &K, 0), OK);
+        }
+        if let Some(tracking) = match i {
+            3 | 12 => Some(2),
+            7 => Some(1),
+            _ => None,
+        } {
+            let r = (a.anchor)(h, i * FRAME_NS, hall.as_ptr().cast(), &image, tracking);
+            assert_eq!(r, OK, "{}", last_error());
+        }
+    }
+    let mut summary = Summary::default();
+    assert_eq!((a.stop)(h, 21 * FRAME_NS, &pose_at(21), &mut summary), OK);
+}
+
+/// The upload job of a session in a venue: the session request names the venue and the
+/// ARCore convention, then the phone's log goes whole, file by file, from the session folder
+/// it saved beside the recording — `trajectory.txt`, `subtrajectories.csv`, `anchors.csv` with
+/// every observation — before the recording.
+#[test]
+fn an_upload_sends_the_phones_log_and_venue_before_the_recording() {
+    let a = api();
+    let dir = tempfile::tempdir().unwrap();
+    let rec = dir.path().join("walk.mp4");
+    std::fs::write(&rec, b"not really an mp4").unwrap();
+    let h = new_session(r#"{"convention":"arcore","venue":"v0123456789abcdef"}"#);
+    record_in_venue(h);
+    let (url, seen) = capture_phone_logs(None);
+    let job = start_upload(
+        h,
+        &rec,
+        &c(&format!(r#"{{"server_url":"{url}","trials":3}}"#)),
+    );
+    let p = wait_for_state(job, JOB_FAILED, Duration::from_secs(20));
+    assert_eq!(p.state, JOB_FAILED, "{p:?}");
+    assert!(message(job).contains("captured"), "{}", message(job));
+    let seen = seen.lock().unwrap().clone();
+    let routes: Vec<String> = seen
+        .iter()
+        .map(|s| format!("{} {}", s.method, s.path))
+        .collect();
+    assert_eq!(
+        routes[..4],
+        [
+            "POST /v1/sessions",
+            "PUT /v1/sessions/s1/trajectory.txt",
+            "PUT /v1/sessions/s1/subtrajectories.csv",
+            "PUT /v1/sessions/s1/anchors.csv",
+        ]
+    );
+    assert!(
+        routes[4..].iter().all(|r| r.ends_with("/recording")),
+        "{routes:?}"
+    );
+    let body: serde_json::Value = serde_json::from_slice(&seen[0].body).unwrap();
+    assert_eq!(
+        body,
+        serde_json::json!({"trials":3,"setting":"trim_mean_30","playback":"adb",
+                           "convention":"arcore","venue":"v0123456789abcdef"})
+    );
+    // Each file as the session folder holds it, whole.
+    let folder = dir.path().join("walk.mp4.session");
+    for (s, name) in seen[1..4]
+        .iter()
+        .zip(["trajectory.txt", "subtrajectories.csv", "anchors.csv"])
+    {
+        assert_eq!(s.body, std::fs::read(folder.join(name)).unwrap(), "{name}");
+    }
+    // The start, two midpoints and two endpoints: integer nanoseconds.
+    let tum = String::from_utf8(seen[1].body.clone()).unwrap();
+    let stamps: Vec<&str> = tum.lines().map(|l| l.split(' ').next().unwrap()).collect();
+    assert_eq!(stamps.len(), 5, "{tum}");
+    assert!(stamps.iter().all(|t| t.parse::<i64>().is_ok()), "{tum}");
+    let table = String::from_utf8(seen[2].body.clone()).unwrap();
+    assert_eq!(table.lines().count(), 1 + 2, "{table}");
+    let anchors = String::from_utf8(seen[3].body.clone()).unwrap();
+    let lines: Vec<&str> = anchors.lines().collect();
+    assert_eq!(lines[0], "t_ns,anchor,px,py,pz,qx,qy,qz,qw,tracking");
+    let tracking: Vec<&str> = lines[1..]
+        .iter()
+        .map(|l| {
+            assert!(l.split(',').nth(1) == Some("hall"), "{l}");
+            l.rsplit(',').next().unwrap()
+        })
+        .collect();
+    assert_eq!(tracking, ["full", "limited", "full"]);
+    assert_eq!((a.upload_free)(job), OK);
+
+    // A file the backend refuses fails the job, naming it with the server's message; the
+    // recording is not sent.
+    let (url, seen) = capture_phone_logs(Some("anchors.csv"));
+    let job = start_upload(h, &rec, &c(&format!(r#"{{"server_url":"{url}"}}"#)));
+    let p = wait_for_state(job, JOB_FAILED, Duration::from_secs(20));
+    assert_eq!(p.state, JOB_FAILED, "{p:?}");
+    assert_eq!(p.error_code, ERR_NETWORK, "{}", message(job));
+    assert_eq!(
+        message(job),
+        "the server refused anchors.csv (422 invalid_content): anchors.csv line 2, column qw: \
+         not a number"
+    );
+    assert_eq!(p.bytes_sent, 0);
+    let seen = seen.lock().unwrap();
+    assert_eq!(seen.len(), 4, "{seen:?}");
+    assert!(seen.iter().all(|s| !s.path.ends_with("/recording")));
+    assert_eq!((a.upload_free)(job), OK);
     assert_eq!((a.session_free)(h), OK);
 }
 
@@ -1697,8 +1917,8 @@ fn wait_for_state_any(job: H, wanted: &[i32], timeout: Duration) -> JobProgress 
     }
 }
 
-/// A session given camera images: the upload job saves its evidence beside the recording
-/// (`walk.rec.evidence/`) and sends it, and the backend serves every thumbnail.
+/// A session given camera images: the upload job saves the session beside the recording
+/// (`walk.rec.session/`) and sends its evidence, and the backend serves every thumbnail.
 #[test]
 fn an_upload_sends_the_camera_evidence_of_the_session() {
     let a = api();
@@ -1741,7 +1961,7 @@ fn an_upload_sends_the_camera_evidence_of_the_session() {
     let job = start_upload(h, &rec, &options);
     let last = wait_for_state(job, 5, Duration::from_secs(120));
     assert_eq!(last.state, 5, "job done: {}", message(job));
-    let saved = dir.path().join("walk.rec.evidence");
+    let saved = dir.path().join("walk.rec.session");
     assert!(
         saved.join("evidence.csv").is_file(),
         "evidence saved beside the recording"

@@ -158,6 +158,11 @@ fn every_asset_has_a_meta_with_its_stable_unique_guid() {
             (false, Some("mat")) => {
                 "NativeFormatImporter:\n  externalObjects: {}\n  mainObjectFileID: 2100000"
             }
+            // The reference image library: a ScriptableObject, main object 11400000.
+            (false, Some("asset")) => {
+                "NativeFormatImporter:\n  externalObjects: {}\n  mainObjectFileID: 11400000"
+            }
+            (false, Some("png")) => "TextureImporter:",
             (false, Some("so" | "java")) => "PluginImporter:",
             _ => "DefaultImporter:",
         };

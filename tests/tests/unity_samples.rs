@@ -15,7 +15,15 @@ fn package() -> PathBuf {
 
 /// Scripts of the samples' dependencies, by the GUIDs of their `.meta` files in
 /// the packages (AR Foundation 5.1.0, XR Core Utilities 2.x, Input System 1.6, uGUI 1.0).
-const EXTERNAL_SCRIPTS: [(&str, &str); 14] = [
+/// The image tracking pair is AR Foundation 5.1.0's
+/// `Runtime/ARFoundation/ARTrackedImageManager.cs.meta` and
+/// `Runtime/ARSubsystems/ImageTrackingSubsystem/XRReferenceImageLibrary.cs.meta`.
+const EXTERNAL_SCRIPTS: [(&str, &str); 16] = [
+    ("4dea56a9eaadd1c439095de4f9a371cb", "ARTrackedImageManager"),
+    (
+        "848409ee8ba454f42a5ddff137688a27",
+        "XRReferenceImageLibrary",
+    ),
     ("3859a92a05d4f5d418cb6ca605290e74", "ARSession"),
     ("fa850fbd5b8aded44846f96e35f1a9f5", "ARInputManager"),
     ("4966719baa26e4b0e8231a24d9bd491a", "ARCameraManager"),
@@ -147,7 +155,7 @@ fn sample_files() -> Vec<PathBuf> {
                 dirs.push(p);
             } else if p
                 .extension()
-                .is_some_and(|e| e == "unity" || e == "prefab" || e == "mat")
+                .is_some_and(|e| e == "unity" || e == "prefab" || e == "mat" || e == "asset")
             {
                 out.push(p);
             }
@@ -192,6 +200,9 @@ fn every_reference_of_the_samples_resolves() {
                         let expected_id = match target.extension().and_then(|e| e.to_str()) {
                             Some("cs") => 11500000,
                             Some("mat") => 2100000,
+                            // A ScriptableObject asset and a texture, by their main objects.
+                            Some("asset") => 11400000,
+                            Some("png") => 2800000,
                             Some("prefab") => {
                                 // A prefab is referred to by its root GameObject.
                                 let t = std::fs::read_to_string(&target).unwrap();
@@ -303,6 +314,21 @@ fn the_package_components_in_the_scenes_set_only_their_fields() {
                 "trajectoryDepth",
                 "trajectoryRegions",
                 "unreliableWarning",
+            ][..],
+        ),
+        (
+            "Samples~/Recorder/Recorder.unity",
+            "Runtime/Components/SitarVenue.cs",
+            &[
+                "trackedImageManager",
+                "surfaceTilePrefab",
+                "pathDotPrefab",
+                "tileLow",
+                "tileMedium",
+                "tileHigh",
+                "trail",
+                "mapToggle",
+                "arCamera",
             ][..],
         ),
         (
@@ -500,7 +526,25 @@ fn the_materials_have_the_papers_colours_and_the_prefabs_use_them() {
         low[2] > 0.8 && low[0] < 0.3 && low[1] < 0.5,
         "low is blue: {low:?}"
     );
+    // The venue layer's tiles: the class colours, translucent (Standard shader, Fade mode).
+    for (tile, class) in [
+        ("VenueTileHigh", &high),
+        ("VenueTileMedium", &medium),
+        ("VenueTileLow", &low),
+    ] {
+        let c = colour(tile);
+        assert_eq!(c[..3], class[..3], "{tile} has its class's colour");
+        assert!(c[3] > 0.2 && c[3] < 0.8, "{tile} is translucent: {c:?}");
+        let text = std::fs::read_to_string(package().join(format!("{m}{tile}.mat"))).unwrap();
+        assert!(
+            text.contains("    - _Mode: 2\n") && text.contains("_ALPHABLEND_ON"),
+            "{tile}"
+        );
+    }
+    assert!(colour("VenueTrail")[3] < 0.5, "the trail is faint");
     for (prefab, material) in [
+        ("VenueTile", "VenueTileLow"),
+        ("VenueTrailDot", "VenueTrail"),
         ("ExclamationHigh", "ErrorHigh"),
         ("ExclamationMedium", "ErrorMedium"),
         ("WarningSignHigh", "ErrorHigh"),
@@ -524,4 +568,159 @@ fn the_materials_have_the_papers_colours_and_the_prefabs_use_them() {
             "{prefab} uses {material}"
         );
     }
+}
+
+/// A GUID's 32 hex digits as AR Foundation serializes a `System.Guid` (`GuidUtil`): the
+/// .NET byte order (first three groups little-endian, the rest as written), read as two
+/// little-endian 64-bit numbers, low then high.
+fn guid_parts(guid: &str) -> (u64, u64) {
+    let hex: Vec<u8> = (0..16)
+        .map(|i| u8::from_str_radix(&guid[2 * i..2 * i + 2], 16).unwrap())
+        .collect();
+    let mut net = [0u8; 16];
+    for (to, from) in [3, 2, 1, 0, 5, 4, 7, 6].into_iter().enumerate() {
+        net[to] = hex[from];
+    }
+    net[8..].copy_from_slice(&hex[8..]);
+    (
+        u64::from_le_bytes(net[..8].try_into().unwrap()),
+        u64::from_le_bytes(net[8..].try_into().unwrap()),
+    )
+}
+
+#[test]
+fn guid_parts_match_an_image_library_unity_wrote() {
+    // arfoundation-samples' ReferenceImageLibrary.asset: the "Golden Trumpet" texture
+    // 63f1cae56cf52304dbb8e0b11d46f01c as Unity serialized it.
+    assert_eq!(
+        guid_parts("63f1cae56cf52304dbb8e0b11d46f01c"),
+        (2523261492433898213, 2085243720824830171)
+    );
+    assert_eq!(
+        guid_parts("a6fd8503774c0402aa403884f5b77f39"),
+        (288924497207985411, 4143232447317295274)
+    );
+}
+
+/// `m_GuidLow`/`m_GuidHigh` of the nested block `key:` in a library's text.
+fn serialized_guid(body: &str, key: &str) -> (u64, u64) {
+    let at = body
+        .find(&format!("{key}:\n"))
+        .unwrap_or_else(|| panic!("{key}"));
+    let mut lines = body[at..].lines().skip(1);
+    let mut next = |name: &str| -> u64 {
+        let line = lines.next().unwrap().trim();
+        line.strip_prefix(&format!("{name}: "))
+            .unwrap_or_else(|| panic!("{key}: {line}"))
+            .parse()
+            .unwrap()
+    };
+    (next("m_GuidLow"), next("m_GuidHigh"))
+}
+
+#[test]
+fn the_recorder_tracks_the_venue_anchor_at_its_printed_size() {
+    let guids = package_guids();
+    let by_path: BTreeMap<&str, &str> = guids
+        .iter()
+        .map(|(g, p)| (p.as_str(), g.as_str()))
+        .collect();
+    let texture = "Samples~/Recorder/Venue/VenueAnchor.png";
+    let library = "Samples~/Recorder/Venue/VenueAnchorLibrary.asset";
+    // The committed anchor image, byte for byte, and square (so its height is its width).
+    let png = std::fs::read(package().join(texture)).unwrap();
+    assert_eq!(
+        png,
+        std::fs::read(package().join("Documentation~/venue-anchor/venue-anchor.png")).unwrap(),
+        "the sample's anchor is the printable one"
+    );
+    assert_eq!(&png[12..16], b"IHDR");
+    assert_eq!(png[16..20], png[20..24], "the anchor image is square");
+    // Printed 180 mm wide on A4 by the script that makes the PDFs.
+    let maker =
+        std::fs::read_to_string(package().join("Documentation~/venue-anchor/make_venue_anchor.py"))
+            .unwrap();
+    assert!(maker.contains(r#"("A4", (210, 297), 180)"#), "A4 at 180 mm");
+
+    // The library: AR Foundation's script, one image named as SitarVenue's anchor id, at 0.18 m,
+    // its texture the PNG by its .meta GUID, in both of the forms AR Foundation keeps.
+    let text = std::fs::read_to_string(package().join(library)).unwrap();
+    let objs = objects(&text);
+    assert_eq!(objs.len(), 1);
+    let lib = &objs[0];
+    assert_eq!((lib.class_id, lib.file_id), (114, 11400000));
+    assert_eq!(
+        value(&lib.body, "m_Script"),
+        Some("{fileID: 11500000, guid: 848409ee8ba454f42a5ddff137688a27, type: 3}")
+    );
+    assert_eq!(lib.body.matches("  - m_SerializedGuid:").count(), 1);
+    // The image's own keys, one level down.
+    let image = |key: &str| {
+        lib.body
+            .lines()
+            .find_map(|l| l.strip_prefix(&format!("    {key}: ")))
+            .map(str::trim)
+    };
+    let texture_guid = by_path[texture];
+    assert_eq!(
+        image("m_Texture"),
+        Some(format!("{{fileID: 2800000, guid: {texture_guid}, type: 3}}").as_str())
+    );
+    assert_eq!(
+        serialized_guid(&lib.body, "m_SerializedTextureGuid"),
+        guid_parts(texture_guid)
+    );
+    assert_ne!(serialized_guid(&lib.body, "- m_SerializedGuid"), (0, 0));
+    assert_ne!(
+        (
+            value(&lib.body, "m_GuidLow").unwrap(),
+            value(&lib.body, "m_GuidHigh").unwrap()
+        ),
+        ("0", "0"),
+        "a library needs its own GUID"
+    );
+    assert_eq!(numbers(image("m_Size").unwrap()), [0.18, 0.18]);
+    assert_eq!(image("m_SpecifySize"), Some("1"));
+    let anchor = image("m_Name").unwrap();
+    let source =
+        std::fs::read_to_string(package().join("Runtime/Components/SitarVenue.cs")).unwrap();
+    assert!(
+        source.contains(&format!("public string anchorId = \"{anchor}\";")),
+        "the image's name is SitarVenue's default anchor id"
+    );
+
+    // The scene: an ARTrackedImageManager on the XR Origin with that library, and SitarVenue
+    // beside SitarRecorder naming it and the same anchor id.
+    let scene =
+        std::fs::read_to_string(package().join("Samples~/Recorder/Recorder.unity")).unwrap();
+    let objs = objects(&scene);
+    let script = |guid: &str| {
+        objs.iter()
+            .find(|o| o.class_id == 114 && o.body.contains(&format!("guid: {guid}, type: 3")))
+            .unwrap_or_else(|| panic!("a MonoBehaviour of {guid}"))
+    };
+    let manager = script("4dea56a9eaadd1c439095de4f9a371cb");
+    assert_eq!(
+        value(&manager.body, "m_SerializedLibrary"),
+        Some(format!("{{fileID: 11400000, guid: {}, type: 2}}", by_path[library]).as_str())
+    );
+    let owner = value(&manager.body, "m_GameObject").unwrap();
+    let origin = script("e0cb9aa70a22847b5925ee5f067c10a9");
+    assert_eq!(
+        Some(owner),
+        value(&origin.body, "m_GameObject"),
+        "on the XR Origin"
+    );
+    let venue = script(by_path["Runtime/Components/SitarVenue.cs"]);
+    assert_eq!(
+        value(&venue.body, "trackedImageManager"),
+        Some(format!("{{fileID: {}}}", manager.file_id).as_str())
+    );
+    assert_eq!(value(&venue.body, "anchorId"), Some(anchor));
+    let recorder = script(by_path["Runtime/Components/SitarRecorder.cs"]);
+    assert_eq!(
+        value(&venue.body, "m_GameObject"),
+        value(&recorder.body, "m_GameObject"),
+        "SitarVenue requires SitarRecorder on its GameObject"
+    );
 }

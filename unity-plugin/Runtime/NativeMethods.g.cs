@@ -291,7 +291,13 @@ namespace Sitar
         ///  `playback` ("adb"), `poll_interval_ms` (500), `session_id` (continue that
         ///  server session, e.g. a failed job's: the upload resumes or is skipped),
         ///  `window_frames` and `pose_relation` (the session config's
-        ///  `subtrajectory_frames` and `pose_relation`; other values are refused).
+        ///  `subtrajectory_frames` and `pose_relation`; other values are refused),
+        ///  `evidence_dir` (a saved session folder; default: a started session is
+        ///  saved as `RECORDING.session/`). The session request carries the config's
+        ///  `venue` and its `convention` when `arcore`; the folder's `trajectory.txt`,
+        ///  `subtrajectories.csv` and `anchors.csv` go before the recording (a file the
+        ///  backend refuses fails the job, naming it; a backend without those routes
+        ///  is skipped with a logged warning).
         /// </summary>
         [DllImport(__DllName, EntryPoint = "sitar_upload_start", CallingConvention = CallingConvention.Cdecl, ExactSpelling = true)]
         internal static extern int sitar_upload_start(ulong h, byte* recording_path, byte* options_json, ulong* out_job);

@@ -158,6 +158,6 @@ fn alignment_name(a: Alignment) -> &'static str {
 pub fn time_unit_name(unit: TimeUnit) -> &'static str {
     match unit {
         TimeUnit::Nanoseconds => "ns",
-        TimeUnit::Seconds => "s",
+        TimeUnit::Seconds | TimeUnit::RosStamp => "s",
     }
 }

@@ -16,7 +16,7 @@ use sitar_sim::Recording;
 /// from disk).
 #[derive(clap::Args, Debug)]
 #[command(
-    after_help = "Examples:\n  sitar demo\n  sitar demo --serve   # then open the printed address"
+    after_help = "Examples:\n  sitar demo\n  sitar demo --serve   # then open the printed address\n  sitar demo --venue   # three users, one venue map"
 )]
 pub struct Args {
     /// Data directory of the in-process server (default: DEMO_DIR in the system temp dir).
@@ -25,9 +25,9 @@ pub struct Args {
     /// Playback trials.
     #[arg(short = 'n', long, default_value_t = 8)]
     trials: u32,
-    /// Walk duration in seconds (30 fps).
-    #[arg(long, default_value_t = 15.0)]
-    seconds: f64,
+    /// Walk duration in seconds (30 fps; default 15, with --venue 20).
+    #[arg(long)]
+    seconds: Option<f64>,
     /// Playback speed: the simulated phones replay this many times faster than real time.
     #[arg(long, default_value_t = 8.0)]
     speed: f64,
@@ -48,6 +48,10 @@ pub struct Args {
     /// report's address (with its token) until Ctrl-C.
     #[arg(long)]
     serve: bool,
+    /// Three users walk the demo room with a printed anchor on its wall; their sessions join
+    /// one venue, and its map is checked against the room's truth (see `demo_venue.rs`).
+    #[arg(long, conflicts_with_all = ["serve", "adaptive"])]
+    venue: bool,
 }
 
 fn parse_display_rotation(text: &str) -> Result<i32, String> {
@@ -82,8 +86,8 @@ fn server_config(args: &Args, data: &Path, token: &str) -> ServerConfig {
 
 /// Step 1: the user walks the room; the phone logic records poses and depth like on a phone.
 fn walk(args: &Args) -> Result<(Recording, PhoneSession)> {
-    let recording =
-        Recording::demo(args.seconds, 30.0, args.seed).context("cannot simulate the walk")?;
+    let recording = Recording::demo(args.seconds.unwrap_or(15.0), 30.0, args.seed)
+        .context("cannot simulate the walk")?;
     let display = DisplayRotation::from_degrees(args.display_rotation)?;
     let session = recording.phone_session(
         SessionConfig::from_json(r#"{"convention":"arcore"}"#)?,
@@ -311,10 +315,13 @@ pub fn run(args: Args) -> Result<()> {
     if args.trials < 2 {
         bail!("--trials must be at least 2 (an estimate compares pairs of trials)");
     }
-    let data = args
-        .data
-        .clone()
-        .unwrap_or_else(|| std::env::temp_dir().join(DEMO_DIR));
+    let data = args.data.clone().unwrap_or_else(|| {
+        std::env::temp_dir().join(if args.venue {
+            crate::demo_venue::DEMO_DIR
+        } else {
+            DEMO_DIR
+        })
+    });
     std::fs::create_dir_all(&data).with_context(|| format!("cannot create {}", data.display()))?;
     // The demo's own token, fresh each run (a new hash under the same name).
     let token = sitar_server::new_token()?;
@@ -328,6 +335,18 @@ pub fn run(args: Args) -> Result<()> {
         args.speed,
         data.display()
     );
+    if args.venue {
+        let options = crate::demo_venue::Options {
+            data: data.clone(),
+            users: crate::demo_venue::VENUE_USERS,
+            trials: args.trials,
+            seconds: args.seconds.unwrap_or(crate::demo_venue::VENUE_SECONDS),
+            seed: args.seed,
+        };
+        let result = crate::demo_venue::run(&options, &server.url(), &token);
+        server.stop();
+        return result;
+    }
     let (recording, mut session) = walk(&args)?;
     let client = Client::new(&server.url())?.with_server_token(&token)?;
     let id = upload(&client, &args, &data, &recording, &session)?;
@@ -366,13 +385,14 @@ mod tests {
         let args = Args {
             data: Some(dir.path().to_path_buf()),
             trials: 3,
-            seconds: 4.0,
+            seconds: Some(4.0),
             speed: 40.0,
             devices: 2,
             seed: 7,
             adaptive: None,
             display_rotation: 90,
             serve: false,
+            venue: false,
         };
         run(args).unwrap();
         let names: Vec<String> = std::fs::read_dir(dir.path())

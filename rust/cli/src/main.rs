@@ -13,6 +13,7 @@ mod compare;
 mod config;
 mod console;
 mod demo;
+mod demo_venue;
 mod distribution;
 mod estimate;
 mod evaluate;

@@ -7,8 +7,9 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, bail};
 use clap::ValueEnum;
 use rayon::prelude::*;
+use sitar_core::{DisplayRotation, SessionConfig};
 use sitar_estimator::{TimeUnit, Trajectory, write_tum};
-use sitar_sim::{Recording, Tracker, TrialOptions, play_trial_with};
+use sitar_sim::{MAX_VENUE_USERS, Recording, Tracker, TrialOptions, Venue, play_trial_with};
 
 use crate::input::progress_bar;
 
@@ -21,10 +22,14 @@ use crate::input::progress_bar;
 /// hard surfaces, surface faced and tracking difficulty per frame) and recording.sitarsim
 /// (what the phone would upload; the backend's `sim` playback replays it). With
 /// `--sequences N`: DIR/seq_00 … DIR/seq_{N-1}, each like the above with both trial sets
-/// (trials = set A, trials-b = set B), and DIR/sequences.json listing them.
+/// (trials = set A, trials-b = set B), and DIR/sequences.json listing them. With `--venue
+/// --users N`: a printed anchor on the demo room's north wall and N users, each in
+/// DIR/user_00 … like the above plus session/ (the phone's session folder, in the phone's own
+/// world frame, with anchors.csv) and truth.json (its world-from-venue transform), and
+/// DIR/venue.json listing them.
 #[derive(clap::Args, Debug)]
 #[command(
-    after_help = "Examples:\n  sitar simulate --out sim --trials 20 && sitar estimate sim/trials\n  sitar simulate --out eval --sequences 8 --trials 100 --seconds 30 --tracker ransac\n  sitar evaluate eval --trial_counts 5,10,20,30,100"
+    after_help = "Examples:\n  sitar simulate --out sim --trials 20 && sitar estimate sim/trials\n  sitar simulate --out eval --sequences 8 --trials 100 --seconds 30 --tracker ransac\n  sitar evaluate eval --trial_counts 5,10,20,30,100\n  sitar simulate --out venue --venue --users 3"
 )]
 pub struct Args {
     /// Output directory (created if missing).
@@ -33,9 +38,10 @@ pub struct Args {
     /// Number of trials.
     #[arg(short = 'n', long, default_value_t = 20)]
     trials: u32,
-    /// Walk duration in seconds.
-    #[arg(long, default_value_t = 15.0)]
-    seconds: f64,
+    /// Walk duration in seconds (default 15; 20 with --venue, so that every walk passes the
+    /// anchor).
+    #[arg(long)]
+    seconds: Option<f64>,
     /// Camera frame rate.
     #[arg(long, default_value_t = 30.0)]
     fps: f64,
@@ -62,7 +68,24 @@ pub struct Args {
     /// alike on the IMU while facing an unlit wall; implies the RANSAC tracker).
     #[arg(long, value_enum, default_value_t = SceneArg::Demo)]
     scene: SceneArg,
+    /// Simulate a venue: the demo room with a printed A4 anchor, walked by --users users,
+    /// each phone in its own world frame.
+    #[arg(long, requires = "users", conflicts_with = "sequences")]
+    venue: bool,
+    /// Users of the venue (with --venue).
+    #[arg(long, value_name = "N", requires = "venue")]
+    users: Option<u32>,
 }
+
+impl Args {
+    fn seconds(&self) -> f64 {
+        self.seconds
+            .unwrap_or(if self.venue { VENUE_SECONDS } else { 15.0 })
+    }
+}
+
+/// A venue walk's default length: five stops, so every walk passes the anchor.
+const VENUE_SECONDS: f64 = 20.0;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 enum TrackerArg {
@@ -103,12 +126,17 @@ pub fn run(args: Args) -> Result<()> {
         Unit::Ns => TimeUnit::Nanoseconds,
         Unit::S => TimeUnit::Seconds,
     };
+    if args.venue {
+        if args.scene != SceneArg::Demo {
+            bail!("--venue walks the demo room; --scene does not apply");
+        }
+        return write_venue(&args, tracker, unit);
+    }
     let Some(count) = args.sequences else {
         let recording = match args.scene {
-            SceneArg::Demo => {
-                Recording::demo(args.seconds, args.fps, args.seed).map(|r| r.with_tracker(tracker))
-            }
-            SceneArg::DarkWall => Recording::dark_wall(args.seconds, args.fps, args.seed),
+            SceneArg::Demo => Recording::demo(args.seconds(), args.fps, args.seed)
+                .map(|r| r.with_tracker(tracker)),
+            SceneArg::DarkWall => Recording::dark_wall(args.seconds(), args.fps, args.seed),
         }
         .context("simulating the walk")?;
         write_sequence(&args, &recording, &args.out, args.second_set, unit)?;
@@ -122,7 +150,7 @@ pub fn run(args: Args) -> Result<()> {
     }
     let mut names = Vec::new();
     for index in 0..count {
-        let recording = Recording::sequence(index, args.seconds, args.fps, args.seed, tracker)
+        let recording = Recording::sequence(index, args.seconds(), args.fps, args.seed, tracker)
             .with_context(|| format!("simulating sequence {index}"))?;
         let name = format!("seq_{index:02}");
         write_sequence(&args, &recording, &args.out.join(&name), true, unit)?;
@@ -134,12 +162,84 @@ pub fn run(args: Args) -> Result<()> {
         "tracker": tracker,
         "seed": args.seed,
         "trials_per_set": args.trials,
-        "seconds": args.seconds,
+        "seconds": args.seconds(),
         "fps": args.fps,
         "sequences": names,
     });
     write_file(
         &args.out.join("sequences.json"),
+        format!("{index:#}\n").as_bytes(),
+    )
+}
+
+/// `--venue`: the venue's users, each a sequence plus the phone's session folder and the
+/// truth, and venue.json listing them.
+fn write_venue(args: &Args, tracker: Tracker, unit: TimeUnit) -> Result<()> {
+    let users = args.users.unwrap_or(1) as usize;
+    if !(1..=MAX_VENUE_USERS).contains(&users) {
+        bail!("--users must be between 1 and {MAX_VENUE_USERS}, got {users}");
+    }
+    let venue = Venue::demo(users, args.seconds(), args.fps, args.seed)
+        .context("simulating the venue's walks")?;
+    let config = SessionConfig::from_json(r#"{"convention":"arcore"}"#)?;
+    let mut listed = Vec::new();
+    for user in &venue.users {
+        let name = format!("user_{:02}", user.index);
+        let dir = args.out.join(&name);
+        let recording = user.recording.clone().with_tracker(tracker);
+        write_sequence(args, &recording, &dir, args.second_set, unit)?;
+        let session = user
+            .phone_session(config.clone(), DisplayRotation::Deg90)
+            .with_context(|| format!("recording user {}'s phone session", user.index))?;
+        let session_dir = dir.join("session");
+        session
+            .save(&session_dir)
+            .with_context(|| format!("{}: cannot save the session", session_dir.display()))?;
+        write_file(
+            &dir.join("truth.json"),
+            user.truth_json(&venue.anchor.id).as_bytes(),
+        )?;
+        let full = user
+            .observations
+            .iter()
+            .filter(|o| o.tracking == sitar_core::Tracking::Full)
+            .count();
+        eprintln!(
+            "user {}: {} anchor observations ({full} full), world frame {:.2} m and {:.1}° from the venue's",
+            user.index,
+            user.observations.len(),
+            user.truth.translation.length(),
+            user.truth.heading_rad.to_degrees()
+        );
+        listed.push(serde_json::json!({
+            "dir": name,
+            "seed": user.seed,
+            "observations": user.observations.len(),
+            "full_observations": full,
+        }));
+    }
+    let anchor = &venue.anchor;
+    let index = serde_json::json!({
+        "format": "sitar-venue-sim",
+        "version": 1,
+        "convention": "arcore",
+        "anchor": {
+            "id": anchor.id,
+            "position": anchor.pose.position.to_array(),
+            "rotation_xyzw": anchor.pose.rotation.to_array(),
+            "width_m": anchor.width_m,
+            "height_m": anchor.height_m,
+        },
+        "hard_surfaces": venue.room.hard_surfaces().iter().map(|s| &s.name).collect::<Vec<_>>(),
+        "tracker": tracker,
+        "seed": args.seed,
+        "trials": args.trials,
+        "seconds": args.seconds(),
+        "fps": args.fps,
+        "users": listed,
+    });
+    write_file(
+        &args.out.join("venue.json"),
         format!("{index:#}\n").as_bytes(),
     )
 }

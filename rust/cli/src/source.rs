@@ -1,4 +1,4 @@
-//! evo's format subcommands (`tum`, `euroc`, `kitti`; `bag`/`bag2`/`mcap` are refused) and
+//! evo's format subcommands (`tum`, `euroc`, `kitti`, `bag`, `bag2`/`mcap`) and
 //! reading REF and EST the way evo does.
 
 use std::path::{Path, PathBuf};
@@ -108,7 +108,7 @@ pub enum Source {
     },
     /// A ROS bag and two of its topics.
     Bag {
-        /// `bag` (ROS 1, not supported) or `bag2`.
+        /// `bag` (ROS 1) or `bag2`.
         kind: &'static str,
         /// The bag (a directory, `.mcap` or `.db3`).
         bag: String,
@@ -162,8 +162,9 @@ macro_rules! format_subcommands {
                 #[command(flatten)]
                 options: $options,
             },
-            /// ROS 1 bag files: not supported by sitar (convert the bag to ROS 2 or the topics to
-            /// TUM first).
+            /// ROS 1 bag files (uncompressed, bz2 or lz4 chunks), with the topics of
+            /// PoseStamped, PoseWithCovarianceStamped, TransformStamped, PointStamped or
+            /// Odometry messages, or tf ids (/tf:PARENT.CHILD).
             Bag {
                 /// ROS bag file.
                 bag: String,
@@ -176,9 +177,10 @@ macro_rules! format_subcommands {
                 #[command(flatten)]
                 options: $options,
             },
-            /// ROS 2 bags: a bag directory, an .mcap or a .db3 file, with the topics of
-            /// PoseStamped, PoseWithCovarianceStamped, TransformStamped, PointStamped or
-            /// Odometry messages.
+            /// ROS 2 bags: a bag directory, an .mcap or a .db3 file (zstd/lz4 chunks, rosbag2's
+            /// file or message compression), with the topics of PoseStamped,
+            /// PoseWithCovarianceStamped, TransformStamped, PointStamped or Odometry messages,
+            /// or tf ids (/tf:PARENT.CHILD).
             #[command(alias = "mcap")]
             Bag2 {
                 /// ROS 2 bag file.
@@ -415,15 +417,15 @@ pub fn load(source: &Source, console: &Console) -> Result<Loaded> {
             estimate: read_kitti_evo(estimate, console)?,
             sync: None,
         }),
-        Source::Bag { kind, .. } if *kind == "bag" => bail!(not_supported_bag(kind)),
         Source::Bag {
+            kind,
             bag,
             reference,
             estimate,
             sync,
-            ..
         } => {
-            let topics = crate::bag::open(bag, console)?;
+            let wanted = crate::bag::Wanted::named([reference, estimate]);
+            let topics = crate::bag::open(kind, bag, &wanted, console)?;
             let named = |topic: &String| -> Result<Named> {
                 let read = crate::bag::trajectory(&topics, topic, bag, console)?;
                 Ok(Named {
@@ -439,11 +441,4 @@ pub fn load(source: &Source, console: &Console) -> Result<Loaded> {
             })
         }
     }
-}
-
-/// The error for a ROS bag format sitar does not read.
-pub fn not_supported_bag(kind: &str) -> String {
-    format!(
-        "the {kind} format (ROS 1 bags) is not supported by sitar: export the topics to TUM files (for example with evo_traj {kind} BAG TOPIC --save_as_tum) and use the tum format, or convert the bag to ROS 2 (rosbags-convert) and use bag2"
-    )
 }

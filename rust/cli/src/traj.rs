@@ -14,9 +14,7 @@ use crate::canvas::{self, Page};
 use crate::console::{Console, SEP, UsabilityArgs};
 use crate::figure::{Drawing, PAGE, PALETTE, Path3, PlotMode, Series};
 use crate::metric_args::PlaneArg;
-use crate::source::{
-    StampUnit, SyncMethod, not_supported_bag, read_euroc_evo, read_kitti_evo, read_tum_evo,
-};
+use crate::source::{StampUnit, SyncMethod, read_euroc_evo, read_kitti_evo, read_tum_evo};
 
 /// Trajectory analysis and manipulation, as evo_traj.
 ///
@@ -61,7 +59,7 @@ enum Format {
         #[command(flatten)]
         options: Options,
     },
-    /// ROS bag files: not supported by sitar.
+    /// ROS 1 bag files; topics of the pose types evo reads or tf ids (--ref is a topic too).
     Bag {
         /// ROS bag file.
         bag: String,
@@ -74,7 +72,7 @@ enum Format {
         options: Options,
     },
     /// ROS 2 bags: a bag directory, an .mcap or a .db3 file; topics of the pose types evo
-    /// reads (--ref is a topic too).
+    /// reads or tf ids (--ref is a topic too).
     #[command(alias = "mcap")]
     Bag2 {
         /// ROS 2 bag file.
@@ -195,10 +193,10 @@ struct Options {
     /// Save the poses in KITTI format (as NAME.kitti in the current directory).
     #[arg(long = "save_as_kitti")]
     save_as_kitti: bool,
-    /// Save in a ROS bag (not supported by sitar).
+    /// Save the trajectories in a ROS 1 bag as DATE.bag (YYYY-MM-DD-hh-mm-ss; PoseStamped topics).
     #[arg(long = "save_as_bag")]
     save_as_bag: bool,
-    /// Save in a ROS 2 bag (not supported by sitar).
+    /// Save the trajectories in a ROS 2 bag (MCAP storage) as the directory DATE.
     #[arg(long = "save_as_bag2")]
     save_as_bag2: bool,
     /// Don't shorten input file paths when displaying trajectory names.
@@ -248,14 +246,22 @@ pub fn run(args: Args) -> Result<()> {
             pose_files,
             options,
         } => (Kind::Kitti, pose_files, options),
-        Format::Bag { .. } => bail!(not_supported_bag("bag")),
+        Format::Bag {
+            bag,
+            topics,
+            all_topics,
+            options,
+        } => {
+            bag2 = Some(("bag", bag, topics, all_topics));
+            (Kind::Tum, Vec::new(), options)
+        }
         Format::Bag2 {
             bag,
             topics,
             all_topics,
             options,
         } => {
-            bag2 = Some((bag, topics, all_topics));
+            bag2 = Some(("bag2", bag, topics, all_topics));
             (Kind::Tum, Vec::new(), options)
         }
     };
@@ -264,8 +270,6 @@ pub fn run(args: Args) -> Result<()> {
         (options.rerun || options.rerun_rec_id.is_some(), "--rerun"),
         (options.map_tile.is_some(), "--map_tile"),
         (options.ros_map_yaml.is_some(), "--ros_map_yaml"),
-        (options.save_as_bag, "--save_as_bag"),
-        (options.save_as_bag2, "--save_as_bag2"),
     ] {
         if used {
             bail!("{flag} is not supported by sitar (it needs ROS or evo's optional viewers)");
@@ -307,8 +311,14 @@ pub fn run(args: Args) -> Result<()> {
         bundle.reference = Some(read(path)?);
     }
     bundle.off_unit = off_unit;
-    if let Some((bag, topics, all_topics)) = &bag2 {
-        read_bag_topics(&mut bundle, bag, topics, *all_topics, &options, &console)?;
+    if let Some((bag_kind, bag, topics, all_topics)) = &bag2 {
+        let selection = BagSelection {
+            kind: bag_kind,
+            bag,
+            topics,
+            all_topics: *all_topics,
+        };
+        read_bag_topics(&mut bundle, &selection, &options, &console)?;
     }
     manipulate(&mut bundle, kind, &options, &console)?;
     print_infos(&bundle, &options, kind, &console)?;
@@ -318,25 +328,43 @@ pub fn run(args: Args) -> Result<()> {
     export(&bundle, &options, kind, &console)
 }
 
-/// evo_traj's topics of a ROS 2 bag: those given, and with `--all_topics` every topic of a
+/// The topics of a bag that `traj` reads.
+struct BagSelection<'a> {
+    /// evo's format: `bag` or `bag2`.
+    kind: &'a str,
+    bag: &'a str,
+    topics: &'a [String],
+    all_topics: bool,
+}
+
+/// evo_traj's topics of a ROS bag: those given, and with `--all_topics` every topic of a
 /// pose type evo reads (sorted; `--ref` left out of them), each named by its topic; `--ref`
 /// is a topic too.
 fn read_bag_topics(
     bundle: &mut Bundle,
-    bag: &str,
-    topics: &[String],
-    all_topics: bool,
+    selection: &BagSelection<'_>,
     options: &Options,
     console: &Console,
 ) -> Result<()> {
+    let BagSelection {
+        kind,
+        bag,
+        topics,
+        all_topics,
+    } = *selection;
     if topics.is_empty() && !all_topics {
         bail!("No topics used - specify topics or set --all_topics.");
     }
-    let content = crate::bag::open(bag, console)?;
     let reference = options
         .reference
         .as_ref()
         .map(|r| r.to_string_lossy().into_owned());
+    let wanted = if all_topics {
+        crate::bag::Wanted::All
+    } else {
+        crate::bag::Wanted::named(topics.iter().chain(&reference))
+    };
+    let content = crate::bag::open(kind, bag, &wanted, console)?;
     let mut chosen = topics.to_vec();
     if all_topics {
         chosen.extend(crate::bag::supported_topics(&content));
@@ -469,9 +497,15 @@ fn add_time_offset(
         let unit = t.time_unit;
         for s in &mut t.stamps {
             *s = match unit {
-                TimeUnit::Seconds => sitar_estimator::seconds_to_ns(unit.seconds(*s) + t_offset),
+                TimeUnit::Seconds | TimeUnit::RosStamp => {
+                    sitar_estimator::seconds_to_ns(unit.seconds(*s) + t_offset)
+                }
                 TimeUnit::Nanoseconds => *s + offset,
             };
+        }
+        // The shifted floats are decimal seconds now (seconds_to_ns keeps them exactly).
+        if unit == TimeUnit::RosStamp {
+            t.time_unit = TimeUnit::Seconds;
         }
     }
     Ok(())
@@ -880,6 +914,94 @@ fn file_stem(name: &str) -> String {
         .map_or_else(|| name.to_owned(), |s| s.to_string_lossy().into_owned())
 }
 
+/// evo's file stem of a trajectory: a bag topic without its leading slash, `/` and `:`
+/// turned into `_`; a file's stem.
+fn export_stem(name: &str, from_bag: bool) -> String {
+    if from_bag {
+        let name = name.strip_prefix('/').unwrap_or(name);
+        name.replace([':', '/'], "_")
+    } else {
+        file_stem(name)
+    }
+}
+
+/// evo's topic for a trajectory saved in a bag: a bag topic with `:` turned into `/`; a
+/// file's stem with spaces as `_` behind a slash.
+fn export_topic(name: &str, from_bag: bool) -> String {
+    if from_bag {
+        name.replace(':', "/")
+    } else {
+        format!("/{}", file_stem(name).replace(' ', "_"))
+    }
+}
+
+/// `--save_as_bag` / `--save_as_bag2`: the trajectories (reference last) as PoseStamped
+/// topics in `<date>.bag` and the bag directory `<date>` (MCAP), named as evo names them
+/// (the date in UTC).
+fn save_bags(
+    bundle: &Bundle,
+    named: &[(&String, Trajectory)],
+    options: &Options,
+    console: &Console,
+) -> Result<()> {
+    let date = jiff::Timestamp::now()
+        .strftime("%Y-%m-%d-%H-%M-%S")
+        .to_string();
+    let topics: Vec<(String, String)> = named
+        .iter()
+        .map(|(name, _)| {
+            let frame = bundle.frames.get(*name).map_or("world", String::as_str);
+            (export_topic(name, bundle.from_bag), frame.to_owned())
+        })
+        .collect();
+    let poses: Vec<sitar_estimator::PoseTopic<'_>> = named
+        .iter()
+        .zip(&topics)
+        .map(|((_, t), (topic, frame))| sitar_estimator::PoseTopic {
+            topic,
+            frame_id: frame,
+            trajectory: t,
+        })
+        .collect();
+    let saved = |topics: &[(String, String)]| -> Result<()> {
+        for (topic, _) in topics {
+            console.info(&format!("Saved geometry_msgs/PoseStamped topic: {topic}"))?;
+        }
+        Ok(())
+    };
+    if options.save_as_bag {
+        let dest = PathBuf::from(format!("{date}.bag"));
+        console.info(SEP)?;
+        console.info(&format!("Saving trajectories to {}...", dest.display()))?;
+        if dest.exists() {
+            bail!("{}: exists already, not overwriting", dest.display());
+        }
+        std::fs::write(&dest, sitar_estimator::ros1_bag(&poses))
+            .with_context(|| format!("{}: cannot write", dest.display()))?;
+        saved(&topics)?;
+    }
+    if options.save_as_bag2 {
+        let dest = PathBuf::from(&date);
+        console.info(SEP)?;
+        console.info(&format!("Saving trajectories to {}...", dest.display()))?;
+        if dest.exists() {
+            bail!("{}: exists already, not overwriting", dest.display());
+        }
+        let file = format!("{date}.mcap");
+        let bytes = sitar_estimator::mcap_bag(&poses)?;
+        std::fs::create_dir(&dest).with_context(|| format!("{}: cannot create", dest.display()))?;
+        std::fs::write(dest.join(&file), bytes)
+            .with_context(|| format!("{}: cannot write", dest.join(&file).display()))?;
+        std::fs::write(
+            dest.join("metadata.yaml"),
+            sitar_estimator::rosbag2_metadata(&file, &poses),
+        )
+        .with_context(|| format!("{}: cannot write", dest.display()))?;
+        saved(&topics)?;
+    }
+    Ok(())
+}
+
 fn export(bundle: &Bundle, options: &Options, kind: Kind, console: &Console) -> Result<()> {
     // evo re-derives quaternions from the pose matrices once it has transformed the poses,
     // with w ≥ 0; sitar writes the same sign.
@@ -908,7 +1030,7 @@ fn export(bundle: &Bundle, options: &Options, kind: Kind, console: &Console) -> 
             bail!("KITTI poses have no timestamps: --save_as_tum needs tum or euroc input");
         }
         for (name, t) in named() {
-            let dest = PathBuf::from(format!("{}.tum", file_stem(name)));
+            let dest = PathBuf::from(format!("{}.tum", export_stem(name, bundle.from_bag)));
             overwrite(&dest);
             let mut out = Vec::new();
             write_tum(&canonical(name, t), &mut out).context("writing TUM")?;
@@ -920,12 +1042,21 @@ fn export(bundle: &Bundle, options: &Options, kind: Kind, console: &Console) -> 
     if options.save_as_kitti {
         console.info(SEP)?;
         for (name, t) in named() {
-            let dest = PathBuf::from(format!("{}.kitti", file_stem(name)));
+            let dest = PathBuf::from(format!("{}.kitti", export_stem(name, bundle.from_bag)));
             overwrite(&dest);
             std::fs::write(&dest, kitti_text(t))
                 .with_context(|| format!("{}: cannot write", dest.display()))?;
             console.info(&format!("Poses saved to: {}", dest.display()))?;
         }
+    }
+    if options.save_as_bag || options.save_as_bag2 {
+        if kind == Kind::Kitti {
+            bail!(
+                "KITTI poses have no timestamps: --save_as_bag and --save_as_bag2 need stamped input"
+            );
+        }
+        let all: Vec<(&String, Trajectory)> = named().map(|(n, t)| (n, canonical(n, t))).collect();
+        save_bags(bundle, &all, options, console)?;
     }
     if let Some(path) = &options.save_table {
         console.debug(SEP)?;

@@ -8,7 +8,7 @@ use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
 use ureq::Agent;
 
-use crate::{Error, NewSession, SessionOptions, SessionStatus};
+use crate::{Error, NewSession, SessionFrame, SessionOptions, SessionStatus};
 
 /// Header carrying the client-made key that makes `POST` requests safe to retry.
 pub const IDEMPOTENCY_HEADER: &str = "Idempotency-Key";
@@ -39,7 +39,7 @@ pub struct Client {
     pinned: Arc<Mutex<Option<(Agent, Agent)>>>,
 }
 
-enum Payload<'a> {
+pub(crate) enum Payload<'a> {
     Empty,
     Json(String),
     Text(&'a str),
@@ -183,8 +183,26 @@ impl Client {
         req: &NewSession,
         options: &SessionOptions,
     ) -> Result<String, Error> {
+        self.create_session_in(req, options, &SessionFrame::default())
+    }
+
+    /// Like [`Client::create_session_with`], in `frame`: the phone's convention and the venue
+    /// the session joins (sent only when set; the server answers 422 naming a venue the
+    /// caller cannot see, 409 naming both conventions when the venue's sessions use another).
+    pub fn create_session_in(
+        &self,
+        req: &NewSession,
+        options: &SessionOptions,
+        frame: &SessionFrame,
+    ) -> Result<String, Error> {
         let mut body =
             serde_json::to_value(req).map_err(|e| Error::InvalidArgument(e.to_string()))?;
+        if let Some(convention) = &frame.convention {
+            body["convention"] = convention.as_str().into();
+        }
+        if let Some(venue) = &frame.venue {
+            body["venue"] = venue.as_str().into();
+        }
         if let Some(min) = options.adaptive_min_trials {
             body["adaptive_min_trials"] = min.into();
         }
@@ -318,6 +336,17 @@ impl Client {
     /// one small file, so a retry sends them again. Returns how many thumbnails were sent;
     /// `Ok(None)` when `dir` has no `evidence.csv` (nothing is sent).
     pub fn upload_evidence(&self, id: &str, dir: &Path) -> Result<Option<usize>, Error> {
+        self.upload_evidence_files(id, dir, true)
+    }
+
+    /// [`Client::upload_evidence`]; `with_spans` false leaves out `subtrajectories.csv` (the
+    /// upload job sends it with the phone's log, before the recording).
+    pub(crate) fn upload_evidence_files(
+        &self,
+        id: &str,
+        dir: &Path,
+        with_spans: bool,
+    ) -> Result<Option<usize>, Error> {
         let id = check_session_id(id)?;
         let read = |path: std::path::PathBuf| {
             std::fs::read(&path).map_err(|source| Error::Io { path, source })
@@ -327,7 +356,7 @@ impl Client {
             return Ok(None);
         }
         let spans = dir.join("subtrajectories.csv");
-        if spans.is_file() {
+        if with_spans && spans.is_file() {
             let body = read(spans)?;
             let url = format!("/v1/sessions/{id}/subtrajectories.csv");
             self.request("PUT", &url, Payload::Bytes(&body, "text/csv"), None)?;
@@ -457,7 +486,7 @@ impl Client {
         self.request("GET", "/v1/devices", Payload::Empty, None)
     }
 
-    fn request(
+    pub(crate) fn request(
         &self,
         method: &str,
         path: &str,
@@ -1145,6 +1174,41 @@ mod tests {
                 .unwrap()
                 .starts_with("text/plain")
         );
+    }
+
+    #[test]
+    fn status_reads_the_venue_and_both_forms_of_alignment() {
+        const HEAD: &str = r#""id":"s1","state":"done","progress":1.0,"eta_s":null,"trials_done":2,"trials_total":2,"error":null"#;
+        let parse = |extra: &str| -> SessionStatus {
+            serde_json::from_str(&format!("{{{HEAD}{extra}}}")).unwrap()
+        };
+        let aligned = parse(
+            r#","venue":"v0123456789abcdef","alignment":{"anchor":"hall","observations":12,"position_spread_m":0.004,"heading_spread_deg":0.3}"#,
+        );
+        assert_eq!(aligned.venue.as_deref(), Some("v0123456789abcdef"));
+        assert_eq!(
+            aligned.alignment,
+            Some(crate::VenueAlignment::Aligned {
+                anchor: "hall".into(),
+                observations: 12,
+                position_spread_m: 0.004,
+                heading_spread_deg: 0.3,
+            })
+        );
+        let not = parse(
+            r#","venue":"v0123456789abcdef","alignment":{"error":"no full observation of hall"}"#,
+        );
+        assert_eq!(
+            not.alignment,
+            Some(crate::VenueAlignment::NotAligned {
+                error: "no full observation of hall".into()
+            })
+        );
+        // Null, or absent (an older backend): none.
+        for extra in [r#","venue":null,"alignment":null"#, ""] {
+            let st = parse(extra);
+            assert_eq!((st.venue, st.alignment), (None, None));
+        }
     }
 
     #[test]

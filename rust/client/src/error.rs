@@ -52,6 +52,20 @@ pub enum Error {
         /// The human-readable message from the JSON body.
         message: String,
     },
+    /// The server refused a file of the phone's session folder (see
+    /// [`crate::Client::upload_phone_logs`]): a 4xx other than 404/405, or a 5xx on every
+    /// attempt. Not retried.
+    #[error("the server refused {file} ({status} {code}): {message}")]
+    FileRefused {
+        /// The file's name in the session folder (`trajectory.txt`, …).
+        file: String,
+        /// The HTTP status code.
+        status: u16,
+        /// The machine-readable error code from the JSON body.
+        code: String,
+        /// The server's message (a 422 names the line and column).
+        message: String,
+    },
     /// A local file could not be read.
     #[error("cannot read {path}: {source}")]
     Io {
@@ -90,7 +104,7 @@ impl Error {
     /// The HTTP status if the server answered with an error status.
     pub fn status(&self) -> Option<u16> {
         match self {
-            Error::Server { status, .. } => Some(*status),
+            Error::Server { status, .. } | Error::FileRefused { status, .. } => Some(*status),
             _ => None,
         }
     }

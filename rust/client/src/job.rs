@@ -8,7 +8,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 use std::time::Duration;
 
-use crate::{Client, Error, NewSession, check_session_id};
+use crate::{Client, Error, NewSession, SessionFrame, check_session_id};
 
 /// What an [`UploadJob`] does.
 #[derive(Debug, Clone, PartialEq)]
@@ -22,10 +22,16 @@ pub struct JobOptions {
     pub session_id: Option<String>,
     /// How often the server's status is asked for while it works (at least 10 ms).
     pub poll_interval: Duration,
-    /// The phone's session folder: after the recording, its evidence (`evidence.csv`,
-    /// `subtrajectories.csv`, `thumbnails/`) is sent when it is there. A folder without
+    /// The phone's session folder (as sitar-core's `Session::save` writes it). Before the
+    /// recording, its log (`trajectory.txt`, `subtrajectories.csv`, `anchors.csv`:
+    /// [`Client::upload_phone_logs`]) is sent: a file the server refuses fails the job, a
+    /// backend without the routes (404/405) is skipped with a warning. After the recording,
+    /// its evidence (`evidence.csv`, `thumbnails/`) is sent when it is there: a folder without
     /// evidence, or an evidence upload that fails after its retries, never fails the job.
     pub evidence_dir: Option<PathBuf>,
+    /// The phone's convention and the venue the new session joins (sent with the session
+    /// request only when set). Ignored with [`JobOptions::session_id`].
+    pub frame: SessionFrame,
 }
 
 impl JobOptions {
@@ -36,6 +42,7 @@ impl JobOptions {
             session_id: None,
             poll_interval: Duration::from_millis(500),
             evidence_dir: None,
+            frame: SessionFrame::default(),
         }
     }
 
@@ -110,6 +117,9 @@ pub struct JobProgress {
     pub results_revision: u32,
     /// Trials behind the results delivered last (0 = none yet).
     pub results_trials: u32,
+    /// How many files of the phone's log ([`crate::PHONE_LOG_FILES`]) the server took (0
+    /// without [`JobOptions::evidence_dir`], or from a backend that predates them).
+    pub logs_sent: u32,
     /// Whether the session folder's evidence reached the server (false without
     /// [`JobOptions::evidence_dir`], without evidence in it, or when its upload failed).
     pub evidence_sent: bool,
@@ -458,6 +468,147 @@ mod tests {
             body,
             serde_json::json!({"trials":3,"setting":"median","playback":"sim"})
         );
+    }
+
+    /// A session folder with the phone's log (contents abridged) and no evidence.
+    fn session_folder(dir: &tempfile::TempDir) -> PathBuf {
+        let folder = dir.path().join("walk.mp4.session");
+        std::fs::create_dir(&folder).unwrap();
+        std::fs::write(folder.join("trajectory.txt"), "0 0 0 0 0 0 0 1\n").unwrap();
+        std::fs::write(folder.join("subtrajectories.csv"), "index\n0\n").unwrap();
+        std::fs::write(folder.join("anchors.csv"), "t_ns,anchor\n").unwrap();
+        folder
+    }
+
+    fn paths(seen: &[crate::test_server::Seen]) -> Vec<String> {
+        seen.iter()
+            .map(|s| format!("{} {}", s.method, s.path))
+            .collect()
+    }
+
+    #[test]
+    fn a_job_in_a_venue_sends_the_frame_and_the_phone_log_before_the_recording() {
+        let (base, seen) = serve(vec![
+            Reply::Answer(201, r#"{"id":"s1"}"#),
+            Reply::Answer(204, ""),
+            Reply::Answer(200, r#"{"subtrajectories":1}"#),
+            Reply::Answer(204, ""),
+            Reply::Offset(0),
+            Reply::Answer(202, "{}"),
+            Reply::Answer(200, DONE),
+            Reply::Answer(200, "final"),
+            Reply::Answer(200, DONE),
+        ]);
+        let dir = tempfile::tempdir().unwrap();
+        let mut o = options(None, None);
+        o.evidence_dir = Some(session_folder(&dir));
+        o.frame = SessionFrame {
+            convention: Some("arcore".into()),
+            venue: Some("v0123456789abcdef".into()),
+        };
+        let (got, sink) = collector();
+        let job = UploadJob::start(client(&base), &recording(&dir), o, sink).unwrap();
+        let p = finished(&job);
+        assert_eq!(p.state, JobState::Done, "{:?}", p.error);
+        assert_eq!(p.logs_sent, 3);
+        // No evidence.csv in the folder: no evidence, and subtrajectories.csv only once.
+        assert!(!p.evidence_sent);
+        assert_eq!(*got.lock().unwrap(), ["final"]);
+        let seen = seen.lock().unwrap();
+        assert_eq!(
+            paths(&seen),
+            [
+                "POST /v1/sessions",
+                "PUT /v1/sessions/s1/trajectory.txt",
+                "PUT /v1/sessions/s1/subtrajectories.csv",
+                "PUT /v1/sessions/s1/anchors.csv",
+                "HEAD /v1/sessions/s1/recording",
+                "PUT /v1/sessions/s1/recording",
+                "GET /v1/sessions/s1",
+                "GET /v1/sessions/s1/results.json",
+                "GET /v1/sessions/s1",
+            ]
+        );
+        let body: serde_json::Value = serde_json::from_slice(&seen[0].body).unwrap();
+        assert_eq!(
+            body,
+            serde_json::json!({"trials":3,"setting":"median","playback":"sim",
+                               "convention":"arcore","venue":"v0123456789abcdef"})
+        );
+        assert_eq!(seen[1].body, b"0 0 0 0 0 0 0 1\n");
+        assert_eq!(seen[3].body, b"t_ns,anchor\n");
+    }
+
+    #[test]
+    fn a_refused_log_fails_the_job_naming_the_file_before_the_recording_is_sent() {
+        let (base, seen) = serve(vec![
+            Reply::Answer(201, r#"{"id":"s1"}"#),
+            Reply::Answer(
+                422,
+                r#"{"error":{"code":"invalid_content","message":"trajectory.txt line 1: 7 columns, expected 8"}}"#,
+            ),
+        ]);
+        let dir = tempfile::tempdir().unwrap();
+        let mut o = options(None, None);
+        o.evidence_dir = Some(session_folder(&dir));
+        let job = UploadJob::start(client(&base), &recording(&dir), o, |_: &str| {
+            Ok::<(), Refused>(())
+        })
+        .unwrap();
+        let p = finished(&job);
+        assert_eq!(p.state, JobState::Failed);
+        assert_eq!((p.logs_sent, p.bytes_sent), (0, 0));
+        let error = p.error.unwrap();
+        assert!(
+            matches!(&*error, Error::FileRefused { file, status: 422, .. } if file == "trajectory.txt"),
+            "{error:?}"
+        );
+        assert_eq!(
+            error.to_string(),
+            "the server refused trajectory.txt (422 invalid_content): \
+             trajectory.txt line 1: 7 columns, expected 8"
+        );
+        std::thread::sleep(Duration::from_millis(50));
+        assert_eq!(
+            paths(&seen.lock().unwrap()),
+            ["POST /v1/sessions", "PUT /v1/sessions/s1/trajectory.txt"]
+        );
+    }
+
+    #[test]
+    fn an_older_backend_without_log_routes_still_completes_the_session() {
+        let (base, seen) = serve(vec![
+            Reply::Answer(201, r#"{"id":"s1"}"#),
+            Reply::Answer(
+                404,
+                r#"{"error":{"code":"not_found","message":"no such route"}}"#,
+            ),
+            // An older backend has subtrajectories.csv (camera evidence), not anchors.csv.
+            Reply::Answer(200, r#"{"subtrajectories":1}"#),
+            Reply::Answer(
+                404,
+                r#"{"error":{"code":"not_found","message":"no such route"}}"#,
+            ),
+            Reply::Offset(0),
+            Reply::Answer(202, "{}"),
+            Reply::Answer(200, DONE),
+            Reply::Answer(200, "final"),
+            Reply::Answer(200, DONE),
+        ]);
+        let dir = tempfile::tempdir().unwrap();
+        let mut o = options(None, None);
+        o.evidence_dir = Some(session_folder(&dir));
+        let (got, sink) = collector();
+        let job = UploadJob::start(client(&base), &recording(&dir), o, sink).unwrap();
+        let p = finished(&job);
+        assert_eq!(p.state, JobState::Done, "{:?}", p.error);
+        assert_eq!(p.logs_sent, 1);
+        assert_eq!(*got.lock().unwrap(), ["final"]);
+        assert_eq!(seen.lock().unwrap().len(), 9);
+        // No frame set: the session request carries neither key.
+        let body: serde_json::Value =
+            serde_json::from_slice(&seen.lock().unwrap()[0].body).unwrap();
+        assert!(body.get("convention").is_none() && body.get("venue").is_none());
     }
 
     #[test]

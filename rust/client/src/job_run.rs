@@ -5,7 +5,7 @@ use std::path::Path;
 use std::time::Duration;
 
 use crate::job::{JobOptions, JobState, Shared, SinkError, UPLOAD_SHARE};
-use crate::{Client, Error, SessionState};
+use crate::{Client, Error, SessionOptions, SessionState};
 
 type Sink<'a> = &'a mut dyn FnMut(&str) -> Result<(), SinkError>;
 
@@ -18,7 +18,11 @@ pub(crate) fn run(
 ) -> Result<(), Error> {
     let (id, playback, needs_upload) = match &options.session_id {
         None => {
-            let id = client.create_session(&options.session)?;
+            let id = client.create_session_in(
+                &options.session,
+                &SessionOptions::default(),
+                &options.frame,
+            )?;
             (id, options.session.playback.clone(), true)
         }
         Some(id) => {
@@ -34,6 +38,12 @@ pub(crate) fn run(
     shared.set_server_id(&id);
     if shared.is_cancelled() {
         return Ok(());
+    }
+    if let Some(dir) = &options.evidence_dir {
+        // Before the recording: the session is surely still open to its files then, and a
+        // refused log fails the job before the long upload.
+        shared.set_state(JobState::Uploading);
+        send_phone_logs(shared, client, &id, dir)?;
     }
     if needs_upload {
         send_recording(shared, client, &id, recording)?;
@@ -152,10 +162,26 @@ fn send_recording(
     }
 }
 
+/// Sends the phone's log from the session folder: a refused file fails the job (naming it),
+/// a backend without the routes is skipped (logged by the client).
+fn send_phone_logs(shared: &Shared, client: &Client, id: &str, dir: &Path) -> Result<(), Error> {
+    let logs = client.upload_phone_logs(id, dir)?;
+    log::info!(
+        "upload: phone log of {id}: sent {:?}, not supported by the server {:?}, not in {} {:?}",
+        logs.sent,
+        logs.unsupported,
+        dir.display(),
+        logs.missing
+    );
+    shared.update(|p| p.logs_sent = logs.sent.len() as u32);
+    Ok(())
+}
+
 /// Sends the session folder's evidence; a failure (after the client's retries) is logged
 /// and leaves [`crate::JobProgress::evidence_sent`] false: the results never depend on it.
 fn send_evidence(shared: &Shared, client: &Client, id: &str, dir: &Path) {
-    match client.upload_evidence(id, dir) {
+    // subtrajectories.csv went with the phone's log.
+    match client.upload_evidence_files(id, dir, false) {
         Ok(Some(thumbnails)) => {
             log::info!("upload: evidence of {id} sent ({thumbnails} thumbnails)");
             shared.update(|p| p.evidence_sent = true);

@@ -16,7 +16,10 @@
 //! continue) a session, send the recording resumably, poll, ask for the estimate of an
 //! `upload` session once all trials arrived, and hand every published result (progressive,
 //! then final) to a sink; the app polls [`JobProgress`] snapshots and may cancel. The native
-//! library bridges it one-to-one (`sitar_upload_*`).
+//! library bridges it one-to-one (`sitar_upload_*`). With the phone's session folder the job
+//! also sends the phone's own log ([`Client::upload_phone_logs`]: `trajectory.txt`,
+//! `subtrajectories.csv`, `anchors.csv`) before the recording, and its camera evidence after;
+//! [`SessionFrame`] puts the session's convention and venue into the session request.
 //!
 //! ```
 //! use sitar_client::{Client, Error, NewSession};
@@ -51,6 +54,7 @@ mod client;
 mod error;
 mod job;
 mod job_run;
+mod phone_logs;
 mod pin;
 pub mod platform_tls;
 #[cfg(test)]
@@ -60,4 +64,7 @@ mod types;
 pub use client::{Client, IDEMPOTENCY_HEADER, UPLOAD_OFFSET_HEADER, check_session_id};
 pub use error::Error;
 pub use job::{JobOptions, JobProgress, JobState, SinkError, UPLOAD_SHARE, UploadJob};
-pub use types::{NewSession, SessionOptions, SessionState, SessionStatus};
+pub use phone_logs::{PHONE_LOG_FILES, PhoneLogsSent};
+pub use types::{
+    NewSession, SessionFrame, SessionOptions, SessionState, SessionStatus, VenueAlignment,
+};

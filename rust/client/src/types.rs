@@ -31,6 +31,22 @@ pub struct SessionOptions {
     pub adaptive_k: Option<u32>,
 }
 
+/// Which world frame a session's poses are in: the phone's coordinate convention and the
+/// venue whose shared frame the session joins (`POST /v1/sessions` keys `"convention"` and
+/// `"venue"`). `None` sends nothing, so a backend that predates venues still takes the session;
+/// build one with `..SessionFrame::default()`.
+#[derive(Debug, Clone, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub struct SessionFrame {
+    /// `"unity"` or `"arcore"` (the session config's `convention`); `None` leaves the
+    /// server's default (`unity`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub convention: Option<String>,
+    /// The venue the session joins (an id from `POST /v1/venues`, `v` and 16 hex digits);
+    /// `None` joins none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub venue: Option<String>,
+}
+
 /// Life cycle of a session on the server.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -106,4 +122,35 @@ pub struct SessionStatus {
     /// Pose relation of the estimate (`trans_part`, `angle_deg`), when the server says.
     #[serde(default)]
     pub pose_relation: Option<String>,
+    /// The venue the session joined (`None` in none, or from a backend without venues).
+    #[serde(default)]
+    pub venue: Option<String>,
+    /// The session's alignment to its venue's frame, from the `anchors.csv` the phone sent
+    /// (`None` in no venue, before the phone's log arrived, or from a backend without venues).
+    #[serde(default)]
+    pub alignment: Option<VenueAlignment>,
+}
+
+/// How a session sits in its venue's frame (`"alignment"` of `GET /v1/sessions/{id}`):
+/// sitar-core's alignment from the session's full observations of the venue's anchor.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum VenueAlignment {
+    /// Aligned from `observations` full observations of `anchor`.
+    Aligned {
+        /// The venue's anchor id.
+        anchor: String,
+        /// Full observations kept (outliers rejected).
+        observations: u32,
+        /// RMS position deviation of the kept observations, metres.
+        position_spread_m: f64,
+        /// RMS heading deviation of the kept observations, degrees.
+        heading_spread_deg: f64,
+    },
+    /// Not aligned, and why (e.g. no full observation of the anchor): the session stays out
+    /// of the venue's map.
+    NotAligned {
+        /// The server's reason.
+        error: String,
+    },
 }

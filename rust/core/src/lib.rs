@@ -91,9 +91,11 @@
 //! puts a session into the venue frame from its `full` observations (robust medians, with
 //! their spread), the one estimate the phone and the backend share; [`VenueMap`] is the
 //! backend's `map.json`, which [`Session::load_venue`] aligns to and [`Session::venue_cells`]
-//! returns in the session's world frame. [`ScreenView::guide`] places a target on the screen or
-//! on an ellipse inside its edge; [`Session::guide_into`] does it for every marker and high
-//! venue cell without allocating.
+//! returns in the session's world frame. [`venue::Contribution::from_files`] turns a session's
+//! uploaded files into what it brings to a venue (its samples in the venue frame), and
+//! [`venue::build_map`] / [`venue::MapBuilder`] aggregate them into the map's cells.
+//! [`ScreenView::guide`] places a target on the screen or on an ellipse inside its edge;
+//! [`Session::guide_into`] does it for every marker and high venue cell without allocating.
 //!
 //! ## Errors
 //!

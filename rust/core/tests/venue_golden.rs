@@ -145,19 +145,19 @@ fn the_incremental_builder_reaches_the_same_map_by_any_route() {
     let reference = VenueMap::from_json(&read("map_min1.json")).unwrap();
     let mut builder = MapBuilder::new(spec.clone());
     // s3 first, a map in between, s1 twice (replaced in place), s2 added, removed, re-added.
-    builder.add(contributions[0].clone());
-    builder.add(contributions[2].clone());
+    builder.add(&contributions[0]);
+    builder.add(&contributions[2]);
     let _ = builder.map(1);
-    builder.add(contributions[0].clone());
-    builder.add(contributions[1].clone());
+    builder.add(&contributions[0]);
+    builder.add(&contributions[1]);
     let _ = builder.map(2);
     assert!(builder.remove("s2"));
     assert!(!builder.remove("s2"));
     let without_s2 = builder.map(1);
     assert!(without_s2.cells.len() < reference.cells.len());
-    builder.add(contributions[1].clone());
-    builder.add(contributions[3].clone());
-    builder.add(contributions[4].clone());
+    builder.add(&contributions[1]);
+    builder.add(&contributions[3]);
+    builder.add(&contributions[4]);
     let mut map = builder.map(1);
     // The order of the session list follows the adds (s1, s3, s2, …): compare cells, and
     // the sessions as a set.

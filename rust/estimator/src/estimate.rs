@@ -141,7 +141,7 @@ impl Estimate {
             trials: self.trials,
             time_unit: match self.time_unit {
                 TimeUnit::Nanoseconds => "ns",
-                TimeUnit::Seconds => "s",
+                TimeUnit::Seconds | TimeUnit::RosStamp => "s",
             },
             pose_relation: self.pose_relation.to_string(),
             window_frames: self.delta,

@@ -173,8 +173,10 @@ pub fn parse_tum_with(
     for (stamp, line) in rows.stamps.iter().zip(&rows.lines) {
         let ns = match (*stamp, unit) {
             (Stamp::Integer(v), TimeUnit::Nanoseconds) => Some(v),
-            (Stamp::Integer(v), TimeUnit::Seconds) => v.checked_mul(1_000_000_000),
-            (Stamp::Seconds(ns), TimeUnit::Seconds) => Some(ns),
+            (Stamp::Integer(v), TimeUnit::Seconds | TimeUnit::RosStamp) => {
+                v.checked_mul(1_000_000_000)
+            }
+            (Stamp::Seconds(ns), TimeUnit::Seconds | TimeUnit::RosStamp) => Some(ns),
             (Stamp::Seconds(_), TimeUnit::Nanoseconds) => {
                 return Err(parse_error(
                     source,

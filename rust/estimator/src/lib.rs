@@ -150,6 +150,7 @@
 #![deny(missing_docs)]
 
 mod align;
+mod bag_writer;
 mod bootstrap;
 mod error;
 mod estimate;
@@ -160,13 +161,16 @@ mod incremental;
 mod metrics;
 mod pairwise;
 mod ranking;
+mod ros1;
 mod rosbag;
 mod sorted_runs;
 mod statistics;
 mod sync;
+mod tf;
 mod trajectory;
 
 pub use align::{Alignment, Similarity, align, align_first, umeyama};
+pub use bag_writer::{PoseTopic, mcap_bag, ros1_bag, rosbag2_metadata};
 pub use bootstrap::{MeanInterval, bootstrap_mean};
 pub use error::Error;
 pub use estimate::{Estimate, EstimateOptions, PairwiseValues, WindowEstimate, estimate};
@@ -187,9 +191,10 @@ pub use metrics::{
 pub use ranking::{
     MIN_FIT_ERROR_M, SweepPoint, ThresholdSweep, fit_scale, median_ratio, spearman, threshold_sweep,
 };
+pub use ros1::{decode_ros1_pose, read_ros1_bag, read_ros1_bag_topics};
 pub use rosbag::{
-    BagTrajectory, PoseMessage, StampedPoseValue, TopicMessages, decode_pose, read_mcap,
-    topic_trajectory,
+    BagTrajectory, Encoding, PoseMessage, StampedPoseValue, TopicMessages, decode_pose,
+    decode_pose_as, read_mcap, read_mcap_from, read_mcap_topics, topic_trajectory,
 };
 /// The class rule and its defaults, shared with the phone and the backend.
 pub use sitar_core::{DEFAULT_SETTING, ErrorClass, Thresholds};
@@ -199,6 +204,10 @@ pub use statistics::{
 pub use sync::{
     associate, associate_trajectories, match_trajectories, matching_time_indices,
     matching_time_indices_seconds, seconds_to_ns,
+};
+pub use tf::{
+    TF_LOOKUP_STEP_NS, TF_MESSAGE_TYPE, TfBuffer, TfId, TfTransform, decode_tf_message,
+    tf_trajectory,
 };
 pub use trajectory::{
     Plane, QUATERNION_NORM_TOLERANCE, TimeUnit, Trajectory, euler_sxyz, pairwise_sum,

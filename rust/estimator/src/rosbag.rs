@@ -1,9 +1,11 @@
-//! Trajectories in ROS 2 bags, as evo reads them: the pose messages evo reads
+//! Trajectories in ROS bags, as evo reads them: the pose messages evo reads
 //! (`geometry_msgs/msg/PoseStamped`, `PoseWithCovarianceStamped`, `TransformStamped`,
 //! `PointStamped` with a unit quaternion, `nav_msgs/msg/Odometry`) decoded from CDR
-//! (`cdr-encoding`), each pose stamped with its header's stamp; MCAP storage read with
-//! Foxglove's `mcap` reader. The container of the sqlite3 storage is read by the caller (it
-//! hands over each message's bytes).
+//! (`cdr-encoding`, ROS 2) or the ROS 1 serialization ([`crate::ros1`]), each pose stamped
+//! with its header's stamp as evo's float `sec + nanosec * 1e-9` ([`TimeUnit::RosStamp`]);
+//! MCAP storage (uncompressed, zstd or lz4 chunks) read with Foxglove's `mcap` reader. The
+//! container of the sqlite3 storage is read by the caller (it hands over each message's
+//! bytes).
 
 use std::collections::BTreeMap;
 
@@ -42,37 +44,62 @@ impl PoseMessage {
     }
 }
 
-#[derive(Deserialize)]
-struct Time {
-    sec: i32,
-    nanosec: u32,
+/// How a bag's messages are serialized.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Encoding {
+    /// ROS 2: CDR with its 4-byte encapsulation header.
+    #[default]
+    Cdr,
+    /// ROS 1: little-endian, unaligned, no header; `std_msgs/Header` has a `seq`.
+    Ros1,
 }
 
 #[derive(Deserialize)]
-struct Header {
-    stamp: Time,
-    frame_id: String,
+pub(crate) struct Time {
+    pub(crate) sec: i32,
+    pub(crate) nanosec: u32,
+}
+
+impl Time {
+    /// The stamp in nanoseconds (`sec` as evo reads it: signed).
+    pub(crate) fn ns(&self) -> i64 {
+        i64::from(self.sec) * 1_000_000_000 + i64::from(self.nanosec)
+    }
 }
 
 #[derive(Deserialize)]
-struct Vector {
-    x: f64,
-    y: f64,
-    z: f64,
+pub(crate) struct Header {
+    pub(crate) stamp: Time,
+    pub(crate) frame_id: String,
 }
 
 #[derive(Deserialize)]
-struct Quaternion {
-    x: f64,
-    y: f64,
-    z: f64,
-    w: f64,
+pub(crate) struct Vector {
+    pub(crate) x: f64,
+    pub(crate) y: f64,
+    pub(crate) z: f64,
 }
 
 #[derive(Deserialize)]
-struct Pose {
-    position: Vector,
-    orientation: Quaternion,
+pub(crate) struct Quaternion {
+    pub(crate) x: f64,
+    pub(crate) y: f64,
+    pub(crate) z: f64,
+    pub(crate) w: f64,
+}
+
+#[derive(Deserialize)]
+pub(crate) struct Pose {
+    pub(crate) position: Vector,
+    pub(crate) orientation: Quaternion,
+}
+
+pub(crate) fn vector(v: Vector) -> DVec3 {
+    DVec3::new(v.x, v.y, v.z)
+}
+
+pub(crate) fn quaternion(q: Quaternion) -> DQuat {
+    DQuat::from_xyzw(q.x, q.y, q.z, q.w)
 }
 
 /// `PoseStamped`, and the leading fields of `PoseWithCovarianceStamped` (its covariance
@@ -84,11 +111,11 @@ struct StampedPose {
 }
 
 #[derive(Deserialize)]
-struct StampedTransform {
-    header: Header,
-    _child_frame_id: String,
-    translation: Vector,
-    rotation: Quaternion,
+pub(crate) struct StampedTransform {
+    pub(crate) header: Header,
+    pub(crate) child_frame_id: String,
+    pub(crate) translation: Vector,
+    pub(crate) rotation: Quaternion,
 }
 
 #[derive(Deserialize)]
@@ -118,9 +145,8 @@ pub struct StampedPoseValue {
     pub frame_id: String,
 }
 
-/// Decodes one CDR-encoded message (4 bytes of encapsulation header, then the body) of
-/// type `kind`.
-pub fn decode_pose(kind: PoseMessage, data: &[u8]) -> Result<StampedPoseValue, Error> {
+/// Splits a CDR message into its body and byte order (from the encapsulation header).
+fn cdr_body(data: &[u8]) -> Result<(&[u8], bool), Error> {
     let bad = |what: String| Error::InvalidArgument(format!("CDR message: {what}"));
     let (header, body) = data
         .split_first_chunk::<4>()
@@ -130,43 +156,63 @@ pub fn decode_pose(kind: PoseMessage, data: &[u8]) -> Result<StampedPoseValue, E
         1 | 3 => true,
         other => return Err(bad(format!("unknown encapsulation kind {other}"))),
     };
-    fn decode<'de, T: Deserialize<'de>>(body: &'de [u8], little: bool) -> Result<T, String> {
-        let result = if little {
-            cdr_encoding::from_bytes::<T, byteorder::LittleEndian>(body)
-        } else {
-            cdr_encoding::from_bytes::<T, byteorder::BigEndian>(body)
-        };
-        result.map(|(value, _)| value).map_err(|e| e.to_string())
-    }
-    let quaternion = |q: Quaternion| DQuat::from_xyzw(q.x, q.y, q.z, q.w);
-    let vector = |v: Vector| DVec3::new(v.x, v.y, v.z);
+    Ok((body, little))
+}
+
+/// Deserializes a CDR message (header included) as `T`.
+pub(crate) fn decode_cdr<T: for<'de> Deserialize<'de>>(data: &[u8]) -> Result<T, Error> {
+    let (body, little) = cdr_body(data)?;
+    let result = if little {
+        cdr_encoding::from_bytes::<T, byteorder::LittleEndian>(body)
+    } else {
+        cdr_encoding::from_bytes::<T, byteorder::BigEndian>(body)
+    };
+    result
+        .map(|(value, _)| value)
+        .map_err(|e| Error::InvalidArgument(format!("CDR message: {e}")))
+}
+
+/// Decodes one CDR-encoded message (4 bytes of encapsulation header, then the body) of
+/// type `kind`.
+pub fn decode_pose(kind: PoseMessage, data: &[u8]) -> Result<StampedPoseValue, Error> {
     let (header, position, orientation) = match kind {
         PoseMessage::PoseStamped | PoseMessage::PoseWithCovarianceStamped => {
-            let m: StampedPose = decode(body, little).map_err(bad)?;
+            let m: StampedPose = decode_cdr(data)?;
             let p = m.pose;
             (m.header, vector(p.position), quaternion(p.orientation))
         }
         PoseMessage::Odometry => {
-            let m: Odometry = decode(body, little).map_err(bad)?;
+            let m: Odometry = decode_cdr(data)?;
             let p = m.pose;
             (m.header, vector(p.position), quaternion(p.orientation))
         }
         PoseMessage::TransformStamped => {
-            let m: StampedTransform = decode(body, little).map_err(bad)?;
+            let m: StampedTransform = decode_cdr(data)?;
             (m.header, vector(m.translation), quaternion(m.rotation))
         }
         PoseMessage::PointStamped => {
-            let m: StampedPoint = decode(body, little).map_err(bad)?;
+            let m: StampedPoint = decode_cdr(data)?;
             (m.header, vector(m.point), DQuat::IDENTITY)
         }
     };
-    let time = header.stamp;
     Ok(StampedPoseValue {
-        stamp_ns: i64::from(time.sec) * 1_000_000_000 + i64::from(time.nanosec),
+        stamp_ns: header.stamp.ns(),
         position,
         orientation,
         frame_id: header.frame_id,
     })
+}
+
+/// Decodes one message of `kind` serialized as `encoding`.
+pub fn decode_pose_as(
+    kind: PoseMessage,
+    encoding: Encoding,
+    data: &[u8],
+) -> Result<StampedPoseValue, Error> {
+    match encoding {
+        Encoding::Cdr => decode_pose(kind, data),
+        Encoding::Ros1 => crate::ros1::decode_ros1_pose(kind, data),
+    }
 }
 
 /// The messages of one topic of a bag: its type name and each message's CDR bytes, in the
@@ -175,6 +221,8 @@ pub fn decode_pose(kind: PoseMessage, data: &[u8]) -> Result<StampedPoseValue, E
 pub struct TopicMessages {
     /// The ROS type name (`geometry_msgs/msg/PoseStamped`).
     pub type_name: String,
+    /// How the messages are serialized.
+    pub encoding: Encoding,
     /// The messages' bytes.
     pub messages: Vec<Vec<u8>>,
 }
@@ -182,35 +230,84 @@ pub struct TopicMessages {
 /// Every topic of an MCAP file (topics advertised without messages included, with none),
 /// messages in log-time order.
 pub fn read_mcap(bytes: &[u8]) -> Result<BTreeMap<String, TopicMessages>, Error> {
+    read_mcap_topics(bytes, &|_| true)
+}
+
+/// [`read_mcap`] keeping the messages of the topics `wanted` says yes to only (the others
+/// are listed with their types and no messages): a bag's images are never copied.
+pub fn read_mcap_topics(
+    bytes: &[u8],
+    wanted: &dyn Fn(&str) -> bool,
+) -> Result<BTreeMap<String, TopicMessages>, Error> {
+    read_mcap_from(bytes, wanted)
+}
+
+/// The largest MCAP record (a chunk, compressed or not) the streaming reader buffers.
+const MAX_MCAP_RECORD: usize = 1 << 30;
+
+/// [`read_mcap_topics`] from a reader, streamed (Foxglove's sans-I/O reader): the file is
+/// never held whole, only one record (at most 1 GiB) and the wanted topics' messages.
+pub fn read_mcap_from(
+    mut input: impl std::io::Read,
+    wanted: &dyn Fn(&str) -> bool,
+) -> Result<BTreeMap<String, TopicMessages>, Error> {
+    use mcap::records::Record;
+    use mcap::sans_io::linear_reader::{LinearReadEvent, LinearReader, LinearReaderOptions};
     let bad = |e: mcap::McapError| Error::InvalidArgument(format!("MCAP: {e}"));
+    let options = LinearReaderOptions::default().with_record_length_limit(MAX_MCAP_RECORD);
+    let mut reader = LinearReader::new_with_options(options);
+    let mut schemas: BTreeMap<u16, String> = BTreeMap::new();
+    let mut channels: BTreeMap<u16, (String, bool)> = BTreeMap::new();
     let mut topics: BTreeMap<String, TopicMessages> = BTreeMap::new();
-    if let Some(summary) = mcap::Summary::read(bytes).map_err(bad)? {
-        for channel in summary.channels.values() {
-            let type_name = channel.schema.as_ref().map(|s| s.name.clone());
-            topics.entry(channel.topic.clone()).or_default().type_name =
-                type_name.unwrap_or_default();
+    let mut stamped: BTreeMap<u16, Vec<(u64, Vec<u8>)>> = BTreeMap::new();
+    while let Some(event) = reader.next_event() {
+        match event.map_err(bad)? {
+            LinearReadEvent::ReadRequest(need) => {
+                let read = input
+                    .read(reader.insert(need))
+                    .map_err(|e| Error::InvalidArgument(format!("MCAP: {e}")))?;
+                reader.notify_read(read);
+            }
+            LinearReadEvent::Record { opcode, data } => match mcap::parse_record(opcode, data)
+                .map_err(bad)?
+            {
+                Record::Schema { header, .. } => {
+                    schemas.insert(header.id, header.name);
+                }
+                Record::Channel(channel) => {
+                    let type_name = schemas.get(&channel.schema_id).cloned().unwrap_or_default();
+                    let entry = topics.entry(channel.topic.clone()).or_default();
+                    if entry.type_name.is_empty() {
+                        entry.type_name = type_name;
+                    }
+                    let keep = wanted(&channel.topic);
+                    channels.insert(channel.id, (channel.topic, keep));
+                }
+                Record::Message { header, data } => {
+                    let Some((_, keep)) = channels.get(&header.channel_id) else {
+                        return Err(Error::InvalidArgument(format!(
+                            "MCAP: a message on channel {}, which no channel record defines",
+                            header.channel_id
+                        )));
+                    };
+                    if *keep {
+                        let messages = stamped.entry(header.channel_id).or_default();
+                        messages.push((header.log_time, data.into_owned()));
+                    }
+                }
+                _ => {}
+            },
         }
-    }
-    let mut stamped: BTreeMap<String, Vec<(u64, Vec<u8>)>> = BTreeMap::new();
-    for message in mcap::MessageStream::new(bytes).map_err(bad)? {
-        let message = message.map_err(bad)?;
-        let channel = &message.channel;
-        let entry = topics.entry(channel.topic.clone()).or_default();
-        if entry.type_name.is_empty() {
-            entry.type_name = channel
-                .schema
-                .as_ref()
-                .map(|s| s.name.clone())
-                .unwrap_or_default();
-        }
-        let messages = stamped.entry(channel.topic.clone()).or_default();
-        messages.push((message.log_time, message.data.into_owned()));
     }
     // Log-time order (stable), as rosbags (evo's reader) yields a bag's messages.
-    for (topic, mut messages) in stamped {
+    for (channel, mut messages) in stamped {
         messages.sort_by_key(|m| m.0);
+        let topic = channels
+            .get(&channel)
+            .map(|c| c.0.clone())
+            .unwrap_or_default();
         let entry = topics.entry(topic).or_default();
-        entry.messages = messages.into_iter().map(|m| m.1).collect();
+        entry.messages.extend(messages.into_iter().map(|m| m.1));
     }
     Ok(topics)
 }
@@ -246,14 +343,14 @@ pub fn topic_trajectory(topic: &str, messages: &TopicMessages) -> Result<BagTraj
     }
     let mut out = BagTrajectory {
         trajectory: Trajectory {
-            time_unit: TimeUnit::Seconds,
+            time_unit: TimeUnit::RosStamp,
             ..Trajectory::default()
         },
         frame_id: String::new(),
         quaternions_off_unit: 0,
     };
     for (k, data) in messages.messages.iter().enumerate() {
-        let pose = decode_pose(kind, data).map_err(|e| {
+        let pose = decode_pose_as(kind, messages.encoding, data).map_err(|e| {
             Error::InvalidArgument(format!(
                 "topic {topic} ({}), message {}: {e}",
                 messages.type_name,
@@ -318,6 +415,7 @@ mod tests {
         let one = TopicMessages {
             type_name: "geometry_msgs/msg/PoseStamped".into(),
             messages: vec![data.clone()],
+            ..TopicMessages::default()
         };
         let read = topic_trajectory("/gt", &one).unwrap();
         assert_eq!(
@@ -332,6 +430,7 @@ mod tests {
         let messages = TopicMessages {
             type_name: "geometry_msgs/msg/PoseStamped".into(),
             messages: vec![data.clone(), data[..12].to_vec()],
+            ..TopicMessages::default()
         };
         let error = topic_trajectory("/gt", &messages).unwrap_err().to_string();
         assert!(
@@ -341,6 +440,7 @@ mod tests {
         let twist = TopicMessages {
             type_name: "geometry_msgs/msg/Twist".into(),
             messages: vec![data],
+            ..TopicMessages::default()
         };
         let error = topic_trajectory("/cmd_vel", &twist)
             .unwrap_err()

@@ -1,10 +1,10 @@
 //! Time association of two trajectories, as evo's `sync.associate_trajectories`.
 
-use crate::{Error, TimeUnit, Trajectory};
+use crate::{Error, Trajectory};
 
 /// Converts seconds to whole nanoseconds: the float's exact value rounded to the nearest
 /// nanosecond (halves away from zero), so a float of evo's seconds above 2²⁵ s (where floats
-/// are further apart than 2 ns) comes back from [`TimeUnit::seconds`] unchanged. Saturates
+/// are further apart than 2 ns) comes back from [`crate::TimeUnit::seconds`] unchanged. Saturates
 /// beyond ±9.2·10⁹ s; NaN is 0.
 pub fn seconds_to_ns(seconds: f64) -> i64 {
     if seconds.is_nan() || seconds.abs() >= 9.2e9 {
@@ -169,7 +169,7 @@ pub fn match_trajectories(
     max_diff_s: f64,
     offset_s: f64,
 ) -> (Vec<usize>, Vec<usize>) {
-    let in_seconds = [short.time_unit, long.time_unit].contains(&TimeUnit::Seconds);
+    let in_seconds = short.time_unit.is_seconds() || long.time_unit.is_seconds();
     if in_seconds {
         matching_time_indices_seconds(&short.seconds(), &long.seconds(), max_diff_s, offset_s)
     } else {
@@ -251,6 +251,7 @@ pub fn associate_trajectories(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::TimeUnit;
 
     /// evo's linear-search definition, for comparison.
     fn brute(s1: &[i64], s2: &[i64], max: i64, off: i64) -> (Vec<usize>, Vec<usize>) {

@@ -15,6 +15,9 @@ pub enum TimeUnit {
     Nanoseconds,
     /// Decimal seconds (classic TUM files).
     Seconds,
+    /// ROS header stamps (`sec`, `nanosec`, from bags): evo holds them as the float64
+    /// `sec + nanosec * 1e-9`, which can be one ulp off the float nearest the decimal.
+    RosStamp,
 }
 
 impl TimeUnit {
@@ -22,7 +25,7 @@ impl TimeUnit {
     pub fn format_stamp(self, t_ns: i64) -> String {
         match self {
             TimeUnit::Nanoseconds => t_ns.to_string(),
-            TimeUnit::Seconds => {
+            TimeUnit::Seconds | TimeUnit::RosStamp => {
                 let sign = if t_ns < 0 { "-" } else { "" };
                 let abs = t_ns.unsigned_abs();
                 format!("{sign}{}.{:09}", abs / 1_000_000_000, abs % 1_000_000_000)
@@ -33,14 +36,26 @@ impl TimeUnit {
     /// A stamp as the float64 seconds evo holds. Read as seconds: the float nearest the
     /// decimal, which is what Python's `float()` makes of a TUM stamp written with up to 9
     /// decimals. Read as nanoseconds: evo's `float(ns) / 1e9` (its EuRoC reader), rounded twice
-    /// above 2⁵³ ns as there.
+    /// above 2⁵³ ns as there. ROS stamps: evo's `sec + nanosec * 1e-9`.
     pub fn seconds(self, t_ns: i64) -> f64 {
         const EXACT: u64 = 1 << 53;
         match self {
+            TimeUnit::RosStamp => {
+                let (sec, nanosec) = (
+                    t_ns.div_euclid(1_000_000_000),
+                    t_ns.rem_euclid(1_000_000_000),
+                );
+                sec as f64 + nanosec as f64 * 1e-9
+            }
             TimeUnit::Seconds if t_ns.unsigned_abs() >= EXACT => nearest_quotient(t_ns),
             // Below 2⁵³ both operands are exact, so the one division rounds correctly.
             TimeUnit::Seconds | TimeUnit::Nanoseconds => t_ns as f64 / 1e9,
         }
+    }
+
+    /// Stamps in (float) seconds, as evo's: decimal seconds or ROS stamps.
+    pub fn is_seconds(self) -> bool {
+        matches!(self, TimeUnit::Seconds | TimeUnit::RosStamp)
     }
 }
 
@@ -632,5 +647,16 @@ mod tests {
         assert_eq!(TimeUnit::Seconds.format_stamp(1_500_000_001), "1.500000001");
         assert_eq!(TimeUnit::Seconds.format_stamp(-5), "-0.000000005");
         assert_eq!(TimeUnit::Nanoseconds.format_stamp(42), "42");
+    }
+
+    /// ROS stamps are evo's `sec + nanosec * 1e-9`, which is not always the float nearest
+    /// the decimal (Python: 63 + 817077201 * 1e-9 == 63.817077201000004).
+    #[test]
+    fn ros_stamps_are_evos_sum() {
+        let ns = 63_817_077_201;
+        assert_eq!(TimeUnit::RosStamp.seconds(ns), 63.817_077_201_000_004);
+        assert_eq!(TimeUnit::Seconds.seconds(ns), 63.817_077_201);
+        assert_eq!(TimeUnit::RosStamp.format_stamp(ns), "63.817077201");
+        assert!(TimeUnit::RosStamp.is_seconds() && !TimeUnit::Nanoseconds.is_seconds());
     }
 }

@@ -529,7 +529,13 @@ int32_t sitar_playback_free(SitarHandle h);
 // `playback` ("adb"), `poll_interval_ms` (500), `session_id` (continue that
 // server session, e.g. a failed job's: the upload resumes or is skipped),
 // `window_frames` and `pose_relation` (the session config's
-// `subtrajectory_frames` and `pose_relation`; other values are refused).
+// `subtrajectory_frames` and `pose_relation`; other values are refused),
+// `evidence_dir` (a saved session folder; default: a started session is
+// saved as `RECORDING.session/`). The session request carries the config's
+// `venue` and its `convention` when `arcore`; the folder's `trajectory.txt`,
+// `subtrajectories.csv` and `anchors.csv` go before the recording (a file the
+// backend refuses fails the job, naming it; a backend without those routes
+// is skipped with a logged warning).
 int32_t sitar_upload_start(SitarHandle h,
                            const char *recording_path,
                            const char *options_json,

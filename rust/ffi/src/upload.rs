@@ -6,8 +6,8 @@ use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use serde::Deserialize;
-use sitar_client::{Client, JobOptions, JobState, NewSession, UploadJob};
-use sitar_core::{PoseRelation, Session};
+use sitar_client::{Client, JobOptions, JobState, NewSession, SessionFrame, UploadJob};
+use sitar_core::{Convention, PoseRelation, Session};
 
 use crate::error::Error;
 use crate::types::{SitarJobProgress, SitarJobState};
@@ -29,10 +29,11 @@ struct UploadOptions {
     poll_interval_ms: u64,
     window_frames: Option<u32>,
     pose_relation: Option<PoseRelation>,
-    /// A session folder (as `sitar_session_save` writes it) whose camera evidence
-    /// (`evidence.csv`, `subtrajectories.csv`, `thumbnails/`) goes to the backend after the
-    /// recording. Without it, a session that was given camera images is saved next to the
-    /// recording (`RECORDING.evidence/`, or under the config's `data_dir`) and sent from there.
+    /// A session folder (as `sitar_session_save` writes it) whose log (`trajectory.txt`,
+    /// `subtrajectories.csv`, `anchors.csv`) goes to the backend before the recording and
+    /// whose camera evidence (`evidence.csv`, `thumbnails/`) after it. Without it, a started
+    /// session is saved next to the recording (`RECORDING.session/`, or under the config's
+    /// `data_dir`) and sent from there.
     evidence_dir: Option<PathBuf>,
 }
 
@@ -114,7 +115,8 @@ pub(crate) fn start(
         poll_interval: Duration::from_millis(o.poll_interval_ms),
         evidence_dir: o
             .evidence_dir
-            .or_else(|| save_evidence(&session, recording, &config)),
+            .or_else(|| save_session_folder(&session, recording, &config)),
+        frame: session_frame(&config),
     };
     let mut client = Client::new(&url)?;
     if let Some(token) = &o.server_token {
@@ -170,19 +172,30 @@ fn state(s: JobState) -> SitarJobState {
     }
 }
 
-/// Saves the session beside the recording when it holds camera evidence, so the job can send
-/// it; `None` (and a log line) when there is none or the folder cannot be written: the
-/// results never depend on the evidence.
-fn save_evidence(
+/// The session request's frame: the config's convention and venue, each sent only where it
+/// differs from the backend's default (`unity`, no venue), so a phone outside venues also
+/// works with a backend that predates them.
+fn session_frame(config: &sitar_core::SessionConfig) -> SessionFrame {
+    SessionFrame {
+        convention: (config.convention != Convention::Unity)
+            .then(|| config.convention.name().to_owned()),
+        venue: config.venue.clone(),
+    }
+}
+
+/// Saves a started session beside the recording (`RECORDING.session/`, or under the config's
+/// `data_dir`), so the job can send its log and camera evidence; `None` (and a log line) for a
+/// session never started or a folder that cannot be written: the results never depend on it.
+fn save_session_folder(
     session: &Arc<Mutex<Session>>,
     recording: &Path,
     config: &sitar_core::SessionConfig,
 ) -> Option<PathBuf> {
     let session = crate::bridge::lock(session).ok()?;
-    if !session.midpoint_inputs().iter().any(|m| m.image.is_some()) {
+    if session.logged().is_empty() {
         return None;
     }
-    let name = format!("{}.evidence", recording.file_name()?.to_string_lossy());
+    let name = format!("{}.session", recording.file_name()?.to_string_lossy());
     let dir = match &config.data_dir {
         Some(data) => data.join(name),
         None => recording.parent()?.join(name),
@@ -190,7 +203,7 @@ fn save_evidence(
     match session.save(&dir) {
         Ok(()) => Some(dir),
         Err(e) => {
-            log::warn!("camera evidence not sent: {e}");
+            log::warn!("the session's log and camera evidence not sent: {e}");
             None
         }
     }
@@ -264,6 +277,21 @@ mod tests {
                 .unwrap_or_else(|| panic!("{recording:?} was accepted"));
             assert_eq!(e.code(), crate::SitarStatus::SITAR_ERR_IO as i32, "{e}");
         }
+    }
+
+    #[test]
+    fn the_frame_sends_only_what_differs_from_the_backends_defaults() {
+        let frame =
+            |config: &str| session_frame(&sitar_core::SessionConfig::from_json(config).unwrap());
+        assert_eq!(frame("{}"), SessionFrame::default());
+        assert_eq!(frame(r#"{"convention":"unity"}"#), SessionFrame::default());
+        assert_eq!(
+            frame(r#"{"convention":"arcore","venue":"v0123456789abcdef"}"#),
+            SessionFrame {
+                convention: Some("arcore".into()),
+                venue: Some("v0123456789abcdef".into()),
+            }
+        );
     }
 
     #[test]

@@ -14,13 +14,15 @@ use crate::{Error, SceneParts};
 
 /// The shapes a node can show.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-enum ShapeKind {
+pub(crate) enum ShapeKind {
     Cylinder,
     Joint,
     Endpoint,
     Frustum,
     Exclamation,
     WarningSign,
+    /// A unit cube (venue cells).
+    Cube,
 }
 
 impl ShapeKind {
@@ -32,6 +34,7 @@ impl ShapeKind {
             Self::Frustum => shapes::frustum(),
             Self::Exclamation => shapes::exclamation(),
             Self::WarningSign => shapes::warning_sign(),
+            Self::Cube => shapes::cube(),
         }
     }
 
@@ -43,6 +46,7 @@ impl ShapeKind {
             Self::Frustum => "frustum",
             Self::Exclamation => "exclamation",
             Self::WarningSign => "warning_sign",
+            Self::Cube => "cube",
         }
     }
 
@@ -56,12 +60,18 @@ impl ShapeKind {
 
 /// Materials: the four classes and the scene's other colours.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-enum Paint {
+pub(crate) enum Paint {
     Class(ErrorClass),
     Frustum,
     Start,
     Stop,
     Surface,
+    /// A venue's surface cell: translucent, by class.
+    SurfaceCell(ErrorClass),
+    /// A venue's path cell: faint, by class.
+    PathCell(ErrorClass),
+    /// The venue's anchor image.
+    Anchor,
 }
 
 impl Paint {
@@ -72,16 +82,41 @@ impl Paint {
             Self::Start => "start",
             Self::Stop => "stop",
             Self::Surface => "surface_point",
+            Self::SurfaceCell(c) => match c {
+                ErrorClass::Low => "surface_cell_low",
+                ErrorClass::Medium => "surface_cell_medium",
+                ErrorClass::High => "surface_cell_high",
+                ErrorClass::Unknown => "surface_cell_unknown",
+            },
+            Self::PathCell(c) => match c {
+                ErrorClass::Low => "path_cell_low",
+                ErrorClass::Medium => "path_cell_medium",
+                ErrorClass::High => "path_cell_high",
+                ErrorClass::Unknown => "path_cell_unknown",
+            },
+            Self::Anchor => "anchor",
+        }
+    }
+
+    /// Opacity: cells are see-through so the room (and the cells behind) stay visible.
+    fn alpha(self) -> f32 {
+        match self {
+            Self::SurfaceCell(_) => 0.55,
+            Self::PathCell(_) => 0.25,
+            _ => 1.0,
         }
     }
 
     /// sRGB colour, as the report draws it.
     fn srgb(self) -> u32 {
         match self {
-            Self::Class(ErrorClass::Low) => 0x2f6fde,
-            Self::Class(ErrorClass::Medium) => 0xe0b100,
-            Self::Class(ErrorClass::High) => 0xd62728,
-            Self::Class(ErrorClass::Unknown) => 0x9a9a9a,
+            Self::Class(c) | Self::SurfaceCell(c) | Self::PathCell(c) => match c {
+                ErrorClass::Low => 0x2f6fde,
+                ErrorClass::Medium => 0xe0b100,
+                ErrorClass::High => 0xd62728,
+                ErrorClass::Unknown => 0x9a9a9a,
+            },
+            Self::Anchor => 0x222222,
             Self::Frustum => 0x555555,
             Self::Start => 0x2ca02c,
             Self::Stop => 0x111111,
@@ -100,7 +135,7 @@ impl Paint {
                 ((v + 0.055) / 1.055).powf(2.4)
             }
         };
-        [lin(c >> 16), lin(c >> 8), lin(c), 1.0]
+        [lin(c >> 16), lin(c >> 8), lin(c), self.alpha()]
     }
 }
 
@@ -112,8 +147,8 @@ type Geometry = (
 );
 
 /// The document being built and its binary chunk.
-struct Writer {
-    root: json::Root,
+pub(crate) struct Writer {
+    pub(crate) root: json::Root,
     bin: Vec<u8>,
     /// Geometry accessors per shape: (positions, normals, indices).
     geometry: HashMap<ShapeKind, Geometry>,
@@ -123,7 +158,7 @@ struct Writer {
 
 const BUFFER: u32 = 0;
 
-fn f32_of(v: f64, what: &str) -> Result<f32, Error> {
+pub(crate) fn f32_of(v: f64, what: &str) -> Result<f32, Error> {
     let x = v as f32;
     if x.is_finite() {
         Ok(x)
@@ -134,7 +169,7 @@ fn f32_of(v: f64, what: &str) -> Result<f32, Error> {
     }
 }
 
-fn vec3(v: DVec3, what: &str) -> Result<[f32; 3], Error> {
+pub(crate) fn vec3(v: DVec3, what: &str) -> Result<[f32; 3], Error> {
     Ok([f32_of(v.x, what)?, f32_of(v.y, what)?, f32_of(v.z, what)?])
 }
 
@@ -148,14 +183,14 @@ fn quat(q: DQuat, what: &str) -> Result<json::scene::UnitQuaternion, Error> {
     ]))
 }
 
-fn extras(value: serde_json::Value) -> Result<json::Extras, Error> {
+pub(crate) fn extras(value: serde_json::Value) -> Result<json::Extras, Error> {
     serde_json::value::RawValue::from_string(value.to_string())
         .map(Some)
         .map_err(|e| Error::Encode(e.to_string()))
 }
 
 impl Writer {
-    fn new() -> Writer {
+    pub(crate) fn new() -> Writer {
         let mut root = json::Root::default();
         root.asset.generator = Some(format!("sitar-scene {}", env!("CARGO_PKG_VERSION")));
         Writer {
@@ -259,6 +294,11 @@ impl Writer {
             name: Some(paint.name().into()),
             // Warning signs are plates: visible from both sides.
             double_sided: true,
+            alpha_mode: Valid(if paint.alpha() < 1.0 {
+                json::material::AlphaMode::Blend
+            } else {
+                json::material::AlphaMode::Opaque
+            }),
             ..Default::default()
         };
         material.pbr_metallic_roughness.base_color_factor =
@@ -270,7 +310,7 @@ impl Writer {
         index
     }
 
-    fn mesh(&mut self, kind: ShapeKind, paint: Paint) -> json::Index<json::Mesh> {
+    pub(crate) fn mesh(&mut self, kind: ShapeKind, paint: Paint) -> json::Index<json::Mesh> {
         if let Some(m) = self.meshes.get(&(kind, paint)) {
             return *m;
         }
@@ -310,12 +350,45 @@ impl Writer {
         index
     }
 
-    fn node(&mut self, node: json::Node) -> json::Index<json::Node> {
+    pub(crate) fn node(&mut self, node: json::Node) -> json::Index<json::Node> {
         self.root.push(node)
     }
 
+    /// The GLB of a scene with one root node.
+    pub(crate) fn finish(mut self, root: json::Index<json::Node>) -> Result<Vec<u8>, Error> {
+        let scene = self.root.push(json::Scene {
+            extensions: None,
+            extras: None,
+            name: Some("sitar".into()),
+            nodes: vec![root],
+        });
+        self.root.scene = Some(scene);
+        let bin_len = self.bin.len();
+        self.root.buffers.push(json::Buffer {
+            byte_length: USize64::from(bin_len),
+            extensions: None,
+            extras: None,
+            name: None,
+            uri: None,
+        });
+        let text =
+            json::serialize::to_string(&self.root).map_err(|e| Error::Encode(e.to_string()))?;
+        let length = 12 + 8 + text.len().next_multiple_of(4) + 8 + bin_len.next_multiple_of(4);
+        let glb = gltf::binary::Glb {
+            header: gltf::binary::Header {
+                magic: *b"glTF",
+                version: 2,
+                length: u32::try_from(length)
+                    .map_err(|_| Error::Encode(format!("{length} bytes exceed GLB's 4 GiB")))?,
+            },
+            json: Cow::Owned(text.into_bytes()),
+            bin: Some(Cow::Owned(self.bin)),
+        };
+        glb.to_vec().map_err(|e| Error::Encode(e.to_string()))
+    }
+
     /// A group node over `children` (glTF forbids an empty `children` array).
-    fn group(
+    pub(crate) fn group(
         &mut self,
         name: &str,
         children: Vec<json::Index<json::Node>>,
@@ -483,32 +556,5 @@ pub fn to_glb(parts: &SceneParts) -> Result<Vec<u8>, Error> {
         extras: extras(serde_json::json!({"source_convention": conv.name()}))?,
         ..Default::default()
     });
-    let scene = w.root.push(json::Scene {
-        extensions: None,
-        extras: None,
-        name: Some("sitar".into()),
-        nodes: vec![root_node],
-    });
-    w.root.scene = Some(scene);
-    let bin_len = w.bin.len();
-    w.root.buffers.push(json::Buffer {
-        byte_length: USize64::from(bin_len),
-        extensions: None,
-        extras: None,
-        name: None,
-        uri: None,
-    });
-    let text = json::serialize::to_string(&w.root).map_err(|e| Error::Encode(e.to_string()))?;
-    let length = 12 + 8 + text.len().next_multiple_of(4) + 8 + bin_len.next_multiple_of(4);
-    let glb = gltf::binary::Glb {
-        header: gltf::binary::Header {
-            magic: *b"glTF",
-            version: 2,
-            length: u32::try_from(length)
-                .map_err(|_| Error::Encode(format!("{length} bytes exceed GLB's 4 GiB")))?,
-        },
-        json: Cow::Owned(text.into_bytes()),
-        bin: Some(Cow::Owned(w.bin)),
-    };
-    glb.to_vec().map_err(|e| Error::Encode(e.to_string()))
+    w.finish(root_node)
 }

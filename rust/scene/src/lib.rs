@@ -45,6 +45,13 @@
 //! `arcore` sessions are written as they are; `unity` sessions are converted with the
 //! reflection `z → −z` (positions `S p`, rotations `S R S`), which is also what glTFast
 //! applies on import, so the scene lands in Unity exactly where the session was recorded.
+//!
+//! ## A venue's map
+//!
+//! [`venue_to_glb`] writes a venue map ([`sitar_core::venue::VenueMap`], the backend's
+//! `map.json`) the same way: root node `sitar_venue`, an `anchor` node at the venue origin,
+//! groups `surface_cells` (translucent tiles coloured by class) and `path_cells` (small faint
+//! boxes), one named node per cell with its numbers in `extras`.
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
 
@@ -52,7 +59,9 @@ mod builder;
 mod error;
 mod parts;
 mod shapes;
+mod venue;
 
 pub use builder::to_glb;
 pub use error::Error;
 pub use parts::SceneParts;
+pub use venue::{PATH_BOX_SHARE, SURFACE_TILE_SHARE, venue_to_glb};

@@ -207,3 +207,67 @@ mod tests {
         }
     }
 }
+
+/// A cube of edge 1 centred on the origin, with flat normals (24 vertices): a venue cell
+/// node scales it to its size.
+pub(crate) fn cube() -> Shape {
+    let mut positions = Vec::new();
+    let mut normals = Vec::new();
+    let mut indices = Vec::new();
+    // Each face: its normal axis and sign, and two in-face axes with `u × v = normal`.
+    for (axis, sign) in [
+        (0, 1.0),
+        (0, -1.0),
+        (1, 1.0),
+        (1, -1.0),
+        (2, 1.0),
+        (2, -1.0),
+    ] {
+        let (u_axis, v_axis) = ((axis + 1) % 3, (axis + 2) % 3);
+        let base = positions.len() as u16;
+        let mut normal = [0.0f32; 3];
+        normal[axis] = sign;
+        for (a, b) in [(-0.5, -0.5), (0.5, -0.5), (0.5, 0.5), (-0.5, 0.5)] {
+            let mut p = [0.0f32; 3];
+            p[axis] = 0.5 * sign;
+            p[u_axis] = a;
+            p[v_axis] = b * sign;
+            positions.push(p);
+            normals.push(normal);
+        }
+        // Counter-clockwise seen from outside.
+        indices.extend_from_slice(&[base, base + 1, base + 2, base, base + 2, base + 3]);
+    }
+    Shape {
+        positions,
+        normals: Some(normals),
+        indices,
+    }
+}
+
+#[cfg(test)]
+mod cube_tests {
+    use super::*;
+
+    /// Every triangle of the cube winds counter-clockwise seen from outside: its geometric
+    /// normal points along the vertex normal.
+    #[test]
+    fn cube_faces_wind_outwards() {
+        let c = cube();
+        let normals = c.normals.as_ref().unwrap();
+        assert_eq!((c.positions.len(), c.indices.len()), (24, 36));
+        for t in c.indices.chunks(3) {
+            let [a, b, d] = [0, 1, 2].map(|k| c.positions[t[k] as usize]);
+            let e1 = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+            let e2 = [d[0] - a[0], d[1] - a[1], d[2] - a[2]];
+            let cross = [
+                e1[1] * e2[2] - e1[2] * e2[1],
+                e1[2] * e2[0] - e1[0] * e2[2],
+                e1[0] * e2[1] - e1[1] * e2[0],
+            ];
+            let n = normals[t[0] as usize];
+            let dot = cross[0] * n[0] + cross[1] * n[1] + cross[2] * n[2];
+            assert!(dot > 0.0, "{t:?}");
+        }
+    }
+}

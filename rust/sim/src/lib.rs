@@ -26,6 +26,12 @@
 //!   [`Recording::dark_wall`]): facing an unlit wall every trial coasts on the same IMU data,
 //!   all trials agree, and the estimate falls far below the true error.
 //!
+//! * A [`Venue`]: the demo room with a [`PrintedAnchor`] on a wall, walked by several users,
+//!   each phone in its own world frame, observing the anchor through an [`AnchorSensor`]
+//!   (frustum, range, view angle, occlusion; `full`/`limited`; noise growing with distance
+//!   and angle), with each user's truth ([`VenueTruth`]) and the room surface under any
+//!   venue-frame point ([`Venue::truth_at`], [`Venue::score_problem_cells`]).
+//!
 //! Everything is deterministic from a seed (ChaCha8 streams: one for the walk, one for the
 //! error all trials share, one for the RANSAC front end's observations, one per trial index).
 //!
@@ -60,6 +66,7 @@
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
 
+mod anchor;
 mod camera;
 mod checks;
 mod error;
@@ -73,8 +80,12 @@ mod recording;
 mod room;
 mod scenes;
 mod trial;
+mod venue_session;
+mod venue_truth;
+mod venue_users;
 mod walk;
 
+pub use anchor::{ANCHOR_SURFACE, AnchorSensor, DEMO_ANCHOR_ID, PrintedAnchor, Sighting};
 pub use camera::{DepthCamera, Intrinsics, View};
 pub use error::Error;
 pub use luma::LumaCamera;
@@ -82,6 +93,8 @@ pub use ransac_tracker::RansacModel;
 pub use recording::{RECORDING_MAGIC, RECORDING_VERSION, Recording, Tracker};
 pub use room::{Hit, Room, Surface, SurfaceKind};
 pub use trial::{DriftModel, TrialOptions, play_trial, play_trial_with, simulate_trials};
+pub use venue_truth::{CellTruth, ProblemCellScore};
+pub use venue_users::{MAX_VENUE_USERS, Venue, VenueTruth, VenueUser};
 pub use walk::{FIRST_STAMP_NS, Walk, look_rotation};
 
 /// The trajectory type of the trials and the ground truth (from `sitar-estimator`).

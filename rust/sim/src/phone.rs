@@ -1,6 +1,8 @@
 //! The user's phone during a simulated walk: sitar-core fed exactly as an app feeds it.
 
-use sitar_core::{DepthImage, DisplayRotation, LumaImage, Pose, Session, SessionConfig};
+use sitar_core::{
+    AnchorObservation, DepthImage, DisplayRotation, LumaImage, Pose, Session, SessionConfig,
+};
 
 use crate::{DepthCamera, Error, LumaCamera, Recording};
 
@@ -18,6 +20,21 @@ impl Recording {
         config: SessionConfig,
         display: DisplayRotation,
     ) -> Result<Session, Error> {
+        self.phone_session_in(config, display, Pose::IDENTITY, &[])
+    }
+
+    /// [`Recording::phone_session`] with the phone's world frame `world_from_room` (every
+    /// pose given to the session is `world_from_room ∘ pose`; depth is relative to the
+    /// camera, so surface points follow), and `anchors` (already in that world frame, in time
+    /// order) reported through [`Session::anchor`] after the frame of the same or an earlier
+    /// timestamp, as an app reports an image tracker's updates after the camera frame.
+    pub fn phone_session_in(
+        &self,
+        config: SessionConfig,
+        display: DisplayRotation,
+        world_from_room: Pose,
+        anchors: &[AnchorObservation],
+    ) -> Result<Session, Error> {
         let core = |e: sitar_core::Error| Error::InvalidArgument(format!("phone session: {e}"));
         let gt = &self.walk().ground_truth;
         if gt.len() < 3 {
@@ -31,11 +48,27 @@ impl Recording {
         let camera = DepthCamera::phone();
         let luma_camera = LumaCamera::phone();
         let k = camera.intrinsics;
-        let pose = |i: usize| Pose::new(gt.positions[i], gt.orientations[i]);
+        let pose = |i: usize| {
+            crate::venue_users::compose(
+                world_from_room,
+                Pose::new(gt.positions[i], gt.orientations[i]),
+            )
+        };
         let last = gt.len() - 1;
+        let mut pending = anchors.iter().peekable();
+        let mut report_until = |session: &mut Session, t_ns: i64| -> Result<(), Error> {
+            while let Some(o) = pending.next_if(|o| o.t_ns <= t_ns) {
+                session
+                    .anchor(o.t_ns, &o.anchor, o.pose, o.tracking)
+                    .map_err(core)?;
+            }
+            Ok(())
+        };
         session.start(gt.stamps[0], pose(0)).map_err(core)?;
+        report_until(&mut session, gt.stamps[0])?;
         for i in 1..last {
             let flags = session.frame(gt.stamps[i], pose(i)).map_err(core)?;
+            report_until(&mut session, gt.stamps[i])?;
             if flags.is_midpoint() {
                 let depth = self.room().render_depth_mm_rotated(
                     gt.positions[i],
@@ -63,6 +96,8 @@ impl Recording {
                 }
             }
         }
+        // Whatever is left (the last frame's, or stamps past the walk) goes before stop.
+        report_until(&mut session, i64::MAX)?;
         session.stop(gt.stamps[last], pose(last)).map_err(core)?;
         Ok(session)
     }

@@ -1,7 +1,7 @@
 //! Cells from contributions: the whole map at once ([`build_map`]) or kept up to date as
 //! sessions join and leave ([`MapBuilder`]).
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashSet};
 
 use glam::DVec3;
 
@@ -18,7 +18,8 @@ pub struct VenueSpec {
     pub name: String,
     /// The anchor id its sessions observe.
     pub anchor: String,
-    /// Cell edge (m).
+    /// Cell edge (m): finite and > 0 (the backend keeps it within 0.05…2); another value
+    /// gives meaningless cells, never a panic.
     pub cell_m: f64,
     /// The convention of the map's coordinates (its sessions').
     pub convention: Convention,
@@ -27,11 +28,44 @@ pub struct VenueSpec {
 /// The map of `contributions` (listed in the given order; a session id given twice counts
 /// once, the later one winning) with the cells seen by at least `min_sessions` sessions.
 pub fn build_map(spec: &VenueSpec, contributions: &[Contribution], min_sessions: u32) -> VenueMap {
-    let mut builder = MapBuilder::new(spec.clone());
-    for c in contributions {
-        builder.add(c.clone());
+    MapBuilder::with_contributions(spec.clone(), contributions).map(min_sessions)
+}
+
+/// Calls `put` with the cell and the member of each of a contribution's samples (its path
+/// cell, then its surface cell), mirrored into the venue's convention when the session's
+/// differs.
+fn placements(
+    contribution: &Contribution,
+    spec: &VenueSpec,
+    slot: u64,
+    mut put: impl FnMut(CellKey, Member),
+) {
+    let mirror = matches!(contribution, Contribution::InMap { convention, .. }
+        if *convention != spec.convention);
+    let to_venue = |p: DVec3| {
+        if mirror {
+            DVec3::new(p.x, p.y, -p.z)
+        } else {
+            p
+        }
+    };
+    for s in contribution.samples() {
+        let member = Member {
+            slot,
+            error_m: s.error_m,
+            sector: s.sector(),
+        };
+        put(
+            cell_key(CellKind::Path, to_venue(s.position), spec.cell_m),
+            member,
+        );
+        if let Some(surface) = s.surface {
+            put(
+                cell_key(CellKind::Surface, to_venue(surface), spec.cell_m),
+                member,
+            );
+        }
     }
-    builder.map(min_sessions)
 }
 
 /// A cell's place: kind (0 path, 1 surface), then the integer index per axis. Its order is
@@ -63,7 +97,8 @@ struct CellState {
 
 #[derive(Debug)]
 struct Entry {
-    contribution: Contribution,
+    /// How the session is listed in the map.
+    listing: VenueSession,
     slot: u64,
     /// The cells it has members in (sorted, distinct).
     cells: Vec<CellKey>,
@@ -91,6 +126,51 @@ impl MapBuilder {
         }
     }
 
+    /// The map of `contributions` at once (as adding each in turn, but one sort instead of
+    /// a tree insertion per sample).
+    pub fn with_contributions(spec: VenueSpec, contributions: &[Contribution]) -> Self {
+        let mut builder = Self::new(spec);
+        let mut ids = HashSet::new();
+        if !contributions.iter().all(|c| ids.insert(c.session())) {
+            // A session given twice: the later replaces the earlier, as `add` does.
+            for c in contributions {
+                builder.add(c);
+            }
+            return builder;
+        }
+        let total: usize = contributions.iter().map(|c| 2 * c.samples().len()).sum();
+        let mut placed: Vec<(CellKey, Member)> = Vec::with_capacity(total);
+        for c in contributions {
+            let slot = builder.next_slot;
+            builder.next_slot += 1;
+            let first = placed.len();
+            placements(c, &builder.spec, slot, |key, member| {
+                placed.push((key, member))
+            });
+            let mut cells: Vec<CellKey> = placed[first..].iter().map(|(k, _)| *k).collect();
+            cells.sort_unstable();
+            cells.dedup();
+            builder.entries.push(Entry {
+                listing: listing(c),
+                slot,
+                cells,
+            });
+        }
+        // Grouped by cell, each session's members consecutive (as `add` leaves them).
+        placed.sort_unstable_by_key(|(key, m)| (*key, m.slot));
+        builder.cells = placed
+            .chunk_by(|a, b| a.0 == b.0)
+            .map(|chunk| {
+                let state = CellState {
+                    members: chunk.iter().map(|(_, m)| *m).collect(),
+                    cached: None,
+                };
+                (chunk[0].0, state)
+            })
+            .collect();
+        builder
+    }
+
     /// The venue.
     pub fn spec(&self) -> &VenueSpec {
         &self.spec
@@ -109,49 +189,22 @@ impl MapBuilder {
     /// Adds a session's contribution (replacing an earlier one of the same session, which
     /// keeps its place in the list). Samples given in another convention than the venue's
     /// are mirrored into it (`z → −z`, the same physical place).
-    pub fn add(&mut self, contribution: Contribution) {
+    pub fn add(&mut self, contribution: &Contribution) {
         let position = self.detach(contribution.session());
         let slot = self.next_slot;
         self.next_slot += 1;
-        let mirror = matches!(&contribution, Contribution::InMap { convention, .. }
-            if *convention != self.spec.convention);
-        let to_venue = |p: DVec3| {
-            if mirror {
-                DVec3::new(p.x, p.y, -p.z)
-            } else {
-                p
-            }
-        };
         let mut touched = Vec::new();
-        for s in contribution.samples() {
-            let member = Member {
-                slot,
-                error_m: s.error_m,
-                sector: s.sector(),
-            };
-            let mut put = |key: CellKey| {
-                let cell = self.cells.entry(key).or_default();
-                cell.members.push(member);
-                cell.cached = None;
-                touched.push(key);
-            };
-            put(cell_key(
-                CellKind::Path,
-                to_venue(s.position),
-                self.spec.cell_m,
-            ));
-            if let Some(surface) = s.surface {
-                put(cell_key(
-                    CellKind::Surface,
-                    to_venue(surface),
-                    self.spec.cell_m,
-                ));
-            }
-        }
+        let cells = &mut self.cells;
+        placements(contribution, &self.spec, slot, |key, member| {
+            let cell = cells.entry(key).or_default();
+            cell.members.push(member);
+            cell.cached = None;
+            touched.push(key);
+        });
         touched.sort_unstable();
         touched.dedup();
         let entry = Entry {
-            contribution,
+            listing: listing(contribution),
             slot,
             cells: touched,
         };
@@ -171,7 +224,7 @@ impl MapBuilder {
         let i = self
             .entries
             .iter()
-            .position(|e| e.contribution.session() == session)?;
+            .position(|e| listed_id(&e.listing) == session)?;
         let entry = self.entries.remove(i);
         for key in &entry.cells {
             if let Some(cell) = self.cells.get_mut(key) {
@@ -206,11 +259,7 @@ impl MapBuilder {
             cell_m,
             convention: self.spec.convention,
             unit: "m".into(),
-            sessions: self
-                .entries
-                .iter()
-                .map(|e| listing(&e.contribution))
-                .collect(),
+            sessions: self.entries.iter().map(|e| e.listing.clone()).collect(),
             cells,
         }
     }
@@ -248,6 +297,13 @@ fn compute_cell(key: CellKey, members: &[Member], cell_m: f64, errors: &mut Vec<
         error_m,
         class: Thresholds::DEFAULT_M.classify(error_m),
         directions,
+    }
+}
+
+/// The session id of a listing.
+fn listed_id(listing: &VenueSession) -> &str {
+    match listing {
+        VenueSession::Aligned { id, .. } | VenueSession::NotAligned { id, .. } => id,
     }
 }
 

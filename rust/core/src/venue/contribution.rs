@@ -26,7 +26,7 @@ pub struct SessionFiles<'a> {
 }
 
 /// One sub-trajectory with an error, in the venue frame (coordinates in the session's
-/// convention: see [`Contribution::convention`]).
+/// convention: the `convention` of [`Contribution::InMap`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Sample {
     /// Its index in the session.

@@ -393,9 +393,14 @@ fn removing_every_session_empties_the_map() {
     );
     let c = Contribution::from_files(&files(&r, Convention::Unity, "s"), "a").unwrap();
     let mut b = MapBuilder::new(spec(Convention::Unity));
-    b.add(c.clone());
-    b.add(c);
+    b.add(&c);
+    b.add(&c);
     assert_eq!(b.len(), 1);
+    let spec = spec(Convention::Unity);
+    assert_eq!(
+        build_map(&spec, &[c.clone(), c.clone()], 1),
+        build_map(&spec, &[c], 1)
+    );
     assert_eq!(b.map(1).cells.len(), 2);
     assert_eq!(b.map(1).cells[0].subtrajectories, 1);
     assert!(b.remove("s"));
@@ -443,6 +448,34 @@ proptest! {
         prop_assert_eq!(sectors as usize, walk.len());
     }
 
+    /// Garbage in any of the files (text inserted, the rest cut) is an error or a
+    /// contribution, never a panic; an error names the file it is about.
+    #[test]
+    fn damaged_files_never_panic(which in 0usize..4, at in 0.0..1.0f64, cut in any::<bool>(),
+        junk in "[0-9a-z,.\\- \n]{0,12}") {
+        let r = record(Convention::Arcore, DVec3::new(1.0, 2.0, 3.0), 0.3,
+            &[camera(DVec3::ZERO, 0.0), camera(DVec3::X, 1.0), camera(DVec3::Z, 2.0)],
+            &[Some(DVec3::Z), None, Some(DVec3::X)], &[Some(0.1), Some(0.2), None]);
+        let mut texts = [r.anchors.clone(), r.trajectory.clone(), r.subs.clone(), r.results.clone()];
+        let text = &mut texts[which];
+        let mut i = (at * text.len() as f64) as usize;
+        while !text.is_char_boundary(i) { i -= 1; }
+        if cut { text.truncate(i); } else { text.insert_str(i, &junk); }
+        let f = SessionFiles { session: "s", convention: Convention::Arcore,
+            anchors_csv: Some(&texts[0]), trajectory_txt: Some(&texts[1]),
+            subtrajectories_csv: Some(&texts[2]), results_json: Some(&texts[3]) };
+        match Contribution::from_files(&f, "a") {
+            Ok(c) => { let _ = build_map(&spec(Convention::Unity), &[c], 1); }
+            Err(Error::Parse { source_name, field, .. }) => {
+                // The damaged file, or (a pose cut from the log) the row whose midpoint
+                // trajectory.txt no longer has.
+                let names = ["anchors.csv", "trajectory.txt", "subtrajectories.csv", "results.csv"];
+                prop_assert!(source_name == names[which] || field == "mid_ns", "{} {}", source_name, field);
+            }
+            Err(other) => prop_assert!(false, "{other}"),
+        }
+    }
+
     /// The builder's incremental map equals a rebuild from scratch after any sequence of
     /// adds and removes.
     #[test]
@@ -458,7 +491,7 @@ proptest! {
         let mut present: Vec<usize> = Vec::new();
         for (s, add) in ops {
             if add {
-                builder.add(contributions[s].clone());
+                builder.add(&contributions[s]);
                 if !present.contains(&s) { present.push(s); }
             } else {
                 prop_assert_eq!(builder.remove(&format!("s{s}")), present.contains(&s));
