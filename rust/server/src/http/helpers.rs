@@ -177,3 +177,33 @@ pub(crate) fn utf8(bytes: Vec<u8>, what: &str) -> Result<String, Error> {
         ))
     })
 }
+
+/// A download: `body` as the file `file_name` of type `content_type`.
+pub(crate) fn attachment(content_type: &'static str, file_name: &str, body: Vec<u8>) -> Response {
+    let disposition = format!("attachment; filename=\"{file_name}\"");
+    (
+        [
+            (header::CONTENT_TYPE, content_type.to_owned()),
+            (header::CONTENT_DISPOSITION, disposition),
+        ],
+        body,
+    )
+        .into_response()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_attachment_has_its_type_and_file_name_and_no_other_header() {
+        let response = attachment("application/zip", "trials.zip", b"PK".to_vec());
+        let headers = response.headers();
+        assert_eq!(headers[header::CONTENT_TYPE], "application/zip");
+        assert_eq!(
+            headers[header::CONTENT_DISPOSITION],
+            "attachment; filename=\"trials.zip\""
+        );
+        assert_eq!(headers.len(), 2, "{headers:?}");
+    }
+}

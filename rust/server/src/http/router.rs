@@ -74,6 +74,7 @@ pub(crate) fn router(shared: Arc<App>) -> Router {
         .route("/v1/venues", post(venues::create).get(venues::list))
         .route("/v1/venues/{id}", get(venues::get).delete(venues::delete))
         .route("/v1/venues/{id}/map.json", get(venues::map_json))
+        .route("/v1/venues/{id}/map.glb", get(venues::map_glb))
         .route("/v1/venues/{id}/report", get(venues::report))
         .route(
             "/v1/venues/{id}/members/{token_name}",

@@ -231,6 +231,42 @@ pub(crate) async fn map_json(
     Ok(json_value(StatusCode::OK, &value))
 }
 
+/// Most cells `map.glb` holds: one glTF node each (~250 bytes), so at most ~50 MB.
+pub(crate) const MAX_GLB_CELLS: usize = 200_000;
+
+/// `GET /v1/venues/{id}/map.glb[?min_sessions=N]`: the venue map as glTF 2.0 binary
+/// (`sitar_scene::venue_to_glb`: one named node per cell, for Unity and Blender), built
+/// from its sessions' files now, as `map.json`. A map of more than [`MAX_GLB_CELLS`] cells
+/// is a 409 that says to raise `min_sessions`.
+pub(crate) async fn map_glb(
+    State(shared): AppState,
+    caller: Caller,
+    Path(id): Path<String>,
+    RawQuery(query): RawQuery,
+) -> Result<Response, Error> {
+    let min_sessions = min_sessions(query.as_deref())?;
+    let (venue, _) = visible_venue(&shared, &caller, &id)?;
+    let glb = blocking("venue map.glb", move || {
+        let map = crate::venue::map::venue_map(&*shared.db, &*shared.blobs, &venue, min_sessions)?;
+        if map.cells.len() > MAX_GLB_CELLS {
+            return Err(Error::Conflict(format!(
+                "venue {}: the map has {} cells with min_sessions={min_sessions}; map.glb holds at \
+                 most {MAX_GLB_CELLS}: ask with a higher min_sessions",
+                venue.id,
+                map.cells.len()
+            )));
+        }
+        sitar_scene::venue_to_glb(&map)
+            .map_err(|e| Error::Internal(format!("venue {}: map.glb: {e}", venue.id)))
+    })
+    .await?;
+    Ok(crate::http::helpers::attachment(
+        "model/gltf-binary",
+        &format!("venue-{id}.glb"),
+        glb,
+    ))
+}
+
 /// `GET /v1/venues/{id}/report[?download=1]`: the venue's page (`crate::report::venue_page`);
 /// with `download=1` the same page as one file that opens from disk.
 pub(crate) async fn report(
@@ -259,7 +295,7 @@ pub(crate) async fn report(
         crate::report::templates::attachment_page(
             html,
             &format!("venue-{id}.html"),
-            &crate::report::venue_page::standalone_csp(),
+            &crate::report::page::standalone_csp(),
         )
     } else {
         crate::report::templates::page(html)
