@@ -77,6 +77,8 @@ pub(crate) async fn put_spans(
         f.store_spans(&table.spans)
     })
     .await?;
+    // The scene from the phone's log takes its depth from this table.
+    crate::report::scene::phone_log_changed(&shared, &session.id);
     let mut answer = json!({"subtrajectories": table.spans.len()});
     if let Some(n) = table.depth_samples {
         answer["depth_samples"] = n.into();

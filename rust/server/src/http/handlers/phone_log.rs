@@ -47,6 +47,8 @@ pub(crate) async fn put_trajectory(
     let text = utf8(bytes, NAME)?;
     let poses = check_trajectory(&text)?;
     store(&shared, &session.id, SessionObject::PhoneTrajectory, &text).await?;
+    // The session's scene is the phone's log from now on.
+    crate::report::scene::phone_log_changed(&shared, &session.id);
     Ok(json_value(StatusCode::OK, &json!({"poses": poses})))
 }
 
