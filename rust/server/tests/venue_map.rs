@@ -377,10 +377,44 @@ fn the_venue_map_is_built_from_its_sessions_files_and_follows_them() {
         head.contains("style-src 'sha256-") && !file.body.contains("/assets/"),
         "{head}"
     );
+    assert!(
+        file.body.contains("<script type=\"module\">") && head.contains("script-src 'sha256-"),
+        "the saved page carries the 3-D view's script inline"
+    );
     assert_eq!(
         get(&server, &stranger, &format!("/v1/venues/{venue}/report")).status,
         404
     );
+
+    // The 3-D view's data: every cell of the map by kind, in glTF's frame (unity: z
+    // mirrored), and both sessions' paths; the page loads the bundled script.
+    assert!(
+        page.body
+            .contains("<script type=\"module\" src=\"/assets/report.bundle.js\">"),
+        "{}",
+        page.body
+    );
+    let view = view_data(&page.body);
+    let cells = map["cells"].as_array().unwrap();
+    for (kind, key) in [("surface", "surface"), ("path", "path")] {
+        let of_kind: Vec<&Value> = cells.iter().filter(|c| c["kind"] == kind).collect();
+        let centres = view[key]["centres"].as_array().unwrap();
+        assert_eq!(centres.len(), 3 * of_kind.len(), "{kind}: {view}");
+        for c in &of_kind {
+            let p = [
+                c["center"][0].as_f64().unwrap(),
+                c["center"][1].as_f64().unwrap(),
+                -c["center"][2].as_f64().unwrap(),
+            ];
+            assert!(
+                centres
+                    .chunks(3)
+                    .any(|q| (0..3).all(|i| (q[i].as_f64().unwrap() - p[i]).abs() < 1e-3)),
+                "{kind} cell {p:?} not drawn: {view}"
+            );
+        }
+    }
+    assert_eq!(view["paths"].as_array().unwrap().len(), 2, "{view}");
 
     // A session not yet finished and one without anchors bring no cells, and say so.
     let body = json!({"playback": "upload", "venue": venue}).to_string();
@@ -436,4 +470,281 @@ fn the_venue_map_is_built_from_its_sessions_files_and_follows_them() {
     }
     assert_eq!(get(&server, &stranger, &map_path).status, 404);
     server.stop();
+}
+
+/// The 3-D view's data the venue page carries (`<script type="application/json" id="venue-data">`).
+fn view_data(page: &str) -> Value {
+    let start = page
+        .find("id=\"venue-data\">")
+        .unwrap_or_else(|| panic!("no venue-data: {page}"))
+        + "id=\"venue-data\">".len();
+    let end = start + page[start..].find("</script>").unwrap();
+    serde_json::from_str(&page[start..end]).unwrap()
+}
+
+/// The JSON chunk of a GLB (glTF 2.0 binary: 12-byte header, then the JSON chunk).
+fn glb_json(glb: &[u8]) -> Value {
+    assert_eq!(&glb[0..4], b"glTF", "not a GLB");
+    assert_eq!(
+        u32::from_le_bytes(glb[8..12].try_into().unwrap()) as usize,
+        glb.len(),
+        "the header's length is the file's"
+    );
+    let len = u32::from_le_bytes(glb[12..16].try_into().unwrap()) as usize;
+    assert_eq!(&glb[16..20], b"JSON");
+    serde_json::from_slice(&glb[20..20 + len]).unwrap()
+}
+
+/// A venue of `owner` with two finished sessions (owner's and member's), 1 m apart in
+/// their world frames.
+fn venue_with_two_sessions(
+    server: &ServerHandle,
+    owner: &str,
+    member: &str,
+) -> (String, String, String) {
+    let body = json!({"name": "Hall", "anchor": "poster-1", "cell_m": CELL_M}).to_string();
+    let a = call(
+        server,
+        owner,
+        "POST",
+        "/v1/venues",
+        Some("application/json"),
+        body.as_bytes(),
+    );
+    let venue = a.json()["id"].as_str().unwrap().to_owned();
+    let path = format!("/v1/venues/{venue}/members/member");
+    assert_eq!(call(server, owner, "PUT", &path, None, &[]).status, 200);
+    let (first, _) = finished_session(server, owner, &venue, &Phone { dx: 0.0 });
+    let (second, _) = finished_session(server, member, &venue, &Phone { dx: 1.0 });
+    (venue, first, second)
+}
+
+#[test]
+fn the_venue_map_glb_has_one_node_per_cell_and_passes_the_khronos_validator() {
+    let dir = tempfile::tempdir().unwrap();
+    let (server, _admin) = support::spawn_with_admin(dir.path());
+    let owner = sitar_server::create_token(dir.path(), Role::App, "owner").unwrap();
+    let member = sitar_server::create_token(dir.path(), Role::App, "member").unwrap();
+    let stranger = sitar_server::create_token(dir.path(), Role::App, "stranger").unwrap();
+    let (venue, _, _) = venue_with_two_sessions(&server, &owner, &member);
+    let mut files = Vec::new();
+    for query in ["", "?min_sessions=2"] {
+        let map = get(
+            &server,
+            &member,
+            &format!("/v1/venues/{venue}/map.json{query}"),
+        )
+        .json();
+        let a = get(
+            &server,
+            &member,
+            &format!("/v1/venues/{venue}/map.glb{query}"),
+        );
+        assert_eq!(a.status, 200, "{}", a.body);
+        let head = a.head.to_ascii_lowercase();
+        assert!(head.contains("content-type: model/gltf-binary"), "{head}");
+        assert!(
+            head.contains(&format!("filename=\"venue-{venue}.glb\"")),
+            "{head}"
+        );
+        let doc = glb_json(&a.bytes);
+        let names: Vec<&str> = doc["nodes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter_map(|n| n["name"].as_str())
+            .collect();
+        let cells = map["cells"].as_array().unwrap();
+        assert!(!cells.is_empty(), "{map}");
+        for (kind, prefix) in [("surface", "surface_cell_"), ("path", "path_cell_")] {
+            let want = cells.iter().filter(|c| c["kind"] == kind).count();
+            let got = names.iter().filter(|n| n.starts_with(prefix)).count();
+            assert_eq!(got, want, "{kind} nodes: {names:?}");
+        }
+        let path = dir.path().join(format!("venue{}.glb", files.len()));
+        std::fs::write(&path, &a.bytes).unwrap();
+        files.push(path);
+    }
+    for (who, status) in [(&stranger, 404), (&owner, 200)] {
+        assert_eq!(
+            get(&server, who, &format!("/v1/venues/{venue}/map.glb")).status,
+            status
+        );
+    }
+    let bad = get(
+        &server,
+        &owner,
+        &format!("/v1/venues/{venue}/map.glb?min_sessions=0"),
+    );
+    assert_eq!(bad.status, 400);
+    assert!(bad.message().contains("min_sessions"), "{}", bad.body);
+    server.stop();
+
+    let tools = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../tools/npm");
+    if !tools.join("node_modules/gltf-validator").exists() {
+        println!(
+            "SKIPPED the_venue_map_glb_has_one_node_per_cell_and_passes_the_khronos_validator \
+             (validator part): run `npm ci --prefix tools/npm`"
+        );
+        return;
+    }
+    let out = std::process::Command::new("node")
+        .arg(tools.join("validate-gltf.mjs"))
+        .args(&files)
+        .output()
+        .expect("node runs");
+    let text = String::from_utf8_lossy(&out.stdout);
+    let reports: Value = serde_json::from_str(&text).unwrap_or_else(|e| {
+        panic!(
+            "validator output ({e}): {text} {}",
+            String::from_utf8_lossy(&out.stderr)
+        )
+    });
+    for report in reports.as_array().unwrap() {
+        let issues = &report["issues"];
+        assert_eq!(issues["numErrors"], 0, "{issues}");
+        assert_eq!(issues["numWarnings"], 0, "{issues}");
+    }
+    assert!(out.status.success());
+}
+
+#[test]
+fn a_sessions_scene_is_the_phones_own_log_when_it_sent_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let (server, _admin) = support::spawn_with_admin(dir.path());
+    let owner = sitar_server::create_token(dir.path(), Role::App, "owner").unwrap();
+    let member = sitar_server::create_token(dir.path(), Role::App, "member").unwrap();
+    let (_, first, _) = venue_with_two_sessions(&server, &owner, &member);
+    let base = format!("/v1/sessions/{first}");
+    let tum = get(&server, &owner, &format!("{base}/trajectory.tum"));
+    assert_eq!(tum.body, Phone { dx: 0.0 }.trajectory_txt());
+
+    // The phone logged frames 0, 5, …, 40; the trials logged every frame: the scene's path
+    // is the phone's, in glTF's frame (a unity session: z mirrored).
+    let scene = get(&server, &owner, &format!("{base}/scene.json")).json();
+    assert!(
+        scene["source"]
+            .as_str()
+            .is_some_and(|s| s.contains("phone's own log")),
+        "{scene}"
+    );
+    let joints: Vec<f64> = scene["joints"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    let logged: Vec<[f64; 3]> = (0..=40).step_by(5).map(position).collect();
+    for p in &logged {
+        let want = [p[0], p[1], -p[2]];
+        assert!(
+            joints
+                .chunks(3)
+                .any(|q| (0..3).all(|i| (q[i] - want[i]).abs() < 1e-3)),
+            "logged pose {want:?} not in the scene's path {joints:?}"
+        );
+    }
+    assert!(
+        joints.chunks(3).all(|q| logged
+            .iter()
+            .any(|p| (q[0] - p[0]).abs() < 1e-3 && (q[2] + p[2]).abs() < 1e-3)),
+        "only the phone's logged poses: {joints:?}"
+    );
+    // The depth the phone measured (2 m at sub-trajectories 0 and 2): a surface point 2 m
+    // straight ahead of the midpoint (unity cameras look along +z).
+    let surface: Vec<f64> = scene["surface"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    assert_eq!(surface.len(), 6, "{surface:?}");
+    for (point, k) in surface.chunks(3).zip([0, 2]) {
+        let mid = position(10 * k + 5);
+        let want = [mid[0], mid[1], -(mid[2] + 2.0)];
+        assert!(
+            (0..3).all(|i| (point[i] - want[i]).abs() < 1e-3),
+            "sub-trajectory {k}: {point:?} against {want:?}"
+        );
+    }
+    // Sub-trajectories keep the phone's start timestamps, so the results are found.
+    let classes = scene["subs"]["class"].as_array().unwrap();
+    assert_eq!(classes.len(), 4, "{}", scene["subs"]);
+    assert!(classes.iter().all(|c| c != "unknown"), "{}", scene["subs"]);
+
+    // A new log replaces the scene at once.
+    let moved: String = Phone { dx: 0.5 }.trajectory_txt();
+    put(&server, &owner, &format!("{base}/trajectory.txt"), &moved);
+    let scene = get(&server, &owner, &format!("{base}/scene.json")).json();
+    let x0 = scene["joints"][0].as_f64().unwrap();
+    assert!((x0 - 0.5).abs() < 1e-3, "{x0}: {}", scene["joints"]);
+    let glb = get(&server, &owner, &format!("{base}/scene.glb"));
+    assert_eq!(glb.status, 200, "{}", glb.body);
+    server.stop();
+}
+
+/// `data-NAME="…"` of the page's `<body>` after its scripts ran (Chromium's `--dump-dom`).
+fn body_data(dom: &str, name: &str) -> Option<String> {
+    let key = format!("data-{name}=\"");
+    let start = dom.find(&key)? + key.len();
+    Some(dom[start..start + dom[start..].find('"')?].to_owned())
+}
+
+/// The saved venue page and a saved session report (its scene from the phone's log),
+/// opened from disk in headless Chromium (SwiftShader WebGL): both 3-D views are drawn with
+/// every point they frame in view.
+#[test]
+fn the_saved_venue_report_draws_its_3d_view_in_chromium() {
+    if !std::path::Path::new("/usr/bin/chromium").exists() {
+        println!(
+            "SKIPPED the_saved_venue_report_draws_its_3d_view_in_chromium: /usr/bin/chromium \
+             is not installed (.ci/run installs it)"
+        );
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let (server, _admin) = support::spawn_with_admin(&dir.path().join("data"));
+    let owner = sitar_server::create_token(&dir.path().join("data"), Role::App, "owner").unwrap();
+    let member = sitar_server::create_token(&dir.path().join("data"), Role::App, "member").unwrap();
+    let (venue, first, _) = venue_with_two_sessions(&server, &owner, &member);
+    let pages = [
+        ("venue", format!("/v1/venues/{venue}/report?download=1")),
+        ("session", format!("/v1/sessions/{first}/report?download=1")),
+    ];
+    let mut saved = Vec::new();
+    for (name, path) in &pages {
+        let a = get(&server, &owner, path);
+        assert_eq!(a.status, 200, "{path}: {}", a.body);
+        let file = dir.path().join(format!("{name}.html"));
+        std::fs::write(&file, &a.body).unwrap();
+        saved.push((name, file));
+    }
+    // No server from here on: the files carry everything.
+    server.stop();
+    let script = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../scripts/report-screenshot");
+    for (name, file) in saved {
+        let out = dir.path().join(format!("{name}-shot"));
+        let status = std::process::Command::new(&script)
+            .arg(format!("file://{}", file.display()))
+            .arg(&out)
+            .arg("1280x1000")
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::null())
+            .status()
+            .unwrap();
+        assert!(status.success(), "{name}: report-screenshot failed");
+        let dom = std::fs::read_to_string(out.join("dom.html")).unwrap();
+        let head = &dom[..dom.len().min(3000)];
+        assert_eq!(
+            body_data(&dom, "view").as_deref(),
+            Some("ready"),
+            "{name}: {head}"
+        );
+        let framed = body_data(&dom, "framed").unwrap_or_default();
+        let (shown, all) = framed.split_once('/').unwrap_or(("", "?"));
+        assert_eq!(shown, all, "{name}: points framed in view: {framed}");
+        assert!(all.parse::<u32>().unwrap() > 2, "{name}: {framed}");
+        println!("{name}: 3-D view ready, {framed} framed points in view");
+    }
 }

@@ -2,8 +2,10 @@
 //! cells coloured by class with every aligned session's path, the sessions with their
 //! alignment spread, the problem regions (surface cells with high error seen by ≥ 2
 //! sessions, worst first, with the likely causes the sessions' evidence names), and the
-//! coverage of each surface cell by direction. Thumbnails are the reader's own sessions'
-//! only (an admin's: all). No script: the page is the same online and as one file.
+//! coverage of each surface cell by direction; and the 3-D view of the same cells and paths
+//! (`venue_view`, drawn by the report's bundled script). Thumbnails are the reader's own
+//! sessions' only (an admin's: all). As one file (`?download=1`) the page carries its
+//! script, style, view data and thumbnails inline.
 
 use std::collections::{BTreeMap, HashMap};
 use std::fmt::Write as _;
@@ -157,16 +159,6 @@ pub(crate) struct VenueReport<'a> {
     pub standalone: bool,
 }
 
-/// The stand-alone page's Content-Security-Policy: its one inline style by hash, images only
-/// inline, no script at all.
-pub(crate) fn standalone_csp() -> String {
-    let digest = ring::digest::digest(&ring::digest::SHA256, INLINE_CSS.as_bytes());
-    format!(
-        "default-src 'none'; style-src 'sha256-{}'; img-src data:; base-uri 'none'; form-action 'none'",
-        BASE64.encode(digest.as_ref())
-    )
-}
-
 impl VenueReport<'_> {
     /// The page's HTML.
     pub(crate) fn render(&self) -> Result<String, Error> {
@@ -223,7 +215,16 @@ impl VenueReport<'_> {
                        "coverage": coverage_words(&c.directions)})
             })
             .collect();
+        // `<` only occurs inside JSON strings, where `\u003c` means the same: no `</script`.
+        let view = super::venue_view::view_data(&map, &list)
+            .to_string()
+            .replace('<', "\\u003c");
         let standalone = self.standalone;
+        let script = if standalone {
+            Some(super::page::inline_script()?)
+        } else {
+            None
+        };
         templates::render(
             "venue.html",
             &json!({
@@ -231,8 +232,10 @@ impl VenueReport<'_> {
                 "convention": map.convention.name(), "cells": map.cells.len(),
                 "sessions": sessions, "topview": top_view(&map, &contributions),
                 "regions": regions, "coverage": coverage,
+                "view": view,
                 "css": standalone.then_some(INLINE_CSS),
-                "csp": standalone.then(standalone_csp),
+                "script": script,
+                "csp": standalone.then(super::page::standalone_csp),
             }),
         )
     }
@@ -309,7 +312,7 @@ mod tests {
         d[4] = 3; // looking west (sector 4): standing east of the surface
         assert_eq!(coverage_words(&d), "seen only from the east");
         d[6] = 1; // looking south: standing north
-        assert_eq!(coverage_words(&d), "seen from the north and the east");
+        assert_eq!(coverage_words(&d), "seen from the east and the north");
         d = [1; 8];
         assert_eq!(coverage_words(&d), "seen from 8 of 8 sides");
     }

@@ -12,6 +12,8 @@ pub struct Answer {
     /// The status line and headers.
     pub head: String,
     pub body: String,
+    /// The body as sent (a binary answer's `body` is lossy).
+    pub bytes: Vec<u8>,
 }
 
 impl Answer {
@@ -62,9 +64,14 @@ pub fn call(
         .nth(1)
         .and_then(|s| s.parse().ok())
         .unwrap_or_else(|| panic!("no status line: {text:?}"));
+    let start = raw
+        .windows(4)
+        .position(|w| w == b"\r\n\r\n")
+        .map_or(raw.len(), |i| i + 4);
     Answer {
         status,
         head: head.to_owned(),
         body: body.to_owned(),
+        bytes: raw[start..].to_vec(),
     }
 }
