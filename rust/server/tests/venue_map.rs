@@ -122,6 +122,17 @@ fn finished_session(
     venue: &str,
     phone: &Phone,
 ) -> (String, Value) {
+    finished_session_with(server, token, venue, phone, 0.003)
+}
+
+/// As [`finished_session`], the second trial wiggling by `noise` (m) per frame.
+fn finished_session_with(
+    server: &ServerHandle,
+    token: &str,
+    venue: &str,
+    phone: &Phone,
+    noise: f64,
+) -> (String, Value) {
     let body = json!({"playback": "upload", "trials": 2, "venue": venue}).to_string();
     let a = call(
         server,
@@ -152,7 +163,7 @@ fn finished_session(
         &format!("{base}/subtrajectories.csv"),
         &phone.subtrajectories_csv(),
     );
-    for noise in [0.0, 0.003] {
+    for noise in [0.0, noise] {
         let trial = phone.trial(noise);
         let a = call(
             server,
@@ -747,4 +758,102 @@ fn the_saved_venue_report_draws_its_3d_view_in_chromium() {
         assert!(all.parse::<u32>().unwrap() > 2, "{name}: {framed}");
         println!("{name}: 3-D view ready, {framed} framed points in view");
     }
+}
+
+/// The phone's evidence for the 4 sub-trajectories: each with an image, `low_texture` named
+/// for the ones that faced the wall (0 and 2).
+fn evidence_csv() -> String {
+    let mut csv = String::from(
+        "index,image,mean_brightness,contrast_std,laplacian_var,corners_per_10k,saturated_share,thumbnail_width,thumbnail_height,depth_valid_share,linear_speed_m_s,angular_speed_deg_s,depth_valid,distance_m,causes\n",
+    );
+    for k in 0..4 {
+        let (valid, cause) = if k % 2 == 0 {
+            (1, "low_texture")
+        } else {
+            (0, "")
+        };
+        csv.push_str(&format!(
+            "{k},1,40,5,10,1,0,120,160,1,0.3,10,{valid},2,{cause}\n"
+        ));
+    }
+    csv
+}
+
+#[test]
+fn problem_regions_name_the_evidences_causes_and_show_only_the_readers_thumbnails() {
+    let dir = tempfile::tempdir().unwrap();
+    let (server, admin) = support::spawn_with_admin(dir.path());
+    let owner = sitar_server::create_token(dir.path(), Role::App, "owner").unwrap();
+    let member = sitar_server::create_token(dir.path(), Role::App, "member").unwrap();
+    let body = json!({"name": "Hall", "anchor": "poster-1", "cell_m": CELL_M}).to_string();
+    let a = call(
+        &server,
+        &owner,
+        "POST",
+        "/v1/venues",
+        Some("application/json"),
+        body.as_bytes(),
+    );
+    let venue = a.json()["id"].as_str().unwrap().to_owned();
+    let path = format!("/v1/venues/{venue}/members/member");
+    assert_eq!(call(&server, &owner, "PUT", &path, None, &[]).status, 200);
+    // Trials 8 cm apart, wiggling frame to frame: every window's error is high.
+    let mut ids = Vec::new();
+    for (token, dx) in [(&owner, 0.0), (&member, 1.0)] {
+        let (id, _) = finished_session_with(&server, token, &venue, &Phone { dx }, 0.08);
+        let base = format!("/v1/sessions/{id}");
+        put(
+            &server,
+            token,
+            &format!("{base}/evidence.csv"),
+            &evidence_csv(),
+        );
+        let jpeg = [0xFF, 0xD8, 0xFF, 0xE0, 0, 0, 0xFF, 0xD9];
+        let a = call(
+            &server,
+            token,
+            "PUT",
+            &format!("{base}/subtrajectories/0/image.jpg"),
+            Some("image/jpeg"),
+            &jpeg,
+        );
+        assert_eq!(a.status, 204, "{}", a.body);
+        ids.push(id);
+    }
+    let map = get(&server, &owner, &format!("/v1/venues/{venue}/map.json")).json();
+    let wall: Vec<&Value> = map["cells"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|c| c["kind"] == "surface" && c["class"] == "high" && c["sessions"] == 2)
+        .collect();
+    assert_eq!(wall.len(), 1, "the wall's cell, seen by both: {map}");
+
+    let image = |id: &str| format!("/v1/sessions/{id}/subtrajectories/0/image.jpg");
+    for (reader, mine, theirs) in [
+        (&owner, Some(&ids[0]), Some(&ids[1])),
+        (&member, Some(&ids[1]), Some(&ids[0])),
+        (&admin, None, None),
+    ] {
+        let page = get(&server, reader, &format!("/v1/venues/{venue}/report"));
+        assert_eq!(page.status, 200, "{}", page.body);
+        let regions = &page.body[page
+            .body
+            .find("<table id=\"regions\">")
+            .expect("no regions")..];
+        let regions = &regions[..regions.find("</table>").unwrap()];
+        assert_eq!(regions.matches("<tr>").count(), 2, "one region: {regions}");
+        // Both sessions' sub-trajectories 0 and 2 faced the wall; each named low texture.
+        assert!(regions.contains("low texture (4 of 4)"), "{regions}");
+        assert!(regions.contains("seen only from the"), "{regions}");
+        let shown = |id: &str| regions.contains(&image(id).replace('/', "&#x2f;"));
+        match (mine, theirs) {
+            (Some(mine), Some(theirs)) => {
+                assert!(shown(mine), "the reader's own thumbnail: {regions}");
+                assert!(!shown(theirs), "another token's thumbnail: {regions}");
+            }
+            _ => assert!(ids.iter().all(|id| shown(id)), "admins see all: {regions}"),
+        }
+    }
+    server.stop();
 }

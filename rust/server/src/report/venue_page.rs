@@ -18,7 +18,7 @@ use sitar_core::venue::{CellKind, Contribution, VenueMap, VenueSession};
 
 use crate::Error;
 use crate::auth::Caller;
-use crate::ingest::evidence::EvidenceFiles;
+use crate::ingest::evidence::{EvidenceFiles, EvidenceRow};
 use crate::report::templates;
 use crate::session::Session;
 use crate::storage::{BlobStore, MetadataStore};
@@ -201,12 +201,16 @@ impl VenueReport<'_> {
             .filter(|c| c.kind == CellKind::Surface)
             .collect();
         surfaces.sort_by(|a, b| b.error_m.total_cmp(&a.error_m));
-        let regions: Vec<Value> = surfaces
+        // Each session's evidence is read once, and only when one of its samples is in a region.
+        let mut evidence = HashMap::new();
+        let mut regions: Vec<Value> = Vec::new();
+        for cell in surfaces
             .iter()
             .filter(|c| c.class == ErrorClass::High && c.sessions >= 2)
             .take(MAX_REGIONS)
-            .map(|c| self.region(c, &contributions))
-            .collect::<Result<_, _>>()?;
+        {
+            regions.push(self.region(cell, &contributions, &mut evidence)?);
+        }
         let coverage: Vec<Value> = surfaces
             .iter()
             .take(MAX_COVERAGE_ROWS)
@@ -247,12 +251,16 @@ impl VenueReport<'_> {
         &self,
         cell: &sitar_core::venue::VenueCell,
         contributions: &[(Session, Contribution)],
+        evidence: &mut HashMap<String, Vec<EvidenceRow>>,
     ) -> Result<Value, Error> {
-        let half = self.venue.cell_m / 2.0;
+        // The map's own rule: a point is in the cell whose index is ⌊p / cell_m⌋ on each axis
+        // (the centre's index too, as the centre is (k + ½)·cell_m).
+        let c = self.venue.cell_m;
+        let index = |v: f64| (v / c).floor();
         let inside = |p: glam::DVec3| {
-            (p.x - cell.center[0]).abs() <= half
-                && (p.y - cell.center[1]).abs() <= half
-                && (p.z - cell.center[2]).abs() <= half
+            index(p.x) == index(cell.center[0])
+                && index(p.y) == index(cell.center[1])
+                && index(p.z) == index(cell.center[2])
         };
         let mut causes: BTreeMap<String, usize> = BTreeMap::new();
         let mut thumbnails = Vec::new();
@@ -261,11 +269,15 @@ impl VenueReport<'_> {
                 blobs: self.blobs,
                 id: &session.id,
             };
-            let rows = files.evidence_rows()?.unwrap_or_default();
             for sample in contribution.samples() {
                 if !sample.surface.is_some_and(inside) {
                     continue;
                 }
+                if !evidence.contains_key(&session.id) {
+                    let read = files.evidence_rows()?.unwrap_or_default();
+                    evidence.insert(session.id.clone(), read);
+                }
+                let rows = evidence.get(&session.id).map_or(&[][..], Vec::as_slice);
                 let k = sample.subtrajectory as usize;
                 if let Some(row) = rows.get(k) {
                     for cause in &row.causes {
