@@ -2,7 +2,10 @@
 //! two users' sessions in world frames 1 m apart, each aligned by its anchor observations,
 //! give the cells computed here by hand from the sessions' own `results.json` (cell centres
 //! `(⌊p/c⌋ + ½)·c`, errors a 30 % trimmed mean as `scipy.stats.trim_mean`); the map follows
-//! its sessions (finished, deleted) on the next request, and strangers get a 404.
+//! its sessions (joined, given its log, finished, deleted) on the next request, and strangers
+//! get a 404. Also: `map.glb` (one node per cell, the Khronos validator), the venue report
+//! (its 3-D view data, problem regions with causes and the reader's own thumbnails, the saved
+//! page drawn in Chromium) and a session's scene from the phone's own log.
 
 use std::collections::BTreeMap;
 use std::time::{Duration, Instant};
@@ -144,6 +147,13 @@ fn finished_session_with(
     );
     assert_eq!(a.status, 201, "{}", a.body);
     let id = a.json()["id"].as_str().unwrap().to_owned();
+    send_phone_log(server, token, &id, phone);
+    let results = finish(server, token, &id, phone, noise);
+    (id, results)
+}
+
+/// Uploads `phone`'s own log (anchors, trajectory, whole sub-trajectory table) to session `id`.
+fn send_phone_log(server: &ServerHandle, token: &str, id: &str, phone: &Phone) {
     let base = format!("/v1/sessions/{id}");
     put(
         server,
@@ -163,6 +173,12 @@ fn finished_session_with(
         &format!("{base}/subtrajectories.csv"),
         &phone.subtrajectories_csv(),
     );
+}
+
+/// Sends session `id` two trials (the second wiggling by `noise`), estimates and waits until
+/// it is done; its results.json.
+fn finish(server: &ServerHandle, token: &str, id: &str, phone: &Phone, noise: f64) -> Value {
+    let base = format!("/v1/sessions/{id}");
     for noise in [0.0, noise] {
         let trial = phone.trial(noise);
         let a = call(
@@ -196,8 +212,7 @@ fn finished_session_with(
         );
         std::thread::sleep(Duration::from_millis(50));
     }
-    let results = get(server, token, &format!("{base}/results.json")).json();
-    (id, results)
+    get(server, token, &format!("{base}/results.json")).json()
 }
 
 /// The error of the window starting at `start` (the sub-trajectory's start; exact here).
@@ -447,6 +462,34 @@ fn the_venue_map_is_built_from_its_sessions_files_and_follows_them() {
         idle_entry["reason"].as_str().unwrap().contains("anchors"),
         "{idle_entry}"
     );
+    assert_cells(&map, &expected(&[&first_results, &second_results]), 2);
+
+    // Its phone's log arrives: still no cells until it is finished; then its cells count at
+    // once (a third user whose world frame is 2 m off: the same cells, seen by three).
+    let third = Phone { dx: 2.0 };
+    send_phone_log(&server, &owner, &idle, &third);
+    let map = get(&server, &owner, &map_path).json();
+    assert_cells(&map, &expected(&[&first_results, &second_results]), 2);
+    let third_results = finish(&server, &owner, &idle, &third, 0.005);
+    let map = get(&server, &owner, &map_path).json();
+    assert_cells(
+        &map,
+        &expected(&[&first_results, &second_results, &third_results]),
+        3,
+    );
+    assert_eq!(
+        call(
+            &server,
+            &owner,
+            "DELETE",
+            &format!("/v1/sessions/{idle}"),
+            None,
+            &[]
+        )
+        .status,
+        200
+    );
+    let map = get(&server, &owner, &map_path).json();
     assert_cells(&map, &expected(&[&first_results, &second_results]), 2);
 
     // The next request after a deletion follows it.
