@@ -17,6 +17,7 @@ use crate::storage::BlobStore;
 use crate::storage::MetadataStore;
 use crate::storage::embedded::open_metadata;
 use crate::storage::files::Files;
+use crate::venue::{NewVenue, new_venue_id};
 
 /// What a running job knows that the database does not: timing and the cancel flag.
 #[derive(Debug, Clone)]
@@ -113,6 +114,13 @@ impl App {
             .insert_session(&crate::storage::files::new_id(), new)?;
         self.blobs.create_session(&id)?;
         Ok((id, created))
+    }
+
+    /// Makes a venue's row; its id.
+    pub fn create_venue(&self, new: &NewVenue<'_>) -> Result<String, Error> {
+        let id = new_venue_id(&crate::storage::files::new_id());
+        self.db.insert_venue(&id, new)?;
+        Ok(id)
     }
 
     pub fn backend(&self, kind: PlaybackKind) -> Arc<dyn Playback> {
