@@ -31,8 +31,6 @@ fn walk(convention: &str) -> Session {
     session
 }
 
-/// The JSON chunk of a GLB.
-
 /// The children of the root's group called `name`.
 fn group<'a>(doc: &'a serde_json::Value, name: &str) -> Vec<&'a serde_json::Value> {
     let nodes = doc["nodes"].as_array().unwrap();
