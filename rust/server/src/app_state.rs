@@ -15,6 +15,7 @@ use crate::playback::{Playback, PlaybackPlan, SimPlayback, UploadPlayback};
 use crate::session::{Lifecycle, NewSession, Session};
 use crate::storage::BlobStore;
 use crate::storage::MetadataStore;
+use crate::venue::{NewVenue, new_venue_id};
 
 /// What a running job knows that the database does not: timing and the cancel flag.
 #[derive(Debug, Clone)]
@@ -108,6 +109,13 @@ impl App {
             .insert_session(&crate::storage::files::new_id(), new)?;
         self.blobs.create_session(&id)?;
         Ok((id, created))
+    }
+
+    /// Makes a venue's row; its id.
+    pub fn create_venue(&self, new: &NewVenue<'_>) -> Result<String, Error> {
+        let id = new_venue_id(&crate::storage::files::new_id());
+        self.db.insert_venue(&id, new)?;
+        Ok(id)
     }
 
     pub fn backend(&self, kind: PlaybackKind) -> Arc<dyn Playback> {

@@ -28,7 +28,7 @@ pub(crate) mod conformance;
 
 pub(crate) use blobs::{BlobStore, body_stream};
 pub(crate) use metadata::{
-    JobEnd, MetadataStore, SessionStore, StepRecord, TokenStore, UsageStore,
+    JobEnd, MetadataStore, SessionStore, StepRecord, TokenStore, UsageStore, VenueStore,
 };
 
 /// Now, in ms since the Unix epoch (0 if the clock is before it): the unit of every stored

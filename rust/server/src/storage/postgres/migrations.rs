@@ -9,8 +9,10 @@ use crate::Error;
 use crate::storage::now_ms;
 
 /// Every migration, in order: (version, name, SQL). Never edit one that shipped; add the next.
-const MIGRATIONS: &[(i64, &str, &str)] =
-    &[(1, "tables", include_str!("migrations/0001_tables.sql"))];
+const MIGRATIONS: &[(i64, &str, &str)] = &[
+    (1, "tables", include_str!("migrations/0001_tables.sql")),
+    (2, "venues", include_str!("migrations/0002_venues.sql")),
+];
 
 /// The advisory lock key the migrating instance holds (`sitar` in ASCII).
 const MIGRATION_LOCK: i64 = 0x0073_6974_6172;

@@ -20,6 +20,7 @@ mod sessions;
 mod tokens;
 mod trials;
 mod usage;
+mod venues;
 
 /// Connections (and threads) per instance.
 pub(crate) const CONNECTIONS: usize = 8;

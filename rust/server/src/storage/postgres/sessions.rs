@@ -12,14 +12,16 @@ use crate::session::{NewSession, Session, SessionState, Step};
 use crate::storage::metadata::{Rows, SessionStore, StepRecord, Unreadable};
 use crate::storage::now_ms;
 
-const COLUMNS: &str = "id, trials_total, setting, playback, state, error, stop_reason, adaptive_min, \
-     adaptive_k, recording_bytes, results_trials, legacy, window_frames, pose_relation, owner";
+pub(super) const COLUMNS: &str = "id, trials_total, setting, playback, state, error, stop_reason, \
+     adaptive_min, adaptive_k, recording_bytes, results_trials, legacy, window_frames, pose_relation, \
+     owner, venue, convention";
 
 /// What makes two session requests the same, as one text; must match
 /// [`NewSession::request_summary`].
 const REQUEST: &str = "trials_total || '/' || playback || '/' || setting || '/' || window_frames \
      || '/' || pose_relation || '/' || COALESCE(adaptive_min::text, '-') || '/' || adaptive_k \
-     || '/' || (CASE WHEN legacy THEN '1' ELSE '0' END)";
+     || '/' || (CASE WHEN legacy THEN '1' ELSE '0' END) || '/' || COALESCE(venue, '-') \
+     || '/' || convention";
 
 /// A text column parsed into its type; a value no version writes is an error naming it.
 fn typed<T>(
@@ -70,11 +72,13 @@ fn session_from_row(r: &Row) -> Result<Session, String> {
         results_trials: u32_column(r, 10, "sessions.results_trials")?,
         legacy: r.try_get(11).map_err(get)?,
         owner: r.try_get(14).map_err(get)?,
+        venue: r.try_get(15).map_err(get)?,
+        convention: typed(r, 16, "convention", super::venues::parse_convention)?,
     })
 }
 
 /// Sorts rows into the readable and the rest.
-fn read_rows(rows: Vec<Row>) -> Rows {
+pub(super) fn read_rows(rows: Vec<Row>) -> Rows {
     let mut out = Rows::default();
     for row in rows {
         match session_from_row(&row) {
@@ -92,6 +96,8 @@ fn read_rows(rows: Vec<Row>) -> Rows {
 struct NewRow {
     key: Option<String>,
     summary: String,
+    venue: Option<String>,
+    convention: sitar_core::Convention,
     values: (
         i64,
         String,
@@ -111,6 +117,8 @@ impl SessionStore for PgStore {
         let row = NewRow {
             key: new.idempotency_key.map(str::to_string),
             summary: new.request_summary(),
+            venue: new.venue.map(str::to_string),
+            convention: new.convention,
             values: (
                 i64::from(new.trials_total),
                 new.settings.setting.to_string(),
@@ -126,11 +134,39 @@ impl SessionStore for PgStore {
         self.pool.run(move |c| {
             let mut tx = c.transaction()?;
             let (total, setting, playback, min, k, legacy, frames, relation, owner) = &row.values;
+            // The session made earlier with this key, if any, checked against this request.
+            let earlier = |tx: &mut postgres::Transaction<'_>| -> Result<Option<String>, Error> {
+                let Some(existing) = tx.query_opt(
+                    &format!("SELECT id, {REQUEST} FROM sessions WHERE idempotency_key = $1"),
+                    &[&row.key],
+                )?
+                else {
+                    return Ok(None);
+                };
+                let (existing, request): (String, String) = (existing.get(0), existing.get(1));
+                // The IETF Idempotency-Key draft: a key reused for another request is refused.
+                if request != row.summary {
+                    return Err(Error::Conflict(format!(
+                        "this Idempotency-Key was used for a different request (session \
+                         {existing}): a new request needs a new key"
+                    )));
+                }
+                Ok(Some(existing))
+            };
+            if row.key.is_some()
+                && let Some(existing) = earlier(&mut tx)?
+            {
+                return Ok((existing, false));
+            }
+            if let Some(venue) = &row.venue {
+                super::venues::check_joining(&mut tx, venue, row.convention)?;
+            }
             // ON CONFLICT: two instances given the same key at once make one session.
             let inserted = tx.query_opt(
                 "INSERT INTO sessions (id, idempotency_key, created_ms, trials_total, setting, \
                  playback, state, adaptive_min, adaptive_k, legacy, window_frames, pose_relation, \
-                 owner) VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12, $13) \
+                 owner, venue, convention) \
+                 VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12, $13, $14, $15) \
                  ON CONFLICT (idempotency_key) DO NOTHING RETURNING id",
                 &[
                     &id,
@@ -146,25 +182,21 @@ impl SessionStore for PgStore {
                     frames,
                     relation,
                     owner,
+                    &row.venue,
+                    &row.convention.name(),
                 ],
             )?;
             if inserted.is_some() {
                 tx.commit()?;
                 return Ok((id, true));
             }
-            let existing = tx.query_one(
-                &format!("SELECT id, {REQUEST} FROM sessions WHERE idempotency_key = $1"),
-                &[&row.key],
-            )?;
-            let (existing, request): (String, String) = (existing.get(0), existing.get(1));
-            // The IETF Idempotency-Key draft: a key reused for another request is refused.
-            if request != row.summary {
-                return Err(Error::Conflict(format!(
-                    "this Idempotency-Key was used for a different request (session \
-                     {existing}): a new request needs a new key"
-                )));
+            // Another instance made it with this key meanwhile.
+            match earlier(&mut tx)? {
+                Some(existing) => Ok((existing, false)),
+                None => Err(Error::Conflict(
+                    "this Idempotency-Key's session was deleted as it was made; retry".into(),
+                )),
             }
-            Ok((existing, false))
         })
     }
 

@@ -1,7 +1,7 @@
 //! The embedded metadata store: SQLite in `DATA/sitar.db` (WAL mode, so `sitar token` works
 //! beside a running server). This folder is the only place that speaks SQL: the connection,
 //! the schema and its migrations here, and one file per concern of
-//! [`crate::storage::metadata`] (`sessions`, `trials`, `jobs`, `tokens`, `usage`).
+//! [`crate::storage::metadata`] (`sessions`, `trials`, `jobs`, `tokens`, `usage`, `venues`).
 
 use std::path::Path;
 use std::sync::Mutex;
@@ -15,6 +15,7 @@ mod sessions;
 mod tokens;
 mod trials;
 mod usage;
+mod venues;
 
 /// Room in the connection's statement cache: more than the server's distinct SQL texts
 /// (about 50), so none is parsed twice.
@@ -73,7 +74,22 @@ CREATE TABLE IF NOT EXISTS sessions (
     finished_ms INTEGER,
     window_frames INTEGER NOT NULL DEFAULT 10,
     pose_relation TEXT NOT NULL DEFAULT 'trans_part',
-    owner INTEGER
+    owner INTEGER,
+    venue TEXT,
+    convention TEXT NOT NULL DEFAULT 'unity'
+);
+CREATE TABLE IF NOT EXISTS venues (
+    id TEXT PRIMARY KEY,
+    name TEXT NOT NULL,
+    anchor TEXT NOT NULL,
+    cell_m REAL NOT NULL,
+    owner INTEGER,
+    created_ms INTEGER NOT NULL
+);
+CREATE TABLE IF NOT EXISTS venue_members (
+    venue_id TEXT NOT NULL REFERENCES venues(id),
+    token_id INTEGER NOT NULL,
+    PRIMARY KEY (venue_id, token_id)
 );
 CREATE TABLE IF NOT EXISTS trials (
     session_id TEXT NOT NULL REFERENCES sessions(id),
@@ -141,6 +157,8 @@ const ADDED_COLUMNS: &[(&str, &str, &str)] = &[
         "TEXT NOT NULL DEFAULT 'trans_part'",
     ),
     ("sessions", "owner", "INTEGER"),
+    ("sessions", "venue", "TEXT"),
+    ("sessions", "convention", "TEXT NOT NULL DEFAULT 'unity'"),
 ];
 
 /// Adds the [`ADDED_COLUMNS`] a database made by an older version lacks.
@@ -168,6 +186,10 @@ impl SqliteStore {
         conn.set_prepared_statement_cache_capacity(STATEMENT_CACHE);
         conn.execute_batch(SCHEMA)?;
         migrate(&conn)?;
+        // After the columns exist: a database of an older version lacks `sessions.venue`.
+        conn.execute_batch(
+            "CREATE INDEX IF NOT EXISTS sessions_venue ON sessions (venue) WHERE venue IS NOT NULL",
+        )?;
         Ok(SqliteStore {
             conn: Mutex::new(conn),
         })
