@@ -327,9 +327,14 @@ fn put_range(
 
 /// The `Upload-Offset` a `HEAD` of session `id`'s recording answers for the upload key.
 fn head_offset(url: &str, token: &str, id: &str) -> usize {
+    head_offset_with(url, token, id, "cluster-resume")
+}
+
+/// The `Upload-Offset` a `HEAD` of session `id`'s recording answers for upload key `key`.
+fn head_offset_with(url: &str, token: &str, id: &str, key: &str) -> usize {
     let out = Command::new("curl")
         .args(["-s", "-I", "-H", &format!("Authorization: Bearer {token}")])
-        .args(["-H", "Idempotency-Key: cluster-resume"])
+        .args(["-H", &format!("Idempotency-Key: {key}")])
         .arg(format!("{url}/v1/sessions/{id}/recording"))
         .output()
         .expect("curl");
@@ -341,6 +346,84 @@ fn head_offset(url: &str, token: &str, id: &str) -> usize {
                 .then(|| value.trim().parse().ok())?
         })
         .unwrap_or_else(|| panic!("no Upload-Offset in {head}"))
+}
+
+#[test]
+fn an_instance_killed_during_an_upload_leaves_nothing_partial() {
+    let Some((database, store)) = services("cluster_crash") else {
+        return;
+    };
+    let Some(database) = fresh_database("cluster_crash", &database) else {
+        return;
+    };
+    let store = format!("{store}/cluster-crash-{}", std::process::id());
+    let cluster = ["--database", database.as_str(), "--store", store.as_str()];
+    let dir = tempfile::tempdir().unwrap();
+    let recording = dir.path().join("walk.rec");
+    // 60 s: about 280 KB, far more than curl sends in one go.
+    let rec = sitar_sim::Recording::demo(60.0, 30.0, 5).unwrap();
+    std::fs::write(&recording, rec.to_bytes()).unwrap();
+    let size = std::fs::metadata(&recording).unwrap().len();
+    let data = dir.path().join("instance");
+    let mut a = Serving::start(&data, &cluster);
+    let admin = admin_token(&data);
+    let id = a
+        .client(&admin)
+        .create_session(&sitar_client::NewSession {
+            trials: 2,
+            setting: "trim_mean_30".into(),
+            playback: "sim".into(),
+            window_frames: None,
+            pose_relation: None,
+        })
+        .unwrap();
+    // A body sent over about 8 s; the instance is killed (SIGKILL) after 1.5 s of it.
+    let mut upload = Command::new("curl")
+        .args([
+            "-s",
+            "-o",
+            "/dev/null",
+            "--limit-rate",
+            &(size / 8).max(1).to_string(),
+        ])
+        .arg("-T")
+        .arg(&recording)
+        .args(["-H", &format!("Authorization: Bearer {admin}")])
+        .args(["-H", "Idempotency-Key: crash"])
+        .arg(format!("{}/v1/sessions/{id}/recording", a.url))
+        .spawn()
+        .expect("curl");
+    std::thread::sleep(Duration::from_millis(1500));
+    a.child.kill().unwrap();
+    a.child.wait().unwrap();
+    let _ = upload.wait();
+    // Started again on the same folder: the staged bytes are gone, nothing of the request
+    // is in the bucket, and the session still waits for its recording.
+    let b = Serving::start(&data, &cluster);
+    assert!(
+        files_under(&data.join("tmp")).is_empty(),
+        "{:?}",
+        files_under(&data.join("tmp"))
+    );
+    let client = b.client(&admin);
+    assert_eq!(
+        client.status(&id).unwrap().state,
+        sitar_client::SessionState::Created
+    );
+    assert_eq!(head_offset_with(&b.url, &admin, &id, "crash"), 0);
+    // The client sends it again, whole: the session plays to the end.
+    client
+        .upload_recording(&id, &recording, &mut |_, _| {})
+        .unwrap();
+    let done = client
+        .wait(
+            &id,
+            Duration::from_millis(50),
+            Duration::from_secs(120),
+            &mut |_| {},
+        )
+        .unwrap();
+    assert_eq!(done.state, sitar_client::SessionState::Done, "{done:?}");
 }
 
 #[test]
