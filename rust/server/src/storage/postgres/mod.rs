@@ -233,6 +233,27 @@ mod tests {
     }
 
     #[test]
+    fn a_call_that_panics_fails_alone() {
+        let Some(url) = test_database::fresh("panics") else {
+            return;
+        };
+        let store = PgStore::open(&url).unwrap();
+        // A column read as the wrong type panics inside rust-postgres.
+        for _ in 0..2 * CONNECTIONS {
+            let err = store
+                .pool
+                .run(|c| Ok(c.query_one("SELECT 'text'", &[])?.get::<_, i64>(0)))
+                .unwrap_err();
+            assert!(err.to_string().contains("without an answer"), "{err}");
+        }
+        use crate::storage::TokenStore;
+        assert!(
+            !store.has_token("anyone").unwrap(),
+            "every thread still serves"
+        );
+    }
+
+    #[test]
     fn a_busy_connection_thread_is_never_a_tokio_worker() {
         let Some(url) = test_database::fresh("runtime") else {
             return;

@@ -131,10 +131,16 @@ impl Pool {
     }
 }
 
-/// A connection thread: runs what it is sent until the pool is dropped.
+/// A connection thread: runs what it is sent until the pool is dropped. A call that panics
+/// (a column of an unexpected type) fails alone: its caller gets an error, the connection is
+/// made again, and the thread goes on serving.
 fn serve(connection: &mut Connection, jobs: Receiver<Job>) {
     while let Ok(job) = jobs.recv() {
-        job(connection);
+        let ran = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| job(connection)));
+        if ran.is_err() {
+            log::error!("a Postgres call panicked; its connection is made again");
+            connection.client = None;
+        }
     }
 }
 
@@ -199,8 +205,11 @@ impl Drop for Lease<'_> {
 
 /// Waits for a connection thread's answer.
 fn wait<T>(receive: Receiver<Result<T, Error>>) -> Result<T, Error> {
-    crate::storage::blocking::wait(receive)
-        .unwrap_or_else(|| Err(Error::Database("a Postgres connection thread ended".into())))
+    crate::storage::blocking::wait(receive).unwrap_or_else(|| {
+        Err(Error::Database(
+            "a Postgres call ended without an answer (logged)".into(),
+        ))
+    })
 }
 
 /// A Postgres failure is the store's own: a 500 `database` that names no backend type.
