@@ -60,11 +60,13 @@ pub mod platform_tls;
 #[cfg(test)]
 mod test_server;
 mod types;
+mod worker_api;
 
 pub use client::{Client, IDEMPOTENCY_HEADER, UPLOAD_OFFSET_HEADER, check_session_id};
 pub use error::Error;
 pub use job::{JobOptions, JobProgress, JobState, SinkError, UPLOAD_SHARE, UploadJob};
 pub use phone_logs::{PHONE_LOG_FILES, PhoneLogsSent};
+pub use worker_api::{WorkerHeartbeat, WorkerHost, WorkerLease};
 pub use types::{
     NewSession, SessionFrame, SessionOptions, SessionState, SessionStatus, VenueAlignment,
 };

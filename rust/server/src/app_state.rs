@@ -11,11 +11,12 @@ use crate::config::{PlaybackKind, ServerConfig};
 use crate::estimate::live_sessions::LiveSessions;
 use crate::playback::adb::AdbPlayback;
 use crate::playback::queue::{PlaybackQueue, QueueLimits};
+use crate::playback::remote::{RemoteBoard, RemotePlayback};
 use crate::playback::{Playback, PlaybackPlan, SimPlayback, UploadPlayback};
 use crate::session::{Lifecycle, NewSession, Session};
 use crate::storage::BlobStore;
-use crate::storage::MetadataStore;
-use crate::storage::embedded::open_metadata;
+use crate::storage::embedded::open_embedded;
+use crate::storage::{MetadataStore, WorkerStore};
 use crate::storage::files::Files;
 
 /// What a running job knows that the database does not: timing and the cancel flag.
@@ -35,6 +36,10 @@ pub(crate) struct App {
     pub config: ServerConfig,
     /// Every row the server keeps (the embedded default: SQLite in `DATA/sitar.db`).
     pub db: Arc<dyn MetadataStore>,
+    /// Playback hosts, their phones, the trials leased to them, failed trials.
+    pub workers: Arc<dyn WorkerStore>,
+    /// Where trials uploaded by playback hosts meet their session's job.
+    pub board: Arc<RemoteBoard>,
     /// Every byte the server keeps for its sessions (the embedded default: the data
     /// directory's session folders).
     pub blobs: Arc<dyn BlobStore>,
@@ -67,10 +72,35 @@ impl App {
         let blobs = Files::open(&config.data_dir)?
             .with_idle_timeout(config.upload_idle_timeout)
             .with_quotas(config.session_disk_quota, config.disk_quota);
-        let db = open_metadata(&config.data_dir)?;
+        let (db, workers) = open_embedded(&config.data_dir)?;
+        let board = Arc::new(RemoteBoard::default());
+        let local_sim: Arc<dyn Playback> = Arc::new(SimPlayback::new(config.sim.clone()));
+        let local_adb: Arc<dyn Playback> = Arc::new(AdbPlayback::new(config.adb.clone()));
+        // `--playback-workers 0`: the phones are on playback hosts, not here.
+        let (sim, adb) = if config.playback_workers == 0 {
+            let remote = |kind, local: Arc<dyn Playback>| -> Arc<dyn Playback> {
+                Arc::new(RemotePlayback::new(
+                    kind,
+                    local,
+                    workers.clone(),
+                    db.clone(),
+                    board.clone(),
+                    config.lease_timeout,
+                    config.adb.fallback_duration_s,
+                ))
+            };
+            (
+                remote(PlaybackKind::Sim, local_sim),
+                remote(PlaybackKind::Adb, local_adb),
+            )
+        } else {
+            (local_sim, local_adb)
+        };
         Ok(App {
-            sim: Arc::new(SimPlayback::new(config.sim.clone())),
-            adb: Arc::new(AdbPlayback::new(config.adb.clone())),
+            sim,
+            adb,
+            workers,
+            board,
             upload: Arc::new(UploadPlayback),
             limiter: Arc::new(crate::auth::UploadLimiter::new(config.limits)),
             secure_cookies: false,
@@ -160,6 +190,11 @@ impl App {
         for job in self.running_jobs().values() {
             job.cancel.store(true, Ordering::SeqCst);
         }
+    }
+
+    /// Whether sim and adb sessions are played by remote hosts (`--playback-workers 0`).
+    pub fn remote_playback(&self) -> bool {
+        self.config.playback_workers == 0
     }
 
     pub fn stopping(&self) -> bool {

@@ -12,3 +12,4 @@ pub(crate) mod scene;
 pub(crate) mod sessions;
 pub(crate) mod share;
 pub(crate) mod trials;
+pub(crate) mod worker;

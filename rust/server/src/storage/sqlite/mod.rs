@@ -1,7 +1,8 @@
 //! The embedded metadata store: SQLite in `DATA/sitar.db` (WAL mode, so `sitar token` works
 //! beside a running server). This folder is the only place that speaks SQL: the connection,
 //! the schema and its migrations here, and one file per concern of
-//! [`crate::storage::metadata`] (`sessions`, `trials`, `jobs`, `tokens`, `usage`).
+//! [`crate::storage::metadata`] (`sessions`, `trials`, `jobs`, `tokens`, `usage`) and of
+//! [`crate::storage::workers`] (`hosts`, `leases`, with their versioned `worker_schema`).
 
 use std::path::Path;
 use std::sync::Mutex;
@@ -10,11 +11,14 @@ use rusqlite::{Connection, Params, Row};
 
 use crate::Error;
 
+mod hosts;
 mod jobs;
+mod leases;
 mod sessions;
 mod tokens;
 mod trials;
 mod usage;
+mod worker_schema;
 
 /// Room in the connection's statement cache: more than the server's distinct SQL texts
 /// (about 50), so none is parsed twice.
@@ -166,8 +170,10 @@ impl SqliteStore {
         let conn = Connection::open(path)?;
         conn.busy_timeout(std::time::Duration::from_secs(5))?;
         conn.set_prepared_statement_cache_capacity(STATEMENT_CACHE);
+        let mut conn = conn;
         conn.execute_batch(SCHEMA)?;
         migrate(&conn)?;
+        worker_schema::migrate(&mut conn)?;
         Ok(SqliteStore {
             conn: Mutex::new(conn),
         })
@@ -217,6 +223,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let store = SqliteStore::open(&dir.path().join("sitar.db")).unwrap();
         crate::storage::conformance::metadata_store(&store);
+        crate::storage::worker_conformance::worker_store(&store);
         // What it stored survives a reopen of the file.
         drop(store);
         let again = SqliteStore::open(&dir.path().join("sitar.db")).unwrap();
