@@ -18,6 +18,7 @@ pub(crate) mod metadata;
 pub(crate) mod quota;
 pub(crate) mod sqlite;
 pub(crate) mod staged;
+pub(crate) mod streamed;
 pub(crate) mod workers;
 
 #[cfg(test)]

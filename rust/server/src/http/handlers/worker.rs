@@ -5,13 +5,12 @@
 use std::time::Duration;
 
 use axum::Json;
-use axum::body::{Body, Bytes};
+use axum::body::Body;
 use axum::extract::{Path, State};
 use axum::http::{HeaderMap, StatusCode, header};
 use axum::response::{IntoResponse, Response};
 use serde::Deserialize;
 use serde_json::json;
-use tokio::io::AsyncReadExt;
 
 use crate::Error;
 use crate::auth::WorkerCaller;
@@ -22,7 +21,7 @@ use crate::playback::TrialOutput;
 use crate::storage::keys::SessionObject;
 use crate::storage::now_ms;
 use crate::storage::workers::{HostRow, Lease, PhoneState, Requeued, TrialFailure};
-use crate::storage::{body_stream, files::is_server_id};
+use crate::storage::{body_stream, streamed};
 
 /// The longest a lease request waits for a trial (`wait_s`).
 pub(crate) const MAX_LEASE_WAIT: Duration = Duration::from_secs(20);
@@ -273,30 +272,8 @@ pub(crate) async fn recording(
         })
         .await?
     };
-    let path = shared
-        .blobs
-        .local_file(&lease.session, SessionObject::Recording);
-    let file = tokio::fs::File::open(&path).await.map_err(|e| {
-        Error::io("cannot read", &path, e)
-    })?;
-    let len = file
-        .metadata()
-        .await
-        .map_err(|e| Error::io("cannot read", &path, e))?
-        .len();
-    let chunks = futures_util::stream::unfold(Some(file), |file| async move {
-        let mut file = file?;
-        let mut buf = vec![0u8; 256 << 10];
-        match file.read(&mut buf).await {
-            Ok(0) => None,
-            Ok(n) => {
-                buf.truncate(n);
-                Some((Ok::<_, std::io::Error>(Bytes::from(buf)), Some(file)))
-            }
-            // The error ends the answer (the host sees a short body and asks again).
-            Err(e) => Some((Err(e), None)),
-        }
-    });
+    let (len, chunks) =
+        streamed::object_stream(&*shared.blobs, &lease.session, SessionObject::Recording).await?;
     Ok((
         StatusCode::OK,
         [
@@ -330,12 +307,6 @@ pub(crate) async fn trial(
         };
         blocking("lease", move || live_lease(&shared, &caller, &host, &lease)).await?
     };
-    if !is_server_id(&leased.session) {
-        return Err(Error::Internal(format!(
-            "lease {} names no valid session",
-            leased.id
-        )));
-    }
     let room = shared.blobs.reserve(
         Some(&leased.session),
         crate::http::helpers::declared_length(&headers),

@@ -236,24 +236,20 @@ impl LeaseStore for SqliteStore {
 
     fn counts(&self, session: &str) -> Result<LeaseCounts, Error> {
         self.with(|c| {
-            let mut stmt = c.prepare_cached(
-                "SELECT state, COUNT(*) FROM trial_leases WHERE session_id = ?1 GROUP BY state",
-            )?;
-            let mut counts = LeaseCounts::default();
-            let rows = stmt.query_map([session], |r| {
-                Ok((r.get::<_, String>(0)?, r.get::<_, u32>(1)?))
-            })?;
-            for row in rows {
-                let (state, n) = row?;
-                match state.as_str() {
-                    "pending" => counts.pending = n,
-                    "leased" => counts.leased = n,
-                    "done" => counts.done = n,
-                    "failed" => counts.failed = n,
-                    _ => {}
-                }
-            }
-            Ok(counts)
+            c.query_row_cached(
+                "SELECT COALESCE(SUM(state = 'pending'), 0), COALESCE(SUM(state = 'leased'), 0), \
+                 COALESCE(SUM(state = 'done'), 0), COALESCE(SUM(state = 'failed'), 0) \
+                 FROM trial_leases WHERE session_id = ?1",
+                [session],
+                |r| {
+                    Ok(LeaseCounts {
+                        pending: r.get(0)?,
+                        leased: r.get(1)?,
+                        done: r.get(2)?,
+                        failed: r.get(3)?,
+                    })
+                },
+            )
         })
     }
 
