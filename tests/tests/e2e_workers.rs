@@ -44,7 +44,8 @@ fn sim_session(app: &Client, recording: &Path, trials: u32) -> String {
             pose_relation: None,
         })
         .unwrap();
-    app.upload_recording(&id, recording, &mut |_, _| {}).unwrap();
+    app.upload_recording(&id, recording, &mut |_, _| {})
+        .unwrap();
     id
 }
 
@@ -85,7 +86,10 @@ fn wait_state(server: &ServerHandle, id: &str, states: &[&str]) -> serde_json::V
         if states.iter().any(|s| doc["state"] == *s) {
             return doc;
         }
-        assert!(Instant::now() < deadline, "{id} never reached {states:?}: {doc}");
+        assert!(
+            Instant::now() < deadline,
+            "{id} never reached {states:?}: {doc}"
+        );
         std::thread::sleep(Duration::from_millis(20));
     }
 }
@@ -120,7 +124,11 @@ fn a_garbage_trial_fails_visibly_and_a_phone_failing_twice_leaves_service() {
     );
     // The lease is gone with it: a second upload on it is refused.
     let err = worker
-        .worker_upload_trial(&host.host, &first.lease, &sim_trial(&recording, first.index))
+        .worker_upload_trial(
+            &host.host,
+            &first.lease,
+            &sim_trial(&recording, first.index),
+        )
         .unwrap_err();
     assert_eq!(err.status(), Some(409), "{err}");
 
@@ -133,7 +141,12 @@ fn a_garbage_trial_fails_visibly_and_a_phone_failing_twice_leaves_service() {
         .worker_heartbeat(&host.host, &["p0".into(), "p1".into()], &[])
         .unwrap();
     assert_eq!(beat.out_of_service, vec!["p0".to_string()]);
-    assert!(worker.worker_lease(&host.host, "p0", 0.0).unwrap().is_none());
+    assert!(
+        worker
+            .worker_lease(&host.host, "p0", 0.0)
+            .unwrap()
+            .is_none()
+    );
     let devices: serde_json::Value =
         serde_json::from_str(&client(&server, ADMIN_TOKEN).devices_json().unwrap()).unwrap();
     let p0 = devices["devices"]
@@ -168,8 +181,12 @@ fn a_late_upload_after_the_lease_expired_is_refused_and_the_trial_played_elsewhe
     let server = start(data.path(), Duration::from_millis(600));
     let (app, worker) = (client(&server, APP_TOKEN), client(&server, WORKER_TOKEN));
     let recording = sim_recording(data.path(), "walk.sitar", 1.0, 4);
-    let a = worker.worker_register("host-a", "sim", &["p".into()]).unwrap();
-    let b = worker.worker_register("host-b", "sim", &["p".into()]).unwrap();
+    let a = worker
+        .worker_register("host-a", "sim", &["p".into()])
+        .unwrap();
+    let b = worker
+        .worker_register("host-b", "sim", &["p".into()])
+        .unwrap();
     let id = sim_session(&app, &recording, 2);
     let held = lease(&worker, &a.host, "p");
     // Host a goes silent past its lease; the reaper gives the trial to host b.
@@ -246,7 +263,11 @@ fn cancel_and_delete_reach_the_hosts_and_sessions_wait_their_turn() {
     let ended = wait_state(&server, &first, &["done", "failed"]);
     assert_eq!(ended["state"], "failed", "{ended}");
     let beat = worker
-        .worker_heartbeat(&host.host, &["p0".into(), "p1".into()], std::slice::from_ref(&held.lease))
+        .worker_heartbeat(
+            &host.host,
+            &["p0".into(), "p1".into()],
+            std::slice::from_ref(&held.lease),
+        )
         .unwrap();
     assert_eq!(beat.abort, vec![held.lease.clone()]);
 
@@ -255,13 +276,22 @@ fn cancel_and_delete_reach_the_hosts_and_sessions_wait_their_turn() {
     assert_eq!(next.session, second);
     app.delete_session(&second).unwrap();
     let beat = worker
-        .worker_heartbeat(&host.host, &["p0".into(), "p1".into()], std::slice::from_ref(&next.lease))
+        .worker_heartbeat(
+            &host.host,
+            &["p0".into(), "p1".into()],
+            std::slice::from_ref(&next.lease),
+        )
         .unwrap();
     assert_eq!(beat.abort, vec![next.lease.clone()]);
     let err = worker
         .worker_upload_trial(&host.host, &next.lease, &sim_trial(&recording, next.index))
         .unwrap_err();
     assert_eq!(err.status(), Some(409), "{err}");
-    assert!(worker.worker_lease(&host.host, "p0", 0.0).unwrap().is_none());
+    assert!(
+        worker
+            .worker_lease(&host.host, "p0", 0.0)
+            .unwrap()
+            .is_none()
+    );
     server.stop();
 }

@@ -77,7 +77,10 @@ enum Command {
 /// command is in exactly one group).
 const GROUPS: &[(&str, &[&str])] = &[
     ("Getting started", &["demo", "simulate"]),
-    ("Backend (the server phones talk to)", &["serve", "token", "worker"]),
+    (
+        "Backend (the server phones talk to)",
+        &["serve", "token", "worker"],
+    ),
     (
         "evo-compatible (evo's command lines)",
         &["ape", "rpe", "traj", "res"],

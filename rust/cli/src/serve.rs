@@ -199,7 +199,10 @@ pub fn run(args: Args) -> Result<()> {
         config.playback_workers = n as usize;
     }
     if !(args.lease_s.is_finite() && args.lease_s >= 0.1) {
-        anyhow::bail!("--lease-s {} is not a number of seconds ≥ 0.1", args.lease_s);
+        anyhow::bail!(
+            "--lease-s {} is not a number of seconds ≥ 0.1",
+            args.lease_s
+        );
     }
     config.lease_timeout = Duration::from_secs_f64(args.lease_s);
     config.remote_sessions = args.remote_sessions as usize;

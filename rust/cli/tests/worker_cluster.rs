@@ -102,7 +102,11 @@ fn token(data: &Path, role: &str, name: &str) -> String {
         .arg(data)
         .output()
         .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     String::from_utf8(out.stdout).unwrap().trim().to_string()
 }
 
@@ -160,7 +164,9 @@ fn sim_session(client: &Client, recording: &Path, trials: u32, setting: &str) ->
             pose_relation: None,
         })
         .unwrap();
-    client.upload_recording(&id, recording, &mut |_, _| {}).unwrap();
+    client
+        .upload_recording(&id, recording, &mut |_, _| {})
+        .unwrap();
     id
 }
 
@@ -239,12 +245,7 @@ fn three_hosts_play_sessions_of_two_tokens_as_the_embedded_server_does() {
         .collect();
     let dir = tempfile::tempdir().unwrap();
     let recording = sitar_tests::sim_recording(dir.path(), "walk.sitar", 3.0, 11);
-    let clients = [&app1, &app2].map(|t| {
-        Client::new(&url)
-            .unwrap()
-            .with_server_token(t)
-            .unwrap()
-    });
+    let clients = [&app1, &app2].map(|t| Client::new(&url).unwrap().with_server_token(t).unwrap());
     let sessions: Vec<(usize, String, u32)> = (0..6)
         .map(|k| {
             let trials = 4 + (k as u32 % 3);
@@ -262,7 +263,11 @@ fn three_hosts_play_sessions_of_two_tokens_as_the_embedded_server_does() {
         let expected = references
             .entry(*trials)
             .or_insert_with(|| reference_results(&recording, *trials, "trim_mean_30"));
-        assert_eq!(clients[*owner].results_json(id).unwrap(), expected.0, "{id}");
+        assert_eq!(
+            clients[*owner].results_json(id).unwrap(),
+            expected.0,
+            "{id}"
+        );
         assert_eq!(clients[*owner].results_csv(id).unwrap(), expected.1, "{id}");
     }
     // The devices listing shows the 6 phones of the 3 hosts, each ready.
@@ -273,11 +278,22 @@ fn three_hosts_play_sessions_of_two_tokens_as_the_embedded_server_does() {
         .as_array()
         .unwrap()
         .iter()
-        .map(|d| (d["serial"].as_str().unwrap().to_string(), d["state"].as_str().unwrap().to_string()))
+        .map(|d| {
+            (
+                d["serial"].as_str().unwrap().to_string(),
+                d["state"].as_str().unwrap().to_string(),
+            )
+        })
         .collect();
     assert_eq!(listed.len(), 6, "{devices}");
-    assert!(listed.iter().all(|(_, state)| state == "ready"), "{devices}");
-    assert!(listed.iter().any(|(serial, _)| serial == "host-c/sim:1"), "{devices}");
+    assert!(
+        listed.iter().all(|(_, state)| state == "ready"),
+        "{devices}"
+    );
+    assert!(
+        listed.iter().any(|(serial, _)| serial == "host-c/sim:1"),
+        "{devices}"
+    );
 }
 
 #[test]

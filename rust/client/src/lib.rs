@@ -66,7 +66,7 @@ pub use client::{Client, IDEMPOTENCY_HEADER, UPLOAD_OFFSET_HEADER, check_session
 pub use error::Error;
 pub use job::{JobOptions, JobProgress, JobState, SinkError, UPLOAD_SHARE, UploadJob};
 pub use phone_logs::{PHONE_LOG_FILES, PhoneLogsSent};
-pub use worker_api::{WorkerHeartbeat, WorkerHost, WorkerLease};
 pub use types::{
     NewSession, SessionFrame, SessionOptions, SessionState, SessionStatus, VenueAlignment,
 };
+pub use worker_api::{WorkerHeartbeat, WorkerHost, WorkerLease};

@@ -116,7 +116,10 @@ impl Client {
             segment(lease)?
         );
         let (agent, _) = self.agents()?;
-        let mut response = agent.get(&url).call().map_err(|e| transport_error(&url, e))?;
+        let mut response = agent
+            .get(&url)
+            .call()
+            .map_err(|e| transport_error(&url, e))?;
         let status = response.status().as_u16();
         if status >= 400 {
             let text = response

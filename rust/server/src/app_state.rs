@@ -16,8 +16,8 @@ use crate::playback::{Playback, PlaybackPlan, SimPlayback, UploadPlayback};
 use crate::session::{Lifecycle, NewSession, Session};
 use crate::storage::BlobStore;
 use crate::storage::embedded::open_embedded;
-use crate::storage::{MetadataStore, WorkerStore};
 use crate::storage::files::Files;
+use crate::storage::{MetadataStore, WorkerStore};
 
 /// What a running job knows that the database does not: timing and the cancel flag.
 #[derive(Debug, Clone)]

@@ -89,7 +89,11 @@ fn play_and_send(
     );
     let played = play(player, phone, lease, recording, cancel);
     if cancel.load(Ordering::SeqCst) {
-        log::info!("{phone}: trial {} of {} stopped", lease.index, lease.session);
+        log::info!(
+            "{phone}: trial {} of {} stopped",
+            lease.index,
+            lease.session
+        );
         return Ok(());
     }
     match played {

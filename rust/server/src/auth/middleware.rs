@@ -190,7 +190,13 @@ mod tests {
             role: crate::auth::Role::Worker,
         };
         assert!(worker_stays_in_its_routes(&worker, "/v1/worker/hosts").is_ok());
-        for path in ["/", "/v1/sessions", "/v1/devices", "/v1/workers", "/results.csv"] {
+        for path in [
+            "/",
+            "/v1/sessions",
+            "/v1/devices",
+            "/v1/workers",
+            "/results.csv",
+        ] {
             let err = worker_stays_in_its_routes(&worker, path).unwrap_err();
             assert_eq!(err.status_and_code().1, "forbidden", "{path}: {err}");
             assert!(err.to_string().contains("host-1"), "{err}");

@@ -182,8 +182,8 @@ impl RemotePlayback {
                 continue;
             }
             let committed = counts.done.saturating_sub(base_done);
-            let lost_handover = settled_since.get_or_insert_with(Instant::now).elapsed()
-                >= HANDOVER_WAIT;
+            let lost_handover =
+                settled_since.get_or_insert_with(Instant::now).elapsed() >= HANDOVER_WAIT;
             if received >= committed || lost_handover {
                 if lost_handover && received < committed {
                     log::warn!(

@@ -9,7 +9,6 @@ use crate::Error;
 use crate::storage::blobs::BlobStore;
 use crate::storage::keys::SessionObject;
 
-
 /// Chunks read at a time.
 const CHUNK: usize = 256 << 10;
 
@@ -19,7 +18,13 @@ pub(crate) async fn object_stream(
     blobs: &dyn BlobStore,
     id: &str,
     object: SessionObject,
-) -> Result<(u64, impl Stream<Item = Result<Bytes, std::io::Error>> + use<>), Error> {
+) -> Result<
+    (
+        u64,
+        impl Stream<Item = Result<Bytes, std::io::Error>> + use<>,
+    ),
+    Error,
+> {
     let path = blobs.local_file(id, object);
     let file = tokio::fs::File::open(&path)
         .await

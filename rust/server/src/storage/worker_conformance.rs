@@ -40,7 +40,10 @@ fn hosts_register_once_per_token_and_name(store: &dyn WorkerStore) {
         .unwrap();
     assert_ne!(other, a);
     let row = store.host(&a).unwrap().unwrap();
-    assert_eq!((row.name.as_str(), row.token, row.last_seen_ms), ("lab-a", 1, 2_000));
+    assert_eq!(
+        (row.name.as_str(), row.token, row.last_seen_ms),
+        ("lab-a", 1, 2_000)
+    );
     assert!(store.host("h0000000000000000").unwrap().is_none());
     // Registration replaced the phone list: sim:1 is gone.
     let serials: Vec<_> = store
@@ -85,13 +88,29 @@ fn a_trial_is_committed_exactly_once(store: &dyn WorkerStore) {
         .offer("s2000000000000001", Some(5), "sim", &[0], "abc", 0)
         .unwrap();
     // adb hosts see nothing of a sim session.
-    assert!(store.claim(&host, "p0", "adb", 0, LEASE_MS).unwrap().is_none());
-    let lease = store.claim(&host, "p0", "sim", 0, LEASE_MS).unwrap().unwrap();
-    assert_eq!((lease.session.as_str(), lease.index), ("s2000000000000001", 0));
+    assert!(
+        store
+            .claim(&host, "p0", "adb", 0, LEASE_MS)
+            .unwrap()
+            .is_none()
+    );
+    let lease = store
+        .claim(&host, "p0", "sim", 0, LEASE_MS)
+        .unwrap()
+        .unwrap();
+    assert_eq!(
+        (lease.session.as_str(), lease.index),
+        ("s2000000000000001", 0)
+    );
     assert_eq!((lease.phone.as_str(), lease.expires_ms), ("p0", LEASE_MS));
     assert_eq!(lease.recording_sha256, "abc");
     // Nothing else waits.
-    assert!(store.claim(&host, "p1", "sim", 0, LEASE_MS).unwrap().is_none());
+    assert!(
+        store
+            .claim(&host, "p1", "sim", 0, LEASE_MS)
+            .unwrap()
+            .is_none()
+    );
     assert!(store.live_lease(&lease.id, &host, 10).unwrap().is_some());
     // Another host cannot commit it; its own host can, once.
     let other = store
@@ -133,7 +152,11 @@ fn leases_expire_without_heartbeats_and_trials_are_replayed(store: &dyn WorkerSt
     let expired = store.expire(110_001).unwrap();
     assert_eq!(expired.len(), 1);
     assert_eq!(
-        (expired[0].lease.as_str(), expired[0].index, expired[0].requeued),
+        (
+            expired[0].lease.as_str(),
+            expired[0].index,
+            expired[0].requeued
+        ),
         (first.id.as_str(), 3, Requeued::Again)
     );
     // A heartbeat now does not bring it back: host a is told to abort it.
@@ -216,17 +239,30 @@ fn phones_failing_twice_in_a_row_leave_service(store: &dyn WorkerStore) {
     store
         .offer("s4000000000000001", None, "sim", &[0, 1], "x", 0)
         .unwrap();
-    let lease = store.claim(&host, "p0", "sim", 0, LEASE_MS).unwrap().unwrap();
-    assert_eq!(store.give_back(&lease.id, &host).unwrap(), Some(Requeued::Again));
+    let lease = store
+        .claim(&host, "p0", "sim", 0, LEASE_MS)
+        .unwrap()
+        .unwrap();
     assert_eq!(
-        store.phone_result(&host, "p0", Some("no trajectory")).unwrap(),
+        store.give_back(&lease.id, &host).unwrap(),
+        Some(Requeued::Again)
+    );
+    assert_eq!(
+        store
+            .phone_result(&host, "p0", Some("no trajectory"))
+            .unwrap(),
         PhoneState::Ready
     );
     // A success in between resets the count.
-    assert_eq!(store.phone_result(&host, "p0", None).unwrap(), PhoneState::Ready);
+    assert_eq!(
+        store.phone_result(&host, "p0", None).unwrap(),
+        PhoneState::Ready
+    );
     let mut state = PhoneState::Ready;
     for _ in 0..FAILURES_OUT_OF_SERVICE {
-        state = store.phone_result(&host, "p0", Some("app crashed")).unwrap();
+        state = store
+            .phone_result(&host, "p0", Some("app crashed"))
+            .unwrap();
     }
     assert_eq!(state, PhoneState::OutOfService);
     let phone = store
@@ -241,11 +277,21 @@ fn phones_failing_twice_in_a_row_leave_service(store: &dyn WorkerStore) {
     store
         .heartbeat(&host, &phones(&["p0"]), &[], 1, LEASE_MS)
         .unwrap();
-    assert!(store.claim(&host, "p0", "sim", 1, LEASE_MS).unwrap().is_none());
+    assert!(
+        store
+            .claim(&host, "p0", "sim", 1, LEASE_MS)
+            .unwrap()
+            .is_none()
+    );
     store
         .register_host(40, "flaky", "sim", &phones(&["p0"]), 2)
         .unwrap();
-    assert!(store.claim(&host, "p0", "sim", 2, LEASE_MS).unwrap().is_some());
+    assert!(
+        store
+            .claim(&host, "p0", "sim", 2, LEASE_MS)
+            .unwrap()
+            .is_some()
+    );
     store.withdraw("s4000000000000001").unwrap();
 }
 
@@ -256,11 +302,25 @@ fn withdrawn_trials_are_not_leased_and_their_leases_abort(store: &dyn WorkerStor
     store
         .offer("s5000000000000001", None, "sim", &[0, 1, 2], "x", 0)
         .unwrap();
-    let lease = store.claim(&host, "p0", "sim", 0, LEASE_MS).unwrap().unwrap();
+    let lease = store
+        .claim(&host, "p0", "sim", 0, LEASE_MS)
+        .unwrap()
+        .unwrap();
     store.withdraw("s5000000000000001").unwrap();
-    assert!(store.claim(&host, "p1", "sim", 0, LEASE_MS).unwrap().is_none());
+    assert!(
+        store
+            .claim(&host, "p1", "sim", 0, LEASE_MS)
+            .unwrap()
+            .is_none()
+    );
     let abort = store
-        .heartbeat(&host, &phones(&["p0", "p1"]), &[lease.id.clone()], 1, LEASE_MS)
+        .heartbeat(
+            &host,
+            &phones(&["p0", "p1"]),
+            &[lease.id.clone()],
+            1,
+            LEASE_MS,
+        )
         .unwrap();
     assert_eq!(abort, vec![lease.id.clone()]);
     assert!(store.commit(&lease.id, &host, 1).unwrap().is_err());
@@ -270,9 +330,17 @@ fn withdrawn_trials_are_not_leased_and_their_leases_abort(store: &dyn WorkerStor
     store
         .offer("s5000000000000001", None, "sim", &[2], "x", 5)
         .unwrap();
-    let again = store.claim(&host, "p1", "sim", 5, LEASE_MS).unwrap().unwrap();
+    let again = store
+        .claim(&host, "p1", "sim", 5, LEASE_MS)
+        .unwrap()
+        .unwrap();
     assert_eq!(again.index, 2);
-    assert!(store.claim(&host, "p0", "sim", 5, LEASE_MS).unwrap().is_none());
+    assert!(
+        store
+            .claim(&host, "p0", "sim", 5, LEASE_MS)
+            .unwrap()
+            .is_none()
+    );
     store.forget("s5000000000000001").unwrap();
 }
 

@@ -72,7 +72,12 @@ fn own_host(
         .workers
         .host(id)?
         .filter(|h| h.token == caller.token)
-        .ok_or_else(|| Error::NotFound(format!("no host {:?}: register again", crate::error::short(id, MAX_NAME))))
+        .ok_or_else(|| {
+            Error::NotFound(format!(
+                "no host {:?}: register again",
+                crate::error::short(id, MAX_NAME)
+            ))
+        })
 }
 
 #[derive(Deserialize)]
@@ -92,10 +97,9 @@ pub(crate) async fn register(
 ) -> Result<Response, Error> {
     check_name("name", &body.name)?;
     check_phones(&body.phones)?;
-    let kind: PlaybackKind = body
-        .playback
-        .parse()
-        .map_err(|e: String| Error::BadRequest(format!("playback: {}", crate::error::short(&e, 200))))?;
+    let kind: PlaybackKind = body.playback.parse().map_err(|e: String| {
+        Error::BadRequest(format!("playback: {}", crate::error::short(&e, 200)))
+    })?;
     if kind == PlaybackKind::Upload {
         return Err(Error::BadRequest(
             "playback: a host plays sim or adb, not upload".into(),
@@ -151,7 +155,8 @@ pub(crate) async fn heartbeat(
         let shared = shared.clone();
         blocking("heartbeat", move || {
             let row = own_host(&shared, &caller, &host)?;
-            let abort = workers.heartbeat(&row.id, &body.phones, &body.leases, now_ms(), lease_ms)?;
+            let abort =
+                workers.heartbeat(&row.id, &body.phones, &body.leases, now_ms(), lease_ms)?;
             let out: Vec<String> = workers
                 .phones()?
                 .into_iter()

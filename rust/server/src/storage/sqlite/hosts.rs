@@ -4,9 +4,7 @@ use rusqlite::{OptionalExtension, params};
 
 use super::{CachedSql, SqliteStore};
 use crate::Error;
-use crate::storage::workers::{
-    FAILURES_OUT_OF_SERVICE, HostRow, HostStore, PhoneRow, PhoneState,
-};
+use crate::storage::workers::{FAILURES_OUT_OF_SERVICE, HostRow, HostStore, PhoneRow, PhoneState};
 
 /// A server-made id: `prefix` and 16 hex digits from the system's secure generator.
 pub(super) fn random_id(prefix: char) -> Result<String, Error> {

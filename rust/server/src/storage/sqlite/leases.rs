@@ -298,7 +298,10 @@ impl LeaseStore for SqliteStore {
     fn forget(&self, session: &str) -> Result<(), Error> {
         self.transaction(|tx| {
             tx.execute_cached("DELETE FROM trial_leases WHERE session_id = ?1", [session])?;
-            tx.execute_cached("DELETE FROM trial_failures WHERE session_id = ?1", [session])?;
+            tx.execute_cached(
+                "DELETE FROM trial_failures WHERE session_id = ?1",
+                [session],
+            )?;
             Ok(())
         })
     }
