@@ -18,11 +18,12 @@ pub(crate) fn open_metadata(data_dir: &Path) -> Result<Arc<dyn MetadataStore>, E
     Ok(open_embedded(data_dir)?.0)
 }
 
+/// The metadata store and the worker store of one data directory.
+pub(crate) type Stores = (Arc<dyn MetadataStore>, Arc<dyn WorkerStore>);
+
 /// Opens the embedded store of `data_dir` as both the metadata store and the worker store
 /// (one SQLite connection behind both).
-pub(crate) fn open_embedded(
-    data_dir: &Path,
-) -> Result<(Arc<dyn MetadataStore>, Arc<dyn WorkerStore>), Error> {
+pub(crate) fn open_embedded(data_dir: &Path) -> Result<Stores, Error> {
     std::fs::create_dir_all(data_dir)
         .map_err(|e| Error::io("cannot create data directory", data_dir, e))?;
     let store = Arc::new(SqliteStore::open(&data_dir.join(DATABASE_FILE))?);

@@ -144,7 +144,13 @@ fn leases_expire_without_heartbeats_and_trials_are_replayed(store: &dyn WorkerSt
     let first = store.claim(&a, "p0", "sim", 0, LEASE_MS).unwrap().unwrap();
     // A heartbeat renews it.
     let abort = store
-        .heartbeat(&a, &phones(&["p0"]), &[first.id.clone()], 50_000, LEASE_MS)
+        .heartbeat(
+            &a,
+            &phones(&["p0"]),
+            std::slice::from_ref(&first.id),
+            50_000,
+            LEASE_MS,
+        )
         .unwrap();
     assert!(abort.is_empty(), "{abort:?}");
     assert!(store.expire(100_000).unwrap().is_empty());
@@ -161,7 +167,13 @@ fn leases_expire_without_heartbeats_and_trials_are_replayed(store: &dyn WorkerSt
     );
     // A heartbeat now does not bring it back: host a is told to abort it.
     let abort = store
-        .heartbeat(&a, &phones(&["p0"]), &[first.id.clone()], 110_002, LEASE_MS)
+        .heartbeat(
+            &a,
+            &phones(&["p0"]),
+            std::slice::from_ref(&first.id),
+            110_002,
+            LEASE_MS,
+        )
         .unwrap();
     assert_eq!(abort, vec![first.id.clone()]);
     let second = store
@@ -317,7 +329,7 @@ fn withdrawn_trials_are_not_leased_and_their_leases_abort(store: &dyn WorkerStor
         .heartbeat(
             &host,
             &phones(&["p0", "p1"]),
-            &[lease.id.clone()],
+            std::slice::from_ref(&lease.id),
             1,
             LEASE_MS,
         )
