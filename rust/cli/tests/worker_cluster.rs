@@ -21,7 +21,15 @@ struct Proc {
 
 impl Proc {
     fn spawn(args: &[&str]) -> Proc {
-        let mut child = Command::new(env!("CARGO_BIN_EXE_sitar"))
+        Proc::spawn_with(args, &[])
+    }
+
+    fn spawn_with(args: &[&str], env: &[(&str, &Path)]) -> Proc {
+        let mut command = Command::new(env!("CARGO_BIN_EXE_sitar"));
+        for (name, value) in env {
+            command.env(name, value);
+        }
+        let mut child = command
             .args(args)
             .stdout(Stdio::piped())
             .stderr(Stdio::piped())
@@ -112,12 +120,16 @@ fn token(data: &Path, role: &str, name: &str) -> String {
 
 /// `sitar serve` with remote playback on a free port: the process and its URL.
 fn serve(data: &Path, lease_s: &str) -> (Proc, String) {
+    serve_kind(data, lease_s, "sim")
+}
+
+fn serve_kind(data: &Path, lease_s: &str, playback: &str) -> (Proc, String) {
     let mut server = Proc::spawn(&[
         "serve",
         "--addr",
         "127.0.0.1:0",
         "--playback",
-        "sim",
+        playback,
         "--playback-workers",
         "0",
         "--lease-s",
@@ -364,4 +376,113 @@ fn a_killed_host_s_trial_is_played_elsewhere_and_a_stopped_host_s_late_trial_is_
     };
     let archive = zip::ZipArchive::new(std::io::Cursor::new(zip)).unwrap();
     assert_eq!(archive.len(), 3);
+}
+
+#[test]
+fn an_adb_host_plays_on_its_phones_and_a_failing_phone_leaves_service() {
+    let data = tempfile::tempdir().unwrap();
+    let root = tempfile::tempdir().unwrap();
+    let app = token(data.path(), "app", "lab-app");
+    let work = token(data.path(), "worker", "lab-hosts");
+    let (_server, url) = serve_kind(data.path(), "5", "adb");
+    // Two fake phones (tests/fake_adb.sh) with the playback app: GOOD plays, BAD's app fails.
+    let rec = sitar_sim::Recording::demo(3.0, 30.0, 8).unwrap();
+    let pool = root.path().join("pool");
+    std::fs::create_dir_all(&pool).unwrap();
+    for (k, trial) in sitar_sim::simulate_trials(&rec, 12).iter().enumerate() {
+        std::fs::write(
+            pool.join(format!("trial_{k}.txt")),
+            sitar_tests::tum_text(trial),
+        )
+        .unwrap();
+    }
+    std::fs::write(root.path().join("counter"), "0\n").unwrap();
+    for serial in ["GOOD", "BAD"] {
+        let phone = root.path().join("phones").join(serial);
+        std::fs::create_dir_all(&phone).unwrap();
+        std::fs::write(
+            phone.join(".installed"),
+            "io.github.sitar.playback/.PlaybackActivity\n",
+        )
+        .unwrap();
+    }
+    std::fs::write(root.path().join("phones/BAD/.fail"), "camera blocked").unwrap();
+    let fake_adb = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/fake_adb.sh");
+    let hosts = tempfile::tempdir().unwrap();
+    let mut host = Proc::spawn_with(
+        &[
+            "worker",
+            "--server",
+            &url,
+            "--token",
+            &work,
+            "--playback",
+            "adb",
+            "--adb",
+            fake_adb.to_str().unwrap(),
+            "--name",
+            "adb-host",
+            "--data",
+            hosts.path().to_str().unwrap(),
+        ],
+        &[
+            ("FAKE_ADB_ROOT", root.path()),
+            ("FAKE_TRIAL_SECONDS", Path::new("0.4")),
+        ],
+    );
+    host.wait_for("2 adb phone(s)", Duration::from_secs(30));
+    let client = Client::new(&url).unwrap().with_server_token(&app).unwrap();
+    let mp4 = root.path().join("recording.mp4");
+    std::fs::write(&mp4, sitar_tests::minimal_mp4(300)).unwrap();
+    let id = client
+        .create_session(&NewSession {
+            trials: 6,
+            setting: "median".into(),
+            playback: "adb".into(),
+            window_frames: None,
+            pose_relation: None,
+        })
+        .unwrap();
+    client.upload_recording(&id, &mp4, &mut |_, _| {}).unwrap();
+    let status = wait(&client, &id, Duration::from_secs(120));
+    assert_eq!(status.state.as_str(), "done", "{status:?}");
+    assert_eq!(status.trials_done, 6, "{status:?}");
+    // BAD failed its trials twice in a row: listed in the session, out of service.
+    let doc = status_json(&url, &app, &id);
+    let failed = doc["failed_trials"].as_array().unwrap();
+    assert!(failed.len() >= 2, "{doc}");
+    assert!(
+        failed.iter().all(|f| f["source"] == "adb-host/BAD"),
+        "{doc}"
+    );
+    assert!(
+        failed
+            .iter()
+            .all(|f| f["error"].as_str().unwrap().contains("camera blocked")),
+        "{doc}"
+    );
+    let admin = std::fs::read_to_string(data.path().join("admin.token")).unwrap();
+    let admin = Client::new(&url)
+        .unwrap()
+        .with_server_token(admin.trim())
+        .unwrap();
+    let devices: serde_json::Value = serde_json::from_str(&admin.devices_json().unwrap()).unwrap();
+    let state = |serial: &str| {
+        devices["devices"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|d| d["serial"] == serial)
+            .map(|d| d["state"].as_str().unwrap().to_string())
+    };
+    assert_eq!(
+        state("adb-host/BAD").as_deref(),
+        Some("out_of_service"),
+        "{devices}"
+    );
+    assert_eq!(
+        state("adb-host/GOOD").as_deref(),
+        Some("ready"),
+        "{devices}"
+    );
 }
