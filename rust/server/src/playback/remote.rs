@@ -23,6 +23,9 @@ use crate::storage::workers::{MAX_ATTEMPTS, PhoneState, WorkerStore};
 /// upload was committed, then its request died before handing it over).
 const HANDOVER_WAIT: Duration = Duration::from_secs(10);
 
+/// How often a job waiting for its trials looks at the worker store (and its cancel flag).
+const CHECK: Duration = Duration::from_millis(200);
+
 /// Where committed trials meet their session's job, and where long-polling hosts wait for
 /// trials to be offered.
 #[derive(Default)]
@@ -167,11 +170,15 @@ impl RemotePlayback {
             if job.cancelled() {
                 return Ok(());
             }
-            match inbox.recv_timeout(Duration::from_millis(50)) {
+            // A trial, or a look at the store every CHECK (a cancel waits at most that long).
+            match inbox.recv_timeout(CHECK) {
                 Ok(trial) => {
                     received += 1;
                     sink(trial);
-                    continue;
+                    while let Ok(trial) = inbox.try_recv() {
+                        received += 1;
+                        sink(trial);
+                    }
                 }
                 Err(RecvTimeoutError::Timeout) => {}
                 Err(RecvTimeoutError::Disconnected) => return Ok(()),
