@@ -2,7 +2,9 @@
 //! --playback sim` processes on loopback. Sessions end `done` with results byte-identical to
 //! the in-process server's; a worker killed with SIGKILL mid-trial loses its lease and the
 //! trial is played elsewhere; a worker stopped (SIGSTOP) past its lease and let go on has its
-//! late trial refused, so every trial is committed once; worker tokens stay in their routes.
+//! late trial refused, so every trial is committed once; a server killed with SIGKILL in the
+//! middle of a session resumes it and the hosts finish it; an adb host plays on its phones
+//! and a failing phone leaves service; worker tokens stay in their routes.
 
 use std::io::{BufRead, BufReader};
 use std::path::Path;
@@ -124,10 +126,14 @@ fn serve(data: &Path, lease_s: &str) -> (Proc, String) {
 }
 
 fn serve_kind(data: &Path, lease_s: &str, playback: &str) -> (Proc, String) {
+    serve_on(data, lease_s, playback, "127.0.0.1:0")
+}
+
+fn serve_on(data: &Path, lease_s: &str, playback: &str, addr: &str) -> (Proc, String) {
     let mut server = Proc::spawn(&[
         "serve",
         "--addr",
-        "127.0.0.1:0",
+        addr,
         "--playback",
         playback,
         "--playback-workers",
@@ -485,4 +491,46 @@ fn an_adb_host_plays_on_its_phones_and_a_failing_phone_leaves_service() {
         Some("ready"),
         "{devices}"
     );
+}
+
+#[test]
+fn a_server_killed_mid_session_resumes_and_the_hosts_finish_it() {
+    let data = tempfile::tempdir().unwrap();
+    let hosts = tempfile::tempdir().unwrap();
+    let app = token(data.path(), "app", "lab-app");
+    let work = token(data.path(), "worker", "lab-hosts");
+    // A fixed port, so the hosts find the restarted server where they left it.
+    let port = std::net::TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    let addr = format!("127.0.0.1:{port}");
+    let (server, url) = serve_on(data.path(), "2", "sim", &addr);
+    let _hosts: Vec<Proc> = ["host-a", "host-b"]
+        .iter()
+        .map(|name| worker(&url, &work, name, "1", "4", hosts.path()))
+        .collect();
+    let client = Client::new(&url).unwrap().with_server_token(&app).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    // 4 s at 4×: 1 s trials; 6 trials on 2 phones take about 3 s.
+    let recording = sitar_tests::sim_recording(dir.path(), "walk.sitar", 4.0, 9);
+    let id = sim_session(&client, &recording, 6, "trim_mean_30");
+    let deadline = Instant::now() + Duration::from_secs(60);
+    // Killed once 2 of the 6 trials are in (the 4 others take another 2 s).
+    while client.status(&id).unwrap().trials_done < 2 {
+        assert!(Instant::now() < deadline, "no trial arrived");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    server.signal("KILL");
+    drop(server);
+    let before = client.status(&id);
+    assert!(before.is_err(), "the server is down: {before:?}");
+    let (_server, again) = serve_on(data.path(), "2", "sim", &addr);
+    assert_eq!(again, url);
+    let status = wait(&client, &id, Duration::from_secs(120));
+    assert_eq!(status.state.as_str(), "done", "{status:?}");
+    assert_eq!(status.trials_done, 6, "each trial once: {status:?}");
+    let expected = reference_results(&recording, 6, "trim_mean_30");
+    assert_eq!(client.results_json(&id).unwrap(), expected.0);
 }
