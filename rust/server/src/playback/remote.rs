@@ -61,9 +61,10 @@ impl RemoteBoard {
         self.offered.notify_waiters();
     }
 
-    /// Waits until [`RemoteBoard::wake`] or `timeout`.
-    pub async fn wait(&self, timeout: Duration) {
-        let _ = tokio::time::timeout(timeout, self.offered.notified()).await;
+    /// A wait for the next [`RemoteBoard::wake`]: enable it before looking for work, so a
+    /// wake between the look and the wait is not missed.
+    pub fn next_wake(&self) -> tokio::sync::futures::Notified<'_> {
+        self.offered.notified()
     }
 }
 

@@ -209,6 +209,9 @@ pub(crate) async fn claim(
     let deadline = tokio::time::Instant::now() + wait;
     let lease_ms = shared.config.lease_timeout.as_millis() as i64;
     loop {
+        let woken = shared.board.next_wake();
+        tokio::pin!(woken);
+        woken.as_mut().enable();
         let lease = {
             let (shared, phone) = (shared.clone(), body.phone.clone());
             let (host, token) = (host.clone(), caller.token);
@@ -234,11 +237,10 @@ pub(crate) async fn claim(
         if now >= deadline || shared.stopping() {
             return Ok(StatusCode::NO_CONTENT.into_response());
         }
-        // Woken when trials are offered or leases expire; a second's nap bounds a missed wake.
-        shared
-            .board
-            .wait((deadline - now).min(Duration::from_secs(1)))
-            .await;
+        // Woken when trials are offered, leases expire or a host registers (its phones may
+        // take what waits); a server stopping answers within 5 s.
+        let nap = (deadline - now).min(Duration::from_secs(5));
+        let _ = tokio::time::timeout(nap, woken).await;
     }
 }
 
