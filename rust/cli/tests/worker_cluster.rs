@@ -534,3 +534,40 @@ fn a_server_killed_mid_session_resumes_and_the_hosts_finish_it() {
     let expected = reference_results(&recording, 6, "trim_mean_30");
     assert_eq!(client.results_json(&id).unwrap(), expected.0);
 }
+
+#[test]
+fn a_worker_with_a_token_the_server_refuses_ends_saying_why() {
+    let data = tempfile::tempdir().unwrap();
+    let app = token(data.path(), "app", "lab-app");
+    let (_server, url) = serve(data.path(), "5");
+    let hosts = tempfile::tempdir().unwrap();
+    for (bad, status) in [
+        (app.as_str(), "403"),
+        ("sitar_0123456789abcdef0123456789", "401"),
+    ] {
+        let out = Command::new(env!("CARGO_BIN_EXE_sitar"))
+            .args([
+                "worker",
+                "--server",
+                &url,
+                "--token",
+                bad,
+                "--playback",
+                "sim",
+            ])
+            .arg("--data")
+            .arg(hosts.path())
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{stderr}");
+        assert!(
+            stderr.contains("registering host") && stderr.contains(status),
+            "{stderr}"
+        );
+        assert!(
+            !stderr.contains(bad),
+            "the token is never printed: {stderr}"
+        );
+    }
+}

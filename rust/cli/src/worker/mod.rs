@@ -168,9 +168,7 @@ pub fn run(args: Args) -> Result<()> {
         Playback::Sim => "sim",
     };
     let present = phones(args.playback, args.slots, &adb);
-    let registered = client
-        .worker_register(&name, kind, &present)
-        .with_context(|| format!("registering host {name} with {}", args.server))?;
+    let registered = register(&client, &name, kind, &present, &args.server)?;
     eprintln!(
         "sitar worker: host {name} ({}) with {} {kind} phone(s) on {}; leases last {} s",
         registered.host,
@@ -209,6 +207,32 @@ pub fn run(args: Args) -> Result<()> {
         beat(&host, &name, kind, &phones(args.playback, args.slots, &adb));
         if host.stop.load(Ordering::SeqCst) {
             return Ok(());
+        }
+    }
+}
+
+/// Registers the host, waiting for a server that is not up yet (started before it, or
+/// restarting): 1 s, 2 s, … up to 30 s between tries. A refused token ends the worker.
+fn register(
+    client: &Client,
+    name: &str,
+    kind: &str,
+    phones: &[String],
+    server: &str,
+) -> Result<sitar_client::WorkerHost> {
+    let mut pause = Duration::from_secs(1);
+    loop {
+        match client.worker_register(name, kind, phones) {
+            Ok(host) => return Ok(host),
+            Err(e) if matches!(e.status(), Some(400..=499)) => {
+                return Err(anyhow::anyhow!(e))
+                    .with_context(|| format!("registering host {name} with {server}"));
+            }
+            Err(e) => {
+                log::warn!("registering host {name} with {server}: {e}; again in {pause:?}");
+                std::thread::sleep(pause);
+                pause = (pause * 2).min(Duration::from_secs(30));
+            }
         }
     }
 }
