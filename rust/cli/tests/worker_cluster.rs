@@ -257,10 +257,32 @@ fn three_hosts_play_sessions_of_two_tokens_as_the_embedded_server_does() {
     assert_eq!(status_of(&url, &app1, "POST", "/v1/worker/hosts"), 403);
     assert_eq!(status_of(&url, admin, "POST", "/v1/worker/hosts"), 403);
 
-    let _workers: Vec<Proc> = ["host-a", "host-b", "host-c"]
+    let mut workers: Vec<Proc> = ["host-a", "host-b"]
         .iter()
         .map(|name| worker(&url, &work, name, "2", "50", hosts.path()))
         .collect();
+    // The third host reads its token from a file.
+    let token_file = hosts.path().join("worker.token");
+    std::fs::write(&token_file, format!("{work}\n")).unwrap();
+    let mut third = Proc::spawn(&[
+        "worker",
+        "--server",
+        &url,
+        "--token-file",
+        token_file.to_str().unwrap(),
+        "--playback",
+        "sim",
+        "--slots",
+        "2",
+        "--sim-speed",
+        "50",
+        "--name",
+        "host-c",
+        "--data",
+        hosts.path().join("host-c").to_str().unwrap(),
+    ]);
+    third.wait_for("sitar worker: host", Duration::from_secs(30));
+    workers.push(third);
     let dir = tempfile::tempdir().unwrap();
     let recording = sitar_tests::sim_recording(dir.path(), "walk.sitar", 3.0, 11);
     let clients = [&app1, &app2].map(|t| Client::new(&url).unwrap().with_server_token(t).unwrap());
@@ -570,4 +592,24 @@ fn a_worker_with_a_token_the_server_refuses_ends_saying_why() {
             "the token is never printed: {stderr}"
         );
     }
+    // The token from a file; an empty file is refused naming it.
+    let file = hosts.path().join("worker.token");
+    std::fs::write(&file, "\n").unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_sitar"))
+        .args([
+            "worker",
+            "--server",
+            &url,
+            "--playback",
+            "sim",
+            "--token-file",
+        ])
+        .arg(&file)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && stderr.contains("worker.token"),
+        "{stderr}"
+    );
 }

@@ -27,8 +27,16 @@ pub struct Args {
     #[arg(long, value_name = "URL")]
     server: String,
     /// A worker token (`sitar token create --role worker`); it may use the worker routes only.
-    #[arg(long, value_name = "TOKEN")]
-    token: String,
+    #[arg(
+        long,
+        value_name = "TOKEN",
+        required_unless_present = "token_file",
+        conflicts_with = "token_file"
+    )]
+    token: Option<String>,
+    /// A file holding the worker token (its first line): keeps it out of the process list.
+    #[arg(long, value_name = "FILE")]
+    token_file: Option<PathBuf>,
     /// With an https:// server: the SHA-256 fingerprint of its certificate (as `sitar serve
     /// --tls` prints it); the worker then trusts that certificate only.
     #[arg(long, value_name = "HEX")]
@@ -116,6 +124,23 @@ fn host_name(args: &Args) -> String {
     })
 }
 
+/// The token of `--token`, or the first line of `--token-file`.
+fn worker_token(args: &Args) -> Result<String> {
+    match (&args.token, &args.token_file) {
+        (Some(token), _) => Ok(token.clone()),
+        (None, Some(file)) => {
+            let text = std::fs::read_to_string(file)
+                .with_context(|| format!("--token-file {}", file.display()))?;
+            let token = text.lines().next().unwrap_or("").trim().to_string();
+            if token.is_empty() {
+                bail!("--token-file {}: the first line is empty", file.display());
+            }
+            Ok(token)
+        }
+        (None, None) => bail!("give --token or --token-file"),
+    }
+}
+
 /// The phones to report: sim's slots, or adb's ready phones now.
 fn phones(playback: Playback, slots: u32, adb: &AdbPlayback) -> Vec<String> {
     match playback {
@@ -143,7 +168,7 @@ pub fn run(args: Args) -> Result<()> {
     let mut client = Client::new(&args.server)
         .context("--server")?
         .with_timeout(Duration::from_secs(60))
-        .with_server_token(&args.token)
+        .with_server_token(&worker_token(&args)?)
         .context("--token")?;
     if let Some(pin) = &args.server_cert_sha256 {
         client = client
