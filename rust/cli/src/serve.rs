@@ -157,6 +157,10 @@ For phones on a LAN:
   made for this machine's LAN address and name, and its SHA-256 fingerprint is printed for
   the app to pin.
 
+Phones on other machines: start the server with --playback-workers 0 and run
+`sitar worker --server URL --token-file FILE --playback adb` on each of them, with a token
+from `sitar token create --data DIR --role worker --name HOSTS`.
+
 Examples:
   sitar serve --playback sim --data sitar-data
   sitar serve --addr 0.0.0.0:8000 --tls --data sitar-data";
