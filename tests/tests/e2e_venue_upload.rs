@@ -2,9 +2,7 @@
 //! an ARCore phone's session in a venue, recorded by sitar-core with observations of the
 //! venue's printed anchor, goes up with `UploadJob`; the backend files it under the venue with
 //! its convention, aligns it from the `anchors.csv` the job sent, and serves the phone's own
-//! `trajectory.txt`. Needs the backend's venue routes (issue 24): a backend without them makes
-//! the test say `SKIPPED` and return (the job's side of that case is in `sitar-client`'s and
-//! the C ABI's tests).
+//! `trajectory.txt`.
 
 use std::time::{Duration, Instant};
 
@@ -65,12 +63,6 @@ fn the_upload_job_puts_a_phone_session_into_its_venue() {
         &format!("{}/v1/venues", server.url()),
         r#"{"name":"Hall","anchor":"hall","cell_m":0.25}"#,
     );
-    if status == 404 || status == 405 {
-        println!(
-            "SKIPPED the_upload_job_puts_a_phone_session_into_its_venue: this backend has no venue routes (POST /v1/venues answered {status}; issue 24)"
-        );
-        return;
-    }
     assert_eq!(status, 201, "{venue}");
     let venue = venue["id"].as_str().unwrap().to_owned();
 

@@ -86,7 +86,8 @@ pub fn run(options: &Options, url: &str, token: &str) -> Result<()> {
     print_worst_cells(&venue, &map);
     print_match(&venue, &map);
     let report = http
-        .get_text(&format!("/v1/venues/{venue_id}/report"))
+        // The one-file copy: script, style and 3-D view data inline, so it opens from disk.
+        .get_text(&format!("/v1/venues/{venue_id}/report?download=1"))
         .context("cannot fetch the venue report")?;
     let path = options.data.join(format!("venue-report-{venue_id}.html"));
     std::fs::write(&path, report).with_context(|| format!("cannot write {}", path.display()))?;

@@ -1128,21 +1128,36 @@ fn stats_table(bundle: &Bundle, kind: Kind) -> Result<String> {
 }
 
 /// evo's speeds plot of `t`: the speed between each pose and the one before, at the newer
-/// pose's `x`; steps whose stamps do not increase are left out and counted.
-fn speeds(t: &Trajectory, x: impl Fn(usize) -> f64) -> (Vec<(f64, f64)>, usize) {
-    let mut skipped = 0;
-    let points = (1..t.len())
-        .filter_map(|i| {
-            let dt = t.time_unit.seconds(t.stamps[i]) - t.time_unit.seconds(t.stamps[i - 1]);
-            if dt > 0.0 {
-                Some((x(i), (t.positions[i] - t.positions[i - 1]).length() / dt))
+/// pose's `x`. As evo, a step whose stamps do not increase leaves the whole trajectory out
+/// of the plot: `Err` carries the first such pair of stamps (seconds) for the warning.
+fn speeds(t: &Trajectory, x: impl Fn(usize) -> f64) -> Result<Vec<(f64, f64)>, (f64, f64)> {
+    (1..t.len())
+        .map(|i| {
+            let (t0, t1) = (
+                t.time_unit.seconds(t.stamps[i - 1]),
+                t.time_unit.seconds(t.stamps[i]),
+            );
+            if t1 - t0 > 0.0 {
+                Ok((
+                    x(i),
+                    (t.positions[i] - t.positions[i - 1]).length() / (t1 - t0),
+                ))
             } else {
-                skipped += 1;
-                None
+                Err((t0, t1))
             }
         })
-        .collect();
-    (points, skipped)
+        .collect()
+}
+
+/// A float as Python's `str` prints it (shortest round trip, `1.0` not `1`), for evo's
+/// words in warnings.
+fn python_str(v: f64) -> String {
+    let s = v.to_string();
+    if v.is_finite() && !s.contains(['.', 'e']) {
+        format!("{s}.0")
+    } else {
+        s
+    }
 }
 
 /// evo_traj's figures: trajectories, xyz, rpy and (with stamps) speeds.
@@ -1233,12 +1248,17 @@ fn plot(bundle: &Bundle, options: &Options, kind: Kind, console: &Console) -> Re
     };
     let mut speed_series = Vec::new();
     for (name, t, c, dashed) in &all {
-        let (points, skipped) = speeds(t, |i| x(t, i));
-        if skipped > 0 {
-            console.warn(&format!(
-                "{name}: {skipped} zero or negative time step(s) left out of the speeds plot"
-            ));
-        }
+        let points = match speeds(t, |i| x(t, i)) {
+            Ok(points) => points,
+            Err((t0, t1)) => {
+                console.warn(&format!(
+                    "Can't plot speeds of {name}: bad timestamps: {} & {}",
+                    python_str(t0),
+                    python_str(t1)
+                ));
+                continue;
+            }
+        };
         speed_series.push(Series {
             name: name.clone(),
             points,
@@ -1317,16 +1337,16 @@ mod tests {
     }
 
     #[test]
-    fn speeds_skip_repeated_stamps() {
+    fn speeds_leave_out_a_trajectory_with_a_repeated_stamp_as_evo() {
         let s = TimeUnit::Seconds;
-        let t = line(vec![0, 1_000_000_000, 1_000_000_000, 3_000_000_000], s);
-        let (points, skipped) = speeds(&t, |i| i as f64);
-        assert_eq!(skipped, 1);
-        // (1,1)-(0,0) over 1 s; (3,9)-(2,4) over 2 s; the repeated stamp left out.
-        assert_eq!(points.len(), 2);
-        assert_eq!(points[0], (1.0, 2f64.sqrt()));
-        assert_eq!(points[1], (3.0, 26f64.sqrt() / 2.0));
-        assert!(points.iter().all(|p| p.1 >= 0.0));
+        let t = line(vec![0, 1_000_000_000, 3_000_000_000], s);
+        let points = speeds(&t, |i| i as f64).unwrap();
+        // (1,1)-(0,0) over 1 s; (2,4)-(1,1) over 2 s, each at the newer pose.
+        assert_eq!(points, vec![(1.0, 2f64.sqrt()), (2.0, 10f64.sqrt() / 2.0)]);
+        let repeated = line(vec![0, 1_000_000_000, 1_000_000_000, 3_000_000_000], s);
+        assert_eq!(speeds(&repeated, |i| i as f64), Err((1.0, 1.0)));
+        assert_eq!(python_str(1.0), "1.0");
+        assert_eq!(python_str(1311868229.576), "1311868229.576");
     }
 
     #[test]

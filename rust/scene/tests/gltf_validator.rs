@@ -2,13 +2,13 @@
 //! converted to glTF's frame, and the Khronos glTF validator (npm `gltf-validator`, pinned in
 //! `tools/npm`) reports no errors.
 
-use std::path::PathBuf;
-use std::process::Command;
-
 use glam::DVec3;
 use sitar_core::{Convention, DisplayRotation, Session, SessionConfig};
 use sitar_scene::{SceneParts, to_glb};
 use sitar_sim::Recording;
+use support::document;
+
+mod support;
 
 /// A demo walk recorded by the phone logic, with results that make high, medium and low
 /// sub-trajectories (so every class material and both marker classes appear).
@@ -29,12 +29,6 @@ fn walk(convention: &str) -> Session {
     }
     session.load_results(&csv).unwrap();
     session
-}
-
-/// The JSON chunk of a GLB.
-fn document(glb: &[u8]) -> serde_json::Value {
-    let glb = gltf::binary::Glb::from_slice(glb).unwrap();
-    serde_json::from_slice(&glb.json).unwrap()
 }
 
 /// The children of the root's group called `name`.
@@ -171,58 +165,14 @@ fn an_empty_session_is_a_clear_error() {
 
 #[test]
 fn the_khronos_validator_finds_no_errors() {
-    let tools = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../tools/npm");
-    if !tools.join("node_modules/gltf-validator").exists() {
-        println!(
-            "SKIPPED the Khronos glTF validator: run `npm ci --prefix tools/npm` (.ci/run does)"
-        );
-        return;
-    }
-    let dir = tempfile::tempdir().unwrap();
-    let mut files = Vec::new();
-    for convention in ["arcore", "unity"] {
-        let path = dir.path().join(format!("{convention}.glb"));
-        std::fs::write(
-            &path,
-            to_glb(&SceneParts::from_session(&walk(convention))).unwrap(),
-        )
-        .unwrap();
-        files.push(path);
-    }
     // Before results: every sub-trajectory unknown, no markers.
     let mut bare = SceneParts::from_session(&walk("arcore"));
     bare.markers.clear();
     bare.classes.clear();
-    let path = dir.path().join("bare.glb");
-    std::fs::write(&path, to_glb(&bare).unwrap()).unwrap();
-    files.push(path);
-    let out = Command::new("node")
-        .arg(tools.join("validate-gltf.mjs"))
-        .args(&files)
-        .output()
-        .expect("node runs");
-    let text = String::from_utf8_lossy(&out.stdout);
-    let reports: serde_json::Value = serde_json::from_str(&text).unwrap_or_else(|e| {
-        panic!(
-            "validator output ({e}): {text} {}",
-            String::from_utf8_lossy(&out.stderr)
-        )
-    });
-    for report in reports.as_array().unwrap() {
-        let issues = &report["issues"];
-        assert_eq!(
-            issues["numErrors"],
-            0,
-            "{}",
-            serde_json::to_string_pretty(issues).unwrap()
-        );
-        assert_eq!(
-            issues["numWarnings"],
-            0,
-            "{}",
-            serde_json::to_string_pretty(issues).unwrap()
-        );
-        assert!(report["info"]["totalVertexCount"].as_u64().unwrap() > 0);
-    }
-    assert!(out.status.success());
+    let glb = |convention: &str| to_glb(&SceneParts::from_session(&walk(convention))).unwrap();
+    support::assert_khronos_clean(&[
+        ("arcore", glb("arcore")),
+        ("unity", glb("unity")),
+        ("bare", to_glb(&bare).unwrap()),
+    ]);
 }

@@ -3,12 +3,12 @@
 //! (npm `gltf-validator`, pinned in `tools/npm`).
 #![allow(missing_docs)]
 
-use std::path::PathBuf;
-use std::process::Command;
-
 use sitar_core::Convention;
 use sitar_core::venue::{CellKind, VenueMap};
 use sitar_scene::{PATH_BOX_SHARE, SURFACE_TILE_SHARE, venue_to_glb};
+use support::document;
+
+mod support;
 
 /// A map with cells of every class and both kinds.
 fn map(convention: Convention) -> VenueMap {
@@ -32,11 +32,6 @@ fn map(convention: Convention) -> VenueMap {
         cells.join(",")
     );
     VenueMap::from_json(&json).unwrap()
-}
-
-fn document(glb: &[u8]) -> serde_json::Value {
-    let glb = gltf::binary::Glb::from_slice(glb).unwrap();
-    serde_json::from_slice(&glb.json).unwrap()
 }
 
 fn children<'a>(
@@ -130,44 +125,11 @@ fn an_empty_map_is_still_a_scene_and_huge_coordinates_are_errors() {
 
 #[test]
 fn the_khronos_validator_finds_no_errors_in_a_venue_map() {
-    let tools = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../tools/npm");
-    if !tools.join("node_modules/gltf-validator").exists() {
-        println!(
-            "SKIPPED the Khronos glTF validator: run `npm ci --prefix tools/npm` (.ci/run does)"
-        );
-        return;
-    }
-    let dir = tempfile::tempdir().unwrap();
-    let mut files = Vec::new();
     let mut empty = map(Convention::Arcore);
     empty.cells.clear();
-    for (name, m) in [
-        ("unity", map(Convention::Unity)),
-        ("arcore", map(Convention::Arcore)),
-        ("empty", empty),
-    ] {
-        let path = dir.path().join(format!("{name}.glb"));
-        std::fs::write(&path, venue_to_glb(&m).unwrap()).unwrap();
-        files.push(path);
-    }
-    let out = Command::new("node")
-        .arg(tools.join("validate-gltf.mjs"))
-        .args(&files)
-        .output()
-        .expect("node runs");
-    let text = String::from_utf8_lossy(&out.stdout);
-    let reports: serde_json::Value = serde_json::from_str(&text).unwrap_or_else(|e| {
-        panic!(
-            "validator output ({e}): {text} {}",
-            String::from_utf8_lossy(&out.stderr)
-        )
-    });
-    for report in reports.as_array().unwrap() {
-        let issues = &report["issues"];
-        let pretty = serde_json::to_string_pretty(issues).unwrap();
-        assert_eq!(issues["numErrors"], 0, "{pretty}");
-        assert_eq!(issues["numWarnings"], 0, "{pretty}");
-        assert!(report["info"]["totalVertexCount"].as_u64().unwrap() > 0);
-    }
-    assert!(out.status.success());
+    support::assert_khronos_clean(&[
+        ("unity", venue_to_glb(&map(Convention::Unity)).unwrap()),
+        ("arcore", venue_to_glb(&map(Convention::Arcore)).unwrap()),
+        ("empty", venue_to_glb(&empty).unwrap()),
+    ]);
 }

@@ -3,6 +3,8 @@
 // bundles the parts used into report.bundle.js, served by this backend, so it works offline.
 import * as THREE from "three";
 import { OrbitControls } from "three/addons/controls/OrbitControls.js";
+import { framing } from "./view_framing.js";
+import { venueMain } from "./venue_view.js";
 
 const CLASS_COLOURS = { low: 0x2f6fde, medium: 0xe0b100, high: 0xd62728, unknown: 0x9a9a9a };
 const VIRIDIS = [[68, 1, 84], [59, 82, 139], [33, 145, 140], [94, 201, 98], [253, 231, 37]];
@@ -120,7 +122,6 @@ async function main() {
   const span = Math.max(size.x, size.z, 1);
   // A marker sign reaches past its point: the frame keeps most of it.
   room.expandByScalar(0.25 * Math.max(1.5, span / 4));
-  const sphere = room.getBoundingSphere(new THREE.Sphere());
 
   // Grid (1 m cells) on the floor under the walk, and axes at the origin.
   const floorY = box.min.y - 1.2;
@@ -259,29 +260,7 @@ async function main() {
   const camera = new THREE.PerspectiveCamera(50, canvas.clientWidth / canvas.clientHeight || 16 / 9, 0.01, 500);
   camera.updateProjectionMatrix();
   const controls = new OrbitControls(camera, canvas);
-  // The nearest distance along `dir` (from the camera to the centre) at which all eight
-  // corners of the box round the walk, the markers and the surface points are in view.
-  function distance(dir) {
-    const tanV = Math.tan(THREE.MathUtils.degToRad(camera.fov) / 2);
-    const tanH = tanV * camera.aspect;
-    const right = new THREE.Vector3().crossVectors(camera.up, dir);
-    if (right.lengthSq() < 1e-9) right.set(1, 0, 0);
-    right.normalize();
-    const up = new THREE.Vector3().crossVectors(dir, right).normalize();
-    let d = 0.5;
-    const c = new THREE.Vector3();
-    for (let i = 0; i < 8; i++) {
-      c.set(i & 1 ? room.max.x : room.min.x, i & 2 ? room.max.y : room.min.y, i & 4 ? room.max.z : room.min.z).sub(sphere.center);
-      const depth = c.dot(dir);
-      d = Math.max(d, depth + Math.abs(c.dot(right)) / tanH, depth + Math.abs(c.dot(up)) / tanV);
-    }
-    return d * 1.04;
-  }
-  function look(dir) {
-    camera.position.copy(sphere.center).addScaledVector(dir, distance(dir));
-    controls.target.copy(sphere.center);
-    controls.update();
-  }
+  const look = framing(camera, controls, room);
   function home() {
     camera.up.set(0, 1, 0);
     look(new THREE.Vector3(0.55, 0.6, 0.75).normalize());
@@ -370,7 +349,9 @@ async function main() {
     (thinned.length ? ` A long walk: drawn thinned for display (${thinned.join(", ")}); the numbers on this page are from all the data.` : ""));
 }
 
-main().catch((e) => {
+// The venue page carries its map inline (`venue-data`); a session's page fetches its scene.
+const venueData = document.getElementById("venue-data");
+(venueData ? venueMain(venueData) : main()).catch((e) => {
   status("3-D view failed: " + e);
   console.error(e);
 });

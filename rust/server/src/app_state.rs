@@ -18,6 +18,7 @@ use crate::storage::BlobStore;
 use crate::storage::embedded::open_embedded;
 use crate::storage::files::Files;
 use crate::storage::{MetadataStore, WorkerStore};
+use crate::venue::{NewVenue, new_venue_id};
 
 /// What a running job knows that the database does not: timing and the cancel flag.
 #[derive(Debug, Clone)]
@@ -143,6 +144,13 @@ impl App {
             .insert_session(&crate::storage::files::new_id(), new)?;
         self.blobs.create_session(&id)?;
         Ok((id, created))
+    }
+
+    /// Makes a venue's row; its id.
+    pub fn create_venue(&self, new: &NewVenue<'_>) -> Result<String, Error> {
+        let id = new_venue_id(&crate::storage::files::new_id());
+        self.db.insert_venue(&id, new)?;
+        Ok(id)
     }
 
     pub fn backend(&self, kind: PlaybackKind) -> Arc<dyn Playback> {

@@ -84,6 +84,7 @@
 // report                                        — what the report draws: page, charts, regions, scene
 // app_state                                     — what handlers and jobs share
 // auth                                          — tokens, callers, limits (middleware)
+// venue                                         — venues: rows, who sees them, sessions' alignment
 // http                                          — router, server, connections, limits, handlers, TLS
 // fuzzing                                       — the parsers, for fuzz/ only (doc-hidden)
 mod app_state;
@@ -99,6 +100,7 @@ mod playback;
 mod report;
 mod session;
 mod storage;
+mod venue;
 
 pub use auth::{
     ADMIN_TOKEN_FILE, Limits, PresetToken, Role, TokenInfo, create_token, list_tokens, new_token,

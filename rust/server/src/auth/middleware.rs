@@ -25,14 +25,15 @@ fn is_open(path: &str) -> bool {
     path == "/healthz" || path.starts_with("/share/") || path.starts_with("/assets/")
 }
 
-/// The HTML pages, which take `?token=` once and then live on the cookie.
+/// The HTML pages (the overview, a session's and a venue's report), which take `?token=`
+/// once and then live on the cookie.
 fn is_page(method: &Method, path: &str) -> bool {
-    method == Method::GET
-        && (path == "/"
-            || path
-                .strip_prefix("/v1/sessions/")
-                .and_then(|rest| rest.strip_suffix("/report"))
-                .is_some_and(|id| !id.contains('/')))
+    let report_of = |prefix: &str| {
+        path.strip_prefix(prefix)
+            .and_then(|rest| rest.strip_suffix("/report"))
+            .is_some_and(|id| !id.is_empty() && !id.contains('/'))
+    };
+    method == Method::GET && (path == "/" || report_of("/v1/sessions/") || report_of("/v1/venues/"))
 }
 
 /// The original Unity app's routes: it can only add `?token=` to its hard-coded address.
@@ -171,6 +172,9 @@ mod tests {
         assert!(is_page(&Method::GET, "/"));
         assert!(is_page(&Method::GET, "/v1/sessions/s0123/report"));
         assert!(!is_page(&Method::GET, "/v1/sessions/s0123/x/report"));
+        assert!(is_page(&Method::GET, "/v1/venues/v0123/report"));
+        assert!(!is_page(&Method::GET, "/v1/venues/v0123/map.json"));
+        assert!(!is_page(&Method::GET, "/v1/venues//report"));
         assert!(!is_page(&Method::POST, "/"));
         assert!(!is_page(&Method::GET, "/v1/sessions"));
         assert!(is_legacy("/results.csv"));

@@ -13,6 +13,8 @@ use crate::Error;
 use crate::app_state::App;
 use crate::auth::Caller;
 use crate::session::Session;
+use crate::storage::body_stream;
+use crate::venue::{Standing, Venue, is_venue_id};
 
 /// Runs `f` on tokio's blocking pool (file and CPU work off the async workers); a task that
 /// panicked or was cancelled is an internal error naming `what`.
@@ -128,5 +130,80 @@ pub(crate) fn visible_session(shared: &App, caller: &Caller, id: &str) -> Result
         Ok(session)
     } else {
         Err(Error::NotFound(format!("no session {id:?}")))
+    }
+}
+
+/// Venue `id` and how `caller` stands to it, if it may see it; otherwise a 404 with the same
+/// message as an unknown id (its existence is not revealed).
+pub(crate) fn visible_venue(
+    shared: &App,
+    caller: &Caller,
+    id: &str,
+) -> Result<(Venue, Standing), Error> {
+    let unknown = || Error::NotFound(format!("no venue {id:?}"));
+    if !is_venue_id(id) {
+        return Err(unknown());
+    }
+    let venue = shared.db.venue(id)?.ok_or_else(unknown)?;
+    match Standing::of(&*shared.db, caller, &venue)? {
+        Some(standing) => Ok((venue, standing)),
+        None => Err(unknown()),
+    }
+}
+
+/// The whole body, refused with a 413 once it passes `limit` (declared or sent) or the
+/// session's disk quota (507 past the server's).
+pub(crate) async fn small_body(
+    shared: &App,
+    id: &str,
+    headers: &HeaderMap,
+    body: axum::body::Body,
+    limit: u64,
+    what: &'static str,
+) -> Result<Vec<u8>, Error> {
+    check_declared_length(headers, limit, what)?;
+    let room = shared.blobs.reserve(Some(id), declared_length(headers))?;
+    shared
+        .blobs
+        .receive_bytes_into(body_stream(body.into_data_stream()), limit, what, room)
+        .await
+}
+
+pub(crate) fn utf8(bytes: Vec<u8>, what: &str) -> Result<String, Error> {
+    String::from_utf8(bytes).map_err(|e| {
+        Error::InvalidContent(format!(
+            "{what} is not UTF-8 text (byte {})",
+            e.utf8_error().valid_up_to()
+        ))
+    })
+}
+
+/// A download: `body` as the file `file_name` of type `content_type`.
+pub(crate) fn attachment(content_type: &'static str, file_name: &str, body: Vec<u8>) -> Response {
+    let disposition = format!("attachment; filename=\"{file_name}\"");
+    (
+        [
+            (header::CONTENT_TYPE, content_type.to_owned()),
+            (header::CONTENT_DISPOSITION, disposition),
+        ],
+        body,
+    )
+        .into_response()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_attachment_has_its_type_and_file_name_and_no_other_header() {
+        let response = attachment("application/zip", "trials.zip", b"PK".to_vec());
+        let headers = response.headers();
+        assert_eq!(headers[header::CONTENT_TYPE], "application/zip");
+        assert_eq!(
+            headers[header::CONTENT_DISPOSITION],
+            "attachment; filename=\"trials.zip\""
+        );
+        assert_eq!(headers.len(), 2, "{headers:?}");
     }
 }

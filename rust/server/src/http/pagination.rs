@@ -100,6 +100,33 @@ pub(crate) fn page_of(doc: String, key: &str, page: PageRequest) -> Result<Strin
     Ok(out)
 }
 
+/// `?limit=N` of the list routes (`GET /v1/sessions`, `GET /v1/venues`): default and cap.
+const DEFAULT_LIMIT: u32 = 50;
+const MAX_LIMIT: u32 = 500;
+
+/// `?limit=N` (1 … 500, default 50); anything else is a 400 naming the parameter.
+pub(crate) fn list_limit(query: Option<&str>) -> Result<u32, Error> {
+    let mut limit = DEFAULT_LIMIT;
+    for pair in query.unwrap_or("").split('&').filter(|p| !p.is_empty()) {
+        let (key, value) = pair.split_once('=').unwrap_or((pair, ""));
+        if key != "limit" {
+            return Err(Error::BadRequest(format!(
+                "unknown query parameter {key:?}: only limit is known"
+            )));
+        }
+        limit = value
+            .parse()
+            .ok()
+            .filter(|n| (1..=MAX_LIMIT).contains(n))
+            .ok_or_else(|| {
+                Error::BadRequest(format!(
+                    "limit {value:?} is not a whole number from 1 to {MAX_LIMIT}"
+                ))
+            })?;
+    }
+    Ok(limit)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -159,6 +186,30 @@ mod tests {
         ] {
             let err = PageRequest::parse(Some(query)).unwrap_err().to_string();
             assert!(err.contains(needle), "{query}: {err}");
+        }
+    }
+
+    #[test]
+    fn limit_takes_one_number_in_range_and_names_what_is_wrong() {
+        assert_eq!(list_limit(None).unwrap(), DEFAULT_LIMIT);
+        assert_eq!(list_limit(Some("")).unwrap(), DEFAULT_LIMIT);
+        assert_eq!(list_limit(Some("limit=7")).unwrap(), 7);
+        assert_eq!(list_limit(Some("limit=500")).unwrap(), 500);
+        for bad in [
+            "limit=0",
+            "limit=501",
+            "limit=-1",
+            "limit=",
+            "limit=x",
+            "page=2",
+        ] {
+            let err = list_limit(Some(bad)).unwrap_err().to_string();
+            let named = if bad.starts_with("page") {
+                "page"
+            } else {
+                "limit"
+            };
+            assert!(err.contains(named), "{bad}: {err}");
         }
     }
 }

@@ -21,6 +21,7 @@ use crate::app_state::App;
 use crate::config::ServerConfig;
 use crate::http::helpers::declared_length;
 use crate::ingest::evidence::{MAX_TABLE_BYTES, MAX_THUMBNAIL_BYTES};
+use crate::ingest::phone_log::{MAX_ANCHORS_BYTES, MAX_TRAJECTORY_BYTES};
 
 /// A JSON body (`POST /v1/sessions`, whose handler counts the same 64 KiB itself), and the
 /// body of every route that takes none: a few short keys need far less.
@@ -63,6 +64,10 @@ pub(crate) fn body_limit(config: &ServerConfig, method: &Method, pattern: &str) 
         ("PUT", "/v1/sessions/{id}/subtrajectories.csv") => {
             upload(MAX_TABLE_BYTES, "subtrajectories.csv")
         }
+        ("PUT", "/v1/sessions/{id}/trajectory.txt") => {
+            upload(MAX_TRAJECTORY_BYTES, "trajectory.txt")
+        }
+        ("PUT", "/v1/sessions/{id}/anchors.csv") => upload(MAX_ANCHORS_BYTES, "anchors.csv"),
         ("PUT", "/v1/sessions/{id}/subtrajectories/{k}/image.jpg") => {
             upload(MAX_THUMBNAIL_BYTES, "image.jpg")
         }
@@ -80,6 +85,10 @@ pub(crate) fn body_limit(config: &ServerConfig, method: &Method, pattern: &str) 
         ("POST", "/v1/sessions") => BodyLimit {
             idle: config.body_idle_timeout,
             ..upload(MAX_REQUEST_BYTES, "session request")
+        },
+        ("POST", "/v1/venues") => BodyLimit {
+            idle: config.body_idle_timeout,
+            ..upload(MAX_REQUEST_BYTES, "venue request")
         },
         _ => BodyLimit {
             bytes: MAX_REQUEST_BYTES,

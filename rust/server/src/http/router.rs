@@ -13,8 +13,8 @@ use crate::Error;
 use crate::app_state::App;
 use crate::auth::{self, CallerName};
 use crate::http::handlers::{
-    devices, evidence, health, legacy, pages, recording, results, scene, sessions, share, trials,
-    worker,
+    devices, evidence, health, legacy, pages, phone_log, recording, results, scene, sessions,
+    share, trials, venues, worker,
 };
 use crate::http::helpers::json_response;
 
@@ -47,6 +47,11 @@ pub(crate) fn router(shared: Arc<App>) -> Router {
             "/v1/sessions/{id}/subtrajectories.csv",
             put(evidence::put_spans),
         )
+        .route(
+            "/v1/sessions/{id}/trajectory.txt",
+            put(phone_log::put_trajectory),
+        )
+        .route("/v1/sessions/{id}/anchors.csv", put(phone_log::put_anchors))
         .route("/v1/sessions/{id}/subtrajectories", get(evidence::list))
         .route(
             "/v1/sessions/{id}/subtrajectories/{k}/image.jpg",
@@ -66,6 +71,15 @@ pub(crate) fn router(shared: Arc<App>) -> Router {
         .route("/v1/sessions/{id}/scene.json", get(scene::json))
         .route("/v1/sessions/{id}/trajectory.tum", get(scene::trajectory))
         .route("/v1/sessions/{id}/trials.zip", get(scene::trials_zip))
+        .route("/v1/venues", post(venues::create).get(venues::list))
+        .route("/v1/venues/{id}", get(venues::get).delete(venues::delete))
+        .route("/v1/venues/{id}/map.json", get(venues::map_json))
+        .route("/v1/venues/{id}/map.glb", get(venues::map_glb))
+        .route("/v1/venues/{id}/report", get(venues::report))
+        .route(
+            "/v1/venues/{id}/members/{token_name}",
+            put(venues::add_member).delete(venues::remove_member),
+        )
         .route("/assets/{*name}", get(crate::http::assets::get))
         .route("/v1/devices", get(devices::list))
         // Playback hosts (`sitar worker`; worker tokens only, and they nothing else).

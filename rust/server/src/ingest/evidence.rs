@@ -99,7 +99,7 @@ fn table<'a>(src: &str, text: &'a str, needed: &[&str]) -> Result<Table<'a>, Err
 
 /// Reads every row of the table `text` (as [`table`]) with `row`, given the row's cells and
 /// its `index` cell, which must count 0, 1, … in order.
-fn indexed_rows<T>(
+pub(super) fn indexed_rows<T>(
     src: &'static str,
     text: &str,
     needed: &[&str],
@@ -121,7 +121,7 @@ fn indexed_rows<T>(
 }
 
 /// One row's cells by column name, for errors that name line and column.
-struct Cells<'a, 'b> {
+pub(super) struct Cells<'a, 'b> {
     src: &'static str,
     line: usize,
     columns: &'b HashMap<&'a str, usize>,
@@ -129,25 +129,25 @@ struct Cells<'a, 'b> {
 }
 
 impl Cells<'_, '_> {
-    fn raw(&self, name: &str) -> &str {
+    pub(super) fn raw(&self, name: &str) -> &str {
         self.columns.get(name).map_or("", |&i| self.cells[i])
     }
 
-    fn bad(&self, name: &str, why: impl std::fmt::Display) -> Error {
+    pub(super) fn bad(&self, name: &str, why: impl std::fmt::Display) -> Error {
         Error::InvalidContent(format!(
             "{} line {}, column `{name}`: {why}",
             self.src, self.line
         ))
     }
 
-    fn parse<T: std::str::FromStr>(&self, name: &str) -> Result<T, Error> {
+    pub(super) fn parse<T: std::str::FromStr>(&self, name: &str) -> Result<T, Error> {
         let s = self.raw(name);
         s.parse()
             .map_err(|_| self.bad(name, format!("`{s}` is not a valid number")))
     }
 
     /// A finite, non-negative number.
-    fn measure(&self, name: &str) -> Result<f64, Error> {
+    pub(super) fn measure(&self, name: &str) -> Result<f64, Error> {
         let v: f64 = self.parse(name)?;
         if v.is_finite() && v >= 0.0 {
             Ok(v)
@@ -156,14 +156,14 @@ impl Cells<'_, '_> {
         }
     }
 
-    fn optional_measure(&self, name: &str) -> Result<Option<f64>, Error> {
+    pub(super) fn optional_measure(&self, name: &str) -> Result<Option<f64>, Error> {
         match self.raw(name) {
             "" => Ok(None),
             _ => self.measure(name).map(Some),
         }
     }
 
-    fn flag(&self, name: &str) -> Result<bool, Error> {
+    pub(super) fn flag(&self, name: &str) -> Result<bool, Error> {
         match self.raw(name) {
             "1" => Ok(true),
             "0" => Ok(false),

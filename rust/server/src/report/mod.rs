@@ -5,9 +5,12 @@
 pub(crate) mod charts;
 pub(crate) mod index_ranges;
 pub(crate) mod page;
+pub(crate) mod phone_log_scene;
 pub(crate) mod region_evidence;
 pub(crate) mod regions;
 pub(crate) mod scene;
 pub(crate) mod scene_view;
 pub(crate) mod templates;
 pub(crate) mod thinning;
+pub(crate) mod venue_page;
+pub(crate) mod venue_view;

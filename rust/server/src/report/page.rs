@@ -492,7 +492,19 @@ fn partial(row: &Session, doc: &ResultsDoc) -> Option<serde_json::Value> {
 const INLINE_CSS: &str = include_str!("../../assets/site.css");
 const INLINE_SCRIPT: &str = include_str!("../../assets/report.bundle.js");
 
-/// The Content-Security-Policy of a stand-alone page: its inline script and style by hash.
+/// The bundle as a stand-alone page's inline script (this page's and the venue page's).
+pub(crate) fn inline_script() -> Result<&'static str, Error> {
+    // The script element ends at the first `</script`: the bundle must not hold one.
+    if INLINE_SCRIPT.to_ascii_lowercase().contains("</script") {
+        return Err(Error::Internal(
+            "report.bundle.js holds </script: it cannot be inlined".into(),
+        ));
+    }
+    Ok(INLINE_SCRIPT)
+}
+
+/// The Content-Security-Policy of a stand-alone page (this one and the venue page): its
+/// inline script and style by hash.
 pub(crate) fn standalone_csp() -> String {
     let hash = |text: &str| {
         let digest = ring::digest::digest(&ring::digest::SHA256, text.as_bytes());
@@ -504,12 +516,7 @@ pub(crate) fn standalone_csp() -> String {
 /// Step 6: what a stand-alone page carries inline (style, script, scene data) and its
 /// Content-Security-Policy, which allows exactly those.
 fn inline_parts(alone: &Standalone<'_>) -> Result<serde_json::Value, Error> {
-    // The script element ends at the first `</script`: the bundle must not hold one.
-    if INLINE_SCRIPT.to_ascii_lowercase().contains("</script") {
-        return Err(Error::Internal(
-            "report.bundle.js holds </script: it cannot be inlined".into(),
-        ));
-    }
+    let script = inline_script()?;
     // `<` only occurs inside JSON strings, where `\u003c` means the same: no `</script`.
     let scene = alone
         .scene
@@ -517,7 +524,7 @@ fn inline_parts(alone: &Standalone<'_>) -> Result<serde_json::Value, Error> {
         .map(|s| s.to_string().replace('<', "\\u003c"));
     Ok(json!({
         "css": INLINE_CSS,
-        "script": INLINE_SCRIPT,
+        "script": script,
         "scene": scene,
         "csp": standalone_csp(),
     }))

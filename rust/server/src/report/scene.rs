@@ -33,6 +33,8 @@ pub(crate) enum Source {
     ReferenceTrial,
     /// The reference trial's poses with the surface distances of the phone's evidence.
     ReferenceTrialWithEvidence,
+    /// The phone's own log (`trajectory.txt`, with the depth of its `subtrajectories.csv`).
+    PhoneLog,
 }
 
 impl Source {
@@ -46,6 +48,9 @@ impl Source {
             Self::ReferenceTrialWithEvidence => {
                 "the reference trial, with the surface distances the phone measured (surface points straight ahead of each midpoint; marker normals face the camera)"
             }
+            Self::PhoneLog => {
+                "the phone's own log (trajectory.txt), with the depth it measured at each midpoint from its subtrajectories.csv (surface points straight ahead; marker normals face the camera)"
+            }
         }
     }
 
@@ -55,6 +60,7 @@ impl Source {
             Self::SimulatedWalk => "sim",
             Self::ReferenceTrial => "trial",
             Self::ReferenceTrialWithEvidence => "trial+evidence",
+            Self::PhoneLog => "phone",
         }
     }
 
@@ -62,6 +68,7 @@ impl Source {
         match tag {
             "sim" => Self::SimulatedWalk,
             "trial+evidence" => Self::ReferenceTrialWithEvidence,
+            "phone" => Self::PhoneLog,
             _ => Self::ReferenceTrial,
         }
     }
@@ -71,7 +78,7 @@ impl Source {
 /// own sampling: 16 × 16 px, a pinhole of 16 px focal length.
 const FLAT_SIDE: u32 = 16;
 
-fn flat_depth_sample(session: &mut Session, distance_m: f64) {
+pub(super) fn flat_depth_sample(session: &mut Session, distance_m: f64) {
     let mm = (distance_m * 1000.0).round();
     // sitar-core reads depth in millimetres within u16 (65 m).
     if !(100.0..65_000.0).contains(&mm) {
@@ -158,9 +165,19 @@ fn from_reference_trial(
     Ok(session)
 }
 
-/// Builds the phone session of `row` (no results loaded). Blocking and CPU-heavy for
-/// simulated walks (one depth image per midpoint).
+/// Builds the phone session of `row` (no results loaded): from the phone's own log when it
+/// sent one, else from the simulated walk, else from the reference trial. Blocking and
+/// CPU-heavy for simulated walks (one depth image per midpoint).
 fn build(shared: &App, row: &Row) -> Result<(Session, Source), Error> {
+    if let Some(log) = shared.blobs.get(&row.id, SessionObject::PhoneTrajectory)? {
+        let table = shared.blobs.get(&row.id, SessionObject::Subtrajectories)?;
+        let session = super::phone_log_scene::from_phone_log(
+            row,
+            &String::from_utf8_lossy(&log),
+            table.as_deref().map(String::from_utf8_lossy).as_deref(),
+        )?;
+        return Ok((session, Source::PhoneLog));
+    }
     let simulated = shared
         .blobs
         .get(&row.id, SessionObject::Recording)
@@ -247,6 +264,13 @@ pub(crate) fn preparing(id: &str) -> bool {
     locked(&PREPARING).as_deref() == Some(id)
 }
 
+/// The phone's log of session `id` changed (`trajectory.txt` or `subtrajectories.csv`): its
+/// kept scene and cached copy are dropped, so the next request builds it from the new log.
+pub(crate) fn phone_log_changed(shared: &App, id: &str) {
+    shared.blobs.discard_scene(id);
+    forget(shared, id);
+}
+
 /// Drops session `id`'s scene from the in-memory cache (a deleted session's data must not
 /// stay readable, even in memory).
 pub(crate) fn forget(shared: &App, id: &str) {
@@ -281,6 +305,14 @@ fn load_uncached(shared: &App, row: &Row) -> Result<(Session, Source), Error> {
         // Built before the phone's evidence arrived: built again with it.
         .filter(|(_, source)| {
             *source != Source::ReferenceTrial || stored_evidence(shared, row).is_none()
+        })
+        // Built before the phone's log arrived: built again from it.
+        .filter(|(_, source)| {
+            *source == Source::PhoneLog
+                || !matches!(
+                    shared.blobs.get(&row.id, SessionObject::PhoneTrajectory),
+                    Ok(Some(_))
+                )
         });
     if cached.is_none() {
         shared.blobs.discard_scene(&row.id);

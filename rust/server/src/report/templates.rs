@@ -21,6 +21,7 @@ fn environment() -> &'static Environment<'static> {
                 include_str!("../../templates/overview.html"),
             ),
             ("waiting.html", include_str!("../../templates/waiting.html")),
+            ("venue.html", include_str!("../../templates/venue.html")),
         ] {
             // A template that does not compile is a bug caught by every test of the pages.
             if let Err(e) = env.add_template(name, source) {
@@ -189,6 +190,19 @@ mod tests {
         // The served partial page reloads itself.
         assert!(served.contains("<meta http-equiv=\"refresh\""), "{served}");
         assert!(served.contains("This page reloads every"));
+        // The venue page: client strings escaped; its one script the bundle, its view data a
+        // JSON block (server-made, `<` written as `\u003c`).
+        let venue = render(
+            "venue.html",
+            &serde_json::json!({"id": "v1", "name": hostile, "anchor": hostile,
+                "sessions": [{"id": hostile, "reason": hostile, "aligned": false}],
+                "regions": [], "coverage": [], "view": "{}", "topview": "<svg></svg>"}),
+        )
+        .unwrap();
+        assert!(!venue.contains("<script>alert"), "{venue}");
+        assert!(venue.contains("&lt;script&gt;alert(1)&lt;"), "{venue}");
+        assert_eq!(venue.matches("<script").count(), 2, "{venue}");
+        assert!(venue.contains("<script type=\"application/json\" id=\"venue-data\">{}</script>"));
         for page in [&overview, &report, &waiting] {
             assert!(!page.contains("<script>alert"), "{page}");
             assert!(page.contains("&lt;script&gt;alert(1)&lt;"), "{page}");

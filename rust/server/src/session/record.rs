@@ -1,5 +1,7 @@
 //! A session as the server knows it: the typed row of the `sessions` table.
 
+use sitar_core::Convention;
+
 use crate::config::PlaybackKind;
 use crate::session::estimate_settings::EstimateSettings;
 use crate::session::state::{SessionState, Step};
@@ -33,6 +35,10 @@ pub(crate) struct Session {
     pub legacy: bool,
     /// The token that created it (`None`: made without authentication).
     pub owner: Option<i64>,
+    /// The venue it was recorded in (`None`: none, or the venue was deleted).
+    pub venue: Option<String>,
+    /// The coordinate convention of the phone that recorded it.
+    pub convention: Convention,
 }
 
 impl Session {
@@ -79,4 +85,8 @@ pub(crate) struct NewSession<'a> {
     pub legacy: bool,
     /// The token that created it (`None`: made without authentication).
     pub owner: Option<i64>,
+    /// The venue it joins (checked by the caller: one the token may see).
+    pub venue: Option<&'a str>,
+    /// The phone's coordinate convention (a venue's sessions share one).
+    pub convention: Convention,
 }

@@ -7,6 +7,7 @@ use serde_json::json;
 use crate::Error;
 use crate::app_state::App;
 use crate::session::{Session, SessionState};
+use crate::venue::alignment::alignment_json;
 
 /// Progress (0 … 1) and seconds left, when known.
 fn progress(shared: &App, session: &Session, done: u32) -> (f64, Option<f64>) {
@@ -77,5 +78,8 @@ pub(crate) fn status_json(shared: &App, session: &Session) -> Result<serde_json:
         // Trials a phone played that could not be used (unparsable, failed on its phone),
         // each with why; a trial played again elsewhere is listed once per failure.
         "failed_trials": failed_trials,
+        "venue": session.venue,
+        // From the phone's anchors.csv; null in no venue or without one.
+        "alignment": alignment_json(&*shared.db, &*shared.blobs, session)?,
     }))
 }

@@ -23,6 +23,7 @@ pub(crate) fn metadata_store(store: &dyn MetadataStore) {
     share_links_open_one_session(store);
     usage_is_counted_over_its_windows(store);
     deleting_a_session_removes_what_belongs_to_it(store);
+    venues_hold_members_and_sessions_of_one_convention(store);
 }
 
 /// A session request with the server's defaults (5 trials), for the suites and unit tests.
@@ -40,6 +41,8 @@ pub(crate) fn new_session(
         adaptive_k: 3,
         legacy: false,
         owner,
+        venue: None,
+        convention: sitar_core::Convention::Unity,
     }
 }
 
@@ -505,4 +508,125 @@ fn scenes_are_kept_whole_with_their_tag(store: &dyn BlobStore) {
     assert_ne!(store.playback_folder(A), store.playback_folder(B));
     store.discard_scene(A);
     assert!(store.kept_scene(A).is_none());
+}
+
+fn venues_hold_members_and_sessions_of_one_convention(store: &dyn MetadataStore) {
+    use crate::venue::NewVenue;
+    use sitar_core::Convention;
+    let (owner, member, stranger) = ("venue-owner", "venue-member", "venue-stranger");
+    for (name, token) in [
+        (owner, "sitar_vownerAAAAAAAAAAAAAAAAAAAAAAAAAAAAAA"),
+        (member, "sitar_vmemberAAAAAAAAAAAAAAAAAAAAAAAAAAAAA"),
+        (stranger, "sitar_vstrangerAAAAAAAAAAAAAAAAAAAAAAAAAAA"),
+    ] {
+        store.insert_token(name, Role::App, token).unwrap();
+    }
+    let id_of = |token: &str| store.caller(token).unwrap().unwrap().owner().unwrap();
+    let owner_id = id_of("sitar_vownerAAAAAAAAAAAAAAAAAAAAAAAAAAAAAA");
+    let member_id = id_of("sitar_vmemberAAAAAAAAAAAAAAAAAAAAAAAAAAAAA");
+    let stranger_id = id_of("sitar_vstrangerAAAAAAAAAAAAAAAAAAAAAAAAAAA");
+    let venue = "v2000000000000001";
+    let new = NewVenue {
+        name: "Lobby",
+        anchor: "poster-1",
+        cell_m: 0.5,
+        owner: Some(owner_id),
+    };
+    store.insert_venue(venue, &new).unwrap();
+    store
+        .insert_venue(
+            "v2000000000000002",
+            &NewVenue {
+                owner: Some(stranger_id),
+                ..new.clone()
+            },
+        )
+        .unwrap();
+    let row = store.venue(venue).unwrap().unwrap();
+    assert_eq!(
+        (
+            row.name.as_str(),
+            row.anchor.as_str(),
+            row.cell_m,
+            row.owner
+        ),
+        ("Lobby", "poster-1", 0.5, Some(owner_id))
+    );
+    assert!(store.venue("v2000000000000009").unwrap().is_none());
+    // Membership by token name; an unknown name changes nothing.
+    assert!(store.add_member(venue, member).unwrap());
+    assert!(store.add_member(venue, member).unwrap(), "again: no change");
+    assert!(!store.add_member(venue, "nobody").unwrap());
+    assert_eq!(store.members(venue).unwrap(), [member]);
+    assert!(store.is_member(venue, member_id).unwrap());
+    assert!(!store.is_member(venue, stranger_id).unwrap());
+    let ids = |viewer| -> Vec<String> {
+        store
+            .venues_for(viewer, 10)
+            .unwrap()
+            .into_iter()
+            .map(|v| v.id)
+            .collect()
+    };
+    assert_eq!(ids(Some(owner_id)), [venue]);
+    assert_eq!(ids(Some(member_id)), [venue]);
+    assert_eq!(ids(Some(stranger_id)), ["v2000000000000002"]);
+    assert_eq!(ids(None), ["v2000000000000002", venue], "all, newest first");
+    assert_eq!(store.venues_for(None, 1).unwrap().len(), 1);
+    // Sessions join with one convention; another is refused naming both, and not stored.
+    let joining = |id: &str, owner, convention| {
+        let new = NewSession {
+            venue: Some(venue),
+            convention,
+            ..new_session(None, PlaybackKind::Upload, Some(owner))
+        };
+        store.insert_session(id, &new)
+    };
+    joining("s2000000000000001", owner_id, Convention::Arcore).unwrap();
+    joining("s2000000000000002", member_id, Convention::Arcore).unwrap();
+    let refused = joining("s2000000000000003", member_id, Convention::Unity).unwrap_err();
+    assert_eq!(refused.status_and_code().0.as_u16(), 409, "{refused}");
+    let message = refused.to_string();
+    assert!(
+        message.contains("arcore") && message.contains("unity"),
+        "{message}"
+    );
+    assert!(store.session("s2000000000000003").unwrap().is_none());
+    let row = store.session("s2000000000000002").unwrap().unwrap();
+    assert_eq!(
+        (row.venue.as_deref(), row.convention),
+        (Some(venue), Convention::Arcore)
+    );
+    let in_venue: Vec<String> = store
+        .venue_sessions(venue)
+        .unwrap()
+        .into_iter()
+        .map(|s| s.id)
+        .collect();
+    assert_eq!(in_venue, ["s2000000000000001", "s2000000000000002"]);
+    // A deleted session leaves its venue.
+    assert!(store.delete_session("s2000000000000002").unwrap());
+    assert_eq!(store.venue_sessions(venue).unwrap().len(), 1);
+    // Joining a venue that does not exist is refused naming the key.
+    let gone = NewSession {
+        venue: Some("v2000000000000009"),
+        ..new_session(None, PlaybackKind::Upload, Some(owner_id))
+    };
+    let e = store
+        .insert_session("s2000000000000004", &gone)
+        .unwrap_err();
+    assert!(e.to_string().contains("venue"), "{e}");
+    // Ending a membership; an unknown token name is told apart.
+    assert_eq!(store.remove_member(venue, member).unwrap(), Some(true));
+    assert_eq!(store.remove_member(venue, member).unwrap(), Some(false));
+    assert_eq!(store.remove_member(venue, "nobody").unwrap(), None);
+    assert!(ids(Some(member_id)).is_empty());
+    // Deleting a venue keeps its sessions, in no venue.
+    store.add_member(venue, member).unwrap();
+    assert!(store.delete_venue(venue).unwrap());
+    assert!(!store.delete_venue(venue).unwrap());
+    assert!(store.venue(venue).unwrap().is_none());
+    assert!(!store.is_member(venue, member_id).unwrap());
+    let kept = store.session("s2000000000000001").unwrap().unwrap();
+    assert_eq!((kept.venue, kept.convention), (None, Convention::Arcore));
 }

@@ -30,6 +30,14 @@ pub(crate) enum SessionObject {
     Spans,
     /// Sub-trajectory k's camera thumbnail (k a checked number).
     Thumbnail(usize),
+    /// The phone's own log (`trajectory.txt`: start, midpoints, endpoints; TUM, integer ns),
+    /// checked whole on arrival.
+    PhoneTrajectory,
+    /// The phone's anchor observations (`anchors.csv`), checked whole on arrival.
+    Anchors,
+    /// The phone's whole sub-trajectory table (`subtrajectories.csv` in sitar-core's header),
+    /// checked whole on arrival.
+    Subtrajectories,
 }
 
 impl SessionObject {
@@ -48,6 +56,9 @@ impl SessionObject {
             SessionObject::Evidence => "evidence.json".into(),
             SessionObject::Spans => "spans.json".into(),
             SessionObject::Thumbnail(k) => format!("thumbnails/{k}.jpg"),
+            SessionObject::PhoneTrajectory => "phone_log/trajectory.txt".into(),
+            SessionObject::Anchors => "phone_log/anchors.csv".into(),
+            SessionObject::Subtrajectories => "phone_log/subtrajectories.csv".into(),
         }
     }
 }
@@ -73,6 +84,9 @@ mod tests {
             SessionObject::Spans,
             SessionObject::Thumbnail(0),
             SessionObject::Thumbnail(12),
+            SessionObject::PhoneTrajectory,
+            SessionObject::Anchors,
+            SessionObject::Subtrajectories,
         ];
         let paths: std::collections::BTreeSet<String> =
             objects.iter().map(|o| o.relative_path()).collect();

@@ -1,5 +1,6 @@
 //! The metadata store: every row the server keeps (sessions, trials, jobs, devices, tokens,
-//! share links, per-token usage, idempotency keys), as operations named by what they mean.
+//! share links, per-token usage, idempotency keys, venues and their members), as operations
+//! named by what they mean.
 //! No SQL and no connection type crosses this seam; [`super::sqlite::SqliteStore`] is the
 //! embedded implementation (`DATA/sitar.db`), and `storage::conformance` is the test suite
 //! every implementation passes.
@@ -11,6 +12,7 @@
 use crate::Error;
 use crate::auth::{Caller, Role, TokenInfo, UsageFull};
 use crate::session::{NewSession, Session, SessionState, Step};
+use crate::venue::{NewVenue, Venue};
 
 /// How a job ended (a job is `running`, then one of these, or `interrupted` when a restart
 /// finds it left running by a dead process).
@@ -193,13 +195,56 @@ pub(crate) trait UsageStore {
     fn add_uploaded(&self, token: i64, bytes: u64, now_ms: i64) -> Result<(), Error>;
 }
 
+/// Venues, their members, and which sessions joined them. A session joins a venue when it
+/// is created ([`SessionStore::insert_session`] with `NewSession::venue`), which checks
+/// atomically that the venue exists and that its sessions share the new one's convention.
+pub(crate) trait VenueStore {
+    /// Inserts venue `id`.
+    fn insert_venue(&self, id: &str, new: &NewVenue<'_>) -> Result<(), Error>;
+    /// Venue `id`, if it exists.
+    fn venue(&self, id: &str) -> Result<Option<Venue>, Error>;
+    /// The newest `limit` venues, newest first: every one when `viewer` is `None`, else those
+    /// token `viewer` owns or is a member of.
+    fn venues_for(&self, viewer: Option<i64>, limit: u32) -> Result<Vec<Venue>, Error>;
+    /// Whether token `token` is a member of venue `venue`.
+    fn is_member(&self, venue: &str, token: i64) -> Result<bool, Error>;
+    /// Makes the token named `token_name` a member of `venue` (again: no change). `false`
+    /// when no token has that name.
+    fn add_member(&self, venue: &str, token_name: &str) -> Result<bool, Error>;
+    /// Ends the membership of the token named `token_name`: `None` when no token has that
+    /// name, else whether it was a member.
+    fn remove_member(&self, venue: &str, token_name: &str) -> Result<Option<bool>, Error>;
+    /// The names of `venue`'s members, by name.
+    fn members(&self, venue: &str) -> Result<Vec<String>, Error>;
+    /// The sessions that joined `venue`, oldest first (unreadable rows left out and logged).
+    fn venue_sessions(&self, venue: &str) -> Result<Vec<Session>, Error>;
+    /// Deletes `venue` and its memberships; its sessions stay, in no venue. Whether it existed.
+    fn delete_venue(&self, id: &str) -> Result<bool, Error>;
+}
+
 /// Every concern of the metadata store: what the server holds as `Arc<dyn MetadataStore>`.
 pub(crate) trait MetadataStore:
-    SessionStore + TrialStore + JobStore + DeviceStore + TokenStore + UsageStore + Send + Sync
+    SessionStore
+    + TrialStore
+    + JobStore
+    + DeviceStore
+    + TokenStore
+    + UsageStore
+    + VenueStore
+    + Send
+    + Sync
 {
 }
 
 impl<T> MetadataStore for T where
-    T: SessionStore + TrialStore + JobStore + DeviceStore + TokenStore + UsageStore + Send + Sync
+    T: SessionStore
+        + TrialStore
+        + JobStore
+        + DeviceStore
+        + TokenStore
+        + UsageStore
+        + VenueStore
+        + Send
+        + Sync
 {
 }

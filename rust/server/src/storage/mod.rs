@@ -28,7 +28,7 @@ pub(crate) mod worker_conformance;
 
 pub(crate) use blobs::{BlobStore, body_stream};
 pub(crate) use metadata::{
-    JobEnd, MetadataStore, SessionStore, StepRecord, TokenStore, UsageStore,
+    JobEnd, MetadataStore, SessionStore, StepRecord, TokenStore, UsageStore, VenueStore,
 };
 pub(crate) use workers::WorkerStore;
 

@@ -11,3 +11,6 @@ pub fn spawn_with_admin(data: &Path) -> (ServerHandle, String) {
     let admin = std::fs::read_to_string(data.join(sitar_server::ADMIN_TOKEN_FILE)).unwrap();
     (server, admin.trim().to_owned())
 }
+
+#[allow(dead_code)]
+pub mod http;

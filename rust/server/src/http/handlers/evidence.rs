@@ -18,43 +18,15 @@ use crate::Error;
 use crate::app_state::App;
 use crate::auth::Caller;
 use crate::estimate::results_files::{self, Form};
-use crate::http::helpers::{
-    AppState, Found, check_declared_length, declared_length, json_value, visible_session,
-};
+use crate::http::helpers::{AppState, Found, json_value, small_body, utf8, visible_session};
 use crate::http::pagination::PageRequest;
 use crate::ingest::evidence::{
     EvidenceFiles, MAX_SUBTRAJECTORIES, MAX_TABLE_BYTES, MAX_THUMBNAIL_BYTES, check_jpeg,
-    parse_evidence, parse_spans,
+    parse_evidence,
 };
+use crate::ingest::phone_log::parse_subtrajectories;
 use crate::session::Session;
-use crate::storage::body_stream;
-
-/// The whole body, refused with a 413 once it passes `limit` (declared or sent) or the
-/// session's disk quota (507 past the server's).
-async fn small_body(
-    shared: &App,
-    id: &str,
-    headers: &HeaderMap,
-    body: Body,
-    limit: u64,
-    what: &'static str,
-) -> Result<Vec<u8>, Error> {
-    check_declared_length(headers, limit, what)?;
-    let room = shared.blobs.reserve(Some(id), declared_length(headers))?;
-    shared
-        .blobs
-        .receive_bytes_into(body_stream(body.into_data_stream()), limit, what, room)
-        .await
-}
-
-fn utf8(bytes: Vec<u8>, what: &str) -> Result<String, Error> {
-    String::from_utf8(bytes).map_err(|e| {
-        Error::InvalidContent(format!(
-            "{what} is not UTF-8 text (byte {})",
-            e.utf8_error().valid_up_to()
-        ))
-    })
-}
+use crate::storage::keys::SessionObject;
 
 /// Runs `store` under the session's lock, after checking the session still exists (it may
 /// have been deleted while the body was arriving: nothing is written for it then).
@@ -92,11 +64,26 @@ pub(crate) async fn put_spans(
     headers: HeaderMap,
     body: Body,
 ) -> Result<Response, Error> {
-    let spans = parse_spans(
-        &table_text(&shared, &session.id, &headers, body, "subtrajectories.csv").await?,
-    )?;
-    under_lock(&shared, &session.id, |f| f.store_spans(&spans)).await?;
-    Ok(stored(spans.len()))
+    let text = table_text(&shared, &session.id, &headers, body, "subtrajectories.csv").await?;
+    let table = parse_subtrajectories(&text)?;
+    under_lock(&shared, &session.id, |f| {
+        // The whole table first: a reader never sees new spans beside an old table.
+        match table.depth_samples {
+            Some(_) => f
+                .blobs
+                .put(f.id, SessionObject::Subtrajectories, text.as_bytes())?,
+            None => f.blobs.remove(f.id, SessionObject::Subtrajectories)?,
+        }
+        f.store_spans(&table.spans)
+    })
+    .await?;
+    // The scene from the phone's log takes its depth from this table.
+    crate::report::scene::phone_log_changed(&shared, &session.id);
+    let mut answer = json!({"subtrajectories": table.spans.len()});
+    if let Some(n) = table.depth_samples {
+        answer["depth_samples"] = n.into();
+    }
+    Ok(json_value(StatusCode::OK, &answer))
 }
 
 /// A phone table's body as text: bounded by `MAX_TABLE_BYTES`, UTF-8, errors naming `name`.

@@ -120,6 +120,8 @@ pub(crate) async fn recording(
         adaptive_k: shared.config.default_adaptive_k,
         legacy: true,
         owner: caller.owner(),
+        venue: None,
+        convention: sitar_core::Convention::Unity,
     })?;
     accept_recording(&shared, &shared.session(&id)?, temp)?;
     // The original app treats this answer as "evaluation complete" and then

@@ -1,25 +1,12 @@
 //! `GET /v1/sessions/{id}/scene.glb`: the session's scene as glTF 2.0 binary.
 
 use axum::extract::State;
-use axum::http::header;
-use axum::response::{IntoResponse, Response};
+use axum::response::Response;
 
 use crate::Error;
-use crate::http::helpers::{AppState, Found, blocking};
+use crate::http::helpers::{AppState, Found, attachment, blocking};
 use crate::report::scene;
-
-/// A download: `body` as the file `file_name` of type `content_type`.
-fn attachment(content_type: &'static str, file_name: &str, body: Vec<u8>) -> Response {
-    let disposition = format!("attachment; filename=\"{file_name}\"");
-    (
-        [
-            (header::CONTENT_TYPE, content_type.to_owned()),
-            (header::CONTENT_DISPOSITION, disposition),
-        ],
-        body,
-    )
-        .into_response()
-}
+use crate::storage::keys::SessionObject;
 
 /// `GET /v1/sessions/{id}/scene.glb`: trajectory by class, frustums, markers, surface points.
 pub(crate) async fn glb(State(shared): AppState, Found(session): Found) -> Result<Response, Error> {
@@ -59,12 +46,20 @@ pub(crate) async fn json(
 }
 
 /// `GET /v1/sessions/{id}/trajectory.tum`: the user's trajectory as the phone logged it
-/// (start, midpoints, endpoints; TUM, integer nanoseconds, the phone session's convention).
+/// (start, midpoints, endpoints; TUM, integer nanoseconds): the phone's own `trajectory.txt`
+/// when it sent one, else as the scene rebuilt it.
 pub(crate) async fn trajectory(
     State(shared): AppState,
     Found(session): Found,
 ) -> Result<Response, Error> {
     let tum = blocking("trajectory", move || {
+        if let Some(sent) = shared
+            .blobs
+            .get(&session.id, SessionObject::PhoneTrajectory)?
+        {
+            return String::from_utf8(sent)
+                .map_err(|e| Error::Internal(format!("stored trajectory.txt: {e}")));
+        }
         scene::load(&shared, &session).map(|loaded| loaded.0.trajectory_tum())
     })
     .await?;
@@ -98,21 +93,4 @@ pub(crate) async fn trials_zip(
     })
     .await?;
     Ok(attachment("application/zip", "trials.zip", bytes))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn an_attachment_has_its_type_and_file_name_and_no_other_header() {
-        let response = attachment("application/zip", "trials.zip", b"PK".to_vec());
-        let headers = response.headers();
-        assert_eq!(headers[header::CONTENT_TYPE], "application/zip");
-        assert_eq!(
-            headers[header::CONTENT_DISPOSITION],
-            "attachment; filename=\"trials.zip\""
-        );
-        assert_eq!(headers.len(), 2, "{headers:?}");
-    }
 }

@@ -6,6 +6,7 @@ use axum::http::{HeaderMap, StatusCode, header};
 use axum::response::{IntoResponse, Response};
 use serde::Deserialize;
 use serde_json::json;
+use sitar_core::Convention;
 
 use crate::Error;
 use crate::auth::Caller;
@@ -13,7 +14,9 @@ use crate::config::PlaybackKind;
 use crate::error::short;
 use crate::http::helpers::{
     AppState, Found, check_declared_length, content_type, idempotency_key, json_value,
+    visible_venue,
 };
+use crate::http::pagination::list_limit as limit;
 use crate::playback::jobs::{self, EndEarly, Stopped};
 use crate::playback::queue::Intent;
 use crate::session::deletion;
@@ -26,9 +29,6 @@ use crate::storage::body_stream;
 pub(crate) const MAX_REQUEST_BYTES: u64 = 64 * 1024;
 /// How much of a client's input an error message quotes at most.
 pub(crate) const QUOTE_LIMIT: usize = 200;
-
-const DEFAULT_LIMIT: u32 = 50;
-const MAX_LIMIT: u32 = 500;
 
 /// The JSON body of `POST /v1/sessions`; every key optional.
 #[derive(Debug, Deserialize)]
@@ -52,6 +52,12 @@ pub(crate) struct CreateRequest {
     /// `trans_part` (default) or `angle_deg`.
     #[serde(default)]
     pose_relation: Option<String>,
+    /// The venue the session joins (one the token can see).
+    #[serde(default)]
+    venue: Option<String>,
+    /// The phone's coordinate convention: `unity` (default) or `arcore`.
+    #[serde(default)]
+    convention: Option<String>,
 }
 
 /// The `POST /v1/sessions` body as a typed request: one JSON object and nothing after it
@@ -155,6 +161,26 @@ pub(crate) async fn create(
             "adaptive_min_trials: {min} is below 2"
         )));
     }
+    let convention = match req.convention.as_deref() {
+        None | Some("unity") => Convention::Unity,
+        Some("arcore") => Convention::Arcore,
+        Some(other) => {
+            return Err(Error::InvalidContent(format!(
+                "convention: {:?} is not unity or arcore",
+                short(other, QUOTE_LIMIT)
+            )));
+        }
+    };
+    if let Some(venue) = req.venue.as_deref() {
+        // A venue the caller cannot see is reported like one that does not exist.
+        visible_venue(&shared, &caller, venue).map_err(|e| match e {
+            Error::NotFound(_) => Error::InvalidContent(format!(
+                "venue: no venue {:?} that this token can see",
+                short(venue, QUOTE_LIMIT)
+            )),
+            other => other,
+        })?;
+    }
     // Keys are per token: another token's key never returns (or reveals) its session.
     let key = idempotency_key(&headers)?.map(|key| match caller.owner() {
         Some(owner) => format!("{owner}/{key}"),
@@ -169,6 +195,8 @@ pub(crate) async fn create(
         adaptive_k: req.adaptive_k.unwrap_or(shared.config.default_adaptive_k),
         legacy: false,
         owner: caller.owner(),
+        venue: req.venue.as_deref(),
+        convention,
     })?;
     // A replayed request (same Idempotency-Key) gets the answer of the first one.
     Ok((
@@ -198,29 +226,6 @@ pub(crate) async fn status(
     Found(session): Found,
 ) -> Result<Response, Error> {
     Ok(axum::Json(status_json(&shared, &session)?).into_response())
-}
-
-/// `?limit=N` (1 … 500, default 50); anything else is a 400 naming the parameter.
-fn limit(query: Option<&str>) -> Result<u32, Error> {
-    let mut limit = DEFAULT_LIMIT;
-    for pair in query.unwrap_or("").split('&').filter(|p| !p.is_empty()) {
-        let (key, value) = pair.split_once('=').unwrap_or((pair, ""));
-        if key != "limit" {
-            return Err(Error::BadRequest(format!(
-                "unknown query parameter {key:?}: only limit is known"
-            )));
-        }
-        limit = value
-            .parse()
-            .ok()
-            .filter(|n| (1..=MAX_LIMIT).contains(n))
-            .ok_or_else(|| {
-                Error::BadRequest(format!(
-                    "limit {value:?} is not a whole number from 1 to {MAX_LIMIT}"
-                ))
-            })?;
-    }
-    Ok(limit)
 }
 
 /// `GET /v1/sessions[?limit=N]`: the newest sessions, newest first, each as its status (an
@@ -333,30 +338,6 @@ mod tests {
                 Err(Error::BadRequest(message)) => assert!(message.contains(says), "{message}"),
                 other => panic!("{:?}: {other:?}", String::from_utf8_lossy(body)),
             }
-        }
-    }
-
-    #[test]
-    fn limit_takes_one_number_in_range_and_names_what_is_wrong() {
-        assert_eq!(limit(None).unwrap(), DEFAULT_LIMIT);
-        assert_eq!(limit(Some("")).unwrap(), DEFAULT_LIMIT);
-        assert_eq!(limit(Some("limit=7")).unwrap(), 7);
-        assert_eq!(limit(Some("limit=500")).unwrap(), 500);
-        for bad in [
-            "limit=0",
-            "limit=501",
-            "limit=-1",
-            "limit=",
-            "limit=x",
-            "page=2",
-        ] {
-            let err = limit(Some(bad)).unwrap_err().to_string();
-            let named = if bad.starts_with("page") {
-                "page"
-            } else {
-                "limit"
-            };
-            assert!(err.contains(named), "{bad}: {err}");
         }
     }
 }

@@ -1,8 +1,8 @@
 //! The embedded metadata store: SQLite in `DATA/sitar.db` (WAL mode, so `sitar token` works
 //! beside a running server). This folder is the only place that speaks SQL: the connection,
 //! the schema and its migrations here, and one file per concern of
-//! [`crate::storage::metadata`] (`sessions`, `trials`, `jobs`, `tokens`, `usage`) and of
-//! [`crate::storage::workers`] (`hosts`, `leases`, with their versioned `worker_schema`).
+//! [`crate::storage::metadata`] (`sessions`, `trials`, `jobs`, `tokens`, `usage`, `venues`) and
+//! of [`crate::storage::workers`] (`hosts`, `leases`, with their versioned `worker_schema`).
 
 use std::path::Path;
 use std::sync::Mutex;
@@ -18,6 +18,7 @@ mod sessions;
 mod tokens;
 mod trials;
 mod usage;
+mod venues;
 mod worker_schema;
 
 /// Room in the connection's statement cache: more than the server's distinct SQL texts
@@ -77,7 +78,22 @@ CREATE TABLE IF NOT EXISTS sessions (
     finished_ms INTEGER,
     window_frames INTEGER NOT NULL DEFAULT 10,
     pose_relation TEXT NOT NULL DEFAULT 'trans_part',
-    owner INTEGER
+    owner INTEGER,
+    venue TEXT,
+    convention TEXT NOT NULL DEFAULT 'unity'
+);
+CREATE TABLE IF NOT EXISTS venues (
+    id TEXT PRIMARY KEY,
+    name TEXT NOT NULL,
+    anchor TEXT NOT NULL,
+    cell_m REAL NOT NULL,
+    owner INTEGER,
+    created_ms INTEGER NOT NULL
+);
+CREATE TABLE IF NOT EXISTS venue_members (
+    venue_id TEXT NOT NULL REFERENCES venues(id),
+    token_id INTEGER NOT NULL,
+    PRIMARY KEY (venue_id, token_id)
 );
 CREATE TABLE IF NOT EXISTS trials (
     session_id TEXT NOT NULL REFERENCES sessions(id),
@@ -145,6 +161,8 @@ const ADDED_COLUMNS: &[(&str, &str, &str)] = &[
         "TEXT NOT NULL DEFAULT 'trans_part'",
     ),
     ("sessions", "owner", "INTEGER"),
+    ("sessions", "venue", "TEXT"),
+    ("sessions", "convention", "TEXT NOT NULL DEFAULT 'unity'"),
 ];
 
 /// Adds the [`ADDED_COLUMNS`] a database made by an older version lacks.
@@ -173,6 +191,10 @@ impl SqliteStore {
         let mut conn = conn;
         conn.execute_batch(SCHEMA)?;
         migrate(&conn)?;
+        // After the columns exist: a database of an older version lacks `sessions.venue`.
+        conn.execute_batch(
+            "CREATE INDEX IF NOT EXISTS sessions_venue ON sessions (venue) WHERE venue IS NOT NULL",
+        )?;
         worker_schema::migrate(&mut conn)?;
         Ok(SqliteStore {
             conn: Mutex::new(conn),

@@ -13,20 +13,21 @@ use crate::session::{NewSession, Session, SessionState, Step};
 use crate::storage::metadata::{Rows, SessionStore, StepRecord, Unreadable};
 use crate::storage::now_ms;
 
-const COLUMNS: &str = "id, trials_total, setting, playback, state, error, stop_reason, adaptive_min, \
-     adaptive_k, recording_bytes, results_trials, legacy, window_frames, pose_relation, owner";
+pub(super) const COLUMNS: &str = "id, trials_total, setting, playback, state, error, stop_reason, adaptive_min, \
+     adaptive_k, recording_bytes, results_trials, legacy, window_frames, pose_relation, owner, venue, \
+     convention";
 
 /// What makes two session requests the same, as one text (compared for an idempotency key
 /// used again); must match [`NewSession::request_summary`].
 const REQUEST: &str = "trials_total || '/' || playback || '/' || setting || '/' || window_frames \
      || '/' || pose_relation || '/' || COALESCE(adaptive_min, '-') || '/' || adaptive_k \
-     || '/' || legacy";
+     || '/' || legacy || '/' || COALESCE(venue, '-') || '/' || convention";
 
 impl NewSession<'_> {
     /// The request as [`REQUEST`] reads it back from a row.
     fn request_summary(&self) -> String {
         format!(
-            "{}/{}/{}/{}/{}/{}/{}/{}",
+            "{}/{}/{}/{}/{}/{}/{}/{}/{}/{}",
             self.trials_total,
             self.playback.as_str(),
             self.settings.setting,
@@ -36,6 +37,8 @@ impl NewSession<'_> {
                 .map_or_else(|| "-".to_string(), |m| m.to_string()),
             self.adaptive_k,
             self.legacy as i64,
+            self.venue.unwrap_or("-"),
+            self.convention.name(),
         )
     }
 }
@@ -81,11 +84,13 @@ fn session_from_row(r: &rusqlite::Row<'_>) -> rusqlite::Result<Session> {
         results_trials: r.get(10)?,
         legacy: r.get::<_, i64>(11)? != 0,
         owner: r.get(14)?,
+        venue: r.get(15)?,
+        convention: typed(r, 16, "convention", super::venues::parse_convention)?,
     })
 }
 
 /// Reads every row of `stmt` (a `SELECT {COLUMNS}`), sorting the readable from the rest.
-fn read_rows(
+pub(super) fn read_rows(
     stmt: &mut rusqlite::Statement<'_>,
     params: impl rusqlite::Params,
 ) -> rusqlite::Result<Rows> {
@@ -129,10 +134,14 @@ impl SessionStore for SqliteStore {
                     return Ok((existing, false));
                 }
             }
+            if let Some(venue) = new.venue {
+                super::venues::check_joining(tx, venue, new.convention)?;
+            }
             tx.execute_cached(
                 "INSERT INTO sessions (id, idempotency_key, created_ms, trials_total, setting, playback, \
-                 state, adaptive_min, adaptive_k, legacy, window_frames, pose_relation, owner) \
-                 VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13)",
+                 state, adaptive_min, adaptive_k, legacy, window_frames, pose_relation, owner, venue, \
+                 convention) \
+                 VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15)",
                 params![
                     id,
                     new.idempotency_key,
@@ -147,6 +156,8 @@ impl SessionStore for SqliteStore {
                     new.settings.window_frames,
                     new.settings.pose_relation.to_string(),
                     new.owner,
+                    new.venue,
+                    new.convention.name(),
                 ],
             )?;
             Ok((id.to_string(), true))
@@ -366,6 +377,8 @@ mod tests {
             adaptive_k: 3,
             legacy: false,
             owner: None,
+            venue: None,
+            convention: sitar_core::Convention::Unity,
         }
     }
 

@@ -1,0 +1,14 @@
+//! Venues: places whose sessions share one frame through a printed image anchor (issue 24).
+//! The typed row and its bounds (`record`), who may see and change one (`access`), and a
+//! session's alignment to its venue's frame from the phone's `anchors.csv` (`alignment`),
+//! and the venue's map from its sessions' files (`map`).
+
+mod access;
+pub(crate) mod alignment;
+pub(crate) mod map;
+mod record;
+
+pub(crate) use access::Standing;
+pub(crate) use record::{
+    CELL_M_RANGE, DEFAULT_CELL_M, MAX_NAME_CHARS, NewVenue, Venue, is_venue_id, new_venue_id,
+};
