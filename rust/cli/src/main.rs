@@ -38,6 +38,7 @@ mod simulate;
 mod source;
 mod token;
 mod traj;
+mod worker;
 
 use std::process::ExitCode;
 
@@ -67,6 +68,7 @@ enum Command {
     Simulate(simulate::Args),
     Serve(serve::Args),
     Token(token::Args),
+    Worker(worker::Args),
     Demo(demo::Args),
     Scene(scene::Args),
 }
@@ -75,7 +77,10 @@ enum Command {
 /// command is in exactly one group).
 const GROUPS: &[(&str, &[&str])] = &[
     ("Getting started", &["demo", "simulate"]),
-    ("Backend (the server phones talk to)", &["serve", "token"]),
+    (
+        "Backend (the server phones talk to)",
+        &["serve", "token", "worker"],
+    ),
     (
         "evo-compatible (evo's command lines)",
         &["ape", "rpe", "traj", "res"],
@@ -150,6 +155,7 @@ fn main() -> ExitCode {
         Command::Simulate(args) => simulate::run(args),
         Command::Serve(args) => serve::run(args),
         Command::Token(args) => token::run(args),
+        Command::Worker(args) => worker::run(args),
         Command::Demo(args) => demo::run(args),
         Command::Scene(args) => scene::run(args),
     };

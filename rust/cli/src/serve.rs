@@ -108,9 +108,19 @@ pub struct Args {
     #[arg(long, value_name = "N", default_value_t = Limits::default().concurrent_uploads)]
     max_concurrent_uploads: u32,
     /// Playback jobs (sim, adb) running at once; more wait in a queue holding no thread
-    /// [default: the machine's cores, 2 … 8].
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=256))]
+    /// [default: the machine's cores, 2 … 8]. 0: this server plays nothing itself; playback
+    /// hosts (`sitar worker`, worker tokens) lease the trials.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(0..=256))]
     playback_workers: Option<u32>,
+    /// With --playback-workers 0: a host's lease on a trial lasts this long past its last
+    /// heartbeat; then the trial is played elsewhere and the host's late upload is refused.
+    #[arg(long, value_name = "SECS", default_value_t = 60.0)]
+    lease_s: f64,
+    /// With --playback-workers 0: sessions whose trials are out with the hosts at once (each
+    /// holds a thread; more wait in the queue).
+    #[arg(long, value_name = "N", default_value_t = 64,
+          value_parser = clap::value_parser!(u32).range(1..=4096))]
+    remote_sessions: u32,
     /// `upload` sessions' estimates running at once [default: the machine's cores, 2 … 8].
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=256))]
     estimate_workers: Option<u32>,
@@ -159,6 +169,10 @@ For phones on a LAN:
   made for this machine's LAN address and name, and its SHA-256 fingerprint is printed for
   the app to pin.
 
+Phones on other machines: start the server with --playback-workers 0 and run
+`sitar worker --server URL --token-file FILE --playback adb` on each of them, with a token
+from `sitar token create --data DIR --role worker --name HOSTS`.
+
 Examples:
   sitar serve --playback sim --data sitar-data
   sitar serve --addr 0.0.0.0:8000 --tls --data sitar-data";
@@ -202,6 +216,14 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(n) = args.playback_workers {
         config.playback_workers = n as usize;
     }
+    if !(args.lease_s.is_finite() && args.lease_s >= 0.1) {
+        anyhow::bail!(
+            "--lease-s {} is not a number of seconds ≥ 0.1",
+            args.lease_s
+        );
+    }
+    config.lease_timeout = Duration::from_secs_f64(args.lease_s);
+    config.remote_sessions = args.remote_sessions as usize;
     if let Some(n) = args.estimate_workers {
         config.estimate_workers = n as usize;
     }
@@ -234,6 +256,13 @@ pub fn run(args: Args) -> Result<()> {
             store.as_deref().unwrap_or("DIR/sessions")
         ),
     };
+    if config.playback_workers == 0 {
+        eprintln!(
+            "sitar serve: sim and adb sessions are played by playback hosts (sitar worker); \
+             leases last {} s past a host's last heartbeat",
+            args.lease_s
+        );
+    }
     eprintln!(
         "sitar serve: data {}{stores}, playback {}{}, {} playback and {} estimate workers; \
          Ctrl-C or SIGTERM stops",

@@ -50,7 +50,8 @@ enum Command {
     Create {
         #[command(flatten)]
         data: Database,
-        /// `app` (its own sessions) or `admin` (everything).
+        /// `app` (its own sessions), `admin` (everything) or `worker` (a playback host:
+        /// the /v1/worker/ routes only).
         #[arg(long, value_parser = parse_role)]
         role: Role,
         /// A name for logs and `sitar token list` (letters, digits, `._-`).

@@ -134,7 +134,7 @@ impl Client {
 
     /// (plain, upload) agents: with a pin, those trusting only the pinned certificate,
     /// fetched on first use.
-    fn agents(&self) -> Result<(Agent, Agent), Error> {
+    pub(crate) fn agents(&self) -> Result<(Agent, Agent), Error> {
         let Some(pin) = &self.cert_pin else {
             return Ok((self.agent.clone(), self.upload_agent.clone()));
         };
@@ -712,7 +712,7 @@ fn body_builder(
     }
 }
 
-fn transport_error(url: &str, e: ureq::Error) -> Error {
+pub(crate) fn transport_error(url: &str, e: ureq::Error) -> Error {
     match e {
         ureq::Error::Timeout(_) => Error::Timeout {
             url: url.to_string(),
@@ -731,7 +731,7 @@ fn transport_error(url: &str, e: ureq::Error) -> Error {
     }
 }
 
-fn server_error(status: u16, body: &str) -> Error {
+pub(crate) fn server_error(status: u16, body: &str) -> Error {
     let parsed: Option<serde_json::Value> = serde_json::from_str(body).ok();
     let field = |name: &str| {
         parsed

@@ -60,6 +60,7 @@ pub mod platform_tls;
 #[cfg(test)]
 mod test_server;
 mod types;
+mod worker_api;
 
 pub use client::{Client, IDEMPOTENCY_HEADER, UPLOAD_OFFSET_HEADER, check_session_id};
 pub use error::Error;
@@ -68,3 +69,4 @@ pub use phone_logs::{PHONE_LOG_FILES, PhoneLogsSent};
 pub use types::{
     NewSession, SessionFrame, SessionOptions, SessionState, SessionStatus, VenueAlignment,
 };
+pub use worker_api::{WorkerHeartbeat, WorkerHost, WorkerLease};

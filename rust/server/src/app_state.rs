@@ -11,10 +11,11 @@ use crate::config::{PlaybackKind, ServerConfig};
 use crate::estimate::live_sessions::LiveSessions;
 use crate::playback::adb::AdbPlayback;
 use crate::playback::queue::{PlaybackQueue, QueueLimits};
+use crate::playback::remote::{RemoteBoard, RemotePlayback};
 use crate::playback::{Playback, PlaybackPlan, SimPlayback, UploadPlayback};
 use crate::session::{Lifecycle, NewSession, Session};
 use crate::storage::BlobStore;
-use crate::storage::MetadataStore;
+use crate::storage::{MetadataStore, WorkerStore};
 use crate::venue::{NewVenue, new_venue_id};
 
 /// What a running job knows that the database does not: timing and the cancel flag.
@@ -34,6 +35,10 @@ pub(crate) struct App {
     pub config: ServerConfig,
     /// Every row the server keeps (the embedded default: SQLite in `DATA/sitar.db`).
     pub db: Arc<dyn MetadataStore>,
+    /// Playback hosts, their phones, the trials leased to them, failed trials.
+    pub workers: Arc<dyn WorkerStore>,
+    /// Where trials uploaded by playback hosts meet their session's job.
+    pub board: Arc<RemoteBoard>,
     /// Every byte the server keeps for its sessions (the embedded default: the data
     /// directory's session folders).
     pub blobs: Arc<dyn BlobStore>,
@@ -63,10 +68,35 @@ pub(crate) struct App {
 
 impl App {
     pub fn open(config: ServerConfig) -> Result<App, Error> {
-        let (db, blobs) = crate::storage::open::open(&config)?;
+        let (db, blobs, workers) = crate::storage::open::open(&config)?;
+        let board = Arc::new(RemoteBoard::default());
+        let local_sim: Arc<dyn Playback> = Arc::new(SimPlayback::new(config.sim.clone()));
+        let local_adb: Arc<dyn Playback> = Arc::new(AdbPlayback::new(config.adb.clone()));
+        // `--playback-workers 0`: the phones are on playback hosts, not here.
+        let (sim, adb) = if config.playback_workers == 0 {
+            let remote = |kind, local: Arc<dyn Playback>| -> Arc<dyn Playback> {
+                Arc::new(RemotePlayback::new(
+                    kind,
+                    local,
+                    workers.clone(),
+                    db.clone(),
+                    board.clone(),
+                    config.lease_timeout,
+                    config.adb.fallback_duration_s,
+                ))
+            };
+            (
+                remote(PlaybackKind::Sim, local_sim),
+                remote(PlaybackKind::Adb, local_adb),
+            )
+        } else {
+            (local_sim, local_adb)
+        };
         Ok(App {
-            sim: Arc::new(SimPlayback::new(config.sim.clone())),
-            adb: Arc::new(AdbPlayback::new(config.adb.clone())),
+            sim,
+            adb,
+            workers,
+            board,
             upload: Arc::new(UploadPlayback),
             limiter: Arc::new(crate::auth::UploadLimiter::new(config.limits)),
             secure_cookies: false,
@@ -163,6 +193,11 @@ impl App {
         for job in self.running_jobs().values() {
             job.cancel.store(true, Ordering::SeqCst);
         }
+    }
+
+    /// Whether sim and adb sessions are played by remote hosts (`--playback-workers 0`).
+    pub fn remote_playback(&self) -> bool {
+        self.config.playback_workers == 0
     }
 
     pub fn stopping(&self) -> bool {

@@ -230,6 +230,9 @@ pub struct ServerConfig {
     pub tls: Option<crate::http::tls::TlsConfig>,
     /// Playback jobs (sim, adb) running at once, each on its own thread; more wait in the
     /// queue holding no thread (default: the machine's cores, at least 2, at most 8).
+    ///
+    /// With 0, the server plays nothing itself: sim and adb sessions are played by
+    /// `sitar worker` hosts that lease their trials (`remote_sessions` of them at once).
     pub playback_workers: usize,
     /// `upload` sessions' estimates (progressive and final) running at once (default: the
     /// machine's cores, at least 2, at most 8).
@@ -240,6 +243,13 @@ pub struct ServerConfig {
     /// Sessions waiting in the playback queue, all tokens together (default 10 000); a
     /// recording that would start one more is refused with 503 `busy`.
     pub max_queued: usize,
+    /// With `playback_workers` 0: sessions whose trials are offered to the playback hosts at
+    /// once (default 64; each holds a thread while it plays, more wait in the queue).
+    pub remote_sessions: usize,
+    /// A playback host's lease on a trial lasts this long past its last heartbeat (default
+    /// 60 s); then the trial is offered to another phone and the host's late upload is
+    /// refused.
+    pub lease_timeout: Duration,
     /// Largest `trials` a session may ask for (default 100); more is a 422 naming the cap.
     pub max_trials: u32,
     /// Whether sessions may ask for `sim` playback on a server whose `playback` is another
@@ -290,6 +300,8 @@ impl ServerConfig {
                 .clamp(2, 8),
             jobs_per_token: 2,
             max_queued: 10_000,
+            remote_sessions: 64,
+            lease_timeout: Duration::from_secs(60),
             max_trials: 100,
             allow_sim: false,
         }

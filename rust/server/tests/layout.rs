@@ -373,6 +373,10 @@ fn only_the_storage_folder_touches_the_data_directory() {
             "the sim player reads the local recording it is handed",
         ),
         ("ingest::mp4_check", "reads the staged upload it is handed"),
+        (
+            "playback::remote",
+            "hashes the local recording it is handed (the playback hosts' cache key)",
+        ),
     ]);
     let sources = sources();
     let mut found = BTreeSet::new();

@@ -1,6 +1,6 @@
 //! Who is asking: the caller the authentication middleware found, as axum extractors
-//! (`Caller` for any authenticated request, `Admin` for admin-only routes; atuin's
-//! `UserAuth` pattern).
+//! (`Caller` for any authenticated request, `Admin` for admin-only routes, `WorkerCaller` for
+//! the playback hosts' routes; atuin's `UserAuth` pattern).
 
 use axum::extract::FromRequestParts;
 use axum::http::request::Parts;
@@ -87,6 +87,34 @@ impl<S: Send + Sync> FromRequestParts<S> for Admin {
                 "token {:?} has the app role; this route needs an admin token",
                 caller.name()
             )))
+        }
+    }
+}
+
+/// A caller with the worker role (a playback host); any other token gets 403. The token id
+/// is the one its hosts are registered under.
+pub(crate) struct WorkerCaller {
+    /// The token's id.
+    pub token: i64,
+    /// The token's name (logs, the devices listing).
+    pub name: String,
+}
+
+impl<S: Send + Sync> FromRequestParts<S> for WorkerCaller {
+    type Rejection = Error;
+
+    async fn from_request_parts(parts: &mut Parts, state: &S) -> Result<WorkerCaller, Error> {
+        match Caller::from_request_parts(parts, state).await? {
+            Caller::Token {
+                id,
+                name,
+                role: Role::Worker,
+            } => Ok(WorkerCaller { token: id, name }),
+            other => Err(Error::Forbidden(format!(
+                "token {:?} is not a worker token; the /v1/worker/ routes are for playback hosts \
+                 (sitar token create --role worker)",
+                other.name()
+            ))),
         }
     }
 }

@@ -58,11 +58,32 @@ pub(crate) async fn authenticate(
             Err(e) => return e.into_response(),
         }
     };
+    if let Err(e) = worker_stays_in_its_routes(&caller, request.uri().path()) {
+        return e.into_response();
+    }
     let name = caller.name().to_owned();
     request.extensions_mut().insert(caller);
     let mut response = next.run(request).await;
     response.extensions_mut().insert(CallerName(name));
     response
+}
+
+/// The playback hosts' routes: the only ones a worker token may use.
+pub(crate) const WORKER_ROUTES: &str = "/v1/worker/";
+
+/// A worker token may use the worker routes and nothing else (403 elsewhere); the worker
+/// routes' own extractor refuses every other token.
+fn worker_stays_in_its_routes(caller: &Caller, path: &str) -> Result<(), Error> {
+    match caller {
+        Caller::Token {
+            role: crate::auth::Role::Worker,
+            name,
+            ..
+        } if !path.starts_with(WORKER_ROUTES) => Err(Error::Forbidden(format!(
+            "token {name:?} has the worker role: it may use only the {WORKER_ROUTES} routes"
+        ))),
+        _ => Ok(()),
+    }
 }
 
 enum Found<'a> {
@@ -163,5 +184,32 @@ mod tests {
         assert!(!is_open("/healthz/x"));
         assert!(is_open("/assets/report.js"));
         assert!(!is_open("/v1/sessions/s0/assets/x"));
+    }
+
+    #[test]
+    fn a_worker_token_stays_in_the_worker_routes() {
+        let worker = Caller::Token {
+            id: 1,
+            name: "host-1".into(),
+            role: crate::auth::Role::Worker,
+        };
+        assert!(worker_stays_in_its_routes(&worker, "/v1/worker/hosts").is_ok());
+        for path in [
+            "/",
+            "/v1/sessions",
+            "/v1/devices",
+            "/v1/workers",
+            "/results.csv",
+        ] {
+            let err = worker_stays_in_its_routes(&worker, path).unwrap_err();
+            assert_eq!(err.status_and_code().1, "forbidden", "{path}: {err}");
+            assert!(err.to_string().contains("host-1"), "{err}");
+        }
+        let app = Caller::Token {
+            id: 2,
+            name: "phone".into(),
+            role: crate::auth::Role::App,
+        };
+        assert!(worker_stays_in_its_routes(&app, "/v1/sessions").is_ok());
     }
 }

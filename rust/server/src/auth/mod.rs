@@ -1,4 +1,4 @@
-//! Access control: tokens with roles (`admin`, `app`), stored only as hashes in the metadata store and
+//! Access control: tokens with roles (`admin`, `app`, `worker`), stored only as hashes in the metadata store and
 //! compared in constant time; the middleware that finds every request's caller; the
 //! `?token=` → cookie step of the HTML pages; share links; the admin token a new data
 //! directory gets; and the per-token limits, counted in the metadata store so a restart keeps them.
@@ -14,7 +14,7 @@ mod usage;
 
 pub(crate) use bootstrap::ensure_admin_token;
 pub use bootstrap::{ADMIN_TOKEN_FILE, PresetToken};
-pub(crate) use caller::{Admin, Caller};
+pub(crate) use caller::{Admin, Caller, WorkerCaller};
 pub use limits::Limits;
 pub(crate) use limits::{UploadLimiter, limit_uploads};
 pub(crate) use middleware::{CallerName, authenticate};

@@ -7,14 +7,17 @@ pub enum Role {
     Admin,
     /// Creates sessions; reads, uploads to, estimates and deletes only its own.
     App,
+    /// A playback host (`sitar worker`): the `/v1/worker/…` routes and nothing else.
+    Worker,
 }
 
 impl Role {
-    /// `admin` or `app`.
+    /// `admin`, `app` or `worker`.
     pub fn as_str(self) -> &'static str {
         match self {
             Role::Admin => "admin",
             Role::App => "app",
+            Role::Worker => "worker",
         }
     }
 }
@@ -25,7 +28,10 @@ impl std::str::FromStr for Role {
         match s {
             "admin" => Ok(Role::Admin),
             "app" => Ok(Role::App),
-            other => Err(format!("unknown role {other:?}: expected admin or app")),
+            "worker" => Ok(Role::Worker),
+            other => Err(format!(
+                "unknown role {other:?}: expected admin, app or worker"
+            )),
         }
     }
 }

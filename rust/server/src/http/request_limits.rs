@@ -57,6 +57,9 @@ pub(crate) fn body_limit(config: &ServerConfig, method: &Method, pattern: &str) 
     match (method.as_str(), pattern) {
         ("PUT", "/v1/sessions/{id}/recording") => upload(config.max_recording_bytes, "recording"),
         ("POST", "/v1/sessions/{id}/trials") => upload(config.max_trajectory_bytes, "trajectory"),
+        ("PUT", "/v1/worker/hosts/{host}/leases/{lease}/trial") => {
+            upload(config.max_trajectory_bytes, "trajectory")
+        }
         ("PUT", "/v1/sessions/{id}/evidence.csv") => upload(MAX_TABLE_BYTES, "evidence.csv"),
         ("PUT", "/v1/sessions/{id}/subtrajectories.csv") => {
             upload(MAX_TABLE_BYTES, "subtrajectories.csv")

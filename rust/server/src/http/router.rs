@@ -14,7 +14,7 @@ use crate::app_state::App;
 use crate::auth::{self, CallerName};
 use crate::http::handlers::{
     devices, evidence, health, legacy, pages, phone_log, recording, results, scene, sessions,
-    share, trials, venues,
+    share, trials, venues, worker,
 };
 use crate::http::helpers::json_response;
 
@@ -82,6 +82,22 @@ pub(crate) fn router(shared: Arc<App>) -> Router {
         )
         .route("/assets/{*name}", get(crate::http::assets::get))
         .route("/v1/devices", get(devices::list))
+        // Playback hosts (`sitar worker`; worker tokens only, and they nothing else).
+        .route("/v1/worker/hosts", post(worker::register))
+        .route("/v1/worker/hosts/{host}/heartbeat", post(worker::heartbeat))
+        .route("/v1/worker/hosts/{host}/leases", post(worker::claim))
+        .route(
+            "/v1/worker/hosts/{host}/leases/{lease}/recording",
+            get(worker::recording),
+        )
+        .route(
+            "/v1/worker/hosts/{host}/leases/{lease}/trial",
+            put(worker::trial),
+        )
+        .route(
+            "/v1/worker/hosts/{host}/leases/{lease}/failure",
+            post(worker::failure),
+        )
         .route("/recording", post(legacy::recording))
         .route("/timestamps", post(legacy::timestamps))
         .route("/results.csv", get(legacy::results))

@@ -73,6 +73,9 @@ pub struct AdbPlayback {
     config: AdbConfig,
     /// The last `adb devices` answer and when it came: see [`AdbPlayback::list`].
     listing: Arc<Mutex<Option<(Instant, Listing)>>>,
+    /// Plays on this phone only (a playback host's slot: `sitar worker` leases one trial per
+    /// phone); `None`: every ready phone.
+    only: Option<String>,
 }
 
 /// `adb devices`, parsed, or why it failed.
@@ -156,6 +159,15 @@ impl AdbPlayback {
         AdbPlayback {
             config,
             listing: Arc::default(),
+            only: None,
+        }
+    }
+
+    /// The same backend playing on phone `serial` only (it shares the `adb devices` answer).
+    pub fn on_phone(&self, serial: &str) -> AdbPlayback {
+        AdbPlayback {
+            only: Some(serial.to_string()),
+            ..self.clone()
         }
     }
 
@@ -207,7 +219,9 @@ impl AdbPlayback {
         Ok(self
             .list()?
             .into_iter()
-            .filter(|(_, s)| s == "device")
+            .filter(|(serial, s)| {
+                s == "device" && self.only.as_ref().is_none_or(|only| only == serial)
+            })
             .map(|(serial, _)| serial)
             .collect())
     }

@@ -65,7 +65,15 @@ pub(crate) fn enqueue(shared: &App, session: &Session, begin: Begin) {
 /// Starts the playback workers: each takes the next session from the queue and plays it to
 /// the end, until the server stops.
 pub(crate) fn spawn_workers(shared: &Arc<App>) {
-    for _ in 0..shared.config.playback_workers.max(1) {
+    // Remote playback: a job holds a thread while its trials are out with the hosts; the
+    // hosts' phones, not these jobs, bound how many trials play at once.
+    let workers = if shared.remote_playback() {
+        crate::playback::reaper::spawn(shared.clone());
+        shared.config.remote_sessions.max(1)
+    } else {
+        shared.config.playback_workers.max(1)
+    };
+    for _ in 0..workers {
         let shared = shared.clone();
         tokio::spawn(async move {
             while let Some(ticket) = shared.queue.next().await {

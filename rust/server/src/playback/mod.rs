@@ -1,6 +1,8 @@
 pub(crate) mod adb;
 pub(crate) mod jobs;
 pub(crate) mod queue;
+pub(crate) mod reaper;
+pub(crate) mod remote;
 pub(crate) mod run;
 
 use std::path::{Path, PathBuf};

@@ -21,6 +21,7 @@ use crate::playback::queue::{Begin, Intent, JobControl, Ticket};
 use crate::playback::{PlaybackJob, TrialOutput};
 use crate::session::Session;
 use crate::storage::keys::SessionObject;
+use crate::storage::workers::TrialFailure;
 
 /// How a job ended.
 pub(crate) enum Outcome {
@@ -216,12 +217,22 @@ impl Run<'_> {
                     let count = self.shared.db.trial_count(self.id)?;
                     self.stop(format!("memory bound: {e} (stopped after {count} trials)"))?;
                 }
-                Err(e) => log::warn!(
-                    "session {}: trial {} from {} dropped: {e}",
-                    self.id,
-                    trial.index,
-                    trial.source
-                ),
+                Err(e) => {
+                    log::warn!(
+                        "session {}: trial {} from {} failed: {e}",
+                        self.id,
+                        trial.index,
+                        trial.source
+                    );
+                    // Shown in the session's status (`failed_trials`), not dropped unseen.
+                    let failure = TrialFailure {
+                        index: trial.index,
+                        source: trial.source.clone(),
+                        error: e.client_message(),
+                        at_ms: crate::storage::now_ms(),
+                    };
+                    self.shared.workers.record_failure(self.id, &failure)?;
+                }
             }
         }
         Ok(())

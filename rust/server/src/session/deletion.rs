@@ -66,6 +66,9 @@ async fn delete(shared: &Arc<App>, id: &str, playback_stopped: bool) -> Result<(
         return Err(e);
     }
     shared.live.remove(&id);
+    if let Err(e) = shared.workers.forget(&id) {
+        log::warn!("session {id}: its leases and failed trials stay: {e}");
+    }
     shared.forget_session_lock(&id);
     crate::report::scene::forget(shared, &id);
     if let Some(taken) = taken {

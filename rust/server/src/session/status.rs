@@ -51,6 +51,12 @@ pub(crate) fn status_json(shared: &App, session: &Session) -> Result<serde_json:
         .into_iter()
         .map(|(kind, state)| json!({"kind": kind, "state": state}))
         .collect();
+    let failed_trials: Vec<_> = shared
+        .workers
+        .failures(&session.id)?
+        .into_iter()
+        .map(|f| json!({"index": f.index, "source": f.source, "error": f.error}))
+        .collect();
     let settings = &session.settings;
     Ok(json!({
         "id": session.id,
@@ -69,6 +75,9 @@ pub(crate) fn status_json(shared: &App, session: &Session) -> Result<serde_json:
         "jobs": jobs,
         // Where it waits for a playback worker (1: next); null when not queued.
         "queue_position": shared.queue.position(&session.id),
+        // Trials a phone played that could not be used (unparsable, failed on its phone),
+        // each with why; a trial played again elsewhere is listed once per failure.
+        "failed_trials": failed_trials,
         "venue": session.venue,
         // From the phone's anchors.csv; null in no venue or without one.
         "alignment": alignment_json(&*shared.db, &*shared.blobs, session)?,

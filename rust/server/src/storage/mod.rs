@@ -1,7 +1,8 @@
 //! Where bytes are kept, behind two seams named by meaning, with no SQL, connection or path
 //! types crossing them: the metadata store ([`metadata`]: sessions, trials, jobs, devices,
 //! tokens, usage, share links, idempotency keys) and the blob store ([`blobs`]: every byte of
-//! a session, named by [`keys::SessionObject`]). The embedded default is SQLite in
+//! a session, named by [`keys::SessionObject`]); beside them the worker store ([`workers`]:
+//! playback hosts, their phones, trials leased to them). The embedded default is SQLite in
 //! `DATA/sitar.db` ([`sqlite`], opened by [`embedded`]) and the data directory's session
 //! folders ([`files`], with the disk quotas of [`quota`]); each instance's own files (admin
 //! token, TLS certificate) are [`instance`]'s. One conformance suite per seam
@@ -22,14 +23,19 @@ pub(crate) mod quota;
 pub(crate) mod s3;
 pub(crate) mod sqlite;
 pub(crate) mod staged;
+pub(crate) mod streamed;
+pub(crate) mod workers;
 
 #[cfg(test)]
 pub(crate) mod conformance;
+#[cfg(test)]
+pub(crate) mod worker_conformance;
 
 pub(crate) use blobs::{BlobStore, body_stream};
 pub(crate) use metadata::{
     JobEnd, MetadataStore, SessionStore, StepRecord, TokenStore, UsageStore, VenueStore,
 };
+pub(crate) use workers::WorkerStore;
 
 /// Now, in ms since the Unix epoch (0 if the clock is before it): the unit of every stored
 /// time.

@@ -1,7 +1,9 @@
 //! Which stores an instance opens: the embedded default (SQLite in `DATA/sitar.db`, the data
 //! directory's session folders) or, with `--database postgres://…` and `--store s3://…`, the
 //! cluster stores ([`super::postgres`], [`super::s3`]) that several instances share. Either
-//! flag alone is allowed (e.g. Postgres with the files on one host).
+//! flag alone is allowed (e.g. Postgres with the files on one host). The worker store (hosts
+//! and leases of `sitar worker`) is the data directory's SQLite in both cases: with
+//! `--database` it is this instance's own, not shared (leases in Postgres are not done yet).
 
 use std::path::Path;
 use std::sync::Arc;
@@ -13,6 +15,7 @@ use crate::storage::files::Files;
 use crate::storage::metadata::MetadataStore;
 use crate::storage::postgres::{PgStore, is_postgres_url};
 use crate::storage::s3::S3Blobs;
+use crate::storage::workers::WorkerStore;
 
 /// The metadata store: Postgres at `database` when given, else the data directory's SQLite.
 pub(crate) fn open_metadata(
@@ -29,10 +32,14 @@ pub(crate) fn open_metadata(
     }
 }
 
-/// The two stores an instance holds.
-pub(crate) type Stores = (Arc<dyn MetadataStore>, Arc<dyn BlobStore>);
+/// The stores an instance holds: metadata, blobs, and the worker store.
+pub(crate) type Stores = (
+    Arc<dyn MetadataStore>,
+    Arc<dyn BlobStore>,
+    Arc<dyn WorkerStore>,
+);
 
-/// Both stores of `config`.
+/// The stores of `config`.
 pub(crate) fn open(config: &ServerConfig) -> Result<Stores, Error> {
     std::fs::create_dir_all(&config.data_dir)
         .map_err(|e| Error::io("cannot create data directory", &config.data_dir, e))?;
@@ -50,6 +57,10 @@ pub(crate) fn open(config: &ServerConfig) -> Result<Stores, Error> {
             config.disk_quota,
         )?),
     };
-    let db = open_metadata(&config.data_dir, config.database.as_deref())?;
-    Ok((db, blobs))
+    let (embedded, workers) = crate::storage::embedded::open_embedded(&config.data_dir)?;
+    let db = match &config.database {
+        None => embedded,
+        Some(_) => open_metadata(&config.data_dir, config.database.as_deref())?,
+    };
+    Ok((db, blobs, workers))
 }

@@ -14,3 +14,4 @@ pub(crate) mod sessions;
 pub(crate) mod share;
 pub(crate) mod trials;
 pub(crate) mod venues;
+pub(crate) mod worker;

@@ -1,7 +1,8 @@
 //! The embedded metadata store: SQLite in `DATA/sitar.db` (WAL mode, so `sitar token` works
 //! beside a running server). This folder is the only place that speaks SQL: the connection,
 //! the schema and its migrations here, and one file per concern of
-//! [`crate::storage::metadata`] (`sessions`, `trials`, `jobs`, `tokens`, `usage`, `venues`).
+//! [`crate::storage::metadata`] (`sessions`, `trials`, `jobs`, `tokens`, `usage`, `venues`) and
+//! of [`crate::storage::workers`] (`hosts`, `leases`, with their versioned `worker_schema`).
 
 use std::path::Path;
 use std::sync::Mutex;
@@ -10,12 +11,15 @@ use rusqlite::{Connection, Params, Row};
 
 use crate::Error;
 
+mod hosts;
 mod jobs;
+mod leases;
 mod sessions;
 mod tokens;
 mod trials;
 mod usage;
 mod venues;
+mod worker_schema;
 
 /// Room in the connection's statement cache: more than the server's distinct SQL texts
 /// (about 50), so none is parsed twice.
@@ -184,12 +188,14 @@ impl SqliteStore {
         let conn = Connection::open(path)?;
         conn.busy_timeout(std::time::Duration::from_secs(5))?;
         conn.set_prepared_statement_cache_capacity(STATEMENT_CACHE);
+        let mut conn = conn;
         conn.execute_batch(SCHEMA)?;
         migrate(&conn)?;
         // After the columns exist: a database of an older version lacks `sessions.venue`.
         conn.execute_batch(
             "CREATE INDEX IF NOT EXISTS sessions_venue ON sessions (venue) WHERE venue IS NOT NULL",
         )?;
+        worker_schema::migrate(&mut conn)?;
         Ok(SqliteStore {
             conn: Mutex::new(conn),
         })
@@ -239,6 +245,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let store = SqliteStore::open(&dir.path().join("sitar.db")).unwrap();
         crate::storage::conformance::metadata_store(&store);
+        crate::storage::worker_conformance::worker_store(&store);
         // What it stored survives a reopen of the file.
         drop(store);
         let again = SqliteStore::open(&dir.path().join("sitar.db")).unwrap();

@@ -1,0 +1,340 @@
+//! Playback on remote hosts (`sitar serve --playback-workers 0`): a session's job offers its
+//! trials in the worker store, `sitar worker` hosts lease them one per free phone, and each
+//! trial a host uploads is committed there exactly once and handed to the job through this
+//! module's [`RemoteBoard`]. The job itself (progressive estimates, adaptive stopping, the
+//! final estimate) is the same as for phones on the server's own USB: [`RemotePlayback`] is
+//! one more [`Playback`].
+
+use std::collections::{BTreeSet, HashMap};
+use std::io::Read;
+use std::path::Path;
+use std::sync::mpsc::{self, Receiver, RecvTimeoutError, Sender};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+use crate::Error;
+use crate::config::PlaybackKind;
+use crate::playback::{DeviceInfo, Playback, PlaybackJob, PlaybackPlan, TrialOutput};
+use crate::storage::MetadataStore;
+use crate::storage::now_ms;
+use crate::storage::workers::{MAX_ATTEMPTS, PhoneState, WorkerStore};
+
+/// How long a job waits for a committed trial to reach it before taking it as lost (the
+/// upload was committed, then its request died before handing it over).
+const HANDOVER_WAIT: Duration = Duration::from_secs(10);
+
+/// How often a job waiting for its trials looks at the worker store (and its cancel flag).
+const CHECK: Duration = Duration::from_millis(200);
+
+/// Where committed trials meet their session's job, and where long-polling hosts wait for
+/// trials to be offered.
+#[derive(Default)]
+pub(crate) struct RemoteBoard {
+    inboxes: Mutex<HashMap<String, Sender<TrialOutput>>>,
+    offered: tokio::sync::Notify,
+}
+
+impl RemoteBoard {
+    fn inboxes(&self) -> std::sync::MutexGuard<'_, HashMap<String, Sender<TrialOutput>>> {
+        self.inboxes.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// Hands a committed trial to its session's job; false when no job waits for it.
+    pub fn deliver(&self, session: &str, trial: TrialOutput) -> bool {
+        self.inboxes()
+            .get(session)
+            .is_some_and(|inbox| inbox.send(trial).is_ok())
+    }
+
+    fn open(&self, session: &str) -> Receiver<TrialOutput> {
+        let (tx, rx) = mpsc::channel();
+        self.inboxes().insert(session.to_string(), tx);
+        rx
+    }
+
+    fn close(&self, session: &str) {
+        self.inboxes().remove(session);
+    }
+
+    /// Trials may be waiting: wakes the hosts' long polls.
+    pub fn wake(&self) {
+        self.offered.notify_waiters();
+    }
+
+    /// A wait for the next [`RemoteBoard::wake`]: enable it before looking for work, so a
+    /// wake between the look and the wait is not missed.
+    pub fn next_wake(&self) -> tokio::sync::futures::Notified<'_> {
+        self.offered.notified()
+    }
+}
+
+/// The SHA-256 of a file, hex: the name hosts cache a recording under.
+pub(crate) fn sha256_file(path: &Path) -> Result<String, Error> {
+    let mut file = std::fs::File::open(path).map_err(|e| Error::io("cannot read", path, e))?;
+    let mut digest = ring::digest::Context::new(&ring::digest::SHA256);
+    let mut buf = vec![0u8; 1 << 20];
+    loop {
+        let n = file
+            .read(&mut buf)
+            .map_err(|e| Error::io("cannot read", path, e))?;
+        if n == 0 {
+            break;
+        }
+        digest.update(&buf[..n]);
+    }
+    Ok(digest
+        .finish()
+        .as_ref()
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect())
+}
+
+/// The first `count` playback indices not in `stored`: a fresh session's are 0, 1, …; a
+/// resumed one's skip what its phones already delivered, in whatever order they came.
+pub(crate) fn indices_to_play(stored: &BTreeSet<u32>, count: u32) -> Vec<u32> {
+    (0..)
+        .filter(|i| !stored.contains(i))
+        .take(count as usize)
+        .collect()
+}
+
+/// A [`Playback`] whose phones are on `sitar worker` hosts (see the module docs).
+pub(crate) struct RemotePlayback {
+    kind: PlaybackKind,
+    /// The server's own backend of this kind: only for how long a trial lasts.
+    local: Arc<dyn Playback>,
+    workers: Arc<dyn WorkerStore>,
+    db: Arc<dyn MetadataStore>,
+    board: Arc<RemoteBoard>,
+    /// A host not heard from for this long is silent (its leases expire).
+    lease: Duration,
+    /// Fallback trial duration of a recording without a readable MP4 header (adb).
+    fallback_duration_s: f64,
+}
+
+impl RemotePlayback {
+    pub fn new(
+        kind: PlaybackKind,
+        local: Arc<dyn Playback>,
+        workers: Arc<dyn WorkerStore>,
+        db: Arc<dyn MetadataStore>,
+        board: Arc<RemoteBoard>,
+        lease: Duration,
+        fallback_duration_s: f64,
+    ) -> RemotePlayback {
+        RemotePlayback {
+            kind,
+            local,
+            workers,
+            db,
+            board,
+            lease,
+            fallback_duration_s,
+        }
+    }
+
+    /// Ready phones of live hosts of this kind.
+    fn ready_phones(&self) -> Result<u32, Error> {
+        let now = now_ms();
+        let live: BTreeSet<String> = self
+            .workers
+            .hosts()?
+            .into_iter()
+            .filter(|h| h.playback == self.kind.as_str() && self.alive(h.last_seen_ms, now))
+            .map(|h| h.id)
+            .collect();
+        Ok(self
+            .workers
+            .phones()?
+            .iter()
+            .filter(|p| p.state == PhoneState::Ready && live.contains(&p.host))
+            .count() as u32)
+    }
+
+    fn alive(&self, last_seen_ms: i64, now_ms: i64) -> bool {
+        now_ms - last_seen_ms <= self.lease.as_millis() as i64
+    }
+
+    /// Waits for the offered trials to come back (or the job to be cancelled), handing each
+    /// to `sink`; `base_done` trials were committed before the offer.
+    fn collect(
+        &self,
+        job: &PlaybackJob,
+        inbox: &Receiver<TrialOutput>,
+        base_done: u32,
+        sink: &(dyn Fn(TrialOutput) + Sync),
+    ) -> Result<(), Error> {
+        let mut received = 0u32;
+        let mut settled_since: Option<Instant> = None;
+        loop {
+            if job.cancelled() {
+                return Ok(());
+            }
+            // A trial, or a look at the store every CHECK (a cancel waits at most that long).
+            match inbox.recv_timeout(CHECK) {
+                Ok(trial) => {
+                    received += 1;
+                    sink(trial);
+                    while let Ok(trial) = inbox.try_recv() {
+                        received += 1;
+                        sink(trial);
+                    }
+                }
+                Err(RecvTimeoutError::Timeout) => {}
+                Err(RecvTimeoutError::Disconnected) => return Ok(()),
+            }
+            let counts = self.workers.counts(&job.session)?;
+            if counts.open() > 0 {
+                settled_since = None;
+                continue;
+            }
+            let committed = counts.done.saturating_sub(base_done);
+            let lost_handover =
+                settled_since.get_or_insert_with(Instant::now).elapsed() >= HANDOVER_WAIT;
+            if received >= committed || lost_handover {
+                if lost_handover && received < committed {
+                    log::warn!(
+                        "session {}: {} committed trial(s) never reached the job",
+                        job.session,
+                        committed - received
+                    );
+                }
+                if counts.failed > 0 {
+                    return Err(Error::Playback(format!(
+                        "{} trial(s) failed on the playback hosts {MAX_ATTEMPTS} times each and \
+                         were given up (see failed_trials)",
+                        counts.failed
+                    )));
+                }
+                return Ok(());
+            }
+        }
+    }
+}
+
+impl Playback for RemotePlayback {
+    fn name(&self) -> &'static str {
+        self.kind.as_str()
+    }
+
+    fn plan(&self, recording: &Path, trials: u32) -> Result<PlaybackPlan, Error> {
+        let trial_seconds = match self.kind {
+            PlaybackKind::Adb => match crate::playback::adb::mp4_duration_s(recording) {
+                Ok(d) if d > 0.0 => d,
+                _ => self.fallback_duration_s,
+            },
+            _ => self.local.plan(recording, trials)?.trial_seconds,
+        };
+        Ok(PlaybackPlan {
+            trial_seconds,
+            devices: self.ready_phones()?.max(1),
+        })
+    }
+
+    fn play(&self, job: &PlaybackJob, sink: &(dyn Fn(TrialOutput) + Sync)) -> Result<(), Error> {
+        let session = self
+            .db
+            .session(&job.session)?
+            .ok_or_else(|| Error::NotFound(format!("no session {:?}", job.session)))?;
+        let stored: BTreeSet<u32> = self
+            .db
+            .trials_in_order(&job.session)?
+            .into_iter()
+            .map(|(_, play_index)| play_index)
+            .collect();
+        let indices = indices_to_play(&stored, job.trials);
+        let sha256 = sha256_file(&job.recording)?;
+        // The inbox opens before the offer: no commit can find it missing.
+        let inbox = self.board.open(&job.session);
+        let outcome = (|| {
+            self.workers.offer(
+                &job.session,
+                session.owner,
+                self.kind.as_str(),
+                &indices,
+                &sha256,
+                now_ms(),
+            )?;
+            let base_done = self.workers.counts(&job.session)?.done;
+            self.board.wake();
+            self.collect(job, &inbox, base_done, sink)
+        })();
+        // Whatever ended the job (done, cancel, delete, shutdown): nothing stays offered, and
+        // hosts playing a withdrawn trial are told to abort at their next heartbeat.
+        self.board.close(&job.session);
+        if let Err(e) = self.workers.withdraw(&job.session) {
+            log::warn!("session {}: cannot withdraw its trials: {e}", job.session);
+        }
+        outcome
+    }
+
+    fn devices(&self) -> Vec<DeviceInfo> {
+        let now = now_ms();
+        let (Ok(hosts), Ok(phones)) = (self.workers.hosts(), self.workers.phones()) else {
+            return Vec::new();
+        };
+        let hosts: HashMap<_, _> = hosts
+            .into_iter()
+            .filter(|h| h.playback == self.kind.as_str())
+            .map(|h| (h.id.clone(), h))
+            .collect();
+        phones
+            .into_iter()
+            .filter_map(|p| {
+                let host = hosts.get(&p.host)?;
+                let state = if !self.alive(host.last_seen_ms, now) {
+                    "host_silent"
+                } else {
+                    p.state.as_str()
+                };
+                Some(DeviceInfo {
+                    serial: format!("{}/{}", host.name, p.serial),
+                    state: state.to_string(),
+                    backend: "remote",
+                })
+            })
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_resumed_session_plays_the_indices_it_lacks() {
+        assert_eq!(indices_to_play(&BTreeSet::new(), 3), vec![0, 1, 2]);
+        let stored = BTreeSet::from([0, 1, 3]);
+        assert_eq!(indices_to_play(&stored, 2), vec![2, 4]);
+        assert!(indices_to_play(&stored, 0).is_empty());
+    }
+
+    #[test]
+    fn the_recording_hash_is_sha256() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("rec");
+        std::fs::write(&path, b"abc").unwrap();
+        assert_eq!(
+            sha256_file(&path).unwrap(),
+            "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"
+        );
+    }
+
+    #[test]
+    fn a_trial_reaches_the_job_of_its_session_only() {
+        let board = RemoteBoard::default();
+        let trial = |index| TrialOutput {
+            index,
+            tum: String::new(),
+            source: "h/sim:0".into(),
+        };
+        assert!(!board.deliver("s1", trial(0)));
+        let inbox = board.open("s1");
+        assert!(board.deliver("s1", trial(1)));
+        assert!(!board.deliver("s2", trial(2)));
+        assert_eq!(inbox.try_recv().unwrap().index, 1);
+        board.close("s1");
+        assert!(!board.deliver("s1", trial(3)));
+    }
+}
