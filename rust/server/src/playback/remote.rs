@@ -1,61 +1,35 @@
 //! Playback on remote hosts (`sitar serve --playback-workers 0`): a session's job offers its
 //! trials in the worker store, `sitar worker` hosts lease them one per free phone, and each
-//! trial a host uploads is committed there exactly once and handed to the job through this
-//! module's [`RemoteBoard`]. The job itself (progressive estimates, adaptive stopping, the
-//! final estimate) is the same as for phones on the server's own USB: [`RemotePlayback`] is
-//! one more [`Playback`].
+//! trial a host uploads is committed there exactly once, its text with it. The job takes the
+//! committed trials from the worker store every [`CHECK`] (not from memory: with a shared
+//! store the host may have uploaded to another instance). The job itself (progressive
+//! estimates, adaptive stopping, the final estimate) is the same as for phones on the
+//! server's own USB: [`RemotePlayback`] is one more [`Playback`].
 
 use std::collections::{BTreeSet, HashMap};
 use std::io::Read;
 use std::path::Path;
-use std::sync::mpsc::{self, Receiver, RecvTimeoutError, Sender};
-use std::sync::{Arc, Mutex};
-use std::time::{Duration, Instant};
+use std::sync::Arc;
+use std::time::Duration;
 
 use crate::Error;
 use crate::config::PlaybackKind;
 use crate::playback::{DeviceInfo, Playback, PlaybackJob, PlaybackPlan, TrialOutput};
 use crate::storage::MetadataStore;
 use crate::storage::now_ms;
-use crate::storage::workers::{MAX_ATTEMPTS, PhoneState, WorkerStore};
+use crate::storage::workers::{MAX_ATTEMPTS, MAX_TAKEN_PER_CALL, PhoneState, WorkerStore};
 
-/// How long a job waits for a committed trial to reach it before taking it as lost (the
-/// upload was committed, then its request died before handing it over).
-const HANDOVER_WAIT: Duration = Duration::from_secs(10);
-
-/// How often a job waiting for its trials looks at the worker store (and its cancel flag).
+/// How often a job waiting for its trials takes what was committed (and looks at its cancel
+/// flag): a trial reaches its job at most this long after its commit.
 const CHECK: Duration = Duration::from_millis(200);
 
-/// Where committed trials meet their session's job, and where long-polling hosts wait for
-/// trials to be offered.
+/// Where long-polling hosts wait for trials offered on this instance.
 #[derive(Default)]
 pub(crate) struct RemoteBoard {
-    inboxes: Mutex<HashMap<String, Sender<TrialOutput>>>,
     offered: tokio::sync::Notify,
 }
 
 impl RemoteBoard {
-    fn inboxes(&self) -> std::sync::MutexGuard<'_, HashMap<String, Sender<TrialOutput>>> {
-        self.inboxes.lock().unwrap_or_else(|e| e.into_inner())
-    }
-
-    /// Hands a committed trial to its session's job; false when no job waits for it.
-    pub fn deliver(&self, session: &str, trial: TrialOutput) -> bool {
-        self.inboxes()
-            .get(session)
-            .is_some_and(|inbox| inbox.send(trial).is_ok())
-    }
-
-    fn open(&self, session: &str) -> Receiver<TrialOutput> {
-        let (tx, rx) = mpsc::channel();
-        self.inboxes().insert(session.to_string(), tx);
-        rx
-    }
-
-    fn close(&self, session: &str) {
-        self.inboxes().remove(session);
-    }
-
     /// Trials may be waiting: wakes the hosts' long polls.
     pub fn wake(&self) {
         self.offered.notify_waiters();
@@ -156,50 +130,31 @@ impl RemotePlayback {
         now_ms - last_seen_ms <= self.lease.as_millis() as i64
     }
 
-    /// Waits for the offered trials to come back (or the job to be cancelled), handing each
-    /// to `sink`; `base_done` trials were committed before the offer.
-    fn collect(
-        &self,
-        job: &PlaybackJob,
-        inbox: &Receiver<TrialOutput>,
-        base_done: u32,
-        sink: &(dyn Fn(TrialOutput) + Sync),
-    ) -> Result<(), Error> {
-        let mut received = 0u32;
-        let mut settled_since: Option<Instant> = None;
+    /// Hands every trial committed for the job's session to `sink` until none is open (or
+    /// the job is cancelled).
+    fn collect(&self, job: &PlaybackJob, sink: &(dyn Fn(TrialOutput) + Sync)) -> Result<(), Error> {
         loop {
             if job.cancelled() {
                 return Ok(());
             }
-            // A trial, or a look at the store every CHECK (a cancel waits at most that long).
-            match inbox.recv_timeout(CHECK) {
-                Ok(trial) => {
-                    received += 1;
-                    sink(trial);
-                    while let Ok(trial) = inbox.try_recv() {
-                        received += 1;
-                        sink(trial);
-                    }
-                }
-                Err(RecvTimeoutError::Timeout) => {}
-                Err(RecvTimeoutError::Disconnected) => return Ok(()),
-            }
+            // Counted before taking: a trial done by then is committed, so this take (or an
+            // earlier one) has it when nothing is open any more.
             let counts = self.workers.counts(&job.session)?;
-            if counts.open() > 0 {
-                settled_since = None;
-                continue;
-            }
-            let committed = counts.done.saturating_sub(base_done);
-            let lost_handover =
-                settled_since.get_or_insert_with(Instant::now).elapsed() >= HANDOVER_WAIT;
-            if received >= committed || lost_handover {
-                if lost_handover && received < committed {
-                    log::warn!(
-                        "session {}: {} committed trial(s) never reached the job",
-                        job.session,
-                        committed - received
-                    );
+            loop {
+                let taken = self.workers.take_committed(&job.session)?;
+                let full = taken.len() >= MAX_TAKEN_PER_CALL;
+                for trial in taken {
+                    sink(TrialOutput {
+                        index: trial.index,
+                        tum: trial.tum,
+                        source: trial.source,
+                    });
                 }
+                if !full {
+                    break;
+                }
+            }
+            if counts.open() == 0 {
                 if counts.failed > 0 {
                     return Err(Error::Playback(format!(
                         "{} trial(s) failed on the playback hosts {MAX_ATTEMPTS} times each and \
@@ -209,6 +164,7 @@ impl RemotePlayback {
                 }
                 return Ok(());
             }
+            std::thread::sleep(CHECK);
         }
     }
 }
@@ -245,8 +201,6 @@ impl Playback for RemotePlayback {
             .collect();
         let indices = indices_to_play(&stored, job.trials);
         let sha256 = sha256_file(&job.recording)?;
-        // The inbox opens before the offer: no commit can find it missing.
-        let inbox = self.board.open(&job.session);
         let outcome = (|| {
             self.workers.offer(
                 &job.session,
@@ -256,13 +210,11 @@ impl Playback for RemotePlayback {
                 &sha256,
                 now_ms(),
             )?;
-            let base_done = self.workers.counts(&job.session)?.done;
             self.board.wake();
-            self.collect(job, &inbox, base_done, sink)
+            self.collect(job, sink)
         })();
         // Whatever ended the job (done, cancel, delete, shutdown): nothing stays offered, and
         // hosts playing a withdrawn trial are told to abort at their next heartbeat.
-        self.board.close(&job.session);
         if let Err(e) = self.workers.withdraw(&job.session) {
             log::warn!("session {}: cannot withdraw its trials: {e}", job.session);
         }
@@ -319,22 +271,5 @@ mod tests {
             sha256_file(&path).unwrap(),
             "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"
         );
-    }
-
-    #[test]
-    fn a_trial_reaches_the_job_of_its_session_only() {
-        let board = RemoteBoard::default();
-        let trial = |index| TrialOutput {
-            index,
-            tum: String::new(),
-            source: "h/sim:0".into(),
-        };
-        assert!(!board.deliver("s1", trial(0)));
-        let inbox = board.open("s1");
-        assert!(board.deliver("s1", trial(1)));
-        assert!(!board.deliver("s2", trial(2)));
-        assert_eq!(inbox.try_recv().unwrap().index, 1);
-        board.close("s1");
-        assert!(!board.deliver("s1", trial(3)));
     }
 }

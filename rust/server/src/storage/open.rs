@@ -2,8 +2,9 @@
 //! directory's session folders) or, with `--database postgres://…` and `--store s3://…`, the
 //! cluster stores ([`super::postgres`], [`super::s3`]) that several instances share. Either
 //! flag alone is allowed (e.g. Postgres with the files on one host). The worker store (hosts
-//! and leases of `sitar worker`) is the data directory's SQLite in both cases: with
-//! `--database` it is this instance's own, not shared (leases in Postgres are not done yet).
+//! and leases of `sitar worker`) lives with the metadata: the data directory's SQLite, or with
+//! `--database` the same Postgres, shared by every instance (a host may register, lease and
+//! upload on any of them).
 
 use std::path::Path;
 use std::sync::Arc;
@@ -25,11 +26,16 @@ pub(crate) fn open_metadata(
     match database {
         None => crate::storage::embedded::open_metadata(data_dir),
         Some(url) if is_postgres_url(url) => Ok(Arc::new(PgStore::open(url)?)),
-        Some(url) => Err(Error::Config(format!(
-            "--database {}: expected postgres://USER@HOST:PORT/DATABASE",
-            crate::storage::postgres::redact(url)
-        ))),
+        Some(url) => Err(not_postgres(url)),
     }
+}
+
+/// The error of a `--database` that is not a Postgres URL.
+fn not_postgres(url: &str) -> Error {
+    Error::Config(format!(
+        "--database {}: expected postgres://USER@HOST:PORT/DATABASE",
+        crate::storage::postgres::redact(url)
+    ))
 }
 
 /// The stores an instance holds: metadata, blobs, and the worker store.
@@ -57,10 +63,13 @@ pub(crate) fn open(config: &ServerConfig) -> Result<Stores, Error> {
             config.disk_quota,
         )?),
     };
-    let (embedded, workers) = crate::storage::embedded::open_embedded(&config.data_dir)?;
-    let db = match &config.database {
-        None => embedded,
-        Some(_) => open_metadata(&config.data_dir, config.database.as_deref())?,
+    let (db, workers): (Arc<dyn MetadataStore>, Arc<dyn WorkerStore>) = match &config.database {
+        None => crate::storage::embedded::open_embedded(&config.data_dir)?,
+        Some(url) if is_postgres_url(url) => {
+            let store = Arc::new(PgStore::open(url)?);
+            (store.clone(), store)
+        }
+        Some(url) => return Err(not_postgres(url)),
     };
     Ok((db, blobs, workers))
 }

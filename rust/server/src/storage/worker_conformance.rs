@@ -1,10 +1,15 @@
 //! The conformance suite of the worker store ([`WorkerStore`]): what every implementation must
 //! do, written once against the traits. The embedded store runs it (`storage::sqlite`'s
-//! tests); another implementation calls [`worker_store`] on a fresh, empty store of its own.
+//! tests); another implementation calls [`worker_store`] on a fresh, empty store of its own,
+//! and [`racing_instances`] with two handles on one store (two instances on one database; the
+//! embedded store, which one instance owns, passes the same handle twice).
+
+use std::collections::BTreeSet;
+use std::sync::Barrier;
 
 use crate::storage::workers::{
-    FAILURES_OUT_OF_SERVICE, LeaseCounts, MAX_ATTEMPTS, PhoneState, Requeued, TrialFailure,
-    WorkerStore,
+    FAILURES_OUT_OF_SERVICE, LeaseCounts, MAX_ATTEMPTS, MAX_TAKEN_PER_CALL, PhoneState, Requeued,
+    TrialFailure, WorkerStore,
 };
 
 const LEASE_MS: i64 = 60_000;
@@ -18,6 +23,7 @@ pub(crate) fn worker_store(store: &dyn WorkerStore) {
     phones_failing_twice_in_a_row_leave_service(store);
     withdrawn_trials_are_not_leased_and_their_leases_abort(store);
     failed_trials_are_kept_for_the_status(store);
+    committed_trials_reach_the_job_once(store);
 }
 
 fn phones(serials: &[&str]) -> Vec<String> {
@@ -116,10 +122,18 @@ fn a_trial_is_committed_exactly_once(store: &dyn WorkerStore) {
     let other = store
         .register_host(10, "once-b", "sim", &phones(&["p0"]), 0)
         .unwrap();
-    assert!(store.commit(&lease.id, &other, 10).unwrap().is_err());
-    let committed = store.commit(&lease.id, &host, 10).unwrap().unwrap();
+    assert!(
+        store
+            .commit(&lease.id, &other, 10, "", "")
+            .unwrap()
+            .is_err()
+    );
+    let committed = store.commit(&lease.id, &host, 10, "", "").unwrap().unwrap();
     assert_eq!(committed.index, 0);
-    let again = store.commit(&lease.id, &host, 11).unwrap().unwrap_err();
+    let again = store
+        .commit(&lease.id, &host, 11, "", "")
+        .unwrap()
+        .unwrap_err();
     assert!(again.contains(&lease.id), "{again}");
     assert_eq!(
         store.counts("s2000000000000001").unwrap(),
@@ -183,9 +197,24 @@ fn leases_expire_without_heartbeats_and_trials_are_replayed(store: &dyn WorkerSt
     assert_eq!(second.index, 3);
     assert_ne!(second.id, first.id);
     // The presumed-dead host's late upload is refused; the live one commits, once.
-    assert!(store.commit(&first.id, &a, 110_004).unwrap().is_err());
-    assert!(store.commit(&second.id, &b, 110_005).unwrap().is_ok());
-    assert!(store.commit(&first.id, &a, 110_006).unwrap().is_err());
+    assert!(
+        store
+            .commit(&first.id, &a, 110_004, "", "")
+            .unwrap()
+            .is_err()
+    );
+    assert!(
+        store
+            .commit(&second.id, &b, 110_005, "", "")
+            .unwrap()
+            .is_ok()
+    );
+    assert!(
+        store
+            .commit(&first.id, &a, 110_006, "", "")
+            .unwrap()
+            .is_err()
+    );
     assert_eq!(store.counts("s2000000000000002").unwrap().done, 1);
     // A lease past its time is not live, even before the reaper ran.
     store
@@ -193,7 +222,7 @@ fn leases_expire_without_heartbeats_and_trials_are_replayed(store: &dyn WorkerSt
         .unwrap();
     let late = store.claim(&b, "p0", "sim", 0, 1_000).unwrap().unwrap();
     assert!(store.live_lease(&late.id, &b, 1_001).unwrap().is_none());
-    assert!(store.commit(&late.id, &b, 1_001).unwrap().is_err());
+    assert!(store.commit(&late.id, &b, 1_001, "", "").unwrap().is_err());
     // Expiring over and over gives the trial up after MAX_ATTEMPTS.
     let mut now = 2_000;
     let mut last = None;
@@ -230,7 +259,7 @@ fn owners_are_served_in_turn(store: &dyn WorkerStore) {
     let mut order = Vec::new();
     while let Some(lease) = store.claim(&host, "p0", "adb", 0, LEASE_MS).unwrap() {
         order.push((lease.session.clone(), lease.index));
-        assert!(store.commit(&lease.id, &host, 0).unwrap().is_ok());
+        assert!(store.commit(&lease.id, &host, 0, "", "").unwrap().is_ok());
     }
     // Alternating between the tokens while both wait, each in its own order.
     let expected = [
@@ -335,7 +364,7 @@ fn withdrawn_trials_are_not_leased_and_their_leases_abort(store: &dyn WorkerStor
         )
         .unwrap();
     assert_eq!(abort, vec![lease.id.clone()]);
-    assert!(store.commit(&lease.id, &host, 1).unwrap().is_err());
+    assert!(store.commit(&lease.id, &host, 1, "", "").unwrap().is_err());
     assert_eq!(store.counts("s5000000000000001").unwrap().open(), 0);
     // Offered again (a resumed session): the named trials only, committed ones included
     // (their files were lost with the crash that interrupted them).
@@ -378,4 +407,173 @@ fn failed_trials_are_kept_for_the_status(store: &dyn WorkerStore) {
     assert_eq!(kept[1].error, "trial:1: not a number");
     store.forget(session).unwrap();
     assert!(store.failures(session).unwrap().is_empty());
+}
+
+fn committed_trials_reach_the_job_once(store: &dyn WorkerStore) {
+    let session = "s7000000000000001";
+    let host = store
+        .register_host(70, "hands", "sim", &phones(&["p0"]), 0)
+        .unwrap();
+    let count = MAX_TAKEN_PER_CALL as u32 + 3;
+    let all: Vec<u32> = (0..count).collect();
+    store.offer(session, Some(7), "sim", &all, "x", 0).unwrap();
+    assert!(store.take_committed(session).unwrap().is_empty());
+    // Committed in reverse order, each with its own text.
+    let mut leases = Vec::new();
+    while let Some(lease) = store.claim(&host, "p0", "sim", 0, LEASE_MS).unwrap() {
+        let tum = format!("{}.0 0 0 0 0 0 0 1\n", lease.index);
+        assert!(
+            store
+                .commit(&lease.id, &host, 1, &tum, "hands/p0")
+                .unwrap()
+                .is_ok()
+        );
+        leases.push(lease);
+    }
+    assert_eq!(leases.len(), count as usize);
+    // A refused commit stores nothing: the trial stays taken as it was.
+    assert!(
+        store
+            .commit(&leases[0].id, &host, 2, "garbage", "hands/p0")
+            .unwrap()
+            .is_err()
+    );
+    // Bounded per call, by index, each once; then nothing more.
+    let first = store.take_committed(session).unwrap();
+    assert_eq!(first.len(), MAX_TAKEN_PER_CALL);
+    assert_eq!(
+        (
+            first[0].index,
+            first[0].tum.as_str(),
+            first[0].source.as_str()
+        ),
+        (0, "0.0 0 0 0 0 0 0 1\n", "hands/p0")
+    );
+    let rest = store.take_committed(session).unwrap();
+    let indices: Vec<u32> = first.iter().chain(&rest).map(|t| t.index).collect();
+    assert_eq!(indices, all);
+    assert!(store.take_committed(session).unwrap().is_empty());
+    assert_eq!(store.counts(session).unwrap().done, count);
+    // A trial committed after a withdraw (a job that ended) is dropped by the next offer,
+    // which plays it again: a resumed job takes only what its own offer brought.
+    store.offer(session, Some(7), "sim", &[0], "x", 5).unwrap();
+    let lease = store
+        .claim(&host, "p0", "sim", 5, LEASE_MS)
+        .unwrap()
+        .unwrap();
+    store
+        .commit(&lease.id, &host, 6, "late", "hands/p0")
+        .unwrap()
+        .unwrap();
+    store.withdraw(session).unwrap();
+    assert!(store.take_committed(session).unwrap().is_empty());
+    store.offer(session, Some(7), "sim", &[0], "x", 7).unwrap();
+    let lease = store
+        .claim(&host, "p0", "sim", 7, LEASE_MS)
+        .unwrap()
+        .unwrap();
+    store
+        .commit(&lease.id, &host, 8, "again", "hands/p0")
+        .unwrap()
+        .unwrap();
+    store.offer(session, Some(7), "sim", &[0], "x", 9).unwrap();
+    assert!(store.take_committed(session).unwrap().is_empty());
+    store.forget(session).unwrap();
+}
+
+/// Two instances at once on one store, through `a` and `b` (the same handle twice for a store
+/// one instance owns): every trial is leased once and committed once, a commit raced from both
+/// sides succeeds once, and every committed trial is taken once. `a` and `b` must be empty.
+pub(crate) fn racing_instances(a: &dyn WorkerStore, b: &dyn WorkerStore) {
+    let stores = [a, b];
+    let session = "s8000000000000001";
+    let serials: Vec<String> = (0..6).map(|n| format!("p{n}")).collect();
+    let host = a.register_host(80, "race", "sim", &serials, 0).unwrap();
+    let trials: Vec<u32> = (0..24).collect();
+    b.offer(session, Some(8), "sim", &trials, "x", 0).unwrap();
+    // Six phones claim and commit at once, alternating between the handles.
+    let played: Vec<(u32, String)> = std::thread::scope(|s| {
+        let runs: Vec<_> = serials
+            .iter()
+            .enumerate()
+            .map(|(n, phone)| {
+                let (mine, other) = (stores[n % 2], stores[(n + 1) % 2]);
+                let host = host.clone();
+                s.spawn(move || {
+                    let mut got = Vec::new();
+                    while let Some(lease) = mine.claim(&host, phone, "sim", 0, LEASE_MS).unwrap() {
+                        let tum = format!("trial {}", lease.index);
+                        other
+                            .commit(&lease.id, &host, 1, &tum, phone)
+                            .unwrap()
+                            .unwrap();
+                        got.push((lease.index, lease.id));
+                    }
+                    got
+                })
+            })
+            .collect();
+        runs.into_iter().flat_map(|r| r.join().unwrap()).collect()
+    });
+    let indices: BTreeSet<u32> = played.iter().map(|(i, _)| *i).collect();
+    assert_eq!(
+        played.len(),
+        trials.len(),
+        "each trial leased once: {played:?}"
+    );
+    assert_eq!(indices.into_iter().collect::<Vec<_>>(), trials);
+    assert_eq!(a.counts(session).unwrap().done, trials.len() as u32);
+    // Both handles take at once: together they take every trial, none twice.
+    let barrier = Barrier::new(2);
+    let taken: Vec<u32> = std::thread::scope(|s| {
+        let runs: Vec<_> = stores
+            .iter()
+            .map(|store| {
+                let barrier = &barrier;
+                s.spawn(move || {
+                    barrier.wait();
+                    let mut got = Vec::new();
+                    loop {
+                        let batch = store.take_committed(session).unwrap();
+                        if batch.is_empty() {
+                            return got;
+                        }
+                        got.extend(batch.iter().map(|t| t.index));
+                    }
+                })
+            })
+            .collect();
+        runs.into_iter().flat_map(|r| r.join().unwrap()).collect()
+    });
+    let mut sorted = taken.clone();
+    sorted.sort_unstable();
+    assert_eq!(sorted, trials, "each committed trial taken once: {taken:?}");
+    // One lease, committed from both sides at the same moment: exactly one succeeds.
+    for round in 0..10u32 {
+        let one = format!("s80000000000001{round:02}");
+        a.offer(&one, None, "sim", &[0], "x", 0).unwrap();
+        let lease = b.claim(&host, "p0", "sim", 0, LEASE_MS).unwrap().unwrap();
+        let wins = std::thread::scope(|s| {
+            let runs: Vec<_> = stores
+                .iter()
+                .map(|store| {
+                    let (barrier, lease, host) = (&barrier, &lease, &host);
+                    s.spawn(move || {
+                        barrier.wait();
+                        store
+                            .commit(&lease.id, host, 1, "t", "race/p0")
+                            .unwrap()
+                            .is_ok()
+                    })
+                })
+                .collect();
+            runs.into_iter()
+                .map(|r| r.join().unwrap())
+                .filter(|won| *won)
+                .count()
+        });
+        assert_eq!(wins, 1, "round {round}");
+        assert_eq!(b.take_committed(&one).unwrap().len(), 1);
+        assert!(a.take_committed(&one).unwrap().is_empty());
+    }
 }

@@ -3,7 +3,13 @@
 //! [`HostStore`] (hosts, phones, their failures) and [`LeaseStore`] (trials offered to the
 //! hosts, leases, commits, failed trials); [`WorkerStore`] is both. The embedded
 //! implementation is SQLite (`storage/sqlite/hosts.rs`, `leases.rs`, a versioned migration in
-//! `worker_schema.rs`); `storage::worker_conformance` is the suite any implementation passes.
+//! `worker_schema.rs`); the cluster one is Postgres (`storage/postgres/hosts.rs`, `leases.rs`,
+//! migration `0003_workers.sql`), shared by every instance on the database.
+//! `storage::worker_conformance` is the suite any implementation passes.
+//!
+//! A committed trial's text is stored with its lease, in the commit's transaction, and its
+//! session's job takes it from there ([`LeaseStore::take_committed`]): the host may upload to
+//! any instance, whichever instance runs the job.
 //!
 //! Every time is ms since the Unix epoch and is passed in, so the suite controls the clock.
 
@@ -18,6 +24,32 @@ pub(crate) const FAILURES_OUT_OF_SERVICE: u32 = 2;
 
 /// Failed trials kept per session for its status (the newest are dropped beyond).
 pub(crate) const MAX_FAILURES_KEPT: usize = 100;
+
+/// Committed trials one [`LeaseStore::take_committed`] hands over at most (the job calls
+/// again at once when it got this many): what one call holds in memory is this many trials
+/// of at most `--max-trajectory-bytes` each.
+pub(crate) const MAX_TAKEN_PER_CALL: usize = 32;
+
+/// A committed trial, as its session's job takes it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub(crate) struct CommittedTrial {
+    /// The trial's playback index.
+    pub index: u32,
+    /// Its TUM text, as the host uploaded it.
+    pub tum: String,
+    /// The phone that played it (`HOST/SERIAL`).
+    pub source: String,
+}
+
+/// A server-made id: `prefix` and 16 hex digits from the system's secure generator.
+pub(crate) fn random_id(prefix: char) -> Result<String, Error> {
+    use ring::rand::SecureRandom;
+    let mut bytes = [0u8; 8];
+    ring::rand::SystemRandom::new()
+        .fill(&mut bytes)
+        .map_err(|_| Error::Internal("the system's random generator failed".into()))?;
+    Ok(format!("{prefix}{:016x}", u64::from_be_bytes(bytes)))
+}
 
 /// A phone's state as the server sees it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -184,7 +216,8 @@ pub(crate) trait HostStore {
 pub(crate) trait LeaseStore {
     /// Offers `indices` of `session` (of `owner`, to `playback` hosts): each becomes pending,
     /// whatever it was (the caller offers only trials it has not stored: a commit whose trial
-    /// a crash lost is played again); the session's other open trials are withdrawn.
+    /// a crash lost is played again); the session's other open trials are withdrawn and its
+    /// committed trials no job took are dropped (an earlier job's, which ended).
     fn offer(
         &self,
         session: &str,
@@ -208,16 +241,30 @@ pub(crate) trait LeaseStore {
     ) -> Result<Option<Lease>, Error>;
     /// Lease `lease` if it is `host`'s and live (not expired at `now_ms`, not withdrawn).
     fn live_lease(&self, lease: &str, host: &str, now_ms: i64) -> Result<Option<Lease>, Error>;
-    /// Commits the trial of `lease` — exactly once: only a live lease of `host` commits
-    /// (atomically, so a late upload of an expired or replaced lease never does). `Err`
-    /// names why not.
-    fn commit(&self, lease: &str, host: &str, now_ms: i64) -> Result<Result<Lease, String>, Error>;
+    /// Commits the trial of `lease` with its text `tum` (at most `--max-trajectory-bytes`, the
+    /// caller's bound) and `source` — exactly once: only a live lease of `host` commits
+    /// (atomically, so a late upload of an expired or replaced lease never does); the text is
+    /// stored in the same statement, for [`LeaseStore::take_committed`]. `Err` names why not.
+    fn commit(
+        &self,
+        lease: &str,
+        host: &str,
+        now_ms: i64,
+        tum: &str,
+        source: &str,
+    ) -> Result<Result<Lease, String>, Error>;
+    /// Takes up to [`MAX_TAKEN_PER_CALL`] committed trials of `session` not taken before, by
+    /// index, and marks them taken (their text dropped) in the same transaction: each is
+    /// handed over once, whichever instance asks. A job that dies before storing what it took
+    /// loses nothing: the resumed session offers the indices it lacks again.
+    fn take_committed(&self, session: &str) -> Result<Vec<CommittedTrial>, Error>;
     /// Gives `lease`'s trial back (its phone failed, or the trial could not be used): offered
     /// again, or given up after [`MAX_ATTEMPTS`]. None if the lease was not live.
     fn give_back(&self, lease: &str, host: &str) -> Result<Option<Requeued>, Error>;
     /// Expires leases past their time: their trials are offered again (or given up).
     fn expire(&self, now_ms: i64) -> Result<Vec<Expired>, Error>;
-    /// Withdraws `session`'s open trials (cancel, delete, end of playback).
+    /// Withdraws `session`'s open trials (cancel, delete, end of playback) and drops its
+    /// committed trials no job took.
     fn withdraw(&self, session: &str) -> Result<(), Error>;
     /// `session`'s offered trials by state.
     fn counts(&self, session: &str) -> Result<LeaseCounts, Error>;

@@ -17,7 +17,6 @@ use crate::auth::WorkerCaller;
 use crate::config::PlaybackKind;
 use crate::http::helpers::{AppState, blocking, check_declared_length, json_value};
 use crate::ingest::trials::parse_trial;
-use crate::playback::TrialOutput;
 use crate::storage::keys::SessionObject;
 use crate::storage::now_ms;
 use crate::storage::workers::{HostRow, Lease, PhoneState, Requeued, TrialFailure};
@@ -25,6 +24,14 @@ use crate::storage::{body_stream, streamed};
 
 /// The longest a lease request waits for a trial (`wait_s`).
 pub(crate) const MAX_LEASE_WAIT: Duration = Duration::from_secs(20);
+/// With a shared worker store (`--database`), how often a waiting lease request looks at it
+/// again besides the local wake: another instance's offers wake nobody here, so a host
+/// long-polling this instance sees them within this long (one claim query per waiting phone
+/// and interval).
+pub(crate) const STORE_RECHECK: Duration = Duration::from_secs(1);
+/// The same for the instance's own store, where every offer wakes the waiting requests: only
+/// so that a stopping server answers them.
+const LOCAL_RECHECK: Duration = Duration::from_secs(5);
 /// Phones one host may report.
 pub(crate) const MAX_PHONES: usize = 256;
 /// Longest host name, phone serial or failure message kept (bytes).
@@ -237,9 +244,15 @@ pub(crate) async fn claim(
         if now >= deadline || shared.stopping() {
             return Ok(StatusCode::NO_CONTENT.into_response());
         }
-        // Woken when trials are offered, leases expire or a host registers (its phones may
-        // take what waits); a server stopping answers within 5 s.
-        let nap = (deadline - now).min(Duration::from_secs(5));
+        // Woken when trials are offered here, leases expire or a host registers (its phones
+        // may take what waits); trials another instance offered are seen at the next look,
+        // within STORE_RECHECK; a server stopping answers within that too.
+        let recheck = if shared.config.database.is_some() {
+            STORE_RECHECK
+        } else {
+            LOCAL_RECHECK
+        };
+        let nap = (deadline - now).min(recheck);
         let _ = tokio::time::timeout(nap, woken).await;
     }
 }
@@ -349,26 +362,13 @@ pub(crate) async fn trial(
             }
             return Err(e);
         }
+        // The text goes into the worker store with the commit: the session's job takes it
+        // from there, on whichever instance it runs.
+        let tum = String::from_utf8_lossy(&bytes);
         let lease = workers
-            .commit(&leased.id, &row.id, now_ms())?
+            .commit(&leased.id, &row.id, now_ms(), &tum, &source)?
             .map_err(Error::Conflict)?;
         workers.phone_result(&row.id, &lease.phone, None)?;
-        let tum = String::from_utf8_lossy(&bytes).into_owned();
-        let delivered = shared.board.deliver(
-            &lease.session,
-            TrialOutput {
-                index: lease.index,
-                tum,
-                source,
-            },
-        );
-        if !delivered {
-            log::warn!(
-                "session {}: trial {} committed but its job has ended",
-                lease.session,
-                lease.index
-            );
-        }
         Ok(json_value(
             StatusCode::CREATED,
             &json!({"session": lease.session, "index": lease.index}),

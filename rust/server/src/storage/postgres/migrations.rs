@@ -12,6 +12,7 @@ use crate::storage::now_ms;
 const MIGRATIONS: &[(i64, &str, &str)] = &[
     (1, "tables", include_str!("migrations/0001_tables.sql")),
     (2, "venues", include_str!("migrations/0002_venues.sql")),
+    (3, "workers", include_str!("migrations/0003_workers.sql")),
 ];
 
 /// The advisory lock key the migrating instance holds (`sitar` in ASCII).

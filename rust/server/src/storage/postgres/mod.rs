@@ -13,7 +13,9 @@ use std::str::FromStr;
 
 use crate::Error;
 
+mod hosts;
 mod jobs;
+mod leases;
 mod migrations;
 mod pool;
 mod sessions;
@@ -145,6 +147,21 @@ mod tests {
         let again = PgStore::open(&url).unwrap();
         use crate::storage::SessionStore;
         assert!(again.session("s1000000000000005").unwrap().is_some());
+    }
+
+    #[test]
+    fn the_cluster_worker_store_passes_the_conformance_suite() {
+        let Some(url) = test_database::fresh("workers") else {
+            return;
+        };
+        let store = PgStore::open(&url).unwrap();
+        crate::storage::worker_conformance::worker_store(&store);
+        // Two instances on one database (each its own connections) racing.
+        let Some(url) = test_database::fresh("workers_racing") else {
+            return;
+        };
+        let (a, b) = (PgStore::open(&url).unwrap(), PgStore::open(&url).unwrap());
+        crate::storage::worker_conformance::racing_instances(&a, &b);
     }
 
     #[test]

@@ -4,17 +4,9 @@ use rusqlite::{OptionalExtension, params};
 
 use super::{CachedSql, SqliteStore};
 use crate::Error;
-use crate::storage::workers::{FAILURES_OUT_OF_SERVICE, HostRow, HostStore, PhoneRow, PhoneState};
-
-/// A server-made id: `prefix` and 16 hex digits from the system's secure generator.
-pub(super) fn random_id(prefix: char) -> Result<String, Error> {
-    use ring::rand::SecureRandom;
-    let mut bytes = [0u8; 8];
-    ring::rand::SystemRandom::new()
-        .fill(&mut bytes)
-        .map_err(|_| Error::Internal("the system's random generator failed".into()))?;
-    Ok(format!("{prefix}{:016x}", u64::from_be_bytes(bytes)))
-}
+use crate::storage::workers::{
+    FAILURES_OUT_OF_SERVICE, HostRow, HostStore, PhoneRow, PhoneState, random_id,
+};
 
 fn host_row(r: &rusqlite::Row<'_>) -> rusqlite::Result<HostRow> {
     Ok(HostRow {

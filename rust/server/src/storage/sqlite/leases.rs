@@ -1,16 +1,16 @@
 //! The worker store's offered trials and leases (`trial_leases`, `lease_turns`) and failed
 //! trials (`trial_failures`). A trial row is `pending`, `leased` (to one phone, until its
 //! `expires_ms`), `done` (committed: exactly once, by one atomic `UPDATE … WHERE state =
-//! 'leased'`), `failed` (given up) or `withdrawn`.
+//! 'leased'`, which stores the trial's text until its job takes it), `failed` (given up) or
+//! `withdrawn`.
 
 use rusqlite::{OptionalExtension, Transaction, params};
 
-use super::hosts::random_id;
 use super::{CachedSql, SqliteStore};
 use crate::Error;
 use crate::storage::workers::{
-    Expired, Lease, LeaseCounts, LeaseStore, MAX_ATTEMPTS, MAX_FAILURES_KEPT, Requeued,
-    TrialFailure,
+    CommittedTrial, Expired, Lease, LeaseCounts, LeaseStore, MAX_ATTEMPTS, MAX_FAILURES_KEPT,
+    MAX_TAKEN_PER_CALL, Requeued, TrialFailure, random_id,
 };
 
 /// The round-robin key of an owner (a token id, or none).
@@ -66,6 +66,11 @@ impl LeaseStore for SqliteStore {
                  WHERE session_id = ?1 AND state IN ('pending', 'leased')",
                 [session],
             )?;
+            tx.execute_cached(
+                "UPDATE trial_leases SET taken = 1, trial_text = NULL \
+                 WHERE session_id = ?1 AND state = 'done' AND taken = 0",
+                [session],
+            )?;
             let seq: i64 = tx.query_row_cached(
                 "SELECT COALESCE(MAX(offered_seq), 0) + 1 FROM trial_leases",
                 [],
@@ -78,7 +83,8 @@ impl LeaseStore for SqliteStore {
                      ON CONFLICT (session_id, play_index) DO UPDATE SET state = 'pending', \
                      owner_key = excluded.owner_key, playback = excluded.playback, \
                      recording_sha256 = excluded.recording_sha256, offered_seq = excluded.offered_seq, \
-                     attempts = 0, lease_id = NULL, host_id = NULL, phone = NULL, expires_ms = NULL",
+                     attempts = 0, lease_id = NULL, host_id = NULL, phone = NULL, expires_ms = NULL, \
+                     trial_text = NULL, trial_source = NULL, taken = 0",
                     params![session, index, owner, playback, recording_sha256, seq],
                 )?;
             }
@@ -157,15 +163,23 @@ impl LeaseStore for SqliteStore {
         })
     }
 
-    fn commit(&self, lease: &str, host: &str, now_ms: i64) -> Result<Result<Lease, String>, Error> {
+    fn commit(
+        &self,
+        lease: &str,
+        host: &str,
+        now_ms: i64,
+        tum: &str,
+        source: &str,
+    ) -> Result<Result<Lease, String>, Error> {
         self.transaction(|tx| {
             let committed = tx
                 .query_row_cached(
                     &format!(
-                        "UPDATE trial_leases SET state = 'done' WHERE lease_id = ?1 AND host_id = ?2 \
+                        "UPDATE trial_leases SET state = 'done', trial_text = ?4, \
+                         trial_source = ?5, taken = 0 WHERE lease_id = ?1 AND host_id = ?2 \
                          AND state = 'leased' AND expires_ms >= ?3 RETURNING {LEASE_COLUMNS}"
                     ),
-                    params![lease, host, now_ms],
+                    params![lease, host, now_ms, tum, source],
                     lease_row,
                 )
                 .optional()?;
@@ -175,6 +189,34 @@ impl LeaseStore for SqliteStore {
                      given to another phone): its trial is not taken"
                 )
             }))
+        })
+    }
+
+    fn take_committed(&self, session: &str) -> Result<Vec<CommittedTrial>, Error> {
+        self.transaction(|tx| {
+            let taken: Vec<CommittedTrial> = {
+                let mut stmt = tx.prepare_cached(
+                    "SELECT play_index, trial_text, trial_source FROM trial_leases \
+                     WHERE session_id = ?1 AND state = 'done' AND taken = 0 \
+                     AND trial_text IS NOT NULL ORDER BY play_index LIMIT ?2",
+                )?;
+                let rows = stmt.query_map(params![session, MAX_TAKEN_PER_CALL as i64], |r| {
+                    Ok(CommittedTrial {
+                        index: r.get(0)?,
+                        tum: r.get(1)?,
+                        source: r.get::<_, Option<String>>(2)?.unwrap_or_default(),
+                    })
+                })?;
+                rows.collect::<rusqlite::Result<_>>()?
+            };
+            for trial in &taken {
+                tx.execute_cached(
+                    "UPDATE trial_leases SET taken = 1, trial_text = NULL \
+                     WHERE session_id = ?1 AND play_index = ?2",
+                    params![session, trial.index],
+                )?;
+            }
+            Ok(taken)
         })
     }
 
@@ -224,14 +266,19 @@ impl LeaseStore for SqliteStore {
     }
 
     fn withdraw(&self, session: &str) -> Result<(), Error> {
-        self.with(|c| {
-            c.execute_cached(
+        self.transaction(|tx| {
+            tx.execute_cached(
                 "UPDATE trial_leases SET state = 'withdrawn', lease_id = NULL, expires_ms = NULL \
                  WHERE session_id = ?1 AND state IN ('pending', 'leased')",
                 [session],
-            )
-        })?;
-        Ok(())
+            )?;
+            tx.execute_cached(
+                "UPDATE trial_leases SET taken = 1, trial_text = NULL \
+                 WHERE session_id = ?1 AND state = 'done' AND taken = 0",
+                [session],
+            )?;
+            Ok(())
+        })
     }
 
     fn counts(&self, session: &str) -> Result<LeaseCounts, Error> {

@@ -59,6 +59,13 @@ CREATE TABLE trial_failures (
 );
 CREATE INDEX trial_failures_session ON trial_failures (session_id, id);
 ",
+    // 2: a committed trial's text travels with its lease until its session's job takes it.
+    "
+ALTER TABLE trial_leases ADD COLUMN trial_text TEXT;
+ALTER TABLE trial_leases ADD COLUMN trial_source TEXT;
+ALTER TABLE trial_leases ADD COLUMN taken INTEGER NOT NULL DEFAULT 0;
+UPDATE trial_leases SET taken = 1 WHERE state = 'done';
+",
 ];
 
 /// The version these tables are at now.
