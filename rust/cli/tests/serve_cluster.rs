@@ -242,10 +242,11 @@ fn a_cluster_instance_plays_a_session_as_the_embedded_one_does() {
         cluster_json, json,
         "JSON results differ from the embedded server's"
     );
-    // Nothing of the session is in the instance's folder (its `sitar.db` is the worker store,
-    // hosts and leases, this instance's own).
+    // Nothing of the session is in the instance's folder, and no database either (the worker
+    // store, hosts and leases, is in Postgres too).
     let kept: Vec<_> = files_under(&a_data.join("sessions"));
     assert!(kept.is_empty(), "{kept:?}");
+    assert!(!a_data.join("sitar.db").exists());
 
     // A second instance on the same database and store: no admin token of its own, and it
     // answers for the session the first one played.

@@ -1,0 +1,358 @@
+//! Playback hosts across instances, for real: two `sitar serve --database … --store …
+//! --playback-workers 0` on one Postgres and bucket (a data folder each), sessions created on
+//! instance A, sim worker hosts connected to instance B and one to A. The worker store is the
+//! shared database: hosts on B lease what A's jobs offer, their trials reach A's jobs through
+//! the store, every session ends `done` with every trial committed once, and the results are
+//! byte-identical to the embedded server's. Without `SITAR_TEST_DATABASE_URL` and
+//! `SITAR_TEST_S3_URL` (`scripts/cluster-services start`) the test prints SKIPPED.
+
+use std::collections::HashMap;
+use std::io::{BufRead, BufReader};
+use std::path::Path;
+use std::process::{Child, Command, Stdio};
+use std::sync::mpsc::{Receiver, channel};
+use std::time::{Duration, Instant};
+
+use sitar_client::{Client, NewSession};
+
+/// A child process whose output lines are collected; killed on drop.
+struct Proc {
+    child: Child,
+    lines: Receiver<String>,
+    seen: Vec<String>,
+}
+
+impl Proc {
+    fn spawn(args: &[&str]) -> Proc {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_sitar"))
+            .args(args)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("run sitar");
+        let (tx, lines) = channel();
+        for stream in [
+            Box::new(child.stdout.take().unwrap()) as Box<dyn std::io::Read + Send>,
+            Box::new(child.stderr.take().unwrap()),
+        ] {
+            let tx = tx.clone();
+            std::thread::spawn(move || {
+                for line in BufReader::new(stream).lines().map_while(Result::ok) {
+                    if tx.send(line).is_err() {
+                        return;
+                    }
+                }
+            });
+        }
+        Proc {
+            child,
+            lines,
+            seen: Vec::new(),
+        }
+    }
+
+    /// Waits for a line containing `needle`; panics with what was seen after `limit`.
+    fn wait_for(&mut self, needle: &str, limit: Duration) -> String {
+        if let Some(line) = self.seen.iter().find(|l| l.contains(needle)) {
+            return line.clone();
+        }
+        let deadline = Instant::now() + limit;
+        while let Some(left) = deadline.checked_duration_since(Instant::now()) {
+            match self.lines.recv_timeout(left) {
+                Ok(line) => {
+                    self.seen.push(line.clone());
+                    if line.contains(needle) {
+                        return line;
+                    }
+                }
+                Err(_) => break,
+            }
+        }
+        panic!("no line with {needle:?} in {:#?}", self.seen);
+    }
+
+    fn drain(&mut self) -> &[String] {
+        while let Ok(line) = self.lines.try_recv() {
+            self.seen.push(line);
+        }
+        &self.seen
+    }
+}
+
+impl Drop for Proc {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// The test services' URLs, or `None` after printing SKIPPED.
+fn services(test: &str) -> Option<(String, String)> {
+    let var = |name: &str| std::env::var(name).ok().filter(|v| !v.is_empty());
+    match (var("SITAR_TEST_DATABASE_URL"), var("SITAR_TEST_S3_URL")) {
+        (Some(db), Some(s3)) => Some((db, s3)),
+        _ => {
+            println!(
+                "SKIPPED {test}: SITAR_TEST_DATABASE_URL and SITAR_TEST_S3_URL are not both set \
+                 (scripts/cluster-services start)"
+            );
+            None
+        }
+    }
+}
+
+/// A fresh database on the test server (made with `psql`), or `None` after printing SKIPPED.
+fn fresh_database(test: &str, url: &str) -> Option<String> {
+    let name = format!("sitar_cli_{test}_{}", std::process::id());
+    let made = Command::new("psql")
+        .args([url, "-q", "-c"])
+        .arg(format!("DROP DATABASE IF EXISTS {name} WITH (FORCE)"))
+        .args(["-c", &format!("CREATE DATABASE {name}")])
+        .output();
+    match made {
+        Ok(out) if out.status.success() => {
+            let base = url.rsplit_once('/').map_or(url, |(base, _)| base);
+            Some(format!("{base}/{name}"))
+        }
+        Ok(out) => {
+            println!(
+                "SKIPPED {test}: psql cannot make a database: {}",
+                String::from_utf8_lossy(&out.stderr)
+            );
+            None
+        }
+        Err(e) => {
+            println!("SKIPPED {test}: no psql: {e}");
+            None
+        }
+    }
+}
+
+/// `sitar serve` on the shared database and store, remote playback only: process and URL.
+fn serve(data: &Path, database: &str, store: &str) -> (Proc, String) {
+    let mut server = Proc::spawn(&[
+        "serve",
+        "--addr",
+        "127.0.0.1:0",
+        "--playback",
+        "sim",
+        "--playback-workers",
+        "0",
+        "--lease-s",
+        "5",
+        "--jobs-per-token",
+        "4",
+        "--database",
+        database,
+        "--store",
+        store,
+        "--data",
+        data.to_str().unwrap(),
+    ]);
+    let line = server.wait_for("listening on http://", Duration::from_secs(60));
+    let url = line[line.find("http://").unwrap()..].trim().to_string();
+    (server, url)
+}
+
+/// `sitar token create --database`: the token.
+fn token(database: &str, role: &str, name: &str) -> String {
+    let out = Command::new(env!("CARGO_BIN_EXE_sitar"))
+        .args(["token", "create", "--role", role, "--name", name])
+        .args(["--database", database])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout).unwrap().trim().to_string()
+}
+
+fn worker(url: &str, token: &str, name: &str, dir: &Path) -> Proc {
+    let mut w = Proc::spawn(&[
+        "worker",
+        "--server",
+        url,
+        "--token",
+        token,
+        "--playback",
+        "sim",
+        "--slots",
+        "2",
+        "--sim-speed",
+        "50",
+        "--name",
+        name,
+        "--data",
+        dir.join(name).to_str().unwrap(),
+    ]);
+    w.wait_for("sitar worker: host", Duration::from_secs(30));
+    w
+}
+
+fn sim_session(client: &Client, recording: &Path, trials: u32) -> String {
+    let id = client
+        .create_session(&NewSession {
+            trials,
+            setting: "trim_mean_30".into(),
+            playback: "sim".into(),
+            window_frames: None,
+            pose_relation: None,
+        })
+        .unwrap();
+    client
+        .upload_recording(&id, recording, &mut |_, _| {})
+        .unwrap();
+    id
+}
+
+/// The same session on the embedded server with in-process sim playback: its results.
+fn reference_results(recording: &Path, trials: u32) -> (String, String) {
+    let data = tempfile::tempdir().unwrap();
+    let server = sitar_tests::start(sitar_tests::sim_config(data.path(), 200.0, 3));
+    let client = Client::new(&server.url())
+        .unwrap()
+        .with_server_token(sitar_tests::APP_TOKEN)
+        .unwrap();
+    let id = sim_session(&client, recording, trials);
+    let status = client
+        .wait(
+            &id,
+            Duration::from_millis(50),
+            Duration::from_secs(120),
+            &mut |_| {},
+        )
+        .unwrap();
+    assert_eq!(status.state.as_str(), "done", "{status:?}");
+    let results = (
+        client.results_json(&id).unwrap(),
+        client.results_csv(&id).unwrap(),
+    );
+    server.stop();
+    results
+}
+
+/// The raw status document (its `failed_trials` is not in the client's type).
+fn status_json(url: &str, token: &str, id: &str) -> serde_json::Value {
+    let mut answer = ureq::get(&format!("{url}/v1/sessions/{id}"))
+        .header("authorization", &format!("Bearer {token}"))
+        .call()
+        .unwrap();
+    serde_json::from_str(&answer.body_mut().read_to_string().unwrap()).unwrap()
+}
+
+/// The number of trial files in a session's `trials.zip`.
+fn trials_in_zip(url: &str, token: &str, id: &str) -> usize {
+    let zip = ureq::get(&format!("{url}/v1/sessions/{id}/trials.zip"))
+        .header("authorization", &format!("Bearer {token}"))
+        .call()
+        .unwrap()
+        .body_mut()
+        .read_to_vec()
+        .unwrap();
+    zip::ZipArchive::new(std::io::Cursor::new(zip))
+        .unwrap()
+        .len()
+}
+
+#[test]
+fn hosts_on_another_instance_play_the_sessions_of_the_first() {
+    let Some((database, store)) = services("worker_instances") else {
+        return;
+    };
+    let Some(database) = fresh_database("worker_instances", &database) else {
+        return;
+    };
+    let store = format!("{store}/worker-instances-{}", std::process::id());
+    let dir = tempfile::tempdir().unwrap();
+    let (a_data, b_data) = (dir.path().join("instance-a"), dir.path().join("instance-b"));
+    let (mut a, a_url) = serve(&a_data, &database, &store);
+    a.wait_for("metadata in Postgres", Duration::from_secs(10));
+    let (_b, b_url) = serve(&b_data, &database, &store);
+    // The worker store is the database: neither instance keeps one in its folder.
+    assert!(!a_data.join("sitar.db").exists());
+    assert!(!b_data.join("sitar.db").exists());
+    let app = token(&database, "app", "lab-app");
+    let work = token(&database, "worker", "lab-hosts");
+
+    let recording = sitar_tests::sim_recording(dir.path(), "walk.sitar", 3.0, 11);
+    let client = Client::new(&a_url)
+        .unwrap()
+        .with_server_token(&app)
+        .unwrap();
+    let hosts = tempfile::tempdir().unwrap();
+    let mut references = HashMap::new();
+    let mut check = |id: &str, trials: u32| {
+        let status = client
+            .wait(
+                id,
+                Duration::from_millis(50),
+                Duration::from_secs(180),
+                &mut |_| {},
+            )
+            .expect("the session finishes");
+        assert_eq!(status.state.as_str(), "done", "{status:?}");
+        assert_eq!(status.trials_done, trials, "{status:?}");
+        let doc = status_json(&a_url, &app, id);
+        assert_eq!(doc["failed_trials"], serde_json::json!([]), "{doc}");
+        // Every trial committed once: as many trial files as trials, on either instance.
+        assert_eq!(trials_in_zip(&a_url, &app, id), trials as usize, "{id}");
+        assert_eq!(trials_in_zip(&b_url, &app, id), trials as usize, "{id}");
+        let expected = references
+            .entry(trials)
+            .or_insert_with(|| reference_results(&recording, trials));
+        assert_eq!(client.results_json(id).unwrap(), expected.0, "{id}");
+        assert_eq!(client.results_csv(id).unwrap(), expected.1, "{id}");
+    };
+
+    // Hosts on B only, their lease requests already waiting (20 s long polls): A's offers
+    // wake nobody on B, so they find them by looking at the store again (every 1 s).
+    let mut on_b: Vec<Proc> = ["host-b1", "host-b2"]
+        .iter()
+        .map(|name| worker(&b_url, &work, name, hosts.path()))
+        .collect();
+    std::thread::sleep(Duration::from_millis(1500));
+    let offered = Instant::now();
+    let first: Vec<(String, u32)> = (0..2)
+        .map(|k| (sim_session(&client, &recording, 4 + k), 4 + k))
+        .collect();
+    for (id, trials) in &first {
+        check(id, *trials);
+    }
+    let took = offered.elapsed();
+    println!("two sessions offered on A, played by B's hosts: done in {took:?}");
+    assert!(
+        took < Duration::from_secs(15),
+        "B's hosts took {took:?}: they saw A's offers only when their long polls ended"
+    );
+
+    // Then a host on A too, and more sessions: every trial once, whoever played it.
+    let mut on_a = worker(&a_url, &work, "host-a1", hosts.path());
+    let second: Vec<(String, u32)> = (0..4)
+        .map(|k| (sim_session(&client, &recording, 4 + k % 2), 4 + k % 2))
+        .collect();
+    for (id, trials) in &second {
+        check(id, *trials);
+    }
+    // The hosts connected to B played trials of A's sessions.
+    let played_on_b = on_b
+        .iter_mut()
+        .flat_map(|w| w.drain().to_vec())
+        .filter(|l| l.contains("playing trial"))
+        .count();
+    assert!(played_on_b > 0, "no trial played by B's hosts");
+    on_a.drain();
+    // Both instances list the three hosts' phones (the store is shared).
+    for url in [&a_url, &b_url] {
+        let admin = std::fs::read_to_string(a_data.join("admin.token")).unwrap();
+        let devices = Client::new(url)
+            .unwrap()
+            .with_server_token(admin.trim())
+            .unwrap()
+            .devices_json()
+            .unwrap();
+        let devices: serde_json::Value = serde_json::from_str(&devices).unwrap();
+        assert_eq!(devices["devices"].as_array().unwrap().len(), 6, "{devices}");
+    }
+}
