@@ -36,8 +36,9 @@ fn lease_row(r: &postgres::Row) -> Result<Lease, Error> {
     })
 }
 
-fn requeued(state: &str) -> Requeued {
-    if state == "failed" {
+/// What became of a trial given back, from the `given_up` its `UPDATE` returned.
+fn requeued(given_up: bool) -> Requeued {
+    if given_up {
         Requeued::GivenUp
     } else {
         Requeued::Again
@@ -265,7 +266,7 @@ impl LeaseStore for PgStore {
             let row = c.query_opt(
                 &format!(
                     "UPDATE trial_leases SET {} WHERE lease_id = $1 AND host_id = $2 \
-                     AND state = 'leased' RETURNING state",
+                     AND state = 'leased' RETURNING state = 'failed'",
                     requeue_set("$3")
                 ),
                 &[&lease, &host, &attempts],
@@ -288,7 +289,7 @@ impl LeaseStore for PgStore {
                      WHERE trial_leases.session_id = old.session_id \
                      AND trial_leases.play_index = old.play_index \
                      RETURNING old.lease_id, old.session_id, old.play_index, old.host_id, \
-                     old.phone, trial_leases.state",
+                     old.phone, trial_leases.state = 'failed'",
                     requeue_set("$2")
                 ),
                 &[&now_ms, &attempts],

@@ -72,7 +72,7 @@ UPDATE trial_leases SET taken = 1 WHERE state = 'done';
 #[cfg(test)]
 pub(super) const LATEST: i64 = MIGRATIONS.len() as i64;
 
-/// Brings the worker tables to [`LATEST`]; returns the version found.
+/// Brings the worker tables to the latest version (`MIGRATIONS.len()`); returns the version found.
 pub(super) fn migrate(conn: &mut Connection) -> rusqlite::Result<i64> {
     conn.execute_batch(
         "CREATE TABLE IF NOT EXISTS schema_versions (
