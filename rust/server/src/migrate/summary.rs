@@ -104,3 +104,41 @@ impl fmt::Display for Summary {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn count(table: &'static str, rows: usize, copied: usize, equal: usize) -> TableCount {
+        TableCount {
+            table,
+            rows,
+            copied,
+            equal,
+            in_database: equal,
+        }
+    }
+
+    #[test]
+    fn a_table_short_of_rows_or_a_named_difference_is_not_verified() {
+        let mut summary = Summary {
+            tables: vec![count("tokens", 3, 0, 3), count("sessions", 2, 0, 2)],
+            files: 4,
+            ..Default::default()
+        };
+        assert!(summary.verified() && summary.copied_nothing());
+        assert!(summary.to_string().ends_with("equal in the cluster stores"));
+        summary.tables[1] = count("sessions", 2, 1, 1);
+        assert!(!summary.verified() && !summary.copied_nothing());
+        summary
+            .differences
+            .push("sessions/s1/results.csv: SHA-256 a here but b".into());
+        let text = summary.to_string();
+        assert!(
+            text.contains("NOT VERIFIED       2 difference(s)"),
+            "{text}"
+        );
+        assert!(text.contains("sessions (1 of 2 rows equal)"), "{text}");
+        assert!(text.contains("results.csv: SHA-256"), "{text}");
+    }
+}

@@ -7,8 +7,10 @@
 //! folders ([`files`], with the disk quotas of [`quota`]); each instance's own files (admin
 //! token, TLS certificate) are [`instance`]'s. One conformance suite per seam
 //! (`conformance`) runs against any implementation. The cluster implementations, for several
-//! instances on one database and bucket, are [`postgres`] and [`s3`] ([`open`] picks). Only
-//! this folder speaks SQL or touches the data directory (`tests/layout.rs` checks both).
+//! instances on one database and bucket, are [`postgres`] and [`s3`] ([`open`] picks). For
+//! `sitar migrate`: an embedded installation read under SQLite's exclusive lock
+//! ([`installation`]) and rows as plain values ([`rows`]), written into Postgres as they are.
+//! Only this folder speaks SQL or touches the data directory (`tests/layout.rs` checks both).
 
 pub(crate) mod blobs;
 pub(crate) mod blocking;
