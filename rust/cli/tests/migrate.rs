@@ -612,6 +612,12 @@ fn an_embedded_installation_moves_into_the_cluster_stores() {
         );
     }
     assert_eq!(kept_offset(&cluster.url, &phone_b, &half), offset);
+    // The worker token does what it did: register a playback host, and nothing else.
+    let host_body = r#"{"name":"lab-host","playback":"sim","phones":["sim:0"]}"#;
+    let (status, answer) = cluster.call("POST", "/v1/worker/hosts", &host, host_body);
+    assert_eq!(status, 201, "{answer}");
+    let (status, _) = cluster.call("POST", "/v1/worker/hosts", &phone_a, host_body);
+    assert_eq!(status, 403);
     assert_eq!(token_names(&["--database", &db_a]), tokens);
     // Ids the embedded store handed out are never handed out again (a revoked token's too).
     let out = sitar(&[
