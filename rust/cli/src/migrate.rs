@@ -8,10 +8,10 @@ use std::path::PathBuf;
 use anyhow::{Result, bail};
 use sitar_server::{MigrateOptions, migrate};
 
-/// Moves an embedded installation (DIR/sitar.db and DIR/sessions) into Postgres and an
-/// S3-compatible bucket, for `sitar serve --database URL --store URL`. Stop the server on DIR
-/// first (a running one is refused). Run it again after an interruption: what is there and
-/// equal is skipped, what is partial is copied again.
+/// Moves an embedded installation into Postgres and an S3-compatible bucket. DIR/sitar.db and
+/// DIR/sessions are copied and verified for `sitar serve --database URL --store URL`; stop the
+/// server on DIR first (a running one is refused). Run it again after an interruption: what
+/// is there and equal is skipped, what is partial is copied again.
 #[derive(clap::Args, Debug)]
 #[command(after_help = "Example:
   sitar migrate --data sitar-data --database postgres://sitar@db.lab:5432/sitar \\
