@@ -543,8 +543,9 @@ fn an_embedded_installation_moves_into_the_cluster_stores() {
             break;
         }
     }
-    // The large session's first file goes quickly, its recording (40 MiB) takes a while.
-    std::thread::sleep(Duration::from_millis(100));
+    // The large session's first file goes quickly, its recording (40 MiB, about 1 s here)
+    // takes a while: killed soon after the line, the run is in the middle of it.
+    std::thread::sleep(Duration::from_millis(30));
     child.kill().unwrap();
     let status = child.wait().unwrap();
     assert!(!status.success(), "killed mid-copy");
