@@ -13,6 +13,7 @@ use std::str::FromStr;
 
 use crate::Error;
 
+pub(crate) mod copy;
 mod hosts;
 mod jobs;
 mod leases;
