@@ -252,7 +252,7 @@ pub struct ServerConfig {
     pub lease_timeout: Duration,
     /// With `database` set (several instances on one database): an instance whose heartbeat
     /// is older than this is dead, and the sessions it played are adopted by another
-    /// (default [`INSTANCE_TIMEOUT`]).
+    /// (default 30 s).
     pub instance_timeout: Duration,
     /// Largest `trials` a session may ask for (default 100); more is a 422 naming the cap.
     pub max_trials: u32,
