@@ -8,13 +8,16 @@
 //! token, TLS certificate, instance id) are [`instance`]'s; which instance plays which session
 //! is [`instances`]'. One conformance suite per seam
 //! (`conformance`) runs against any implementation. The cluster implementations, for several
-//! instances on one database and bucket, are [`postgres`] and [`s3`] ([`open`] picks). Only
-//! this folder speaks SQL or touches the data directory (`tests/layout.rs` checks both).
+//! instances on one database and bucket, are [`postgres`] and [`s3`] ([`open`] picks). For
+//! `sitar migrate`: an embedded installation read under SQLite's exclusive lock
+//! ([`installation`]) and rows as plain values ([`rows`]), written into Postgres as they are.
+//! Only this folder speaks SQL or touches the data directory (`tests/layout.rs` checks both).
 
 pub(crate) mod blobs;
 pub(crate) mod blocking;
 pub(crate) mod embedded;
 pub(crate) mod files;
+pub(crate) mod installation;
 pub(crate) mod instance;
 pub(crate) mod instances;
 pub(crate) mod keys;
@@ -22,6 +25,7 @@ pub(crate) mod metadata;
 pub(crate) mod open;
 pub(crate) mod postgres;
 pub(crate) mod quota;
+pub(crate) mod rows;
 pub(crate) mod s3;
 pub(crate) mod sqlite;
 pub(crate) mod staged;

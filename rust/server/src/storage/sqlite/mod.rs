@@ -12,6 +12,7 @@ use rusqlite::{Connection, Params, Row};
 
 use crate::Error;
 
+pub(crate) mod export;
 mod hosts;
 mod instance_schema;
 mod instances;
