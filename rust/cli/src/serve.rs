@@ -31,6 +31,11 @@ pub struct Args {
     /// AWS_REGION, AWS_ACCESS_KEY_ID, AWS_SECRET_ACCESS_KEY, AWS_ALLOW_HTTP).
     #[arg(long, value_name = "URL")]
     store: Option<String>,
+    /// With --database: an instance silent this long (no heartbeat in the database) is dead,
+    /// and another adopts the sessions it played (within 4/3 of it). Each instance keeps its
+    /// id in DIR/instance.id.
+    #[arg(long, value_name = "SECS", default_value_t = 30.0)]
+    instance_timeout_s: f64,
     /// How trials are played for sessions that do not name a playback (`POST /v1/sessions`
     /// without `playback`), for the legacy `POST /recording` route and `GET /v1/devices`:
     /// adb drives phones over USB, sim plays on simulated phones. Sessions may always ask
@@ -223,6 +228,14 @@ pub fn run(args: Args) -> Result<()> {
         );
     }
     config.lease_timeout = Duration::from_secs_f64(args.lease_s);
+    if !(args.instance_timeout_s.is_finite() && (1.0..=86_400.0).contains(&args.instance_timeout_s))
+    {
+        anyhow::bail!(
+            "--instance-timeout-s {} is not a number of seconds from 1 to 86400",
+            args.instance_timeout_s
+        );
+    }
+    config.instance_timeout = Duration::from_secs_f64(args.instance_timeout_s);
     config.remote_sessions = args.remote_sessions as usize;
     if let Some(n) = args.estimate_workers {
         config.estimate_workers = n as usize;

@@ -54,6 +54,8 @@ pub(crate) struct App {
     pub queue: PlaybackQueue,
     /// One permit per estimate worker: `upload` sessions' estimates run within it.
     pub estimates: tokio::sync::Semaphore,
+    /// This instance's id (`DATA/instance.id`): which sessions in flight it plays.
+    pub instance: String,
     sim: Arc<dyn Playback>,
     adb: Arc<dyn Playback>,
     upload: Arc<dyn Playback>,
@@ -69,6 +71,7 @@ pub(crate) struct App {
 impl App {
     pub fn open(config: ServerConfig) -> Result<App, Error> {
         let (db, blobs, workers) = crate::storage::open::open(&config)?;
+        let instance = crate::storage::instance::instance_id(&config.data_dir)?;
         let board = Arc::new(RemoteBoard::default());
         let local_sim: Arc<dyn Playback> = Arc::new(SimPlayback::new(config.sim.clone()));
         let local_adb: Arc<dyn Playback> = Arc::new(AdbPlayback::new(config.adb.clone()));
@@ -107,6 +110,7 @@ impl App {
                 max_waiting: config.max_queued,
             }),
             estimates: tokio::sync::Semaphore::new(config.estimate_workers.max(1)),
+            instance,
             config,
             db,
             blobs,
@@ -202,5 +206,22 @@ impl App {
 
     pub fn stopping(&self) -> bool {
         self.shutdown.load(Ordering::SeqCst)
+    }
+
+    /// Whether other instances may share the database (`--database`): then instances
+    /// heartbeat, adopt the sessions of dead ones and pass stop requests through it.
+    pub fn clustered(&self) -> bool {
+        self.config.database.is_some()
+    }
+
+    /// The oldest heartbeat (ms since the epoch) of an instance counted alive now. Alone on
+    /// its data directory (the embedded default) no other instance plays anything, so any
+    /// other instance counts as dead, as when one process held every session.
+    pub fn alive_since_ms(&self) -> i64 {
+        if !self.clustered() {
+            return i64::MAX;
+        }
+        let timeout = i64::try_from(self.config.instance_timeout.as_millis()).unwrap_or(i64::MAX);
+        crate::storage::now_ms().saturating_sub(timeout)
     }
 }

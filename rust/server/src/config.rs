@@ -250,12 +250,20 @@ pub struct ServerConfig {
     /// 60 s); then the trial is offered to another phone and the host's late upload is
     /// refused.
     pub lease_timeout: Duration,
+    /// With `database` set (several instances on one database): an instance whose heartbeat
+    /// is older than this is dead, and the sessions it played are adopted by another
+    /// (default 30 s).
+    pub instance_timeout: Duration,
     /// Largest `trials` a session may ask for (default 100); more is a 422 naming the cap.
     pub max_trials: u32,
     /// Whether sessions may ask for `sim` playback on a server whose `playback` is another
     /// (default false): simulated playback costs CPU and is for demos and tests.
     pub allow_sim: bool,
 }
+
+/// How long an instance may be silent (no heartbeat in the database) before the others
+/// count it dead and adopt the sessions it played: 30 s, six missed heartbeats.
+pub const INSTANCE_TIMEOUT: Duration = Duration::from_secs(30);
 
 impl ServerConfig {
     /// Defaults with the given data directory.
@@ -302,6 +310,7 @@ impl ServerConfig {
             max_queued: 10_000,
             remote_sessions: 64,
             lease_timeout: Duration::from_secs(60),
+            instance_timeout: INSTANCE_TIMEOUT,
             max_trials: 100,
             allow_sim: false,
         }

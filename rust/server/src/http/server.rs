@@ -68,6 +68,10 @@ impl Server {
         shutdown: impl std::future::Future<Output = ()> + Send + 'static,
     ) -> Result<(), Error> {
         jobs::recover(&self.shared)?;
+        if self.shared.clustered() {
+            // Heartbeat, adoption of dead instances' sessions, stop requests from others.
+            crate::playback::instances::spawn(self.shared.clone());
+        }
         deletion::spawn_retention_sweep(self.shared.clone());
         let shared = self.shared.clone();
         let stop = async move {

@@ -50,7 +50,7 @@ pub(crate) fn accept_recording(
     shared.queue.check_room()?;
     shared.blobs.publish(temp, id, SessionObject::Recording)?;
     if shared.lifecycle().accept_recording(id, bytes)? == SessionState::Created {
-        jobs::enqueue(shared, session, Begin::Start);
+        jobs::enqueue(shared, session, Begin::Start)?;
     }
     Ok(())
 }

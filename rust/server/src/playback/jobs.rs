@@ -27,6 +27,13 @@ const STOP_WAIT: Duration = Duration::from_secs(15);
 fn conclude(shared: &Arc<App>, id: &str, job: Option<i64>, outcome: Result<Outcome, Error>) {
     shared.set_running(id, None);
     shared.live.remove(id);
+    let in_flight = matches!(outcome, Ok(Outcome::Interrupted)) || shared.stopping();
+    if !in_flight {
+        // Nobody plays it now: an instance waiting to delete it goes ahead.
+        if let Err(e) = shared.db.release_session(id, &shared.instance) {
+            log::warn!("session {id}: still marked as played by this instance: {e}");
+        }
+    }
     match outcome {
         Ok(Outcome::Done) => {
             if let Some(job) = job {
@@ -57,9 +64,20 @@ fn conclude(shared: &Arc<App>, id: &str, job: Option<i64>, outcome: Result<Outco
     }
 }
 
-/// Puts a sim or adb session in the playback queue; a playback worker takes it in turn.
-pub(crate) fn enqueue(shared: &App, session: &Session, begin: Begin) {
-    shared.queue.push(session.owner, &session.id, begin);
+/// Puts a sim or adb session in the playback queue, a playback worker takes it in turn, once
+/// this instance is its player (claimed in the database; false when another live instance
+/// plays it, and the queue is left as it is).
+pub(crate) fn enqueue(shared: &App, session: &Session, begin: Begin) -> Result<bool, Error> {
+    let id = &session.id;
+    if !shared
+        .db
+        .claim_session(id, &shared.instance, shared.alive_since_ms())?
+    {
+        log::info!("session {id}: another instance plays it");
+        return Ok(false);
+    }
+    shared.queue.push(session.owner, id, begin);
+    Ok(true)
 }
 
 /// Starts the playback workers: each takes the next session from the queue and plays it to
@@ -92,7 +110,7 @@ pub(crate) fn spawn_workers(shared: &Arc<App>) {
 
 async fn run_ticket(shared: Arc<App>, ticket: Ticket) {
     let id = ticket.id.clone();
-    let job = shared.db.start_job(&id, "playback").ok();
+    let job = shared.db.start_job(&id, "playback", &shared.instance).ok();
     let outcome = play_and_estimate(&shared, &ticket).await;
     conclude(&shared, &id, job, outcome);
 }
@@ -120,7 +138,7 @@ where
     F: FnOnce(&App, &Session) -> Result<(), Error> + Send + 'static,
 {
     tokio::spawn(async move {
-        let job = shared.db.start_job(&id, "estimate").ok();
+        let job = shared.db.start_job(&id, "estimate", &shared.instance).ok();
         let outcome = with_estimate_permit(&shared, async {
             let session = shared.session(&id)?;
             prepare(&shared, &session)?;
@@ -174,8 +192,9 @@ pub(crate) enum Stopped {
     Idle,
 }
 
-/// Stops session `id`'s playback for `intent` (`Cancel` or `Delete`): out of the queue if it
-/// waits there, else its job is told; a delete waits (bounded) until the job has ended.
+/// Stops session `id`'s playback on this instance for `intent` (`Cancel` or `Delete`): out
+/// of the queue if it waits there, else its job is told; a delete waits (bounded) until the
+/// job has ended. (`stop_requests::stop_anywhere` also reaches another instance's job.)
 pub(crate) async fn stop_playback(
     shared: &App,
     id: &str,
@@ -263,11 +282,19 @@ async fn play_and_estimate(shared: &Arc<App>, ticket: &Ticket) -> Result<Outcome
 }
 
 /// After a restart: sessions in flight go back into the queue in their original order (or
-/// are marked failed with a reason). Jobs a dead process left running are marked interrupted
-/// first. A session that cannot be resumed, or whose row cannot be read, fails alone: the
-/// server always starts. Then the playback workers start.
+/// are marked failed with a reason). This instance's heartbeat comes first, then the jobs
+/// it (or a dead instance) left running are marked interrupted. With other instances on the
+/// database, a session another live instance plays is left to it. A session that cannot be
+/// resumed, or whose row cannot be read, fails alone: the server always starts. Then the
+/// playback workers start (with `--database` the server starts the instance's loops next,
+/// `playback::instances::spawn`).
 pub(crate) fn recover(shared: &Arc<App>) -> Result<(), Error> {
-    let interrupted = shared.db.interrupt_running_jobs()?;
+    shared
+        .db
+        .heartbeat(&shared.instance, crate::storage::now_ms())?;
+    let interrupted = shared
+        .db
+        .interrupt_jobs(Some(&shared.instance), shared.alive_since_ms())?;
     if interrupted > 0 {
         log::info!("{interrupted} job(s) were interrupted by the last stop");
     }
@@ -286,20 +313,26 @@ pub(crate) fn recover(shared: &Arc<App>) -> Result<(), Error> {
         }
     }
     for session in rows.sessions {
-        let id = session.id.clone();
-        if let Err(e) = recover_one(shared, session) {
-            log::warn!("session {id}: cannot resume after restart: {e}");
-            let why = format!(
-                "server restarted and cannot resume it: {}",
-                e.client_message()
-            );
-            if let Err(e) = shared.lifecycle().fail(&id, &why) {
-                log::warn!("session {id}: {e}");
-            }
-        }
+        resume_or_fail(shared, session);
     }
     spawn_workers(shared);
     Ok(())
+}
+
+/// Resumes one session in flight (after a restart, or adopted from a dead instance), or
+/// marks it failed with the reason it cannot be.
+pub(crate) fn resume_or_fail(shared: &Arc<App>, session: Session) {
+    let id = session.id.clone();
+    if let Err(e) = recover_one(shared, session) {
+        log::warn!("session {id}: cannot resume after restart: {e}");
+        let why = format!(
+            "server restarted and cannot resume it: {}",
+            e.client_message()
+        );
+        if let Err(e) = shared.lifecycle().fail(&id, &why) {
+            log::warn!("session {id}: {e}");
+        }
+    }
 }
 
 /// Resumes one session in flight after a restart.
@@ -326,6 +359,14 @@ fn recover_one(shared: &Arc<App>, session: Session) -> Result<(), Error> {
     if session.state == SessionState::Created {
         return Ok(());
     }
+    // Claimed before any state moves: a session another live instance plays is its own.
+    if !shared
+        .db
+        .claim_session(&id, &shared.instance, shared.alive_since_ms())?
+    {
+        log::info!("session {id}: played by another instance, left to it");
+        return Ok(());
+    }
     if !shared.blobs.exists(&id, SessionObject::Recording) {
         return shared
             .lifecycle()
@@ -333,10 +374,10 @@ fn recover_one(shared: &Arc<App>, session: Session) -> Result<(), Error> {
     }
     log::info!("session {id}: back in the playback queue after restart");
     if session.allows(Step::StartPlaying) {
-        enqueue(shared, &session, Begin::Start);
+        enqueue(shared, &session, Begin::Start)?;
     } else {
         shared.lifecycle().resume(&id)?;
-        enqueue(shared, &session, Begin::Resume);
+        enqueue(shared, &session, Begin::Resume)?;
     }
     Ok(())
 }

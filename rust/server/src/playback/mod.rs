@@ -1,9 +1,11 @@
 pub(crate) mod adb;
+pub(crate) mod instances;
 pub(crate) mod jobs;
 pub(crate) mod queue;
 pub(crate) mod reaper;
 pub(crate) mod remote;
 pub(crate) mod run;
+pub(crate) mod stop_requests;
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;

@@ -24,6 +24,7 @@ pub(crate) fn metadata_store(store: &dyn MetadataStore) {
     usage_is_counted_over_its_windows(store);
     deleting_a_session_removes_what_belongs_to_it(store);
     venues_hold_members_and_sessions_of_one_convention(store);
+    instances_own_adopt_and_stop_sessions(store);
 }
 
 /// A session request with the server's defaults (5 trials), for the suites and unit tests.
@@ -189,16 +190,19 @@ fn trials_are_ordered_idempotent_and_all_or_nothing(store: &dyn MetadataStore) {
 
 fn jobs_and_devices_are_recorded(store: &dyn MetadataStore) {
     let id = "s1000000000000004";
-    let first = store.start_job(id, "playback").unwrap();
-    let second = store.start_job(id, "estimate").unwrap();
+    let first = store.start_job(id, "playback", "instance-j").unwrap();
+    let second = store.start_job(id, "estimate", "instance-j").unwrap();
     assert_ne!(first, second);
     store.finish_job(first, JobEnd::Done, None).unwrap();
     store
         .finish_job(second, JobEnd::Failed, Some("no trials"))
         .unwrap();
-    let third = store.start_job(id, "estimate").unwrap();
-    assert_eq!(store.interrupt_running_jobs().unwrap(), 1);
-    assert_eq!(store.interrupt_running_jobs().unwrap(), 0);
+    let third = store.start_job(id, "estimate", "instance-j").unwrap();
+    // Its instance restarts: its own running jobs are interrupted, once.
+    let now = crate::storage::now_ms();
+    store.heartbeat("instance-j", now).unwrap();
+    assert_eq!(store.interrupt_jobs(Some("instance-j"), now).unwrap(), 1);
+    assert_eq!(store.interrupt_jobs(Some("instance-j"), now).unwrap(), 0);
     let jobs = store.jobs_of(id).unwrap();
     let (done, failed) = (JobEnd::Done.as_str(), JobEnd::Failed.as_str());
     assert_eq!(
@@ -629,4 +633,125 @@ fn venues_hold_members_and_sessions_of_one_convention(store: &dyn MetadataStore)
     assert!(!store.is_member(venue, member_id).unwrap());
     let kept = store.session("s2000000000000001").unwrap().unwrap();
     assert_eq!((kept.venue, kept.convention), (None, Convention::Arcore));
+}
+
+/// Several instances on one store: one player per session in flight, adoption of a dead
+/// instance's sessions by exactly one other, stop requests reaching the player, and each
+/// instance's restart interrupting only its own and dead instances' jobs.
+fn instances_own_adopt_and_stop_sessions(store: &dyn MetadataStore) {
+    use crate::storage::instances::StopRequest;
+    let now = crate::storage::now_ms();
+    let alive_since = now - 30_000;
+    let (a, b, c) = ("instance-a", "instance-b", "instance-c");
+    store.heartbeat(a, now).unwrap();
+    store.heartbeat(b, now).unwrap();
+    let id = "s1000000000000060";
+    store
+        .insert_session(id, &new_session(None, PlaybackKind::Sim, None))
+        .unwrap();
+    // Not in flight yet: nobody can claim it.
+    assert!(!store.claim_session(id, a, alive_since).unwrap());
+    store
+        .transition(id, Step::AcceptRecording, StepRecord::RecordingBytes(9))
+        .unwrap();
+    // Sessions the suite left in flight may be listed too: only this one is looked at.
+    let unplayed = |alive: i64| -> Vec<Option<String>> {
+        let rows = store.unplayed_sessions(alive).unwrap();
+        rows.into_iter()
+            .filter(|r| r.0 == id)
+            .map(|r| r.1)
+            .collect()
+    };
+    assert_eq!(unplayed(alive_since), [None]);
+    assert!(store.claim_session(id, a, alive_since).unwrap());
+    // Again by its player: still its own; by another while the player lives: refused.
+    assert!(store.claim_session(id, a, alive_since).unwrap());
+    assert!(!store.claim_session(id, b, alive_since).unwrap());
+    assert_eq!(store.session_player(id).unwrap().as_deref(), Some(a));
+    assert!(unplayed(alive_since).is_empty());
+    store
+        .transition(id, Step::StartPlaying, StepRecord::Nothing)
+        .unwrap();
+    let job = store.start_job(id, "playback", a).unwrap();
+    let _ = job;
+
+    // A cancel and then a delete sent through B reach A; the delete outranks the cancel.
+    assert!(store.stop_requests(a).unwrap().is_empty());
+    store.request_stop(id, StopRequest::Cancel).unwrap();
+    assert_eq!(
+        store.stop_requests(a).unwrap(),
+        [(id.to_string(), StopRequest::Cancel)]
+    );
+    assert!(store.stop_requests(b).unwrap().is_empty());
+    store.request_stop(id, StopRequest::Delete).unwrap();
+    store.request_stop(id, StopRequest::Cancel).unwrap();
+    assert_eq!(
+        store.stop_requests(a).unwrap(),
+        [(id.to_string(), StopRequest::Delete)]
+    );
+
+    // A falls silent past the bound while B lives on: the session is A's no more.
+    let later = now + 60_000;
+    let alive_later = later - 30_000;
+    store.heartbeat(b, later).unwrap();
+    store.heartbeat(c, later).unwrap();
+    assert!(!store.is_alive(a, alive_later).unwrap());
+    assert!(store.is_alive(b, alive_later).unwrap());
+    // An earlier heartbeat never moves one back.
+    store.heartbeat(b, now).unwrap();
+    assert!(store.is_alive(b, alive_later).unwrap());
+    assert_eq!(unplayed(alive_later), [Some(a.to_string())]);
+    // B and C adopt it at once: exactly one wins.
+    let (by_b, by_c) = std::thread::scope(|scope| {
+        let b_claims = scope.spawn(|| store.claim_session(id, b, alive_later).unwrap());
+        let c_claims = scope.spawn(|| store.claim_session(id, c, alive_later).unwrap());
+        (b_claims.join().unwrap(), c_claims.join().unwrap())
+    });
+    assert!(by_b ^ by_c, "B adopted: {by_b}, C adopted: {by_c}");
+    let (adopter, other) = if by_b { (b, c) } else { (c, b) };
+    assert_eq!(store.session_player(id).unwrap().as_deref(), Some(adopter));
+    assert!(!store.claim_session(id, other, alive_later).unwrap());
+    // The request made while A played is the adopter's to carry out now.
+    assert_eq!(
+        store.stop_requests(adopter).unwrap(),
+        [(id.to_string(), StopRequest::Delete)]
+    );
+    // The adopter interrupts the dead instance's running job, never a live one's.
+    let live_job = store.start_job(id, "estimate", adopter).unwrap();
+    assert_eq!(store.interrupt_jobs(None, alive_later).unwrap(), 1);
+    let states: Vec<String> = store
+        .jobs_of(id)
+        .unwrap()
+        .into_iter()
+        .map(|j| j.1)
+        .collect();
+    assert_eq!(states, ["interrupted", "running"]);
+    store.finish_job(live_job, JobEnd::Done, None).unwrap();
+    // A, back, claims nothing the adopter plays.
+    store.heartbeat(a, later).unwrap();
+    assert!(!store.claim_session(id, a, alive_later).unwrap());
+
+    // Released by someone else than the player: nothing changes; by the player: nobody
+    // plays it and its stop request is gone.
+    store.release_session(id, other).unwrap();
+    assert_eq!(store.session_player(id).unwrap().as_deref(), Some(adopter));
+    store.release_session(id, adopter).unwrap();
+    assert_eq!(store.session_player(id).unwrap(), None);
+    assert!(store.stop_requests(adopter).unwrap().is_empty());
+    // Finished, it is in flight no more: nobody claims it, no adopter sees it.
+    store
+        .transition(id, Step::Fail, StepRecord::Error("test"))
+        .unwrap();
+    assert!(!store.claim_session(id, a, alive_later).unwrap());
+    assert!(unplayed(alive_later).is_empty());
+    // An upload session is never played by an instance.
+    let upload = "s1000000000000061";
+    store
+        .insert_session(upload, &new_session(None, PlaybackKind::Upload, None))
+        .unwrap();
+    store
+        .transition(upload, Step::AcceptRecording, StepRecord::RecordingBytes(9))
+        .unwrap();
+    assert!(!store.claim_session(upload, a, alive_later).unwrap());
+    assert!(store.delete_session(upload).unwrap() && store.delete_session(id).unwrap());
 }

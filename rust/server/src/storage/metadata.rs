@@ -12,10 +12,11 @@
 use crate::Error;
 use crate::auth::{Caller, Role, TokenInfo, UsageFull};
 use crate::session::{NewSession, Session, SessionState, Step};
+use crate::storage::instances::InstanceStore;
 use crate::venue::{NewVenue, Venue};
 
-/// How a job ended (a job is `running`, then one of these, or `interrupted` when a restart
-/// finds it left running by a dead process).
+/// How a job ended (a job is `running`, then one of these, or `interrupted` when its instance
+/// restarts, or another adopts its session, and finds it left running by a dead process).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum JobEnd {
     Done,
@@ -132,12 +133,10 @@ pub(crate) trait TrialStore {
 
 /// The jobs run on sessions (playback, estimates), for status and restarts.
 pub(crate) trait JobStore {
-    /// A `kind` job starts on `session`; its id.
-    fn start_job(&self, session: &str, kind: &str) -> Result<i64, Error>;
+    /// A `kind` job starts on `session`, run by instance `instance`; its id.
+    fn start_job(&self, session: &str, kind: &str, instance: &str) -> Result<i64, Error>;
     /// Job `job` ended.
     fn finish_job(&self, job: i64, end: JobEnd, error: Option<&str>) -> Result<(), Error>;
-    /// Marks jobs a dead process left running; returns how many.
-    fn interrupt_running_jobs(&self) -> Result<usize, Error>;
     /// (kind, state) of `session`'s jobs, oldest first.
     fn jobs_of(&self, session: &str) -> Result<Vec<(String, String)>, Error>;
 }
@@ -225,6 +224,7 @@ pub(crate) trait VenueStore {
 /// Every concern of the metadata store: what the server holds as `Arc<dyn MetadataStore>`.
 pub(crate) trait MetadataStore:
     SessionStore
+    + InstanceStore
     + TrialStore
     + JobStore
     + DeviceStore
@@ -238,6 +238,7 @@ pub(crate) trait MetadataStore:
 
 impl<T> MetadataStore for T where
     T: SessionStore
+        + InstanceStore
         + TrialStore
         + JobStore
         + DeviceStore

@@ -5,7 +5,8 @@
 //! playback hosts, their phones, trials leased to them). The embedded default is SQLite in
 //! `DATA/sitar.db` ([`sqlite`], opened by [`embedded`]) and the data directory's session
 //! folders ([`files`], with the disk quotas of [`quota`]); each instance's own files (admin
-//! token, TLS certificate) are [`instance`]'s. One conformance suite per seam
+//! token, TLS certificate, instance id) are [`instance`]'s; which instance plays which session
+//! is [`instances`]'. One conformance suite per seam
 //! (`conformance`) runs against any implementation. The cluster implementations, for several
 //! instances on one database and bucket, are [`postgres`] and [`s3`] ([`open`] picks). For
 //! `sitar migrate`: an embedded installation read under SQLite's exclusive lock
@@ -18,6 +19,7 @@ pub(crate) mod embedded;
 pub(crate) mod files;
 pub(crate) mod installation;
 pub(crate) mod instance;
+pub(crate) mod instances;
 pub(crate) mod keys;
 pub(crate) mod metadata;
 pub(crate) mod open;
@@ -36,6 +38,7 @@ pub(crate) mod conformance;
 pub(crate) mod worker_conformance;
 
 pub(crate) use blobs::{BlobStore, body_stream};
+pub(crate) use instances::StopRequest;
 pub(crate) use metadata::{
     JobEnd, MetadataStore, SessionStore, StepRecord, TokenStore, UsageStore, VenueStore,
 };

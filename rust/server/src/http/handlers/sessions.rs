@@ -19,6 +19,7 @@ use crate::http::helpers::{
 use crate::http::pagination::list_limit as limit;
 use crate::playback::jobs::{self, EndEarly, Stopped};
 use crate::playback::queue::Intent;
+use crate::playback::stop_requests;
 use crate::session::deletion;
 use crate::session::estimate_settings::EstimateSettings;
 use crate::session::status::status_json;
@@ -260,12 +261,13 @@ pub(crate) async fn list(
 }
 
 /// `DELETE /v1/sessions/{id}`: a queued or playing session's playback is stopped first (the
-/// adb backend stops the app on the phones), then the session goes.
+/// adb backend stops the app on the phones; another instance playing it is asked through the
+/// database and waited for), then the session goes.
 pub(crate) async fn delete(
     State(shared): AppState,
     Found(session): Found,
 ) -> Result<Response, Error> {
-    match jobs::stop_playback(&shared, &session.id, Intent::Delete).await? {
+    match stop_requests::stop_anywhere(&shared, &session.id, Intent::Delete).await? {
         Stopped::Dequeued | Stopped::Playing => {
             deletion::delete_stopped(&shared, &session.id).await?
         }
@@ -279,7 +281,8 @@ pub(crate) async fn delete(
 
 /// `POST /v1/sessions/{id}/cancel`: stops a sim or adb session's playback and keeps what
 /// was played: the session ends with an estimate over its trials (2 or more), else failed
-/// with the reason. A queued session leaves the queue.
+/// with the reason. A queued session leaves the queue. Another instance playing it is asked
+/// through the database (it looks every `stop_requests::POLL`).
 pub(crate) async fn cancel(
     State(shared): AppState,
     Found(session): Found,
@@ -297,7 +300,7 @@ pub(crate) async fn cancel(
             session.state
         )));
     }
-    match jobs::stop_playback(&shared, &id, Intent::Cancel).await? {
+    match stop_requests::stop_anywhere(&shared, &id, Intent::Cancel).await? {
         Stopped::Dequeued => jobs::finish_dequeued(shared.clone(), id.clone(), EndEarly::Cancel)?,
         // Its job ends the playback and estimates what was played.
         Stopped::Playing => {}

@@ -6,13 +6,13 @@ use crate::storage::metadata::{DeviceRow, DeviceStore, JobEnd, JobStore};
 use crate::storage::now_ms;
 
 impl JobStore for PgStore {
-    fn start_job(&self, session: &str, kind: &str) -> Result<i64, Error> {
-        let (id, kind) = (session.to_string(), kind.to_string());
+    fn start_job(&self, session: &str, kind: &str, instance: &str) -> Result<i64, Error> {
+        let (id, kind, instance) = (session.to_string(), kind.to_string(), instance.to_string());
         self.pool.run(move |c| {
             Ok(c.query_one(
-                "INSERT INTO jobs (session_id, kind, state, started_ms) \
-                 VALUES ($1, $2, 'running', $3) RETURNING id",
-                &[&id, &kind, &now_ms()],
+                "INSERT INTO jobs (session_id, kind, state, started_ms, instance) \
+                 VALUES ($1, $2, 'running', $3, $4) RETURNING id",
+                &[&id, &kind, &now_ms(), &instance],
             )?
             .get(0))
         })
@@ -26,17 +26,6 @@ impl JobStore for PgStore {
                 &[&job, &end.as_str(), &error, &now_ms()],
             )?;
             Ok(())
-        })
-    }
-
-    fn interrupt_running_jobs(&self) -> Result<usize, Error> {
-        self.pool.run(|c| {
-            let n = c.execute(
-                "UPDATE jobs SET state = 'interrupted', error = 'server stopped while the job ran', \
-                 finished_ms = $1 WHERE state = 'running'",
-                &[&now_ms()],
-            )?;
-            Ok(n as usize)
         })
     }
 

@@ -8,11 +8,12 @@ use crate::storage::metadata::{DeviceRow, DeviceStore, JobEnd, JobStore};
 use crate::storage::now_ms;
 
 impl JobStore for SqliteStore {
-    fn start_job(&self, session: &str, kind: &str) -> Result<i64, Error> {
+    fn start_job(&self, session: &str, kind: &str, instance: &str) -> Result<i64, Error> {
         self.with(|c| {
             c.execute_cached(
-                "INSERT INTO jobs (session_id, kind, state, started_ms) VALUES (?1, ?2, 'running', ?3)",
-                params![session, kind, now_ms()],
+                "INSERT INTO jobs (session_id, kind, state, started_ms, instance) \
+                 VALUES (?1, ?2, 'running', ?3, ?4)",
+                params![session, kind, now_ms(), instance],
             )?;
             Ok(c.last_insert_rowid())
         })
@@ -26,16 +27,6 @@ impl JobStore for SqliteStore {
             )
         })
         .map(|_| ())
-    }
-
-    fn interrupt_running_jobs(&self) -> Result<usize, Error> {
-        self.with(|c| {
-            c.execute_cached(
-                "UPDATE jobs SET state = 'interrupted', error = 'server stopped while the job ran', finished_ms = ?1 \
-                 WHERE state = 'running'",
-                [now_ms()],
-            )
-        })
     }
 
     fn jobs_of(&self, session: &str) -> Result<Vec<(String, String)>, Error> {

@@ -1,7 +1,8 @@
 //! The embedded metadata store: SQLite in `DATA/sitar.db` (WAL mode, so `sitar token` works
 //! beside a running server). This folder is the only place that speaks SQL: the connection,
 //! the schema and its migrations here, and one file per concern of
-//! [`crate::storage::metadata`] (`sessions`, `trials`, `jobs`, `tokens`, `usage`, `venues`) and
+//! [`crate::storage::metadata`] (`sessions`, `trials`, `jobs`, `tokens`, `usage`, `venues`,
+//! `instances` with its versioned `instance_schema`) and
 //! of [`crate::storage::workers`] (`hosts`, `leases`, with their versioned `worker_schema`).
 
 use std::path::Path;
@@ -13,6 +14,8 @@ use crate::Error;
 
 pub(crate) mod export;
 mod hosts;
+mod instance_schema;
+mod instances;
 mod jobs;
 mod leases;
 mod sessions;
@@ -197,6 +200,7 @@ impl SqliteStore {
             "CREATE INDEX IF NOT EXISTS sessions_venue ON sessions (venue) WHERE venue IS NOT NULL",
         )?;
         worker_schema::migrate(&mut conn)?;
+        instance_schema::migrate(&mut conn)?;
         Ok(SqliteStore {
             conn: Mutex::new(conn),
         })

@@ -1,0 +1,3 @@
+//! Helpers of the instance tests (`serve_instances.rs`).
+
+pub mod serving;
