@@ -24,6 +24,7 @@ mod input;
 mod logging;
 mod metric;
 mod metric_args;
+mod migrate;
 mod output;
 mod panels;
 mod pdf;
@@ -69,6 +70,7 @@ enum Command {
     Serve(serve::Args),
     Token(token::Args),
     Worker(worker::Args),
+    Migrate(migrate::Args),
     Demo(demo::Args),
     Scene(scene::Args),
 }
@@ -79,7 +81,7 @@ const GROUPS: &[(&str, &[&str])] = &[
     ("Getting started", &["demo", "simulate"]),
     (
         "Backend (the server phones talk to)",
-        &["serve", "token", "worker"],
+        &["serve", "token", "worker", "migrate"],
     ),
     (
         "evo-compatible (evo's command lines)",
@@ -156,6 +158,7 @@ fn main() -> ExitCode {
         Command::Serve(args) => serve::run(args),
         Command::Token(args) => token::run(args),
         Command::Worker(args) => worker::run(args),
+        Command::Migrate(args) => migrate::run(args),
         Command::Demo(args) => demo::run(args),
         Command::Scene(args) => scene::run(args),
     };

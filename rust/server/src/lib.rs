@@ -86,6 +86,7 @@
 // auth                                          — tokens, callers, limits (middleware)
 // venue                                         — venues: rows, who sees them, sessions' alignment
 // http                                          — router, server, connections, limits, handlers, TLS
+// migrate                                       — `sitar migrate`: an embedded installation into the cluster stores
 // fuzzing                                       — the parsers, for fuzz/ only (doc-hidden)
 mod app_state;
 mod auth;
@@ -96,6 +97,7 @@ mod estimate;
 pub mod fuzzing;
 mod http;
 mod ingest;
+mod migrate;
 mod playback;
 mod report;
 mod session;
@@ -111,6 +113,7 @@ pub use error::Error;
 pub use http::helpers::IDEMPOTENCY_HEADER;
 pub use http::server::{Server, ServerHandle};
 pub use http::tls::TlsConfig;
+pub use migrate::{MigrateOptions, Summary as MigrateSummary, TableCount, migrate};
 pub use playback::adb::{AdbPlayback, contract as adb_contract, mp4_duration_s};
 pub use playback::{
     DeviceInfo, Playback, PlaybackJob, PlaybackPlan, SimPlayback, TrialOutput, UploadPlayback,

@@ -41,6 +41,41 @@ pub(crate) enum SessionObject {
 }
 
 impl SessionObject {
+    /// The object stored at `relative` inside a session's folder (the inverse of
+    /// [`SessionObject::relative_path`]); `None` for anything else there (working folders,
+    /// caches).
+    pub(crate) fn from_relative_path(relative: &str) -> Option<SessionObject> {
+        let number = |text: &str| -> Option<u32> {
+            (!text.is_empty() && text.bytes().all(|b| b.is_ascii_digit()))
+                .then(|| text.parse().ok())?
+        };
+        let object = match relative {
+            "recording" => SessionObject::Recording,
+            "recording.part" => SessionObject::RecordingPart,
+            "recording.part.key" => SessionObject::RecordingPartKey,
+            "recording.part.total" => SessionObject::RecordingPartTotal,
+            "timestamps.txt" => SessionObject::Timestamps,
+            "results.csv" => SessionObject::ResultsCsv,
+            "results.json" => SessionObject::ResultsJson,
+            "history.jsonl" => SessionObject::History,
+            "evidence.json" => SessionObject::Evidence,
+            "spans.json" => SessionObject::Spans,
+            "phone_log/trajectory.txt" => SessionObject::PhoneTrajectory,
+            "phone_log/anchors.csv" => SessionObject::Anchors,
+            "phone_log/subtrajectories.csv" => SessionObject::Subtrajectories,
+            other => {
+                if let Some(name) = other.strip_prefix("trials/trial_") {
+                    SessionObject::Trial(number(name.strip_suffix(".txt")?)?)
+                } else {
+                    let k = other.strip_prefix("thumbnails/")?.strip_suffix(".jpg")?;
+                    SessionObject::Thumbnail(number(k)? as usize)
+                }
+            }
+        };
+        // Only the spelling this version writes (`trial_7.txt` is not `trial_007.txt`).
+        (object.relative_path() == relative).then_some(object)
+    }
+
     /// Where the object lives inside the session's folder.
     pub(crate) fn relative_path(self) -> String {
         match self {
@@ -88,6 +123,25 @@ mod tests {
             SessionObject::Anchors,
             SessionObject::Subtrajectories,
         ];
+        for object in objects {
+            let path = object.relative_path();
+            assert_eq!(
+                SessionObject::from_relative_path(&path),
+                Some(object),
+                "{path}"
+            );
+        }
+        for other in [
+            "trials/trial_7.txt",
+            "trials/trial_.txt",
+            "thumbnails/x.jpg",
+            "thumbnails/+1.jpg",
+            "phone/session.json",
+            "adb-pull/trajectory_0.txt",
+            "recording.tmp",
+        ] {
+            assert_eq!(SessionObject::from_relative_path(other), None, "{other}");
+        }
         let paths: std::collections::BTreeSet<String> =
             objects.iter().map(|o| o.relative_path()).collect();
         assert_eq!(paths.len(), objects.len(), "{paths:?}");

@@ -7,19 +7,23 @@
 //! folders ([`files`], with the disk quotas of [`quota`]); each instance's own files (admin
 //! token, TLS certificate) are [`instance`]'s. One conformance suite per seam
 //! (`conformance`) runs against any implementation. The cluster implementations, for several
-//! instances on one database and bucket, are [`postgres`] and [`s3`] ([`open`] picks). Only
-//! this folder speaks SQL or touches the data directory (`tests/layout.rs` checks both).
+//! instances on one database and bucket, are [`postgres`] and [`s3`] ([`open`] picks). For
+//! `sitar migrate`: an embedded installation read under SQLite's exclusive lock
+//! ([`installation`]) and rows as plain values ([`rows`]), written into Postgres as they are.
+//! Only this folder speaks SQL or touches the data directory (`tests/layout.rs` checks both).
 
 pub(crate) mod blobs;
 pub(crate) mod blocking;
 pub(crate) mod embedded;
 pub(crate) mod files;
+pub(crate) mod installation;
 pub(crate) mod instance;
 pub(crate) mod keys;
 pub(crate) mod metadata;
 pub(crate) mod open;
 pub(crate) mod postgres;
 pub(crate) mod quota;
+pub(crate) mod rows;
 pub(crate) mod s3;
 pub(crate) mod sqlite;
 pub(crate) mod staged;

@@ -13,6 +13,7 @@ use std::str::FromStr;
 
 use crate::Error;
 
+pub(crate) mod copy;
 mod jobs;
 mod migrations;
 mod pool;

@@ -11,6 +11,7 @@ use rusqlite::{Connection, Params, Row};
 
 use crate::Error;
 
+pub(crate) mod export;
 mod hosts;
 mod jobs;
 mod leases;
