@@ -330,12 +330,14 @@ pub(crate) async fn blob_store(store: &dyn BlobStore) {
     whole_objects_are_replaced_and_removed(store);
     uploads_are_staged_checked_and_published_whole(store).await;
     resumable_parts_keep_exactly_what_arrived(store).await;
+    a_recording_of_declared_size_is_published_whole(store).await;
     sessions_are_taken_away_at_once(store);
     scenes_are_kept_whole_with_their_tag(store);
 }
 
 const A: &str = "s2000000000000001";
 const B: &str = "s2000000000000002";
+const C: &str = "s2000000000000003";
 
 fn chunks(parts: &[&'static [u8]], broken: bool) -> crate::storage::blobs::BodyStream<'static> {
     let mut items: Vec<Result<axum::body::Bytes, String>> = parts
@@ -477,6 +479,61 @@ async fn resumable_parts_keep_exactly_what_arrived(store: &dyn BlobStore) {
         b"abcdefghijkl"
     );
     assert!(!store.exists(B, part), "the part became the recording");
+}
+
+/// A body from byte 0 that carries a whole recording of declared size (a plain `PUT`):
+/// nothing of it is visible until it is published; broken off, its prefix is kept for a
+/// resume; staged and dropped unpublished, it leaves the stored recording as it was.
+async fn a_recording_of_declared_size_is_published_whole(store: &dyn BlobStore) {
+    let part = SessionObject::RecordingPart;
+    store.create_session(C).unwrap();
+    store
+        .put(C, SessionObject::RecordingPartTotal, b"9")
+        .unwrap();
+    let append = async |parts: &[&'static [u8]], broken: bool| {
+        let room = store.reserve(Some(C), Some(9)).unwrap();
+        store
+            .append_to(
+                chunks(parts, broken),
+                C,
+                part,
+                0,
+                1 << 20,
+                "recording",
+                room,
+            )
+            .await
+            .unwrap()
+    };
+    let cut = append(&[b"abc", b"de"], true).await;
+    assert_eq!((cut.len, cut.broken.is_some()), (5, true));
+    assert_eq!(store.len(C, part).unwrap(), Some(5), "kept for a resume");
+    assert!(!store.exists(C, SessionObject::Recording));
+    store.remove(C, part).unwrap();
+    let whole = append(&[b"abcd", b"efghi"], false).await;
+    assert_eq!((whole.len, whole.broken.is_none()), (9, true));
+    assert!(
+        !store.exists(C, SessionObject::Recording),
+        "visible before it was published"
+    );
+    let staged = store.staged_part(C, 9);
+    assert_eq!(std::fs::read(&staged.path).unwrap(), b"abcdefghi");
+    store.publish(staged, C, SessionObject::Recording).unwrap();
+    store.remove(C, part).unwrap();
+    assert_eq!(
+        store.get(C, SessionObject::Recording).unwrap().unwrap(),
+        b"abcdefghi"
+    );
+    // Another whole upload, staged and dropped (its check refused it): nothing changes.
+    append(&[b"zzzzzzzzz"], false).await;
+    drop(store.staged_part(C, 9));
+    store.remove(C, part).unwrap();
+    assert_eq!(
+        store.get(C, SessionObject::Recording).unwrap().unwrap(),
+        b"abcdefghi"
+    );
+    assert!(!store.exists(C, part));
+    store.remove(C, SessionObject::RecordingPartTotal).unwrap();
 }
 
 fn sessions_are_taken_away_at_once(store: &dyn BlobStore) {

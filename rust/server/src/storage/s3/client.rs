@@ -117,6 +117,14 @@ impl Bucket {
             .map_err(|e| Error::Internal(format!("an S3 call failed: {e}")))?
     }
 
+    /// Starts `work` on the client's runtime at once; its handle, to await later.
+    pub fn start<T: Send + 'static>(
+        &self,
+        work: impl Future<Output = T> + Send + 'static,
+    ) -> Result<tokio::task::JoinHandle<T>, Error> {
+        Ok(self.handle()?.spawn(work))
+    }
+
     /// The object's bytes; `None` when it is not stored.
     pub fn get(&self, key: Key) -> Result<Option<Vec<u8>>, Error> {
         let s3 = self.s3.clone();
@@ -247,4 +255,4 @@ pub(crate) async fn upload_file(
 pub(crate) const PART_BYTES: usize = 8 << 20;
 
 /// Parts of one multipart upload sent at once.
-const PARTS_IN_FLIGHT: usize = 4;
+pub(crate) const PARTS_IN_FLIGHT: usize = 4;

@@ -10,7 +10,10 @@
 //! - uploads are staged in the instance's `DATA/tmp` (emptied at start: nothing partial
 //!   survives a crash) and published whole;
 //! - resumable recordings: one object per request's bytes ([`parts`]), so any instance
-//!   resumes them;
+//!   resumes them; a request that carries a whole recording of declared size goes straight
+//!   into a multipart upload of `recording`, sent while it arrives ([`streamed`]) and
+//!   completed only when the recording is published (aborted when it is not, and stored as a
+//!   part from its staged copy when the body breaks off);
 //! - quotas: counted as bytes arrive, against the bucket's usage (listed, reused 30 s);
 //! - deletes: objects put aside in `trash/` first ([`trash`]).
 //!
@@ -33,6 +36,7 @@ pub(crate) mod cache;
 mod client;
 mod local_parts;
 mod parts;
+mod streamed;
 mod trash;
 
 use cache::LocalCache;
@@ -83,11 +87,34 @@ pub(crate) struct S3Blobs {
     /// against the bucket's quotas.
     staging: Files,
     cache: Arc<LocalCache>,
-    /// Staged recordings made of kept parts: publishing one removes the parts; a recording
-    /// that is one part whole is published by a server-side copy of that part.
-    joined: Mutex<std::collections::HashMap<PathBuf, (String, Option<Key>)>>,
+    /// Staged recordings and the session each is for: publishing one removes the session's
+    /// parts.
+    joined: Mutex<std::collections::HashMap<PathBuf, (String, Source)>>,
+    /// Whole recordings received (one per session uploading now), waiting for
+    /// [`BlobStore::staged_part`]: their staged copy and their unfinished upload.
+    streamed: Mutex<std::collections::HashMap<String, Streamed>>,
     /// Local copies of the parts this instance stored.
     local_parts: local_parts::LocalParts,
+}
+
+/// Where a staged recording's bytes already are in the bucket.
+enum Source {
+    /// Nowhere whole: it is sent when published.
+    Gathered,
+    /// One kept part holds it whole: published by a server-side copy.
+    Part(Key),
+    /// Sent while it arrived, to `recording`: published by completing that upload.
+    Sent(streamed::Sent),
+}
+
+/// A whole recording received by [`BlobStore::append_to`].
+struct Streamed {
+    /// The staged copy (in `DATA/tmp`), owned here until taken or discarded.
+    file: PathBuf,
+    len: u64,
+    /// Its unfinished upload to `recording`; `None` when sending failed (it is then sent
+    /// from the staged copy when published).
+    sent: Option<streamed::Sent>,
 }
 
 impl S3Blobs {
@@ -123,6 +150,7 @@ impl S3Blobs {
             bucket,
             staging,
             joined: Mutex::new(Default::default()),
+            streamed: Mutex::new(Default::default()),
             local_parts: Default::default(),
         })
     }
@@ -140,11 +168,70 @@ impl S3Blobs {
             .map(|_| ())
     }
 
-    /// Removes session `id`'s parts and their local copies.
+    /// Removes session `id`'s parts and their local copies, and gives up its recordings
+    /// received whole but not published.
     fn remove_parts(&self, id: &str) -> Result<(), Error> {
         self.local_parts
             .forget_under(&self.bucket.key(&parts::folder(id)));
+        let unpublished = self.lock_streamed().remove(id);
+        if let Some(whole) = unpublished {
+            let _ = std::fs::remove_file(&whole.file);
+            self.abort(id, whole.sent);
+        }
+        self.forget_joined(|_, session| session == id);
         parts::remove(&self.bucket, id)
+    }
+
+    fn lock_streamed(
+        &self,
+    ) -> std::sync::MutexGuard<'_, std::collections::HashMap<String, Streamed>> {
+        self.streamed.lock().unwrap_or_else(|p| p.into_inner())
+    }
+
+    /// Forgets the staged recordings that `forget` names (by staged path and session),
+    /// aborting their unfinished uploads.
+    fn forget_joined(&self, forget: impl Fn(&Path, &str) -> bool) {
+        let forgotten: Vec<(String, Source)> = {
+            let mut joined = self.joined.lock().unwrap_or_else(|p| p.into_inner());
+            let paths: Vec<PathBuf> = joined
+                .iter()
+                .filter(|(path, (session, _))| forget(path, session))
+                .map(|(path, _)| path.clone())
+                .collect();
+            paths.iter().filter_map(|p| joined.remove(p)).collect()
+        };
+        for (session, source) in forgotten {
+            if let Source::Sent(sent) = source {
+                self.abort(&session, Some(sent));
+            }
+        }
+    }
+
+    /// Aborts session `id`'s unfinished upload of its recording, in the background.
+    fn abort(&self, id: &str, sent: Option<streamed::Sent>) {
+        if let Some(sent) = sent {
+            let key = self.key(id, SessionObject::Recording);
+            if let Err(e) = self.bucket.start(sent.abort(key)) {
+                log::warn!("session {id}: {e}");
+            }
+        }
+    }
+
+    /// Aborts an unfinished upload of `key`, in the background.
+    fn abort_sent(&self, sent: Option<streamed::Sent>, key: Key) {
+        if let Some(sent) = sent
+            && let Err(e) = self.bucket.start(sent.abort(key))
+        {
+            log::warn!("{e}");
+        }
+    }
+
+    /// The recording size the session's upload declared (`recording.part.total`).
+    fn declared_total(&self, id: &str) -> Result<Option<u64>, Error> {
+        Ok(self
+            .bucket
+            .get(self.key(id, SessionObject::RecordingPartTotal))?
+            .and_then(|b| String::from_utf8_lossy(&b).trim().parse().ok()))
     }
 }
 
@@ -270,29 +357,115 @@ impl BlobStore for S3Blobs {
                     "session {id}: the kept upload is {len} bytes, not the expected {offset}"
                 )));
             }
-            // This request's bytes, staged whole, then stored as one part.
+            // A body from byte 0 that may carry the whole recording of declared size goes
+            // straight into an upload of `recording`; any other body into its part's object.
+            let total = match offset {
+                0 => self.declared_total(id)?.filter(|&t| t > 0 && t <= end),
+                _ => None,
+            };
+            let part = parts::part_key(&self.bucket, id, offset);
+            let target = match total {
+                Some(_) => self.key(id, SessionObject::Recording),
+                None => part.clone(),
+            };
+            // This request's bytes, staged whole (the checks read them) and sent on meanwhile.
             let temp = TempFile {
                 path: self.staging.temp_path(),
                 bytes: 0,
             };
             std::fs::File::create(&temp.path)
                 .map_err(|e| Error::io("cannot create", &temp.path, e))?;
+            let (to, chunks) = tokio::sync::mpsc::channel(streamed::QUEUED_CHUNKS);
+            let sending = self.bucket.start(streamed::upload(
+                self.bucket.s3.clone(),
+                target.clone(),
+                chunks,
+            ))?;
             let appended = self
                 .staging
-                .append(body, &temp.path, 0, end - offset, what, room)
-                .await?;
+                .append(
+                    streamed::tee(body, to),
+                    &temp.path,
+                    0,
+                    end - offset,
+                    what,
+                    room,
+                )
+                .await;
+            let sent = match sending.await {
+                Ok(Ok(sent)) => Some(sent),
+                Ok(Err(e)) => {
+                    log::info!("session {id}: {e}; the bytes are sent from the staged copy");
+                    None
+                }
+                Err(e) => {
+                    log::warn!("session {id}: the upload to the bucket stopped: {e}");
+                    None
+                }
+            };
+            let appended = match appended {
+                Ok(appended) => appended,
+                Err(e) => {
+                    self.abort_sent(sent.map(|(s, _)| s), target);
+                    return Err(e);
+                }
+            };
+            // What was sent is what was staged, or it is not used.
+            let sent = match sent {
+                Some((sent, n)) if n == appended.len => Some(sent),
+                Some((sent, n)) => {
+                    log::warn!(
+                        "session {id}: {n} bytes sent, {} staged; sent from the staged copy",
+                        appended.len
+                    );
+                    self.abort_sent(Some(sent), target.clone());
+                    None
+                }
+                None => None,
+            };
+            if appended.broken.is_none() && total == Some(appended.len) {
+                // The whole recording: kept until it is published or discarded.
+                let file = temp.path.clone();
+                std::mem::forget(temp);
+                let replaced = self.lock_streamed().insert(
+                    id.to_string(),
+                    Streamed {
+                        file,
+                        len: appended.len,
+                        sent,
+                    },
+                );
+                if let Some(old) = replaced {
+                    let _ = std::fs::remove_file(&old.file);
+                    self.abort(id, old.sent);
+                }
+                return Ok(Appended {
+                    len: appended.len,
+                    broken: None,
+                });
+            }
             if appended.len > 0 {
-                let key = parts::part_key(&self.bucket, id, offset);
                 let s3 = self.bucket.s3.clone();
-                let e_tag = self
-                    .bucket
-                    .spawn(client::upload_file(s3, temp.path.clone(), key.clone()))
-                    .await?;
+                let e_tag = match sent {
+                    Some(sent) if target == part => {
+                        self.bucket.spawn(sent.store(s3, part.clone())).await?
+                    }
+                    other => {
+                        // Sent to `recording`, but the body broke off or was short: the
+                        // prefix is kept as the part, from the staged copy.
+                        self.abort_sent(other, target);
+                        self.bucket
+                            .spawn(client::upload_file(s3, temp.path.clone(), part.clone()))
+                            .await?
+                    }
+                };
                 if let Some(e_tag) = e_tag {
                     let file = temp.path.clone();
                     std::mem::forget(temp);
-                    self.local_parts.keep(key, file, e_tag);
+                    self.local_parts.keep(part, file, e_tag);
                 }
+            } else {
+                self.abort_sent(sent, target);
             }
             Ok(Appended {
                 len: offset + appended.len,
@@ -308,9 +481,28 @@ impl BlobStore for S3Blobs {
             .unwrap_or_else(|p| p.into_inner())
             .remove(&temp.path);
         let dest = self.key(id, object);
-        let copied = match &joined {
-            Some((_, Some(part))) => {
-                let (s3, from, to) = (self.bucket.s3.clone(), part.clone(), dest.clone());
+        let (session, source) = match joined {
+            Some((session, source)) => (Some(session), source),
+            None => (None, Source::Gathered),
+        };
+        let copied = match source {
+            Source::Sent(sent)
+                if session.as_deref() == Some(id) && object == SessionObject::Recording =>
+            {
+                // Completing the upload sent while the recording arrived makes it visible
+                // whole; when that fails it is sent again from the staged copy.
+                let done = self
+                    .bucket
+                    .block(sent.store(self.bucket.s3.clone(), dest.clone()));
+                done.map_err(|e| log::info!("session {id}: {e}; the recording is sent again"))
+                    .is_ok()
+            }
+            Source::Sent(sent) => {
+                self.abort(session.as_deref().unwrap_or(id), Some(sent));
+                false
+            }
+            Source::Part(part) => {
+                let (s3, from, to) = (self.bucket.s3.clone(), part, dest.clone());
                 let copy = self.bucket.block(async move {
                     use object_store::ObjectStoreExt;
                     s3.copy(&from, &to)
@@ -321,13 +513,13 @@ impl BlobStore for S3Blobs {
                 copy.map_err(|e| log::info!("session {id}: {e}; the recording is sent again"))
                     .is_ok()
             }
-            _ => false,
+            Source::Gathered => false,
         };
         if !copied {
             self.upload(temp.path.clone(), dest)?;
         }
         self.cache.forget(&self.cache.object_path(id, object));
-        if let Some((session, _)) = joined {
+        if let Some(session) = session {
             self.remove_parts(&session)?;
         }
         drop(temp);
@@ -339,21 +531,35 @@ impl BlobStore for S3Blobs {
     /// copy of the one part: nothing is read back from the bucket.
     fn staged_part(&self, id: &str, bytes: u64) -> TempFile {
         let path = self.staging.temp_path();
-        let joined = parts::parts(&self.bucket, id).and_then(|(found, _)| match &found[..] {
-            [one]
-                if one.bytes == bytes
-                    && self.local_parts.link(&one.key, one.e_tag.as_deref(), &path) =>
-            {
-                Ok(Some(one.key.clone()))
+        // A staged recording dropped unpublished (refused by its check) is gone.
+        self.forget_joined(|staged, _| !staged.exists());
+        let received = self.lock_streamed().remove(id);
+        let joined = match received {
+            Some(whole) if whole.len == bytes && std::fs::rename(&whole.file, &path).is_ok() => {
+                Ok(whole.sent.map_or(Source::Gathered, Source::Sent))
             }
-            _ => parts::gather(&self.bucket, id, bytes, &path).map(|()| None),
-        });
+            other => {
+                if let Some(stale) = other {
+                    let _ = std::fs::remove_file(&stale.file);
+                    self.abort(id, stale.sent);
+                }
+                parts::parts(&self.bucket, id).and_then(|(found, _)| match &found[..] {
+                    [one]
+                        if one.bytes == bytes
+                            && self.local_parts.link(&one.key, one.e_tag.as_deref(), &path) =>
+                    {
+                        Ok(Source::Part(one.key.clone()))
+                    }
+                    _ => parts::gather(&self.bucket, id, bytes, &path).map(|()| Source::Gathered),
+                })
+            }
+        };
         match joined {
-            Ok(part) => {
-                let mut joined = self.joined.lock().unwrap_or_else(|p| p.into_inner());
-                // A staged recording dropped unpublished (refused by its check) is gone.
-                joined.retain(|staged, _| staged.exists());
-                joined.insert(path.clone(), (id.to_string(), part));
+            Ok(source) => {
+                self.joined
+                    .lock()
+                    .unwrap_or_else(|p| p.into_inner())
+                    .insert(path.clone(), (id.to_string(), source));
             }
             Err(e) => {
                 log::warn!("session {id}: cannot join the kept upload: {e}");
@@ -540,6 +746,72 @@ mod tests {
             std::fs::read(store.local_file(id, SessionObject::Trial(0))).unwrap(),
             b"short"
         );
+    }
+
+    /// A recording of declared size larger than a part goes up in parts while it arrives,
+    /// invisible until published; broken off, what arrived is the part to resume from.
+    #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+    async fn a_large_whole_recording_is_sent_while_it_arrives() {
+        let Some(url) = fresh("s3_streamed") else {
+            return;
+        };
+        let dir = tempfile::tempdir().unwrap();
+        let idle = std::time::Duration::from_secs(60);
+        let store = S3Blobs::open(&url, dir.path(), idle, u64::MAX, u64::MAX).unwrap();
+        let id = "s3000000000000002";
+        let size = client::PART_BYTES * 2 + 777;
+        let big: Vec<u8> = (0..size).map(|i| (i % 253) as u8).collect();
+        let body = |upto: usize, broken: bool| {
+            let mut items: Vec<Result<axum::body::Bytes, String>> = big[..upto]
+                .chunks(300_000)
+                .map(|c| Ok(axum::body::Bytes::copy_from_slice(c)))
+                .collect();
+            if broken {
+                items.push(Err("connection reset".into()));
+            }
+            crate::storage::body_stream(futures_util::stream::iter(items))
+        };
+        let part = SessionObject::RecordingPart;
+        let total = size.to_string();
+        store
+            .put(id, SessionObject::RecordingPartTotal, total.as_bytes())
+            .unwrap();
+        let room = store.reserve(Some(id), None).unwrap();
+        let cut = store
+            .append_to(
+                body(size - 5000, true),
+                id,
+                part,
+                0,
+                1 << 30,
+                "recording",
+                room,
+            )
+            .await
+            .unwrap();
+        assert_eq!(cut.len, (size - 5000) as u64);
+        assert_eq!(store.len(id, part).unwrap(), Some(cut.len));
+        assert!(!store.exists(id, SessionObject::Recording));
+        store.remove(id, part).unwrap();
+        let room = store.reserve(Some(id), None).unwrap();
+        let whole = store
+            .append_to(body(size, false), id, part, 0, 1 << 30, "recording", room)
+            .await
+            .unwrap();
+        assert_eq!((whole.len, whole.broken.is_none()), (size as u64, true));
+        assert!(
+            !store.exists(id, SessionObject::Recording),
+            "visible too early"
+        );
+        let staged = store.staged_part(id, size as u64);
+        store.publish(staged, id, SessionObject::Recording).unwrap();
+        store.remove(id, part).unwrap();
+        let local = store.local_file(id, SessionObject::Recording);
+        assert!(
+            std::fs::read(&local).unwrap() == big,
+            "the recording is not what was sent"
+        );
+        assert!(!store.exists(id, part));
     }
 
     #[test]
