@@ -8,6 +8,8 @@
 //! run again; a running server, a database holding other data and a changed side are refused
 //! naming them. Without `SITAR_TEST_DATABASE_URL` and `SITAR_TEST_S3_URL` it prints SKIPPED.
 
+mod support;
+
 use std::io::{BufRead, BufReader};
 use std::path::Path;
 use std::process::{Child, Command, Output, Stdio};
@@ -15,6 +17,8 @@ use std::sync::mpsc::{Receiver, channel};
 use std::time::{Duration, Instant};
 
 use sitar_client::{JobOptions, JobState, NewSession, SessionFrame, UploadJob};
+
+use support::cluster::{fresh_database, services};
 
 /// A running `sitar serve`, its output lines and its URL.
 struct Serving {
@@ -122,21 +126,6 @@ fn read_lines(child: &mut Child) -> Receiver<String> {
     lines
 }
 
-/// The test services' URLs, or `None` after printing SKIPPED.
-fn services(test: &str) -> Option<(String, String)> {
-    let var = |name: &str| std::env::var(name).ok().filter(|v| !v.is_empty());
-    match (var("SITAR_TEST_DATABASE_URL"), var("SITAR_TEST_S3_URL")) {
-        (Some(db), Some(s3)) => Some((db, s3)),
-        _ => {
-            println!(
-                "SKIPPED {test}: SITAR_TEST_DATABASE_URL and SITAR_TEST_S3_URL are not both set \
-                 (scripts/cluster-services start)"
-            );
-            None
-        }
-    }
-}
-
 /// `psql URL -At -c SQL`: its output, trimmed; panics naming the error.
 fn psql(url: &str, sql: &str) -> String {
     let out = Command::new("psql")
@@ -149,33 +138,6 @@ fn psql(url: &str, sql: &str) -> String {
         String::from_utf8_lossy(&out.stderr)
     );
     String::from_utf8_lossy(&out.stdout).trim().to_string()
-}
-
-/// A fresh database on the test server (made with `psql`), or `None` after printing SKIPPED.
-fn fresh_database(test: &str, url: &str) -> Option<String> {
-    let name = format!("sitar_cli_{test}_{}", std::process::id());
-    let made = Command::new("psql")
-        .args([url, "-q", "-c"])
-        .arg(format!("DROP DATABASE IF EXISTS {name} WITH (FORCE)"))
-        .args(["-c", &format!("CREATE DATABASE {name}")])
-        .output();
-    match made {
-        Ok(out) if out.status.success() => {
-            let base = url.rsplit_once('/').map_or(url, |(base, _)| base);
-            Some(format!("{base}/{name}"))
-        }
-        Ok(out) => {
-            println!(
-                "SKIPPED {test}: psql cannot make a database: {}",
-                String::from_utf8_lossy(&out.stderr)
-            );
-            None
-        }
-        Err(e) => {
-            println!("SKIPPED {test}: no psql: {e}");
-            None
-        }
-    }
 }
 
 fn sitar(args: &[&str]) -> Output {

@@ -6,12 +6,14 @@
 //! `scripts/cluster-services` the test prints SKIPPED.
 
 mod instances;
+mod support;
 
 use std::path::Path;
 use std::time::{Duration, Instant};
 
-use instances::serving::{Serving, fresh_database, request, services};
+use instances::serving::{Serving, request};
 use sitar_client::SessionState;
+use support::cluster::{fresh_database, services};
 
 /// Trials per session: long enough to kill an instance in the middle.
 const TRIALS: u32 = 6;

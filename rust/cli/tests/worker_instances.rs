@@ -6,6 +6,8 @@
 //! byte-identical to the embedded server's. Without `SITAR_TEST_DATABASE_URL` and
 //! `SITAR_TEST_S3_URL` (`scripts/cluster-services start`) the test prints SKIPPED.
 
+mod support;
+
 use std::collections::HashMap;
 use std::io::{BufRead, BufReader};
 use std::path::Path;
@@ -14,6 +16,8 @@ use std::sync::mpsc::{Receiver, channel};
 use std::time::{Duration, Instant};
 
 use sitar_client::{Client, NewSession};
+
+use support::cluster::{fresh_database, services};
 
 /// A child process whose output lines are collected; killed on drop.
 struct Proc {
@@ -83,48 +87,6 @@ impl Drop for Proc {
     fn drop(&mut self) {
         let _ = self.child.kill();
         let _ = self.child.wait();
-    }
-}
-
-/// The test services' URLs, or `None` after printing SKIPPED.
-fn services(test: &str) -> Option<(String, String)> {
-    let var = |name: &str| std::env::var(name).ok().filter(|v| !v.is_empty());
-    match (var("SITAR_TEST_DATABASE_URL"), var("SITAR_TEST_S3_URL")) {
-        (Some(db), Some(s3)) => Some((db, s3)),
-        _ => {
-            println!(
-                "SKIPPED {test}: SITAR_TEST_DATABASE_URL and SITAR_TEST_S3_URL are not both set \
-                 (scripts/cluster-services start)"
-            );
-            None
-        }
-    }
-}
-
-/// A fresh database on the test server (made with `psql`), or `None` after printing SKIPPED.
-fn fresh_database(test: &str, url: &str) -> Option<String> {
-    let name = format!("sitar_cli_{test}_{}", std::process::id());
-    let made = Command::new("psql")
-        .args([url, "-q", "-c"])
-        .arg(format!("DROP DATABASE IF EXISTS {name} WITH (FORCE)"))
-        .args(["-c", &format!("CREATE DATABASE {name}")])
-        .output();
-    match made {
-        Ok(out) if out.status.success() => {
-            let base = url.rsplit_once('/').map_or(url, |(base, _)| base);
-            Some(format!("{base}/{name}"))
-        }
-        Ok(out) => {
-            println!(
-                "SKIPPED {test}: psql cannot make a database: {}",
-                String::from_utf8_lossy(&out.stderr)
-            );
-            None
-        }
-        Err(e) => {
-            println!("SKIPPED {test}: no psql: {e}");
-            None
-        }
     }
 }
 
