@@ -30,32 +30,9 @@ ALTER TABLE jobs ADD COLUMN instance TEXT;
 #[cfg(test)]
 pub(super) const LATEST: i64 = MIGRATIONS.len() as i64;
 
-/// Brings the instance tables to [`LATEST`]; returns the version found.
+/// Brings the instance tables to the latest version (`MIGRATIONS.len()`); returns the version found.
 pub(super) fn migrate(conn: &mut Connection) -> rusqlite::Result<i64> {
-    conn.execute_batch(
-        "CREATE TABLE IF NOT EXISTS schema_versions (
-            component TEXT PRIMARY KEY,
-            version INTEGER NOT NULL
-        )",
-    )?;
-    let found: i64 = conn.query_row(
-        "SELECT COALESCE(MAX(version), 0) FROM schema_versions WHERE component = ?1",
-        [COMPONENT],
-        |r| r.get(0),
-    )?;
-    for (at, sql) in MIGRATIONS.iter().enumerate().skip(found.max(0) as usize) {
-        let version = at as i64 + 1;
-        let tx = conn.transaction()?;
-        tx.execute_batch(sql)?;
-        tx.execute(
-            "INSERT INTO schema_versions (component, version) VALUES (?1, ?2) \
-             ON CONFLICT (component) DO UPDATE SET version = excluded.version",
-            rusqlite::params![COMPONENT, version],
-        )?;
-        tx.commit()?;
-        log::info!("database: {COMPONENT} tables at version {version}");
-    }
-    Ok(found)
+    super::component_schema::migrate_component(conn, COMPONENT, MIGRATIONS)
 }
 
 #[cfg(test)]

@@ -12,6 +12,7 @@ use rusqlite::{Connection, Params, Row};
 
 use crate::Error;
 
+mod component_schema;
 pub(crate) mod export;
 mod hosts;
 mod instance_schema;
