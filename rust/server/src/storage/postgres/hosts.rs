@@ -121,7 +121,11 @@ impl HostStore for PgStore {
                 .map(|r| r.get(0))
                 .collect();
             tx.commit()?;
-            Ok(held.into_iter().filter(|l| !live.contains(l)).collect())
+            Ok(held
+                .iter()
+                .filter(|l| !live.contains(*l))
+                .cloned()
+                .collect())
         })
     }
 

@@ -251,6 +251,146 @@ mod tests {
         }
     }
 
+    /// Ends the server side of the connections to `url`'s database whose backend pid is in
+    /// `pids` (all but the caller's when empty), as a restart does, and waits until they are
+    /// gone.
+    fn terminate(url: &str, pids: &[i32]) {
+        let mut admin = config(url).unwrap().connect(postgres::NoTls).unwrap();
+        let chosen = "datname = current_database() AND pid <> pg_backend_pid() \
+                      AND (cardinality($1::int[]) = 0 OR pid = ANY($1))";
+        admin
+            .execute(
+                &format!("SELECT pg_terminate_backend(pid) FROM pg_stat_activity WHERE {chosen}"),
+                &[&pids],
+            )
+            .unwrap();
+        let count = format!("SELECT count(*) FROM pg_stat_activity WHERE {chosen}");
+        let deadline = std::time::Instant::now() + std::time::Duration::from_secs(10);
+        while admin.query_one(&count, &[&pids]).unwrap().get::<_, i64>(0) > 0 {
+            assert!(std::time::Instant::now() < deadline, "backends still there");
+            std::thread::sleep(std::time::Duration::from_millis(10));
+        }
+    }
+
+    #[test]
+    fn a_call_whose_connection_broke_just_now_runs_again() {
+        let Some(url) = test_database::fresh("rerun") else {
+            return;
+        };
+        let store = PgStore::open(&url).unwrap();
+        use crate::storage::TokenStore;
+        // Every connection used just now: none is old enough to be checked before use.
+        let leases: Vec<_> = (0..CONNECTIONS)
+            .map(|_| store.pool.lease().unwrap())
+            .collect();
+        drop(leases);
+        for _ in 0..2 * CONNECTIONS {
+            assert!(!store.has_token("anyone").unwrap());
+        }
+        terminate(&url, &[]);
+        for _ in 0..2 * CONNECTIONS {
+            assert!(!store.has_token("anyone").unwrap());
+        }
+    }
+
+    #[test]
+    fn a_transaction_whose_connection_broke_fails_and_leaves_nothing() {
+        let Some(url) = test_database::fresh("broken_tx") else {
+            return;
+        };
+        let store = PgStore::open(&url).unwrap();
+        store
+            .pool
+            .run(|c| Ok(c.batch_execute("CREATE TABLE marks (n INT)")?))
+            .unwrap();
+        let mut lease = store.pool.lease().unwrap();
+        let pid = lease
+            .run(|c| {
+                Ok(c.query_one("SELECT pg_backend_pid()", &[])?
+                    .get::<_, i32>(0))
+            })
+            .unwrap();
+        lease.begin().unwrap();
+        lease
+            .run(|c| Ok(c.execute("INSERT INTO marks VALUES (1)", &[]).map(|_| ())?))
+            .unwrap();
+        terminate(&url, &[pid]);
+        // The rest of the transaction runs nowhere: not alone on a new connection.
+        let err = lease
+            .run(|c| Ok(c.execute("INSERT INTO marks VALUES (2)", &[]).map(|_| ())?))
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("during a transaction"), "{err}");
+        assert!(lease.commit().is_err());
+        drop(lease);
+        let marks = store
+            .pool
+            .run(|c| {
+                Ok(c.query_one("SELECT count(*) FROM marks", &[])?
+                    .get::<_, i64>(0))
+            })
+            .unwrap();
+        assert_eq!(marks, 0);
+    }
+
+    #[test]
+    fn a_database_that_stops_answering_for_a_while_is_waited_for() {
+        let Some(url) = test_database::fresh("waits") else {
+            return;
+        };
+        // A proxy in front of the test server that refuses connections for a second, as a
+        // restarting server does.
+        let target: std::net::SocketAddr = {
+            let c = config(&url).unwrap();
+            let host = match &c.get_hosts()[0] {
+                postgres::config::Host::Tcp(h) => h.clone(),
+                #[allow(unreachable_patterns)]
+                _ => return,
+            };
+            format!("{host}:{}", c.get_ports()[0]).parse().unwrap()
+        };
+        let proxy = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+        let port = proxy.local_addr().unwrap().port();
+        let through = url.replacen(&target.port().to_string(), &port.to_string(), 1);
+        let refusing = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+        let refuse = refusing.clone();
+        std::thread::spawn(move || {
+            for client in proxy.incoming().flatten() {
+                if refuse.load(std::sync::atomic::Ordering::SeqCst) {
+                    drop(client);
+                    continue;
+                }
+                let server = std::net::TcpStream::connect(target).unwrap();
+                for (mut from, mut to) in [
+                    (client.try_clone().unwrap(), server.try_clone().unwrap()),
+                    (server, client),
+                ] {
+                    std::thread::spawn(move || {
+                        let _ = std::io::copy(&mut from, &mut to);
+                        let _ = to.shutdown(std::net::Shutdown::Both);
+                    });
+                }
+            }
+        });
+        let store = PgStore::open(&through).unwrap();
+        use crate::storage::TokenStore;
+        assert!(!store.has_token("anyone").unwrap());
+        refusing.store(true, std::sync::atomic::Ordering::SeqCst);
+        terminate(&url, &[]);
+        let back = refusing.clone();
+        std::thread::spawn(move || {
+            std::thread::sleep(std::time::Duration::from_secs(1));
+            back.store(false, std::sync::atomic::Ordering::SeqCst);
+        });
+        let started = std::time::Instant::now();
+        assert!(!store.has_token("anyone").unwrap());
+        let waited = started.elapsed();
+        assert!(
+            waited >= std::time::Duration::from_millis(900) && waited < pool::RECONNECT_WAIT,
+            "{waited:?}"
+        );
+    }
+
     #[test]
     fn a_call_that_panics_fails_alone() {
         let Some(url) = test_database::fresh("panics") else {

@@ -12,9 +12,17 @@
 //! Bounds: `size` connections (and threads); a caller waits at most [`CHECKOUT_WAIT`] for
 //! one. A connection that broke (Postgres restarted) is made again on its next use; one idle
 //! for more than [`CHECK_IDLE_AFTER`] is checked with an empty query first.
+//!
+//! A restart or failover of Postgres is ridden out, not passed on: making a connection is
+//! tried again for up to [`RECONNECT_WAIT`] while the server cannot be reached or says it
+//! is starting or stopping (a wrong password or database fails at once), and a call outside
+//! a transaction whose connection broke under it runs once more on a new one. A call inside
+//! a transaction, and its `COMMIT`, are never run again: the transaction is lost with the
+//! connection, and the caller gets the error.
 
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{Receiver, Sender, channel, sync_channel};
-use std::sync::{Condvar, Mutex};
+use std::sync::{Arc, Condvar, Mutex};
 use std::time::{Duration, Instant};
 
 use postgres::{Client, NoTls};
@@ -29,6 +37,17 @@ pub(super) const CHECKOUT_WAIT: Duration = Duration::from_secs(30);
 /// one that breaks while busy fails that call (500, the client retries) and is made again.
 pub(super) const CHECK_IDLE_AFTER: Duration = Duration::from_secs(1);
 
+/// How long making a connection is tried again while Postgres cannot be reached (restarting,
+/// failing over); a caller waits this long at most on top of [`CHECKOUT_WAIT`].
+pub(super) const RECONNECT_WAIT: Duration = Duration::from_secs(20);
+
+/// What a call in a transaction whose connection broke answers.
+const TRANSACTION_LOST: &str =
+    "the connection to Postgres broke during a transaction, which is rolled back";
+
+/// The longest pause between two connection attempts.
+const RECONNECT_PAUSE: Duration = Duration::from_secs(1);
+
 /// Work sent to a connection thread.
 type Job = Box<dyn FnOnce(&mut Connection) + Send>;
 
@@ -37,6 +56,9 @@ pub(super) struct Connection {
     config: postgres::Config,
     client: Option<Client>,
     last_used: Instant,
+    /// Whether connecting is tried again for [`RECONNECT_WAIT`] (not while the pool opens:
+    /// a server that is down at start is named at once).
+    patient: Arc<AtomicBool>,
 }
 
 impl Connection {
@@ -49,16 +71,79 @@ impl Connection {
         };
         if broken {
             self.client = None;
-            let client = self
-                .config
-                .connect(NoTls)
-                .map_err(|e| Error::Database(format!("cannot connect to Postgres: {e}")))?;
-            self.client = Some(client);
+            self.client = Some(self.connect()?);
         }
         self.last_used = Instant::now();
         self.client
             .as_mut()
             .ok_or_else(|| Error::Database("no Postgres connection".into()))
+    }
+
+    /// The connection an open transaction is on; an error if it broke (the transaction is
+    /// lost: a new connection would run the rest of it alone).
+    fn transaction_client(&mut self) -> Result<&mut Client, Error> {
+        self.last_used = Instant::now();
+        match &mut self.client {
+            Some(c) if !c.is_closed() => Ok(c),
+            _ => Err(Error::Database(TRANSACTION_LOST.into())),
+        }
+    }
+
+    /// A new connection, tried again while Postgres cannot be reached (see the module docs).
+    fn connect(&self) -> Result<Client, Error> {
+        let deadline = Instant::now() + RECONNECT_WAIT;
+        let mut pause = Duration::from_millis(50);
+        let mut said = false;
+        loop {
+            let e = match self.config.connect(NoTls) {
+                Ok(client) => {
+                    if said {
+                        log::info!("database: connected to Postgres again");
+                    }
+                    return Ok(client);
+                }
+                Err(e) => e,
+            };
+            let patient = self.patient.load(Ordering::Relaxed);
+            if !patient || !unreachable(&e) || Instant::now() + pause > deadline {
+                return Err(Error::Database(format!("cannot connect to Postgres: {e}")));
+            }
+            if !said {
+                log::warn!(
+                    "database: cannot connect to Postgres ({e}); trying again for up to {} s",
+                    RECONNECT_WAIT.as_secs()
+                );
+                said = true;
+            }
+            std::thread::sleep(pause);
+            pause = (pause * 2).min(RECONNECT_PAUSE);
+        }
+    }
+
+    /// Whether the connection broke (rather than the call failing on a sound one): it is
+    /// closed, or does not answer an empty query. Checked only after a call failed.
+    fn broke(&mut self) -> bool {
+        match &mut self.client {
+            None => true,
+            Some(c) => c.is_closed() || c.is_valid(Duration::from_secs(2)).is_err(),
+        }
+    }
+}
+
+/// Whether a failed connection attempt may succeed later: no answer (refused, reset, timed
+/// out), or Postgres saying it is starting or shutting down. A refusal of the user, password
+/// or database is not.
+fn unreachable(e: &postgres::Error) -> bool {
+    use postgres::error::SqlState;
+    match e.code() {
+        None => true,
+        Some(code) => [
+            SqlState::CANNOT_CONNECT_NOW,
+            SqlState::ADMIN_SHUTDOWN,
+            SqlState::CRASH_SHUTDOWN,
+            SqlState::TOO_MANY_CONNECTIONS,
+        ]
+        .contains(code),
     }
 }
 
@@ -66,6 +151,7 @@ impl Connection {
 pub(super) struct Pool {
     free: Mutex<Vec<Sender<Job>>>,
     returned: Condvar,
+    patient: Arc<AtomicBool>,
 }
 
 impl Pool {
@@ -73,12 +159,14 @@ impl Pool {
     /// or a server that is down is an error at start.
     pub fn open(config: postgres::Config, size: usize) -> Result<Pool, Error> {
         let mut free = Vec::new();
+        let patient = Arc::new(AtomicBool::new(false));
         for n in 0..size.max(1) {
             let (send, receive) = channel::<Job>();
             let mut connection = Connection {
                 config: config.clone(),
                 client: None,
                 last_used: Instant::now(),
+                patient: patient.clone(),
             };
             std::thread::Builder::new()
                 .name(format!("sitar-pg-{n}"))
@@ -89,9 +177,12 @@ impl Pool {
         let pool = Pool {
             free: Mutex::new(free),
             returned: Condvar::new(),
+            patient,
         };
         pool.lease()?
             .run(|c| Ok(c.simple_query("SELECT 1").map(|_| ())?))?;
+        // Reached once: from now on an unreachable server is waited for.
+        pool.patient.store(true, Ordering::Relaxed);
         Ok(pool)
     }
 
@@ -122,10 +213,10 @@ impl Pool {
         }
     }
 
-    /// Runs `f` on a free connection.
+    /// Runs `f` on a free connection (once more on a new one if the connection broke).
     pub fn run<T: Send + 'static>(
         &self,
-        f: impl FnOnce(&mut Client) -> Result<T, Error> + Send + 'static,
+        f: impl FnMut(&mut Client) -> Result<T, Error> + Send + 'static,
     ) -> Result<T, Error> {
         self.lease()?.run(f)
     }
@@ -152,14 +243,43 @@ pub(super) struct Lease<'p> {
 }
 
 impl Lease<'_> {
-    /// Runs `f` on this lease's connection and waits for its answer.
+    /// Runs `f` on this lease's connection and waits for its answer. Outside a transaction
+    /// a call whose connection broke runs once more on a new one.
     pub fn run<T: Send + 'static>(
         &mut self,
-        f: impl FnOnce(&mut Client) -> Result<T, Error> + Send + 'static,
+        f: impl FnMut(&mut Client) -> Result<T, Error> + Send + 'static,
+    ) -> Result<T, Error> {
+        let in_transaction = self.open_transaction;
+        self.send(f, in_transaction)
+    }
+
+    /// Runs `f` on the connection: alone, once more on a new connection if it broke; in a
+    /// transaction, on the transaction's connection or not at all.
+    fn send<T: Send + 'static>(
+        &mut self,
+        mut f: impl FnMut(&mut Client) -> Result<T, Error> + Send + 'static,
+        in_transaction: bool,
     ) -> Result<T, Error> {
         let (answer, receive) = sync_channel(1);
         let job: Job = Box::new(move |connection: &mut Connection| {
-            let outcome = connection.client().and_then(f);
+            if in_transaction {
+                let outcome = match connection.transaction_client().and_then(&mut f) {
+                    Err(e) if connection.client.as_ref().is_none_or(|c| c.is_closed()) => {
+                        Err(Error::Database(format!("{TRANSACTION_LOST} ({e})")))
+                    }
+                    outcome => outcome,
+                };
+                let _ = answer.send(outcome);
+                return;
+            }
+            let mut outcome = connection.client().and_then(&mut f);
+            if let Err(e) = &outcome
+                && connection.broke()
+            {
+                log::warn!("database: the connection broke ({e}); the call runs again");
+                connection.client = None;
+                outcome = connection.client().and_then(&mut f);
+            }
             let _ = answer.send(outcome);
         });
         let sender = self
@@ -183,7 +303,8 @@ impl Lease<'_> {
     /// Commits the transaction [`Lease::begin`] started.
     pub fn commit(&mut self) -> Result<(), Error> {
         self.open_transaction = false;
-        self.run(|c| Ok(c.batch_execute("COMMIT")?))
+        // Never on a new connection: there it would commit nothing and say so.
+        self.send(|c| Ok(c.batch_execute("COMMIT")?), true)
     }
 }
 
@@ -191,7 +312,7 @@ impl Drop for Lease<'_> {
     fn drop(&mut self) {
         if self.open_transaction {
             self.open_transaction = false;
-            if let Err(e) = self.run(|c| Ok(c.batch_execute("ROLLBACK")?)) {
+            if let Err(e) = self.send(|c| Ok(c.batch_execute("ROLLBACK")?), true) {
                 log::warn!("Postgres: rollback failed: {e}");
             }
         }

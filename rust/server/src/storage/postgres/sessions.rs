@@ -188,7 +188,7 @@ impl SessionStore for PgStore {
             )?;
             if inserted.is_some() {
                 tx.commit()?;
-                return Ok((id, true));
+                return Ok((id.clone(), true));
             }
             // Another instance made it with this key meanwhile.
             match earlier(&mut tx)? {
