@@ -78,15 +78,18 @@ impl App {
         // `--playback-workers 0`: the phones are on playback hosts, not here.
         let (sim, adb) = if config.playback_workers == 0 {
             let remote = |kind, local: Arc<dyn Playback>| -> Arc<dyn Playback> {
-                Arc::new(RemotePlayback::new(
-                    kind,
-                    local,
-                    workers.clone(),
-                    db.clone(),
-                    board.clone(),
-                    config.lease_timeout,
-                    config.adb.fallback_duration_s,
-                ))
+                Arc::new(
+                    RemotePlayback::new(
+                        kind,
+                        local,
+                        workers.clone(),
+                        db.clone(),
+                        board.clone(),
+                        config.lease_timeout,
+                        config.adb.fallback_duration_s,
+                    )
+                    .for_instance(config.database.is_some().then(|| instance.clone())),
+                )
             };
             (
                 remote(PlaybackKind::Sim, local_sim),

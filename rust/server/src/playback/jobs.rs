@@ -27,7 +27,8 @@ const STOP_WAIT: Duration = Duration::from_secs(15);
 fn conclude(shared: &Arc<App>, id: &str, job: Option<i64>, outcome: Result<Outcome, Error>) {
     shared.set_running(id, None);
     shared.live.remove(id);
-    let in_flight = matches!(outcome, Ok(Outcome::Interrupted)) || shared.stopping();
+    let in_flight =
+        matches!(outcome, Ok(Outcome::Interrupted | Outcome::Adopted)) || shared.stopping();
     if !in_flight {
         // Nobody plays it now: an instance waiting to delete it goes ahead.
         if let Err(e) = shared.db.release_session(id, &shared.instance) {
@@ -45,6 +46,16 @@ fn conclude(shared: &Arc<App>, id: &str, job: Option<i64>, outcome: Result<Outco
             log::info!("session {id}: interrupted by shutdown, resumes on next start")
         }
         Ok(Outcome::Deleted) => log::info!("session {id}: playback stopped for its deletion"),
+        Ok(Outcome::Adopted) => {
+            log::warn!(
+                "session {id}: another instance plays it now (this one was silent past the \
+                 instance timeout); left to it"
+            );
+            if let Some(job) = job {
+                let why = "its session was adopted by another instance";
+                let _ = shared.db.finish_job(job, JobEnd::Interrupted, Some(why));
+            }
+        }
         // An error while the server stops (a cancelled playback, a refused blocking
         // task) is the stop's doing: the session stays in flight for the next start.
         Err(e) if shared.stopping() => {

@@ -23,6 +23,10 @@ use crate::storage::workers::{MAX_ATTEMPTS, MAX_TAKEN_PER_CALL, PhoneState, Work
 /// flag): a trial reaches its job at most this long after its commit.
 const CHECK: Duration = Duration::from_millis(200);
 
+/// Every how many collections a clustered job checks that it still plays its session (once
+/// a second).
+const PLAYER_CHECK: u64 = 5;
+
 /// Where long-polling hosts wait for trials offered on this instance.
 #[derive(Default)]
 pub(crate) struct RemoteBoard {
@@ -85,6 +89,9 @@ pub(crate) struct RemotePlayback {
     lease: Duration,
     /// Fallback trial duration of a recording without a readable MP4 header (adb).
     fallback_duration_s: f64,
+    /// This instance, when others share the database: a job stops collecting once another
+    /// instance plays its session (adopted while this one was silent).
+    instance: Option<String>,
 }
 
 impl RemotePlayback {
@@ -105,7 +112,22 @@ impl RemotePlayback {
             board,
             lease,
             fallback_duration_s,
+            instance: None,
         }
+    }
+
+    /// Plays for `instance` among others on one database: see [`RemotePlayback::collect`].
+    pub fn for_instance(mut self, instance: Option<String>) -> RemotePlayback {
+        self.instance = instance;
+        self
+    }
+
+    /// Whether another instance plays the session now (never without other instances).
+    fn adopted_elsewhere(&self, session: &str) -> Result<bool, Error> {
+        let Some(me) = &self.instance else {
+            return Ok(false);
+        };
+        Ok(self.db.session_player(session)?.as_deref() != Some(me.as_str()))
     }
 
     /// Ready phones of live hosts of this kind.
@@ -131,10 +153,14 @@ impl RemotePlayback {
     }
 
     /// Hands every trial committed for the job's session to `sink` until none is open (or
-    /// the job is cancelled).
+    /// the job is cancelled, or another instance plays the session now: checked every
+    /// [`PLAYER_CHECK`] collections; the job's end sees it and leaves the session alone).
     fn collect(&self, job: &PlaybackJob, sink: &(dyn Fn(TrialOutput) + Sync)) -> Result<(), Error> {
-        loop {
+        for round in 0u64.. {
             if job.cancelled() {
+                return Ok(());
+            }
+            if round % PLAYER_CHECK == PLAYER_CHECK - 1 && self.adopted_elsewhere(&job.session)? {
                 return Ok(());
             }
             // Counted before taking: a trial done by then is committed, so this take (or an
@@ -166,6 +192,7 @@ impl RemotePlayback {
             }
             std::thread::sleep(CHECK);
         }
+        Ok(())
     }
 }
 

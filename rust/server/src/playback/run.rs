@@ -30,6 +30,9 @@ pub(crate) enum Outcome {
     Interrupted,
     /// A delete stopped it: nothing is published, the session goes next.
     Deleted,
+    /// Another instance plays the session now (it adopted it while this one was silent past
+    /// the instance timeout): this job leaves it to that one, changing nothing.
+    Adopted,
 }
 
 /// Publishes the estimate over the live session's trials if any arrived since the last.
@@ -282,6 +285,11 @@ impl Run<'_> {
         let intent = self.control.intent();
         if intent == Intent::Delete {
             return Ok(Some(Outcome::Deleted));
+        }
+        if self.shared.clustered()
+            && self.shared.db.session_player(self.id)?.as_deref() != Some(&self.shared.instance)
+        {
+            return Ok(Some(Outcome::Adopted));
         }
         let count = self.shared.db.trial_count(self.id)?;
         let total = self.session.trials_total;

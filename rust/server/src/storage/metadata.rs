@@ -15,12 +15,15 @@ use crate::session::{NewSession, Session, SessionState, Step};
 use crate::storage::instances::InstanceStore;
 use crate::venue::{NewVenue, Venue};
 
-/// How a job ended (a job is `running`, then one of these, or `interrupted` when its instance
-/// restarts, or another adopts its session, and finds it left running by a dead process).
+/// How a job ended (a job is `running`, then one of these; also `interrupted` when its
+/// instance restarts, or another adopts its session, and finds it left running by a dead
+/// process).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum JobEnd {
     Done,
     Failed,
+    /// Its session was adopted by another instance while this one was silent.
+    Interrupted,
 }
 
 impl JobEnd {
@@ -28,6 +31,7 @@ impl JobEnd {
         match self {
             JobEnd::Done => "done",
             JobEnd::Failed => "failed",
+            JobEnd::Interrupted => "interrupted",
         }
     }
 }
