@@ -1,6 +1,7 @@
 //! The cluster services the real-process tests need (`scripts/cluster-services start`): the
 //! database and bucket they name, and a fresh database per test.
 
+use std::path::{Path, PathBuf};
 use std::process::Command;
 
 /// The test services' URLs, or `None` after printing SKIPPED.
@@ -43,4 +44,49 @@ pub fn fresh_database(test: &str, url: &str) -> Option<String> {
             None
         }
     }
+}
+
+/// The test Postgres' data folder (`SITAR_TEST_PG_DATA`), or `None` after printing SKIPPED.
+pub fn postgres_data(test: &str) -> Option<PathBuf> {
+    match std::env::var_os("SITAR_TEST_PG_DATA").filter(|v| !v.is_empty()) {
+        Some(dir) => Some(PathBuf::from(dir)),
+        None => {
+            println!(
+                "SKIPPED {test}: SITAR_TEST_PG_DATA is not set (scripts/cluster-services start)"
+            );
+            None
+        }
+    }
+}
+
+/// Restarts the test Postgres (`pg_ctl restart -m fast`, as its owner when we are root, as
+/// `scripts/cluster-services` started it): every connection to it breaks once.
+pub fn restart_postgres(data: &Path) {
+    let pg_ctl = "/usr/lib/postgresql/15/bin/pg_ctl";
+    let root = Command::new("id")
+        .arg("-u")
+        .output()
+        .is_ok_and(|o| String::from_utf8_lossy(&o.stdout).trim() == "0");
+    let mut command = if root {
+        let mut c = Command::new("runuser");
+        c.args(["-u", "postgres", "--", pg_ctl]);
+        c
+    } else {
+        Command::new(pg_ctl)
+    };
+    // Its log goes where it went: the server must not keep our pipe open.
+    let log = data.parent().unwrap_or(data).join("server.log");
+    let out = command
+        .args(["restart", "-m", "fast", "-w", "-t", "60", "-D"])
+        .arg(data)
+        .arg("-l")
+        .arg(log)
+        .stdin(std::process::Stdio::null())
+        .output()
+        .expect("pg_ctl");
+    assert!(
+        out.status.success(),
+        "pg_ctl restart: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
 }
