@@ -10,72 +10,36 @@
 
 mod support;
 
-use std::io::{BufRead, BufReader};
 use std::path::Path;
-use std::process::{Child, Command, Output, Stdio};
-use std::sync::mpsc::{Receiver, channel};
+use std::process::{Command, Output};
 use std::time::{Duration, Instant};
 
 use sitar_client::{JobOptions, JobState, NewSession, SessionFrame, UploadJob};
 
 use support::cluster::{fresh_database, services};
+use support::process::{Proc, Serving};
 
-/// A running `sitar serve`, its output lines and its URL.
-struct Serving {
-    child: Child,
-    lines: Receiver<String>,
-    seen: Vec<String>,
-    url: String,
+/// `sitar serve` with sim playback (2 phones at 30×) on a free port and `extra` arguments.
+fn serve(data: &Path, extra: &[&str]) -> Serving {
+    let mut args = vec![
+        "--playback",
+        "sim",
+        "--sim-speed",
+        "30",
+        "--sim-devices",
+        "2",
+    ];
+    args.extend_from_slice(extra);
+    Serving::start(data, &args)
 }
 
-impl Serving {
-    /// Starts `sitar serve` with sim playback on a free port and `extra` arguments.
-    fn start(data: &Path, extra: &[&str]) -> Serving {
-        let mut child = Command::new(env!("CARGO_BIN_EXE_sitar"))
-            .args(["serve", "--addr", "127.0.0.1:0", "--playback", "sim"])
-            .args(["--sim-speed", "30", "--sim-devices", "2", "--data"])
-            .arg(data)
-            .args(extra)
-            .stdout(Stdio::piped())
-            .stderr(Stdio::piped())
-            .spawn()
-            .expect("run sitar serve");
-        let lines = read_lines(&mut child);
-        let mut serving = Serving {
-            child,
-            lines,
-            seen: Vec::new(),
-            url: String::new(),
-        };
-        let listening = serving.wait_for("listening on http://");
-        serving.url = listening[listening.find("http://").unwrap()..].to_string();
-        serving
-    }
+/// Requests to an instance beyond its client.
+trait Requests {
+    fn get(&self, path: &str, token: &str) -> (u16, Vec<u8>);
+    fn call(&self, method: &str, path: &str, token: &str, body: &str) -> (u16, serde_json::Value);
+}
 
-    /// Waits for an output line containing `needle`; panics with what was seen after 60 s.
-    fn wait_for(&mut self, needle: &str) -> String {
-        let deadline = Instant::now() + Duration::from_secs(60);
-        while let Some(left) = deadline.checked_duration_since(Instant::now()) {
-            match self.lines.recv_timeout(left) {
-                Ok(line) => {
-                    self.seen.push(line.clone());
-                    if line.contains(needle) {
-                        return line;
-                    }
-                }
-                Err(_) => break,
-            }
-        }
-        panic!("no line with {needle:?} in {:#?}", self.seen);
-    }
-
-    fn client(&self, token: &str) -> sitar_client::Client {
-        sitar_client::Client::new(&self.url)
-            .unwrap()
-            .with_server_token(token)
-            .unwrap()
-    }
-
+impl Requests for Serving {
     /// GET `path` with `token`: status and body bytes.
     fn get(&self, path: &str, token: &str) -> (u16, Vec<u8>) {
         let (status, _, body) = sitar_tests::get_bytes(&format!("{}{path}", self.url), Some(token));
@@ -94,36 +58,6 @@ impl Serving {
         );
         (status, serde_json::from_str(&text).unwrap_or_default())
     }
-}
-
-impl Drop for Serving {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
-
-/// Every line `child` writes to stdout and stderr, as they come.
-fn read_lines(child: &mut Child) -> Receiver<String> {
-    let (tx, lines) = channel();
-    let out = child.stdout.take().unwrap();
-    let err = child.stderr.take().unwrap();
-    let tx_out = tx.clone();
-    std::thread::spawn(move || {
-        for line in BufReader::new(out).lines().map_while(Result::ok) {
-            if tx_out.send(line).is_err() {
-                return;
-            }
-        }
-    });
-    std::thread::spawn(move || {
-        for line in BufReader::new(err).lines().map_while(Result::ok) {
-            if tx.send(line).is_err() {
-                return;
-            }
-        }
-    });
-    lines
 }
 
 /// `psql URL -At -c SQL`: its output, trimmed; panics naming the error.
@@ -285,7 +219,7 @@ fn an_embedded_installation_moves_into_the_cluster_stores() {
     let data = dir.path().join("embedded");
 
     // The embedded installation, made by the real server.
-    let embedded = Serving::start(&data, &[]);
+    let embedded = serve(&data, &[]);
     let admin = std::fs::read_to_string(data.join("admin.token"))
         .unwrap()
         .trim()
@@ -488,28 +422,22 @@ fn an_embedded_installation_moves_into_the_cluster_stores() {
     assert_eq!(psql(&db_a, "SELECT COUNT(*) FROM tokens"), "4");
 
     // B: killed (SIGKILL) while the 40 MiB recording goes up, then run again.
-    let mut child = Command::new(env!("CARGO_BIN_EXE_sitar"))
-        .args(["migrate", "--data", data.to_str().unwrap()])
-        .args(["--database", &db_b, "--store", &store_b])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let lines = read_lines(&mut child);
-    let deadline = Instant::now() + Duration::from_secs(120);
-    loop {
-        let line = lines
-            .recv_timeout(deadline.saturating_duration_since(Instant::now()))
-            .expect("a progress line for the large session");
-        if line.contains(&format!("session {big} (")) {
-            break;
-        }
-    }
+    let data_arg = data.to_str().unwrap();
+    let mut run = Proc::sitar(&[
+        "migrate",
+        "--data",
+        data_arg,
+        "--database",
+        &db_b,
+        "--store",
+        &store_b,
+    ]);
+    run.wait_for(&format!("session {big} ("), Duration::from_secs(120));
     // The large session's first file goes quickly, its recording (40 MiB, about 1 s here)
     // takes a while: killed soon after the line, the run is in the middle of it.
     std::thread::sleep(Duration::from_millis(30));
-    child.kill().unwrap();
-    let status = child.wait().unwrap();
+    run.child.kill().unwrap();
+    let status = run.child.wait().unwrap();
     assert!(!status.success(), "killed mid-copy");
     assert_eq!(
         psql(
@@ -561,7 +489,7 @@ fn an_embedded_installation_moves_into_the_cluster_stores() {
 
     // The cluster serves A: the same tokens, byte-identical answers.
     let instance = dir.path().join("instance");
-    let cluster = Serving::start(&instance, &["--database", &db_a, "--store", &store_a]);
+    let cluster = serve(&instance, &["--database", &db_a, "--store", &store_a]);
     assert!(
         !instance.join("admin.token").exists(),
         "the admin token is the migrated one"

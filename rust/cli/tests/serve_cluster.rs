@@ -6,96 +6,25 @@
 
 mod support;
 
-use std::io::{BufRead, BufReader};
 use std::path::Path;
-use std::process::{Child, Command, Stdio};
-use std::sync::mpsc::{Receiver, channel};
-use std::time::{Duration, Instant};
+use std::process::Command;
+use std::time::Duration;
 
 use support::cluster::{fresh_database, services};
+use support::process::Serving;
 
-/// A running `sitar serve`, its output lines and its URL.
-struct Serving {
-    child: Child,
-    lines: Receiver<String>,
-    seen: Vec<String>,
-    url: String,
-}
-
-impl Serving {
-    /// Starts `sitar serve` with sim playback on a free port and `extra` arguments.
-    fn start(data: &Path, extra: &[&str]) -> Serving {
-        let mut child = Command::new(env!("CARGO_BIN_EXE_sitar"))
-            .args(["serve", "--addr", "127.0.0.1:0", "--playback", "sim"])
-            .args(["--sim-speed", "30", "--sim-devices", "2", "--data"])
-            .arg(data)
-            .args(extra)
-            .stdout(Stdio::piped())
-            .stderr(Stdio::piped())
-            .spawn()
-            .expect("run sitar serve");
-        let (tx, lines) = channel();
-        let out = child.stdout.take().unwrap();
-        let err = child.stderr.take().unwrap();
-        let tx_out = tx.clone();
-        std::thread::spawn(move || {
-            for line in BufReader::new(out).lines().map_while(Result::ok) {
-                if tx_out.send(line).is_err() {
-                    return;
-                }
-            }
-        });
-        std::thread::spawn(move || {
-            for line in BufReader::new(err).lines().map_while(Result::ok) {
-                if tx.send(line).is_err() {
-                    return;
-                }
-            }
-        });
-        let mut serving = Serving {
-            child,
-            lines,
-            seen: Vec::new(),
-            url: String::new(),
-        };
-        let listening = serving.wait_for("listening on http://");
-        serving.url = listening[listening.find("http://").unwrap()..].to_string();
-        serving
-    }
-
-    /// Waits for an output line containing `needle`; panics with what was seen after 60 s.
-    fn wait_for(&mut self, needle: &str) -> String {
-        if let Some(line) = self.seen.iter().find(|l| l.contains(needle)) {
-            return line.clone();
-        }
-        let deadline = Instant::now() + Duration::from_secs(60);
-        while let Some(left) = deadline.checked_duration_since(Instant::now()) {
-            match self.lines.recv_timeout(left) {
-                Ok(line) => {
-                    self.seen.push(line.clone());
-                    if line.contains(needle) {
-                        return line;
-                    }
-                }
-                Err(_) => break,
-            }
-        }
-        panic!("no line with {needle:?} in {:#?}", self.seen);
-    }
-
-    fn client(&self, token: &str) -> sitar_client::Client {
-        sitar_client::Client::new(&self.url)
-            .unwrap()
-            .with_server_token(token)
-            .unwrap()
-    }
-}
-
-impl Drop for Serving {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
+/// `sitar serve` with sim playback (2 phones at 30×) on a free port and `extra` arguments.
+fn serve(data: &Path, extra: &[&str]) -> Serving {
+    let mut args = vec![
+        "--playback",
+        "sim",
+        "--sim-speed",
+        "30",
+        "--sim-devices",
+        "2",
+    ];
+    args.extend_from_slice(extra);
+    Serving::start(data, &args)
 }
 
 /// Runs a sim session of `trials` trials on `recording`; its status, CSV and JSON results.
@@ -169,7 +98,7 @@ fn a_cluster_instance_plays_a_session_as_the_embedded_one_does() {
 
     // The embedded server: the reference.
     let embedded_data = dir.path().join("embedded");
-    let embedded = Serving::start(&embedded_data, &[]);
+    let embedded = serve(&embedded_data, &[]);
     let client = embedded.client(&admin_token(&embedded_data));
     let (_, status, csv, json) = run_session(&client, &recording, 5);
     assert_eq!(status.state, sitar_client::SessionState::Done, "{status:?}");
@@ -178,8 +107,8 @@ fn a_cluster_instance_plays_a_session_as_the_embedded_one_does() {
     // The cluster instance: the first on an empty database writes the admin token.
     let a_data = dir.path().join("instance-a");
     let cluster = ["--database", database.as_str(), "--store", store.as_str()];
-    let mut a = Serving::start(&a_data, &cluster);
-    a.wait_for("metadata in Postgres");
+    let mut a = serve(&a_data, &cluster);
+    a.wait_for("metadata in Postgres", Duration::from_secs(60));
     let admin = admin_token(&a_data);
     // `sitar token create --database` makes a token the running instance accepts.
     let out = Command::new(env!("CARGO_BIN_EXE_sitar"))
@@ -213,7 +142,7 @@ fn a_cluster_instance_plays_a_session_as_the_embedded_one_does() {
     // A second instance on the same database and store: no admin token of its own, and it
     // answers for the session the first one played.
     let b_data = dir.path().join("instance-b");
-    let b = Serving::start(&b_data, &cluster);
+    let b = serve(&b_data, &cluster);
     assert!(!b_data.join("admin.token").exists());
     let from_b = b.client(&admin);
     assert_eq!(from_b.results_csv(&id).unwrap(), csv);
@@ -328,7 +257,7 @@ fn an_instance_killed_during_an_upload_leaves_nothing_partial() {
     std::fs::write(&recording, rec.to_bytes()).unwrap();
     let size = std::fs::metadata(&recording).unwrap().len();
     let data = dir.path().join("instance");
-    let mut a = Serving::start(&data, &cluster);
+    let mut a = serve(&data, &cluster);
     let admin = admin_token(&data);
     let id = a
         .client(&admin)
@@ -362,7 +291,7 @@ fn an_instance_killed_during_an_upload_leaves_nothing_partial() {
     let _ = upload.wait();
     // Started again on the same folder: the staged bytes are gone, nothing of the request
     // is in the bucket, and the session still waits for its recording.
-    let b = Serving::start(&data, &cluster);
+    let b = serve(&data, &cluster);
     assert!(
         files_under(&data.join("tmp")).is_empty(),
         "{:?}",

@@ -11,7 +11,7 @@ mod support;
 use std::path::Path;
 use std::time::{Duration, Instant};
 
-use instances::serving::{Serving, request};
+use instances::serving::{request, start};
 use sitar_client::SessionState;
 use support::cluster::{fresh_database, services};
 
@@ -106,7 +106,7 @@ fn a_dead_instances_session_is_adopted_and_stops_reach_the_player() {
 
     // The embedded server, fast: the reference results.
     let embedded_data = dir.path().join("embedded");
-    let embedded = Serving::start(&embedded_data, &["--sim-speed", "30", "--sim-devices", "1"]);
+    let embedded = start(&embedded_data, &["--sim-speed", "30", "--sim-devices", "1"]);
     let reference = embedded.client(&admin_token(&embedded_data));
     let id = start_session(&reference, &recording);
     assert_eq!(wait_done(&reference, &id).state, SessionState::Done);
@@ -131,9 +131,9 @@ fn a_dead_instances_session_is_adopted_and_stops_reach_the_player() {
         timeout.as_str(),
     ];
     let a_data = dir.path().join("instance-a");
-    let mut a = Serving::start(&a_data, &cluster);
+    let mut a = start(&a_data, &cluster);
     let admin = admin_token(&a_data);
-    let mut b = Serving::start(&dir.path().join("instance-b"), &cluster);
+    let mut b = start(&dir.path().join("instance-b"), &cluster);
     let a_id = std::fs::read_to_string(a_data.join("instance.id")).unwrap();
     let (from_a, from_b) = (a.client(&admin), b.client(&admin));
 
@@ -154,7 +154,7 @@ fn a_dead_instances_session_is_adopted_and_stops_reach_the_player() {
         killed.elapsed()
     );
     // A starts again on its folder while B plays the session: it leaves it to B.
-    let mut a = Serving::start(&a_data, &cluster);
+    let mut a = start(&a_data, &cluster);
     let from_a = a.client(&admin);
     let status = wait_done(&from_b, &played);
     assert_eq!(status.state, SessionState::Done, "{status:?}");

@@ -6,104 +6,14 @@
 //! middle of a session resumes it and the hosts finish it; an adb host plays on its phones
 //! and a failing phone leaves service; worker tokens stay in their routes.
 
-use std::io::{BufRead, BufReader};
+mod support;
+
 use std::path::Path;
-use std::process::{Child, Command, Stdio};
-use std::sync::mpsc::{Receiver, channel};
+use std::process::Command;
 use std::time::{Duration, Instant};
 
 use sitar_client::{Client, NewSession};
-
-/// A child process whose stdout and stderr lines are collected; killed on drop.
-struct Proc {
-    child: Child,
-    lines: Receiver<String>,
-    seen: Vec<String>,
-}
-
-impl Proc {
-    fn spawn(args: &[&str]) -> Proc {
-        Proc::spawn_with(args, &[])
-    }
-
-    fn spawn_with(args: &[&str], env: &[(&str, &Path)]) -> Proc {
-        let mut command = Command::new(env!("CARGO_BIN_EXE_sitar"));
-        for (name, value) in env {
-            command.env(name, value);
-        }
-        let mut child = command
-            .args(args)
-            .stdout(Stdio::piped())
-            .stderr(Stdio::piped())
-            .spawn()
-            .expect("run sitar");
-        let (tx, lines) = channel();
-        for stream in [
-            Box::new(child.stdout.take().unwrap()) as Box<dyn std::io::Read + Send>,
-            Box::new(child.stderr.take().unwrap()),
-        ] {
-            let tx = tx.clone();
-            std::thread::spawn(move || {
-                for line in BufReader::new(stream).lines().map_while(Result::ok) {
-                    if tx.send(line).is_err() {
-                        return;
-                    }
-                }
-            });
-        }
-        Proc {
-            child,
-            lines,
-            seen: Vec::new(),
-        }
-    }
-
-    /// Takes the lines that arrived so far.
-    fn drain(&mut self) {
-        while let Ok(line) = self.lines.try_recv() {
-            self.seen.push(line);
-        }
-    }
-
-    /// Waits for a line containing `needle`; panics with what was seen after `limit`.
-    fn wait_for(&mut self, needle: &str, limit: Duration) -> String {
-        let deadline = Instant::now() + limit;
-        if let Some(line) = self.seen.iter().find(|l| l.contains(needle)) {
-            return line.clone();
-        }
-        while let Some(left) = deadline.checked_duration_since(Instant::now()) {
-            match self.lines.recv_timeout(left) {
-                Ok(line) => {
-                    self.seen.push(line.clone());
-                    if line.contains(needle) {
-                        return line;
-                    }
-                }
-                Err(_) => break,
-            }
-        }
-        panic!("no line with {needle:?} in {:#?}", self.seen);
-    }
-
-    fn signal(&self, name: &str) {
-        let status = Command::new("kill")
-            .args([&format!("-{name}"), &self.child.id().to_string()])
-            .status()
-            .expect("kill");
-        assert!(status.success(), "kill -{name}");
-    }
-}
-
-impl Drop for Proc {
-    fn drop(&mut self) {
-        // A stopped child must go on to die; a dead one ignores it.
-        let _ = Command::new("kill")
-            .args(["-CONT", &self.child.id().to_string()])
-            .status();
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
+use support::process::Proc;
 
 /// `sitar token create` on `data`: the token.
 fn token(data: &Path, role: &str, name: &str) -> String {
@@ -130,7 +40,7 @@ fn serve_kind(data: &Path, lease_s: &str, playback: &str) -> (Proc, String) {
 }
 
 fn serve_on(data: &Path, lease_s: &str, playback: &str, addr: &str) -> (Proc, String) {
-    let mut server = Proc::spawn(&[
+    let mut server = Proc::sitar(&[
         "serve",
         "--addr",
         addr,
@@ -151,7 +61,7 @@ fn serve_on(data: &Path, lease_s: &str, playback: &str, addr: &str) -> (Proc, St
 }
 
 fn worker(url: &str, token: &str, name: &str, slots: &str, speed: &str, dir: &Path) -> Proc {
-    let mut w = Proc::spawn(&[
+    let mut w = Proc::sitar(&[
         "worker",
         "--server",
         url,
@@ -264,7 +174,7 @@ fn three_hosts_play_sessions_of_two_tokens_as_the_embedded_server_does() {
     // The third host reads its token from a file.
     let token_file = hosts.path().join("worker.token");
     std::fs::write(&token_file, format!("{work}\n")).unwrap();
-    let mut third = Proc::spawn(&[
+    let mut third = Proc::sitar(&[
         "worker",
         "--server",
         &url,
@@ -437,7 +347,7 @@ fn an_adb_host_plays_on_its_phones_and_a_failing_phone_leaves_service() {
     std::fs::write(root.path().join("phones/BAD/.fail"), "camera blocked").unwrap();
     let fake_adb = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/fake_adb.sh");
     let hosts = tempfile::tempdir().unwrap();
-    let mut host = Proc::spawn_with(
+    let mut host = Proc::sitar_with(
         &[
             "worker",
             "--server",
@@ -454,8 +364,8 @@ fn an_adb_host_plays_on_its_phones_and_a_failing_phone_leaves_service() {
             hosts.path().to_str().unwrap(),
         ],
         &[
-            ("FAKE_ADB_ROOT", root.path()),
-            ("FAKE_TRIAL_SECONDS", Path::new("0.4")),
+            ("FAKE_ADB_ROOT", root.path().as_os_str()),
+            ("FAKE_TRIAL_SECONDS", std::ffi::OsStr::new("0.4")),
         ],
     );
     host.wait_for("2 adb phone(s)", Duration::from_secs(30));

@@ -9,90 +9,18 @@
 mod support;
 
 use std::collections::HashMap;
-use std::io::{BufRead, BufReader};
 use std::path::Path;
-use std::process::{Child, Command, Stdio};
-use std::sync::mpsc::{Receiver, channel};
+use std::process::Command;
 use std::time::{Duration, Instant};
 
 use sitar_client::{Client, NewSession};
 
 use support::cluster::{fresh_database, services};
-
-/// A child process whose output lines are collected; killed on drop.
-struct Proc {
-    child: Child,
-    lines: Receiver<String>,
-    seen: Vec<String>,
-}
-
-impl Proc {
-    fn spawn(args: &[&str]) -> Proc {
-        let mut child = Command::new(env!("CARGO_BIN_EXE_sitar"))
-            .args(args)
-            .stdout(Stdio::piped())
-            .stderr(Stdio::piped())
-            .spawn()
-            .expect("run sitar");
-        let (tx, lines) = channel();
-        for stream in [
-            Box::new(child.stdout.take().unwrap()) as Box<dyn std::io::Read + Send>,
-            Box::new(child.stderr.take().unwrap()),
-        ] {
-            let tx = tx.clone();
-            std::thread::spawn(move || {
-                for line in BufReader::new(stream).lines().map_while(Result::ok) {
-                    if tx.send(line).is_err() {
-                        return;
-                    }
-                }
-            });
-        }
-        Proc {
-            child,
-            lines,
-            seen: Vec::new(),
-        }
-    }
-
-    /// Waits for a line containing `needle`; panics with what was seen after `limit`.
-    fn wait_for(&mut self, needle: &str, limit: Duration) -> String {
-        if let Some(line) = self.seen.iter().find(|l| l.contains(needle)) {
-            return line.clone();
-        }
-        let deadline = Instant::now() + limit;
-        while let Some(left) = deadline.checked_duration_since(Instant::now()) {
-            match self.lines.recv_timeout(left) {
-                Ok(line) => {
-                    self.seen.push(line.clone());
-                    if line.contains(needle) {
-                        return line;
-                    }
-                }
-                Err(_) => break,
-            }
-        }
-        panic!("no line with {needle:?} in {:#?}", self.seen);
-    }
-
-    fn drain(&mut self) -> &[String] {
-        while let Ok(line) = self.lines.try_recv() {
-            self.seen.push(line);
-        }
-        &self.seen
-    }
-}
-
-impl Drop for Proc {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
+use support::process::Proc;
 
 /// `sitar serve` on the shared database and store, remote playback only: process and URL.
 fn serve(data: &Path, database: &str, store: &str) -> (Proc, String) {
-    let mut server = Proc::spawn(&[
+    let mut server = Proc::sitar(&[
         "serve",
         "--addr",
         "127.0.0.1:0",
@@ -132,7 +60,7 @@ fn token(database: &str, role: &str, name: &str) -> String {
 }
 
 fn worker(url: &str, token: &str, name: &str, dir: &Path) -> Proc {
-    let mut w = Proc::spawn(&[
+    let mut w = Proc::sitar(&[
         "worker",
         "--server",
         url,
@@ -300,7 +228,10 @@ fn hosts_on_another_instance_play_the_sessions_of_the_first() {
     // The hosts connected to B played trials of A's sessions.
     let played_on_b = on_b
         .iter_mut()
-        .flat_map(|w| w.drain().to_vec())
+        .flat_map(|w| {
+            w.drain();
+            w.seen.clone()
+        })
         .filter(|l| l.contains("playing trial"))
         .count();
     assert!(played_on_b > 0, "no trial played by B's hosts");

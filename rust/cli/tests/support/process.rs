@@ -81,7 +81,11 @@ impl Proc {
                 Err(_) => break,
             }
         }
-        panic!("no line with {needle:?} in {limit:?}: {:#?}", self.seen);
+        let ended = self.child.try_wait().ok().flatten();
+        panic!(
+            "no line with {needle:?} in {limit:?} (exit: {ended:?}): {:#?}",
+            self.seen
+        );
     }
 
     /// Whether any line so far contains `needle`.
@@ -101,10 +105,12 @@ impl Proc {
 
     /// Kills the process at once (SIGKILL), as a crash would, and reaps it.
     pub fn kill(&mut self) {
-        // A stopped child must go on to die; a dead one ignores it.
-        let _ = Command::new("kill")
-            .args(["-CONT", &self.child.id().to_string()])
-            .status();
+        // A stopped child must go on to die (a reaped one's pid may be another's now).
+        if matches!(self.child.try_wait(), Ok(None)) {
+            let _ = Command::new("kill")
+                .args(["-CONT", &self.child.id().to_string()])
+                .status();
+        }
         let _ = self.child.kill();
         let _ = self.child.wait();
     }
