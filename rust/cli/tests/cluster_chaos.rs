@@ -19,7 +19,8 @@ use std::time::Duration;
 
 use sitar_client::{Client, NewSession};
 use support::cluster::{fresh_database, postgres_data, restart_postgres, services};
-use support::process::{Proc, Serving};
+use support::process::{Proc, Serving, create_token, sim_host, upload_offset};
+use support::sessions::{embedded_results, sim_session, trials_in_zip};
 
 const TEST: &str = "cluster_chaos";
 
@@ -51,17 +52,7 @@ fn cluster() -> Option<Services> {
 
 /// `sitar token create --database`: the token.
 fn token(database: &str, role: &str, name: &str) -> String {
-    let out = Command::new(env!("CARGO_BIN_EXE_sitar"))
-        .args(["token", "create", "--role", role, "--name", name])
-        .args(["--database", database])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8(out.stdout).unwrap().trim().to_string()
+    create_token(&["--database", database], role, name)
 }
 
 /// An instance with remote playback on a free port.
@@ -90,25 +81,7 @@ fn serve(data: &Path, services: &Services) -> Serving {
 
 /// A sim host of 2 phones playing at `speed`× real time, connected to `url`.
 fn worker(url: &str, token: &str, name: &str, speed: &str, dir: &Path) -> Proc {
-    let mut w = Proc::sitar(&[
-        "worker",
-        "--server",
-        url,
-        "--token",
-        token,
-        "--playback",
-        "sim",
-        "--slots",
-        "2",
-        "--sim-speed",
-        speed,
-        "--name",
-        name,
-        "--data",
-        dir.join(name).to_str().unwrap(),
-    ]);
-    w.wait_for("sitar worker: host", Duration::from_secs(60));
-    w
+    sim_host(url, token, name, "2", speed, dir)
 }
 
 fn new_session(client: &Client, trials: u32) -> String {
@@ -123,25 +96,6 @@ fn new_session(client: &Client, trials: u32) -> String {
         .unwrap()
 }
 
-/// The same session on the embedded server with in-process sim playback: its results.
-fn reference_results(recording: &Path, trials: u32) -> (String, String) {
-    let data = tempfile::tempdir().unwrap();
-    let server = sitar_tests::start(sitar_tests::sim_config(data.path(), 200.0, 3));
-    let client = sitar_tests::client_with(&server, sitar_tests::APP_TOKEN);
-    let id = new_session(&client, trials);
-    client
-        .upload_recording(&id, recording, &mut |_, _| {})
-        .unwrap();
-    let status = sitar_tests::wait_done(&client, &id);
-    assert_eq!(status.state.as_str(), "done", "{status:?}");
-    let results = (
-        client.results_json(&id).unwrap(),
-        client.results_csv(&id).unwrap(),
-    );
-    server.stop();
-    results
-}
-
 /// `curl` with the token and upload key: `-w %{http_code}` output.
 fn curl(token: &str, args: &[&str]) -> Command {
     let mut c = Command::new("curl");
@@ -149,22 +103,6 @@ fn curl(token: &str, args: &[&str]) -> Command {
         .args(["-H", "Idempotency-Key: chaos-upload"])
         .args(args);
     c
-}
-
-/// The `Upload-Offset` a `HEAD` of session `id`'s recording answers at `url`.
-fn head_offset(url: &str, token: &str, id: &str) -> usize {
-    let out = curl(token, &["-I"])
-        .arg(format!("{url}/v1/sessions/{id}/recording"))
-        .output()
-        .expect("curl");
-    let head = String::from_utf8_lossy(&out.stdout).to_string();
-    head.lines()
-        .find_map(|l| {
-            let (name, value) = l.split_once(':')?;
-            name.eq_ignore_ascii_case("upload-offset")
-                .then(|| value.trim().parse().ok())?
-        })
-        .unwrap_or_else(|| panic!("no Upload-Offset in {head}"))
 }
 
 /// `PUT`s bytes `offset…` of `file` to its end as one request at `url`: the HTTP status.
@@ -247,18 +185,6 @@ fn stored_trials(database: &str) -> HashMap<String, u32> {
         .collect()
 }
 
-/// Entries of session `id`'s `trials.zip`.
-fn zip_entries(url: &str, token: &str, id: &str) -> usize {
-    let mut answer = ureq::get(&format!("{url}/v1/sessions/{id}/trials.zip"))
-        .header("authorization", &format!("Bearer {token}"))
-        .call()
-        .unwrap();
-    let zip = answer.body_mut().read_to_vec().unwrap();
-    zip::ZipArchive::new(std::io::Cursor::new(zip))
-        .unwrap()
-        .len()
-}
-
 #[test]
 fn two_instances_three_hosts_and_thirty_sessions_come_through_kills_stops_and_a_database_restart() {
     let Some(services) = cluster() else {
@@ -299,8 +225,7 @@ fn two_instances_three_hosts_and_thirty_sessions_come_through_kills_stops_and_a_
                                 .with_server_token(&apps[k])
                                 .unwrap();
                             let trials = 3 + (n as u32 % 2);
-                            let id = new_session(&client, trials);
-                            client.upload_recording(&id, walk, &mut |_, _| {}).unwrap();
+                            let id = sim_session(&client, walk, trials, "trim_mean_30");
                             (k, id, trials)
                         })
                         .collect::<Vec<_>>()
@@ -362,7 +287,7 @@ fn two_instances_three_hosts_and_thirty_sessions_come_through_kills_stops_and_a_
     a.kill();
     a.drain();
     drop(cut);
-    let resumed_at = head_offset(&b_url, &apps[0], &big_id);
+    let resumed_at = upload_offset(&b_url, &apps[0], &big_id, "chaos-upload");
     // The first request's bytes are stored whole; the cut-off one's died with A.
     assert_eq!(resumed_at, half, "B resumes after A's first request");
     let status = put_rest(&b_url, &apps[0], &big_id, &big, resumed_at);
@@ -431,14 +356,14 @@ fn two_instances_three_hosts_and_thirty_sessions_come_through_kills_stops_and_a_
             );
         }
         assert_eq!(
-            zip_entries(&b_url, &apps[owner], &id),
+            trials_in_zip(&b_url, &apps[owner], &id),
             trials as usize,
             "{id}"
         );
         let recording = if id == big_id { &big } else { &walk };
         let expected = references
             .entry((recording.clone(), trials))
-            .or_insert_with(|| reference_results(recording, trials));
+            .or_insert_with(|| embedded_results(recording, trials, "trim_mean_30"));
         assert_eq!(client.results_json(&id).unwrap(), expected.0, "{id}");
         assert_eq!(client.results_csv(&id).unwrap(), expected.1, "{id}");
     }

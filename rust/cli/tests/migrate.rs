@@ -19,20 +19,6 @@ use sitar_client::{JobOptions, JobState, NewSession, SessionFrame, UploadJob};
 use support::cluster::{fresh_database, services};
 use support::process::{Proc, Serving};
 
-/// `sitar serve` with sim playback (2 phones at 30×) on a free port and `extra` arguments.
-fn serve(data: &Path, extra: &[&str]) -> Serving {
-    let mut args = vec![
-        "--playback",
-        "sim",
-        "--sim-speed",
-        "30",
-        "--sim-devices",
-        "2",
-    ];
-    args.extend_from_slice(extra);
-    Serving::start(data, &args)
-}
-
 /// Requests to an instance beyond its client.
 trait Requests {
     fn get(&self, path: &str, token: &str) -> (u16, Vec<u8>);
@@ -219,7 +205,7 @@ fn an_embedded_installation_moves_into_the_cluster_stores() {
     let data = dir.path().join("embedded");
 
     // The embedded installation, made by the real server.
-    let embedded = serve(&data, &[]);
+    let embedded = Serving::sim(&data, &[]);
     let admin = std::fs::read_to_string(data.join("admin.token"))
         .unwrap()
         .trim()
@@ -489,7 +475,7 @@ fn an_embedded_installation_moves_into_the_cluster_stores() {
 
     // The cluster serves A: the same tokens, byte-identical answers.
     let instance = dir.path().join("instance");
-    let cluster = serve(&instance, &["--database", &db_a, "--store", &store_a]);
+    let cluster = Serving::sim(&instance, &["--database", &db_a, "--store", &store_a]);
     assert!(
         !instance.join("admin.token").exists(),
         "the admin token is the migrated one"

@@ -11,21 +11,7 @@ use std::process::Command;
 use std::time::Duration;
 
 use support::cluster::{fresh_database, services};
-use support::process::Serving;
-
-/// `sitar serve` with sim playback (2 phones at 30×) on a free port and `extra` arguments.
-fn serve(data: &Path, extra: &[&str]) -> Serving {
-    let mut args = vec![
-        "--playback",
-        "sim",
-        "--sim-speed",
-        "30",
-        "--sim-devices",
-        "2",
-    ];
-    args.extend_from_slice(extra);
-    Serving::start(data, &args)
-}
+use support::process::{Serving, upload_offset};
 
 /// Runs a sim session of `trials` trials on `recording`; its status, CSV and JSON results.
 fn run_session(
@@ -98,7 +84,7 @@ fn a_cluster_instance_plays_a_session_as_the_embedded_one_does() {
 
     // The embedded server: the reference.
     let embedded_data = dir.path().join("embedded");
-    let embedded = serve(&embedded_data, &[]);
+    let embedded = Serving::sim(&embedded_data, &[]);
     let client = embedded.client(&admin_token(&embedded_data));
     let (_, status, csv, json) = run_session(&client, &recording, 5);
     assert_eq!(status.state, sitar_client::SessionState::Done, "{status:?}");
@@ -107,7 +93,7 @@ fn a_cluster_instance_plays_a_session_as_the_embedded_one_does() {
     // The cluster instance: the first on an empty database writes the admin token.
     let a_data = dir.path().join("instance-a");
     let cluster = ["--database", database.as_str(), "--store", store.as_str()];
-    let mut a = serve(&a_data, &cluster);
+    let mut a = Serving::sim(&a_data, &cluster);
     a.wait_for("metadata in Postgres", Duration::from_secs(60));
     let admin = admin_token(&a_data);
     // `sitar token create --database` makes a token the running instance accepts.
@@ -142,7 +128,7 @@ fn a_cluster_instance_plays_a_session_as_the_embedded_one_does() {
     // A second instance on the same database and store: no admin token of its own, and it
     // answers for the session the first one played.
     let b_data = dir.path().join("instance-b");
-    let b = serve(&b_data, &cluster);
+    let b = Serving::sim(&b_data, &cluster);
     assert!(!b_data.join("admin.token").exists());
     let from_b = b.client(&admin);
     assert_eq!(from_b.results_csv(&id).unwrap(), csv);
@@ -219,25 +205,7 @@ fn put_range(
 
 /// The `Upload-Offset` a `HEAD` of session `id`'s recording answers for the upload key.
 fn head_offset(url: &str, token: &str, id: &str) -> usize {
-    head_offset_with(url, token, id, "cluster-resume")
-}
-
-/// The `Upload-Offset` a `HEAD` of session `id`'s recording answers for upload key `key`.
-fn head_offset_with(url: &str, token: &str, id: &str, key: &str) -> usize {
-    let out = Command::new("curl")
-        .args(["-s", "-I", "-H", &format!("Authorization: Bearer {token}")])
-        .args(["-H", &format!("Idempotency-Key: {key}")])
-        .arg(format!("{url}/v1/sessions/{id}/recording"))
-        .output()
-        .expect("curl");
-    let head = String::from_utf8_lossy(&out.stdout).to_string();
-    head.lines()
-        .find_map(|l| {
-            let (name, value) = l.split_once(':')?;
-            name.eq_ignore_ascii_case("upload-offset")
-                .then(|| value.trim().parse().ok())?
-        })
-        .unwrap_or_else(|| panic!("no Upload-Offset in {head}"))
+    upload_offset(url, token, id, "cluster-resume")
 }
 
 #[test]
@@ -257,7 +225,7 @@ fn an_instance_killed_during_an_upload_leaves_nothing_partial() {
     std::fs::write(&recording, rec.to_bytes()).unwrap();
     let size = std::fs::metadata(&recording).unwrap().len();
     let data = dir.path().join("instance");
-    let mut a = serve(&data, &cluster);
+    let mut a = Serving::sim(&data, &cluster);
     let admin = admin_token(&data);
     let id = a
         .client(&admin)
@@ -291,7 +259,7 @@ fn an_instance_killed_during_an_upload_leaves_nothing_partial() {
     let _ = upload.wait();
     // Started again on the same folder: the staged bytes are gone, nothing of the request
     // is in the bucket, and the session still waits for its recording.
-    let b = serve(&data, &cluster);
+    let b = Serving::sim(&data, &cluster);
     assert!(
         files_under(&data.join("tmp")).is_empty(),
         "{:?}",
@@ -302,7 +270,7 @@ fn an_instance_killed_during_an_upload_leaves_nothing_partial() {
         client.status(&id).unwrap().state,
         sitar_client::SessionState::Created
     );
-    assert_eq!(head_offset_with(&b.url, &admin, &id, "crash"), 0);
+    assert_eq!(upload_offset(&b.url, &admin, &id, "crash"), 0);
     // The client sends it again, whole: the session plays to the end.
     client
         .upload_recording(&id, &recording, &mut |_, _| {})

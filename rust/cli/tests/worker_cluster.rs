@@ -13,21 +13,12 @@ use std::process::Command;
 use std::time::{Duration, Instant};
 
 use sitar_client::{Client, NewSession};
-use support::process::Proc;
+use support::process::{Proc, create_token, sim_host};
+use support::sessions::{embedded_results, sim_session};
 
-/// `sitar token create` on `data`: the token.
+/// `sitar token create --data`: the token.
 fn token(data: &Path, role: &str, name: &str) -> String {
-    let out = Command::new(env!("CARGO_BIN_EXE_sitar"))
-        .args(["token", "create", "--role", role, "--name", name, "--data"])
-        .arg(data)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8(out.stdout).unwrap().trim().to_string()
+    create_token(&["--data", data.to_str().unwrap()], role, name)
 }
 
 /// `sitar serve` with remote playback on a free port: the process and its URL.
@@ -60,67 +51,15 @@ fn serve_on(data: &Path, lease_s: &str, playback: &str, addr: &str) -> (Proc, St
     (server, url)
 }
 
+/// A sim host of `slots` phones at `speed`× real time, connected to `url`.
 fn worker(url: &str, token: &str, name: &str, slots: &str, speed: &str, dir: &Path) -> Proc {
-    let mut w = Proc::sitar(&[
-        "worker",
-        "--server",
-        url,
-        "--token",
-        token,
-        "--playback",
-        "sim",
-        "--slots",
-        slots,
-        "--sim-speed",
-        speed,
-        "--name",
-        name,
-        "--data",
-        dir.join(name).to_str().unwrap(),
-    ]);
-    w.wait_for("sitar worker: host", Duration::from_secs(30));
-    w
-}
-
-fn sim_session(client: &Client, recording: &Path, trials: u32, setting: &str) -> String {
-    let id = client
-        .create_session(&NewSession {
-            trials,
-            setting: setting.into(),
-            playback: "sim".into(),
-            window_frames: None,
-            pose_relation: None,
-        })
-        .unwrap();
-    client
-        .upload_recording(&id, recording, &mut |_, _| {})
-        .unwrap();
-    id
+    sim_host(url, token, name, slots, speed, dir)
 }
 
 fn wait(client: &Client, id: &str, limit: Duration) -> sitar_client::SessionStatus {
     client
         .wait(id, Duration::from_millis(50), limit, &mut |_| {})
         .expect("the session finishes")
-}
-
-/// The same session on the embedded server with in-process sim playback: its results.
-fn reference_results(recording: &Path, trials: u32, setting: &str) -> (String, String) {
-    let data = tempfile::tempdir().unwrap();
-    let server = sitar_tests::start(sitar_tests::sim_config(data.path(), 200.0, 3));
-    let client = Client::new(&server.url())
-        .unwrap()
-        .with_server_token(sitar_tests::APP_TOKEN)
-        .unwrap();
-    let id = sim_session(&client, recording, trials, setting);
-    let status = wait(&client, &id, Duration::from_secs(120));
-    assert_eq!(status.state.as_str(), "done", "{status:?}");
-    let results = (
-        client.results_json(&id).unwrap(),
-        client.results_csv(&id).unwrap(),
-    );
-    server.stop();
-    results
 }
 
 /// The raw status document (its `failed_trials` is not in the client's type).
@@ -212,7 +151,7 @@ fn three_hosts_play_sessions_of_two_tokens_as_the_embedded_server_does() {
         assert_eq!(doc["failed_trials"], serde_json::json!([]), "{doc}");
         let expected = references
             .entry(*trials)
-            .or_insert_with(|| reference_results(&recording, *trials, "trim_mean_30"));
+            .or_insert_with(|| embedded_results(&recording, *trials, "trim_mean_30"));
         assert_eq!(
             clients[*owner].results_json(id).unwrap(),
             expected.0,
@@ -270,7 +209,7 @@ fn a_killed_host_s_trial_is_played_elsewhere_and_a_stopped_host_s_late_trial_is_
     assert_eq!(status.state.as_str(), "done", "{status:?}");
     assert_eq!(status.trials_done, 3, "{status:?}");
     assert!(killed_at.elapsed() >= Duration::from_millis(1500));
-    let expected = reference_results(&recording, 3, "median");
+    let expected = embedded_results(&recording, 3, "median");
     assert_eq!(client.results_json(&first).unwrap(), expected.0);
 
     // A host stopped past its lease, then let go on: its trial is played elsewhere, and
@@ -463,7 +402,7 @@ fn a_server_killed_mid_session_resumes_and_the_hosts_finish_it() {
     let status = wait(&client, &id, Duration::from_secs(120));
     assert_eq!(status.state.as_str(), "done", "{status:?}");
     assert_eq!(status.trials_done, 6, "each trial once: {status:?}");
-    let expected = reference_results(&recording, 6, "trim_mean_30");
+    let expected = embedded_results(&recording, 6, "trim_mean_30");
     assert_eq!(client.results_json(&id).unwrap(), expected.0);
 }
 

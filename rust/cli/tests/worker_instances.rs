@@ -10,13 +10,13 @@ mod support;
 
 use std::collections::HashMap;
 use std::path::Path;
-use std::process::Command;
 use std::time::{Duration, Instant};
 
-use sitar_client::{Client, NewSession};
+use sitar_client::Client;
 
 use support::cluster::{fresh_database, services};
-use support::process::Proc;
+use support::process::{Proc, create_token, sim_host};
+use support::sessions::{embedded_results, sim_session, trials_in_zip};
 
 /// `sitar serve` on the shared database and store, remote playback only: process and URL.
 fn serve(data: &Path, database: &str, store: &str) -> (Proc, String) {
@@ -46,81 +46,12 @@ fn serve(data: &Path, database: &str, store: &str) -> (Proc, String) {
 
 /// `sitar token create --database`: the token.
 fn token(database: &str, role: &str, name: &str) -> String {
-    let out = Command::new(env!("CARGO_BIN_EXE_sitar"))
-        .args(["token", "create", "--role", role, "--name", name])
-        .args(["--database", database])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8(out.stdout).unwrap().trim().to_string()
+    create_token(&["--database", database], role, name)
 }
 
+/// A sim host of 2 phones at 50× real time, connected to `url`.
 fn worker(url: &str, token: &str, name: &str, dir: &Path) -> Proc {
-    let mut w = Proc::sitar(&[
-        "worker",
-        "--server",
-        url,
-        "--token",
-        token,
-        "--playback",
-        "sim",
-        "--slots",
-        "2",
-        "--sim-speed",
-        "50",
-        "--name",
-        name,
-        "--data",
-        dir.join(name).to_str().unwrap(),
-    ]);
-    w.wait_for("sitar worker: host", Duration::from_secs(30));
-    w
-}
-
-fn sim_session(client: &Client, recording: &Path, trials: u32) -> String {
-    let id = client
-        .create_session(&NewSession {
-            trials,
-            setting: "trim_mean_30".into(),
-            playback: "sim".into(),
-            window_frames: None,
-            pose_relation: None,
-        })
-        .unwrap();
-    client
-        .upload_recording(&id, recording, &mut |_, _| {})
-        .unwrap();
-    id
-}
-
-/// The same session on the embedded server with in-process sim playback: its results.
-fn reference_results(recording: &Path, trials: u32) -> (String, String) {
-    let data = tempfile::tempdir().unwrap();
-    let server = sitar_tests::start(sitar_tests::sim_config(data.path(), 200.0, 3));
-    let client = Client::new(&server.url())
-        .unwrap()
-        .with_server_token(sitar_tests::APP_TOKEN)
-        .unwrap();
-    let id = sim_session(&client, recording, trials);
-    let status = client
-        .wait(
-            &id,
-            Duration::from_millis(50),
-            Duration::from_secs(120),
-            &mut |_| {},
-        )
-        .unwrap();
-    assert_eq!(status.state.as_str(), "done", "{status:?}");
-    let results = (
-        client.results_json(&id).unwrap(),
-        client.results_csv(&id).unwrap(),
-    );
-    server.stop();
-    results
+    sim_host(url, token, name, "2", "50", dir)
 }
 
 /// The raw status document (its `failed_trials` is not in the client's type).
@@ -130,20 +61,6 @@ fn status_json(url: &str, token: &str, id: &str) -> serde_json::Value {
         .call()
         .unwrap();
     serde_json::from_str(&answer.body_mut().read_to_string().unwrap()).unwrap()
-}
-
-/// The number of trial files in a session's `trials.zip`.
-fn trials_in_zip(url: &str, token: &str, id: &str) -> usize {
-    let zip = ureq::get(&format!("{url}/v1/sessions/{id}/trials.zip"))
-        .header("authorization", &format!("Bearer {token}"))
-        .call()
-        .unwrap()
-        .body_mut()
-        .read_to_vec()
-        .unwrap();
-    zip::ZipArchive::new(std::io::Cursor::new(zip))
-        .unwrap()
-        .len()
 }
 
 #[test]
@@ -191,7 +108,7 @@ fn hosts_on_another_instance_play_the_sessions_of_the_first() {
         assert_eq!(trials_in_zip(&b_url, &app, id), trials as usize, "{id}");
         let expected = references
             .entry(trials)
-            .or_insert_with(|| reference_results(&recording, trials));
+            .or_insert_with(|| embedded_results(&recording, trials, "trim_mean_30"));
         assert_eq!(client.results_json(id).unwrap(), expected.0, "{id}");
         assert_eq!(client.results_csv(id).unwrap(), expected.1, "{id}");
     };
@@ -205,7 +122,12 @@ fn hosts_on_another_instance_play_the_sessions_of_the_first() {
     std::thread::sleep(Duration::from_millis(1500));
     let offered = Instant::now();
     let first: Vec<(String, u32)> = (0..2)
-        .map(|k| (sim_session(&client, &recording, 4 + k), 4 + k))
+        .map(|k| {
+            (
+                sim_session(&client, &recording, 4 + k, "trim_mean_30"),
+                4 + k,
+            )
+        })
         .collect();
     for (id, trials) in &first {
         check(id, *trials);
@@ -220,7 +142,12 @@ fn hosts_on_another_instance_play_the_sessions_of_the_first() {
     // Then a host on A too, and more sessions: every trial once, whoever played it.
     let mut on_a = worker(&a_url, &work, "host-a1", hosts.path());
     let second: Vec<(String, u32)> = (0..4)
-        .map(|k| (sim_session(&client, &recording, 4 + k % 2), 4 + k % 2))
+        .map(|k| {
+            (
+                sim_session(&client, &recording, 4 + k % 2, "trim_mean_30"),
+                4 + k % 2,
+            )
+        })
         .collect();
     for (id, trials) in &second {
         check(id, *trials);

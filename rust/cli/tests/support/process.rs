@@ -137,6 +137,20 @@ impl Serving {
         Serving::run(&all)
     }
 
+    /// `sitar serve` with in-process sim playback (2 phones at 30×) and `extra` arguments.
+    pub fn sim(data: &Path, extra: &[&str]) -> Serving {
+        let mut args = vec![
+            "--playback",
+            "sim",
+            "--sim-speed",
+            "30",
+            "--sim-devices",
+            "2",
+        ];
+        args.extend_from_slice(extra);
+        Serving::start(data, &args)
+    }
+
     /// Runs `sitar ARGS` (a `serve` with its own `--addr`) and waits for its URL.
     pub fn run(args: &[&str]) -> Serving {
         let mut process = Proc::sitar(args);
@@ -167,4 +181,64 @@ impl std::ops::DerefMut for Serving {
     fn deref_mut(&mut self) -> &mut Proc {
         &mut self.process
     }
+}
+
+/// `sitar token create --role ROLE --name NAME PLACE…` (`--data DIR` or `--database URL`):
+/// the token it printed.
+pub fn create_token(place: &[&str], role: &str, name: &str) -> String {
+    let out = Command::new(env!("CARGO_BIN_EXE_sitar"))
+        .args(["token", "create", "--role", role, "--name", name])
+        .args(place)
+        .output()
+        .expect("run sitar token create");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout).unwrap().trim().to_string()
+}
+
+/// A `sitar worker --playback sim` host `name` of `slots` phones playing at `speed`× real
+/// time (its folder `dir/name`), connected to `url` and registered.
+pub fn sim_host(url: &str, token: &str, name: &str, slots: &str, speed: &str, dir: &Path) -> Proc {
+    let folder = dir.join(name);
+    let mut host = Proc::sitar(&[
+        "worker",
+        "--server",
+        url,
+        "--token",
+        token,
+        "--playback",
+        "sim",
+        "--slots",
+        slots,
+        "--sim-speed",
+        speed,
+        "--name",
+        name,
+        "--data",
+        folder.to_str().expect("a UTF-8 folder"),
+    ]);
+    host.wait_for("sitar worker: host", Duration::from_secs(60));
+    host
+}
+
+/// The `Upload-Offset` a `HEAD` of session `id`'s recording at `url` answers for upload key
+/// `key` (through curl).
+pub fn upload_offset(url: &str, token: &str, id: &str, key: &str) -> usize {
+    let out = Command::new("curl")
+        .args(["-s", "-I", "-H", &format!("Authorization: Bearer {token}")])
+        .args(["-H", &format!("Idempotency-Key: {key}")])
+        .arg(format!("{url}/v1/sessions/{id}/recording"))
+        .output()
+        .expect("curl");
+    let head = String::from_utf8_lossy(&out.stdout).to_string();
+    head.lines()
+        .find_map(|l| {
+            let (name, value) = l.split_once(':')?;
+            name.eq_ignore_ascii_case("upload-offset")
+                .then(|| value.trim().parse().ok())?
+        })
+        .unwrap_or_else(|| panic!("no Upload-Offset in {head}"))
 }
