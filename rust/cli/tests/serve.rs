@@ -2,93 +2,23 @@
 //! time-stamped log line per request on stderr naming the token, the admin token printed
 //! once, `sitar token` working while it runs, and SIGTERM stopping it cleanly.
 
-use std::io::{BufRead, BufReader};
-use std::process::{Child, Command, Stdio};
-use std::sync::mpsc::{Receiver, channel};
+mod support;
+
+use std::process::Command;
 use std::time::{Duration, Instant};
 
-struct Serving {
-    child: Child,
-    lines: Receiver<String>,
-    seen: Vec<String>,
-}
-
-impl Serving {
-    /// Waits for a stderr line containing `needle`; panics with what was seen after 30 s.
-    fn wait_for(&mut self, needle: &str) -> String {
-        let deadline = Instant::now() + Duration::from_secs(30);
-        if let Some(line) = self.seen.iter().find(|l| l.contains(needle)) {
-            return line.clone();
-        }
-        while let Some(left) = deadline.checked_duration_since(Instant::now()) {
-            match self.lines.recv_timeout(left) {
-                Ok(line) => {
-                    self.seen.push(line.clone());
-                    if line.contains(needle) {
-                        return line;
-                    }
-                }
-                Err(_) => break,
-            }
-        }
-        panic!("no line with {needle:?} in {:#?}", self.seen);
-    }
-}
-
-impl Drop for Serving {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
+use support::process::Serving;
 
 #[test]
 fn serve_listens_and_logs_every_request_that_changes_or_fails() {
     let data = tempfile::tempdir().unwrap();
-    let mut child = Command::new(env!("CARGO_BIN_EXE_sitar"))
-        .args([
-            "serve",
-            "--addr",
-            "127.0.0.1:0",
-            "--playback",
-            "sim",
-            "--data",
-        ])
-        .arg(data.path())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("run sitar serve");
-    // stdout and stderr in one stream of lines.
-    let (tx, lines) = channel();
-    let stderr = child.stderr.take().unwrap();
-    let stdout = child.stdout.take().unwrap();
-    let tx_out = tx.clone();
-    std::thread::spawn(move || {
-        for line in BufReader::new(stdout).lines().map_while(Result::ok) {
-            if tx_out.send(line).is_err() {
-                return;
-            }
-        }
-    });
-    std::thread::spawn(move || {
-        for line in BufReader::new(stderr).lines().map_while(Result::ok) {
-            if tx.send(line).is_err() {
-                return;
-            }
-        }
-    });
-    let mut serving = Serving {
-        child,
-        lines,
-        seen: Vec::new(),
-    };
-    let listening = serving.wait_for("listening on http://");
-    let url = &listening[listening.find("http://").unwrap()..];
+    let mut serving = Serving::start(data.path(), &["--playback", "sim"]);
+    let url = serving.url.clone();
+    let url = url.as_str();
     assert!(data.path().join("sitar.db").is_file());
 
     // The new data directory's admin token: in the file (0600) and in the URL printed once.
-    let printed = serving.wait_for("/?token=");
+    let printed = serving.wait_for("/?token=", Duration::from_secs(30));
     let admin = std::fs::read_to_string(data.path().join("admin.token")).unwrap();
     let admin = admin.trim();
     assert!(
@@ -149,7 +79,10 @@ fn serve_listens_and_logs_every_request_that_changes_or_fails() {
         Some(404)
     );
 
-    let created = serving.wait_for("POST /v1/sessions [lab-phone] → 201");
+    let created = serving.wait_for(
+        "POST /v1/sessions [lab-phone] → 201",
+        Duration::from_secs(30),
+    );
     // `2026-12-02T03:04:05.123Z INFO …`: an RFC 3339 stamp in UTC, then the level.
     let (stamp, rest) = created.split_once(' ').unwrap();
     assert!(
@@ -157,8 +90,14 @@ fn serve_listens_and_logs_every_request_that_changes_or_fails() {
         "{created}"
     );
     assert!(rest.starts_with("INFO "), "{created}");
-    serving.wait_for("POST /v1/sessions [lab-phone] → 400");
-    serving.wait_for("GET /v1/sessions/s0000000000000000 [lab-phone] → 404");
+    serving.wait_for(
+        "POST /v1/sessions [lab-phone] → 400",
+        Duration::from_secs(30),
+    );
+    serving.wait_for(
+        "GET /v1/sessions/s0000000000000000 [lab-phone] → 404",
+        Duration::from_secs(30),
+    );
     // Successful reads stay quiet: phones poll their status all the time.
     client.status(&id).unwrap();
     assert!(
@@ -169,7 +108,7 @@ fn serve_listens_and_logs_every_request_that_changes_or_fails() {
     // Revoked while it runs: the next request is refused.
     sitar(&["token", "revoke", "lab-phone"]);
     assert_eq!(client.status(&id).unwrap_err().status(), Some(401));
-    serving.wait_for("→ 401");
+    serving.wait_for("→ 401", Duration::from_secs(30));
     // No token ever reaches the log.
     assert!(
         !serving
@@ -184,7 +123,7 @@ fn serve_listens_and_logs_every_request_that_changes_or_fails() {
     let pid = serving.child.id().to_string();
     let killed = Command::new("kill").args(["-TERM", &pid]).status().unwrap();
     assert!(killed.success());
-    serving.wait_for("SIGTERM: stopping");
+    serving.wait_for("SIGTERM: stopping", Duration::from_secs(30));
     let deadline = Instant::now() + Duration::from_secs(20);
     let status = loop {
         if let Some(status) = serving.child.try_wait().unwrap() {

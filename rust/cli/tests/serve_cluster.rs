@@ -12,6 +12,7 @@ use std::time::Duration;
 
 use support::cluster::{fresh_database, services};
 use support::process::{Serving, upload_offset};
+use support::sessions::sim_session;
 
 /// Runs a sim session of `trials` trials on `recording`; its status, CSV and JSON results.
 fn run_session(
@@ -19,18 +20,7 @@ fn run_session(
     recording: &Path,
     trials: u32,
 ) -> (String, sitar_client::SessionStatus, String, String) {
-    let id = client
-        .create_session(&sitar_client::NewSession {
-            trials,
-            setting: "trim_mean_30".into(),
-            playback: "sim".into(),
-            window_frames: None,
-            pose_relation: None,
-        })
-        .unwrap();
-    client
-        .upload_recording(&id, recording, &mut |_, _| {})
-        .unwrap();
+    let id = sim_session(client, recording, trials, "trim_mean_30");
     let status = client
         .wait(
             &id,
