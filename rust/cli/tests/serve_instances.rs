@@ -2,7 +2,7 @@
 //! real processes: who plays a session, and what happens when an instance dies. A session
 //! uploaded to A is adopted by B after A is killed (SIGKILL) mid-playback and ends with
 //! results byte-identical to the embedded server's; A started again plays nothing twice; a
-//! cancel and a delete sent to B reach the sessions A plays. Without the services of
+//! cancel, an estimate and a delete sent to B reach the sessions A plays. Without the services of
 //! `scripts/cluster-services` the test prints SKIPPED.
 
 mod instances;
@@ -203,6 +203,22 @@ fn a_dead_instances_session_is_adopted_and_stops_reach_the_player() {
     let reason = status.stop_reason.clone().unwrap_or_default();
     assert!(reason.contains("cancelled by the client"), "{status:?}");
     assert!(!b.said(&format!("session {cancelled}: back in the playback queue")));
+
+    // An estimate asked of B for a session A plays: A stops and estimates what it has.
+    let estimated = start_session(&from_a, &recording);
+    wait_for_trials(&from_b, &estimated, 2);
+    let (code, body) = request(
+        "POST",
+        &b.url,
+        &format!("/v1/sessions/{estimated}/estimate"),
+        &admin,
+    );
+    assert_eq!(code, "202", "{body}");
+    let status = wait_done(&from_b, &estimated);
+    assert_eq!(status.state, SessionState::Done, "{status:?}");
+    assert!(status.trials_done < TRIALS, "{status:?}");
+    let reason = status.stop_reason.clone().unwrap_or_default();
+    assert!(reason.contains("estimate requested after"), "{status:?}");
 
     // A delete sent to B stops A's playback, and the session is gone for both.
     let deleted = start_session(&from_a, &recording);

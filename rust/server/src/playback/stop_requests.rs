@@ -1,11 +1,12 @@
-//! Cancel and delete across instances. The instance a client asks records the request on
-//! the session's row when another instance plays it; the player looks for requests on its
-//! sessions every [`POLL`] and stops the session as if the client had asked it: a queued one
-//! leaves the queue, a playing one's job is told (its backends look at the cancel flag
-//! between trials). A delete waits (at most [`DELETE_WAIT`]) until the player has let the
-//! session go, then deletes it itself.
+//! Estimate, cancel and delete across instances. The instance a client asks records the
+//! request on the session's row when another instance plays it; the player looks for
+//! requests on its sessions every [`POLL`] and stops the session as if the client had asked
+//! it: a queued one leaves the queue, a playing one's job is told (its backends look at the
+//! cancel flag between trials). A delete waits (at most [`DELETE_WAIT`]) until the player
+//! has let the session go, then deletes it itself.
 
 use std::sync::Arc;
+use std::sync::atomic::Ordering;
 use std::time::{Duration, Instant};
 
 use crate::Error;
@@ -28,19 +29,28 @@ pub(crate) async fn stop_anywhere(
     id: &str,
     intent: Intent,
 ) -> Result<Stopped, Error> {
+    let request = match intent {
+        Intent::Run => None,
+        Intent::Cancel => Some(StopRequest::Cancel),
+        Intent::Delete => Some(StopRequest::Delete),
+    };
     match jobs::stop_playback(shared, id, intent).await? {
-        Stopped::Idle if stop_elsewhere(shared, id, intent).await? => Ok(Stopped::Playing),
+        Stopped::Idle if request.is_some() && ask_elsewhere(shared, id, request).await? => {
+            Ok(Stopped::Playing)
+        }
         stopped => Ok(stopped),
     }
 }
 
-/// When another instance plays session `id`: records `intent` for it and, for a delete,
+/// When another instance plays session `id`: records `request` for it and, for a delete,
 /// waits until it let the session go. False when no other instance plays it.
-async fn stop_elsewhere(shared: &App, id: &str, intent: Intent) -> Result<bool, Error> {
-    let request = match intent {
-        Intent::Run => return Ok(false),
-        Intent::Cancel => StopRequest::Cancel,
-        Intent::Delete => StopRequest::Delete,
+pub(crate) async fn ask_elsewhere(
+    shared: &App,
+    id: &str,
+    request: Option<StopRequest>,
+) -> Result<bool, Error> {
+    let Some(request) = request else {
+        return Ok(false);
     };
     if !shared.clustered() {
         return Ok(false);
@@ -104,6 +114,9 @@ fn carry_out(shared: &Arc<App>, id: &str, request: StopRequest) {
     if shared.queue.remove(id) {
         log::info!("session {id}: left the queue ({} asked)", request.as_str());
         let done = match request {
+            StopRequest::Estimate => {
+                finish_dequeued(shared.clone(), id.to_string(), EndEarly::Estimate)
+            }
             StopRequest::Cancel => {
                 finish_dequeued(shared.clone(), id.to_string(), EndEarly::Cancel)
             }
@@ -114,9 +127,11 @@ fn carry_out(shared: &Arc<App>, id: &str, request: StopRequest) {
             log::warn!("session {id}: {e}");
         }
     } else if let Some(control) = shared.queue.control(id) {
-        control.request(match request {
-            StopRequest::Cancel => Intent::Cancel,
-            StopRequest::Delete => Intent::Delete,
-        });
+        match request {
+            // As the estimate route does on the player: playback stops, the job estimates.
+            StopRequest::Estimate => control.cancel.store(true, Ordering::SeqCst),
+            StopRequest::Cancel => control.request(Intent::Cancel),
+            StopRequest::Delete => control.request(Intent::Delete),
+        }
     }
 }

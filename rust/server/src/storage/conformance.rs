@@ -732,9 +732,16 @@ fn instances_own_adopt_and_stop_sessions(store: &dyn MetadataStore) {
     let job = store.start_job(id, "playback", a).unwrap();
     let _ = job;
 
-    // A cancel and then a delete sent through B reach A; the delete outranks the cancel.
+    // An estimate, a cancel and then a delete sent through B reach A; the stronger request
+    // stays (delete, cancel, estimate).
     assert!(store.stop_requests(a).unwrap().is_empty());
+    store.request_stop(id, StopRequest::Estimate).unwrap();
+    assert_eq!(
+        store.stop_requests(a).unwrap(),
+        [(id.to_string(), StopRequest::Estimate)]
+    );
     store.request_stop(id, StopRequest::Cancel).unwrap();
+    store.request_stop(id, StopRequest::Estimate).unwrap();
     assert_eq!(
         store.stop_requests(a).unwrap(),
         [(id.to_string(), StopRequest::Cancel)]

@@ -6,10 +6,12 @@
 
 use crate::Error;
 
-/// What a client asked of a session's playback through another instance.
+/// What a client asked of a session's playback through another instance, weakest first.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
 pub(crate) enum StopRequest {
-    /// `POST …/cancel`: stop playing, estimate what was played.
+    /// `POST …/estimate`: stop playing, estimate what was played ("estimate requested").
+    Estimate,
+    /// `POST …/cancel`: stop playing, estimate what was played ("cancelled by the client").
     Cancel,
     /// `DELETE`: stop playing and publish nothing; the receiving instance deletes it.
     Delete,
@@ -19,6 +21,7 @@ impl StopRequest {
     /// The stored name.
     pub(crate) fn as_str(self) -> &'static str {
         match self {
+            StopRequest::Estimate => "estimate",
             StopRequest::Cancel => "cancel",
             StopRequest::Delete => "delete",
         }
@@ -27,11 +30,28 @@ impl StopRequest {
     /// The inverse of [`StopRequest::as_str`]; `None` for a value no version writes.
     pub(crate) fn from_stored(name: &str) -> Option<StopRequest> {
         match name {
+            "estimate" => Some(StopRequest::Estimate),
             "cancel" => Some(StopRequest::Cancel),
             "delete" => Some(StopRequest::Delete),
             _ => None,
         }
     }
+}
+
+/// SQL that sets `sessions.stop_request` to the stronger of what it holds and the request
+/// in parameter `new` (`$2`, `?2`): delete, then cancel, then estimate (both stores' SQL).
+pub(crate) fn stronger_stop_request(new: &str) -> String {
+    let rank = |value: &str| {
+        format!(
+            "CASE {value} WHEN 'delete' THEN 3 WHEN 'cancel' THEN 2 WHEN 'estimate' THEN 1 \
+             ELSE 0 END"
+        )
+    };
+    format!(
+        "stop_request = CASE WHEN {} > {} THEN {new} ELSE stop_request END",
+        rank(new),
+        rank("stop_request")
+    )
 }
 
 /// Which instance plays what, and who is alive. "In flight" is a session of a playback kind
@@ -56,7 +76,8 @@ pub(crate) trait InstanceStore {
         &self,
         alive_since_ms: i64,
     ) -> Result<Vec<(String, Option<String>)>, Error>;
-    /// Records `request` on session `id` for its player to see (a delete outranks a cancel).
+    /// Records `request` on session `id` for its player to see (a delete outranks a cancel,
+    /// which outranks an estimate).
     fn request_stop(&self, id: &str, request: StopRequest) -> Result<(), Error>;
     /// The stop requests on the sessions in flight `instance` plays, oldest session first.
     fn stop_requests(&self, instance: &str) -> Result<Vec<(String, StopRequest)>, Error>;

@@ -11,8 +11,9 @@ use crate::config::PlaybackKind;
 use crate::estimate::results_files::{self, Form};
 use crate::http::helpers::{AppState, Found, json_response, json_value};
 use crate::http::pagination::{PageRequest, page_of};
-use crate::playback::jobs;
+use crate::playback::{jobs, stop_requests};
 use crate::session::SessionState;
+use crate::storage::StopRequest;
 
 /// `POST /v1/sessions/{id}/estimate`: `upload` sessions estimate now; sim and adb sessions
 /// that are playing stop playback and estimate what is there.
@@ -45,6 +46,10 @@ pub(crate) async fn estimate(
             } else if let Some(job) = shared.running(&id) {
                 // Estimate now: stop playback; the job publishes the final estimate.
                 job.cancel.store(true, std::sync::atomic::Ordering::SeqCst);
+            } else {
+                // Another instance plays it: asked through the database.
+                let request = Some(StopRequest::Estimate);
+                stop_requests::ask_elsewhere(&shared, &id, request).await?;
             }
         }
         _ if session.playback == PlaybackKind::Upload => {

@@ -5,7 +5,7 @@
 
 use super::PgStore;
 use crate::Error;
-use crate::storage::instances::{InstanceStore, StopRequest};
+use crate::storage::instances::{InstanceStore, StopRequest, stronger_stop_request};
 
 /// In flight: a session of a playback kind whose job is queued, playing or estimating.
 const IN_FLIGHT: &str = "playback <> 'upload' AND state IN ('uploaded', 'playing', 'estimating')";
@@ -96,9 +96,12 @@ impl InstanceStore for PgStore {
     fn request_stop(&self, id: &str, request: StopRequest) -> Result<(), Error> {
         let id = id.to_string();
         self.pool.run(move |c| {
-            // 'delete' > 'cancel' as text too: the stronger request stays.
+            // The stronger request stays.
             c.execute(
-                "UPDATE sessions SET stop_request = GREATEST(stop_request, $2) WHERE id = $1",
+                &format!(
+                    "UPDATE sessions SET {} WHERE id = $1",
+                    stronger_stop_request("$2::TEXT")
+                ),
                 &[&id, &request.as_str()],
             )?;
             Ok(())

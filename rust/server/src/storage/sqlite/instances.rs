@@ -5,7 +5,7 @@ use rusqlite::{OptionalExtension, params};
 
 use super::{CachedSql, SqliteStore};
 use crate::Error;
-use crate::storage::instances::{InstanceStore, StopRequest};
+use crate::storage::instances::{InstanceStore, StopRequest, stronger_stop_request};
 
 /// In flight: a session of a playback kind whose job is queued, playing or estimating.
 const IN_FLIGHT: &str = "playback <> 'upload' AND state IN ('uploaded', 'playing', 'estimating')";
@@ -88,11 +88,13 @@ impl InstanceStore for SqliteStore {
     }
 
     fn request_stop(&self, id: &str, request: StopRequest) -> Result<(), Error> {
-        // 'delete' > 'cancel' as text too: the stronger request stays.
+        // The stronger request stays.
         self.with(|c| {
             c.execute_cached(
-                "UPDATE sessions SET stop_request = MAX(COALESCE(stop_request, ''), ?2) \
-                 WHERE id = ?1",
+                &format!(
+                    "UPDATE sessions SET {} WHERE id = ?1",
+                    stronger_stop_request("?2")
+                ),
                 params![id, request.as_str()],
             )
         })
