@@ -11,6 +11,8 @@
 
 use std::str::FromStr;
 
+use tokio_postgres_rustls::MakeRustlsConnect;
+
 use crate::Error;
 
 pub(crate) mod copy;
@@ -21,6 +23,7 @@ mod leases;
 mod migrations;
 mod pool;
 mod sessions;
+pub(crate) mod tls;
 mod tokens;
 mod trials;
 mod usage;
@@ -39,10 +42,27 @@ pub(crate) fn is_postgres_url(url: &str) -> bool {
     url.starts_with("postgres://") || url.starts_with("postgresql://")
 }
 
-/// The connection settings of `url`, with the `PG*` variables for what it leaves out.
+/// The connection settings of `url`, with the `PG*` variables for what it leaves out, and
+/// the TLS connector its `sslmode` asks for (see [`tls`]).
+pub(crate) fn connection(url: &str) -> Result<(postgres::Config, MakeRustlsConnect), Error> {
+    let (_, settings) = tls::take_settings(url)?;
+    Ok((config(url)?, tls::connector(&settings)?))
+}
+
+/// The connection settings of `url`, with the `PG*` variables for what it leaves out (its
+/// `sslmode` as rust-postgres knows it: disable, prefer or require).
 pub(crate) fn config(url: &str) -> Result<postgres::Config, Error> {
-    let mut config = postgres::Config::from_str(url)
+    let (plain, settings) = tls::take_settings(url)?;
+    let mut config = postgres::Config::from_str(&plain)
         .map_err(|e| Error::Config(format!("--database {}: {e}", redact(url))))?;
+    config.ssl_mode(match settings {
+        tls::TlsSettings {
+            check: tls::Check::Disable,
+            ..
+        } => postgres::config::SslMode::Disable,
+        tls::TlsSettings { required: true, .. } => postgres::config::SslMode::Require,
+        _ => postgres::config::SslMode::Prefer,
+    });
     let var = |name: &str| std::env::var(name).ok().filter(|v| !v.is_empty());
     if config.get_hosts().is_empty()
         && let Some(host) = var("PGHOST")
@@ -114,8 +134,8 @@ pub(crate) fn redact(url: &str) -> String {
 impl PgStore {
     /// Connects to `url` and applies the migrations the database lacks.
     pub fn open(url: &str) -> Result<PgStore, Error> {
-        let config = config(url)?;
-        let pool = pool::Pool::open(config, CONNECTIONS).map_err(|e| match e {
+        let (config, tls) = connection(url)?;
+        let pool = pool::Pool::open(config, tls, CONNECTIONS).map_err(|e| match e {
             Error::Database(why) => Error::Database(format!("{}: {why}", redact(url))),
             other => other,
         })?;
@@ -389,6 +409,61 @@ mod tests {
             waited >= std::time::Duration::from_millis(900) && waited < pool::RECONNECT_WAIT,
             "{waited:?}"
         );
+    }
+
+    #[test]
+    fn tls_to_the_database_is_used_and_checked_as_sslmode_asks() {
+        let Some(url) = test_database::fresh("tls") else {
+            return;
+        };
+        let Some(ca) = std::env::var("SITAR_TEST_PG_CA")
+            .ok()
+            .filter(|v| !v.is_empty())
+        else {
+            println!("SKIPPED tls: SITAR_TEST_PG_CA is not set (the test Postgres has no TLS)");
+            return;
+        };
+        let encrypted = |store: &PgStore| {
+            store
+                .pool
+                .run(|c| {
+                    let sql = "SELECT ssl FROM pg_stat_ssl WHERE pid = pg_backend_pid()";
+                    Ok(c.query_one(sql, &[])?.get::<_, bool>(0))
+                })
+                .unwrap()
+        };
+        // libpq's default (prefer): encrypted, as the server offers it.
+        assert!(encrypted(&PgStore::open(&url).unwrap()));
+        assert!(!encrypted(
+            &PgStore::open(&format!("{url}?sslmode=disable")).unwrap()
+        ));
+        let full = format!("{url}?sslmode=verify-full&sslrootcert={ca}");
+        assert!(encrypted(&PgStore::open(&full).unwrap()));
+        // The certificate is made out to 127.0.0.1, not to localhost: verify-ca takes it
+        // there, verify-full does not.
+        let by_name = url.replacen("127.0.0.1", "localhost", 1);
+        let ca_only = format!("{by_name}?sslmode=verify-ca&sslrootcert={ca}");
+        assert!(encrypted(&PgStore::open(&ca_only).unwrap()));
+        let err = PgStore::open(&format!("{by_name}?sslmode=verify-full&sslrootcert={ca}"))
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(err.contains("certificate"), "{err}");
+        // Signed by another CA: refused, whatever the name.
+        let other = tempfile::tempdir().unwrap();
+        let other_ca = other.path().join("other-ca.pem");
+        let mut params = rcgen::CertificateParams::new(vec!["127.0.0.1".into()]).unwrap();
+        params.is_ca = rcgen::IsCa::Ca(rcgen::BasicConstraints::Unconstrained);
+        let key = rcgen::KeyPair::generate().unwrap();
+        std::fs::write(&other_ca, params.self_signed(&key).unwrap().pem()).unwrap();
+        let err = PgStore::open(&format!(
+            "{url}?sslmode=verify-ca&sslrootcert={}",
+            other_ca.display()
+        ))
+        .err()
+        .unwrap()
+        .to_string();
+        assert!(err.contains("certificate"), "{err}");
     }
 
     #[test]

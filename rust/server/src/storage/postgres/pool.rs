@@ -25,7 +25,8 @@ use std::sync::mpsc::{Receiver, Sender, channel, sync_channel};
 use std::sync::{Arc, Condvar, Mutex};
 use std::time::{Duration, Instant};
 
-use postgres::{Client, NoTls};
+use postgres::Client;
+use tokio_postgres_rustls::MakeRustlsConnect;
 
 use crate::Error;
 
@@ -54,6 +55,7 @@ type Job = Box<dyn FnOnce(&mut Connection) + Send>;
 /// One connection, made (again) when needed.
 pub(super) struct Connection {
     config: postgres::Config,
+    tls: MakeRustlsConnect,
     client: Option<Client>,
     last_used: Instant,
     /// Whether connecting is tried again for [`RECONNECT_WAIT`] (not while the pool opens:
@@ -95,7 +97,7 @@ impl Connection {
         let mut pause = Duration::from_millis(50);
         let mut said = false;
         loop {
-            let e = match self.config.connect(NoTls) {
+            let e = match self.config.connect(self.tls.clone()) {
                 Ok(client) => {
                     if said {
                         log::info!("database: connected to Postgres again");
@@ -106,11 +108,15 @@ impl Connection {
             };
             let patient = self.patient.load(Ordering::Relaxed);
             if !patient || !unreachable(&e) || Instant::now() + pause > deadline {
-                return Err(Error::Database(format!("cannot connect to Postgres: {e}")));
+                return Err(Error::Database(format!(
+                    "cannot connect to Postgres: {}",
+                    with_causes(&e)
+                )));
             }
             if !said {
                 log::warn!(
-                    "database: cannot connect to Postgres ({e}); trying again for up to {} s",
+                    "database: cannot connect to Postgres ({}); trying again for up to {} s",
+                    with_causes(&e),
                     RECONNECT_WAIT.as_secs()
                 );
                 said = true;
@@ -128,6 +134,18 @@ impl Connection {
             Some(c) => c.is_closed() || c.is_valid(Duration::from_secs(2)).is_err(),
         }
     }
+}
+
+/// An error and its causes (a TLS handshake's says which certificate check failed).
+fn with_causes(e: &dyn std::error::Error) -> String {
+    let mut text = e.to_string();
+    let mut cause = e.source();
+    while let Some(c) = cause {
+        text.push_str(": ");
+        text.push_str(&c.to_string());
+        cause = c.source();
+    }
+    text
 }
 
 /// Whether a failed connection attempt may succeed later: no answer (refused, reset, timed
@@ -157,13 +175,18 @@ pub(super) struct Pool {
 impl Pool {
     /// Starts `size` connection threads for `config`; connects one at once, so a wrong URL
     /// or a server that is down is an error at start.
-    pub fn open(config: postgres::Config, size: usize) -> Result<Pool, Error> {
+    pub fn open(
+        config: postgres::Config,
+        tls: MakeRustlsConnect,
+        size: usize,
+    ) -> Result<Pool, Error> {
         let mut free = Vec::new();
         let patient = Arc::new(AtomicBool::new(false));
         for n in 0..size.max(1) {
             let (send, receive) = channel::<Job>();
             let mut connection = Connection {
                 config: config.clone(),
+                tls: tls.clone(),
                 client: None,
                 last_used: Instant::now(),
                 patient: patient.clone(),
@@ -272,7 +295,14 @@ impl Lease<'_> {
                 let _ = answer.send(outcome);
                 return;
             }
-            let mut outcome = connection.client().and_then(&mut f);
+            let mut outcome = match connection.client() {
+                Ok(client) => f(client),
+                // Making the connection was tried again already: nothing ran to run again.
+                Err(e) => {
+                    let _ = answer.send(Err(e));
+                    return;
+                }
+            };
             if let Err(e) = &outcome
                 && connection.broke()
             {
