@@ -138,6 +138,19 @@ async fn with_estimate_permit<T>(
 /// Runs the final estimate of an `upload` session in the background; the caller has moved
 /// it to `estimating` (so a delete under the session lock sees it in flight).
 pub(crate) fn spawn_estimate(shared: Arc<App>, id: String) {
+    // Claimed as a playback is: an instance starting meanwhile leaves it to this one, and
+    // if this one dies another adopts it.
+    match shared
+        .db
+        .claim_session(&id, &shared.instance, shared.alive_since_ms())
+    {
+        Ok(true) => {}
+        Ok(false) => {
+            log::info!("session {id}: another instance runs its final estimate");
+            return;
+        }
+        Err(e) => log::warn!("session {id}: not marked as estimated here: {e}"),
+    }
     // Nothing new since the last progressive estimate: it is the final one.
     spawn_final_estimate(shared, id, |_, _| Ok(()));
 }
@@ -351,6 +364,13 @@ fn recover_one(shared: &Arc<App>, session: Session) -> Result<(), Error> {
     let id = session.id.clone();
     if session.playback == PlaybackKind::Upload {
         if session.state == SessionState::Estimating {
+            if !shared
+                .db
+                .claim_session(&id, &shared.instance, shared.alive_since_ms())?
+            {
+                log::info!("session {id}: its final estimate runs on another instance");
+                return Ok(());
+            }
             shared.lifecycle().resume(&id)?;
             spawn_estimate(shared.clone(), id);
         } else if shared.config.progressive_uploads

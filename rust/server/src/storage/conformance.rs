@@ -808,7 +808,8 @@ fn instances_own_adopt_and_stop_sessions(store: &dyn MetadataStore) {
         .unwrap();
     assert!(!store.claim_session(id, a, alive_later).unwrap());
     assert!(unplayed(alive_later).is_empty());
-    // An upload session is never played by an instance.
+    // An upload session is never played by an instance; its final estimate runs on one,
+    // claimed as a playback is (and adopted from a dead one).
     let upload = "s1000000000000061";
     store
         .insert_session(upload, &new_session(None, PlaybackKind::Upload, None))
@@ -816,6 +817,20 @@ fn instances_own_adopt_and_stop_sessions(store: &dyn MetadataStore) {
     store
         .transition(upload, Step::AcceptRecording, StepRecord::RecordingBytes(9))
         .unwrap();
-    assert!(!store.claim_session(upload, a, alive_later).unwrap());
+    assert!(!store.claim_session(upload, b, alive_later).unwrap());
+    store
+        .transition(upload, Step::StartEstimating, StepRecord::Nothing)
+        .unwrap();
+    let unplayed_upload = |alive: i64| -> Vec<Option<String>> {
+        let rows = store.unplayed_sessions(alive).unwrap();
+        rows.into_iter()
+            .filter(|r| r.0 == upload)
+            .map(|r| r.1)
+            .collect()
+    };
+    assert_eq!(unplayed_upload(alive_later), [None]);
+    assert!(store.claim_session(upload, b, alive_later).unwrap());
+    assert!(!store.claim_session(upload, c, alive_later).unwrap());
+    assert!(unplayed_upload(alive_later).is_empty());
     assert!(store.delete_session(upload).unwrap() && store.delete_session(id).unwrap());
 }

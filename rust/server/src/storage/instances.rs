@@ -38,6 +38,12 @@ impl StopRequest {
     }
 }
 
+/// SQL true of a session in flight, which one instance plays: a `sim` or `adb` session
+/// `uploaded`, `playing` or `estimating`, or an `upload` session `estimating` (its final
+/// estimate runs on one instance; adopted if that one dies).
+pub(crate) const IN_FLIGHT: &str = "((playback <> 'upload' AND state IN ('uploaded', 'playing', \
+     'estimating')) OR (playback = 'upload' AND state = 'estimating'))";
+
 /// SQL that sets `sessions.stop_request` to the stronger of what it holds and the request
 /// in parameter `new` (`$2`, `?2`): delete, then cancel, then estimate (both stores' SQL).
 pub(crate) fn stronger_stop_request(new: &str) -> String {
@@ -54,8 +60,7 @@ pub(crate) fn stronger_stop_request(new: &str) -> String {
     )
 }
 
-/// Which instance plays what, and who is alive. "In flight" is a session of a playback kind
-/// (`sim`, `adb`) in state `uploaded`, `playing` or `estimating`.
+/// Which instance plays what, and who is alive. "In flight": see [`IN_FLIGHT`].
 pub(crate) trait InstanceStore {
     /// Instance `instance` is alive at `now_ms` (its row made or renewed).
     fn heartbeat(&self, instance: &str, now_ms: i64) -> Result<(), Error>;

@@ -5,10 +5,9 @@ use rusqlite::{OptionalExtension, params};
 
 use super::{CachedSql, SqliteStore};
 use crate::Error;
-use crate::storage::instances::{InstanceStore, StopRequest, stronger_stop_request};
+use crate::storage::instances::{IN_FLIGHT, InstanceStore, StopRequest, stronger_stop_request};
 
 /// In flight: a session of a playback kind whose job is queued, playing or estimating.
-const IN_FLIGHT: &str = "playback <> 'upload' AND state IN ('uploaded', 'playing', 'estimating')";
 
 /// `played_by` names no instance alive since `?ALIVE` (a parameter the statement binds).
 fn player_dead(alive: &str) -> String {
