@@ -7,8 +7,6 @@ use super::PgStore;
 use crate::Error;
 use crate::storage::instances::{IN_FLIGHT, InstanceStore, StopRequest, stronger_stop_request};
 
-/// In flight: a session of a playback kind whose job is queued, playing or estimating.
-
 /// `played_by` names no instance alive since `alive` (a bound parameter such as `$3`).
 fn player_dead(alive: &str) -> String {
     format!(

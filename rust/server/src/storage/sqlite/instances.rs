@@ -7,8 +7,6 @@ use super::{CachedSql, SqliteStore};
 use crate::Error;
 use crate::storage::instances::{IN_FLIGHT, InstanceStore, StopRequest, stronger_stop_request};
 
-/// In flight: a session of a playback kind whose job is queued, playing or estimating.
-
 /// `played_by` names no instance alive since `?ALIVE` (a parameter the statement binds).
 fn player_dead(alive: &str) -> String {
     format!(
