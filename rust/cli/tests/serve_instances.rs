@@ -2,7 +2,8 @@
 //! real processes: who plays a session, and what happens when an instance dies. A session
 //! uploaded to A is adopted by B after A is killed (SIGKILL) mid-playback and ends with
 //! results byte-identical to the embedded server's; A started again plays nothing twice; a
-//! cancel, an estimate and a delete sent to B reach the sessions A plays. Without the services of
+//! cancel, an estimate and a delete sent to B reach the sessions A plays; B shows the queue
+//! position and ETA of A's sessions as A does. Without the services of
 //! `scripts/cluster-services` the test prints SKIPPED.
 
 mod instances;
@@ -129,6 +130,9 @@ fn a_dead_instances_session_is_adopted_and_stops_reach_the_player() {
         "1",
         "--instance-timeout-s",
         timeout.as_str(),
+        // One session plays at a time: a second one waits in the queue.
+        "--playback-workers",
+        "1",
     ];
     let a_data = dir.path().join("instance-a");
     let mut a = start(&a_data, &cluster);
@@ -229,4 +233,38 @@ fn a_dead_instances_session_is_adopted_and_stops_reach_the_player() {
         &format!("session {deleted}: playback stopped for its deletion"),
         Duration::from_secs(10),
     );
+
+    // Two sessions on A: one plays, one waits. B answers their status as A does: the queue
+    // position and the ETA A works out (A publishes them; B reads them).
+    let playing = start_session(&from_a, &recording);
+    wait_for_trials(&from_b, &playing, 1);
+    let waiting = start_session(&from_a, &recording);
+    let raw = |url: &str, id: &str| -> serde_json::Value {
+        let (code, body) = request("GET", url, &format!("/v1/sessions/{id}"), &admin);
+        assert_eq!(code, "200", "{body}");
+        serde_json::from_str(&body).unwrap()
+    };
+    assert_eq!(raw(&a.url, &waiting)["queue_position"], 1);
+    let deadline = Instant::now() + Duration::from_secs(10);
+    while raw(&b.url, &waiting)["queue_position"] != 1 {
+        assert!(
+            Instant::now() < deadline,
+            "B never showed the queue position A holds: {}",
+            raw(&b.url, &waiting)
+        );
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    let (eta_a, eta_b) = (
+        raw(&a.url, &playing)["eta_s"].as_f64(),
+        raw(&b.url, &playing)["eta_s"].as_f64(),
+    );
+    let (eta_a, eta_b) = (eta_a.expect("A knows the ETA"), eta_b.expect("B shows it"));
+    assert!(
+        eta_a > 0.0 && (eta_a - eta_b).abs() <= 1.5,
+        "ETA from A {eta_a} s, from B {eta_b} s"
+    );
+    assert!(raw(&b.url, &playing)["progress"].as_f64().unwrap() > 0.0);
+    from_b.delete_session(&waiting).unwrap();
+    from_b.delete_session(&playing).unwrap();
+    assert_eq!(from_a.status(&waiting).unwrap_err().status(), Some(404));
 }

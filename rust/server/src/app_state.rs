@@ -4,7 +4,6 @@
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
-use std::time::Instant;
 
 use crate::Error;
 use crate::config::{PlaybackKind, ServerConfig};
@@ -23,7 +22,9 @@ use crate::venue::{NewVenue, new_venue_id};
 pub(crate) struct RunningJob {
     pub cancel: Arc<AtomicBool>,
     pub plan: Option<PlaybackPlan>,
-    pub started: Instant,
+    /// When the job started (ms since the epoch: other instances read it,
+    /// `playback::progress_view`).
+    pub started_ms: i64,
     /// Trials stored before this run started (resume after restart).
     pub done_before: u32,
     /// Trials this run plays.
@@ -170,6 +171,14 @@ impl App {
     /// The job running on session `id`, if one does.
     pub fn running(&self, id: &str) -> Option<RunningJob> {
         self.running_jobs().get(id).cloned()
+    }
+
+    /// Every job running here, by session id.
+    pub fn running_all(&self) -> Vec<(String, RunningJob)> {
+        let jobs = self.running_jobs();
+        jobs.iter()
+            .map(|(id, job)| (id.clone(), job.clone()))
+            .collect()
     }
 
     pub fn set_running(&self, id: &str, job: Option<RunningJob>) {

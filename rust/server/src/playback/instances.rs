@@ -38,7 +38,7 @@ pub(crate) fn scan_every(timeout: Duration) -> Duration {
     (timeout / 3).clamp(FLOOR, Duration::from_secs(10))
 }
 
-/// Starts the heartbeat, adoption and stop-request loops of a clustered instance.
+/// Starts the heartbeat, adoption, progress and stop-request loops of a clustered instance.
 pub(crate) fn spawn(shared: Arc<App>) {
     let timeout = shared.config.instance_timeout;
     let beating = shared.clone();
@@ -78,6 +78,7 @@ pub(crate) fn spawn(shared: Arc<App>) {
             }
         }
     });
+    crate::playback::progress_view::spawn(shared.clone());
     crate::playback::stop_requests::spawn(shared);
 }
 

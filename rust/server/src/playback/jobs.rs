@@ -267,7 +267,7 @@ pub(crate) fn finish_dequeued(shared: Arc<App>, id: String, why: EndEarly) -> Re
         Some(RunningJob {
             cancel: Default::default(),
             plan: None,
-            started: Instant::now(),
+            started_ms: crate::storage::now_ms(),
             done_before: count,
             needed: 0,
         }),

@@ -1,6 +1,7 @@
 pub(crate) mod adb;
 pub(crate) mod instances;
 pub(crate) mod jobs;
+pub(crate) mod progress_view;
 pub(crate) mod queue;
 pub(crate) mod reaper;
 pub(crate) mod remote;

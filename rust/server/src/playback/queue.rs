@@ -100,6 +100,21 @@ impl State {
         self.active.values().filter(|(o, _)| *o == owner).count()
     }
 
+    /// The position of the `k`-th waiting session of lane `lane_at`: the sessions the
+    /// round-robin serves before it, plus one.
+    fn position_of(&self, lane_at: usize, k: usize) -> usize {
+        let ahead: usize = self
+            .lanes
+            .iter()
+            .enumerate()
+            .map(|(at, lane)| {
+                let rounds = if at < lane_at { k + 1 } else { k };
+                lane.waiting.len().min(rounds)
+            })
+            .sum();
+        ahead + 1
+    }
+
     fn holds(&self, id: &str) -> bool {
         self.active.contains_key(id)
             || self
@@ -212,16 +227,19 @@ impl PlaybackQueue {
             let k = lane.waiting.iter().position(|w| w.id == id)?;
             Some((at, k))
         })?;
-        let ahead: usize = state
-            .lanes
-            .iter()
-            .enumerate()
-            .map(|(at, lane)| {
-                let rounds = if at < lane_at { k + 1 } else { k };
-                lane.waiting.len().min(rounds)
-            })
-            .sum();
-        Some(ahead + 1)
+        Some(state.position_of(lane_at, k))
+    }
+
+    /// Every waiting session with its [`position`](Self::position).
+    pub fn positions(&self) -> Vec<(String, usize)> {
+        let state = self.state();
+        let mut all = Vec::with_capacity(state.waiting());
+        for (lane_at, lane) in state.lanes.iter().enumerate() {
+            for (k, waiting) in lane.waiting.iter().enumerate() {
+                all.push((waiting.id.clone(), state.position_of(lane_at, k)));
+            }
+        }
+        all
     }
 
     /// The next session a worker may play: the first lane (in round-robin order) whose owner
@@ -307,6 +325,12 @@ mod tests {
             .map(|id| q.position(id).unwrap())
             .collect();
         assert_eq!(predicted, vec![1, 2, 3, 4, 5, 6, 7]);
+        // All at once (what a clustered instance publishes), as one by one.
+        let mut all = q.positions();
+        all.sort_by_key(|p| p.1);
+        let order: Vec<_> = all.iter().map(|p| p.0.as_str()).collect();
+        assert_eq!(order, ["a1", "b1", "n1", "a2", "b2", "a3", "a4"]);
+        assert!(all.iter().all(|(id, at)| q.position(id) == Some(*at)));
         assert_eq!(
             take_ids(&q, 7),
             vec!["a1", "b1", "n1", "a2", "b2", "a3", "a4"]

@@ -6,7 +6,6 @@
 use std::collections::BTreeMap;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::Instant;
 
 use sitar_core::ErrorClass;
 use tokio::sync::{mpsc, oneshot};
@@ -93,7 +92,7 @@ pub(crate) async fn start<'a>(
     let running = |plan, done_before, needed| RunningJob {
         cancel: cancel.clone(),
         plan,
-        started: Instant::now(),
+        started_ms: crate::storage::now_ms(),
         done_before,
         needed,
     };

@@ -1,42 +1,39 @@
 //! The status document of a session (`GET /v1/sessions/{id}`, and each entry of the list):
 //! its state, progress and ETA (d·⌈T/D⌉ from the playback plan), trials and settings, and
-//! its place in the playback queue while it waits.
+//! its place in the playback queue while it waits (the same from every instance of a
+//! cluster: `playback::progress_view`).
 
 use serde_json::json;
 
 use crate::Error;
 use crate::app_state::App;
+use crate::playback::progress_view::{self, ProgressView};
 use crate::session::{Session, SessionState};
 use crate::venue::alignment::alignment_json;
 
-/// Progress (0 … 1) and seconds left, when known.
-fn progress(shared: &App, session: &Session, done: u32) -> (f64, Option<f64>) {
+/// Progress (0 … 1) and seconds left, when known; `view` is where the session stands in its
+/// player's queue and playback (this instance's or, clustered, the player's).
+fn progress(session: &Session, view: &ProgressView, done: u32) -> (f64, Option<f64>) {
     let total = session.trials_total.max(1) as f64;
     match session.state {
         SessionState::Done => (1.0, Some(0.0)),
         SessionState::Failed => (done as f64 / total, None),
         SessionState::Estimating => (0.97, Some(0.5)),
-        SessionState::Playing => {
-            let running = shared.running(&session.id);
-            match running
-                .as_ref()
-                .and_then(|job| job.plan.map(|plan| (job, plan)))
-            {
-                Some((job, plan)) if plan.devices > 0 => {
-                    let expected = plan.seconds_for(job.needed).max(1e-9);
-                    let elapsed = job.started.elapsed().as_secs_f64();
-                    let by_time = (job.done_before as f64
-                        + job.needed as f64 * (elapsed / expected).min(1.0))
-                        / total;
-                    let by_trials = done as f64 / total;
-                    (
-                        0.95 * by_time.max(by_trials).min(1.0),
-                        Some((expected - elapsed).max(0.0) + 0.5),
-                    )
-                }
-                _ => (0.95 * done as f64 / total, None),
+        SessionState::Playing => match &view.playing {
+            Some(playing) => {
+                let expected = playing.expected_s.max(1e-9);
+                let elapsed = playing.elapsed_s(crate::storage::now_ms());
+                let by_time = (playing.done_before as f64
+                    + playing.needed as f64 * (elapsed / expected).min(1.0))
+                    / total;
+                let by_trials = done as f64 / total;
+                (
+                    0.95 * by_time.max(by_trials).min(1.0),
+                    Some((expected - elapsed).max(0.0) + 0.5),
+                )
             }
-        }
+            None => (0.95 * done as f64 / total, None),
+        },
         SessionState::Created | SessionState::Uploaded => (0.0, None),
     }
 }
@@ -44,7 +41,13 @@ fn progress(shared: &App, session: &Session, done: u32) -> (f64, Option<f64>) {
 /// The status document of `session`.
 pub(crate) fn status_json(shared: &App, session: &Session) -> Result<serde_json::Value, Error> {
     let done = shared.db.trial_count(&session.id)?;
-    let (progress, eta) = progress(shared, session, done);
+    let view = match session.state {
+        SessionState::Uploaded | SessionState::Playing => {
+            progress_view::of_session(shared, &session.id)?
+        }
+        _ => ProgressView::default(),
+    };
+    let (progress, eta) = progress(session, &view, done);
     let jobs: Vec<_> = shared
         .db
         .jobs_of(&session.id)?
@@ -74,7 +77,7 @@ pub(crate) fn status_json(shared: &App, session: &Session) -> Result<serde_json:
         "pose_relation": settings.pose_relation.to_string(),
         "jobs": jobs,
         // Where it waits for a playback worker (1: next); null when not queued.
-        "queue_position": shared.queue.position(&session.id),
+        "queue_position": view.queue_position,
         // Trials a phone played that could not be used (unparsable, failed on its phone),
         // each with why; a trial played again elsewhere is listed once per failure.
         "failed_trials": failed_trials,

@@ -732,6 +732,19 @@ fn instances_own_adopt_and_stop_sessions(store: &dyn MetadataStore) {
     let job = store.start_job(id, "playback", a).unwrap();
     let _ = job;
 
+    // A publishes its progress for the others' status answers; B, not the player, cannot.
+    assert_eq!(store.published_progress(id).unwrap(), None);
+    store
+        .publish_progress(id, a, Some(r#"{"queue_position":2}"#))
+        .unwrap();
+    store
+        .publish_progress(id, b, Some(r#"{"queue_position":9}"#))
+        .unwrap();
+    assert_eq!(
+        store.published_progress(id).unwrap(),
+        Some((a.to_string(), r#"{"queue_position":2}"#.to_string()))
+    );
+
     // An estimate, a cancel and then a delete sent through B reach A; the stronger request
     // stays (delete, cancel, estimate).
     assert!(store.stop_requests(a).unwrap().is_empty());
@@ -775,6 +788,17 @@ fn instances_own_adopt_and_stop_sessions(store: &dyn MetadataStore) {
     let (adopter, other) = if by_b { (b, c) } else { (c, b) };
     assert_eq!(store.session_player(id).unwrap().as_deref(), Some(adopter));
     assert!(!store.claim_session(id, other, alive_later).unwrap());
+    // What A published went with the adoption; the adopter publishes its own, and A, back
+    // late, cannot overwrite it.
+    assert_eq!(store.published_progress(id).unwrap(), None);
+    store.publish_progress(id, adopter, Some("{}")).unwrap();
+    store
+        .publish_progress(id, a, Some(r#"{"queue_position":1}"#))
+        .unwrap();
+    assert_eq!(
+        store.published_progress(id).unwrap(),
+        Some((adopter.to_string(), "{}".to_string()))
+    );
     // The request made while A played is the adopter's to carry out now.
     assert_eq!(
         store.stop_requests(adopter).unwrap(),
@@ -802,6 +826,7 @@ fn instances_own_adopt_and_stop_sessions(store: &dyn MetadataStore) {
     store.release_session(id, adopter).unwrap();
     assert_eq!(store.session_player(id).unwrap(), None);
     assert!(store.stop_requests(adopter).unwrap().is_empty());
+    assert_eq!(store.published_progress(id).unwrap(), None);
     // Finished, it is in flight no more: nobody claims it, no adopter sees it.
     store
         .transition(id, Step::Fail, StepRecord::Error("test"))

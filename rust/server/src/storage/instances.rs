@@ -68,8 +68,8 @@ pub(crate) trait InstanceStore {
     /// heartbeat at or after `alive_since_ms` plays it (checked in the same update, so of two
     /// instances claiming at once exactly one wins). Whether `instance` plays it now.
     fn claim_session(&self, id: &str, instance: &str, alive_since_ms: i64) -> Result<bool, Error>;
-    /// `instance`'s job on session `id` ended: nobody plays it, and its stop request is
-    /// forgotten (a session another instance plays is left alone).
+    /// `instance`'s job on session `id` ended: nobody plays it, and its stop request and
+    /// progress are forgotten (a session another instance plays is left alone).
     fn release_session(&self, id: &str, instance: &str) -> Result<(), Error>;
     /// The instance playing session `id`, if any.
     fn session_player(&self, id: &str) -> Result<Option<String>, Error>;
@@ -86,6 +86,13 @@ pub(crate) trait InstanceStore {
     fn request_stop(&self, id: &str, request: StopRequest) -> Result<(), Error>;
     /// The stop requests on the sessions in flight `instance` plays, oldest session first.
     fn stop_requests(&self, instance: &str) -> Result<Vec<(String, StopRequest)>, Error>;
+    /// Publishes `instance`'s view of the progress of session `id`, which it plays (a JSON
+    /// document, `playback::progress_view`; `None` clears it), for the other instances'
+    /// status answers. A session another instance plays now is left alone.
+    fn publish_progress(&self, id: &str, instance: &str, view: Option<&str>) -> Result<(), Error>;
+    /// The progress its player last published for session `id`, with the player's id; `None`
+    /// when nobody plays it or its player published nothing.
+    fn published_progress(&self, id: &str) -> Result<Option<(String, String)>, Error>;
     /// Marks `interrupted` the running jobs of `instance` (when given), of instances with no
     /// heartbeat at or after `alive_since_ms`, and of none (older versions); how many.
     fn interrupt_jobs(&self, instance: Option<&str>, alive_since_ms: i64) -> Result<usize, Error>;

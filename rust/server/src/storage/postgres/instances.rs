@@ -31,7 +31,8 @@ impl InstanceStore for PgStore {
 
     fn claim_session(&self, id: &str, instance: &str, alive_since_ms: i64) -> Result<bool, Error> {
         let sql = format!(
-            "UPDATE sessions SET played_by = $2 WHERE id = $1 AND {IN_FLIGHT} \
+            "UPDATE sessions SET progress_view = CASE WHEN played_by = $2 THEN progress_view \
+             END, played_by = $2 WHERE id = $1 AND {IN_FLIGHT} \
              AND (played_by IS NULL OR played_by = $2 OR {})",
             player_dead("$3")
         );
@@ -44,8 +45,8 @@ impl InstanceStore for PgStore {
         let (id, instance) = (id.to_string(), instance.to_string());
         self.pool.run(move |c| {
             c.execute(
-                "UPDATE sessions SET played_by = NULL, stop_request = NULL \
-                 WHERE id = $1 AND played_by = $2",
+                "UPDATE sessions SET played_by = NULL, stop_request = NULL, \
+                 progress_view = NULL WHERE id = $1 AND played_by = $2",
                 &[&id, &instance],
             )?;
             Ok(())
@@ -123,6 +124,30 @@ impl InstanceStore for PgStore {
             .into_iter()
             .filter_map(|(id, request)| Some((id, StopRequest::from_stored(&request)?)))
             .collect())
+    }
+
+    fn publish_progress(&self, id: &str, instance: &str, view: Option<&str>) -> Result<(), Error> {
+        let (id, instance) = (id.to_string(), instance.to_string());
+        let view = view.map(str::to_string);
+        self.pool.run(move |c| {
+            c.execute(
+                "UPDATE sessions SET progress_view = $3 WHERE id = $1 AND played_by = $2",
+                &[&id, &instance, &view],
+            )?;
+            Ok(())
+        })
+    }
+
+    fn published_progress(&self, id: &str) -> Result<Option<(String, String)>, Error> {
+        let id = id.to_string();
+        self.pool.run(move |c| {
+            Ok(c.query_opt(
+                "SELECT played_by, progress_view FROM sessions WHERE id = $1 \
+                 AND played_by IS NOT NULL AND progress_view IS NOT NULL",
+                &[&id],
+            )?
+            .map(|row| (row.get(0), row.get(1))))
+        })
     }
 
     fn interrupt_jobs(&self, instance: Option<&str>, alive_since_ms: i64) -> Result<usize, Error> {

@@ -18,6 +18,11 @@ const MIGRATIONS: &[(i64, &str, &str)] = &[
         "instances",
         include_str!("migrations/0004_instances.sql"),
     ),
+    (
+        5,
+        "progress_view",
+        include_str!("migrations/0005_progress_view.sql"),
+    ),
 ];
 
 /// The advisory lock key the migrating instance holds (`sitar` in ASCII).

@@ -24,6 +24,11 @@ ALTER TABLE sessions ADD COLUMN stop_request TEXT;
 CREATE INDEX sessions_played_by ON sessions (played_by) WHERE played_by IS NOT NULL;
 ALTER TABLE jobs ADD COLUMN instance TEXT;
 ",
+    // 2: the progress the player publishes for the other instances' status answers
+    // (`playback::progress_view`). Postgres: migration 0005_progress_view.sql.
+    "
+ALTER TABLE sessions ADD COLUMN progress_view TEXT;
+",
 ];
 
 /// The version these tables are at now.

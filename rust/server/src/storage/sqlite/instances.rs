@@ -29,7 +29,8 @@ impl InstanceStore for SqliteStore {
 
     fn claim_session(&self, id: &str, instance: &str, alive_since_ms: i64) -> Result<bool, Error> {
         let sql = format!(
-            "UPDATE sessions SET played_by = ?2 WHERE id = ?1 AND {IN_FLIGHT} \
+            "UPDATE sessions SET progress_view = CASE WHEN played_by = ?2 THEN progress_view \
+             END, played_by = ?2 WHERE id = ?1 AND {IN_FLIGHT} \
              AND (played_by IS NULL OR played_by = ?2 OR {})",
             player_dead("?3")
         );
@@ -40,8 +41,8 @@ impl InstanceStore for SqliteStore {
     fn release_session(&self, id: &str, instance: &str) -> Result<(), Error> {
         self.with(|c| {
             c.execute_cached(
-                "UPDATE sessions SET played_by = NULL, stop_request = NULL \
-                 WHERE id = ?1 AND played_by = ?2",
+                "UPDATE sessions SET played_by = NULL, stop_request = NULL, \
+                 progress_view = NULL WHERE id = ?1 AND played_by = ?2",
                 params![id, instance],
             )
         })
@@ -111,6 +112,28 @@ impl InstanceStore for SqliteStore {
             .into_iter()
             .filter_map(|(id, request)| Some((id, StopRequest::from_stored(&request)?)))
             .collect())
+    }
+
+    fn publish_progress(&self, id: &str, instance: &str, view: Option<&str>) -> Result<(), Error> {
+        self.with(|c| {
+            c.execute_cached(
+                "UPDATE sessions SET progress_view = ?3 WHERE id = ?1 AND played_by = ?2",
+                params![id, instance, view],
+            )
+        })
+        .map(drop)
+    }
+
+    fn published_progress(&self, id: &str) -> Result<Option<(String, String)>, Error> {
+        self.with(|c| {
+            c.query_row_cached(
+                "SELECT played_by, progress_view FROM sessions WHERE id = ?1 \
+                 AND played_by IS NOT NULL AND progress_view IS NOT NULL",
+                [id],
+                |r| Ok((r.get(0)?, r.get(1)?)),
+            )
+            .optional()
+        })
     }
 
     fn interrupt_jobs(&self, instance: Option<&str>, alive_since_ms: i64) -> Result<usize, Error> {
