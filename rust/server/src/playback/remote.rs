@@ -167,7 +167,9 @@ impl RemotePlayback {
             // earlier one) has it when nothing is open any more.
             let counts = self.workers.counts(&job.session)?;
             loop {
-                let taken = self.workers.take_committed(&job.session)?;
+                let taken = self
+                    .workers
+                    .take_committed(&job.session, self.instance.as_deref())?;
                 let full = taken.len() >= MAX_TAKEN_PER_CALL;
                 for trial in taken {
                     sink(TrialOutput {

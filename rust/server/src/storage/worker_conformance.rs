@@ -417,7 +417,7 @@ fn committed_trials_reach_the_job_once(store: &dyn WorkerStore) {
     let count = MAX_TAKEN_PER_CALL as u32 + 3;
     let all: Vec<u32> = (0..count).collect();
     store.offer(session, Some(7), "sim", &all, "x", 0).unwrap();
-    assert!(store.take_committed(session).unwrap().is_empty());
+    assert!(store.take_committed(session, None).unwrap().is_empty());
     // Committed in reverse order, each with its own text.
     let mut leases = Vec::new();
     while let Some(lease) = store.claim(&host, "p0", "sim", 0, LEASE_MS).unwrap() {
@@ -439,7 +439,7 @@ fn committed_trials_reach_the_job_once(store: &dyn WorkerStore) {
             .is_err()
     );
     // Bounded per call, by index, each once; then nothing more.
-    let first = store.take_committed(session).unwrap();
+    let first = store.take_committed(session, None).unwrap();
     assert_eq!(first.len(), MAX_TAKEN_PER_CALL);
     assert_eq!(
         (
@@ -449,10 +449,10 @@ fn committed_trials_reach_the_job_once(store: &dyn WorkerStore) {
         ),
         (0, "0.0 0 0 0 0 0 0 1\n", "hands/p0")
     );
-    let rest = store.take_committed(session).unwrap();
+    let rest = store.take_committed(session, None).unwrap();
     let indices: Vec<u32> = first.iter().chain(&rest).map(|t| t.index).collect();
     assert_eq!(indices, all);
-    assert!(store.take_committed(session).unwrap().is_empty());
+    assert!(store.take_committed(session, None).unwrap().is_empty());
     assert_eq!(store.counts(session).unwrap().done, count);
     // A trial committed after a withdraw (a job that ended) is dropped by the next offer,
     // which plays it again: a resumed job takes only what its own offer brought.
@@ -466,7 +466,7 @@ fn committed_trials_reach_the_job_once(store: &dyn WorkerStore) {
         .unwrap()
         .unwrap();
     store.withdraw(session).unwrap();
-    assert!(store.take_committed(session).unwrap().is_empty());
+    assert!(store.take_committed(session, None).unwrap().is_empty());
     store.offer(session, Some(7), "sim", &[0], "x", 7).unwrap();
     let lease = store
         .claim(&host, "p0", "sim", 7, LEASE_MS)
@@ -477,7 +477,7 @@ fn committed_trials_reach_the_job_once(store: &dyn WorkerStore) {
         .unwrap()
         .unwrap();
     store.offer(session, Some(7), "sim", &[0], "x", 9).unwrap();
-    assert!(store.take_committed(session).unwrap().is_empty());
+    assert!(store.take_committed(session, None).unwrap().is_empty());
     store.forget(session).unwrap();
 }
 
@@ -534,7 +534,7 @@ pub(crate) fn racing_instances(a: &dyn WorkerStore, b: &dyn WorkerStore) {
                     barrier.wait();
                     let mut got = Vec::new();
                     loop {
-                        let batch = store.take_committed(session).unwrap();
+                        let batch = store.take_committed(session, None).unwrap();
                         if batch.is_empty() {
                             return got;
                         }
@@ -573,7 +573,73 @@ pub(crate) fn racing_instances(a: &dyn WorkerStore, b: &dyn WorkerStore) {
                 .count()
         });
         assert_eq!(wins, 1, "round {round}");
-        assert_eq!(b.take_committed(&one).unwrap().len(), 1);
-        assert!(a.take_committed(&one).unwrap().is_empty());
+        assert_eq!(b.take_committed(&one, None).unwrap().len(), 1);
+        assert!(a.take_committed(&one, None).unwrap().is_empty());
     }
+}
+
+/// With several instances on one database a job takes committed trials only while its
+/// instance plays the session: one that woke from a pause to find its session adopted takes
+/// none of the adopter's. `store` holds both the sessions and the leases (one database).
+pub(crate) fn only_the_player_takes<S>(store: &S)
+where
+    S: crate::storage::MetadataStore + WorkerStore,
+{
+    use crate::config::PlaybackKind;
+    use crate::session::Step;
+    use crate::storage::instances::InstanceStore;
+    use crate::storage::metadata::StepRecord;
+    let session = "s9000000000000001";
+    store
+        .insert_session(
+            session,
+            &crate::storage::conformance::new_session(None, PlaybackKind::Sim, None),
+        )
+        .unwrap();
+    store
+        .transition(
+            session,
+            Step::AcceptRecording,
+            StepRecord::RecordingBytes(9),
+        )
+        .unwrap();
+    let now = crate::storage::now_ms();
+    let (a, b) = ("instance-pa", "instance-pb");
+    InstanceStore::heartbeat(store, a, now).unwrap();
+    assert!(store.claim_session(session, a, now - 30_000).unwrap());
+    let host = store
+        .register_host(90, "paused", "sim", &phones(&["p0"]), 0)
+        .unwrap();
+    store
+        .offer(session, Some(9), "sim", &[0, 1], "x", 0)
+        .unwrap();
+    let commit_next = || {
+        let lease = store
+            .claim(&host, "p0", "sim", 0, LEASE_MS)
+            .unwrap()
+            .unwrap();
+        let tum = format!("{}.0 0 0 0 0 0 0 1\n", lease.index);
+        assert!(
+            store
+                .commit(&lease.id, &host, 1, &tum, "paused/p0")
+                .unwrap()
+                .is_ok()
+        );
+    };
+    commit_next();
+    // B is no player: it takes nothing; A, the player, takes the trial.
+    assert!(store.take_committed(session, Some(b)).unwrap().is_empty());
+    let taken = store.take_committed(session, Some(a)).unwrap();
+    assert_eq!(taken.iter().map(|t| t.index).collect::<Vec<_>>(), [0]);
+    // A falls silent; B adopts the session. A, awake again, takes nothing more: the next
+    // trial is B's.
+    commit_next();
+    InstanceStore::heartbeat(store, b, now + 60_000).unwrap();
+    assert!(store.claim_session(session, b, now + 30_000).unwrap());
+    assert!(store.take_committed(session, Some(a)).unwrap().is_empty());
+    let taken = store.take_committed(session, Some(b)).unwrap();
+    assert_eq!(taken.iter().map(|t| t.index).collect::<Vec<_>>(), [1]);
+    // Alone on its database (no player named), a job takes as before.
+    assert!(store.take_committed(session, None).unwrap().is_empty());
+    assert!(store.delete_session(session).unwrap());
 }

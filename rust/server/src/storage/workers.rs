@@ -256,8 +256,15 @@ pub(crate) trait LeaseStore {
     /// Takes up to [`MAX_TAKEN_PER_CALL`] committed trials of `session` not taken before, by
     /// index, and marks them taken (their text dropped) in the same transaction: each is
     /// handed over once, whichever instance asks. A job that dies before storing what it took
-    /// loses nothing: the resumed session offers the indices it lacks again.
-    fn take_committed(&self, session: &str) -> Result<Vec<CommittedTrial>, Error>;
+    /// loses nothing: the resumed session offers the indices it lacks again. With `player`
+    /// (several instances on one database) nothing is taken unless `player` plays the session
+    /// (`sessions.played_by`) in the same statement: an instance that woke from a pause to
+    /// find its session adopted takes none of the adopter's trials.
+    fn take_committed(
+        &self,
+        session: &str,
+        player: Option<&str>,
+    ) -> Result<Vec<CommittedTrial>, Error>;
     /// Gives `lease`'s trial back (its phone failed, or the trial could not be used): offered
     /// again, or given up after [`MAX_ATTEMPTS`]. None if the lease was not live.
     fn give_back(&self, lease: &str, host: &str) -> Result<Option<Requeued>, Error>;

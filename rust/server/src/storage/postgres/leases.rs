@@ -229,19 +229,27 @@ impl LeaseStore for PgStore {
         })
     }
 
-    fn take_committed(&self, session: &str) -> Result<Vec<CommittedTrial>, Error> {
+    fn take_committed(
+        &self,
+        session: &str,
+        player: Option<&str>,
+    ) -> Result<Vec<CommittedTrial>, Error> {
         let session = session.to_string();
+        let player = player.map(str::to_string);
         let limit = MAX_TAKEN_PER_CALL as i64;
         self.pool.run(move |c| {
-            // Rows another instance is taking right now are skipped: each is taken once.
+            // Rows another instance is taking right now are skipped: each is taken once. The
+            // player's row is share-locked: an adoption waits until this take is over.
             let rows = c.query(
                 "WITH picked AS (SELECT session_id, play_index, trial_text, trial_source \
                  FROM trial_leases WHERE session_id = $1 AND state = 'done' AND NOT taken \
-                 AND trial_text IS NOT NULL ORDER BY play_index LIMIT $2 FOR UPDATE SKIP LOCKED) \
+                 AND trial_text IS NOT NULL AND ($3::TEXT IS NULL OR EXISTS (SELECT 1 FROM \
+                 (SELECT 1 FROM sessions s WHERE s.id = $1 AND s.played_by = $3 FOR SHARE) p)) \
+                 ORDER BY play_index LIMIT $2 FOR UPDATE SKIP LOCKED) \
                  UPDATE trial_leases l SET taken = TRUE, trial_text = NULL FROM picked \
                  WHERE l.session_id = picked.session_id AND l.play_index = picked.play_index \
                  RETURNING picked.play_index, picked.trial_text, picked.trial_source",
-                &[&session, &limit],
+                &[&session, &limit, &player],
             )?;
             let mut taken = rows
                 .iter()

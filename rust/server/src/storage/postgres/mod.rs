@@ -178,6 +178,7 @@ mod tests {
         };
         let store = PgStore::open(&url).unwrap();
         crate::storage::worker_conformance::worker_store(&store);
+        crate::storage::worker_conformance::only_the_player_takes(&store);
         // Two instances on one database (each its own connections) racing.
         let Some(url) = test_database::fresh("workers_racing") else {
             return;

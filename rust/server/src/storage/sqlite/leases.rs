@@ -192,15 +192,22 @@ impl LeaseStore for SqliteStore {
         })
     }
 
-    fn take_committed(&self, session: &str) -> Result<Vec<CommittedTrial>, Error> {
+    fn take_committed(
+        &self,
+        session: &str,
+        player: Option<&str>,
+    ) -> Result<Vec<CommittedTrial>, Error> {
         self.transaction(|tx| {
             let taken: Vec<CommittedTrial> = {
                 let mut stmt = tx.prepare_cached(
                     "SELECT play_index, trial_text, trial_source FROM trial_leases \
                      WHERE session_id = ?1 AND state = 'done' AND taken = 0 \
-                     AND trial_text IS NOT NULL ORDER BY play_index LIMIT ?2",
+                     AND trial_text IS NOT NULL AND (?3 IS NULL OR EXISTS (SELECT 1 FROM \
+                     sessions s WHERE s.id = ?1 AND s.played_by = ?3)) \
+                     ORDER BY play_index LIMIT ?2",
                 )?;
-                let rows = stmt.query_map(params![session, MAX_TAKEN_PER_CALL as i64], |r| {
+                let limit = MAX_TAKEN_PER_CALL as i64;
+                let rows = stmt.query_map(params![session, limit, player], |r| {
                     Ok(CommittedTrial {
                         index: r.get(0)?,
                         tum: r.get(1)?,

@@ -252,6 +252,7 @@ mod tests {
         let store = SqliteStore::open(&dir.path().join("sitar.db")).unwrap();
         crate::storage::conformance::metadata_store(&store);
         crate::storage::worker_conformance::worker_store(&store);
+        crate::storage::worker_conformance::only_the_player_takes(&store);
         let racing = SqliteStore::open(&dir.path().join("racing.db")).unwrap();
         crate::storage::worker_conformance::racing_instances(&racing, &racing);
         // What it stored survives a reopen of the file.
