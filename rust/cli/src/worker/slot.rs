@@ -134,8 +134,7 @@ fn play(
         session: lease.session.clone(),
         recording,
         work_dir,
-        first_index: lease.index,
-        trials: 1,
+        indices: vec![lease.index],
         cancel: cancel.clone(),
     };
     let got: Mutex<Option<TrialOutput>> = Mutex::new(None);

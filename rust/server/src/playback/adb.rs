@@ -514,8 +514,7 @@ impl Playback for AdbPlayback {
             return Err(Error::Playback("no playback phone is connected".into()));
         }
         let trial_s = self.duration_s(&job.recording);
-        let queue =
-            Mutex::new((job.first_index..job.first_index + job.trials).collect::<VecDeque<u32>>());
+        let queue = Mutex::new(job.indices.iter().copied().collect::<VecDeque<u32>>());
         let active = Mutex::new(devices.len());
         let failures = Mutex::new(Vec::new());
         std::thread::scope(|scope| {

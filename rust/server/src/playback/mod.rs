@@ -8,6 +8,7 @@ pub(crate) mod remote;
 pub(crate) mod run;
 pub(crate) mod stop_requests;
 
+use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
@@ -49,12 +50,21 @@ pub struct PlaybackJob {
     /// A local folder for the job's working files (adb's pulled trials), the blob store's:
     /// it goes with the session.
     pub work_dir: PathBuf,
-    /// Playback index of the first trial to run (after a restart: the trials already stored).
-    pub first_index: u32,
-    /// How many trials to run.
-    pub trials: u32,
+    /// The playback indices to run, in order ([`indices_to_play`]): a fresh session's are
+    /// 0, 1, …; a resumed one's skip the trials already stored, whatever order they came in.
+    pub indices: Vec<u32>,
     /// Set to stop early (adaptive stopping, estimate requested, shutdown).
     pub cancel: Arc<AtomicBool>,
+}
+
+/// The first `count` playback indices not in `stored`: a fresh session's are 0, 1, …; a
+/// resumed one's skip what its phones already delivered, in whatever order they came (with
+/// several phones, trial 3 may be stored before trial 2 when the server stops).
+pub fn indices_to_play(stored: &BTreeSet<u32>, count: u32) -> Vec<u32> {
+    (0..)
+        .filter(|i| !stored.contains(i))
+        .take(count as usize)
+        .collect()
 }
 
 impl PlaybackJob {
@@ -185,11 +195,13 @@ impl Playback for SimPlayback {
                 let (rec, next) = (&rec, &next);
                 scope.spawn(move || {
                     loop {
-                        let i = next.fetch_add(1, Ordering::Relaxed);
-                        if i >= job.trials || !job.sleep(seconds) {
+                        let i = next.fetch_add(1, Ordering::Relaxed) as usize;
+                        let Some(&index) = job.indices.get(i) else {
+                            return;
+                        };
+                        if !job.sleep(seconds) {
                             return;
                         }
-                        let index = job.first_index + i;
                         let trajectory = sitar_sim::play_trial(rec, index);
                         let mut tum = Vec::new();
                         if sitar_estimator::write_tum(&trajectory, &mut tum).is_ok() {
@@ -241,13 +253,54 @@ mod tests {
     }
 
     #[test]
+    fn a_resumed_session_plays_the_indices_it_lacks() {
+        assert_eq!(indices_to_play(&BTreeSet::new(), 3), vec![0, 1, 2]);
+        let stored = BTreeSet::from([0, 1, 3]);
+        assert_eq!(indices_to_play(&stored, 2), vec![2, 4]);
+        assert!(indices_to_play(&stored, 0).is_empty());
+    }
+
+    /// The sim phones play exactly the job's indices, each trial the one of its index: a
+    /// session resumed with trials 0, 1 and 3 stored gets 2 and 4, not 3 a second time.
+    #[test]
+    fn sim_phones_play_exactly_the_indices_of_the_job() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("recording.sitarsim");
+        let rec = sitar_sim::Recording::demo(2.0, 10.0, 7).unwrap();
+        std::fs::write(&path, rec.to_bytes()).unwrap();
+        let playback = SimPlayback::new(SimConfig {
+            speed: 1e6,
+            devices: 2,
+        });
+        let job = PlaybackJob {
+            session: "s".into(),
+            recording: path,
+            work_dir: dir.path().to_path_buf(),
+            indices: indices_to_play(&BTreeSet::from([0, 1, 3]), 2),
+            cancel: Arc::new(AtomicBool::new(false)),
+        };
+        let got = std::sync::Mutex::new(Vec::new());
+        playback
+            .play(&job, &|trial| got.lock().unwrap().push(trial))
+            .unwrap();
+        let mut got = got.into_inner().unwrap();
+        got.sort_by_key(|t| t.index);
+        assert_eq!(got.iter().map(|t| t.index).collect::<Vec<_>>(), vec![2, 4]);
+        for trial in &got {
+            let mut expected = Vec::new();
+            sitar_estimator::write_tum(&sitar_sim::play_trial(&rec, trial.index), &mut expected)
+                .unwrap();
+            assert_eq!(trial.tum.as_bytes(), expected, "trial {}", trial.index);
+        }
+    }
+
+    #[test]
     fn a_cancelled_job_stops_sleeping_at_once() {
         let job = PlaybackJob {
             session: "s".into(),
             recording: PathBuf::new(),
             work_dir: PathBuf::new(),
-            first_index: 0,
-            trials: 1,
+            indices: vec![0],
             cancel: Arc::new(AtomicBool::new(true)),
         };
         let started = Instant::now();

@@ -68,15 +68,6 @@ pub(crate) fn sha256_file(path: &Path) -> Result<String, Error> {
         .collect())
 }
 
-/// The first `count` playback indices not in `stored`: a fresh session's are 0, 1, …; a
-/// resumed one's skip what its phones already delivered, in whatever order they came.
-pub(crate) fn indices_to_play(stored: &BTreeSet<u32>, count: u32) -> Vec<u32> {
-    (0..)
-        .filter(|i| !stored.contains(i))
-        .take(count as usize)
-        .collect()
-}
-
 /// A [`Playback`] whose phones are on `sitar worker` hosts (see the module docs).
 pub(crate) struct RemotePlayback {
     kind: PlaybackKind,
@@ -222,20 +213,13 @@ impl Playback for RemotePlayback {
             .db
             .session(&job.session)?
             .ok_or_else(|| Error::NotFound(format!("no session {:?}", job.session)))?;
-        let stored: BTreeSet<u32> = self
-            .db
-            .trials_in_order(&job.session)?
-            .into_iter()
-            .map(|(_, play_index)| play_index)
-            .collect();
-        let indices = indices_to_play(&stored, job.trials);
         let sha256 = sha256_file(&job.recording)?;
         let outcome = (|| {
             self.workers.offer(
                 &job.session,
                 session.owner,
                 self.kind.as_str(),
-                &indices,
+                &job.indices,
                 &sha256,
                 now_ms(),
             )?;
@@ -282,14 +266,6 @@ impl Playback for RemotePlayback {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn a_resumed_session_plays_the_indices_it_lacks() {
-        assert_eq!(indices_to_play(&BTreeSet::new(), 3), vec![0, 1, 2]);
-        let stored = BTreeSet::from([0, 1, 3]);
-        assert_eq!(indices_to_play(&stored, 2), vec![2, 4]);
-        assert!(indices_to_play(&stored, 0).is_empty());
-    }
 
     #[test]
     fn the_recording_hash_is_sha256() {

@@ -3,7 +3,7 @@
 //! adaptively), end playback (why it stopped, or why there is nothing to estimate), and the
 //! final estimate. `jobs::play_and_estimate` runs them in this order.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
@@ -17,7 +17,7 @@ use crate::estimate::live_sessions::LiveSession;
 use crate::estimate::publishing::{self, Published};
 use crate::ingest::trials::{self, Arrival};
 use crate::playback::queue::{Begin, Intent, JobControl, Ticket};
-use crate::playback::{PlaybackJob, TrialOutput};
+use crate::playback::{PlaybackJob, TrialOutput, indices_to_play};
 use crate::session::Session;
 use crate::storage::keys::SessionObject;
 use crate::storage::workers::TrialFailure;
@@ -105,6 +105,12 @@ pub(crate) async fn start<'a>(
     }
     let session = shared.session(id)?;
     let backend = shared.backend(session.playback);
+    let stored: BTreeSet<u32> = shared
+        .db
+        .trials_in_order(id)?
+        .into_iter()
+        .map(|(_, play_index)| play_index)
+        .collect();
     let done_before = shared.db.trial_count(id)?;
     let needed = session.trials_total.saturating_sub(done_before);
     let recording = shared.blobs.local_file(id, SessionObject::Recording);
@@ -124,8 +130,7 @@ pub(crate) async fn start<'a>(
         session: id.to_string(),
         recording,
         work_dir: shared.blobs.playback_folder(id),
-        first_index: done_before,
-        trials: needed,
+        indices: indices_to_play(&stored, needed),
         cancel: cancel.clone(),
     };
     let (played_tx, played_rx) = oneshot::channel();
