@@ -50,7 +50,7 @@ pub struct PlaybackJob {
     /// A local folder for the job's working files (adb's pulled trials), the blob store's:
     /// it goes with the session.
     pub work_dir: PathBuf,
-    /// The playback indices to run, in order ([`indices_to_play`]): a fresh session's are
+    /// The playback indices to run, in order (`indices_to_play`): a fresh session's are
     /// 0, 1, …; a resumed one's skip the trials already stored, whatever order they came in.
     pub indices: Vec<u32>,
     /// Set to stop early (adaptive stopping, estimate requested, shutdown).
@@ -60,7 +60,7 @@ pub struct PlaybackJob {
 /// The first `count` playback indices not in `stored`: a fresh session's are 0, 1, …; a
 /// resumed one's skip what its phones already delivered, in whatever order they came (with
 /// several phones, trial 3 may be stored before trial 2 when the server stops).
-pub fn indices_to_play(stored: &BTreeSet<u32>, count: u32) -> Vec<u32> {
+pub(crate) fn indices_to_play(stored: &BTreeSet<u32>, count: u32) -> Vec<u32> {
     (0..)
         .filter(|i| !stored.contains(i))
         .take(count as usize)
