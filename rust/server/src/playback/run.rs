@@ -105,13 +105,10 @@ pub(crate) async fn start<'a>(
     }
     let session = shared.session(id)?;
     let backend = shared.backend(session.playback);
-    let stored: BTreeSet<u32> = shared
-        .db
-        .trials_in_order(id)?
-        .into_iter()
-        .map(|(_, play_index)| play_index)
-        .collect();
-    let done_before = shared.db.trial_count(id)?;
+    // One row per stored trial: their count, and the playback indices a resume skips.
+    let stored_trials = shared.db.trials_in_order(id)?;
+    let done_before = stored_trials.len() as u32;
+    let stored: BTreeSet<u32> = stored_trials.into_iter().map(|(_, index)| index).collect();
     let needed = session.trials_total.saturating_sub(done_before);
     let recording = shared.blobs.local_file(id, SessionObject::Recording);
     let plan = {
