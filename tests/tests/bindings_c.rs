@@ -1379,8 +1379,14 @@ fn a_job_for_an_existing_server_session_resumes_its_upload() {
     }
     assert_eq!((a.upload_cancel)(job), OK);
     assert_eq!((a.upload_free)(job), OK);
+    // The key file is written as the upload begins and the prefix grows after it: wait for
+    // bytes in the prefix, not for the key alone.
+    let kept_now = || {
+        session_dir.join("recording.part.key").exists()
+            && std::fs::metadata(session_dir.join("recording.part")).is_ok_and(|m| m.len() > 0)
+    };
     let deadline = Instant::now() + Duration::from_secs(20);
-    while !session_dir.join("recording.part.key").exists() {
+    while !kept_now() {
         assert!(Instant::now() < deadline, "the server kept nothing");
         std::thread::sleep(Duration::from_millis(5));
     }
