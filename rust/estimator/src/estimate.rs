@@ -59,6 +59,21 @@ pub struct WindowEstimate {
     pub pairs: usize,
     /// Population standard deviation of the pair values (how much the trials disagree).
     pub spread_m: f64,
+    /// Set by [`crate::Calibration::apply`]: the uncalibrated value and the interval;
+    /// `error_m` is then the calibrated value.
+    pub interval: Option<WindowInterval>,
+}
+
+/// A calibrated window's uncalibrated value and the interval that holds its true error with
+/// the calibration's coverage (same unit as `error_m`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WindowInterval {
+    /// The estimate before calibration (JSON `raw_m`).
+    pub raw_m: f64,
+    /// Lower bound (JSON `lower_m`).
+    pub lower_m: f64,
+    /// Upper bound (JSON `upper_m`).
+    pub upper_m: f64,
 }
 
 /// The result of [`estimate`]: windows sorted by start.
@@ -76,6 +91,8 @@ pub struct Estimate {
     pub delta: usize,
     /// Windows, sorted by start.
     pub windows: Vec<WindowEstimate>,
+    /// The name of the calibration applied (JSON `calibration`), if any.
+    pub calibration: Option<String>,
 }
 
 impl Estimate {
@@ -108,6 +125,12 @@ impl Estimate {
             PoseRelation::RotationAngleRad => ("error_rad", "spread_rad", "rad"),
             _ => ("error", "spread", "unit-less"),
         };
+        let interval_keys = match self.pose_relation {
+            PoseRelation::TranslationPart => ["raw_m", "lower_m", "upper_m"],
+            PoseRelation::RotationAngleDeg => ["raw_deg", "lower_deg", "upper_deg"],
+            PoseRelation::RotationAngleRad => ["raw_rad", "lower_rad", "upper_rad"],
+            _ => ["raw", "lower", "upper"],
+        };
         let classified = matches!(
             self.pose_relation,
             PoseRelation::TranslationPart | PoseRelation::RotationAngleDeg
@@ -119,7 +142,7 @@ impl Estimate {
                 start: self.time_unit.format_stamp(window.start),
                 end: self.time_unit.format_stamp(window.end),
                 window,
-                keys: (error_key, spread_key),
+                keys: (error_key, spread_key, interval_keys),
                 class: classified.then(|| thresholds.classify(window.error_m).name()),
             })
             .collect();
@@ -133,6 +156,8 @@ impl Estimate {
             pose_relation: String,
             window_frames: usize,
             unit: &'static str,
+            #[serde(skip_serializing_if = "Option::is_none")]
+            calibration: Option<&'a str>,
             windows: Vec<WindowJson<'a>>,
         }
         let document = Document {
@@ -146,6 +171,7 @@ impl Estimate {
             pose_relation: self.pose_relation.to_string(),
             window_frames: self.delta,
             unit,
+            calibration: self.calibration.as_deref(),
             windows,
         };
         serde_json::to_string(&document).expect("plain data serializes")
@@ -153,14 +179,15 @@ impl Estimate {
 }
 
 /// One window of the JSON: `start` and `end` as exact number text, then the values in
-/// alphabetical key order (`class`, error, `pairs`, spread), written straight from the window
+/// alphabetical key order (`class`, error, `lower`, `pairs`, `raw`, spread, `upper`), written straight from the window
 /// (a progressive server writes thousands of them after every trial).
 struct WindowJson<'a> {
     start: String,
     end: String,
     window: &'a WindowEstimate,
-    /// The error's and the spread's keys in the estimate's unit.
-    keys: (&'static str, &'static str),
+    /// The error's and the spread's keys in the estimate's unit, and the interval's
+    /// (`raw`, `lower`, `upper`).
+    keys: (&'static str, &'static str, [&'static str; 3]),
     class: Option<&'static str>,
 }
 
@@ -185,8 +212,17 @@ impl serde::Serialize for WindowJson<'_> {
             map.serialize_entry("class", class)?;
         }
         map.serialize_entry(self.keys.0, &finite(self.window.error_m))?;
+        if let Some(interval) = &self.window.interval {
+            map.serialize_entry(self.keys.2[1], &finite(interval.lower_m))?;
+        }
         map.serialize_entry("pairs", &self.window.pairs)?;
+        if let Some(interval) = &self.window.interval {
+            map.serialize_entry(self.keys.2[0], &finite(interval.raw_m))?;
+        }
         map.serialize_entry(self.keys.1, &finite(self.window.spread_m))?;
+        if let Some(interval) = &self.window.interval {
+            map.serialize_entry(self.keys.2[2], &finite(interval.upper_m))?;
+        }
         map.end()
     }
 }
@@ -257,6 +293,7 @@ impl PairwiseValues {
                                 error_m: error,
                                 pairs: values.len(),
                                 spread_m: spread,
+                                interval: None,
                             }
                         })
                         .collect::<Vec<_>>()
@@ -270,6 +307,7 @@ impl PairwiseValues {
             pose_relation: self.pose_relation,
             delta: self.delta,
             windows: per_block.into_iter().flatten().collect(),
+            calibration: None,
         }
     }
 
@@ -336,6 +374,7 @@ mod tests {
             error_m,
             pairs,
             spread_m,
+            interval: None,
         };
         let mut e = Estimate {
             setting: Setting::Median,
@@ -347,6 +386,7 @@ mod tests {
                 window(1000, 0.25, 3, 0.5),
                 window(2000, f64::NAN, 1, f64::NAN),
             ],
+            calibration: None,
         };
         assert_eq!(
             e.to_json(Thresholds::new(0.1, 0.2)),
@@ -358,6 +398,19 @@ mod tests {
         assert_eq!(
             e.to_json(Thresholds::new(0.1, 0.2)),
             r#"{"version":1,"setting":"median","trials":2,"time_unit":"s","pose_relation":"angle_rad","window_frames":10,"unit":"rad","windows":[{"start":0.000001000,"end":0.000002000,"error_rad":0.25,"pairs":3,"spread_rad":0.5}]}"#
+        );
+        // A calibrated window: the interval's keys in the estimate's unit, alphabetically
+        // among the others, and the calibration named.
+        e.pose_relation = PoseRelation::TranslationPart;
+        e.calibration = Some("euroc".into());
+        e.windows[0].interval = Some(WindowInterval {
+            raw_m: 0.125,
+            lower_m: 0.0625,
+            upper_m: 0.5,
+        });
+        assert_eq!(
+            e.to_json(Thresholds::new(0.1, 0.2)),
+            r#"{"version":1,"setting":"median","trials":2,"time_unit":"s","pose_relation":"trans_part","window_frames":10,"unit":"m","calibration":"euroc","windows":[{"start":0.000001000,"end":0.000002000,"class":"high","error_m":0.25,"lower_m":0.0625,"pairs":3,"raw_m":0.125,"spread_m":0.5,"upper_m":0.5}]}"#
         );
     }
 

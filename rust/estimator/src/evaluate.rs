@@ -324,7 +324,7 @@ pub fn evaluate(
 }
 
 /// Index of the nearest key within `tolerance` (earlier on a tie).
-fn nearest(keys: &[i64], stamp: i64, tolerance: i64) -> Option<usize> {
+pub(crate) fn nearest(keys: &[i64], stamp: i64, tolerance: i64) -> Option<usize> {
     let upper = keys.partition_point(|&k| k <= stamp);
     let candidates = [upper.checked_sub(1), (upper < keys.len()).then_some(upper)];
     candidates

@@ -344,6 +344,7 @@ impl IncrementalEstimate {
                     error_m,
                     pairs: state.count,
                     spread_m,
+                    interval: None,
                 })
             })
             .collect();
@@ -354,6 +355,7 @@ impl IncrementalEstimate {
             pose_relation: self.options.pose_relation,
             delta: self.options.delta,
             windows,
+            calibration: None,
         })
     }
 

@@ -152,6 +152,8 @@
 mod align;
 mod bag_writer;
 mod bootstrap;
+mod calibration;
+mod calibration_fit;
 mod error;
 mod estimate;
 mod evaluate;
@@ -172,8 +174,19 @@ mod trajectory;
 pub use align::{Alignment, Similarity, align, align_first, umeyama};
 pub use bag_writer::{PoseTopic, mcap_bag, ros1_bag, rosbag2_metadata};
 pub use bootstrap::{MeanInterval, bootstrap_mean};
+pub use calibration::{
+    AgreementScores, CALIBRATION_FEATURES, CALIBRATION_FORMAT, CALIBRATION_VERSION, Calibration,
+    CalibrationModel, CalibrationScores, FEATURE_OFFSETS, FittedOn, FittedSequence,
+    HeldOutScores, IntervalModel, WindowFeatures, smooth, window_features,
+};
+pub use calibration_fit::{
+    CalibrationSequence, DEFAULT_SMOOTHING_WINDOWS, DEFAULT_SPREAD_MATCH, FitOptions,
+    agreement_scores, fit_calibration, leave_one_sequence_out,
+};
 pub use error::Error;
-pub use estimate::{Estimate, EstimateOptions, PairwiseValues, WindowEstimate, estimate};
+pub use estimate::{
+    Estimate, EstimateOptions, PairwiseValues, WindowEstimate, WindowInterval, estimate,
+};
 pub use evaluate::{
     ClassificationScores, Evaluation, EvaluationOptions, EvaluationRow, MatchedWindows,
     PAPER_CLASSIFIERS, classification_scores, evaluate, ground_truth_errors, matched_windows,
