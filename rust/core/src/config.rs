@@ -5,7 +5,54 @@ use std::path::PathBuf;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
-use crate::{Convention, Error, ErrorUnit, PoseRelation, Thresholds};
+use crate::{Convention, Error, ErrorUnit, PoseRelation, ResultWindow, Thresholds};
+
+/// Which value of a result window colours it (its class) and places markers: the config key
+/// `classify_by`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ClassifyBy {
+    /// The window's error (`"estimate"`, the default): the calibrated value in calibrated
+    /// results, else the statistic of the spread.
+    #[default]
+    Estimate,
+    /// The window's upper bound (`"upper"`) where the results give one, else its error: the
+    /// cautious choice, which warns wherever the error may be high.
+    Upper,
+}
+
+impl ClassifyBy {
+    /// Every choice, in the order error messages list them.
+    pub const ALL: [ClassifyBy; 2] = [ClassifyBy::Estimate, ClassifyBy::Upper];
+
+    /// `"estimate"` or `"upper"`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::Estimate => "estimate",
+            Self::Upper => "upper",
+        }
+    }
+
+    /// The inverse of [`ClassifyBy::name`].
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|c| c.name() == name)
+    }
+
+    /// The value of `window` that classifies it and places markers: its error, or with
+    /// [`ClassifyBy::Upper`] its interval's upper bound when it has one.
+    pub fn value(&self, window: &ResultWindow) -> f64 {
+        match (self, window.interval) {
+            (Self::Upper, Some(interval)) => interval.upper,
+            _ => window.error,
+        }
+    }
+}
+
+impl std::fmt::Display for ClassifyBy {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
 
 /// Settings of one session. Parse with [`SessionConfig::from_json`]; see the field docs for
 /// the defaults (those of ARCHITECTURE.md).
@@ -58,6 +105,12 @@ pub struct SessionConfig {
     /// hex digits, as `POST /v1/venues` returns it; default none).
     #[serde(default)]
     pub venue: Option<String>,
+    /// Which value of a result window gives its class (the colour of its sub-trajectory) and
+    /// places markers (default `"estimate"`: its error; `"upper"`: its interval's upper bound
+    /// where calibrated results give one, else its error). Errors reported (`error_at`,
+    /// [`crate::Marker::error_m`]) stay the windows' errors either way.
+    #[serde(default)]
+    pub classify_by: ClassifyBy,
 }
 
 fn default_images() -> bool {
@@ -90,6 +143,7 @@ impl Default for SessionConfig {
             images: true,
             thumbnail_px: 160,
             venue: None,
+            classify_by: ClassifyBy::Estimate,
         }
     }
 }
@@ -124,6 +178,7 @@ const KEYS: &[&str] = &[
     "images",
     "thumbnail_px",
     "venue",
+    "classify_by",
 ];
 
 fn config_err(key: &str, message: impl Into<String>) -> Error {
@@ -136,6 +191,29 @@ fn config_err(key: &str, message: impl Into<String>) -> Error {
 /// Deserialises one key's value, naming the key on failure.
 fn field<T: serde::de::DeserializeOwned>(key: &str, value: Value) -> Result<T, Error> {
     serde_json::from_value(value).map_err(|e| config_err(key, e.to_string()))
+}
+
+/// The `classify_by` value: one of [`ClassifyBy::ALL`]'s names.
+fn classify_by(value: Value) -> Result<ClassifyBy, Error> {
+    let allowed = || {
+        ClassifyBy::ALL
+            .iter()
+            .map(|c| format!("\"{c}\""))
+            .collect::<Vec<_>>()
+            .join(" or ")
+    };
+    match &value {
+        Value::String(name) => ClassifyBy::from_name(name).ok_or_else(|| {
+            config_err(
+                "classify_by",
+                format!("`{name}` is not allowed; use {}", allowed()),
+            )
+        }),
+        other => Err(config_err(
+            "classify_by",
+            format!("expected {}, found {other}", allowed()),
+        )),
+    }
 }
 
 impl SessionConfig {
@@ -173,6 +251,7 @@ impl SessionConfig {
                 "images" => config.images = field(k, value)?,
                 "thumbnail_px" => config.thumbnail_px = field(k, value)?,
                 "venue" => config.venue = field(k, value)?,
+                "classify_by" => config.classify_by = classify_by(value)?,
                 _ => {
                     return Err(config_err(
                         k,
@@ -328,6 +407,52 @@ mod tests {
             let e = SessionConfig::from_json(&format!(r#"{{"venue":{bad}}}"#)).unwrap_err();
             assert_eq!(key_of(e), "venue");
         }
+    }
+
+    #[test]
+    fn classify_by_is_estimate_or_upper() {
+        assert_eq!(SessionConfig::default().classify_by, ClassifyBy::Estimate);
+        for (text, want) in [
+            (r#"{"classify_by":"estimate"}"#, ClassifyBy::Estimate),
+            (r#"{"classify_by":"upper"}"#, ClassifyBy::Upper),
+        ] {
+            let c = SessionConfig::from_json(text).unwrap();
+            assert_eq!(c.classify_by, want);
+            assert_eq!(SessionConfig::from_json(&c.to_json()).unwrap(), c);
+        }
+        for bad in [r#""Upper""#, r#""lower""#, "1", "null", r#"["upper"]"#] {
+            let e = SessionConfig::from_json(&format!(r#"{{"classify_by":{bad}}}"#)).unwrap_err();
+            let message = e.to_string();
+            assert_eq!(key_of(e), "classify_by");
+            assert!(
+                message.contains(r#""estimate" or "upper""#),
+                "{bad}: {message}"
+            );
+        }
+        // A config.json written before the key existed reads as the default.
+        let mut old: serde_json::Value =
+            serde_json::from_str(&SessionConfig::default().to_json()).unwrap();
+        old.as_object_mut().unwrap().remove("classify_by");
+        assert_eq!(
+            SessionConfig::from_json(&old.to_string()).unwrap(),
+            SessionConfig::default()
+        );
+        // The value it picks: the upper bound only where a window has one.
+        let mut w = ResultWindow {
+            start: 0,
+            end: None,
+            error: 0.04,
+            pairs: None,
+            raw: None,
+            interval: None,
+        };
+        assert_eq!(ClassifyBy::Upper.value(&w), 0.04);
+        w.interval = Some(crate::ErrorInterval {
+            lower: 0.01,
+            upper: 0.12,
+        });
+        assert_eq!(ClassifyBy::Upper.value(&w), 0.12);
+        assert_eq!(ClassifyBy::Estimate.value(&w), 0.04);
     }
 
     #[test]

@@ -128,7 +128,7 @@ mod tum;
 pub mod venue;
 
 pub use classes::{DEFAULT_SETTING, ErrorClass, Thresholds};
-pub use config::SessionConfig;
+pub use config::{ClassifyBy, SessionConfig};
 pub use convention::{Convention, DisplayRotation, Pose};
 pub use depth::{DepthImage, DepthSample, Intrinsics, sample_surface};
 pub use error::{Error, InvalidDepth};
@@ -147,7 +147,7 @@ pub use markers::{Marker, MarkerCandidate, select_markers, warning_sign_rotation
 pub use playback::PlaybackLogger;
 pub use relation::{ErrorUnit, PoseRelation};
 pub use render::{Frustum, Joint, RenderPlan, Segment};
-pub use results::{ResultWindow, Results};
+pub use results::{ErrorInterval, ResultWindow, Results};
 pub use session::{
     DepthStatus, FrameFlags, LoggedPose, MidpointInput, Session, SessionState, SubTrajectory,
     Summary,

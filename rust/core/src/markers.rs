@@ -19,11 +19,14 @@ pub struct Marker {
     pub upright: DQuat,
     /// Unit surface normal (world), facing the camera.
     pub normal: DVec3,
-    /// High if the error is ≥ `high_threshold_m`, else medium.
+    /// High if the candidate's value is ≥ `high_threshold_m` (`_deg`), else medium. From
+    /// [`crate::Session::markers`] the value `classify_by` picks: the error, or the upper
+    /// bound of a calibrated window.
     pub class: ErrorClass,
     /// The sub-trajectory the marker belongs to.
     pub subtrajectory: u32,
-    /// That sub-trajectory's estimated error (metres).
+    /// That sub-trajectory's estimated error (the results' unit: metres, or degrees). From
+    /// [`crate::Session::markers`] always the window's error, whichever value placed it.
     pub error_m: f64,
 }
 
@@ -36,7 +39,8 @@ pub struct MarkerCandidate {
     pub position: DVec3,
     /// Unit surface normal (world).
     pub normal: DVec3,
-    /// Estimated error (metres).
+    /// The value the search and the class use (metres, or degrees): the estimated error, or
+    /// with `classify_by` `"upper"` the window's upper bound.
     pub error_m: f64,
 }
 

@@ -429,6 +429,51 @@ mod tests {
     }
 
     #[test]
+    fn calibrated_results_and_classify_by_round_trip() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut s = recorded("arcore");
+        s.config.classify_by = crate::ClassifyBy::Upper;
+        s.stop(1_700_000_000_000_000_000 + 48 * 33_333_334, Pose::IDENTITY)
+            .unwrap();
+        let windows: Vec<String> = s
+            .subtrajectories()
+            .iter()
+            .enumerate()
+            .map(|(i, x)| {
+                let e = 0.01 * i as f64;
+                format!(
+                    r#"{{"start":{},"error_m":{e},"lower_m":{},"raw_m":{},"upper_m":{}}}"#,
+                    x.start_ns,
+                    e / 2.0,
+                    e * 0.7,
+                    e * 4.0
+                )
+            })
+            .collect();
+        let json = format!(
+            r#"{{"calibration":"pixel7","window_frames":10,"windows":[{}]}}"#,
+            windows.join(",")
+        );
+        s.load_results(&json).unwrap();
+        s.save(dir.path()).unwrap();
+        let back = Session::load(dir.path()).unwrap();
+        assert_eq!(back, s);
+        assert_eq!(back.config().classify_by, crate::ClassifyBy::Upper);
+        assert_eq!(
+            back.results().unwrap().calibration.as_deref(),
+            Some("pixel7")
+        );
+        assert_eq!(back.markers().unwrap(), s.markers().unwrap());
+        // Sub 3: error 3 cm (low), upper 12 cm: high by the upper bound; the table keeps
+        // the error and the class shown.
+        let table = std::fs::read_to_string(dir.path().join("subtrajectories.csv")).unwrap();
+        assert!(
+            table.lines().nth(4).unwrap().ends_with(",0.03,high"),
+            "{table}"
+        );
+    }
+
+    #[test]
     fn degree_results_round_trip_and_unfit_results_are_refused_on_load() {
         let dir = tempfile::tempdir().unwrap();
         let mut config = recorded("unity").config().clone();

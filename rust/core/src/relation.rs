@@ -80,6 +80,16 @@ impl ErrorUnit {
             Self::Degrees => "error_deg",
         }
     }
+
+    /// The keys of a calibrated window's uncalibrated value and interval in the results
+    /// JSON, `[raw, lower, upper]`: `["raw_m", "lower_m", "upper_m"]` or `["raw_deg",
+    /// "lower_deg", "upper_deg"]`.
+    pub fn interval_keys(&self) -> [&'static str; 3] {
+        match self {
+            Self::Metres => ["raw_m", "lower_m", "upper_m"],
+            Self::Degrees => ["raw_deg", "lower_deg", "upper_deg"],
+        }
+    }
 }
 
 #[cfg(test)]
@@ -98,6 +108,10 @@ mod tests {
         }
         assert_eq!(PoseRelation::from_name("angle_rad"), None);
         assert_eq!(PoseRelation::AngleDeg.unit().error_key(), "error_deg");
+        assert_eq!(
+            ErrorUnit::Degrees.interval_keys(),
+            ["raw_deg", "lower_deg", "upper_deg"]
+        );
         assert_eq!(PoseRelation::default().unit(), ErrorUnit::Metres);
     }
 }

@@ -13,10 +13,33 @@ pub struct ResultWindow {
     /// End timestamp (ns), when known (JSON form only).
     pub end: Option<i64>,
     /// Estimated error in the results' unit ([`Results::unit`]: metres, or degrees for
-    /// `angle_deg`), finite and ≥ 0.
+    /// `angle_deg`), finite and ≥ 0. In calibrated results (`calibration` named) the
+    /// calibrated value.
     pub error: f64,
     /// Number of trial pairs that had this window, when known (JSON form only).
     pub pairs: Option<u32>,
+    /// The uncalibrated estimate (`raw_m`, or `raw_deg` for `angle_deg`) of a calibrated
+    /// window, finite and ≥ 0; `None` in uncalibrated results, legacy CSV, and where the
+    /// key is `null` (the estimator writes `null` for a value it could not compute).
+    #[serde(default)]
+    pub raw: Option<f64>,
+    /// The interval that holds the window's true error with the calibration's coverage
+    /// (`lower_m`/`upper_m`, or `lower_deg`/`upper_deg`); `None` in uncalibrated results
+    /// and legacy CSV.
+    #[serde(default)]
+    pub interval: Option<ErrorInterval>,
+}
+
+/// The interval a calibrated window's true error lies in with the calibration's stated
+/// coverage (e.g. 80 %), in the results' unit. A calibration is fitted for one SLAM system
+/// and playback device (and one setting, window length and pose relation): the interval
+/// means what it says only for results of that system and device.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ErrorInterval {
+    /// Lower bound, finite and ≥ 0.
+    pub lower: f64,
+    /// Upper bound, finite and ≥ `lower`.
+    pub upper: f64,
 }
 
 /// Parsed results, windows sorted by start timestamp.
@@ -33,6 +56,9 @@ pub struct Results {
     pub window_frames: Option<u32>,
     /// What the errors measure (`"pose_relation"`; legacy CSV is always `trans_part`).
     pub relation: PoseRelation,
+    /// The name of the calibration applied (`"calibration"`), when the results are
+    /// calibrated; `None` for uncalibrated results and legacy CSV.
+    pub calibration: Option<String>,
 }
 
 /// Parses a decimal-seconds token exactly into nanoseconds (no f64 rounding of large stamps).
@@ -69,6 +95,37 @@ fn seconds_to_ns(token: &str) -> Option<i64> {
 fn is_integer_token(token: &str) -> bool {
     let body = token.strip_prefix(['-', '+']).unwrap_or(token);
     !body.is_empty() && body.bytes().all(|b| b.is_ascii_digit())
+}
+
+/// An optional number of a JSON window (`raw_…`, `lower_…`, `upper_…`): absent is `None`;
+/// `null` is `None` when `null_is_absent`, else an error; otherwise a finite number ≥ 0.
+fn window_number(
+    window: &Value,
+    key: &str,
+    path: &str,
+    start: i64,
+    null_is_absent: bool,
+) -> Result<Option<f64>, Error> {
+    const SRC: &str = "results.json";
+    let bad = |message: String| {
+        Err(Error::parse(
+            SRC,
+            0,
+            path,
+            format!("{message} (window starting at {start} ns)"),
+        ))
+    };
+    match window.get(key) {
+        None => Ok(None),
+        Some(Value::Null) if null_is_absent => Ok(None),
+        Some(Value::Null) => bad(format!("{key} is null, not a finite number")),
+        Some(Value::Number(n)) => match n.as_f64() {
+            Some(v) if v.is_finite() && v >= 0.0 => Ok(Some(v)),
+            Some(v) if v.is_finite() => bad(format!("{key} {v} is negative")),
+            _ => bad(format!("{key} {n} is not a finite number")),
+        },
+        Some(other) => bad(format!("{key}: expected a number, found {other}")),
+    }
 }
 
 fn check_error(source: &str, line: usize, field: &str, e: f64) -> Result<f64, Error> {
@@ -163,6 +220,8 @@ impl Results {
                 end: None,
                 error: error_m,
                 pairs: None,
+                raw: None,
+                interval: None,
             });
         }
         Ok(Self::sorted(
@@ -182,6 +241,14 @@ impl Results {
     /// either implies the other, and they must agree); with `deg` the windows carry
     /// `error_deg` instead of `error_m`. `class` is ignored (recomputed from the session's
     /// thresholds), as are keys this parser does not know.
+    ///
+    /// Calibrated results (what the backend writes once a calibration is applied) name it
+    /// (`"calibration":"<name>"`, a string) and give per window `raw_m`, `lower_m` and
+    /// `upper_m` (`raw_deg`, `lower_deg`, `upper_deg` for degrees); `error_m` is then the
+    /// calibrated value. Each key is optional. `lower_m` and `upper_m` come together, each a
+    /// finite number ≥ 0 (not `null`), lower ≤ upper; `raw_m` is a finite number ≥ 0 or
+    /// `null` (kept as `None`). A bad value is an [`Error::Parse`] whose field is the key's
+    /// path (`windows[3].lower_m`) and whose message names the window's start.
     pub fn parse_json(text: &str) -> Result<Self, Error> {
         const SRC: &str = "results.json";
         let value: Value = serde_json::from_str(text)
@@ -234,8 +301,21 @@ impl Results {
                     })?,
             ),
         };
+        let calibration = match obj.get("calibration") {
+            None | Some(Value::Null) => None,
+            Some(Value::String(s)) => Some(s.clone()),
+            Some(other) => {
+                return Err(Error::parse(
+                    SRC,
+                    0,
+                    "calibration",
+                    format!("expected the calibration's name (a string), found {other}"),
+                ));
+            }
+        };
         let relation = relation_and_unit(obj)?;
         let error_key = relation.unit().error_key();
+        let [raw_key, lower_key, upper_key] = relation.unit().interval_keys();
         let list = obj
             .get("windows")
             .and_then(Value::as_array)
@@ -310,20 +390,54 @@ impl Results {
                     },
                 )?),
             };
+            let raw = window_number(w, raw_key, &path(raw_key), start, true)?;
+            let lower = window_number(w, lower_key, &path(lower_key), start, false)?;
+            let upper = window_number(w, upper_key, &path(upper_key), start, false)?;
+            let interval = match (lower, upper) {
+                (None, None) => None,
+                (Some(lower), Some(upper)) if lower <= upper => {
+                    Some(ErrorInterval { lower, upper })
+                }
+                (Some(lower), Some(upper)) => {
+                    return Err(Error::parse(
+                        SRC,
+                        0,
+                        path(lower_key),
+                        format!(
+                            "{lower_key} {lower} is above {upper_key} {upper} (window \
+                             starting at {start} ns)"
+                        ),
+                    ));
+                }
+                (given, _) => {
+                    let (present, missing) = if given.is_some() {
+                        (lower_key, upper_key)
+                    } else {
+                        (upper_key, lower_key)
+                    };
+                    return Err(Error::parse(
+                        SRC,
+                        0,
+                        path(missing),
+                        format!(
+                            "missing while {present} is given: an interval needs both bounds \
+                             (window starting at {start} ns)"
+                        ),
+                    ));
+                }
+            };
             windows.push(ResultWindow {
                 start,
                 end,
                 error,
                 pairs,
+                raw,
+                interval,
             });
         }
-        Ok(Self::sorted(
-            windows,
-            setting,
-            trials,
-            window_frames,
-            relation,
-        ))
+        let mut results = Self::sorted(windows, setting, trials, window_frames, relation);
+        results.calibration = calibration;
+        Ok(results)
     }
 
     fn sorted(
@@ -341,6 +455,7 @@ impl Results {
             trials,
             window_frames,
             relation,
+            calibration: None,
         }
     }
 
@@ -350,9 +465,12 @@ impl Results {
     }
 
     /// Writes the JSON form (starts and ends in integer nanoseconds, the error under the
-    /// key of its unit), classes from the thresholds (which must be in that unit).
+    /// key of its unit), classes from the thresholds (which must be in that unit). A
+    /// calibration's name and the windows' raw values and intervals are written where
+    /// present, under the keys of the unit.
     pub fn to_json(&self, thresholds: Thresholds) -> String {
         let error_key = self.unit().error_key();
+        let [raw_key, lower_key, upper_key] = self.unit().interval_keys();
         let windows: Vec<Value> = self
             .windows
             .iter()
@@ -363,10 +481,17 @@ impl Results {
                 o.insert(error_key.into(), w.error.into());
                 o.insert("pairs".into(), w.pairs.into());
                 o.insert("class".into(), thresholds.classify(w.error).name().into());
+                if let Some(raw) = w.raw {
+                    o.insert(raw_key.into(), raw.into());
+                }
+                if let Some(interval) = w.interval {
+                    o.insert(lower_key.into(), interval.lower.into());
+                    o.insert(upper_key.into(), interval.upper.into());
+                }
                 Value::Object(o)
             })
             .collect();
-        let doc = serde_json::json!({
+        let mut doc = serde_json::json!({
             "version": 1,
             "setting": self.setting,
             "trials": self.trials,
@@ -375,6 +500,9 @@ impl Results {
             "unit": self.unit().name(),
             "windows": windows,
         });
+        if let (Some(name), Value::Object(o)) = (&self.calibration, &mut doc) {
+            o.insert("calibration".into(), name.as_str().into());
+        }
         serde_json::to_string_pretty(&doc).unwrap_or_default()
     }
 
@@ -559,7 +687,9 @@ mod tests {
                 start: 1000,
                 end: Some(2000),
                 error: 0.01,
-                pairs: Some(9)
+                pairs: Some(9),
+                raw: None,
+                interval: None,
             }
         );
         assert_eq!(
@@ -606,6 +736,161 @@ mod tests {
             matches!(Results::parse(rot), Err(Error::Parse { field, .. }) if field == "windows[0].error_m")
         );
         assert!(Results::parse(r#"{"version":2,"windows":[]}"#).is_err());
+    }
+
+    #[test]
+    fn calibrated_json_keeps_raw_values_and_intervals() {
+        // What sitar-estimator's Estimate::to_json writes once a calibration is applied.
+        let text = r#"{"version":1,"setting":"median","trials":2,"time_unit":"s","pose_relation":"trans_part","window_frames":10,"unit":"m","calibration":"euroc","windows":[{"start":0.000001000,"end":0.000002000,"class":"high","error_m":0.25,"lower_m":0.0625,"pairs":3,"raw_m":0.125,"spread_m":0.5,"upper_m":0.5},{"start":0.000002000,"end":0.000003000,"class":"low","error_m":0.02,"lower_m":0.01,"pairs":3,"raw_m":null,"spread_m":0.1,"upper_m":0.04}]}"#;
+        let r = Results::parse(text).unwrap();
+        assert_eq!(r.calibration.as_deref(), Some("euroc"));
+        assert_eq!(
+            r.windows[0],
+            ResultWindow {
+                start: 1000,
+                end: Some(2000),
+                error: 0.25,
+                pairs: Some(3),
+                raw: Some(0.125),
+                interval: Some(ErrorInterval {
+                    lower: 0.0625,
+                    upper: 0.5
+                }),
+            }
+        );
+        // A null raw value is absent; the interval stays.
+        assert_eq!(r.windows[1].raw, None);
+        assert_eq!(
+            r.windows[1].interval,
+            Some(ErrorInterval {
+                lower: 0.01,
+                upper: 0.04
+            })
+        );
+        assert_eq!(
+            r.lookup(1010, 10).and_then(|w| w.interval).unwrap().upper,
+            0.5
+        );
+        // The JSON form writes them back.
+        let json = r.to_json(Thresholds::DEFAULT_M);
+        assert!(json.contains(r#""calibration": "euroc""#), "{json}");
+        assert_eq!(Results::parse(&json).unwrap(), r);
+        // Uncalibrated results have none of them, and say so.
+        let plain = Results::parse(r#"{"windows":[{"start":1,"error_m":0.1}]}"#).unwrap();
+        assert_eq!(
+            (
+                plain.calibration,
+                plain.windows[0].raw,
+                plain.windows[0].interval
+            ),
+            (None, None, None)
+        );
+        let csv = Results::parse(
+            "start,error
+1,0.1
+",
+        )
+        .unwrap();
+        assert_eq!((csv.windows[0].raw, csv.windows[0].interval), (None, None));
+        assert!(!plain_json_has_interval_keys(
+            &csv.to_json(Thresholds::DEFAULT_M)
+        ));
+        // Degrees: the keys of the unit.
+        let deg = Results::parse(
+            r#"{"unit":"deg","calibration":"c","windows":[{"start":1,"error_deg":3,
+            "raw_deg":2,"lower_deg":1,"upper_deg":6,"lower_m":9,"upper_m":1}]}"#,
+        )
+        .unwrap();
+        assert_eq!(deg.windows[0].raw, Some(2.0));
+        assert_eq!(
+            deg.windows[0].interval,
+            Some(ErrorInterval {
+                lower: 1.0,
+                upper: 6.0
+            })
+        );
+        let json = deg.to_json(Thresholds::DEFAULT_DEG);
+        assert!(
+            json.contains("upper_deg") && !json.contains("upper_m"),
+            "{json}"
+        );
+        assert_eq!(Results::parse(&json).unwrap(), deg);
+    }
+
+    fn plain_json_has_interval_keys(json: &str) -> bool {
+        ["calibration", "raw_m", "lower_m", "upper_m"]
+            .iter()
+            .any(|k| json.contains(k))
+    }
+
+    #[test]
+    fn bad_bounds_name_the_key_and_the_window() {
+        let window = |extra: &str| {
+            format!(
+                r#"{{"calibration":"euroc","windows":[{{"start":5,"error_m":0.1}},{{"start":7,"error_m":0.1,{extra}}}]}}"#
+            )
+        };
+        let cases = [
+            (
+                r#""lower_m":0.3,"upper_m":0.2"#,
+                "windows[1].lower_m",
+                "above upper_m 0.2",
+            ),
+            (
+                r#""lower_m":-0.1,"upper_m":0.2"#,
+                "windows[1].lower_m",
+                "negative",
+            ),
+            (
+                r#""lower_m":0.1,"upper_m":-0.2"#,
+                "windows[1].upper_m",
+                "negative",
+            ),
+            (
+                r#""lower_m":null,"upper_m":0.2"#,
+                "windows[1].lower_m",
+                "null",
+            ),
+            (
+                r#""lower_m":0.1,"upper_m":null"#,
+                "windows[1].upper_m",
+                "null",
+            ),
+            (
+                r#""lower_m":0.1,"upper_m":"0.2""#,
+                "windows[1].upper_m",
+                "expected a number",
+            ),
+            (r#""lower_m":0.1,"upper_m":1e999"#, "(document)", ""),
+            (r#""lower_m":0.1"#, "windows[1].upper_m", "both bounds"),
+            (r#""upper_m":0.1"#, "windows[1].lower_m", "both bounds"),
+            (r#""raw_m":-1"#, "windows[1].raw_m", "negative"),
+            (r#""raw_m":[1]"#, "windows[1].raw_m", "expected a number"),
+        ];
+        for (extra, want_field, want_message) in cases {
+            let text = window(extra);
+            match Results::parse(&text) {
+                Err(Error::Parse { field, message, .. }) => {
+                    assert_eq!(field, want_field, "{text}");
+                    assert!(message.contains(want_message), "{text}: {message}");
+                    if want_field != "(document)" {
+                        assert!(message.contains("starting at 7 ns"), "{text}: {message}");
+                    }
+                }
+                other => panic!("{text}: {other:?}"),
+            }
+        }
+        match Results::parse(r#"{"calibration":3,"windows":[]}"#) {
+            Err(Error::Parse { field, .. }) => assert_eq!(field, "calibration"),
+            other => panic!("{other:?}"),
+        }
+        // Equal bounds are an interval; a null calibration is none.
+        let r = Results::parse(
+            r#"{"calibration":null,"windows":[{"start":1,"error_m":0.1,"lower_m":0.1,"upper_m":0.1}]}"#,
+        )
+        .unwrap();
+        assert_eq!(r.calibration, None);
+        assert_eq!(r.windows[0].interval.unwrap().upper, 0.1);
     }
 
     #[test]
@@ -705,7 +990,7 @@ mod tests {
         ) {
             starts.sort_unstable();
             starts.dedup();
-            let r = Results { windows: starts.iter().map(|&s| ResultWindow { start: s, end: None, error: 0.0, pairs: None }).collect(), ..Default::default() };
+            let r = Results { windows: starts.iter().map(|&s| ResultWindow { start: s, end: None, error: 0.0, pairs: None, raw: None, interval: None }).collect(), ..Default::default() };
             let best = starts.iter().map(|s| s.abs_diff(t)).min().unwrap();
             match r.lookup(t, tol) {
                 Some(w) => {
@@ -725,7 +1010,7 @@ mod tests {
         ) {
             starts.sort_unstable();
             if sort_times { times.sort_unstable(); }
-            let r = Results { windows: starts.iter().map(|&s| ResultWindow { start: s, end: None, error: 0.0, pairs: None }).collect(), ..Default::default() };
+            let r = Results { windows: starts.iter().map(|&s| ResultWindow { start: s, end: None, error: 0.0, pairs: None, raw: None, interval: None }).collect(), ..Default::default() };
             let many = r.lookup_many(&times, tol);
             for (t, got) in times.iter().zip(many) {
                 prop_assert_eq!(got.map(|w| w.start), r.lookup(*t, tol).map(|w| w.start));

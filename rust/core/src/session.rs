@@ -10,8 +10,8 @@ use crate::thumbnail::{PixelScratch, downsample_rotated, encode_jpeg};
 use crate::venue::{Alignment, AnchorObservation, NotAligned, Tracking, VenueMap, WorldCell};
 use crate::{
     DepthImage, DepthSample, DisplayRotation, Error, ErrorClass, Guide, ImageProperties,
-    Intrinsics, InvalidDepth, LumaImage, Marker, Pose, RenderPlan, Results, ScreenView,
-    SessionConfig,
+    Intrinsics, InvalidDepth, LumaImage, Marker, Pose, RenderPlan, ResultWindow, Results,
+    ScreenView, SessionConfig,
 };
 
 /// What a frame asks of the app (bit set; the C ABI's `out_flags`).
@@ -713,26 +713,41 @@ impl Session {
     }
 
     /// Class and error of the result window whose start is nearest to `t_ns` within the
-    /// tolerance; `(Unknown, None)` when there is none or no results are loaded.
+    /// tolerance; `(Unknown, None)` when there is none or no results are loaded. The error is
+    /// the window's ([`ResultWindow::error`]); the class is that of the value the config's
+    /// `classify_by` picks ([`crate::ClassifyBy::value`]: the error, or the upper bound).
     pub fn error_at(&self, t_ns: i64) -> (ErrorClass, Option<f64>) {
-        self.error_at_with(t_ns, self.lookup_tolerance_ns())
-    }
-
-    fn error_at_with(&self, t_ns: i64, tolerance_ns: i64) -> (ErrorClass, Option<f64>) {
-        match self
-            .results
-            .as_ref()
-            .and_then(|r| r.lookup(t_ns, tolerance_ns))
-        {
-            Some(w) => (self.classify(w.error), Some(w.error)),
+        match self.result_at(t_ns) {
+            Some(w) => (self.classify(w), Some(w.error)),
             None => (ErrorClass::Unknown, None),
         }
     }
 
-    /// The class of an error of the loaded results, with the thresholds of their unit.
-    fn classify(&self, error: f64) -> ErrorClass {
+    /// The result window [`Session::error_at`] looks up for `t_ns` (nearest start within the
+    /// lookup tolerance), with its raw value and interval when the results are calibrated
+    /// ([`ResultWindow::raw`], [`ResultWindow::interval`]: `None` otherwise); `None` when no
+    /// window is within the tolerance or no results are loaded.
+    pub fn result_at(&self, t_ns: i64) -> Option<&ResultWindow> {
+        self.results
+            .as_ref()
+            .and_then(|r| r.lookup(t_ns, self.lookup_tolerance_ns()))
+    }
+
+    /// The result window of sub-trajectory `k` (looked up by its start timestamp, as
+    /// [`Session::result_at`]); `None` without one or for an unknown `k`.
+    pub fn subtrajectory_window(&self, k: u32) -> Option<&ResultWindow> {
+        self.subs
+            .get(k as usize)
+            .and_then(|s| self.result_at(s.start_ns))
+    }
+
+    /// The class of a window of the loaded results: the value `classify_by` picks, with the
+    /// thresholds of the results' unit.
+    fn classify(&self, window: &ResultWindow) -> ErrorClass {
         let unit = self.results.as_ref().map(Results::unit).unwrap_or_default();
-        self.config.thresholds_for(unit).classify(error)
+        self.config
+            .thresholds_for(unit)
+            .classify(self.config.classify_by.value(window))
     }
 
     /// Estimated error of sub-trajectory `k` (looked up by its start timestamp).
@@ -751,39 +766,52 @@ impl Session {
 
     /// Errors of all sub-trajectories, in order (one merge walk, O(n + m)).
     pub fn subtrajectory_errors(&self) -> Vec<Option<f64>> {
-        let Some(results) = &self.results else {
-            return vec![None; self.subs.len()];
-        };
-        let starts: Vec<i64> = self.subs.iter().map(|s| s.start_ns).collect();
-        results
-            .lookup_many(&starts, self.lookup_tolerance_ns())
+        self.subtrajectory_windows()
             .into_iter()
             .map(|w| w.map(|w| w.error))
             .collect()
     }
 
+    /// The result windows of all sub-trajectories, in order (one merge walk, O(n + m)).
+    pub fn subtrajectory_windows(&self) -> Vec<Option<&ResultWindow>> {
+        let Some(results) = &self.results else {
+            return vec![None; self.subs.len()];
+        };
+        let starts: Vec<i64> = self.subs.iter().map(|s| s.start_ns).collect();
+        results.lookup_many(&starts, self.lookup_tolerance_ns())
+    }
+
     /// Marker regions (see [`crate::select_markers`]) among the sub-trajectories with a valid
-    /// depth sample and a result. Needs results: [`Error::InvalidState`] otherwise.
+    /// depth sample and a result. Needs results: [`Error::InvalidState`] otherwise. The
+    /// search and the markers' classes use the value `classify_by` picks (the error, or the
+    /// upper bound); [`Marker::error_m`] is the window's error either way.
     pub fn markers(&self) -> Result<Vec<Marker>, Error> {
         if self.results.is_none() {
             return Err(Error::InvalidState("markers: no results loaded"));
         }
-        let errors = self.subtrajectory_errors();
+        let windows = self.subtrajectory_windows();
+        let by = self.config.classify_by;
         let candidates: Vec<MarkerCandidate> = self
             .subs
             .iter()
-            .zip(errors)
-            .filter_map(|(s, e)| {
+            .zip(&windows)
+            .filter_map(|(s, w)| {
                 let sample = s.depth.sample()?;
                 Some(MarkerCandidate {
                     subtrajectory: s.index,
                     position: sample.point,
                     normal: sample.normal,
-                    error_m: e?,
+                    error_m: by.value(w.as_ref()?),
                 })
             })
             .collect();
-        Ok(select_markers(&candidates, &self.config))
+        let mut markers = select_markers(&candidates, &self.config);
+        for m in &mut markers {
+            if let Some(Some(w)) = windows.get(m.subtrajectory as usize) {
+                m.error_m = w.error;
+            }
+        }
+        Ok(markers)
     }
 
     /// Whether the mean error over all result windows is ≥ `unreliable_mean_error_m` (or
@@ -1238,6 +1266,110 @@ mod tests {
         let loud = results_json(r#""unit":"deg","#, "error_deg", &starts, &[9.0; 4]);
         s.load_results(&loud).unwrap();
         assert!(s.results_unreliable());
+    }
+
+    /// Calibrated results for `starts`: per window `(error, Some((lower, upper)))` or no
+    /// interval.
+    fn calibrated_json(starts: &[i64], windows: &[(f64, Option<(f64, f64)>)]) -> String {
+        let windows: Vec<String> = starts
+            .iter()
+            .zip(windows)
+            .map(|(t, (e, bounds))| match bounds {
+                Some((l, u)) => format!(
+                    r#"{{"start":{t},"class":"low","error_m":{e},"lower_m":{l},"pairs":3,"raw_m":0.001,"spread_m":0.001,"upper_m":{u}}}"#
+                ),
+                None => format!(r#"{{"start":{t},"error_m":{e}}}"#),
+            })
+            .collect();
+        format!(
+            r#"{{"version":1,"window_frames":10,"pose_relation":"trans_part","unit":"m","calibration":"pixel7-arcore","windows":[{}]}}"#,
+            windows.join(",")
+        )
+    }
+
+    #[test]
+    fn classify_by_upper_colours_and_places_markers_by_the_upper_bound() {
+        // Errors 3, 4, 12 and 0.5 cm; upper bounds 6, (none), 20 and 15 cm.
+        let windows = [
+            (0.03, Some((0.01, 0.06))),
+            (0.04, None),
+            (0.12, Some((0.08, 0.2))),
+            (0.005, Some((0.001, 0.15))),
+        ];
+        let classes = |s: &Session| (0..4).map(|k| s.subtrajectory_class(k)).collect::<Vec<_>>();
+        let placed = |s: &Session| {
+            s.markers()
+                .unwrap()
+                .iter()
+                .map(|m| (m.subtrajectory, m.class, m.error_m))
+                .collect::<Vec<_>>()
+        };
+        let (mut estimate, starts) = stopped("{}", 40);
+        estimate
+            .load_results(&calibrated_json(&starts, &windows))
+            .unwrap();
+        let (mut upper, _) = stopped(r#"{"classify_by":"upper"}"#, 40);
+        upper
+            .load_results(&calibrated_json(&starts, &windows))
+            .unwrap();
+        use ErrorClass::{High, Low, Medium};
+        // By the estimate (the default): 10 cm finds sub 2; 2 cm subs 0 and 1.
+        assert_eq!(classes(&estimate), [Low, Low, High, Low]);
+        assert_eq!(
+            placed(&estimate),
+            [(2, High, 0.12), (0, Medium, 0.03), (1, Medium, 0.04)]
+        );
+        // By the upper bound: sub 1 has none and keeps its error; 10 cm finds subs 2 and 3,
+        // 5 cm sub 0. The markers' errors stay the windows' errors.
+        assert_eq!(classes(&upper), [Medium, Low, High, High]);
+        assert_eq!(
+            placed(&upper),
+            [(2, High, 0.12), (3, High, 0.005), (0, Medium, 0.03)]
+        );
+        // The lookup gives the error and the interval either way.
+        assert_eq!(upper.error_at(starts[3]), (High, Some(0.005)));
+        assert_eq!(estimate.error_at(starts[3]), (Low, Some(0.005)));
+        let w = upper.result_at(starts[3] + 3).unwrap();
+        assert_eq!(
+            (w.raw, w.interval),
+            (
+                Some(0.001),
+                Some(crate::ErrorInterval {
+                    lower: 0.001,
+                    upper: 0.15
+                })
+            )
+        );
+        assert_eq!(upper.subtrajectory_window(1).unwrap().interval, None);
+        assert_eq!(upper.result_at(starts[3] + DT), None);
+        assert_eq!(
+            upper.results().unwrap().calibration.as_deref(),
+            Some("pixel7-arcore")
+        );
+        // Uncalibrated results: both choices give the same classes.
+        let plain = "start,error\n".to_owned()
+            + &starts
+                .iter()
+                .zip(&windows)
+                .map(|(t, (e, _))| format!("{t},{e}\n"))
+                .collect::<String>();
+        upper.load_results(&plain).unwrap();
+        assert_eq!(classes(&upper), [Low, Low, High, Low]);
+        assert_eq!(upper.subtrajectory_window(3).unwrap().interval, None);
+        // The render plan's items take their colour from these classes (the bindings' plan).
+        upper
+            .load_results(&calibrated_json(&starts, &windows))
+            .unwrap();
+        let plan = upper.render_plan();
+        let frustum_classes: Vec<_> = plan
+            .frustums
+            .iter()
+            .map(|f| upper.subtrajectory_class(f.subtrajectory))
+            .collect();
+        assert!(!frustum_classes.is_empty());
+        for (f, c) in plan.frustums.iter().zip(frustum_classes) {
+            assert_eq!(c, classes(&upper)[f.subtrajectory as usize]);
+        }
     }
 
     #[test]
