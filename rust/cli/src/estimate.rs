@@ -4,8 +4,8 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use sitar_estimator::{
-    Estimate, EstimateOptions, PoseRelation, Setting, Thresholds, Trajectory, estimate,
-    matching_time_indices, seconds_to_ns,
+    Calibration, Estimate, EstimateOptions, PoseRelation, Setting, Thresholds, Trajectory,
+    estimate, matching_time_indices, seconds_to_ns,
 };
 
 use crate::compare::{file_name, unit};
@@ -67,6 +67,12 @@ pub struct Args {
     /// Write the result to this file instead of stdout.
     #[arg(short = 'o', long)]
     output: Option<PathBuf>,
+    /// Calibrate the estimate with this file (made by `sitar calibrate`): JSON windows gain
+    /// `raw_m` (the uncalibrated value), `lower_m` and `upper_m`; `error_m`, `class` and the
+    /// CSV's error are the calibrated value. Refused if it was fitted for another setting,
+    /// window or pose relation.
+    #[arg(long, value_name = "FILE")]
+    calibration: Option<PathBuf>,
     #[command(flatten)]
     plot: PlotArgs,
 }
@@ -95,6 +101,17 @@ pub fn run(args: Args) -> Result<()> {
             args.high_m
         );
     }
+    // Read and checked before the trials, so a wrong file fails at once.
+    let calibration = match &args.calibration {
+        Some(path) => {
+            let calibration = Calibration::read(path)?;
+            calibration
+                .check(args.setting, args.delta, args.pose_relation)
+                .with_context(|| format!("{}", path.display()))?;
+            Some((calibration, calibration_name(path)))
+        }
+        None => None,
+    };
     let files = input::expand_trials(&args.trials)?;
     if files.len() < 2 {
         bail!("the estimate needs at least 2 trials, got {}", files.len());
@@ -108,7 +125,10 @@ pub fn run(args: Args) -> Result<()> {
         t_max_diff_s: args.t_max_diff,
         pose_relation: args.pose_relation,
     };
-    let result = estimate(&trials, &options).context("estimating")?;
+    let mut result = estimate(&trials, &options).context("estimating")?;
+    if let Some((calibration, name)) = &calibration {
+        calibration.apply(&mut result, &trials, name)?;
+    }
     if let Some(path) = &args.plot.plot {
         let figure = error_figure(&args, &files[0], &trials[0], &result);
         crate::canvas::write_error_figure(path, args.plot.plot_mode, &figure)?;
@@ -118,6 +138,15 @@ pub fn run(args: Args) -> Result<()> {
         OutputFormat::Json => result.to_json(Thresholds::new(args.medium_m, args.high_m)) + "\n",
     };
     emit(args.output.as_deref(), &text)
+}
+
+/// A calibration's name in the output: its file name without `.json`.
+pub fn calibration_name(path: &Path) -> String {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "calibration".into());
+    name.strip_suffix(".json").unwrap_or(&name).to_owned()
 }
 
 /// The `--plot` figure: each window's estimate at its start, on the first trial's path (the

@@ -9,13 +9,15 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, bail};
 use plotters::prelude::*;
 use sitar_estimator::{
-    ClassificationScores, EstimateOptions, EvaluationOptions, MatchedWindows, MeanInterval,
-    PAPER_CLASSIFIERS, Setting, ThresholdSweep, Thresholds, bootstrap_mean, classification_scores,
-    fit_scale, matched_windows, median_ratio, spearman, threshold_sweep,
+    Calibration, ClassificationScores, EstimateOptions, EvaluationOptions, MatchedWindows,
+    MeanInterval, PAPER_CLASSIFIERS, Setting, ThresholdSweep, Thresholds, bootstrap_mean,
+    calibrated_matched_windows, classification_scores, fit_scale, matched_windows, median_ratio,
+    spearman, threshold_sweep,
 };
 
 use crate::input::{self, Format, progress_bar};
 use crate::output::{emit, json_number};
+use crate::sequences::{self, SequenceInput};
 
 /// The paper's trial counts.
 const PAPER_COUNTS: [usize; 11] = [5, 10, 20, 30, 40, 50, 60, 70, 80, 90, 100];
@@ -33,14 +35,19 @@ const SWEEP_BOUNDARIES: [f64; 3] = [0.02, 0.05, 0.10];
 /// median estimate/truth ratio and Spearman's rank correlation, and draws accuracy and F1
 /// against k per setting (the paper's Figure 5) as SVG.
 ///
-/// SEQUENCE: a directory with ground_truth.txt, trials/ (set A) and trials-b/ (set B), or a
-/// directory of such directories (`sitar simulate --sequences N` output).
+/// SEQUENCE: a directory with ground_truth.txt and either runs/ (repeated runs of one SLAM,
+/// natural order: the first ⌈N/2⌉ are set A, the rest set B; --split K puts K in set A) or
+/// trials/ (set A) and trials-b/ (set B), or a directory of such directories (`sitar simulate
+/// --sequences N` output).
+///
+/// With --calibration FILE (made by `sitar calibrate`) the calibrated estimate is scored, with
+/// the share of windows whose interval holds the true error (coverage).
 #[derive(clap::Args, Debug)]
 #[command(
     after_help = "Examples:\n  sitar simulate --out eval --sequences 8 --trials 100 --seconds 30 --tracker ransac\n  sitar evaluate eval --trial_counts 5,10,20,30,100 --calibrate --sweep\n  sitar evaluate --ground_truth sim/ground_truth.txt --trials_a sim/trials --trials_b sim/trials-b"
 )]
 pub struct Args {
-    /// Sequence directories (each with ground_truth.txt, trials/, trials-b/), or directories of them.
+    /// Sequence directories (each with ground_truth.txt and runs/ or trials/ + trials-b/), or directories of them.
     #[arg(value_name = "SEQUENCE", conflicts_with_all = ["ground_truth", "trials_a", "trials_b"])]
     sequences: Vec<PathBuf>,
     /// Ground-truth trajectory (one sequence given by its parts).
@@ -113,6 +120,13 @@ pub struct Args {
     /// Confidence level of the intervals.
     #[arg(long, default_value_t = 0.95)]
     confidence: f64,
+    /// Runs in set A (the truth) of each runs/ folder [default: half, rounded up].
+    #[arg(long, value_name = "K")]
+    split: Option<usize>,
+    /// Score the estimate calibrated by this file (`sitar calibrate`); its setting and window
+    /// are the ones evaluated.
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["window_frames", "calibrate"])]
+    calibration: Option<PathBuf>,
 }
 
 /// Report format.
@@ -130,88 +144,22 @@ fn parse_setting(s: &str) -> Result<Setting, String> {
     s.parse().map_err(|e: sitar_estimator::Error| e.to_string())
 }
 
-/// The largest number of sequences read at once (each is a full trial set in memory in turn).
-const MAX_SEQUENCES: usize = 10_000;
-
-/// One sequence's inputs.
-struct SequenceInput {
-    name: String,
-    ground_truth: PathBuf,
-    trials_a: PathBuf,
-    trials_b: PathBuf,
-}
-
 /// Expands the SEQUENCE arguments (or the single-sequence flags).
 fn sequence_inputs(args: &Args) -> Result<Vec<SequenceInput>> {
     if let (Some(gt), Some(a), Some(b)) = (&args.ground_truth, &args.trials_a, &args.trials_b) {
         return Ok(vec![SequenceInput {
             name: gt.display().to_string(),
             ground_truth: gt.clone(),
-            trials_a: a.clone(),
-            trials_b: b.clone(),
+            set_a: input::trial_files(a)?,
+            set_b: input::trial_files(b)?,
+            dir_a: a.clone(),
+            dir_b: b.clone(),
         }]);
     }
     if args.sequences.is_empty() {
         bail!("give SEQUENCE directories, or --ground_truth with --trials_a and --trials_b");
     }
-    let one = |dir: &Path| SequenceInput {
-        name: dir.display().to_string(),
-        ground_truth: dir.join("ground_truth.txt"),
-        trials_a: dir.join("trials"),
-        trials_b: dir.join("trials-b"),
-    };
-    let mut out = Vec::new();
-    for dir in &args.sequences {
-        if dir.join("ground_truth.txt").is_file() {
-            out.push(one(dir));
-            continue;
-        }
-        let entries =
-            std::fs::read_dir(dir).with_context(|| format!("{}: cannot list", dir.display()))?;
-        let mut subdirs: Vec<PathBuf> = entries
-            .filter_map(|e| e.ok().map(|e| e.path()))
-            .filter(|p| p.join("ground_truth.txt").is_file())
-            .collect();
-        if subdirs.is_empty() {
-            bail!(
-                "{}: neither a sequence (no ground_truth.txt) nor a directory of sequences",
-                dir.display()
-            );
-        }
-        subdirs.sort_by_key(|p| natural_key(p));
-        out.extend(subdirs.iter().map(|p| one(p)));
-    }
-    if out.len() > MAX_SEQUENCES {
-        bail!(
-            "{} sequences given, at most {MAX_SEQUENCES} are read",
-            out.len()
-        );
-    }
-    Ok(out)
-}
-
-/// Sorts `seq_2` before `seq_10`.
-fn natural_key(path: &Path) -> (String, u64) {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let digits: String = name
-        .chars()
-        .rev()
-        .take_while(char::is_ascii_digit)
-        .collect();
-    let number = digits
-        .chars()
-        .rev()
-        .collect::<String>()
-        .parse()
-        .unwrap_or(0);
-    (
-        name.trim_end_matches(|c: char| c.is_ascii_digit())
-            .to_owned(),
-        number,
-    )
+    sequences::sequence_inputs(&args.sequences, args.split)
 }
 
 /// One sequence evaluated: per window length, the matched windows of every (k, setting).
@@ -244,20 +192,25 @@ pub fn run(args: Args) -> Result<()> {
         );
     }
     let inputs = sequence_inputs(&args)?;
-    let settings = args
-        .settings
-        .clone()
-        .unwrap_or_else(|| Setting::ALL.to_vec());
+    let calibration = match &args.calibration {
+        Some(path) => Some(Calibration::read(path)?),
+        None => None,
+    };
+    let settings = match (&args.settings, &calibration) {
+        (Some(settings), _) => settings.clone(),
+        // A calibration is fitted for one setting.
+        (None, Some(c)) => vec![c.fitted_on.setting.parse()?],
+        (None, None) => Setting::ALL.to_vec(),
+    };
     let bar = progress_bar(inputs.len() as u64, "evaluating sequences");
     let mut evaluated = Vec::new();
     let mut counts: Option<Vec<usize>> = None;
     for input in inputs {
-        let files_a = input::trial_files(&input.trials_a)?;
-        let files_b = input::trial_files(&input.trials_b)?;
+        let (files_a, files_b) = (input.set_a.clone(), input.set_b.clone());
         if files_b.len() < 2 {
             bail!(
                 "{}: the estimate needs at least 2 trials, found {}",
-                input.trials_b.display(),
+                input.dir_b.display(),
                 files_b.len()
             );
         }
@@ -265,7 +218,7 @@ pub fn run(args: Args) -> Result<()> {
         match &counts {
             Some(c) if *c != these => bail!(
                 "{}: {} trials in set B give other trial counts than the first sequence's; give --trial_counts",
-                input.trials_b.display(),
+                input.dir_b.display(),
                 files_b.len()
             ),
             _ => counts = Some(these.clone()),
@@ -278,8 +231,8 @@ pub fn run(args: Args) -> Result<()> {
             format!(
                 "evaluating {} (trial i = the i-th file of {} or {})",
                 input.name,
-                input.trials_a.display(),
-                input.trials_b.display()
+                input.dir_a.display(),
+                input.dir_b.display()
             )
         };
         let mut by_window = Vec::new();
@@ -294,8 +247,11 @@ pub fn run(args: Args) -> Result<()> {
                     ..EstimateOptions::default()
                 },
             };
-            by_window
-                .push(matched_windows(&gt, &trials_a, &trials_b, &opts).with_context(context)?);
+            let matched = match &calibration {
+                Some(c) => calibrated_matched_windows(&gt, &trials_a, &trials_b, &opts, c),
+                None => matched_windows(&gt, &trials_a, &trials_b, &opts),
+            };
+            by_window.push(matched.with_context(context)?);
         }
         evaluated.push(Evaluated {
             input,
@@ -393,6 +349,13 @@ struct AgreementRow {
     rank_correlation: MeanInterval,
     /// Over the windows of all sequences together.
     pooled_ratio: f64,
+    /// Per sequence: the share of the truly high windows (5 & 10 cm) the estimate calls low.
+    high_called_low: Vec<f64>,
+    /// The same over the windows of all sequences.
+    pooled_high_called_low: f64,
+    /// With a calibration: per sequence and over all windows, the share of windows whose
+    /// interval holds the true error.
+    coverage: Option<(Vec<f64>, f64)>,
 }
 
 /// The calibration of one (window frames, setting, trials, boundaries).
@@ -421,6 +384,8 @@ struct Computed {
     calibration: Option<(usize, Vec<CalibrationRow>)>,
     sweeps: Vec<SweepRow>,
     confidence: f64,
+    /// The calibration scored (`--calibration`), by its file name.
+    calibration_name: Option<String>,
 }
 
 /// The windows of every sequence for one (window-frames index, setting, trials).
@@ -451,6 +416,25 @@ fn pooled(windows: &[&MatchedWindows]) -> (Vec<f64>, Vec<f64>) {
         .flat_map(|m| m.estimate.iter().copied())
         .collect();
     (truth, estimate)
+}
+
+/// The share of windows with a true error at or above 10 cm whose estimate is below 5 cm
+/// (NaN without such windows): the failure the product exists to prevent.
+fn share_high_called_low(truth: &[f64], estimate: &[f64]) -> f64 {
+    let b = Thresholds::DEFAULT_M;
+    let high: Vec<usize> = (0..truth.len()).filter(|&i| truth[i] >= b.high).collect();
+    if high.is_empty() {
+        return f64::NAN;
+    }
+    high.iter().filter(|&&i| estimate[i] < b.medium).count() as f64 / high.len() as f64
+}
+
+/// (windows whose interval holds the truth, windows).
+fn held(m: &MatchedWindows) -> (usize, usize) {
+    let inside = (0..m.truth.len())
+        .filter(|&i| m.lower[i] <= m.truth[i] && m.truth[i] <= m.upper[i])
+        .count();
+    (inside, m.truth.len())
 }
 
 impl Computed {
@@ -489,8 +473,24 @@ impl Computed {
                         })
                         .unzip();
                     let (truth, estimate) = pooled(&windows);
+                    let high_called_low: Vec<f64> = windows
+                        .iter()
+                        .map(|m| share_high_called_low(&m.truth, &m.estimate))
+                        .collect();
+                    let coverage = windows.iter().all(|m| !m.lower.is_empty()).then(|| {
+                        let per: Vec<(usize, usize)> = windows.iter().map(|m| held(m)).collect();
+                        let (inside, total) =
+                            per.iter().fold((0, 0), |(a, b), &(i, t)| (a + i, b + t));
+                        (
+                            per.iter().map(|&(i, t)| i as f64 / t as f64).collect(),
+                            inside as f64 / total.max(1) as f64,
+                        )
+                    });
                     salt += 1;
                     agreement.push(AgreementRow {
+                        pooled_high_called_low: share_high_called_low(&truth, &estimate),
+                        high_called_low,
+                        coverage,
                         window_frames: frames,
                         setting,
                         trials,
@@ -573,6 +573,10 @@ impl Computed {
             calibration,
             sweeps,
             confidence: args.confidence,
+            calibration_name: args
+                .calibration
+                .as_deref()
+                .map(crate::estimate::calibration_name),
         })
     }
 
@@ -584,6 +588,9 @@ impl Computed {
             evaluated.len(),
             100.0 * self.confidence
         );
+        if let Some(name) = &self.calibration_name {
+            let _ = writeln!(out, "estimate calibrated by {name}");
+        }
         for e in evaluated {
             let _ = writeln!(
                 out,
@@ -654,6 +661,24 @@ impl Computed {
                 r.rank_correlation.mean,
                 r.rank_correlation.low,
                 r.rank_correlation.high
+            );
+            let _ = writeln!(
+                out,
+                "          {:<14}{} high (≥ 10 cm) called low (< 5 cm): {:.1} % of the high windows{}",
+                "",
+                if several_windows { "           " } else { "" },
+                100.0 * r.pooled_high_called_low,
+                match &r.coverage {
+                    Some((per, all)) => format!(
+                        "; interval coverage {:.1} % (per sequence {})",
+                        100.0 * all,
+                        per.iter()
+                            .map(|c| format!("{:.1} %", 100.0 * c))
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ),
+                    None => String::new(),
+                }
             );
         }
         if let Some((train, rows)) = &self.calibration {
@@ -800,6 +825,10 @@ impl Computed {
                     "mean_median_ratio": interval(&r.ratio),
                     "mean_spearman": interval(&r.rank_correlation),
                     "pooled_median_ratio": json_number(r.pooled_ratio),
+                    "high_called_low": r.high_called_low.iter().map(|&v| json_number(v)).collect::<Vec<_>>(),
+                    "pooled_high_called_low": json_number(r.pooled_high_called_low),
+                    "coverage": r.coverage.as_ref().map(|(_, all)| json_number(*all)),
+                    "coverage_per_sequence": r.coverage.as_ref().map(|(per, _)| per.iter().map(|&v| json_number(v)).collect::<Vec<_>>()),
                 })
             })
             .collect();
@@ -845,6 +874,9 @@ impl Computed {
             "averaged": averaged,
             "agreement": agreement,
         });
+        if let Some(name) = &self.calibration_name {
+            doc["calibrated_by"] = serde_json::json!(name);
+        }
         if let Some((train, rows)) = &self.calibration {
             doc["calibration"] = serde_json::json!({
                 "train_sequences": train,

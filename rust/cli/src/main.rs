@@ -8,6 +8,7 @@
 mod ape;
 mod archive;
 mod bag;
+mod calibrate;
 mod canvas;
 mod compare;
 mod config;
@@ -33,6 +34,7 @@ mod pyfmt;
 mod res;
 mod rpe;
 mod scene;
+mod sequences;
 mod serve;
 mod shell;
 mod simulate;
@@ -66,6 +68,7 @@ enum Command {
     Man(shell::ManArgs),
     Estimate(estimate::Args),
     Evaluate(evaluate::Args),
+    Calibrate(calibrate::Args),
     Simulate(simulate::Args),
     Serve(serve::Args),
     Token(token::Args),
@@ -87,7 +90,10 @@ const GROUPS: &[(&str, &[&str])] = &[
         "evo-compatible (evo's command lines)",
         &["ape", "rpe", "traj", "res"],
     ),
-    ("SiTAR analysis", &["estimate", "evaluate", "scene"]),
+    (
+        "SiTAR analysis",
+        &["estimate", "evaluate", "calibrate", "scene"],
+    ),
     ("Tools", &["completions", "man", "help"]),
 ];
 
@@ -154,6 +160,7 @@ fn main() -> ExitCode {
         Command::Man(args) => shell::man(args, cli()),
         Command::Estimate(args) => estimate::run(args),
         Command::Evaluate(args) => evaluate::run(args),
+        Command::Calibrate(args) => calibrate::run(args),
         Command::Simulate(args) => simulate::run(args),
         Command::Serve(args) => serve::run(args),
         Command::Token(args) => token::run(args),

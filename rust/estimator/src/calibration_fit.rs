@@ -5,8 +5,8 @@ use nalgebra::{DMatrix, DVector};
 
 use crate::calibration::{
     AgreementScores, CALIBRATION_FEATURES, CALIBRATION_FORMAT, CALIBRATION_VERSION,
-    CalibrationModel, CalibrationScores, FEATURE_OFFSETS, FittedOn, FittedSequence,
-    HeldOutScores, IntervalModel, WindowFeatures, design_row, smooth, unit_of, window_features,
+    CalibrationModel, CalibrationScores, FEATURE_OFFSETS, FittedOn, FittedSequence, HeldOutScores,
+    IntervalModel, WindowFeatures, design_row, smooth, unit_of, window_features,
 };
 use crate::sync::seconds_to_ns;
 use crate::{
@@ -17,7 +17,7 @@ use crate::{
 /// The default stretch exponent ([`CalibrationModel::spread_match`]).
 pub const DEFAULT_SPREAD_MATCH: f64 = 0.45;
 /// The default number of neighbouring windows on each side averaged into a window's features.
-pub const DEFAULT_SMOOTHING_WINDOWS: usize = 4;
+pub const DEFAULT_SMOOTHING_WINDOWS: usize = 3;
 /// True errors below this are taken as this in the logarithm (0.01 mm).
 const MIN_TRUTH: f64 = 1e-5;
 
@@ -30,6 +30,8 @@ pub struct CalibrationSequence {
     pub sets: (usize, usize),
     /// The true error per window (mean RPE of set A against the ground truth).
     pub truth: Vec<f64>,
+    /// The uncalibrated estimate of the same windows.
+    pub raw: Vec<f64>,
     /// The smoothed features of the same windows.
     pub features: Vec<WindowFeatures>,
 }
@@ -55,11 +57,13 @@ impl CalibrationSequence {
             name: name.to_owned(),
             sets: (set_a.len(), set_b.len()),
             truth: Vec::new(),
+            raw: Vec::new(),
             features: Vec::new(),
         };
         for (window, f) in estimate.windows.iter().zip(features) {
             if let Some(i) = crate::evaluate::nearest(&keys, window.start, tolerance) {
                 out.truth.push(truth[i].1);
+                out.raw.push(window.error_m);
                 out.features.push(f);
             }
         }
@@ -151,11 +155,12 @@ fn check_options(sequences: &[CalibrationSequence], opts: &FitOptions) -> Result
         )));
     }
     for s in sequences {
-        if s.truth.len() != s.features.len() {
+        if s.truth.len() != s.features.len() || s.raw.len() != s.features.len() {
             return Err(Error::InvalidArgument(format!(
-                "{}: {} true errors for {} windows",
+                "{}: {} true errors and {} estimates for {} windows",
                 s.name,
                 s.truth.len(),
+                s.raw.len(),
                 s.features.len()
             )));
         }
@@ -309,7 +314,6 @@ pub fn leave_one_sequence_out(
         // The held-out model is fitted exactly as the final one, its interval included
         // (cross-conformal over the others when there are two or more of them).
         let calibration = fit_without_scores(&others, opts)?;
-        let raw: Vec<f64> = held.features.iter().map(|f| f.statistic).collect();
         let predicted: Vec<(f64, f64, f64)> = held
             .features
             .iter()
@@ -320,7 +324,7 @@ pub fn leave_one_sequence_out(
         let upper: Vec<f64> = predicted.iter().map(|p| p.2).collect();
         held_out.push(HeldOutScores {
             name: held.name.clone(),
-            raw: agreement_scores(&held.truth, &raw, None, opts.thresholds)?,
+            raw: agreement_scores(&held.truth, &held.raw, None, opts.thresholds)?,
             calibrated: agreement_scores(
                 &held.truth,
                 &value,

@@ -10,7 +10,8 @@ use rayon::prelude::*;
 
 use crate::sync::{associate_named, seconds_to_ns};
 use crate::{
-    Error, EstimateOptions, PairwiseValues, RpeOptions, Setting, Thresholds, Trajectory, rpe,
+    Calibration, Error, EstimateOptions, PairwiseValues, RpeOptions, Setting, Thresholds,
+    Trajectory, rpe,
 };
 
 /// The paper's three classifiers (Table 2): medium from 5 cm and high from 10 cm, 2 & 10 cm,
@@ -241,8 +242,12 @@ pub struct MatchedWindows {
     pub starts: Vec<i64>,
     /// True error per window (mean RPE of set A against the ground truth), metres.
     pub truth: Vec<f64>,
-    /// The estimate per window, metres.
+    /// The estimate per window, metres (calibrated by [`calibrated_matched_windows`]).
     pub estimate: Vec<f64>,
+    /// The calibrated interval's bounds per window (empty without a calibration).
+    pub lower: Vec<f64>,
+    /// See `lower`.
+    pub upper: Vec<f64>,
 }
 
 /// The protocol's matched windows for every trial count and setting of `opts` (counts
@@ -254,6 +259,32 @@ pub fn matched_windows(
     trials_b: &[Trajectory],
     opts: &EvaluationOptions,
 ) -> Result<(usize, Vec<MatchedWindows>), Error> {
+    matched_windows_with(ground_truth, trials_a, trials_b, opts, None)
+}
+
+/// [`matched_windows`] of the estimate calibrated by `calibration` (applied to the first `k`
+/// trials of set B before windows are matched), with each window's interval. Settings other
+/// than the calibration's, or another window or pose relation, are refused.
+pub fn calibrated_matched_windows(
+    ground_truth: &Trajectory,
+    trials_a: &[Trajectory],
+    trials_b: &[Trajectory],
+    opts: &EvaluationOptions,
+    calibration: &Calibration,
+) -> Result<(usize, Vec<MatchedWindows>), Error> {
+    for &setting in &opts.settings {
+        calibration.check(setting, opts.estimate.delta, opts.estimate.pose_relation)?;
+    }
+    matched_windows_with(ground_truth, trials_a, trials_b, opts, Some(calibration))
+}
+
+fn matched_windows_with(
+    ground_truth: &Trajectory,
+    trials_a: &[Trajectory],
+    trials_b: &[Trajectory],
+    opts: &EvaluationOptions,
+    calibration: Option<&Calibration>,
+) -> Result<(usize, Vec<MatchedWindows>), Error> {
     let truth = ground_truth_errors(ground_truth, trials_a, &opts.estimate)?;
     let truth_keys: Vec<i64> = truth.iter().map(|&(k, _)| k).collect();
     let tolerance = seconds_to_ns(opts.estimate.t_max_diff_s);
@@ -264,19 +295,28 @@ pub fn matched_windows(
         }
         let values = PairwiseValues::compute(&trials_b[..count], &opts.estimate)?;
         for &setting in &opts.settings {
-            let estimate = values.estimate(setting);
+            let mut estimate = values.estimate(setting);
+            if let Some(calibration) = calibration {
+                calibration.apply(&mut estimate, &trials_b[..count], "")?;
+            }
             let mut matched = MatchedWindows {
                 setting,
                 trials: count,
                 starts: Vec::new(),
                 truth: Vec::new(),
                 estimate: Vec::new(),
+                lower: Vec::new(),
+                upper: Vec::new(),
             };
             for window in &estimate.windows {
                 if let Some(index) = nearest(&truth_keys, window.start, tolerance) {
                     matched.starts.push(truth[index].0);
                     matched.truth.push(truth[index].1);
                     matched.estimate.push(window.error_m);
+                    if let Some(interval) = window.interval {
+                        matched.lower.push(interval.lower_m);
+                        matched.upper.push(interval.upper_m);
+                    }
                 }
             }
             if matched.estimate.is_empty() {

@@ -176,8 +176,8 @@ pub use bag_writer::{PoseTopic, mcap_bag, ros1_bag, rosbag2_metadata};
 pub use bootstrap::{MeanInterval, bootstrap_mean};
 pub use calibration::{
     AgreementScores, CALIBRATION_FEATURES, CALIBRATION_FORMAT, CALIBRATION_VERSION, Calibration,
-    CalibrationModel, CalibrationScores, FEATURE_OFFSETS, FittedOn, FittedSequence,
-    HeldOutScores, IntervalModel, WindowFeatures, smooth, window_features,
+    CalibrationModel, CalibrationScores, FEATURE_OFFSETS, FittedOn, FittedSequence, HeldOutScores,
+    IntervalModel, WindowFeatures, smooth, window_features,
 };
 pub use calibration_fit::{
     CalibrationSequence, DEFAULT_SMOOTHING_WINDOWS, DEFAULT_SPREAD_MATCH, FitOptions,
@@ -189,7 +189,8 @@ pub use estimate::{
 };
 pub use evaluate::{
     ClassificationScores, Evaluation, EvaluationOptions, EvaluationRow, MatchedWindows,
-    PAPER_CLASSIFIERS, classification_scores, evaluate, ground_truth_errors, matched_windows,
+    PAPER_CLASSIFIERS, calibrated_matched_windows, classification_scores, evaluate,
+    ground_truth_errors, matched_windows,
 };
 pub use formats::{
     NANOSECOND_STAMP_THRESHOLD, ReadOptions, ReadReport, StampOrder, TimeUnitRule, parse_euroc_csv,
