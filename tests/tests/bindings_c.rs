@@ -159,6 +159,8 @@ struct Api {
     summary: extern "C" fn(H, *mut Summary) -> i32,
     load_results: extern "C" fn(H, *const c_char) -> i32,
     error_at: extern "C" fn(H, i64, *mut i32, *mut f64) -> i32,
+    bounds_at: extern "C" fn(H, i64, *mut i32, *mut f64, *mut f64, *mut f64) -> i32,
+    results_calibration: extern "C" fn(H, *mut c_char, usize, *mut usize) -> i32,
     markers: extern "C" fn(H, *mut Marker, usize, *mut usize) -> i32,
     unreliable: extern "C" fn(H, *mut i32) -> i32,
     sub_class: extern "C" fn(H, u32, *mut i32) -> i32,
@@ -214,6 +216,8 @@ fn api() -> &'static Api {
             summary: sym!("sitar_session_summary"),
             load_results: sym!("sitar_session_load_results"),
             error_at: sym!("sitar_session_error_at"),
+            bounds_at: sym!("sitar_session_bounds_at"),
+            results_calibration: sym!("sitar_session_results_calibration"),
             markers: sym!("sitar_session_markers"),
             unreliable: sym!("sitar_session_results_unreliable"),
             sub_class: sym!("sitar_session_subtrajectory_class"),
@@ -1552,6 +1556,219 @@ fn angle_deg_results_use_the_degree_thresholds_and_unfit_results_are_refused() {
         );
     }
     assert_eq!((a.session_free)(h), OK);
+}
+
+/// Calibrated results as the backend writes them: per window the calibrated error, its
+/// interval (`None`: no interval) and the raw value (half the error), keys alphabetical.
+fn calibrated_json(windows: &[(f64, Option<(f64, f64)>)]) -> String {
+    let windows: Vec<String> = windows
+        .iter()
+        .enumerate()
+        .map(|(k, (e, bounds))| {
+            let start = 10 * k as i64 * FRAME_NS;
+            let end = start + 10 * FRAME_NS;
+            match bounds {
+                Some((lower, upper)) => format!(
+                    r#"{{"start":{start},"end":{end},"class":"low","error_m":{e},"lower_m":{lower},"pairs":3,"raw_m":{},"spread_m":0.01,"upper_m":{upper}}}"#,
+                    e / 2.0
+                ),
+                None => format!(
+                    r#"{{"start":{start},"end":{end},"error_m":{e},"pairs":3,"raw_m":null,"spread_m":0.01}}"#
+                ),
+            }
+        })
+        .collect();
+    format!(
+        r#"{{"version":1,"setting":"trim_mean_30","trials":3,"time_unit":"ns","pose_relation":"trans_part","window_frames":10,"unit":"m","calibration":"pixel7-arcore","windows":[{}]}}"#,
+        windows.join(",")
+    )
+}
+
+/// `(present, lower, upper, raw)` of `sitar_session_bounds_at`.
+fn bounds_at(h: H, t_ns: i64) -> (i32, f64, f64, f64) {
+    let (mut present, mut lower, mut upper, mut raw) = (-1, 0.0, 0.0, 0.0);
+    assert_eq!(
+        (api().bounds_at)(h, t_ns, &mut present, &mut lower, &mut upper, &mut raw),
+        OK,
+        "{}",
+        last_error()
+    );
+    (present, lower, upper, raw)
+}
+
+fn calibration_name(h: H) -> String {
+    let mut buf = [0u8; 64];
+    let mut len = usize::MAX;
+    assert_eq!(
+        (api().results_calibration)(h, buf.as_mut_ptr().cast(), buf.len(), &mut len),
+        OK,
+        "{}",
+        last_error()
+    );
+    assert_eq!(buf[len], 0, "NUL-terminated");
+    String::from_utf8(buf[..len].to_vec()).unwrap()
+}
+
+#[test]
+fn calibrated_results_give_bounds_and_classify_by_upper_moves_classes_and_markers() {
+    let a = api();
+    let windows = [
+        (0.01, Some((0.005, 0.02))),
+        (0.12, Some((0.05, 0.3))),
+        (0.03, Some((0.01, 0.15))),
+        (0.015, Some((0.005, 0.12))),
+        (0.025, Some((0.01, 0.04))),
+        (0.03, None),
+    ];
+    let json = c(&calibrated_json(&windows));
+    let classes = |h: H| -> Vec<i32> {
+        let mut items = [SubResult::default(); 8];
+        let mut len = 0;
+        assert_eq!((a.sub_results)(h, items.as_mut_ptr(), 8, &mut len), OK);
+        items[..len].iter().map(|r| r.error_class).collect()
+    };
+    let placed = |h: H| -> Vec<(u32, i32, f64)> {
+        let mut markers = [Marker::default(); 8];
+        let mut len = 0;
+        assert_eq!((a.markers)(h, markers.as_mut_ptr(), 8, &mut len), OK);
+        let mut found: Vec<_> = markers[..len]
+            .iter()
+            .map(|m| (m.subtrajectory, m.error_class, m.error_m))
+            .collect();
+        found.sort_by_key(|m| m.0);
+        found
+    };
+
+    // classify_by "estimate" (the default): the errors colour and place markers.
+    let h = new_session(r#"{"convention":"unity"}"#);
+    record(h);
+    let (present, lower, upper, raw) = bounds_at(h, 0);
+    assert!(present == 0 && lower.is_nan() && upper.is_nan() && raw.is_nan());
+    assert_eq!(calibration_name(h), "");
+    assert_eq!(
+        (a.load_results)(h, json.as_ptr().cast()),
+        OK,
+        "{}",
+        last_error()
+    );
+    assert_eq!(calibration_name(h), "pixel7-arcore");
+    for (k, (e, bounds)) in windows.iter().enumerate().take(5) {
+        let (l, u) = bounds.unwrap();
+        // Anywhere within the lookup tolerance of the window's start.
+        let t = 10 * k as i64 * FRAME_NS + FRAME_NS / 3;
+        assert_eq!(bounds_at(h, t), (1, l, u, e / 2.0), "sub-trajectory {k}");
+    }
+    for t in [50 * FRAME_NS, 1_000 * FRAME_NS] {
+        let (present, lower, upper, raw) = bounds_at(h, t);
+        assert!(
+            present == 0 && lower.is_nan() && upper.is_nan() && raw.is_nan(),
+            "{t}"
+        );
+    }
+    assert_eq!(classes(h), [1, 3, 1, 1, 1, 1]);
+    // 10 cm: sub 1; 5 cm: none; 2 cm: subs 2 and 4.
+    assert_eq!(placed(h), [(1, 3, 0.12), (2, 2, 0.03), (4, 2, 0.025)]);
+
+    // classify_by "upper": the upper bounds do; sub 5 has none and keeps its error.
+    let cautious = new_session(r#"{"convention":"unity","classify_by":"upper"}"#);
+    record(cautious);
+    assert_eq!((a.load_results)(cautious, json.as_ptr().cast()), OK);
+    assert_eq!(classes(cautious), [1, 3, 3, 3, 1, 1]);
+    let (mut class, mut err) = (0, 0.0);
+    assert_eq!(
+        (a.error_at)(cautious, 30 * FRAME_NS, &mut class, &mut err),
+        OK
+    );
+    assert_eq!((class, err), (3, 0.015), "the error stays the estimate");
+    // 10 cm finds subs 1, 2 and 3: sub 3 gets the marker sub 4 had.
+    assert_eq!(
+        placed(cautious),
+        [(1, 3, 0.12), (2, 3, 0.03), (3, 3, 0.015)]
+    );
+    let mut segments = [Segment::default(); 32];
+    let mut len = 0;
+    assert_eq!(
+        (a.segments)(cautious, segments.as_mut_ptr(), 32, &mut len),
+        OK
+    );
+    let class_of_sub = |k: u32| -> Vec<i32> {
+        segments[..len]
+            .iter()
+            .filter(|s| s.subtrajectory == k)
+            .map(|s| s.error_class)
+            .collect()
+    };
+    assert!(!class_of_sub(3).is_empty() && class_of_sub(3).iter().all(|&c| c == 3));
+    assert!(class_of_sub(4).iter().all(|&c| c == 1));
+
+    // Uncalibrated results replace them: no bounds, no name, the estimate's classes.
+    assert_eq!(
+        (a.load_results)(cautious, c(&results_csv(FRAME_NS, &ERRORS)).as_ptr().cast()),
+        OK
+    );
+    assert_eq!(bounds_at(cautious, 10 * FRAME_NS).0, 0);
+    assert_eq!(calibration_name(cautious), "");
+    assert_eq!(classes(cautious), [1, 3, 2, 1, 3, 1]);
+
+    // Bad bounds name the key and the window; the earlier results stay.
+    let text = calibrated_json(&windows);
+    for (bad, needle) in [
+        (
+            text.replace(r#""lower_m":0.05"#, r#""lower_m":0.5"#),
+            "windows[1].lower_m",
+        ),
+        (
+            text.replace(r#""upper_m":0.02"#, r#""upper_m":-0.02"#),
+            "windows[0].upper_m",
+        ),
+        (
+            text.replace(r#""upper_m":0.04"#, r#""upper_m":null"#),
+            "windows[4].upper_m",
+        ),
+    ] {
+        assert_ne!(bad, text);
+        expect_err(
+            (a.load_results)(h, c(&bad).as_ptr().cast()),
+            ERR_PARSE,
+            needle,
+        );
+    }
+    assert_eq!(calibration_name(h), "pixel7-arcore");
+    // NULL outputs, a too-small name buffer, a freed handle.
+    let (mut present, mut lower, mut upper, mut raw) = (0, 0.0, 0.0, 0.0);
+    expect_err(
+        (a.bounds_at)(
+            h,
+            0,
+            &mut present,
+            &mut lower,
+            std::ptr::null_mut(),
+            &mut raw,
+        ),
+        ERR_NULL,
+        "out_upper_m",
+    );
+    let mut small = [0x55u8; 4];
+    let mut len = 0;
+    assert_eq!(
+        (a.results_calibration)(h, small.as_mut_ptr().cast(), small.len(), &mut len),
+        ERR_BUFFER_TOO_SMALL
+    );
+    assert_eq!((len, &small), (13, b"pix\0"));
+    // A config naming another choice is refused, naming the key and the choices.
+    let mut other = 0;
+    expect_err(
+        (a.session_new)(c(r#"{"classify_by":"lower"}"#).as_ptr().cast(), &mut other),
+        ERR_PARSE,
+        r#"classify_by`: `lower` is not allowed; use "estimate" or "upper""#,
+    );
+    assert_eq!((a.session_free)(h), OK);
+    assert_eq!((a.session_free)(cautious), OK);
+    expect_err(
+        (a.bounds_at)(h, 0, &mut present, &mut lower, &mut upper, &mut raw),
+        ERR_INVALID_HANDLE,
+        "",
+    );
 }
 
 /// A server that answers the session request with a 400 and hands over its body.

@@ -122,6 +122,23 @@ namespace Sitar
         internal static extern int sitar_session_error_at(ulong h, long t_ns, int* out_class, double* out_error_m);
 
         /// <summary>
+        ///  The interval of the result window `sitar_session_error_at` finds at `t_ns`, in the
+        ///  results' unit (metres, or degrees): the true error lies in [lower, upper] with the
+        ///  calibration's coverage. `*out_present` = 1 when the window has one, else 0 (no window
+        ///  within the tolerance, no results, or uncalibrated results) and the bounds are NaN.
+        ///  `*out_raw_m`: the window's uncalibrated estimate, NaN when absent.
+        /// </summary>
+        [DllImport(__DllName, EntryPoint = "sitar_session_bounds_at", CallingConvention = CallingConvention.Cdecl, ExactSpelling = true)]
+        internal static extern int sitar_session_bounds_at(ulong h, long t_ns, int* out_present, double* out_lower_m, double* out_upper_m, double* out_raw_m);
+
+        /// <summary>
+        ///  The name of the calibration applied to the loaded results (text-output convention;
+        ///  "" when they are not calibrated or none are loaded).
+        /// </summary>
+        [DllImport(__DllName, EntryPoint = "sitar_session_results_calibration", CallingConvention = CallingConvention.Cdecl, ExactSpelling = true)]
+        internal static extern int sitar_session_results_calibration(ulong h, byte* buf, System.UIntPtr cap, System.UIntPtr* out_len);
+
+        /// <summary>
         ///  The markers (array-output convention; needs results loaded).
         /// </summary>
         [DllImport(__DllName, EntryPoint = "sitar_session_markers", CallingConvention = CallingConvention.Cdecl, ExactSpelling = true)]

@@ -147,6 +147,19 @@ namespace Sitar
         public double ErrorM;
     }
 
+    /// <summary>
+    /// The interval of a calibrated result window, in the results' unit (metres, or degrees
+    /// with pose_relation angle_deg): the true error lies in [LowerM, UpperM] with the
+    /// calibration's coverage (e.g. 80 %). A calibration belongs to one SLAM system and
+    /// playback device. RawM is the window's uncalibrated estimate, null when the results do
+    /// not give it.
+    /// </summary>
+    public struct ErrorBounds
+    {
+        public double LowerM, UpperM;
+        public double? RawM;
+    }
+
     /// <summary>The result of one sub-trajectory: error (in the results' unit; null when no result window is near) and class.</summary>
     public struct SubtrajectoryResult
     {
@@ -498,7 +511,12 @@ namespace Sitar
             }
         }
 
-        /// <summary>Class and error (in the results' unit; null if no result window is near) at a timestamp.</summary>
+        /// <summary>
+        /// Class and error (in the results' unit; null if no result window is near) at a
+        /// timestamp. The class is that of the value the config's classify_by picks: the error
+        /// ("estimate", default) or, with "upper", the window's upper bound where the results
+        /// give one.
+        /// </summary>
         public ErrorClass ErrorAt(long tNs, out double? errorM)
         {
             int cls;
@@ -506,6 +524,28 @@ namespace Sitar
             Native.Check(NativeMethods.sitar_session_error_at(Id, tNs, &cls, &e));
             errorM = double.IsNaN(e) ? (double?)null : e;
             return (ErrorClass)cls;
+        }
+
+        /// <summary>
+        /// The interval of the result window ErrorAt finds at tNs, when the loaded results are
+        /// calibrated; null when no window is near, no results are loaded, or they are not
+        /// calibrated.
+        /// </summary>
+        public ErrorBounds? BoundsAt(long tNs)
+        {
+            int present;
+            double lower, upper, raw;
+            Native.Check(NativeMethods.sitar_session_bounds_at(Id, tNs, &present, &lower, &upper, &raw));
+            if (present == 0) return null;
+            return new ErrorBounds { LowerM = lower, UpperM = upper, RawM = double.IsNaN(raw) ? (double?)null : raw };
+        }
+
+        /// <summary>The name of the calibration of the loaded results; null when they are not calibrated.</summary>
+        public string ResultsCalibration()
+        {
+            ulong id = Id;
+            string name = Native.Text((b, c, l) => NativeMethods.sitar_session_results_calibration(id, b, c, l));
+            return name.Length == 0 ? null : name;
         }
 
         public ErrorClass SubtrajectoryClass(uint k)

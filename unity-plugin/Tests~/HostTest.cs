@@ -281,6 +281,87 @@ static class HostTest
         }
     }
 
+    static string Num(double v)
+    {
+        return v.ToString("R", System.Globalization.CultureInfo.InvariantCulture);
+    }
+
+    /// <summary>
+    /// Calibrated results as the backend writes them: per window the calibrated error, its
+    /// interval and the raw value, keys in alphabetical order; a NaN upper bound leaves the
+    /// window without an interval.
+    /// </summary>
+    static string CalibratedJson(double[] errors, double[] lowers, double[] uppers)
+    {
+        var windows = errors.Select((e, k) =>
+        {
+            long start = 10L * k * FrameNs;
+            string head = "{\"start\":" + start + ",\"end\":" + (start + 10 * FrameNs);
+            if (double.IsNaN(uppers[k]))
+                return head + ",\"error_m\":" + Num(e) + ",\"pairs\":3,\"raw_m\":null,\"spread_m\":0.01}";
+            return head + ",\"class\":\"low\",\"error_m\":" + Num(e) + ",\"lower_m\":" + Num(lowers[k]) + ",\"pairs\":3,\"raw_m\":"
+                + Num(e / 2) + ",\"spread_m\":0.01,\"upper_m\":" + Num(uppers[k]) + "}";
+        });
+        return "{\"version\":1,\"setting\":\"trim_mean_30\",\"trials\":3,\"time_unit\":\"ns\",\"pose_relation\":\"trans_part\",\"window_frames\":10,\"unit\":\"m\",\"calibration\":\"pixel7-arcore\",\"windows\":["
+            + string.Join(",", windows) + "]}";
+    }
+
+    static void CalibratedResults()
+    {
+        double[] errors = { 0.01, 0.12, 0.03, 0.015, 0.025, 0.03 };
+        double[] lowers = { 0.005, 0.05, 0.01, 0.005, 0.01, 0.0 };
+        double[] uppers = { 0.02, 0.3, 0.15, 0.12, 0.04, double.NaN };
+        string json = CalibratedJson(errors, lowers, uppers);
+        ErrorClass low = ErrorClass.Low, high = ErrorClass.High;
+        double? err;
+
+        // classify_by "estimate" (the default): the errors colour and place markers.
+        using (var s = new SitarSession("{\"convention\":\"unity\"}"))
+        using (var cautious = new SitarSession("{\"convention\":\"unity\",\"classify_by\":\"upper\"}"))
+        {
+            Record(s);
+            Check(s.BoundsAt(0) == null && s.ResultsCalibration() == null, "no results, no bounds");
+            s.LoadResults(json);
+            Check(s.ResultsCalibration() == "pixel7-arcore", "calibration " + s.ResultsCalibration());
+            for (int k = 0; k < 5; k++)
+            {
+                ErrorBounds? b = s.BoundsAt(10L * k * FrameNs);
+                Check(b.HasValue && b.Value.LowerM == lowers[k] && b.Value.UpperM == uppers[k] && b.Value.RawM == errors[k] / 2, "bounds of sub " + k);
+            }
+            Check(s.BoundsAt(50 * FrameNs) == null, "sub 5 has no interval");
+            Check(s.BoundsAt(1000 * FrameNs) == null, "far from any window");
+            Check(s.Results().Select(r => r.ErrorClass).SequenceEqual(new[] { low, high, low, low, low, low }), "estimate classes");
+            // 10 cm: sub 1; 5 cm: none; 2 cm: subs 2 and 4.
+            Check(s.Markers().Select(m => m.Subtrajectory).OrderBy(k => k).SequenceEqual(new uint[] { 1, 2, 4 }), "estimate markers");
+
+            // classify_by "upper": the upper bounds do (sub 5 has none and keeps its error).
+            Record(cautious);
+            cautious.LoadResults(json);
+            Check(cautious.Results().Select(r => r.ErrorClass).SequenceEqual(new[] { low, high, high, high, low, low }), "upper classes");
+            Check(cautious.ErrorAt(30 * FrameNs, out err) == high && err == 0.015, "the error stays the estimate");
+            Check(cautious.SubtrajectoryClass(2) == high, "sub 2 high by its upper bound");
+            // 10 cm finds subs 1, 2 and 3: sub 3 gets the marker sub 4 had.
+            Marker[] markers = cautious.Markers().OrderBy(m => m.Subtrajectory).ToArray();
+            Check(markers.Select(m => m.Subtrajectory).SequenceEqual(new uint[] { 1, 2, 3 }), "upper markers");
+            Check(markers[2].ErrorClass == high && markers[2].ErrorM == 0.015, "marker 3");
+            RenderPlan plan = cautious.GetRenderPlan();
+            Check(plan.Segments.Any(g => g.Subtrajectory == 3), "sub 3 has segments");
+            Check(plan.Segments.Where(g => g.Subtrajectory == 3).All(g => g.ErrorClass == high), "segments of sub 3 high");
+            Check(plan.Segments.Where(g => g.Subtrajectory == 4).All(g => g.ErrorClass == low), "segments of sub 4 low");
+
+            // Uncalibrated results replace them: no bounds, no calibration, the estimate classes.
+            cautious.LoadResults(ResultsCsv());
+            Check(cautious.BoundsAt(10 * FrameNs) == null && cautious.ResultsCalibration() == null, "uncalibrated");
+            Check(cautious.ErrorAt(10 * FrameNs, out err) == high && err == 0.12, "csv class");
+
+            // Bad bounds and a bad choice are errors naming the key.
+            ExpectSitar(SitarErrorCode.Parse, "windows[1].lower_m", () => s.LoadResults(json.Replace("\"lower_m\":0.05", "\"lower_m\":0.5")));
+            ExpectSitar(SitarErrorCode.Parse, "windows[0].upper_m", () => s.LoadResults(json.Replace("\"upper_m\":0.02", "\"upper_m\":-0.02")));
+            Check(s.ResultsCalibration() == "pixel7-arcore", "earlier results kept");
+        }
+        ExpectSitar(SitarErrorCode.Parse, "classify_by", () => new SitarSession("{\"classify_by\":\"lower\"}"));
+    }
+
     const string VenueMap = "{\"id\":\"v0123456789abcdef\",\"name\":\"Hall\",\"anchor\":\"hall\",\"cell_m\":0.25,"
         + "\"convention\":\"unity\",\"unit\":\"m\",\"sessions\":[],\"cells\":["
         + "{\"center\":[1.0,0.0,0.5],\"kind\":\"path\",\"sessions\":1,\"subtrajectories\":2,\"error_m\":0.02,\"class\":\"low\",\"directions\":[2,0,0,0,0,0,0,0]},"
@@ -333,6 +414,7 @@ static class HostTest
         Playback(args[1]);
         Upload(args[1]);
         WindowSettings(args[1]);
+        CalibratedResults();
         Venue();
         Console.WriteLine("PASSED " + checks + " checks");
         return 0;

@@ -405,6 +405,22 @@ int32_t sitar_session_error_at(SitarHandle h,
                                int32_t *out_class,
                                double *out_error_m);
 
+// The interval of the result window `sitar_session_error_at` finds at `t_ns`, in the
+// results' unit (metres, or degrees): the true error lies in [lower, upper] with the
+// calibration's coverage. `*out_present` = 1 when the window has one, else 0 (no window
+// within the tolerance, no results, or uncalibrated results) and the bounds are NaN.
+// `*out_raw_m`: the window's uncalibrated estimate, NaN when absent.
+int32_t sitar_session_bounds_at(SitarHandle h,
+                                int64_t t_ns,
+                                int32_t *out_present,
+                                double *out_lower_m,
+                                double *out_upper_m,
+                                double *out_raw_m);
+
+// The name of the calibration applied to the loaded results (text-output convention;
+// "" when they are not calibrated or none are loaded).
+int32_t sitar_session_results_calibration(SitarHandle h, char *buf, size_t cap, size_t *out_len);
+
 // The markers (array-output convention; needs results loaded).
 int32_t sitar_session_markers(SitarHandle h, SitarMarker *out, size_t capacity, size_t *out_len);
 

@@ -56,6 +56,21 @@ pub struct SitarErrorAt {
     pub error_m: f64,
 }
 
+/// The interval of the result window at a timestamp (calibrated results).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct SitarBoundsAt {
+    /// 1 when the window found has an interval; 0 when no window is within the tolerance,
+    /// no results are loaded, or the results are not calibrated.
+    pub present: i32,
+    /// Lower bound in the results' unit (metres; degrees for `angle_deg`); NaN when absent.
+    pub lower_m: f64,
+    /// Upper bound in the results' unit; NaN when absent.
+    pub upper_m: f64,
+    /// The window's uncalibrated estimate in the results' unit; NaN when absent (no window,
+    /// uncalibrated results, or `null` in the results).
+    pub raw_m: f64,
+}
+
 /// A depth image borrowed from the caller: 16-bit millimetres, any row stride.
 #[derive(Debug, Clone, Copy)]
 pub struct DepthView<'a> {
@@ -317,6 +332,29 @@ pub fn session_error_at(h: SitarHandle, t_ns: i64) -> Result<SitarErrorAt, Error
             error_class: class as i32,
             error_m: error.unwrap_or(f64::NAN),
         })
+    })
+}
+
+/// The interval (and raw value) of the window `session_error_at` finds at a timestamp.
+pub fn session_bounds_at(h: SitarHandle, t_ns: i64) -> Result<SitarBoundsAt, Error> {
+    with_session(h, |s| {
+        let window = s.result_at(t_ns);
+        let interval = window.and_then(|w| w.interval);
+        Ok(SitarBoundsAt {
+            present: i32::from(interval.is_some()),
+            lower_m: interval.map_or(f64::NAN, |i| i.lower),
+            upper_m: interval.map_or(f64::NAN, |i| i.upper),
+            raw_m: window.and_then(|w| w.raw).unwrap_or(f64::NAN),
+        })
+    })
+}
+
+/// The name of the calibration of the loaded results; "" when uncalibrated or none loaded.
+pub fn session_results_calibration(h: SitarHandle) -> Result<String, Error> {
+    with_session(h, |s| {
+        Ok(s.results()
+            .and_then(|r| r.calibration.clone())
+            .unwrap_or_default())
     })
 }
 

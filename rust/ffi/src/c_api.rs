@@ -20,7 +20,7 @@
 
 use std::ffi::{c_char, CStr};
 
-use crate::bridge::{DepthView, PlanEnds, SitarErrorAt};
+use crate::bridge::{DepthView, PlanEnds, SitarBoundsAt, SitarErrorAt};
 use crate::error::Error;
 use crate::guard::with_last_error;
 use crate::types::SitarPose;
@@ -197,6 +197,12 @@ impl WriteOuts<(&mut i32, &mut f64)> for SitarErrorAt {
     }
 }
 
+impl WriteOuts<(&mut i32, &mut f64, &mut f64, &mut f64)> for SitarBoundsAt {
+    fn write_outs(self, (present, lower, upper, raw): (&mut i32, &mut f64, &mut f64, &mut f64)) {
+        (*present, *lower, *upper, *raw) = (self.present, self.lower_m, self.upper_m, self.raw_m);
+    }
+}
+
 /// `*out_mask` bit 1: the start was written; bit 2: the stop was.
 impl WriteOuts<(&mut SitarPose, &mut SitarPose, &mut u32)> for PlanEnds {
     fn write_outs(self, (start, stop, mask): (&mut SitarPose, &mut SitarPose, &mut u32)) {
@@ -323,6 +329,16 @@ mod tests {
         }
         .write_outs((&mut class, &mut error));
         assert_eq!((class, error), (3, 0.2));
+        let (mut present, mut lower, mut upper, mut raw) = (7, 0.0, 0.0, 0.0);
+        SitarBoundsAt {
+            present: 1,
+            lower_m: 0.01,
+            upper_m: 0.3,
+            raw_m: f64::NAN,
+        }
+        .write_outs((&mut present, &mut lower, &mut upper, &mut raw));
+        assert_eq!((present, lower, upper), (1, 0.01, 0.3));
+        assert!(raw.is_nan());
         let marker = SitarPose {
             px: -7.0,
             ..SitarPose::default()

@@ -13,7 +13,7 @@ use jni::objects::{JByteArray, JByteBuffer, JClass, JObject, JShortArray, JStrin
 use jni::sys::{jdouble, jint, jlong};
 use jni::EnvUnowned;
 
-use crate::bridge::{PlanEnds, RenderPlanC, SitarErrorAt};
+use crate::bridge::{PlanEnds, RenderPlanC, SitarBoundsAt, SitarErrorAt};
 use crate::registry::SitarHandle;
 use crate::types::{
     SitarEvidence, SitarFrustum, SitarGuide, SitarIntrinsics, SitarJobProgress, SitarJoint,
@@ -103,6 +103,20 @@ crate::exports_macro::exports! {
     /// error in the results' unit, metres or degrees (NaN when unknown).
     fn session_error_at(h: SitarHandle, t_ns: i64) -> SitarErrorAt
         => c sitar_session_error_at(out_class: i32, out_error_m: f64) jni sessionErrorAt;
+
+    /// The interval of the result window `sitar_session_error_at` finds at `t_ns`, in the
+    /// results' unit (metres, or degrees): the true error lies in [lower, upper] with the
+    /// calibration's coverage. `*out_present` = 1 when the window has one, else 0 (no window
+    /// within the tolerance, no results, or uncalibrated results) and the bounds are NaN.
+    /// `*out_raw_m`: the window's uncalibrated estimate, NaN when absent.
+    fn session_bounds_at(h: SitarHandle, t_ns: i64) -> SitarBoundsAt
+        => c sitar_session_bounds_at(out_present: i32, out_lower_m: f64, out_upper_m: f64,
+            out_raw_m: f64) jni sessionBoundsAt;
+
+    /// The name of the calibration applied to the loaded results (text-output convention;
+    /// "" when they are not calibrated or none are loaded).
+    fn session_results_calibration(h: SitarHandle) -> String
+        => c sitar_session_results_calibration(text) jni sessionResultsCalibration;
 
     /// The markers (array-output convention; needs results loaded).
     fn session_markers(h: SitarHandle) -> Vec<SitarMarker>

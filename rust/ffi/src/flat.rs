@@ -6,7 +6,7 @@
 use jni::objects::JDoubleArray;
 use jni::Env;
 
-use crate::bridge::{PlanEnds, RenderPlanC, SitarErrorAt};
+use crate::bridge::{PlanEnds, RenderPlanC, SitarBoundsAt, SitarErrorAt};
 use crate::descriptors::FlatLayout;
 use crate::error::Error;
 use crate::jni_api::{doubles, IntoJava};
@@ -114,6 +114,7 @@ flat_layouts! {
         frames, midpoints, subtrajectories, depth_samples, duration_s, length_m, mean_depth_m,
     }
     SitarErrorAt as ErrorAt { error_class, error_m }
+    SitarBoundsAt as BoundsAt { present, lower_m, upper_m, raw_m }
     SitarMarker as Marker {
         px, py, pz, qx, qy, qz, qw, nx, ny, nz, error_class, subtrajectory, error_m,
     }
@@ -210,6 +211,7 @@ mod tests {
                 "Pose" => SitarPose::WIDTH,
                 "Summary" => SitarSummary::WIDTH,
                 "ErrorAt" => SitarErrorAt::WIDTH,
+                "BoundsAt" => SitarBoundsAt::WIDTH,
                 "Marker" => SitarMarker::WIDTH,
                 "SubtrajectoryResult" => SitarSubtrajectoryResult::WIDTH,
                 "Segment" => SitarSegment::WIDTH,

@@ -249,6 +249,73 @@ private fun windowSettings(tmp: File) {
     long.close()
 }
 
+/**
+ * Calibrated results as the backend writes them: per window the calibrated error, its
+ * interval and the raw value, keys in alphabetical order; a null upper bound leaves the window
+ * without an interval.
+ */
+private fun calibratedJson(errors: DoubleArray, lowers: DoubleArray, uppers: Array<Double?>): String {
+    val windows = errors.indices.joinToString(",") { k ->
+        val start = 10L * k * FRAME_NS
+        val upper = uppers[k]
+        if (upper == null) """{"start":$start,"end":${start + 10 * FRAME_NS},"error_m":${errors[k]},"pairs":3,"raw_m":null,"spread_m":0.01}"""
+        else """{"start":$start,"end":${start + 10 * FRAME_NS},"class":"low","error_m":${errors[k]},"lower_m":${lowers[k]},"pairs":3,"raw_m":${errors[k] / 2},"spread_m":0.01,"upper_m":$upper}"""
+    }
+    return """{"version":1,"setting":"trim_mean_30","trials":3,"time_unit":"ns","pose_relation":"trans_part","window_frames":10,"unit":"m","calibration":"pixel7-arcore","windows":[$windows]}"""
+}
+
+private fun calibratedResults() {
+    val errors = doubleArrayOf(0.01, 0.12, 0.03, 0.015, 0.025, 0.03)
+    val lowers = doubleArrayOf(0.005, 0.05, 0.01, 0.005, 0.01, 0.0)
+    val uppers = arrayOf<Double?>(0.02, 0.3, 0.15, 0.12, 0.04, null)
+    val json = calibratedJson(errors, lowers, uppers)
+    val (low, medium, high) = Triple(ErrorClass.LOW, ErrorClass.MEDIUM, ErrorClass.HIGH)
+
+    // classify_by "estimate" (the default): the errors colour and place markers.
+    val s = SitarSession("""{"convention":"unity"}""")
+    record(s)
+    check(s.boundsAt(0) == null && s.resultsCalibration() == null, "no results, no bounds")
+    s.loadResults(json)
+    check(s.resultsCalibration() == "pixel7-arcore", "calibration ${s.resultsCalibration()}")
+    for (k in 0 until 5) {
+        check(s.boundsAt(10L * k * FRAME_NS) == ErrorBounds(lowers[k], uppers[k]!!, errors[k] / 2), "bounds of sub $k: ${s.boundsAt(10L * k * FRAME_NS)}")
+    }
+    check(s.boundsAt(50 * FRAME_NS) == null, "sub 5 has no interval")
+    check(s.boundsAt(1000 * FRAME_NS) == null, "far from any window")
+    check(s.results().map { it.errorClass } == listOf(low, high, low, low, low, low), "estimate classes ${s.results()}")
+    // 10 cm: sub 1; 5 cm: none; 2 cm: subs 2 and 4.
+    check(s.markers().map { it.subtrajectory }.sorted() == listOf(1, 2, 4), "estimate markers ${s.markers()}")
+
+    // classify_by "upper": the upper bounds do (sub 5 has none and keeps its error).
+    val cautious = SitarSession("""{"convention":"unity","classify_by":"upper"}""")
+    record(cautious)
+    cautious.loadResults(json)
+    check(cautious.results().map { it.errorClass } == listOf(low, high, high, high, low, low), "upper classes ${cautious.results()}")
+    check(cautious.errorAt(30 * FRAME_NS) == ErrorAt(high, 0.015), "error stays the estimate: ${cautious.errorAt(30 * FRAME_NS)}")
+    check(cautious.subtrajectoryClass(2) == high, "sub 2 high by its upper bound")
+    // 10 cm finds subs 1, 2 and 3: sub 3 gets the marker sub 4 had.
+    val markers = cautious.markers().sortedBy { it.subtrajectory }
+    check(markers.map { it.subtrajectory } == listOf(1, 2, 3), "upper markers $markers")
+    check(markers[2].errorClass == high && markers[2].errorM == 0.015, "marker 3: ${markers[2]}")
+    val plan = cautious.renderPlan()
+    check(plan.segments.filter { it.subtrajectory == 3 }.all { it.errorClass == high }, "segments of sub 3 high")
+    check(plan.segments.filter { it.subtrajectory == 4 }.all { it.errorClass == low }, "segments of sub 4 low")
+    check(plan.segments.any { it.subtrajectory == 3 }, "sub 3 has segments")
+
+    // Uncalibrated results replace them: no bounds, no calibration, the estimate classes.
+    cautious.loadResults(resultsCsv())
+    check(cautious.boundsAt(10 * FRAME_NS) == null && cautious.resultsCalibration() == null, "uncalibrated")
+    check(cautious.errorAt(10 * FRAME_NS) == ErrorAt(high, 0.12), "csv class")
+
+    // Bad bounds and a bad choice are errors naming the key.
+    expectSitar(SitarStatus.PARSE, "windows[1].lower_m") { s.loadResults(json.replace("\"lower_m\":0.05", "\"lower_m\":0.5")) }
+    expectSitar(SitarStatus.PARSE, "windows[0].upper_m") { s.loadResults(json.replace("\"upper_m\":0.02", "\"upper_m\":-0.02")) }
+    check(s.resultsCalibration() == "pixel7-arcore", "earlier results kept")
+    expectSitar(SitarStatus.PARSE, "classify_by") { SitarSession("""{"classify_by":"lower"}""") }
+    s.close()
+    cautious.close()
+}
+
 /** A venue map of two cells around its anchor `hall`: a low path cell and a high surface cell. */
 private const val VENUE_MAP = """{"id":"v0123456789abcdef","name":"Hall","anchor":"hall","cell_m":0.25,
     "convention":"unity","unit":"m","sessions":[{"id":"s1","aligned":false,"reason":"never fully tracked"}],
@@ -311,6 +378,7 @@ fun main(args: Array<String>) {
     playback(tmp)
     upload(tmp)
     windowSettings(tmp)
+    calibratedResults()
     venue()
     println("PASSED $checks checks")
 }

@@ -36,6 +36,16 @@ internal object ErrorAtLayout {
     const val SIZE = 2
 }
 
+/** Offsets into the flat `DoubleArray` of a `SitarBoundsAt` (`rust/ffi/src/flat.rs`). */
+internal object BoundsAtLayout {
+    const val PRESENT = 0
+    const val LOWER_M = 1
+    const val UPPER_M = 2
+    const val RAW_M = 3
+    /** Doubles per item. */
+    const val SIZE = 4
+}
+
 /** Offsets into the flat `DoubleArray` of a `SitarMarker` (`rust/ffi/src/flat.rs`). */
 internal object MarkerLayout {
     const val PX = 0

@@ -71,8 +71,22 @@ class SitarSession private constructor(handle: Long) : AutoCloseable {
      */
     fun loadResults(csvOrJson: String) = Native.sessionLoadResults(handle, csvOrJson)
 
-    /** Class and error at a timestamp (nearest result window within tolerance). */
+    /**
+     * Class and error at a timestamp (nearest result window within tolerance). The class is
+     * that of the value the config's `classify_by` picks: the error (`"estimate"`, default)
+     * or, with `"upper"`, the window's upper bound where the results give one.
+     */
     fun errorAt(tNs: Long): ErrorAt = ErrorAt.of(Native.sessionErrorAt(handle, tNs))
+
+    /**
+     * The interval of the result window [errorAt] finds at [tNs], when the loaded results
+     * are calibrated; null when no window is near, no results are loaded, or they are not
+     * calibrated.
+     */
+    fun boundsAt(tNs: Long): ErrorBounds? = ErrorBounds.of(Native.sessionBoundsAt(handle, tNs))
+
+    /** The name of the calibration of the loaded results; null when they are not calibrated. */
+    fun resultsCalibration(): String? = Native.sessionResultsCalibration(handle).ifEmpty { null }
 
     /** The class of sub-trajectory [k]. */
     fun subtrajectoryClass(k: Int): ErrorClass = ErrorClass.of(Native.sessionSubtrajectoryClass(handle, k))

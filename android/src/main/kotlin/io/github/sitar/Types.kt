@@ -56,6 +56,23 @@ data class ErrorAt(val errorClass: ErrorClass, val errorM: Double?) {
 }
 
 /**
+ * The interval of a calibrated result window, in the results' unit (metres, or degrees with
+ * `pose_relation` `angle_deg`): the true error lies in [[lowerM], [upperM]] with the
+ * calibration's coverage (e.g. 80 %). A calibration belongs to one SLAM system and playback
+ * device. [rawM] is the window's uncalibrated estimate, null when the results do not give it.
+ */
+data class ErrorBounds(val lowerM: Double, val upperM: Double, val rawM: Double?) {
+    internal companion object {
+        /** Null when the window has no interval. */
+        fun of(v: DoubleArray): ErrorBounds? {
+            if (v[BoundsAtLayout.PRESENT] == 0.0) return null
+            val raw = v[BoundsAtLayout.RAW_M]
+            return ErrorBounds(v[BoundsAtLayout.LOWER_M], v[BoundsAtLayout.UPPER_M], if (raw.isNaN()) null else raw)
+        }
+    }
+}
+
+/**
  * A marker: position, warning-sign rotation (local +Y along the normal), surface normal; the
  * error is in the results' unit (metres, or degrees for `angle_deg`).
  */
