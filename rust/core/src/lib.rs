@@ -75,6 +75,11 @@
 //!   classes and markers use the thresholds of the results' unit
 //!   ([`SessionConfig::thresholds_for`]; degree defaults 2°/4° and markers `[4, 2, 0.8,
 //!   0.4]`°, the metric ones at 40° per metre).
+//! * Calibrated results name their calibration ([`Results::calibration`]) and give each
+//!   window its uncalibrated value and an interval that holds the true error with the
+//!   calibration's coverage ([`ResultWindow::raw`], [`ResultWindow::interval`]);
+//!   [`Session::result_at`] returns them with the window. The config's `classify_by`
+//!   ([`ClassifyBy`]) colours windows and places markers by the error or by the upper bound.
 //! * [`RenderPlan`]: cylinders, joints, frustums every `frustum_spacing_m`, start/stop.
 //! * [`PlaybackLogger`]: the playback device's per-frame TUM log.
 //!
