@@ -259,6 +259,10 @@ pub struct ServerConfig {
     /// Whether sessions may ask for `sim` playback on a server whose `playback` is another
     /// (default false): simulated playback costs CPU and is for demos and tests.
     pub allow_sim: bool,
+    /// Calibrations sessions may name (`"calibration"` in `POST /v1/sessions`), read and
+    /// checked at start (`sitar serve --calibration NAME=FILE`; at most
+    /// [`MAX_CALIBRATIONS`](crate::MAX_CALIBRATIONS)); none by default.
+    pub calibrations: crate::estimate::calibrations::Calibrations,
 }
 
 /// How long an instance may be silent (no heartbeat in the database) before the others
@@ -313,6 +317,7 @@ impl ServerConfig {
             instance_timeout: INSTANCE_TIMEOUT,
             max_trials: 100,
             allow_sim: false,
+            calibrations: Default::default(),
         }
     }
 }

@@ -110,6 +110,7 @@ pub use auth::{
 };
 pub use config::{AdbConfig, PlaybackKind, ServerConfig, SimConfig};
 pub use error::Error;
+pub use estimate::calibrations::{Calibrations, MAX_CALIBRATIONS, is_calibration_name};
 pub use http::helpers::IDEMPOTENCY_HEADER;
 pub use http::server::{Server, ServerHandle};
 pub use http::tls::TlsConfig;

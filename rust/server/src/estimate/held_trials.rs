@@ -10,8 +10,17 @@
 //! bounds. A final estimate with no state yet (an `upload` session without progressive
 //! estimates, or one rebuilt after a restart) is one one-shot estimate, cheaper than pushing
 //! every trial.
+//!
+//! A calibrated session's estimate is calibrated here, over the same trials in playback
+//! order (the calibration looks at the motion of the first trials that have each window):
+//! exactly what `Calibration::apply` gives on the one-shot estimate. The incremental state
+//! holds its trials in the order they arrived; when that is not playback order (parallel
+//! phones), the trials are copied into playback order for the calibration's look, and the
+//! copy freed at once.
 
-use sitar_estimator::{Estimate, IncrementalEstimate, Trajectory};
+use std::borrow::Cow;
+
+use sitar_estimator::{Calibration, Estimate, IncrementalEstimate, Trajectory};
 
 use crate::Error;
 use crate::session::estimate_settings::EstimateSettings;
@@ -44,6 +53,10 @@ pub(crate) enum Purpose {
 pub(crate) struct HeldTrials {
     /// Places of the trials the estimator holds, ascending.
     order: Vec<(u32, u32)>,
+    /// Places of the incremental state's trials in the order they were pushed (its
+    /// `trajectories()` order); empty for one-shot estimates, whose trials are in playback
+    /// order.
+    pushed: Vec<(u32, u32)>,
     estimator: Estimator,
     /// Trials taken from the inbox, not yet given to the estimator, sorted by place.
     waiting: Vec<Held>,
@@ -74,6 +87,7 @@ impl HeldTrials {
         };
         HeldTrials {
             order: Vec::new(),
+            pushed: Vec::new(),
             estimator,
             waiting: Vec::new(),
             counted: 0,
@@ -109,14 +123,16 @@ impl HeldTrials {
         }
     }
 
-    /// The estimate over every held trial in playback order (at least 2), and the first of
-    /// them (the reference whose frames the phone colours). Growth of the state is counted
-    /// in `budget`; when it is refused the state is dropped and this estimate is one-shot.
+    /// The estimate over every held trial in playback order (at least 2), calibrated with
+    /// `calibration` (and its name) when given, and the first of the trials (the reference
+    /// whose frames the phone colours). Growth of the state is counted in `budget`; when it
+    /// is refused the state is dropped and this estimate is one-shot.
     pub fn estimate(
         &mut self,
         settings: &EstimateSettings,
         purpose: Purpose,
         budget: &dyn StateBudget,
+        calibration: Option<(&Calibration, &str)>,
     ) -> Result<(Estimate, &Trajectory), Error> {
         self.bring_in(purpose);
         let mut now = self.state_bytes();
@@ -141,9 +157,31 @@ impl HeldTrials {
                 trials.first(),
             ),
         };
-        let estimate = estimate.map_err(|e| Error::Estimate(e.to_string()))?;
+        let mut estimate = estimate.map_err(|e| Error::Estimate(e.to_string()))?;
         let first = first.ok_or_else(|| Error::Estimate("no trials".into()))?;
+        if let Some((calibration, name)) = calibration {
+            calibration
+                .apply(&mut estimate, &self.in_playback_order(), name)
+                .map_err(|e| Error::Estimate(format!("calibration {name}: {e}")))?;
+        }
         Ok((estimate, first))
+    }
+
+    /// The estimator's trials in playback order: its own when they are (one-shot, or pushed
+    /// in order), else a copy.
+    fn in_playback_order(&self) -> Cow<'_, [Trajectory]> {
+        match &self.estimator {
+            Estimator::OneShot(trials) => Cow::Borrowed(trials),
+            Estimator::Incremental(state) => {
+                let trials = state.trajectories();
+                if self.pushed.windows(2).all(|w| w[0] <= w[1]) {
+                    return Cow::Borrowed(trials);
+                }
+                let mut at: Vec<usize> = (0..trials.len()).collect();
+                at.sort_by_key(|&i| self.pushed[i]);
+                Cow::Owned(at.into_iter().map(|i| trials[i].clone()).collect())
+            }
+        }
     }
 
     /// Gives the waiting trials to the estimator, each at its place in playback order.
@@ -160,12 +198,15 @@ impl HeldTrials {
                 Estimator::Incremental(state) => {
                     let (play, index) = held.order;
                     let place = (u64::from(play) << 32) | u64::from(index);
-                    if let Err(rejected) = state.try_push_ordered(held.trial, place) {
-                        let (e, trial) = *rejected;
-                        log::info!("incremental estimate given up: {e}");
-                        self.give_up_state();
-                        if let Estimator::OneShot(trials) = &mut self.estimator {
-                            trials.insert(at, trial);
+                    match state.try_push_ordered(held.trial, place) {
+                        Ok(()) => self.pushed.push(held.order),
+                        Err(rejected) => {
+                            let (e, trial) = *rejected;
+                            log::info!("incremental estimate given up: {e}");
+                            self.give_up_state();
+                            if let Estimator::OneShot(trials) = &mut self.estimator {
+                                trials.insert(at, trial);
+                            }
                         }
                     }
                 }
@@ -181,5 +222,6 @@ impl HeldTrials {
             Estimator::OneShot(trials) => trials,
         };
         self.estimator = Estimator::OneShot(trials);
+        self.pushed = Vec::new();
     }
 }

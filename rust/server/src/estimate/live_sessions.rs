@@ -28,6 +28,7 @@ use sitar_core::Thresholds;
 use sitar_estimator::Trajectory;
 
 use crate::Error;
+use crate::estimate::calibrations::SessionCalibration;
 use crate::estimate::held_trials::{Held, HeldTrials, Purpose, StateBudget, trial_bytes};
 use crate::estimate::publishing::Published;
 use crate::session::estimate_settings::EstimateSettings;
@@ -69,11 +70,13 @@ impl LiveSessions {
 
     /// The live session `id`, made with `trials` (its stored trials, as (playback index,
     /// storage index, trial)) when it is not in memory. `published` is the trial count of
-    /// its latest published results. Another request's session made meanwhile wins.
+    /// its latest published results; `calibration` what its estimates are calibrated with.
+    /// Another request's session made meanwhile wins.
     pub fn get_or_insert(
         &self,
         id: &str,
         settings: EstimateSettings,
+        calibration: SessionCalibration,
         thresholds: Thresholds,
         published: u32,
         trials: impl FnOnce() -> Result<Vec<(u32, u32, Trajectory)>, Error>,
@@ -84,6 +87,7 @@ impl LiveSessions {
         let live = Arc::new(LiveSession {
             id: id.to_string(),
             settings,
+            calibration,
             thresholds,
             inbox: Mutex::new(Vec::new()),
             held: Arc::new(tokio::sync::Mutex::new(HeldTrials::new(&settings))),
@@ -118,6 +122,8 @@ impl LiveSessions {
 pub(crate) struct LiveSession {
     id: String,
     settings: EstimateSettings,
+    /// Every estimate published is calibrated with it (or says that it is missing).
+    calibration: SessionCalibration,
     thresholds: Thresholds,
     /// Trials that arrived since an estimate last took them.
     inbox: Mutex<Vec<Held>>,
@@ -256,13 +262,19 @@ impl LiveSession {
             if count < 2 || count == live.published() {
                 return Ok(None);
             }
-            let (estimate, reference) = held.estimate(&live.settings, purpose, live.as_ref())?;
-            let published = Published::new(
+            let (estimate, reference) = held.estimate(
+                &live.settings,
+                purpose,
+                live.as_ref(),
+                live.calibration.applied(),
+            )?;
+            let mut published = Published::new(
                 &estimate,
                 reference,
                 live.settings.window_frames as usize,
                 live.thresholds,
             );
+            published.json = live.calibration.mark(std::mem::take(&mut published.json));
             write(&published)?;
             live.published.store(count, Ordering::SeqCst);
             drop(held);
@@ -336,6 +348,7 @@ mod tests {
             .get_or_insert(
                 id,
                 settings(),
+                Default::default(),
                 Thresholds::DEFAULT_DEG,
                 0,
                 || Ok(Vec::new()),
@@ -407,6 +420,81 @@ mod tests {
         assert!(progressive(&live).await.is_none());
         drop(live);
         assert_eq!(sessions.held_bytes(), 0);
+    }
+
+    #[tokio::test]
+    async fn a_calibrated_session_publishes_the_calibrated_one_shot_in_any_arrival_order() {
+        use crate::estimate::calibrations::tests::calibration as calibration_json;
+        let calibration = sitar_estimator::Calibration::from_json(
+            &calibration_json("median", 5, "angle_deg"),
+            "test",
+        )
+        .unwrap();
+        let expected = |plays: &[u64]| {
+            let trials: Vec<Trajectory> = plays.iter().map(|&p| trial(p)).collect();
+            let mut estimate = sitar_estimator::estimate(&trials, &settings().options()).unwrap();
+            calibration.apply(&mut estimate, &trials, "lab").unwrap();
+            estimate.to_json(Thresholds::DEFAULT_DEG)
+        };
+        let sessions = LiveSessions::new(1 << 24, 1 << 24);
+        let applied = SessionCalibration::Apply {
+            name: "lab".into(),
+            calibration: Arc::new(calibration.clone()),
+        };
+        let live = sessions
+            .get_or_insert("a", settings(), applied, Thresholds::DEFAULT_DEG, 0, || {
+                Ok(Vec::new())
+            })
+            .unwrap();
+        for (play, index) in [(2, 0), (0, 1)] {
+            add(&live, play, index);
+        }
+        let published = progressive(&live).await.unwrap();
+        assert_eq!(published.json, expected(&[0, 2]));
+        assert!(published.json.contains(r#""calibration":"lab""#));
+        assert!(
+            published.json.contains(r#""lower_deg":"#),
+            "{}",
+            published.json
+        );
+        // Trial 1 joins after trial 2: the state holds them out of playback order, the
+        // calibration looks at them in order.
+        add(&live, 1, 2);
+        let published = progressive(&live).await.unwrap();
+        assert_eq!(published.json, expected(&[0, 1, 2]));
+        assert!(live.incremental().await);
+        add(&live, 3, 3);
+        let published = live
+            .publish(Purpose::Final, |_| Ok(()))
+            .await
+            .unwrap()
+            .unwrap();
+        assert_eq!(published.json, expected(&[0, 1, 2, 3]));
+        // The legacy CSV carries the calibrated errors, in its own shape.
+        let trials: Vec<Trajectory> = (0..4).map(trial).collect();
+        let mut estimate = sitar_estimator::estimate(&trials, &settings().options()).unwrap();
+        calibration.apply(&mut estimate, &trials, "lab").unwrap();
+        assert_eq!(published.csv, estimate.to_legacy_csv());
+        assert!(published.csv.starts_with("start,error\n"));
+
+        // Asked for but not on this server: the uncalibrated estimate, saying so.
+        let missing = sessions
+            .get_or_insert(
+                "b",
+                settings(),
+                SessionCalibration::Missing("gone".into()),
+                Thresholds::DEFAULT_DEG,
+                0,
+                || Ok(Vec::new()),
+            )
+            .unwrap();
+        add_in_order(&missing, 0..2);
+        let published = progressive(&missing).await.unwrap();
+        let plain = one_shot(&[0, 1]);
+        assert_eq!(
+            published.json,
+            format!(r#"{{"calibration_missing":"gone",{}"#, &plain[1..])
+        );
     }
 
     #[tokio::test]
@@ -525,26 +613,41 @@ mod tests {
     fn a_rebuilt_session_starts_from_its_stored_trials_and_published_count() {
         let sessions = LiveSessions::new(1 << 20, 1 << 20);
         let live = sessions
-            .get_or_insert("a", settings(), Thresholds::DEFAULT_DEG, 2, || {
-                Ok(vec![(0, 0, trial(0)), (1, 1, trial(1))])
-            })
+            .get_or_insert(
+                "a",
+                settings(),
+                Default::default(),
+                Thresholds::DEFAULT_DEG,
+                2,
+                || Ok(vec![(0, 0, trial(0)), (1, 1, trial(1))]),
+            )
             .unwrap();
         assert_eq!(live.published(), 2);
         assert!(live.has_new());
         assert_eq!(sessions.held_bytes(), 2 * trial_bytes(&trial(0)));
         // In memory now: a second lookup does not read the files again.
         let again = sessions
-            .get_or_insert("a", settings(), Thresholds::DEFAULT_DEG, 0, || {
-                Err(Error::Internal("read again".into()))
-            })
+            .get_or_insert(
+                "a",
+                settings(),
+                Default::default(),
+                Thresholds::DEFAULT_DEG,
+                0,
+                || Err(Error::Internal("read again".into())),
+            )
             .unwrap();
         assert!(Arc::ptr_eq(&live, &again));
         // A trial file over the bound: the rebuild fails and holds nothing.
         let tight = LiveSessions::new(10, 1 << 20);
         let err = tight
-            .get_or_insert("b", settings(), Thresholds::DEFAULT_DEG, 0, || {
-                Ok(vec![(0, 0, trial(0))])
-            })
+            .get_or_insert(
+                "b",
+                settings(),
+                Default::default(),
+                Thresholds::DEFAULT_DEG,
+                0,
+                || Ok(vec![(0, 0, trial(0))]),
+            )
             .err()
             .unwrap();
         assert!(matches!(err, Error::TooLarge { .. }));

@@ -121,9 +121,21 @@ pub(crate) async fn live_session(
     let id = session.id.clone();
     tokio::task::spawn_blocking(move || {
         let thresholds = session.settings.thresholds(&shared.config);
+        let calibration = shared
+            .config
+            .calibrations
+            .for_session(session.calibration.as_deref());
+        if let crate::estimate::calibrations::SessionCalibration::Missing(name) = &calibration {
+            log::warn!(
+                "session {}: calibration {name} is not on this server (sitar serve \
+                 --calibration {name}=FILE): its estimates are published uncalibrated",
+                session.id
+            );
+        }
         shared.live.get_or_insert(
             &session.id,
             session.settings,
+            calibration,
             thresholds,
             session.results_trials,
             || {

@@ -39,6 +39,8 @@ pub(crate) struct Session {
     pub venue: Option<String>,
     /// The coordinate convention of the phone that recorded it.
     pub convention: Convention,
+    /// The calibration its estimates are calibrated with, by name (`None`: uncalibrated).
+    pub calibration: Option<String>,
 }
 
 impl Session {
@@ -89,4 +91,7 @@ pub(crate) struct NewSession<'a> {
     pub venue: Option<&'a str>,
     /// The phone's coordinate convention (a venue's sessions share one).
     pub convention: Convention,
+    /// The calibration asked for (checked by the caller: one the server has, fitted for the
+    /// session's settings).
+    pub calibration: Option<&'a str>,
 }

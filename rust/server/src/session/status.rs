@@ -61,7 +61,7 @@ pub(crate) fn status_json(shared: &App, session: &Session) -> Result<serde_json:
         .map(|f| json!({"index": f.index, "source": f.source, "error": f.error}))
         .collect();
     let settings = &session.settings;
-    Ok(json!({
+    let mut doc = json!({
         "id": session.id,
         "state": session.state.as_str(),
         "progress": (progress * 1000.0).round() / 1000.0,
@@ -84,5 +84,15 @@ pub(crate) fn status_json(shared: &App, session: &Session) -> Result<serde_json:
         "venue": session.venue,
         // From the phone's anchors.csv; null in no venue or without one.
         "alignment": alignment_json(&*shared.db, &*shared.blobs, session)?,
-    }))
+        // The calibration its estimates are calibrated with (null: uncalibrated).
+        "calibration": session.calibration,
+    });
+    // Asked for, but this server was started without it: its estimates are published
+    // uncalibrated (and their results say so).
+    if let Some(name) = &session.calibration
+        && shared.config.calibrations.get(name).is_none()
+    {
+        doc["calibration_missing"] = true.into();
+    }
+    Ok(doc)
 }

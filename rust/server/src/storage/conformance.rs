@@ -44,6 +44,7 @@ pub(crate) fn new_session(
         owner,
         venue: None,
         convention: sitar_core::Convention::Unity,
+        calibration: None,
     }
 }
 
@@ -66,9 +67,37 @@ fn sessions_are_created_once_per_key(store: &dyn MetadataStore) {
     let refused = store.insert_session("s1000000000000003", &other);
     assert!(refused.is_err(), "{refused:?}");
     assert!(store.session("s1000000000000003").unwrap().is_none());
+    // Another calibration is another request too.
+    let calibrated = NewSession {
+        calibration: Some("lab-phone"),
+        ..new_session(Some("key-1"), PlaybackKind::Sim, Some(7))
+    };
+    assert!(
+        store
+            .insert_session("s1000000000000003", &calibrated)
+            .is_err()
+    );
     let row = store.session("s1000000000000001").unwrap().unwrap();
     assert_eq!(row.state, SessionState::Created);
     assert_eq!((row.trials_total, row.owner), (5, Some(7)));
+    assert_eq!(row.calibration, None);
+    // A calibrated session keeps its calibration's name, and its key returns it.
+    let calibrated = NewSession {
+        idempotency_key: Some("key-cal"),
+        ..calibrated
+    };
+    for _ in 0..2 {
+        assert_eq!(
+            store
+                .insert_session("s10000000000000c1", &calibrated)
+                .unwrap()
+                .0,
+            "s10000000000000c1"
+        );
+    }
+    let row = store.session("s10000000000000c1").unwrap().unwrap();
+    assert_eq!(row.calibration.as_deref(), Some("lab-phone"));
+    assert!(store.delete_session("s10000000000000c1").unwrap());
     assert!(store.session("s0000000000000000").unwrap().is_none());
     let created = store
         .session_created_ms("s1000000000000001")

@@ -122,6 +122,7 @@ pub(crate) async fn recording(
         owner: caller.owner(),
         venue: None,
         convention: sitar_core::Convention::Unity,
+        calibration: None,
     })?;
     accept_recording(&shared, &shared.session(&id)?, temp)?;
     // The original app treats this answer as "evaluation complete" and then

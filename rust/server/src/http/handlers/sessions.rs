@@ -59,6 +59,10 @@ pub(crate) struct CreateRequest {
     /// The phone's coordinate convention: `unity` (default) or `arcore`.
     #[serde(default)]
     convention: Option<String>,
+    /// A calibration this server was started with (`--calibration NAME=FILE`), fitted for
+    /// the session's settings: every estimate of the session is calibrated with it.
+    #[serde(default)]
+    calibration: Option<String>,
 }
 
 /// The `POST /v1/sessions` body as a typed request: one JSON object and nothing after it
@@ -155,6 +159,9 @@ pub(crate) async fn create(
         req.window_frames,
         req.pose_relation.as_deref(),
     )?;
+    if let Some(name) = req.calibration.as_deref() {
+        check_calibration(&shared.config, name, &settings)?;
+    }
     if let Some(min) = req.adaptive_min_trials
         && min < 2
     {
@@ -198,6 +205,7 @@ pub(crate) async fn create(
         owner: caller.owner(),
         venue: req.venue.as_deref(),
         convention,
+        calibration: req.calibration.as_deref(),
     })?;
     // A replayed request (same Idempotency-Key) gets the answer of the first one.
     Ok((
@@ -206,6 +214,35 @@ pub(crate) async fn create(
         axum::Json(json!({"id": id})),
     )
         .into_response())
+}
+
+/// A session's `calibration`: one this server has (else a 400 naming it and the ones it has),
+/// fitted for the session's setting, window and pose relation (else a 400 with the
+/// calibration's own message naming both).
+fn check_calibration(
+    config: &crate::ServerConfig,
+    name: &str,
+    settings: &EstimateSettings,
+) -> Result<(), Error> {
+    let Some(calibration) = config.calibrations.get(name) else {
+        let known: Vec<&str> = config.calibrations.names().collect();
+        let known = if known.is_empty() {
+            "this server has none (sitar serve --calibration NAME=FILE)".to_string()
+        } else {
+            format!("this server has {}", known.join(", "))
+        };
+        return Err(Error::BadRequest(format!(
+            "calibration: no calibration {:?}: {known}",
+            short(name, 64)
+        )));
+    };
+    calibration
+        .check(
+            settings.setting,
+            settings.window_frames as usize,
+            settings.pose_relation,
+        )
+        .map_err(|e| Error::BadRequest(format!("calibration: {name}: {e}")))
 }
 
 /// The playback kinds sessions may ask for: the server's own, `upload`, and `sim` with

@@ -23,6 +23,11 @@ const MIGRATIONS: &[(i64, &str, &str)] = &[
         "progress_view",
         include_str!("migrations/0005_progress_view.sql"),
     ),
+    (
+        6,
+        "calibration",
+        include_str!("migrations/0006_calibration.sql"),
+    ),
 ];
 
 /// The advisory lock key the migrating instance holds (`sitar` in ASCII).

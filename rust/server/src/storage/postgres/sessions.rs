@@ -14,14 +14,14 @@ use crate::storage::now_ms;
 
 pub(super) const COLUMNS: &str = "id, trials_total, setting, playback, state, error, stop_reason, \
      adaptive_min, adaptive_k, recording_bytes, results_trials, legacy, window_frames, pose_relation, \
-     owner, venue, convention";
+     owner, venue, convention, calibration";
 
 /// What makes two session requests the same, as one text; must match
 /// [`NewSession::request_summary`].
 const REQUEST: &str = "trials_total || '/' || playback || '/' || setting || '/' || window_frames \
      || '/' || pose_relation || '/' || COALESCE(adaptive_min::text, '-') || '/' || adaptive_k \
      || '/' || (CASE WHEN legacy THEN '1' ELSE '0' END) || '/' || COALESCE(venue, '-') \
-     || '/' || convention";
+     || '/' || convention || '/' || COALESCE(calibration, '-')";
 
 /// A text column parsed into its type; a value no version writes is an error naming it.
 fn typed<T>(
@@ -74,6 +74,7 @@ fn session_from_row(r: &Row) -> Result<Session, String> {
         owner: r.try_get(14).map_err(get)?,
         venue: r.try_get(15).map_err(get)?,
         convention: typed(r, 16, "convention", super::venues::parse_convention)?,
+        calibration: r.try_get(17).map_err(get)?,
     })
 }
 
@@ -98,6 +99,7 @@ struct NewRow {
     summary: String,
     venue: Option<String>,
     convention: sitar_core::Convention,
+    calibration: Option<String>,
     values: (
         i64,
         String,
@@ -119,6 +121,7 @@ impl SessionStore for PgStore {
             summary: new.request_summary(),
             venue: new.venue.map(str::to_string),
             convention: new.convention,
+            calibration: new.calibration.map(str::to_string),
             values: (
                 i64::from(new.trials_total),
                 new.settings.setting.to_string(),
@@ -165,8 +168,8 @@ impl SessionStore for PgStore {
             let inserted = tx.query_opt(
                 "INSERT INTO sessions (id, idempotency_key, created_ms, trials_total, setting, \
                  playback, state, adaptive_min, adaptive_k, legacy, window_frames, pose_relation, \
-                 owner, venue, convention) \
-                 VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12, $13, $14, $15) \
+                 owner, venue, convention, calibration) \
+                 VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12, $13, $14, $15, $16) \
                  ON CONFLICT (idempotency_key) DO NOTHING RETURNING id",
                 &[
                     &id,
@@ -184,6 +187,7 @@ impl SessionStore for PgStore {
                     owner,
                     &row.venue,
                     &row.convention.name(),
+                    &row.calibration,
                 ],
             )?;
             if inserted.is_some() {

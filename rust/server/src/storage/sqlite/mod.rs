@@ -85,7 +85,8 @@ CREATE TABLE IF NOT EXISTS sessions (
     pose_relation TEXT NOT NULL DEFAULT 'trans_part',
     owner INTEGER,
     venue TEXT,
-    convention TEXT NOT NULL DEFAULT 'unity'
+    convention TEXT NOT NULL DEFAULT 'unity',
+    calibration TEXT
 );
 CREATE TABLE IF NOT EXISTS venues (
     id TEXT PRIMARY KEY,
@@ -168,6 +169,8 @@ const ADDED_COLUMNS: &[(&str, &str, &str)] = &[
     ("sessions", "owner", "INTEGER"),
     ("sessions", "venue", "TEXT"),
     ("sessions", "convention", "TEXT NOT NULL DEFAULT 'unity'"),
+    // The calibration a session's estimates get, by name (older rows: none).
+    ("sessions", "calibration", "TEXT"),
 ];
 
 /// Adds the [`ADDED_COLUMNS`] a database made by an older version lacks.

@@ -15,19 +15,20 @@ use crate::storage::now_ms;
 
 pub(super) const COLUMNS: &str = "id, trials_total, setting, playback, state, error, stop_reason, adaptive_min, \
      adaptive_k, recording_bytes, results_trials, legacy, window_frames, pose_relation, owner, venue, \
-     convention";
+     convention, calibration";
 
 /// What makes two session requests the same, as one text (compared for an idempotency key
 /// used again); must match [`NewSession::request_summary`].
 const REQUEST: &str = "trials_total || '/' || playback || '/' || setting || '/' || window_frames \
      || '/' || pose_relation || '/' || COALESCE(adaptive_min, '-') || '/' || adaptive_k \
-     || '/' || legacy || '/' || COALESCE(venue, '-') || '/' || convention";
+     || '/' || legacy || '/' || COALESCE(venue, '-') || '/' || convention \
+     || '/' || COALESCE(calibration, '-')";
 
 impl NewSession<'_> {
     /// The request as [`REQUEST`] reads it back from a row.
     pub(crate) fn request_summary(&self) -> String {
         format!(
-            "{}/{}/{}/{}/{}/{}/{}/{}/{}/{}",
+            "{}/{}/{}/{}/{}/{}/{}/{}/{}/{}/{}",
             self.trials_total,
             self.playback.as_str(),
             self.settings.setting,
@@ -39,6 +40,8 @@ impl NewSession<'_> {
             self.legacy as i64,
             self.venue.unwrap_or("-"),
             self.convention.name(),
+            // A calibration name holds no `/` (`estimate::calibrations`).
+            self.calibration.unwrap_or("-"),
         )
     }
 }
@@ -86,6 +89,7 @@ fn session_from_row(r: &rusqlite::Row<'_>) -> rusqlite::Result<Session> {
         owner: r.get(14)?,
         venue: r.get(15)?,
         convention: typed(r, 16, "convention", super::venues::parse_convention)?,
+        calibration: r.get(17)?,
     })
 }
 
@@ -140,8 +144,8 @@ impl SessionStore for SqliteStore {
             tx.execute_cached(
                 "INSERT INTO sessions (id, idempotency_key, created_ms, trials_total, setting, playback, \
                  state, adaptive_min, adaptive_k, legacy, window_frames, pose_relation, owner, venue, \
-                 convention) \
-                 VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15)",
+                 convention, calibration) \
+                 VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16)",
                 params![
                     id,
                     new.idempotency_key,
@@ -158,6 +162,7 @@ impl SessionStore for SqliteStore {
                     new.owner,
                     new.venue,
                     new.convention.name(),
+                    new.calibration,
                 ],
             )?;
             Ok((id.to_string(), true))
@@ -379,6 +384,7 @@ mod tests {
             owner: None,
             venue: None,
             convention: sitar_core::Convention::Unity,
+            calibration: None,
         }
     }
 
