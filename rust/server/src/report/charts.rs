@@ -126,6 +126,45 @@ fn grouped(subs: &[(f64, f64, Option<f64>)]) -> Vec<(f64, f64, Option<f64>)> {
         .collect()
 }
 
+/// The interval band of a calibrated estimate behind the error chart.
+pub(crate) struct Band<'a> {
+    /// Per sub-trajectory (as the chart's `subs`), its window's interval (lower, upper).
+    pub intervals: &'a [Option<(f64, f64)>],
+    /// The band's tooltip, e.g. `80 % interval (calibration lab)`.
+    pub title: String,
+}
+
+/// One step of the band: its start and end time, and its bounds (lower, upper).
+type BandStep = (f64, f64, Option<(f64, f64)>);
+
+/// The band's steps, grouped as [`grouped`] groups the errors: each group's lowest lower
+/// and highest upper bound (none when no member has an interval).
+fn grouped_band(
+    subs: &[(f64, f64, Option<f64>)],
+    intervals: &[Option<(f64, f64)>],
+) -> Vec<BandStep> {
+    let size = subs.len().div_ceil(MAX_CHART_STEPS).max(1);
+    subs.chunks(size)
+        .zip(intervals.chunks(size))
+        .map(|(group, bounds)| {
+            let envelope = bounds
+                .iter()
+                .flatten()
+                .copied()
+                .reduce(|a, b| (a.0.min(b.0), a.1.max(b.1)));
+            (group[0].0, group[group.len() - 1].1, envelope)
+        })
+        .collect()
+}
+
+/// `text` for an SVG text node or attribute.
+fn escape(text: &str) -> String {
+    text.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
+
 /// Rows of marker labels at the top of the error chart.
 const LABEL_ROWS: usize = 3;
 
@@ -135,18 +174,28 @@ fn label_width(text: &str) -> f64 {
 }
 
 /// Error over time: class bands, one step per sub-trajectory (gaps where no window matched;
-/// grouped past `MAX_CHART_STEPS`), dashed lines at the markers' times. `scale` turns the
-/// unit into the shown one (m → cm).
+/// grouped past `MAX_CHART_STEPS`), a calibrated estimate's interval as a grey band behind
+/// the line, dashed lines at the markers' times. `scale` turns the unit into the shown one
+/// (m → cm).
 pub(crate) fn error_over_time(
     subs: &[(f64, f64, Option<f64>)],
     thresholds: Thresholds,
     markers: &[(usize, f64)],
     scale: f64,
     y_label: &str,
+    band: Option<&Band<'_>>,
 ) -> String {
     let (w, h) = (760.0, 240.0);
     let x1 = subs.last().map_or(1.0, |s| s.1).max(1e-3);
-    let max = subs.iter().filter_map(|s| s.2).fold(0.0, f64::max);
+    let uppers = band
+        .into_iter()
+        .flat_map(|b| b.intervals.iter().flatten().map(|i| i.1));
+    let max = subs
+        .iter()
+        .filter_map(|s| s.2)
+        .chain(uppers)
+        .filter(|v| v.is_finite())
+        .fold(0.0, f64::max);
     let frame = Frame {
         w,
         h,
@@ -159,6 +208,9 @@ pub(crate) fn error_over_time(
     );
     frame.class_bands(&mut svg, thresholds);
     frame.axes(&mut svg, "time (s)", y_label, scale);
+    if let Some(band) = band {
+        interval_band(&mut svg, &frame, subs, band);
+    }
     let mut path = String::new();
     let mut pen_down = false;
     let steps = grouped(subs);
@@ -215,6 +267,53 @@ pub(crate) fn error_over_time(
     }
     svg.push_str("</svg>");
     svg
+}
+
+/// The interval band: one closed path per run of steps with an interval, along the upper
+/// bounds forward and the lower bounds back.
+fn interval_band(
+    svg: &mut String,
+    frame: &Frame,
+    subs: &[(f64, f64, Option<f64>)],
+    band: &Band<'_>,
+) {
+    let steps = grouped_band(subs, band.intervals);
+    let mut path = String::new();
+    let mut run: Vec<(f64, f64, (f64, f64))> = Vec::new();
+    let close = |run: &mut Vec<(f64, f64, (f64, f64))>, path: &mut String| {
+        for (i, &(t0, t1, (_, upper))) in run.iter().enumerate() {
+            let op = if i == 0 { 'M' } else { 'L' };
+            let y = frame.y(upper);
+            let _ = write!(
+                path,
+                "{op}{:.1} {y:.1}L{:.1} {y:.1}",
+                frame.x(t0),
+                frame.x(t1)
+            );
+        }
+        for &(t0, t1, (lower, _)) in run.iter().rev() {
+            let y = frame.y(lower);
+            let _ = write!(path, "L{:.1} {y:.1}L{:.1} {y:.1}", frame.x(t1), frame.x(t0));
+        }
+        if !run.is_empty() {
+            path.push('Z');
+        }
+        run.clear();
+    };
+    for (t0, t1, interval) in steps {
+        match interval {
+            Some(bounds) if bounds.0.is_finite() && bounds.1.is_finite() => {
+                run.push((t0, t1, bounds));
+            }
+            _ => close(&mut run, &mut path),
+        }
+    }
+    close(&mut run, &mut path);
+    let _ = write!(
+        svg,
+        r##"<path id="error-interval" class="interval-band" d="{path}" fill="#555" fill-opacity="0.22" stroke="none"><title>{}</title></path>"##,
+        escape(&band.title)
+    );
 }
 
 /// The distribution of sub-trajectory errors: 20 bins, each coloured by its class.
@@ -344,7 +443,7 @@ mod tests {
         // M2 and M3 at the same moment, M4 just after, then ten more close together.
         let mut markers = vec![(1, 2.0), (2, 9.0), (3, 9.0), (4, 9.1)];
         markers.extend((5..15).map(|n| (n, 20.0 + 0.05 * n as f64)));
-        let svg = error_over_time(&subs, t, &markers, 100.0, "error (cm)");
+        let svg = error_over_time(&subs, t, &markers, 100.0, "error (cm)", None);
         let mut boxes: Vec<(f64, f64, f64)> = Vec::new();
         for text in svg.split(r#"<text class="marker-label" "#).skip(1) {
             let number = |key: &str| -> f64 {
@@ -369,6 +468,42 @@ mod tests {
         // Every marker keeps its line and its name as a tooltip.
         assert_eq!(svg.matches(r#"class="marker-time""#).count(), markers.len());
         assert!(svg.contains("<title>M14</title>"));
+    }
+
+    #[test]
+    fn the_interval_band_runs_between_the_bounds_and_breaks_at_gaps() {
+        let t = Thresholds {
+            medium: 0.05,
+            high: 0.1,
+        };
+        let subs = [
+            (0.0, 1.0, Some(0.1)),
+            (1.0, 2.0, Some(0.2)),
+            (2.0, 3.0, None),
+            (3.0, 4.0, Some(0.1)),
+        ];
+        let intervals = [Some((0.05, 0.3)), Some((0.1, 0.4)), None, Some((0.05, 0.3))];
+        let band = Band {
+            intervals: &intervals,
+            title: "80 % interval (calibration <lab>)".into(),
+        };
+        let svg = error_over_time(&subs, t, &[], 100.0, "error (cm)", Some(&band));
+        let d = svg
+            .split(r#"id="error-interval" class="interval-band" d=""#)
+            .nth(1)
+            .unwrap();
+        let d = &d[..d.find('"').unwrap()];
+        // Two runs, each closed.
+        assert_eq!(d.matches('M').count(), 2, "{d}");
+        assert_eq!(d.matches('Z').count(), 2, "{d}");
+        // The chart reaches the highest upper bound (40 cm) at its top edge.
+        assert!(d.contains(&format!(" {TOP:.1}L")), "{d}");
+        assert!(svg.contains("calibration &lt;lab&gt;"), "{svg}");
+        // The band is drawn behind the error line.
+        assert!(svg.find("error-interval").unwrap() < svg.find("error-line").unwrap());
+        // Without a band the chart is as before.
+        let plain = error_over_time(&subs, t, &[], 100.0, "error (cm)", None);
+        assert!(!plain.contains("interval"));
     }
 
     #[test]
@@ -428,8 +563,20 @@ mod tests {
             medium: 0.05,
             high: 0.1,
         };
-        let svg = error_over_time(&subs, t, &[], 100.0, "error (cm)");
+        let svg = error_over_time(&subs, t, &[], 100.0, "error (cm)", None);
         assert!(svg.len() < 120_000, "{} bytes", svg.len());
+        // With an interval per sub-trajectory: the band is grouped alike, still bounded.
+        let intervals: Vec<Option<(f64, f64)>> = subs
+            .iter()
+            .map(|s| s.2.map(|e| (e * 0.5, e * 2.0)))
+            .collect();
+        let band = Band {
+            intervals: &intervals,
+            title: "80 % interval".into(),
+        };
+        let banded = error_over_time(&subs, t, &[], 100.0, "error (cm)", Some(&band));
+        assert!(banded.len() < 2 * 120_000, "{} bytes", banded.len());
+        assert!(banded.contains(r#"id="error-interval""#));
     }
 
     #[test]

@@ -33,6 +33,87 @@ struct ResultsDoc {
     #[serde(default)]
     trials: u32,
     windows: Vec<serde::de::IgnoredAny>,
+    /// The calibration the errors are calibrated with (none: the spread, as in the paper).
+    #[serde(default)]
+    calibration: Option<String>,
+}
+
+/// A calibrated results document's windows, for their intervals (read only when the
+/// document names a calibration).
+#[derive(Debug, Deserialize)]
+struct IntervalsDoc<'a> {
+    #[serde(default)]
+    time_unit: Option<String>,
+    #[serde(borrow)]
+    windows: Vec<IntervalWindow<'a>>,
+}
+
+#[derive(Debug, Deserialize)]
+struct IntervalWindow<'a> {
+    /// The start as written: integer nanoseconds, or seconds with up to 9 decimals.
+    #[serde(borrow)]
+    start: &'a serde_json::value::RawValue,
+    #[serde(default, alias = "lower_deg")]
+    lower_m: Option<f64>,
+    #[serde(default, alias = "upper_deg")]
+    upper_m: Option<f64>,
+}
+
+/// A results stamp (`start` as the estimator writes it) in nanoseconds: integer nanoseconds
+/// with `time_unit` `ns`, else decimal seconds read exactly (no f64 rounding).
+fn stamp_ns(text: &str, nanoseconds: bool) -> Option<i64> {
+    if nanoseconds {
+        return text.parse().ok();
+    }
+    let (negative, body) = match text.strip_prefix('-') {
+        Some(rest) => (true, rest),
+        None => (false, text),
+    };
+    let (whole, fraction) = body.split_once('.').unwrap_or((body, ""));
+    if whole.is_empty()
+        || fraction.len() > 9
+        || !whole
+            .bytes()
+            .chain(fraction.bytes())
+            .all(|b| b.is_ascii_digit())
+    {
+        return None;
+    }
+    let nanos: i64 = format!("{fraction:0<9}").parse().ok()?;
+    let ns = whole
+        .parse::<i64>()
+        .ok()?
+        .checked_mul(1_000_000_000)?
+        .checked_add(nanos)?;
+    Some(if negative { -ns } else { ns })
+}
+
+/// The interval of every window of calibrated results, by start (ns).
+fn window_intervals(results_json: &str) -> std::collections::HashMap<i64, (f64, f64)> {
+    let Ok(doc) = serde_json::from_str::<IntervalsDoc<'_>>(results_json) else {
+        return Default::default();
+    };
+    let nanoseconds = doc.time_unit.as_deref() != Some("s");
+    doc.windows
+        .iter()
+        .filter_map(|w| {
+            let start = stamp_ns(w.start.get(), nanoseconds)?;
+            Some((start, (w.lower_m?, w.upper_m?)))
+        })
+        .collect()
+}
+
+/// Each sub-trajectory's interval: that of the window the phone session matched it with.
+fn attach_intervals(subs: &mut [SubRow], phone: &Phone, results_json: &str) {
+    let Some(results) = phone.results() else {
+        return;
+    };
+    let intervals = window_intervals(results_json);
+    let starts: Vec<i64> = phone.subtrajectories().iter().map(|s| s.start_ns).collect();
+    let windows = results.lookup_many(&starts, phone.lookup_tolerance_ns());
+    for (sub, window) in subs.iter_mut().zip(windows) {
+        sub.interval = window.and_then(|w| intervals.get(&w.start).copied());
+    }
 }
 
 /// How the report writes errors of one unit.
@@ -62,6 +143,43 @@ impl Unit {
         let space = if self.name == "°" { "" } else { " " };
         format!("{:.1}{space}{}", value * self.scale, self.name)
     }
+
+    /// `6.1–31.0 cm`, `1.2–5.0°`.
+    fn range(&self, (lower, upper): (f64, f64)) -> String {
+        let space = if self.name == "°" { "" } else { " " };
+        format!(
+            "{:.1}–{:.1}{space}{}",
+            lower * self.scale,
+            upper * self.scale,
+            self.name
+        )
+    }
+}
+
+/// The calibration of a session's results, as the page shows it.
+struct CalibrationView {
+    /// Its name, as the results name it.
+    name: String,
+    /// `80 % interval` (the coverage of the calibration this server has by that name), or
+    /// `interval` when this server does not have it.
+    interval: String,
+}
+
+impl CalibrationView {
+    fn of(doc: &ResultsDoc, config: &ServerConfig) -> Option<CalibrationView> {
+        let name = doc.calibration.clone()?;
+        let interval = match config.calibrations.get(&name) {
+            Some(c) => format!("{} % interval", trim_percent(c.fitted_on.coverage)),
+            None => "interval".to_string(),
+        };
+        Some(CalibrationView { name, interval })
+    }
+}
+
+/// A share as a percentage without needless decimals: 0.8 → `80`, 0.875 → `87.5`.
+fn trim_percent(share: f64) -> String {
+    let text = format!("{:.1}", share * 100.0);
+    text.trim_end_matches(".0").to_string()
 }
 
 pub(crate) fn colour(class: ErrorClass) -> &'static str {
@@ -329,6 +447,8 @@ struct Analysis {
     regions: Vec<regions::Region>,
     /// The errors of the sub-trajectories with an estimate.
     errors: Vec<f64>,
+    /// The calibration of calibrated results.
+    calibration: Option<CalibrationView>,
 }
 
 /// Step 1: the results read, the walk classified, regions found and their evidence attached.
@@ -337,11 +457,15 @@ fn analyse(input: &ReportInput<'_>) -> Result<Analysis, Error> {
     let thresholds: Thresholds = row.settings.thresholds(input.config);
     let doc: ResultsDoc = serde_json::from_str(input.results_json)
         .map_err(|e| Error::Internal(format!("results.json of {} is unreadable: {e}", row.id)))?;
+    let calibration = CalibrationView::of(&doc, input.config);
     let (subs, markers) = match input.phone {
-        Some((phone, _)) => (
-            regions::sub_rows(phone, thresholds),
-            phone.markers().unwrap_or_default(),
-        ),
+        Some((phone, _)) => {
+            let mut subs = regions::sub_rows(phone, thresholds);
+            if calibration.is_some() {
+                attach_intervals(&mut subs, phone, input.results_json);
+            }
+            (subs, phone.markers().unwrap_or_default())
+        }
         None => (Vec::new(), Vec::new()),
     };
     let radius = input.phone.map_or(0.5, |(p, _)| p.config().dedup_radius_m);
@@ -366,6 +490,7 @@ fn analyse(input: &ReportInput<'_>) -> Result<Analysis, Error> {
         markers,
         regions: found,
         errors,
+        calibration,
     })
 }
 
@@ -381,7 +506,15 @@ fn region_rows(a: &Analysis, phone: Option<&Phone>) -> Vec<serde_json::Value> {
                 "rank": r.rank,
                 "class": r.class.name(),
                 "colour": colour(r.class),
-                "max_error": unit.show(r.max_error),
+                "max_error": match (&a.calibration, r.interval) {
+                    (Some(c), Some(bounds)) => format!(
+                        "{} ({} {})",
+                        unit.show(r.max_error),
+                        c.interval,
+                        unit.range(bounds)
+                    ),
+                    _ => unit.show(r.max_error),
+                },
                 "mean_error": unit.show(r.mean_error),
                 "span": format!("{:.1}–{:.1} s", r.t0, r.t1),
                 "distance": format!("{:.2} m", r.distance_m),
@@ -430,10 +563,10 @@ fn marker_rows(a: &Analysis, phone: Option<&Phone>) -> Vec<serde_json::Value> {
         .collect()
 }
 
-/// Step 4: the settings table.
+/// Step 4: the settings table (a calibrated session's calibration last).
 fn settings_rows(row: &Session, a: &Analysis) -> Vec<(&'static str, String)> {
     let unit = &a.unit;
-    vec![
+    let mut rows = vec![
         ("Session", row.id.clone()),
         ("State", row.state.as_str().to_string()),
         (
@@ -471,7 +604,23 @@ fn settings_rows(row: &Session, a: &Analysis) -> Vec<(&'static str, String)> {
                 .clone()
                 .unwrap_or_else(|| "all trials played".into()),
         ),
-    ]
+    ];
+    if let Some(name) = &row.calibration {
+        let how = match &a.calibration {
+            Some(c) if &c.name == name => format!("{name} (errors calibrated, {})", c.interval),
+            _ => format!("{name} (not on this server: errors uncalibrated)"),
+        };
+        rows.push(("Calibration", how));
+    }
+    rows
+}
+
+/// The banner of a session whose calibration this server lacks: its results are the
+/// uncalibrated spread (none when they are calibrated, or none was asked for).
+fn calibration_missing(row: &Session, a: &Analysis) -> Option<String> {
+    let asked = row.calibration.as_ref()?;
+    let applied = a.calibration.as_ref().map(|c| &c.name);
+    (applied != Some(asked)).then(|| asked.clone())
 }
 
 /// Step 5: whether the estimate is still partial (trials are arriving), for the banner
@@ -545,6 +694,11 @@ pub(crate) fn render(input: &ReportInput<'_>) -> Result<String, Error> {
     let y_label = format!("error ({})", unit.name);
     let timeline: Vec<(f64, f64, Option<f64>)> =
         a.subs.iter().map(|s| (s.t0, s.t1, s.error)).collect();
+    let intervals: Vec<Option<(f64, f64)>> = a.subs.iter().map(|s| s.interval).collect();
+    let band = a.calibration.as_ref().map(|c| charts::Band {
+        intervals: &intervals,
+        title: format!("{} (calibration {})", c.interval, c.name),
+    });
     let count = |c: ErrorClass| a.subs.iter().filter(|s| s.class == c).count();
     let trials = a.doc.trials;
     let standalone = match &input.standalone {
@@ -557,7 +711,7 @@ pub(crate) fn render(input: &ReportInput<'_>) -> Result<String, Error> {
         .iter()
         .map(|t| unit.show(*t))
         .collect();
-    let context = json!({
+    let mut context = json!({
         "id": row.id,
         "unit": unit.name,
         // Every sub-trajectory the walk has, the same count as the 3-D view's, the tables'
@@ -589,7 +743,7 @@ pub(crate) fn render(input: &ReportInput<'_>) -> Result<String, Error> {
         "source": input.phone.map(|(_, s)| s.describe()),
         "top_view": phone.map(|p| top_view(p, &a.subs)).unwrap_or_default(),
         "error_chart": if a.subs.is_empty() { String::new() } else {
-            charts::error_over_time(&timeline, thresholds, &marker_times, unit.scale, &y_label)
+            charts::error_over_time(&timeline, thresholds, &marker_times, unit.scale, &y_label, band.as_ref())
         },
         "histogram": if a.errors.is_empty() { String::new() } else {
             charts::histogram(&a.errors, thresholds, unit.scale, &y_label)
@@ -604,6 +758,11 @@ pub(crate) fn render(input: &ReportInput<'_>) -> Result<String, Error> {
         })).collect::<Vec<_>>(),
         "colours": {"low": LOW, "medium": MEDIUM, "high": HIGH, "unknown": UNKNOWN},
     });
+    context["calibration"] = json!(a.calibration.as_ref().map(|c| json!({
+        "name": c.name,
+        "interval": c.interval,
+    })));
+    context["calibration_missing"] = json!(calibration_missing(row, &a));
     templates::render("report.html", &context)
 }
 
@@ -700,7 +859,7 @@ mod tests {
         }
         let timeline: Vec<(f64, f64, Option<f64>)> =
             subs.iter().map(|s| (s.t0, s.t1, s.error)).collect();
-        let chart = charts::error_over_time(&timeline, thresholds, &[], 100.0, "error (cm)");
+        let chart = charts::error_over_time(&timeline, thresholds, &[], 100.0, "error (cm)", None);
         let unit = Unit {
             name: "cm",
             scale: 100.0,
@@ -805,6 +964,137 @@ mod tests {
         let dots = svg.split(r#"<g class="surface""#).nth(1).unwrap();
         let dots = &dots[..dots.find("</g>").unwrap()];
         assert_eq!(dots.matches("<circle").count(), faced.len());
+    }
+
+    fn row(calibration: Option<&str>) -> Session {
+        Session {
+            id: "s0123456789abcdef".into(),
+            state: crate::session::SessionState::Done,
+            playback: crate::config::PlaybackKind::Upload,
+            trials_total: 3,
+            settings: crate::session::estimate_settings::EstimateSettings::defaults(
+                &ServerConfig::new("unused"),
+            )
+            .unwrap(),
+            error: None,
+            stop_reason: None,
+            adaptive_min: None,
+            adaptive_k: 3,
+            recording_bytes: None,
+            results_trials: 3,
+            legacy: false,
+            owner: None,
+            venue: None,
+            convention: Convention::Arcore,
+            calibration: calibration.map(str::to_string),
+        }
+    }
+
+    /// The demo walk with results whose error rises along it; calibrated ones (`lab`) carry
+    /// an interval of ×0.5 … ×2 around each error.
+    fn demo_report(calibrated: bool, config: &ServerConfig, row: &Session) -> String {
+        let recording = sitar_sim::Recording::demo(15.0, 30.0, 42).unwrap();
+        let mut phone = recording
+            .phone_session(
+                sitar_core::SessionConfig::from_json(r#"{"convention":"arcore"}"#).unwrap(),
+                sitar_core::DisplayRotation::Deg90,
+            )
+            .unwrap();
+        let windows: Vec<serde_json::Value> = phone
+            .subtrajectories()
+            .iter()
+            .map(|s| {
+                let e = 0.003 * f64::from(s.index);
+                let mut w = json!({"start": s.start_ns, "error_m": e});
+                if calibrated {
+                    w["lower_m"] = json!(e * 0.5);
+                    w["upper_m"] = json!(e * 2.0);
+                    w["raw_m"] = json!(e / 3.0);
+                }
+                w
+            })
+            .collect();
+        let mut results = json!({"version": 1, "setting": "trim_mean_30", "trials": 3,
+            "time_unit": "ns", "pose_relation": "trans_part", "window_frames": 10, "unit": "m",
+            "windows": windows});
+        if calibrated {
+            results["calibration"] = json!("lab");
+        }
+        let results = results.to_string();
+        phone.load_results(&results).unwrap();
+        render(&ReportInput {
+            row,
+            results_json: &results,
+            config,
+            phone: Some((&phone, Source::SimulatedWalk)),
+            history: Vec::new(),
+            base: "/v1/sessions/s0123456789abcdef/",
+            evidence: None,
+            standalone: None,
+        })
+        .unwrap()
+    }
+
+    #[test]
+    fn a_calibrated_report_draws_the_interval_and_names_the_calibration() {
+        let mut config = ServerConfig::new("unused");
+        let calibration = sitar_estimator::Calibration::from_json(
+            &crate::estimate::calibrations::tests::calibration("trim_mean_30", 10, "trans_part"),
+            "test",
+        )
+        .unwrap();
+        config.calibrations.insert("lab", calibration).unwrap();
+        let page = demo_report(true, &config, &row(Some("lab")));
+        assert!(page.contains(r#"id="error-interval""#), "no band");
+        assert!(page.contains(r#"<b id="calibration-name">lab</b>"#));
+        assert!(page.contains("80 % interval"));
+        // Each region gives its worst sub-trajectory's error with its interval.
+        let regions = &page[page.find(r#"<table id="regions">"#).unwrap()..];
+        let regions = &regions[..regions.find("</table>").unwrap()];
+        let first = regions.split("<td>").nth(3).unwrap();
+        let first = &first[..first.find("</td>").unwrap()];
+        let (error, interval) = first.split_once(" (80 % interval ").unwrap();
+        let error: f64 = error.trim_end_matches(" cm").parse().unwrap();
+        let (lower, upper) = interval.trim_end_matches(" cm)").split_once('–').unwrap();
+        let (lower, upper): (f64, f64) = (lower.parse().unwrap(), upper.parse().unwrap());
+        assert!(
+            (lower - error * 0.5).abs() < 0.06 && (upper - error * 2.0).abs() < 0.06,
+            "{first}"
+        );
+        assert!(page.contains("lab (errors calibrated, 80 % interval)"));
+        assert!(!page.contains("calibration-missing"));
+
+        // Served without the calibration, the results published with it keep their interval.
+        let without = ServerConfig::new("unused");
+        let page = demo_report(true, &without, &row(Some("lab")));
+        assert!(page.contains(r#"id="error-interval""#) && page.contains(" (interval "));
+        // Results published uncalibrated for a session that asked: the banner says why.
+        let page = demo_report(false, &without, &row(Some("lab")));
+        assert!(page.contains(r#"id="calibration-missing""#));
+        assert!(!page.contains("error-interval") && !page.contains("calibration-legend"));
+
+        // An uncalibrated session's page has nothing of it.
+        let page = demo_report(false, &config, &row(None));
+        for word in ["interval", "calibrat"] {
+            assert!(!page.to_lowercase().contains(word), "{word}");
+        }
+    }
+
+    #[test]
+    fn results_stamps_are_read_exactly() {
+        assert_eq!(
+            stamp_ns("1700000000000000001", true),
+            Some(1_700_000_000_000_000_001)
+        );
+        assert_eq!(
+            stamp_ns("1403636579.763555527", false),
+            Some(1_403_636_579_763_555_527)
+        );
+        assert_eq!(stamp_ns("1.5", false), Some(1_500_000_000));
+        assert_eq!(stamp_ns("-0.25", false), Some(-250_000_000));
+        for bad in ["", ".5", "1.0000000001", "1e9", "x"] {
+            assert_eq!(stamp_ns(bad, false), None, "{bad}");
+        }
     }
 
     #[test]

@@ -166,6 +166,7 @@ mod tests {
             error,
             class: ErrorClass::High,
             surface: None,
+            interval: None,
         }
     }
 
@@ -183,6 +184,7 @@ mod tests {
             surface: None,
             markers: vec![],
             evidence: None,
+            interval: None,
         }
     }
 

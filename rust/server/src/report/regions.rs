@@ -23,6 +23,9 @@ pub(crate) struct SubRow {
     pub class: ErrorClass,
     /// The surface point its midpoint's depth sample hit.
     pub surface: Option<DVec3>,
+    /// The calibrated results' interval of its window (lower, upper; the results' unit),
+    /// none in uncalibrated results.
+    pub interval: Option<(f64, f64)>,
 }
 
 /// A problem region: one place, one or more stretches of medium/high sub-trajectories.
@@ -45,6 +48,8 @@ pub(crate) struct Region {
     pub markers: Vec<usize>,
     /// The camera evidence of the place (`crate::report::region_evidence`), when the phone sent it.
     pub evidence: Option<RegionEvidence>,
+    /// The interval of its worst sub-trajectory (calibrated results only).
+    pub interval: Option<(f64, f64)>,
 }
 
 /// What the phone's camera evidence says of one region.
@@ -97,6 +102,7 @@ pub(crate) fn sub_rows(session: &Session, thresholds: Thresholds) -> Vec<SubRow>
                 error,
                 class: error.map_or(ErrorClass::Unknown, |e| thresholds.classify(e)),
                 surface: s.depth.sample().map(|d| d.point),
+                interval: None,
             }
         })
         .collect()
@@ -134,10 +140,10 @@ pub(crate) fn regions(subs: &[SubRow], markers: &[Marker], radius_m: f64) -> Vec
         .map(|(members, stretches)| {
             let errors: Vec<f64> = members.iter().filter_map(|s| s.error).collect();
             let max_error = errors.iter().copied().fold(f64::MIN, f64::max);
-            let worst = members
+            let worst_member = members
                 .iter()
-                .max_by(|a, b| a.error.unwrap_or(0.0).total_cmp(&b.error.unwrap_or(0.0)))
-                .map_or(ErrorClass::Unknown, |s| s.class);
+                .max_by(|a, b| a.error.unwrap_or(0.0).total_cmp(&b.error.unwrap_or(0.0)));
+            let worst = worst_member.map_or(ErrorClass::Unknown, |s| s.class);
             let indices: Vec<u32> = members.iter().map(|s| s.index).collect();
             Region {
                 rank: 0,
@@ -157,6 +163,7 @@ pub(crate) fn regions(subs: &[SubRow], markers: &[Marker], radius_m: f64) -> Vec
                     .collect(),
                 subtrajectories: indices,
                 evidence: None,
+                interval: worst_member.and_then(|s| s.interval),
             }
         })
         .collect();
@@ -246,6 +253,7 @@ mod tests {
             error: Some(error),
             class: t.classify(error),
             surface,
+            interval: None,
         }
     }
 
