@@ -6,7 +6,10 @@ use std::time::Duration;
 
 use anyhow::{Context, Result};
 use clap::ValueEnum;
-use sitar_server::{AdbConfig, Limits, PlaybackKind, Server, ServerConfig, TlsConfig};
+use sitar_server::{
+    AdbConfig, Calibrations, Limits, MAX_CALIBRATIONS, PlaybackKind, Server, ServerConfig,
+    TlsConfig,
+};
 
 /// Runs the SiTAR backend: HTTP API (versioned and the original app's legacy routes),
 /// SQLite storage in DIR, playback on phones over adb (or the simulator), estimation.
@@ -156,6 +159,12 @@ pub struct Args {
     /// PEM private key for --tls (with --cert).
     #[arg(long, value_name = "PEM", requires = "tls", requires = "cert")]
     key: Option<PathBuf>,
+    /// A calibration sessions may ask for (`"calibration": NAME` in POST /v1/sessions):
+    /// NAME (1–64 of A-Z a-z 0-9 _ . -) and a file made by `sitar calibrate` on runs of one
+    /// SLAM system on one playback device model. Repeat it (at most 64); each file is read and
+    /// checked at start.
+    #[arg(long = "calibration", value_name = "NAME=FILE")]
+    calibrations: Vec<String>,
     /// A host name or address the self-signed certificate is made for (repeat it)
     /// [default: localhost, 127.0.0.1, ::1, this machine's LAN address and host name].
     #[arg(long = "tls-name", value_name = "NAME", requires = "tls")]
@@ -254,6 +263,19 @@ pub fn run(args: Args) -> Result<()> {
         upload_bytes_per_day: args.max_upload_gib_per_day.saturating_mul(1 << 30),
         concurrent_uploads: args.max_concurrent_uploads,
     };
+    if args.calibrations.len() > MAX_CALIBRATIONS {
+        anyhow::bail!(
+            "sitar serve --calibration: {} given, a server keeps at most {MAX_CALIBRATIONS}",
+            args.calibrations.len()
+        );
+    }
+    for argument in &args.calibrations {
+        let (name, file) = Calibrations::parse_argument(argument)?;
+        config
+            .calibrations
+            .read(&name, &file)
+            .with_context(|| format!("sitar serve --calibration {argument}"))?;
+    }
     config.retention = args
         .keep_days
         .map(|days| Duration::from_secs(u64::from(days) * 86_400));
@@ -289,5 +311,9 @@ pub fn run(args: Args) -> Result<()> {
         config.playback_workers,
         config.estimate_workers
     );
+    if !config.calibrations.is_empty() {
+        let names: Vec<&str> = config.calibrations.names().collect();
+        eprintln!("sitar serve: calibrations {}", names.join(", "));
+    }
     Server::run(config, args.addr).context("the server stopped")
 }
