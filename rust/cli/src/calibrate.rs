@@ -215,27 +215,35 @@ pub fn score_table<'a>(
     rows: impl Iterator<Item = (&'a str, &'a AgreementScores, &'a AgreementScores)>,
 ) -> String {
     let mut out = format!(
-        "  {:<40} {:>17} {:>17} {:>17} {:>17} {:>17} {:>8}\n",
-        "sequence", "accuracy", "macro F1", "Spearman", "est/truth", "high→low", "coverage"
+        "  {:<12} {:>17} {:>17} {:>17} {:>17} {:>17} {:>9} {:>9}\n",
+        "sequence",
+        "accuracy",
+        "macro F1",
+        "Spearman",
+        "est/truth",
+        "high→low",
+        "upper",
+        "coverage"
     );
     let _ = writeln!(
         out,
-        "  {:<40} {:>17} {:>17} {:>17} {:>17} {:>17} {:>8}",
-        "", "raw → cal", "raw → cal", "raw → cal", "raw → cal", "raw → cal", ""
+        "  {:<12} {:>17} {:>17} {:>17} {:>17} {:>17} {:>9} {:>9}",
+        "", "raw → cal", "raw → cal", "raw → cal", "raw → cal", "raw → cal", "high→low", ""
     );
     let pair = |a: f64, b: f64| format!("{a:>7.3} → {b:<7.3}");
     for (name, raw, cal) in rows {
         let chars = name.chars().count();
-        let short: String = name.chars().skip(chars.saturating_sub(40)).collect();
+        let short: String = name.chars().skip(chars.saturating_sub(12)).collect();
         let _ = writeln!(
             out,
-            "  {:<40} {:>17} {:>17} {:>17} {:>17} {:>17} {:>7.1}%",
+            "  {:<12} {:>17} {:>17} {:>17} {:>17} {:>17} {:>9.3} {:>8.1}%",
             short,
             pair(raw.accuracy, cal.accuracy),
             pair(raw.macro_f1, cal.macro_f1),
             pair(raw.spearman, cal.spearman),
             pair(raw.median_ratio, cal.median_ratio),
             pair(raw.high_called_low, cal.high_called_low),
+            cal.high_upper_low.unwrap_or(f64::NAN),
             100.0 * cal.coverage.unwrap_or(f64::NAN)
         );
     }

@@ -158,23 +158,50 @@ pub struct HeldOutScores {
     pub calibrated: AgreementScores,
 }
 
-/// How an estimate agrees with the truth on a set of windows.
+/// How an estimate agrees with the truth on a set of windows. A score that does not exist
+/// (no truly high window, a constant estimate) is NaN, `null` in the file.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct AgreementScores {
     /// Share of windows whose class is right.
+    #[serde(with = "nan_as_null")]
     pub accuracy: f64,
     /// Macro F1 over the three classes.
+    #[serde(with = "nan_as_null")]
     pub macro_f1: f64,
     /// Spearman's rank correlation with the truth.
+    #[serde(with = "nan_as_null")]
     pub spearman: f64,
     /// Median of estimate/truth.
+    #[serde(with = "nan_as_null")]
     pub median_ratio: f64,
-    /// Share of the truly high windows that the estimate calls low (NaN without high ones).
+    /// Share of the truly high windows that the estimate calls low.
+    #[serde(with = "nan_as_null")]
     pub high_called_low: f64,
     /// Share of windows whose interval holds the truth (absent for the raw estimate).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub coverage: Option<f64>,
+    /// Share of the truly high windows whose upper bound is low: what `classify_by = upper`
+    /// still misses (absent for the raw estimate).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub high_upper_low: Option<f64>,
+}
+
+/// NaN written as `null` and read back as NaN (JSON has no NaN).
+mod nan_as_null {
+    use serde::{Deserialize, Deserializer, Serializer};
+
+    pub fn serialize<S: Serializer>(value: &f64, serializer: S) -> Result<S::Ok, S::Error> {
+        if value.is_finite() {
+            serializer.serialize_f64(*value)
+        } else {
+            serializer.serialize_none()
+        }
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(deserializer: D) -> Result<f64, D::Error> {
+        Ok(Option::<f64>::deserialize(deserializer)?.unwrap_or(f64::NAN))
+    }
 }
 
 /// The three features of one window, before smoothing.
@@ -294,9 +321,16 @@ impl Calibration {
         pose_relation: PoseRelation,
     ) -> Result<(), Error> {
         let f = &self.fitted_on;
-        let theirs = (setting.to_string(), window_frames, pose_relation.to_string());
-        if (f.setting.as_str(), f.window_frames, f.pose_relation.as_str())
-            != (theirs.0.as_str(), theirs.1, theirs.2.as_str())
+        let theirs = (
+            setting.to_string(),
+            window_frames,
+            pose_relation.to_string(),
+        );
+        if (
+            f.setting.as_str(),
+            f.window_frames,
+            f.pose_relation.as_str(),
+        ) != (theirs.0.as_str(), theirs.1, theirs.2.as_str())
         {
             return Err(Error::InvalidArgument(format!(
                 "the calibration was fitted for setting {}, {} window frames, pose relation {}; the estimate is setting {}, {} window frames, pose relation {}",

@@ -251,20 +251,20 @@ pub fn agreement_scores(
     let high: Vec<usize> = (0..truth.len())
         .filter(|&i| truth[i] >= thresholds.high)
         .collect();
-    let called_low = high
-        .iter()
-        .filter(|&&i| estimate[i] < thresholds.medium)
-        .count();
+    let share_of_high = |low: &dyn Fn(usize) -> bool| {
+        if high.is_empty() {
+            f64::NAN
+        } else {
+            high.iter().filter(|&&i| low(i)).count() as f64 / high.len() as f64
+        }
+    };
     Ok(AgreementScores {
         accuracy: classes.accuracy,
         macro_f1: classes.macro_f1,
         spearman: spearman(truth, estimate)?,
         median_ratio: median_ratio(truth, estimate)?,
-        high_called_low: if high.is_empty() {
-            f64::NAN
-        } else {
-            called_low as f64 / high.len() as f64
-        },
+        high_called_low: share_of_high(&|i| estimate[i] < thresholds.medium),
+        high_upper_low: interval.map(|(_, upper)| share_of_high(&|i| upper[i] < thresholds.medium)),
         coverage: interval.map(|(lower, upper)| {
             let held = (0..truth.len())
                 .filter(|&i| lower[i] <= truth[i] && truth[i] <= upper[i])
@@ -290,6 +290,10 @@ fn mean_scores(all: &[AgreementScores]) -> AgreementScores {
             .iter()
             .all(|s| s.coverage.is_some())
             .then(|| mean(&|s| s.coverage.unwrap_or(f64::NAN))),
+        high_upper_low: all
+            .iter()
+            .all(|s| s.high_upper_low.is_some())
+            .then(|| mean(&|s| s.high_upper_low.unwrap_or(f64::NAN))),
     }
 }
 
