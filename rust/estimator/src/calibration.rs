@@ -403,7 +403,7 @@ pub(crate) fn design_row(f: &WindowFeatures, offsets: &[f64]) -> [f64; 4] {
 
 /// The unsmoothed features of every window of `estimate`, in its window order: the statistic,
 /// and the path length and rotation of the window's `delta` frames, each the median over the
-/// first [`MOTION_TRIALS`] trials that have the window's start stamp. A window no trial
+/// first 15 trials (`MOTION_TRIALS`) that have the window's start stamp. A window no trial
 /// starts at (it cannot happen for windows the estimate made from these trials) takes the
 /// motion of the nearest window that has one.
 pub fn window_features(estimate: &Estimate, trials: &[Trajectory]) -> Vec<WindowFeatures> {

@@ -146,6 +146,18 @@
 //! classified by 3-class classifiers ([`PAPER_CLASSIFIERS`]: 5 & 10, 2 & 10, 2 & 5 cm, each [`Thresholds`])
 //! and scored ([`classification_scores`]: accuracy, macro F1, mean per-class sensitivity and
 //! specificity) for every setting and trial count.
+//!
+//! ## Calibration
+//!
+//! The estimate measures how runs differ, not the error against ground truth. A
+//! [`Calibration`] (made by [`fit_calibration`] on [`CalibrationSequence`]s with ground truth,
+//! `sitar calibrate`) maps a window's statistic, path length and rotation (each a moving
+//! mean over neighbouring windows) to its true error with a log-linear model, and gives an
+//! interval that holds the true error with a stated coverage on sequences it was not fitted
+//! on (cross-conformal by sequence). [`Calibration::apply`] turns an [`Estimate`] into the
+//! calibrated one: `error_m` calibrated, [`WindowInterval`] with the raw value and the
+//! bounds, JSON keys `raw_m`, `lower_m`, `upper_m` and `calibration`. The model, the
+//! choices and the figures on real EuRoC runs: the crate README.
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
 
