@@ -83,6 +83,8 @@ pub struct FittedOn {
 pub struct FittedSequence {
     /// Its name (the folder).
     pub name: String,
+    /// Runs used: set A and set B together.
+    pub runs: usize,
     /// Runs in set A (the truth).
     pub set_a: usize,
     /// Runs in set B (the estimate).

@@ -125,6 +125,7 @@ pub fn fit_calibration(
         .iter()
         .map(|s| FittedSequence {
             name: s.name.clone(),
+            runs: s.sets.0 + s.sets.1,
             set_a: s.sets.0,
             set_b: s.sets.1,
             windows: s.truth.len(),

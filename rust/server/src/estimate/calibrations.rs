@@ -189,7 +189,7 @@ pub(crate) mod tests {
             "format": "sitar-calibration",
             "version": 1,
             "fitted_on": {
-                "sequences": [{"name": "a", "set_a": 5, "set_b": 5, "windows": 100}],
+                "sequences": [{"name": "a", "runs": 10, "set_a": 5, "set_b": 5, "windows": 100}],
                 "setting": setting,
                 "window_frames": window_frames,
                 "pose_relation": relation,
