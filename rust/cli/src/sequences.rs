@@ -193,7 +193,7 @@ mod tests {
         // A folder of sequences: each one that has ground truth.
         std::fs::remove_dir_all(dir.join("b")).unwrap();
         write_runs(&dir.join("c"), 4);
-        let s = sequence_inputs(&[dir.clone()], None).unwrap();
+        let s = sequence_inputs(std::slice::from_ref(&dir), None).unwrap();
         assert_eq!(s.len(), 2);
         std::fs::remove_dir_all(&dir).unwrap();
     }
