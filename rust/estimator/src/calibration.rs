@@ -294,9 +294,16 @@ impl Calibration {
         pose_relation: PoseRelation,
     ) -> Result<(), Error> {
         let f = &self.fitted_on;
-        let theirs = (setting.to_string(), window_frames, pose_relation.to_string());
-        if (f.setting.as_str(), f.window_frames, f.pose_relation.as_str())
-            != (theirs.0.as_str(), theirs.1, theirs.2.as_str())
+        let theirs = (
+            setting.to_string(),
+            window_frames,
+            pose_relation.to_string(),
+        );
+        if (
+            f.setting.as_str(),
+            f.window_frames,
+            f.pose_relation.as_str(),
+        ) != (theirs.0.as_str(), theirs.1, theirs.2.as_str())
         {
             return Err(Error::InvalidArgument(format!(
                 "the calibration was fitted for setting {}, {} window frames, pose relation {}; the estimate is setting {}, {} window frames, pose relation {}",
