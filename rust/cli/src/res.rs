@@ -370,6 +370,7 @@ fn plot(
                 points: xs.into_iter().zip(errors).collect(),
                 colour: PALETTE[i % PALETTE.len()],
                 dashed: false,
+                markers: false,
             }
         })
         .collect();
@@ -382,6 +383,7 @@ fn plot(
             "index".into()
         },
         panels: vec![(label.clone(), series)],
+        y_from_zero: false,
     };
     let shown: Vec<String> = ["rmse", "median", "mean", "std", "min", "max"]
         .iter()
