@@ -33,6 +33,7 @@ mod plot;
 mod pyfmt;
 mod res;
 mod rpe;
+mod runs;
 mod scene;
 mod sequences;
 mod serve;
