@@ -1,4 +1,5 @@
-//! Repeated runs of one system (`sitar ape|rpe FORMAT REF EST1 EST2 …`): the statistics over runs against numpy and evo
+//! `sitar drift`, and repeated runs of one system (`sitar ape|rpe|drift FORMAT REF EST1 EST2
+//! …`): the statistics over runs against numpy and evo
 //! (`scripts/golden/make_multirun_goldens.py`, on the real runs of
 //! `../shared/data/real-runs`), the text, CSV and JSON outputs, the per-run archives that
 //! `sitar res` reads, the plots; and that one estimate keeps evo's output.
@@ -47,6 +48,13 @@ fn real_sequence(test: &str) -> Option<PathBuf> {
 fn expected() -> Value {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/golden/multirun/expected.json");
     serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+/// The estimator's drift goldens (the synthetic KITTI pair and its numpy results).
+fn estimator_data(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../estimator/tests/data")
+        .join(name)
 }
 
 fn f(v: &Value) -> f64 {
@@ -116,6 +124,59 @@ fn ape_over_five_real_runs_equals_evo_and_numpy() {
     let across = want["across_trials"].as_object().unwrap();
     assert_eq!(across.len(), 7);
     for (stat, summary) in across {
+        for name in ["mean", "median", "min", "max", "std"] {
+            assert_close(
+                &format!("{stat} {name}"),
+                &got["across_trials"][stat][name],
+                &summary[name],
+            );
+        }
+    }
+}
+
+#[test]
+fn drift_over_five_real_runs_equals_numpy() {
+    let Some(dir) = real_sequence("drift_over_five_real_runs_equals_numpy") else {
+        return;
+    };
+    let want = &expected()["drift"];
+    let got = json_of(&dir, &strings(&want["args"]));
+    assert_eq!(got["runs"], 5);
+    for (k, (trial, numpy)) in got["trials"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .zip(want["trials"].as_array().unwrap())
+        .enumerate()
+    {
+        assert_eq!(trial["segments"], numpy["segments"], "run {k}");
+        assert_eq!(trial["speed_from"], "stamps");
+        for key in ["t_err_percent", "r_err_deg_per_m"] {
+            assert_close(&format!("run {k} {key}"), &trial[key], &numpy[key]);
+        }
+        for (bins, centre) in [("by_length", "length_m"), ("by_speed", "speed_m_s")] {
+            let (g, w) = (
+                trial[bins].as_array().unwrap(),
+                numpy[bins].as_array().unwrap(),
+            );
+            assert_eq!(g.len(), w.len(), "run {k} {bins}");
+            for (a, b) in g.iter().zip(w) {
+                assert_eq!(a[centre], b[centre]);
+                assert_eq!(a["segments"], b["segments"]);
+                assert_close(
+                    &format!("run {k} {bins}"),
+                    &a["t_err_percent"],
+                    &b["t_err_percent"],
+                );
+                assert_close(
+                    &format!("run {k} {bins}"),
+                    &a["r_err_deg_per_m"],
+                    &b["r_err_deg_per_m"],
+                );
+            }
+        }
+    }
+    for (stat, summary) in want["across_trials"].as_object().unwrap() {
         for name in ["mean", "median", "min", "max", "std"] {
             assert_close(
                 &format!("{stat} {name}"),
@@ -282,4 +343,144 @@ fn runs_save_one_archive_each_that_res_reads_and_a_box_plot() {
     let table = |name: &str| std::fs::read_to_string(out.path().join(name)).unwrap();
     assert_eq!(table("zips.csv"), table("json.csv"));
     assert_eq!(table("json.csv").lines().count(), 4);
+}
+
+#[test]
+fn drift_on_the_synthetic_kitti_pair_equals_numpy_and_plots() {
+    let cases: Value = serde_json::from_str(
+        &std::fs::read_to_string(estimator_data("golden_drift.json")).unwrap(),
+    )
+    .unwrap();
+    let want = &cases[0];
+    assert_eq!(want["name"], "kitti_synthetic");
+    let out = tempfile::tempdir().unwrap();
+    let (gt, est) = (
+        estimator_data("drift/kitti_gt.txt"),
+        estimator_data("drift/kitti_est.txt"),
+    );
+    let (gt, est) = (gt.to_str().unwrap(), est.to_str().unwrap());
+    let got: Value = serde_json::from_str(&ok_in(
+        out.path(),
+        &["drift", "kitti", gt, est, "--format", "json"],
+    ))
+    .unwrap();
+    assert_eq!(got["segments"], want["segments"]);
+    assert_eq!(got["speed_from"], "frames");
+    for key in ["t_err_percent", "r_err_deg_per_m"] {
+        assert_close(key, &got[key], &want[key]);
+    }
+    for (bins, centre) in [("by_length", "length_m"), ("by_speed", "speed_m_s")] {
+        let (g, w) = (
+            got[bins].as_array().unwrap(),
+            want[bins].as_array().unwrap(),
+        );
+        assert_eq!(g.len(), w.len());
+        for (a, b) in g.iter().zip(w) {
+            assert_eq!(a[centre], b[centre]);
+            assert_eq!(a["segments"], b["segments"]);
+            assert_close(bins, &a["t_err_percent"], &b["t_err_percent"]);
+            assert_close(bins, &a["r_err_deg_per_m"], &b["r_err_deg_per_m"]);
+        }
+    }
+    // The table: a row per length and the overall line.
+    let text = ok_in(out.path(), &["drift", "kitti", gt, est]);
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(
+        lines[0],
+        "KITTI drift over segments of 100, 200, 300, 400, 500, 600, 700, 800 m (a start every 10 poses)"
+    );
+    assert_eq!(lines[1], "(not aligned)");
+    let header = lines
+        .iter()
+        .position(|l| l.starts_with("length (m)"))
+        .unwrap();
+    assert_eq!(lines[header + 1].split_whitespace().next(), Some("100"));
+    let all: Vec<&str> = lines[header + 9].split_whitespace().collect();
+    assert_eq!(all[..2], ["all", "166"]);
+    assert!((all[2].parse::<f64>().unwrap() - f(&want["t_err_percent"])).abs() < 1e-6);
+    // CSV: one row per segment.
+    let csv = ok_in(out.path(), &["drift", "kitti", gt, est, "--format", "csv"]);
+    assert_eq!(
+        csv.lines().next(),
+        Some("first,last,length_m,speed_m_s,t_err_percent,r_err_deg_per_m")
+    );
+    assert_eq!(csv.lines().count(), 167);
+    // A rigid alignment changes no segment; a scale correction lowers the error.
+    let aligned: Value = serde_json::from_str(&ok_in(
+        out.path(),
+        &["drift", "kitti", gt, est, "-a", "--format", "json"],
+    ))
+    .unwrap();
+    assert_eq!(aligned["alignment"], "se3");
+    assert!((f(&aligned["t_err_percent"]) - f(&got["t_err_percent"])).abs() < 1e-9);
+    let scaled: Value = serde_json::from_str(&ok_in(
+        out.path(),
+        &["drift", "kitti", gt, est, "-s", "--format", "json"],
+    ))
+    .unwrap();
+    assert_eq!(scaled["alignment"], "scale");
+    assert!(f(&scaled["scale"]) < 1.0);
+    assert!(f(&scaled["t_err_percent"]) < f(&got["t_err_percent"]) - 0.5);
+    // The two figures as SVG files, and one two-page PDF.
+    let saved = ok_in(
+        out.path(),
+        &["drift", "kitti", gt, est, "--save_plot", "drift.svg"],
+    );
+    assert!(saved.contains("Plot saved to drift_length.svg"));
+    for page in ["length", "speed"] {
+        let svg = std::fs::read_to_string(out.path().join(format!("drift_{page}.svg"))).unwrap();
+        assert!(svg.contains("translation error (%)") && svg.contains("rotation error (deg/m)"));
+    }
+    ok_in(
+        out.path(),
+        &["drift", "kitti", gt, est, "--save_plot", "drift.pdf"],
+    );
+    let pdf =
+        String::from_utf8_lossy(&std::fs::read(out.path().join("drift.pdf")).unwrap()).into_owned();
+    assert!(pdf.starts_with("%PDF") && pdf.contains("/Count 2 >>"));
+}
+
+#[test]
+fn drift_over_runs_prints_and_plots_each_run() {
+    let Some(dir) = real_sequence("drift_over_runs_prints_and_plots_each_run") else {
+        return;
+    };
+    let out = tempfile::tempdir().unwrap();
+    let file = |name: &str| dir.join(name).display().to_string();
+    let args = [
+        "drift".to_owned(),
+        "tum".to_owned(),
+        file("ground_truth.txt"),
+        file("runs/run0.txt"),
+        file("runs/run1.txt"),
+        "--lengths".to_owned(),
+        "1,2,4,8".to_owned(),
+        "--speed_step".to_owned(),
+        "0.25".to_owned(),
+        "--save_plot".to_owned(),
+        "d.svg".to_owned(),
+    ];
+    let text = ok_in(
+        out.path(),
+        &args.iter().map(String::as_str).collect::<Vec<_>>(),
+    );
+    assert!(text.contains("2 runs against"), "{text}");
+    assert!(text.contains("\nacross trials"), "{text}");
+    assert!(text.contains("\nt_err_percent "), "{text}");
+    for page in ["length", "speed", "t_err_box_plot", "r_err_box_plot"] {
+        let svg = std::fs::read_to_string(out.path().join(format!("d_{page}.svg"))).unwrap();
+        assert!(svg.contains("run1.txt"), "{page}");
+    }
+}
+
+#[test]
+fn drift_says_when_no_segment_fits() {
+    let Some(dir) = real_sequence("drift_says_when_no_segment_fits") else {
+        return;
+    };
+    let out = sitar_in(&dir, &["drift", "tum", "ground_truth.txt", "runs/run0.txt"]);
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert!(stderr.contains("no segment"), "{stderr}");
+    assert!(stderr.contains("--lengths"), "{stderr}");
 }
