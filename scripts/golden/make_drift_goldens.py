@@ -5,7 +5,7 @@ from sitar.
 
 Writes into rust/estimator/tests/data/:
   drift/kitti_gt.txt, drift/kitti_est.txt  a synthetic KITTI-format pair (400 poses, about
-                          930 m at 10 Hz, 19-27 m/s): the estimate integrates the ground
+                          919 m at 10 Hz, 19-27 m/s): the estimate integrates the ground
                           truth's frame-to-frame motion with a scale error of 1.5 %, a yaw
                           drift of 0.005 deg per metre and a little noise
   golden_drift.json       per case: the options, every segment (kitti) or its first/last
