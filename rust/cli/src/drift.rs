@@ -249,15 +249,14 @@ fn document(outcome: &Outcome, title: &str, settings: &DriftOptions) -> Value {
     })
 }
 
-/// Lengths that have segments but too few for their average (the devkit's plots need 3).
+/// Lengths with too few segments for their average (the devkit's plots need 3), none
+/// included.
 fn left_out(d: &Drift, settings: &DriftOptions) -> Vec<f64> {
     settings
         .lengths_m
         .iter()
         .copied()
-        .filter(|&l| {
-            d.segments.iter().any(|s| s.length_m == l) && !d.by_length.iter().any(|b| b.centre == l)
-        })
+        .filter(|&l| !d.by_length.iter().any(|b| b.centre == l))
         .collect()
 }
 

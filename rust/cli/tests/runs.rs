@@ -484,3 +484,59 @@ fn drift_says_when_no_segment_fits() {
     assert!(stderr.contains("no segment"), "{stderr}");
     assert!(stderr.contains("--lengths"), "{stderr}");
 }
+
+#[test]
+fn drift_and_runs_read_bag_topics() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/golden/evo_bags");
+    let drift: Value = serde_json::from_str(&ok_in(
+        &dir,
+        &[
+            "drift",
+            "bag2",
+            "fr1_mcap",
+            "/ground_truth",
+            "/odom",
+            "--lengths",
+            "0.5,1,2",
+            "--format",
+            "json",
+        ],
+    ))
+    .unwrap();
+    assert_eq!(drift["speed_from"], "stamps");
+    assert_eq!(drift["segments"], 3);
+    assert_eq!(drift["by_length"].as_array().unwrap().len(), 1);
+    let text = ok_in(
+        &dir,
+        &[
+            "drift",
+            "bag2",
+            "fr1_mcap",
+            "/ground_truth",
+            "/odom",
+            "--lengths",
+            "0.5,1,2",
+        ],
+    );
+    assert!(
+        text.contains("(left out, fewer than 3 segments, as in the devkit's plots: 1, 2 m)"),
+        "{text}"
+    );
+    let runs: Value = serde_json::from_str(&ok_in(
+        &dir,
+        &[
+            "ape",
+            "bag2",
+            "fr1_mcap",
+            "/ground_truth",
+            "/odom",
+            "/pose_cov",
+            "-a",
+            "--format",
+            "json",
+        ],
+    ))
+    .unwrap();
+    assert_eq!(runs["runs"], 2);
+    assert_eq!(runs["trials"][1]["estimate"], "/pose_cov");
+}
