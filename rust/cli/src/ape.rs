@@ -14,7 +14,7 @@ use crate::source::{self, format_subcommands};
 /// truth and a TUM estimate; kitti: KITTI poses). Prints evo's title and statistics table.
 #[derive(clap::Args, Debug)]
 #[command(
-    after_help = "Examples:\n  sitar ape tum ground_truth.txt trajectory_0.txt -a\n  sitar ape euroc data.csv estimate.tum -a -s --save_results ape.zip --save_plot ape.pdf\n  sitar ape kitti 00.txt 00_est.txt -r angle_deg -p"
+    after_help = "Examples:\n  sitar ape tum ground_truth.txt trajectory_0.txt -a\n  sitar ape euroc data.csv estimate.tum -a -s --save_results ape.zip --save_plot ape.pdf\n  sitar ape kitti 00.txt 00_est.txt -r angle_deg -p\n  sitar ape tum gt.txt run0.txt run1.txt run2.txt -a --format json -o runs.json"
 )]
 pub struct Args {
     #[command(subcommand)]
@@ -50,13 +50,21 @@ pub fn run(args: Args) -> Result<()> {
     let (source, options) = args.source.split();
     let console = Console::new(&options.usability)?;
     check_supported(&options.output)?;
-    let loaded = source::load(&source, &console)?;
-    let outcome = metric::compute(
-        Metric::Ape(options.pose_relation),
-        loaded,
-        &options.algorithm,
-        options.output.plot_full_ref,
-        &console,
-    )?;
-    crate::compare::finish(&outcome, &options.output, &console)
+    let runs = source::load(&source, &console)?;
+    let outcomes = runs
+        .into_iter()
+        .map(|loaded| {
+            metric::compute(
+                Metric::Ape(options.pose_relation),
+                loaded,
+                &options.algorithm,
+                options.output.plot_full_ref,
+                &console,
+            )
+        })
+        .collect::<Result<Vec<_>>>()?;
+    match outcomes.as_slice() {
+        [one] => crate::compare::finish(one, &options.output, &console),
+        several => crate::runs::finish(several, &options.output, &console),
+    }
 }

@@ -18,7 +18,7 @@ pub fn finish(outcome: &Outcome, output: &OutputArgs, console: &Console) -> Resu
         Some(format) => {
             let text = match format {
                 OutputFormat::Csv => csv(outcome),
-                OutputFormat::Json => json(outcome) + "\n",
+                OutputFormat::Json => json(outcome).to_string() + "\n",
             };
             emit(output.output.as_deref(), &text)?;
         }
@@ -67,7 +67,7 @@ fn csv(outcome: &Outcome) -> String {
 
 /// The JSON document: metric, relation, unit, alignment and transform, statistics, errors
 /// (stamps integer ns), and for RPE the delta.
-fn json(outcome: &Outcome) -> String {
+pub fn json(outcome: &Outcome) -> serde_json::Value {
     let reference = &outcome.reference;
     let ape = matches!(outcome.metric, Metric::Ape(_));
     let rows: Vec<serde_json::Value> = outcome
@@ -125,7 +125,7 @@ fn json(outcome: &Outcome) -> String {
         object.insert("delta_unit".into(), o.delta_unit.name().into());
         object.insert("all_pairs".into(), o.all_pairs.into());
     }
-    doc.to_string()
+    doc
 }
 
 /// A path's file name, for figure titles (the whole path if it has none).
@@ -144,7 +144,8 @@ pub fn unit(relation: PoseRelation) -> &'static str {
     }
 }
 
-fn alignment_name(a: Alignment) -> &'static str {
+/// The alignment's name in the JSON documents.
+pub fn alignment_name(a: Alignment) -> &'static str {
     match a {
         Alignment::None => "none",
         Alignment::Se3 => "se3",

@@ -104,6 +104,8 @@ pub struct Series {
     pub colour: RGBColor,
     /// Dashed (evo's reference style).
     pub dashed: bool,
+    /// A circle on every point (the KITTI devkit's `linespoints`).
+    pub markers: bool,
 }
 
 /// A named 3-D path of a trajectory figure.
@@ -129,6 +131,9 @@ pub enum Drawing {
         x_label: String,
         /// (y-axis label, lines) per panel, top to bottom.
         panels: Vec<(String, Vec<Series>)>,
+        /// Every y-axis from 0, with room above the largest value for the legend (the KITTI
+        /// devkit's error plots); otherwise around the values.
+        y_from_zero: bool,
     },
     /// Trajectories in a plane or in 3-D (evo_traj's trajectory plot).
     Trajectories {

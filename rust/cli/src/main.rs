@@ -16,6 +16,7 @@ mod console;
 mod demo;
 mod demo_venue;
 mod distribution;
+mod drift;
 mod estimate;
 mod evaluate;
 mod figure;
@@ -33,6 +34,7 @@ mod plot;
 mod pyfmt;
 mod res;
 mod rpe;
+mod runs;
 mod scene;
 mod sequences;
 mod serve;
@@ -64,6 +66,7 @@ enum Command {
     Ape(ape::Args),
     Traj(traj::Args),
     Res(res::Args),
+    Drift(drift::Args),
     Completions(shell::CompletionsArgs),
     Man(shell::ManArgs),
     Estimate(estimate::Args),
@@ -90,6 +93,7 @@ const GROUPS: &[(&str, &[&str])] = &[
         "evo-compatible (evo's command lines)",
         &["ape", "rpe", "traj", "res"],
     ),
+    ("Beyond evo (ground-truth metrics evo lacks)", &["drift"]),
     (
         "SiTAR analysis",
         &["estimate", "evaluate", "calibrate", "scene"],
@@ -156,6 +160,7 @@ fn main() -> ExitCode {
         Command::Ape(args) => ape::run(args),
         Command::Traj(args) => traj::run(args),
         Command::Res(args) => res::run(args),
+        Command::Drift(args) => drift::run(args),
         Command::Completions(args) => shell::completions(args, &mut cli()),
         Command::Man(args) => shell::man(args, cli()),
         Command::Estimate(args) => estimate::run(args),

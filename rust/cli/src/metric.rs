@@ -329,11 +329,11 @@ pub fn synchronise(
 }
 
 /// The alignment kind, the transform applied and evo's `alignment_transformation_sim3`.
-type AlignmentOutcome = (Alignment, Option<Similarity>, Option<[[f64; 4]; 4]>);
+pub type AlignmentOutcome = (Alignment, Option<Similarity>, Option<[[f64; 4]; 4]>);
 
 /// evo's alignment: Umeyama (`-a`, `-s`, `--n_to_align`), then `--align_origin`. Returns the
 /// kind, the transform applied and evo's `alignment_transformation_sim3`.
-fn align_estimate(
+pub fn align_estimate(
     algorithm: &AlgorithmArgs,
     estimate: &mut Trajectory,
     reference: &Trajectory,

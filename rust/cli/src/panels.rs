@@ -22,12 +22,13 @@ where
             title,
             x_label,
             panels,
+            y_from_zero,
         } => {
             let (top, body) = root.split_vertically(50);
             crate::plot::title_lines(&top, title)?;
             let areas = body.split_evenly((panels.len().max(1), 1));
             for (area, (y_label, series)) in areas.iter().zip(panels) {
-                lines_panel(area, x_label, y_label, series)?;
+                lines_panel(area, x_label, y_label, series, *y_from_zero)?;
             }
             Ok(())
         }
@@ -82,12 +83,21 @@ fn lines_panel<DB: DrawingBackend>(
     x_label: &str,
     y_label: &str,
     series: &[Series],
+    y_from_zero: bool,
 ) -> DrawResult<()>
 where
     DB::ErrorType: 'static,
 {
     let xs = span(series.iter().flat_map(|s| s.points.iter().map(|p| p.0)));
-    let ys = span(series.iter().flat_map(|s| s.points.iter().map(|p| p.1)));
+    let mut ys = span(series.iter().flat_map(|s| s.points.iter().map(|p| p.1)));
+    if y_from_zero {
+        let top = series
+            .iter()
+            .flat_map(|s| s.points.iter().map(|p| p.1))
+            .filter(|v| v.is_finite())
+            .fold(0.0f64, f64::max);
+        ys = 0.0..if top > 0.0 { top * 1.25 } else { 1.0 };
+    }
     // Absolute Unix seconds: ticks relative to an offset named in the label, as evo's.
     let offset = crate::plot::axis_offset(&xs);
     let x_decimals = crate::plot::decimals(xs.end - xs.start);
@@ -122,6 +132,13 @@ where
                 .draw_series(LineSeries::new(s.points.clone(), style))?
                 .label(s.name.as_str())
                 .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], style));
+        }
+        if s.markers {
+            chart.draw_series(
+                s.points
+                    .iter()
+                    .map(|&p| Circle::new(p, 3, s.colour.stroke_width(1))),
+            )?;
         }
     }
     crate::plot::legend(&mut chart, SeriesLabelPosition::UpperRight)?;

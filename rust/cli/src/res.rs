@@ -4,7 +4,7 @@
 
 use std::path::PathBuf;
 
-use anyhow::{Result, bail};
+use anyhow::{Context, Result, bail};
 
 use crate::archive::ResultArchive;
 use crate::canvas::{self, Page};
@@ -18,7 +18,8 @@ use crate::figure::{DistributionKind, Drawing, PAGE, PALETTE, Series};
     after_help = "Examples:\n  sitar res ape_a.zip ape_b.zip --use_filenames\n  sitar res results/*.zip --save_table table.csv --save_plot res.pdf"
 )]
 pub struct Args {
-    /// One or multiple result files.
+    /// One or multiple result files: evo's .zip archives, or the .json of `sitar ape|rpe
+    /// --format json` (with several runs, one result per run).
     #[arg(required = true)]
     result_files: Vec<PathBuf>,
     /// Merge the results into a single one (averaged, or appended for other lengths).
@@ -57,6 +58,76 @@ pub struct Args {
     usability: UsabilityArgs,
 }
 
+/// The results in `path`: an evo archive (`.zip`), or SiTAR's `--format json` output of
+/// `ape`/`rpe` (`.json`): one result, or one per run of a repeated-runs document
+/// (`"trials"`), named `FILE[k]`.
+fn read_results(path: &std::path::Path) -> Result<Vec<(String, ResultArchive)>> {
+    let file = path.display().to_string();
+    let is_json = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("json"));
+    if !is_json {
+        return Ok(vec![(file, ResultArchive::read(path)?)]);
+    }
+    let text = std::fs::read_to_string(path).with_context(|| format!("{file}: cannot read"))?;
+    let doc: serde_json::Value =
+        serde_json::from_str(&text).with_context(|| format!("{file}: not JSON"))?;
+    match doc.get("trials").and_then(serde_json::Value::as_array) {
+        Some(trials) => trials
+            .iter()
+            .enumerate()
+            .map(|(k, trial)| {
+                let name = format!("{file}[{k}]");
+                Ok((name.clone(), archive_of_document(trial, &name)?))
+            })
+            .collect(),
+        None => Ok(vec![(file.clone(), archive_of_document(&doc, &file)?)]),
+    }
+}
+
+/// The archive of one `ape`/`rpe` JSON document: its title, names and label, its statistics
+/// and its errors (as `error_array`).
+fn archive_of_document(doc: &serde_json::Value, file: &str) -> Result<ResultArchive> {
+    let text = |key: &str| doc.get(key).and_then(serde_json::Value::as_str);
+    let (Some(metric), Some(stats), Some(errors)) = (
+        text("metric"),
+        doc.get("statistics").and_then(serde_json::Value::as_object),
+        doc.get("errors").and_then(serde_json::Value::as_array),
+    ) else {
+        bail!(
+            "{file}: not an ape or rpe result of `--format json` (a {} result has no errors for res)",
+            text("metric").unwrap_or("different")
+        );
+    };
+    let number =
+        |v: Option<&serde_json::Value>| v.and_then(serde_json::Value::as_f64).unwrap_or(f64::NAN);
+    let info = [
+        ("title", text("title").unwrap_or_default().to_owned()),
+        ("ref_name", text("reference").unwrap_or_default().to_owned()),
+        ("est_name", text("estimate").unwrap_or_default().to_owned()),
+        (
+            "label",
+            format!(
+                "{} ({})",
+                metric.to_uppercase(),
+                text("unit").unwrap_or_default()
+            ),
+        ),
+    ];
+    Ok(ResultArchive {
+        info: info.map(|(k, v)| (k.to_owned(), v)).to_vec(),
+        stats: ["rmse", "mean", "median", "std", "min", "max", "sse"]
+            .iter()
+            .filter(|k| stats.contains_key(**k))
+            .map(|k| ((*k).to_owned(), number(stats.get(*k))))
+            .collect(),
+        arrays: vec![(
+            "error_array".to_owned(),
+            crate::archive::Array::vector(errors.iter().map(|e| number(e.get("error"))).collect()),
+        )],
+    })
+}
+
 /// One loaded result and its label.
 struct Labelled {
     label: String,
@@ -70,9 +141,14 @@ pub fn run(args: Args) -> Result<()> {
         bail!("--rerun is not supported by sitar (it needs evo's optional viewers)");
     }
     let mut results = Vec::new();
-    for path in &args.result_files {
-        let archive = ResultArchive::read(path)?;
-        let file = path.display().to_string();
+    for (file, archive) in args
+        .result_files
+        .iter()
+        .map(|path| read_results(path))
+        .collect::<Result<Vec<_>>>()?
+        .into_iter()
+        .flatten()
+    {
         let label = if args.use_filenames {
             file.clone()
         } else {
@@ -370,6 +446,7 @@ fn plot(
                 points: xs.into_iter().zip(errors).collect(),
                 colour: PALETTE[i % PALETTE.len()],
                 dashed: false,
+                markers: false,
             }
         })
         .collect();
@@ -382,6 +459,7 @@ fn plot(
             "index".into()
         },
         panels: vec![(label.clone(), series)],
+        y_from_zero: false,
     };
     let shown: Vec<String> = ["rmse", "median", "mean", "std", "min", "max"]
         .iter()

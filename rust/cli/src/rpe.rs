@@ -12,10 +12,11 @@ use crate::source::{self, format_subcommands};
 /// Relative pose error of an estimate against a reference, as evo_rpe.
 ///
 /// The format comes first, as in evo: `sitar rpe tum REF EST -d 10 --all_pairs`. Defaults
-/// as evo: delta 1 frame, consecutive pairs, translation part.
+/// as evo: delta 1 frame, consecutive pairs, translation part. Several estimates are
+/// repeated runs of one system: each run's statistics and their summary over the runs.
 #[derive(clap::Args, Debug)]
 #[command(
-    after_help = "Examples:\n  sitar rpe tum ground_truth.txt trajectory_0.txt\n  sitar rpe tum ground_truth.txt trajectory_0.txt -r angle_deg -d 10 --all_pairs --save_results rpe.zip\n  sitar rpe tum gt.txt est.txt -d 1 -u m -a --save_plot rpe.png"
+    after_help = "Examples:\n  sitar rpe tum ground_truth.txt trajectory_0.txt\n  sitar rpe tum ground_truth.txt trajectory_0.txt -r angle_deg -d 10 --all_pairs --save_results rpe.zip\n  sitar rpe tum gt.txt est.txt -d 1 -u m -a --save_plot rpe.png\n  sitar rpe tum gt.txt run0.txt run1.txt run2.txt -d 10 --save_plot runs.pdf"
 )]
 pub struct Args {
     #[command(subcommand)]
@@ -99,13 +100,21 @@ pub fn run(args: Args) -> Result<()> {
         rel_delta_tol: options.delta_tol,
         pairs_from_reference: options.pairs_from_reference,
     };
-    let loaded = source::load(&source, &console)?;
-    let outcome = metric::compute(
-        Metric::Rpe(rpe),
-        loaded,
-        &options.algorithm,
-        options.output.plot_full_ref,
-        &console,
-    )?;
-    crate::compare::finish(&outcome, &options.output, &console)
+    let runs = source::load(&source, &console)?;
+    let outcomes = runs
+        .into_iter()
+        .map(|loaded| {
+            metric::compute(
+                Metric::Rpe(rpe),
+                loaded,
+                &options.algorithm,
+                options.output.plot_full_ref,
+                &console,
+            )
+        })
+        .collect::<Result<Vec<_>>>()?;
+    match outcomes.as_slice() {
+        [one] => crate::compare::finish(one, &options.output, &console),
+        several => crate::runs::finish(several, &options.output, &console),
+    }
 }

@@ -86,25 +86,26 @@ impl StampUnit {
     }
 }
 
-/// The two inputs of `ape`/`rpe`, by format.
+/// The inputs of `ape`/`rpe`/`drift`, by format: a reference and one estimate (evo's
+/// command line) or several (repeated runs of one system).
 #[derive(Debug, Clone)]
 pub enum Source {
-    /// Two TUM files.
+    /// TUM files.
     Tum {
         reference: PathBuf,
-        estimate: PathBuf,
+        estimates: Vec<PathBuf>,
         sync: SyncArgs,
     },
-    /// EuRoC ground-truth CSV and a TUM estimate.
+    /// EuRoC ground-truth CSV and TUM estimates.
     Euroc {
         reference: PathBuf,
-        estimate: PathBuf,
+        estimates: Vec<PathBuf>,
         sync: SyncArgs,
     },
-    /// Two KITTI pose files (no stamps: poses pair by index).
+    /// KITTI pose files (no stamps: poses pair by index).
     Kitti {
         reference: PathBuf,
-        estimate: PathBuf,
+        estimates: Vec<PathBuf>,
     },
     /// A ROS bag and two of its topics.
     Bag {
@@ -114,8 +115,8 @@ pub enum Source {
         bag: String,
         /// The reference topic.
         reference: String,
-        /// The estimate topic.
-        estimate: String,
+        /// The estimate topics (one per run).
+        estimates: Vec<String>,
         /// The sync options.
         sync: SyncArgs,
     },
@@ -132,8 +133,9 @@ macro_rules! format_subcommands {
             Tum {
                 /// Reference trajectory file.
                 ref_file: std::path::PathBuf,
-                /// Estimated trajectory file.
-                est_file: std::path::PathBuf,
+                /// Estimated trajectory file (several: repeated runs of one system).
+                #[arg(required = true)]
+                est_file: Vec<std::path::PathBuf>,
                 #[command(flatten)]
                 sync: crate::source::SyncArgs,
                 #[command(flatten)]
@@ -145,8 +147,9 @@ macro_rules! format_subcommands {
             Euroc {
                 /// Ground truth: SEQ/mav0/state_groundtruth_estimate0/data.csv.
                 state_gt_csv: std::path::PathBuf,
-                /// Estimated trajectory file in TUM format.
-                est_file: std::path::PathBuf,
+                /// Estimated trajectory file in TUM format (several: repeated runs).
+                #[arg(required = true)]
+                est_file: Vec<std::path::PathBuf>,
                 #[command(flatten)]
                 sync: crate::source::SyncArgs,
                 #[command(flatten)]
@@ -157,8 +160,9 @@ macro_rules! format_subcommands {
             Kitti {
                 /// Reference pose file (ground truth).
                 ref_file: std::path::PathBuf,
-                /// Estimated pose file.
-                est_file: std::path::PathBuf,
+                /// Estimated pose file (several: repeated runs of one system).
+                #[arg(required = true)]
+                est_file: Vec<std::path::PathBuf>,
                 #[command(flatten)]
                 options: $options,
             },
@@ -170,8 +174,9 @@ macro_rules! format_subcommands {
                 bag: String,
                 /// Reference trajectory topic.
                 ref_topic: String,
-                /// Estimated trajectory topic.
-                est_topic: String,
+                /// Estimated trajectory topic (several: repeated runs of one system).
+                #[arg(required = true)]
+                est_topic: Vec<String>,
                 #[command(flatten)]
                 sync: crate::source::SyncArgs,
                 #[command(flatten)]
@@ -187,8 +192,9 @@ macro_rules! format_subcommands {
                 bag: String,
                 /// Reference trajectory topic.
                 ref_topic: String,
-                /// Estimated trajectory topic.
-                est_topic: String,
+                /// Estimated trajectory topic (several: repeated runs of one system).
+                #[arg(required = true)]
+                est_topic: Vec<String>,
                 #[command(flatten)]
                 sync: crate::source::SyncArgs,
                 #[command(flatten)]
@@ -214,7 +220,7 @@ macro_rules! format_subcommands {
                     } => (
                         Source::Tum {
                             reference: ref_file,
-                            estimate: est_file,
+                            estimates: est_file,
                             sync,
                         },
                         options,
@@ -227,7 +233,7 @@ macro_rules! format_subcommands {
                     } => (
                         Source::Euroc {
                             reference: state_gt_csv,
-                            estimate: est_file,
+                            estimates: est_file,
                             sync,
                         },
                         options,
@@ -239,7 +245,7 @@ macro_rules! format_subcommands {
                     } => (
                         Source::Kitti {
                             reference: ref_file,
-                            estimate: est_file,
+                            estimates: est_file,
                         },
                         options,
                     ),
@@ -261,7 +267,7 @@ macro_rules! format_subcommands {
                             kind: bag_kind,
                             bag,
                             reference: ref_topic,
-                            estimate: est_topic,
+                            estimates: est_topic,
                             sync,
                         },
                         options,
@@ -274,6 +280,7 @@ macro_rules! format_subcommands {
 pub(crate) use format_subcommands;
 
 /// What evo knows of a loaded trajectory: its poses and its name (the path as given).
+#[derive(Clone)]
 pub struct Named {
     /// The poses.
     pub trajectory: Trajectory,
@@ -387,44 +394,68 @@ fn finish(
     })
 }
 
-/// Reads both inputs of `ape`/`rpe`.
-pub fn load(source: &Source, console: &Console) -> Result<Loaded> {
+/// Reads the reference and every estimate: one [`Loaded`] per estimate (the reference read
+/// once, then each estimate in the order given).
+pub fn load(source: &Source, console: &Console) -> Result<Vec<Loaded>> {
     console.debug(SEP)?;
+    let pair = |reference: &Named, estimate: Named, sync: Option<&SyncArgs>| Loaded {
+        reference: reference.clone(),
+        estimate,
+        sync: sync.cloned(),
+    };
     match source {
         Source::Tum {
             reference,
-            estimate,
+            estimates,
             sync,
-        } => Ok(Loaded {
-            reference: read_tum_evo(reference, sync.time_unit, console)?,
-            estimate: read_tum_evo(estimate, sync.time_unit, console)?,
-            sync: Some(sync.clone()),
-        }),
+        } => {
+            let reference = read_tum_evo(reference, sync.time_unit, console)?;
+            estimates
+                .iter()
+                .map(|e| {
+                    Ok(pair(
+                        &reference,
+                        read_tum_evo(e, sync.time_unit, console)?,
+                        Some(sync),
+                    ))
+                })
+                .collect()
+        }
         Source::Euroc {
             reference,
-            estimate,
+            estimates,
             sync,
-        } => Ok(Loaded {
-            reference: read_euroc_evo(reference, console)?,
-            estimate: read_tum_evo(estimate, sync.time_unit, console)?,
-            sync: Some(sync.clone()),
-        }),
+        } => {
+            let reference = read_euroc_evo(reference, console)?;
+            estimates
+                .iter()
+                .map(|e| {
+                    Ok(pair(
+                        &reference,
+                        read_tum_evo(e, sync.time_unit, console)?,
+                        Some(sync),
+                    ))
+                })
+                .collect()
+        }
         Source::Kitti {
             reference,
-            estimate,
-        } => Ok(Loaded {
-            reference: read_kitti_evo(reference, console)?,
-            estimate: read_kitti_evo(estimate, console)?,
-            sync: None,
-        }),
+            estimates,
+        } => {
+            let reference = read_kitti_evo(reference, console)?;
+            estimates
+                .iter()
+                .map(|e| Ok(pair(&reference, read_kitti_evo(e, console)?, None)))
+                .collect()
+        }
         Source::Bag {
             kind,
             bag,
             reference,
-            estimate,
+            estimates,
             sync,
         } => {
-            let wanted = crate::bag::Wanted::named([reference, estimate]);
+            let wanted = crate::bag::Wanted::named(std::iter::once(reference).chain(estimates));
             let topics = crate::bag::open(kind, bag, &wanted, console)?;
             let named = |topic: &String| -> Result<Named> {
                 let read = crate::bag::trajectory(&topics, topic, bag, console)?;
@@ -434,11 +465,11 @@ pub fn load(source: &Source, console: &Console) -> Result<Loaded> {
                     unit_quaternions: read.quaternions_off_unit == 0,
                 })
             };
-            Ok(Loaded {
-                reference: named(reference)?,
-                estimate: named(estimate)?,
-                sync: Some(sync.clone()),
-            })
+            let reference = named(reference)?;
+            estimates
+                .iter()
+                .map(|e| Ok(pair(&reference, named(e)?, Some(sync))))
+                .collect()
         }
     }
 }

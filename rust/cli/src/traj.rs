@@ -1221,6 +1221,7 @@ fn plot(bundle: &Bundle, options: &Options, kind: Kind, console: &Console) -> Re
                     points: (0..t.len()).map(|i| (x(t, i), value(t, i))).collect(),
                     colour: colour(c),
                     dashed: *dashed,
+                    markers: false,
                 })
                 .collect(),
         )
@@ -1233,6 +1234,7 @@ fn plot(bundle: &Bundle, options: &Options, kind: Kind, console: &Console) -> Re
             panel("y (m)", &|t, i| t.positions[i].y),
             panel("z (m)", &|t, i| t.positions[i].z),
         ],
+        y_from_zero: false,
     };
     let euler = |t: &Trajectory, i: usize, k: usize| {
         sitar_estimator::euler_sxyz(DMat3::from_quat(t.orientations[i]))[k].to_degrees()
@@ -1245,6 +1247,7 @@ fn plot(bundle: &Bundle, options: &Options, kind: Kind, console: &Console) -> Re
             panel("pitch (deg)", &|t, i| euler(t, i, 1)),
             panel("yaw (deg)", &|t, i| euler(t, i, 2)),
         ],
+        y_from_zero: false,
     };
     let mut speed_series = Vec::new();
     for (name, t, c, dashed) in &all {
@@ -1264,12 +1267,14 @@ fn plot(bundle: &Bundle, options: &Options, kind: Kind, console: &Console) -> Re
             points,
             colour: colour(c),
             dashed: *dashed,
+            markers: false,
         });
     }
     let speeds = Drawing::Panels {
         title: "speeds".into(),
         x_label: x_label.into(),
         panels: vec![("v (m/s)".to_owned(), speed_series)],
+        y_from_zero: false,
     };
     let mut pages = vec![
         ("trajectories", Page::Other(&trajectories)),

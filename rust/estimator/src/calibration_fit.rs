@@ -215,6 +215,7 @@ fn fit_model(
         (v.iter().map(|a| (a - m) * (a - m)).sum::<f64>() / v.len() as f64).sqrt()
     };
     let (truth_spread, fitted_spread) = (spread(&y), spread(&fitted));
+    // NaN (a non-finite feature) fails too.
     if fitted_spread.is_nan() || fitted_spread <= 0.0 {
         return Err(Error::InvalidArgument(
             "the features do not vary: nothing to fit".into(),

@@ -59,6 +59,34 @@
 //! Golden tests (`tests/golden.rs`, data from `scripts/golden/make_goldens.py`) check all of
 //! this against evo, numpy and scipy to 1e-9.
 //!
+//! ## Drift over path length (KITTI)
+//!
+//! [`drift`] is the KITTI odometry benchmark's metric as its devkit (`evaluate_odometry.cpp`)
+//! defines it: segments of 100, 200, …, 800 m of ground-truth path ([`DriftOptions`]:
+//! any lengths, a start every 10 poses), per segment the translational error in % and the
+//! rotational error in deg/m of the segment's relative pose, averaged per length, per speed
+//! bin and over every segment ([`Drift`]). The module docs of [`drift`] give the formulas and
+//! every difference from the devkit.
+//!
+//! ```
+//! use glam::{DQuat, DVec3};
+//! use sitar_estimator::{drift, DriftOptions, TimeUnit, Trajectory};
+//!
+//! // A straight walk, a pose every 0.1 m, and an estimate 2 % too long.
+//! let walk = |scale: f64| Trajectory {
+//!     stamps: (0..200).map(|i| i * 100_000_000).collect(),
+//!     positions: (0..200).map(|i| DVec3::new(0.1 * i as f64 * scale, 0.0, 0.0)).collect(),
+//!     orientations: vec![DQuat::IDENTITY; 200],
+//!     time_unit: TimeUnit::Nanoseconds,
+//! };
+//! let options = DriftOptions { lengths_m: vec![5.0, 10.0], ..DriftOptions::default() };
+//! let result = drift(&walk(1.0), &walk(1.02), &options)?;
+//! assert!((result.t_err_percent - 2.0).abs() < 0.05); // 2 % of a path just over L
+//! assert_eq!(result.r_err_deg_per_m, 0.0);
+//! assert_eq!(result.by_length.len(), 2);
+//! # Ok::<(), sitar_estimator::Error>(())
+//! ```
+//!
 //! ## Pairwise estimation
 //!
 //! [`estimate`] follows ARCHITECTURE.md: for each pair `i < j` of trials (in the given order)
@@ -166,6 +194,7 @@ mod bag_writer;
 mod bootstrap;
 mod calibration;
 mod calibration_fit;
+mod drift;
 mod error;
 mod estimate;
 mod evaluate;
@@ -194,6 +223,10 @@ pub use calibration::{
 pub use calibration_fit::{
     CalibrationSequence, DEFAULT_SMOOTHING_WINDOWS, DEFAULT_SPREAD_MATCH, FitOptions,
     agreement_scores, fit_calibration, leave_one_sequence_out,
+};
+pub use drift::{
+    Drift, DriftBin, DriftOptions, DriftSegment, KITTI_FRAME_INTERVAL_S, KITTI_LENGTHS_M,
+    KITTI_SPEED_STEP_M_S, KITTI_STEP, MIN_SEGMENTS_PER_BIN, SPEED_BINS, SegmentDuration, drift,
 };
 pub use error::Error;
 pub use estimate::{
