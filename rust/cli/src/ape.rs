@@ -1,10 +1,10 @@
 //! `sitar ape`: absolute pose error, as `evo_ape`.
 
 use anyhow::Result;
-use sitar_estimator::PoseRelation;
+use sitar_estimator::{DirectionRelation, PoseRelation};
 
 use crate::console::{Console, UsabilityArgs};
-use crate::metric::{self, Metric};
+use crate::metric::{self, ApeRelation, Metric};
 use crate::metric_args::{AlgorithmArgs, OutputArgs, check_supported};
 use crate::source::{self, format_subcommands};
 
@@ -24,9 +24,12 @@ pub struct Args {
 /// `sitar ape`'s options: evo_ape's.
 #[derive(clap::Args, Debug)]
 pub struct Options {
-    /// Pose relation on which the APE is based.
+    /// Pose relation on which the APE is based. SiTAR extras: along_track, cross_track,
+    /// vertical (|translation error| along the reference's heading, across it, along the
+    /// gravity axis of --yaw_axis, m), yaw_deg and roll_pitch_deg (the rotation error's
+    /// twist about the gravity axis and its swing, deg).
     #[arg(short = 'r', long = "pose_relation", alias = "pose-relation", default_value = "trans_part", value_parser = parse_relation)]
-    pose_relation: PoseRelation,
+    pose_relation: ApeRelation,
     #[command(flatten)]
     algorithm: AlgorithmArgs,
     #[command(flatten)]
@@ -37,12 +40,15 @@ pub struct Options {
 
 format_subcommands!(Format, Options);
 
-fn parse_relation(s: &str) -> Result<PoseRelation, String> {
+fn parse_relation(s: &str) -> Result<ApeRelation, String> {
+    if let Ok(d) = s.parse::<DirectionRelation>() {
+        return Ok(ApeRelation::Direction(d));
+    }
     match s.parse() {
         Ok(PoseRelation::PointDistanceErrorRatio) | Err(_) => Err(format!(
-            "invalid choice: '{s}' (choose from 'full', 'trans_part', 'rot_part', 'angle_deg', 'angle_rad', 'point_distance')"
+            "invalid choice: '{s}' (choose from 'full', 'trans_part', 'rot_part', 'angle_deg', 'angle_rad', 'point_distance', or SiTAR's 'along_track', 'cross_track', 'vertical', 'yaw_deg', 'roll_pitch_deg')"
         )),
-        Ok(r) => Ok(r),
+        Ok(r) => Ok(ApeRelation::Evo(r)),
     }
 }
 

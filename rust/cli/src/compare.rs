@@ -2,7 +2,7 @@
 //! JSON extras, the result archive and the plots.
 
 use anyhow::Result;
-use sitar_estimator::{Alignment, PoseRelation, TimeUnit};
+use sitar_estimator::{Alignment, GravityAxis, PoseRelation, TimeUnit};
 
 use crate::console::{Console, SEP};
 use crate::metric::{Metric, Outcome, delta_text};
@@ -100,10 +100,11 @@ pub fn json(outcome: &Outcome) -> serde_json::Value {
             "scale": t.scale,
         })
     });
-    let (metric, relation) = match outcome.metric {
-        Metric::Ape(r) => ("ape", r),
-        Metric::Rpe(o) => ("rpe", o.pose_relation),
+    let metric = match outcome.metric {
+        Metric::Ape(_) => "ape",
+        Metric::Rpe(_) => "rpe",
     };
+    let relation = outcome.metric.relation();
     let mut doc = serde_json::json!({
         "version": 1,
         "metric": metric,
@@ -119,6 +120,19 @@ pub fn json(outcome: &Outcome) -> serde_json::Value {
         "statistics": stats,
         "errors": rows,
     });
+    if let Some(object) = doc.as_object_mut() {
+        let pairing = outcome.pairing.map_or_else(
+            || serde_json::json!({ "paired": reference.len(), "by": "index" }),
+            |p| p.json(),
+        );
+        object.insert("pairing".into(), pairing);
+        if let Some(offset) = outcome.t_offset_estimated {
+            object.insert("t_offset_estimated_s".into(), offset.into());
+        }
+        if let Metric::Ape(crate::metric::ApeRelation::Direction(_)) = outcome.metric {
+            object.insert("yaw_axis".into(), outcome.gravity_axis.name().into());
+        }
+    }
     if let (Metric::Rpe(o), Some(object)) = (outcome.metric, doc.as_object_mut()) {
         object.insert("delta".into(), o.delta.into());
         object.insert("delta_text".into(), delta_text(&o).into());
@@ -152,6 +166,12 @@ pub fn alignment_name(a: Alignment) -> &'static str {
         Alignment::Sim3 => "sim3",
         Alignment::ScaleOnly => "scale",
         Alignment::Origin => "origin",
+        Alignment::PositionYaw {
+            axis: GravityAxis::Z,
+        } => "position_yaw_z",
+        Alignment::PositionYaw {
+            axis: GravityAxis::Y,
+        } => "position_yaw_y",
     }
 }
 

@@ -14,7 +14,7 @@ use sitar_estimator::{
 use crate::canvas::Page;
 use crate::console::{Console, SEP, UsabilityArgs};
 use crate::figure::{DistributionKind, Drawing, PALETTE, Series};
-use crate::metric_args::AlgorithmArgs;
+use crate::metric_args::{AlgorithmArgs, AxisArg};
 use crate::output::{OutputFormat, emit, json_number};
 use crate::runs::{across_table, across_trials, csv_field, run_label, table};
 use crate::source::{self, Loaded, format_subcommands};
@@ -60,6 +60,13 @@ pub struct Options {
     /// The number of poses to use for Umeyama alignment, counted from the start (-1: all).
     #[arg(long = "n_to_align", default_value_t = -1, allow_negative_numbers = true)]
     n_to_align: i64,
+    /// SiTAR extra, with -a: 4-DoF alignment (translation and yaw about the gravity axis),
+    /// as ape's --yaw_only. Cannot be combined with -s.
+    #[arg(long = "yaw_only", alias = "yaw-only", requires = "align")]
+    yaw_only: bool,
+    /// The gravity axis for --yaw_only: z or y (gravity along -y).
+    #[arg(long = "yaw_axis", alias = "yaw-axis", value_enum, default_value_t = AxisArg::Z)]
+    yaw_axis: AxisArg,
     /// Show the plots (errors against length and against speed); without a display sitar
     /// says so and shows nothing.
     #[arg(short = 'p', long)]
@@ -138,7 +145,7 @@ fn compute(
     let (ref_name, est_name) = (reference.name, estimate.name);
     let (mut reference, mut estimate) = (reference.trajectory, estimate.trajectory);
     if let Some(sync) = &sync {
-        (reference, estimate) =
+        (reference, estimate, _) =
             crate::metric::synchronise(reference, estimate, sync, (&ref_name, &est_name), console)?;
         settings.duration = SegmentDuration::Stamps;
     } else {
@@ -157,6 +164,11 @@ fn compute(
         align: options.align,
         correct_scale: options.correct_scale,
         n_to_align: options.n_to_align,
+        yaw_only: options.yaw_only,
+        yaw_axis: options.yaw_axis,
+        estimate_t_offset: false,
+        t_offset_range: 1.0,
+        show_pairing: false,
         align_origin: false,
         change_unit: None,
         project_to_plane: None,
@@ -204,6 +216,10 @@ fn title(settings: &DriftOptions, options: &Options) -> String {
         settings.step
     );
     title += match (options.align, options.correct_scale) {
+        (true, _) if options.yaw_only => match options.yaw_axis {
+            AxisArg::Z => "\n(with 4-DoF position and yaw alignment about z)",
+            AxisArg::Y => "\n(with 4-DoF position and yaw alignment about y)",
+        },
         (true, false) => "\n(with SE(3) Umeyama alignment)",
         (true, true) => "\n(with Sim(3) Umeyama alignment)",
         (false, true) => "\n(scale corrected)",

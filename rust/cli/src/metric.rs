@@ -3,8 +3,9 @@
 
 use anyhow::{Context, Result, bail};
 use sitar_estimator::{
-    Alignment, DeltaUnit, PoseErrors, PoseRelation, RpeOptions, Similarity, Statistics, Trajectory,
-    align_first, ape, delta_pairs, match_trajectories, rpe, seconds_to_ns, umeyama,
+    Alignment, DeltaUnit, DirectionRelation, GravityAxis, PoseErrors, PoseRelation, RpeOptions,
+    Similarity, Statistics, Trajectory, align_first, ape, ape_by_direction, delta_pairs,
+    match_trajectories, rpe, seconds_to_ns, umeyama,
 };
 
 use crate::archive::{Array, ResultArchive};
@@ -12,20 +13,63 @@ use crate::console::{Console, SEP};
 use crate::metric_args::AlgorithmArgs;
 use crate::source::{Loaded, SyncArgs, SyncMethod};
 
+/// An APE pose relation: evo's, or one of SiTAR's direction relations (along_track, …).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ApeRelation {
+    /// evo's pose relations.
+    Evo(PoseRelation),
+    /// SiTAR extra: the error split by direction (reference frame, gravity axis).
+    Direction(DirectionRelation),
+}
+
+impl ApeRelation {
+    /// The description in titles.
+    pub fn description(self) -> &'static str {
+        match self {
+            ApeRelation::Evo(r) => r.description(),
+            ApeRelation::Direction(d) => d.description(),
+        }
+    }
+
+    /// The unit of the values.
+    pub fn unit(self) -> &'static str {
+        match self {
+            ApeRelation::Evo(r) => r.unit(),
+            ApeRelation::Direction(d) => d.unit(),
+        }
+    }
+}
+
+impl std::fmt::Display for ApeRelation {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ApeRelation::Evo(r) => r.fmt(f),
+            ApeRelation::Direction(d) => d.fmt(f),
+        }
+    }
+}
+
+impl From<PoseRelation> for ApeRelation {
+    fn from(r: PoseRelation) -> Self {
+        ApeRelation::Evo(r)
+    }
+}
+
 /// APE, or RPE with its pair options.
 #[derive(Debug, Clone, Copy)]
 pub enum Metric {
     /// Absolute pose error.
-    Ape(PoseRelation),
+    Ape(ApeRelation),
     /// Relative pose error.
     Rpe(RpeOptions),
 }
 
 impl Metric {
-    fn relation(&self) -> PoseRelation {
+    /// The pose relation (RPE's are evo's).
+    pub fn relation(&self) -> ApeRelation {
         match self {
             Metric::Ape(r) => *r,
-            Metric::Rpe(o) => o.pose_relation,
+            Metric::Rpe(o) => ApeRelation::Evo(o.pose_relation),
         }
     }
 
@@ -68,6 +112,12 @@ pub struct Outcome {
     pub transform: Option<Similarity>,
     /// Whether the inputs had stamps (not KITTI).
     pub timed: bool,
+    /// How the poses were paired by stamps (None for KITTI: by index).
+    pub pairing: Option<Pairing>,
+    /// The offset found by --estimate_t_offset (s).
+    pub t_offset_estimated: Option<f64>,
+    /// The gravity axis of --yaw_axis.
+    pub gravity_axis: GravityAxis,
 }
 
 /// Runs the metric on the loaded inputs.
@@ -88,9 +138,34 @@ pub fn compute(
     let reference_full = keep_full_reference.then(|| reference.clone());
     let timed = sync.is_some();
     downsample_or_filter(algorithm, &mut reference, &mut estimate, timed, console)?;
+    let mut pairing = None;
+    let mut t_offset_estimated = None;
     if let Some(sync) = &sync {
-        (reference, estimate) =
-            synchronise(reference, estimate, sync, (&ref_name, &est_name), console)?;
+        let mut sync = sync.clone();
+        if algorithm.estimate_t_offset {
+            let (kind, n) = alignment_kind(algorithm)?;
+            let offset = estimate_t_offset(
+                &reference,
+                &estimate,
+                &sync,
+                kind,
+                n,
+                algorithm.t_offset_range,
+            )
+            .with_context(|| format!("{est_name}: estimating the time offset"))?;
+            eprintln!("estimated t_offset: {offset:.4} s");
+            sync.t_offset = offset;
+            t_offset_estimated = Some(offset);
+        }
+        let found;
+        (reference, estimate, found) =
+            synchronise(reference, estimate, &sync, (&ref_name, &est_name), console)?;
+        if algorithm.show_pairing {
+            eprintln!("{est_name}: {}", found.text());
+        }
+        pairing = Some(found);
+    } else if algorithm.estimate_t_offset {
+        bail!("--estimate_t_offset needs stamps (not the kitti format)");
     } else if reference.len() != estimate.len() {
         bail!(
             "trajectories must have same number of poses ({ref_name}: {}, {est_name}: {})",
@@ -112,7 +187,13 @@ pub fn compute(
     }
     console.debug(SEP)?;
     let mut errors = match &metric {
-        Metric::Ape(r) => ape(&reference, &estimate, *r).context("computing the APE")?,
+        Metric::Ape(ApeRelation::Evo(r)) => {
+            ape(&reference, &estimate, *r).context("computing the APE")?
+        }
+        Metric::Ape(ApeRelation::Direction(d)) => {
+            ape_by_direction(&reference, &estimate, *d, algorithm.yaw_axis.axis())
+                .context("computing the APE by direction")?
+        }
         Metric::Rpe(options) => {
             if options.all_pairs
                 && matches!(options.delta_unit, DeltaUnit::Degrees | DeltaUnit::Radians)
@@ -183,7 +264,34 @@ pub fn compute(
         alignment_matrix,
         transform,
         timed,
+        pairing,
+        t_offset_estimated,
+        gravity_axis: algorithm.yaw_axis.axis(),
     })
+}
+
+/// The alignment `align_estimate` will apply (before --align_origin) and --n_to_align.
+fn alignment_kind(algorithm: &AlgorithmArgs) -> Result<(Alignment, Option<usize>)> {
+    let n = match algorithm.n_to_align {
+        -1 => None,
+        n if n > 0 => Some(n as usize),
+        n => bail!("--n_to_align must be -1 (all poses) or a positive number of poses, got {n}"),
+    };
+    if algorithm.yaw_only && algorithm.correct_scale {
+        bail!(
+            "--yaw_only aligns without scale (a translation and a yaw about the gravity axis): it cannot be combined with -s/--correct_scale"
+        );
+    }
+    let kind = match (algorithm.align, algorithm.correct_scale) {
+        (true, _) if algorithm.yaw_only => Alignment::PositionYaw {
+            axis: algorithm.yaw_axis.axis(),
+        },
+        (true, true) => Alignment::Sim3,
+        (true, false) => Alignment::Se3,
+        (false, true) => Alignment::ScaleOnly,
+        (false, false) => Alignment::None,
+    };
+    Ok((kind, n))
 }
 
 /// evo's `--downsample` and `--motion_filter`, on both trajectories, before the sync.
@@ -238,7 +346,7 @@ pub fn synchronise(
     sync: &SyncArgs,
     names: (&str, &str),
     console: &Console,
-) -> Result<(Trajectory, Trajectory)> {
+) -> Result<(Trajectory, Trajectory, Pairing)> {
     if !(sync.t_max_diff.is_finite() && sync.t_max_diff >= 0.0 && sync.t_offset.is_finite()) {
         bail!(
             "--t_max_diff must be a non-negative number of seconds and --t_offset finite (got {}, {})",
@@ -321,7 +429,191 @@ pub fn synchronise(
             crate::pyfmt::repr(sync.t_max_diff)
         ));
     }
+    let pairing = Pairing {
+        reference_poses: reference.len(),
+        estimate_poses: estimate.len(),
+        paired: ids_short.len(),
+        max_diff_s: sync.t_max_diff,
+        t_offset_s: sync.t_offset,
+    };
     Ok(if second_longer {
+        (short_synced, long_synced, pairing)
+    } else {
+        (long_synced, short_synced, pairing)
+    })
+}
+
+/// How the estimate's poses were paired with the reference's (SiTAR extra: `--show_pairing`
+/// and the JSON's `"pairing"`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Pairing {
+    /// Reference poses offered (after --t_start/--t_end).
+    pub reference_poses: usize,
+    /// Estimate poses read (after --downsample/--motion_filter).
+    pub estimate_poses: usize,
+    /// Pairs made.
+    pub paired: usize,
+    /// --t_max_diff (s).
+    pub max_diff_s: f64,
+    /// The offset used (s).
+    pub t_offset_s: f64,
+}
+
+impl Pairing {
+    /// Estimate poses left without a partner.
+    pub fn dropped(&self) -> usize {
+        self.estimate_poses.saturating_sub(self.paired)
+    }
+
+    /// `paired 1347 of 1350 estimate poses; 3 without a reference pose within 0.01 s`.
+    pub fn text(&self) -> String {
+        let mut text = format!(
+            "paired {} of {} estimate poses",
+            self.paired, self.estimate_poses
+        );
+        if self.dropped() > 0 {
+            text += &format!(
+                "; {} without a reference pose within {} s",
+                self.dropped(),
+                crate::pyfmt::repr(self.max_diff_s)
+            );
+            if self.t_offset_s != 0.0 {
+                text += &format!(" (t_offset {} s)", crate::pyfmt::repr(self.t_offset_s));
+            }
+        }
+        text
+    }
+
+    /// The JSON object.
+    pub fn json(&self) -> serde_json::Value {
+        serde_json::json!({
+            "estimate_poses": self.estimate_poses,
+            "reference_poses": self.reference_poses,
+            "paired": self.paired,
+            "estimate_dropped": self.dropped(),
+            "reason": if self.dropped() > 0 {
+                format!("no reference pose within {} s", crate::pyfmt::repr(self.max_diff_s))
+            } else {
+                String::new()
+            },
+            "t_max_diff_s": self.max_diff_s,
+            "t_offset_s": self.t_offset_s,
+        })
+    }
+}
+
+/// The search of `--estimate_t_offset`: the offset (s, as --t_offset: added to the
+/// estimate's stamps) in ±`range_s` minimising the translation APE RMSE after `kind`'s
+/// alignment, associated as evo (`sync`'s method and --t_max_diff) at every offset. A grid
+/// of steps of min(t_max_diff, range/50), then a grid 40 times finer around the best, whose
+/// best values' interval gives its middle. Only offsets pairing at least 90 % of the most
+/// pairs found count (few pairs fit too well).
+pub fn estimate_t_offset(
+    reference: &Trajectory,
+    estimate: &Trajectory,
+    sync: &SyncArgs,
+    kind: Alignment,
+    n: Option<usize>,
+    range_s: f64,
+) -> Result<f64> {
+    if !(range_s.is_finite() && range_s > 0.0) {
+        bail!("--t_offset_range must be a positive number of seconds, got {range_s}");
+    }
+    let mut reference = reference.clone();
+    let t_start = sync.t_start.filter(|&t| t != 0.0);
+    let t_end = sync.t_end.filter(|&t| t != 0.0);
+    if t_start.is_some() || t_end.is_some() {
+        reference
+            .reduce_to_time_range(t_start, t_end)
+            .context("--t_start/--t_end")?;
+    }
+    let kind = if kind == Alignment::None {
+        Alignment::Se3
+    } else {
+        kind
+    };
+    let evaluate = |offset: f64| -> Option<(usize, f64)> {
+        let (r, mut e) = pair_quiet(&reference, estimate, sync, offset)?;
+        if r.len() < 3 {
+            return None;
+        }
+        align_first(&mut e, &r, kind, n).ok()?;
+        let errors = ape(&r, &e, PoseRelation::TranslationPart).ok()?;
+        Some((r.len(), errors.statistics().rmse))
+    };
+    let scan = |from: f64, to: f64, step: f64| -> Vec<(f64, usize, f64)> {
+        let count = ((to - from) / step).round() as i64;
+        (0..=count)
+            .filter_map(|k| {
+                let offset = from + k as f64 * step;
+                evaluate(offset).map(|(pairs, rmse)| (offset, pairs, rmse))
+            })
+            .collect()
+    };
+    let best = |found: &[(f64, usize, f64)], least: usize| {
+        found
+            .iter()
+            .filter(|c| c.1 >= least && c.2.is_finite())
+            .min_by(|a, b| a.2.total_cmp(&b.2))
+            .copied()
+    };
+    let step = sync.t_max_diff.min(range_s / 50.0).max(range_s / 20_000.0);
+    let coarse = scan(-range_s, range_s, step);
+    let most = coarse.iter().map(|c| c.1).max().unwrap_or(0);
+    let least = (most * 9).div_ceil(10);
+    let Some((centre, _, _)) = best(&coarse, least) else {
+        bail!(
+            "--estimate_t_offset: no offset within ±{range_s} s pairs at least 3 poses (--t_max_diff {} s)",
+            crate::pyfmt::repr(sync.t_max_diff)
+        );
+    };
+    let fine = scan(
+        (centre - step).max(-range_s),
+        (centre + step).min(range_s),
+        step / 40.0,
+    );
+    // Nearest-stamp association makes the RMSE a step function of the offset: the best
+    // value holds on an interval (about one reference period wide); take its middle.
+    let Some((_, _, low)) = best(&fine, least) else {
+        return Ok(centre);
+    };
+    let on_plateau: Vec<f64> = fine
+        .iter()
+        .filter(|c| c.1 >= least && c.2 <= low * (1.0 + 1e-12))
+        .map(|c| c.0)
+        .collect();
+    let (first, last) = (on_plateau[0], on_plateau[on_plateau.len() - 1]);
+    Ok(0.5 * (first + last))
+}
+
+/// The association of `synchronise` without its messages, at `offset_s` (as --t_offset).
+fn pair_quiet(
+    reference: &Trajectory,
+    estimate: &Trajectory,
+    sync: &SyncArgs,
+    offset_s: f64,
+) -> Option<(Trajectory, Trajectory)> {
+    let second_longer = estimate.len() > reference.len();
+    let (short, long) = if second_longer {
+        (reference, estimate)
+    } else {
+        (estimate, reference)
+    };
+    let offset = if second_longer { offset_s } else { -offset_s };
+    let (ids_short, ids_long) = match_trajectories(short, long, sync.t_max_diff, offset);
+    if ids_short.is_empty() {
+        return None;
+    }
+    let short_synced = short.reduce_to_ids(&ids_short);
+    let long_synced = match sync.sync_method {
+        SyncMethod::NearestTime => long.reduce_to_ids(&ids_long),
+        SyncMethod::Interpolation => {
+            let shift = seconds_to_ns(offset);
+            let at: Vec<i64> = short_synced.stamps.iter().map(|&t| t - shift).collect();
+            long.interpolate(&at).ok()?
+        }
+    };
+    Some(if second_longer {
         (short_synced, long_synced)
     } else {
         (long_synced, short_synced)
@@ -345,6 +637,25 @@ pub fn align_estimate(
         n => bail!("--n_to_align must be -1 (all poses) or a positive number of poses, got {n}"),
     };
     let mut result = (Alignment::None, None, None);
+    if algorithm.yaw_only {
+        if algorithm.correct_scale {
+            bail!(
+                "--yaw_only aligns without scale (a translation and a yaw about the gravity axis): it cannot be combined with -s/--correct_scale"
+            );
+        }
+        if !algorithm.align {
+            bail!("--yaw_only needs -a/--align");
+        }
+        let axis = algorithm.yaw_axis.axis();
+        console.debug(SEP)?;
+        console.debug(&format!(
+            "Aligning positions and yaw about the {} axis (4-DoF)...",
+            axis.name()
+        ))?;
+        let kind = Alignment::PositionYaw { axis };
+        let applied = align_first(estimate, reference, kind, n).context("aligning the estimate")?;
+        return Ok((kind, Some(applied), Some(applied.to_matrix())));
+    }
     if algorithm.align || algorithm.correct_scale {
         console.debug(SEP)?;
         let kind = match (algorithm.align, algorithm.correct_scale) {
@@ -464,7 +775,12 @@ fn title(metric: &Metric, unit: &str, algorithm: &AlgorithmArgs) -> String {
         ),
     };
     let (align, scale) = (algorithm.align, algorithm.correct_scale);
-    if align && !scale {
+    if algorithm.yaw_only {
+        title += &format!(
+            "\n(with 4-DoF position and yaw alignment about {})",
+            algorithm.yaw_axis.axis().name()
+        );
+    } else if align && !scale {
         title += "\n(with SE(3) Umeyama alignment)";
     } else if align && scale {
         title += "\n(with Sim(3) Umeyama alignment)";

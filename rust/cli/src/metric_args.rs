@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 
 use clap::ValueEnum;
-use sitar_estimator::Plane;
+use sitar_estimator::{GravityAxis, Plane};
 
 use crate::figure::PlotMode;
 use crate::output::OutputFormat;
@@ -21,6 +21,35 @@ pub struct AlgorithmArgs {
     /// The number of poses to use for Umeyama alignment, counted from the start (-1: all).
     #[arg(long = "n_to_align", default_value_t = -1, allow_negative_numbers = true)]
     pub n_to_align: i64,
+    /// SiTAR extra, with -a: 4-DoF alignment, a translation and a rotation about the
+    /// gravity axis only (the least-squares yaw, as rpg_trajectory_evaluation's posyaw);
+    /// --n_to_align counts as for -a. Cannot be combined with -s.
+    #[arg(long = "yaw_only", alias = "yaw-only", requires = "align")]
+    pub yaw_only: bool,
+    /// SiTAR extra: the gravity (vertical) axis of the reference's world frame: z (ROS,
+    /// EuRoC, TUM) or y (ARCore, Unity: gravity along -y); used by --yaw_only and by the
+    /// direction relations of ape.
+    #[arg(long = "yaw_axis", alias = "yaw-axis", value_enum, default_value_t = AxisArg::Z)]
+    pub yaw_axis: AxisArg,
+    /// SiTAR extra: estimate the constant time offset that --t_offset would need (s added
+    /// to the estimate's stamps): the offset within ±--t_offset_range minimising the APE
+    /// RMSE (translation) after the chosen alignment (SE(3) without -a), associated as evo
+    /// at each offset; prints it on stderr and uses it (instead of --t_offset).
+    #[arg(long = "estimate_t_offset", alias = "estimate-t-offset")]
+    pub estimate_t_offset: bool,
+    /// The search range (s) of --estimate_t_offset: offsets in [-S, S].
+    #[arg(
+        long = "t_offset_range",
+        alias = "t-offset-range",
+        default_value_t = 1.0,
+        value_name = "S",
+        requires = "estimate_t_offset"
+    )]
+    pub t_offset_range: f64,
+    /// SiTAR extra: print on stderr how many estimate poses were paired with a reference pose
+    /// and how many were dropped, and why (the JSON output always has it as "pairing").
+    #[arg(long = "show_pairing", alias = "show-pairing")]
+    pub show_pairing: bool,
     /// Align the trajectory origin to the origin of the reference trajectory.
     #[arg(
         long = "align_origin",
@@ -164,6 +193,25 @@ impl ChangeUnit {
             };
         }
         Ok(())
+    }
+}
+
+/// `--yaw_axis`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum AxisArg {
+    /// z up.
+    Z,
+    /// y (gravity along -y).
+    Y,
+}
+
+impl AxisArg {
+    /// The library's axis.
+    pub fn axis(self) -> GravityAxis {
+        match self {
+            AxisArg::Z => GravityAxis::Z,
+            AxisArg::Y => GravityAxis::Y,
+        }
     }
 }
 

@@ -537,7 +537,7 @@ fn sync_with_reference(
     };
     for (name, t) in &mut bundle.trajectories {
         console.debug(&format!("Syncing {name} with reference."))?;
-        let (r, e) = crate::metric::synchronise(
+        let (r, e, _) = crate::metric::synchronise(
             reference.clone(),
             t.clone(),
             &sync,

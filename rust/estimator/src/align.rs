@@ -52,6 +52,99 @@ pub enum Alignment {
     ScaleOnly,
     /// Move the estimate's first pose onto the reference's first pose (evo `--align_origin`).
     Origin,
+    /// 4-DoF alignment (not in evo): a translation and a rotation about the gravity axis only,
+    /// as rpg_trajectory_evaluation's `posyaw` and common VIO practice (roll and pitch are
+    /// observable from gravity, so they are not aligned away). The yaw is the least-squares
+    /// one over the positions: after centring both point sets, with `(a, b)` the coordinates
+    /// in the horizontal plane such that a rotation by θ maps `a ↦ a·cosθ − b·sinθ`
+    /// (`(x, y)` about z, `(z, x)` about y),
+    /// `θ = atan2(Σ(a_e·b_r − b_e·a_r), Σ(a_e·a_r + b_e·b_r))` (e: estimate, r: reference),
+    /// and the translation moves the rotated estimate's centroid onto the reference's.
+    /// No scale.
+    PositionYaw {
+        /// The gravity (vertical) axis the yaw is about.
+        axis: GravityAxis,
+    },
+}
+
+/// The vertical axis of a trajectory's world frame: the axis gravity lies along.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum GravityAxis {
+    /// z (ROS, EuRoC, TUM: z up).
+    #[default]
+    Z,
+    /// y (ARCore, Unity, OpenGL-style: gravity along −y).
+    Y,
+}
+
+impl GravityAxis {
+    /// The axis as a unit vector (+z or +y; the sign does not matter for a rotation about it
+    /// or a component's magnitude).
+    pub fn unit(self) -> DVec3 {
+        match self {
+            GravityAxis::Z => DVec3::Z,
+            GravityAxis::Y => DVec3::Y,
+        }
+    }
+
+    /// The two horizontal coordinates `(a, b)` of `p`, ordered so that a positive rotation
+    /// about the axis turns `a` towards `b` (right-handed: `(x, y)` about z, `(z, x)` about y).
+    pub fn horizontal(self, p: DVec3) -> (f64, f64) {
+        match self {
+            GravityAxis::Z => (p.x, p.y),
+            GravityAxis::Y => (p.z, p.x),
+        }
+    }
+
+    /// The name used on the command line and in JSON: `z` or `y`.
+    pub fn name(self) -> &'static str {
+        match self {
+            GravityAxis::Z => "z",
+            GravityAxis::Y => "y",
+        }
+    }
+}
+
+/// The least-squares 4-DoF fit `y ≈ R_axis(θ)·x + t` (see [`Alignment::PositionYaw`]).
+pub fn position_yaw(x: &[DVec3], y: &[DVec3], axis: GravityAxis) -> Result<Similarity, Error> {
+    if x.len() != y.len() {
+        return Err(Error::InvalidArgument(format!(
+            "point sets differ in size: {} vs {}",
+            x.len(),
+            y.len()
+        )));
+    }
+    if x.is_empty() {
+        return Err(Error::DegenerateAlignment("no points".into()));
+    }
+    if !x.iter().chain(y).all(|p| p.is_finite()) {
+        return Err(Error::InvalidArgument(
+            "alignment points must be finite".into(),
+        ));
+    }
+    let n = x.len() as f64;
+    let mean_x = x.iter().copied().sum::<DVec3>() / n;
+    let mean_y = y.iter().copied().sum::<DVec3>() / n;
+    let (mut sin_sum, mut cos_sum) = (0.0, 0.0);
+    for (p, q) in x.iter().zip(y) {
+        let (ae, be) = axis.horizontal(*p - mean_x);
+        let (ar, br) = axis.horizontal(*q - mean_y);
+        sin_sum += ae * br - be * ar;
+        cos_sum += ae * ar + be * br;
+    }
+    // All points on the vertical line through the centroid (or a single point): any yaw
+    // fits; keep the estimate's heading (θ = 0) rather than fail.
+    let yaw = if sin_sum == 0.0 && cos_sum == 0.0 {
+        0.0
+    } else {
+        sin_sum.atan2(cos_sum)
+    };
+    let rotation = DMat3::from_axis_angle(axis.unit(), yaw);
+    Ok(Similarity {
+        rotation,
+        translation: mean_y - rotation * mean_x,
+        scale: 1.0,
+    })
 }
 
 /// Umeyama's least-squares `y ≈ c·R·x + t` as evo's `umeyama_alignment(x, y, with_scale)`,
@@ -180,6 +273,10 @@ pub fn align_first(
                 found
             }
         }
+        Alignment::PositionYaw { axis } => {
+            let n = n.unwrap_or(usize::MAX).min(estimate.len());
+            position_yaw(&estimate.positions[..n], &reference.positions[..n], axis)?
+        }
         Alignment::Origin => {
             if estimate.is_empty() {
                 return Err(Error::DegenerateAlignment("no poses".into()));
@@ -265,6 +362,51 @@ mod tests {
         let y: Vec<DVec3> = x.iter().map(|p| DVec3::new(-p.x, p.y, p.z)).collect();
         let t = umeyama(&x, &y, false).unwrap();
         assert!((t.rotation.determinant() - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn position_yaw_recovers_a_yaw_and_shift_about_either_axis() {
+        let x: Vec<DVec3> = (0..20)
+            .map(|i| {
+                let t = f64::from(i);
+                DVec3::new(t.sin() * 3.0, (0.7 * t).cos() * 2.0, 0.1 * t)
+            })
+            .collect();
+        for axis in [GravityAxis::Z, GravityAxis::Y] {
+            for yaw in [-2.9, -0.4, 0.0, 0.3, 1.7, 3.1] {
+                let rotation = DMat3::from_axis_angle(axis.unit(), yaw);
+                let shift = DVec3::new(1.0, -2.0, 0.5);
+                let y: Vec<DVec3> = x.iter().map(|p| rotation * *p + shift).collect();
+                let found = position_yaw(&x, &y, axis).unwrap();
+                assert!(
+                    found.rotation.abs_diff_eq(rotation, 1e-12),
+                    "{axis:?} {yaw}"
+                );
+                assert!(found.translation.abs_diff_eq(shift, 1e-12));
+                assert_eq!(found.scale, 1.0);
+            }
+        }
+        // A roll in the truth is not fitted: the result stays a rotation about the axis.
+        let roll = DMat3::from_rotation_x(0.3);
+        let y: Vec<DVec3> = x.iter().map(|p| roll * *p).collect();
+        let found = position_yaw(&x, &y, GravityAxis::Z).unwrap();
+        assert!((found.rotation * DVec3::Z).abs_diff_eq(DVec3::Z, 1e-12));
+        // The yaw is the least-squares one: a brute-force scan finds no better.
+        let cost = |theta: f64| -> f64 {
+            let r = DMat3::from_rotation_z(theta);
+            let (mx, my) = (
+                x.iter().copied().sum::<DVec3>() / 20.0,
+                y.iter().copied().sum::<DVec3>() / 20.0,
+            );
+            x.iter()
+                .zip(&y)
+                .map(|(p, q)| (r * (*p - mx) - (*q - my)).length_squared())
+                .sum()
+        };
+        let best = cost(found.rotation.x_axis.y.atan2(found.rotation.x_axis.x));
+        for k in 0..3600 {
+            assert!(cost(f64::from(k) * std::f64::consts::TAU / 3600.0) >= best - 1e-12);
+        }
     }
 
     proptest! {

@@ -194,6 +194,7 @@ mod bag_writer;
 mod bootstrap;
 mod calibration;
 mod calibration_fit;
+mod direction;
 mod drift;
 mod error;
 mod estimate;
@@ -212,7 +213,7 @@ mod sync;
 mod tf;
 mod trajectory;
 
-pub use align::{Alignment, Similarity, align, align_first, umeyama};
+pub use align::{Alignment, GravityAxis, Similarity, align, align_first, position_yaw, umeyama};
 pub use bag_writer::{PoseTopic, mcap_bag, ros1_bag, rosbag2_metadata};
 pub use bootstrap::{MeanInterval, bootstrap_mean};
 pub use calibration::{
@@ -223,6 +224,10 @@ pub use calibration::{
 pub use calibration_fit::{
     CalibrationSequence, DEFAULT_SMOOTHING_WINDOWS, DEFAULT_SPREAD_MATCH, FitOptions,
     agreement_scores, fit_calibration, leave_one_sequence_out,
+};
+pub use direction::{
+    DirectionComponents, DirectionRelation, ape_by_direction, direction_components, headings,
+    swing_twist,
 };
 pub use drift::{
     Drift, DriftBin, DriftOptions, DriftSegment, KITTI_FRAME_INTERVAL_S, KITTI_LENGTHS_M,
