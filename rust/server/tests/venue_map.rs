@@ -1,7 +1,7 @@
 //! `GET /v1/venues/{id}/map.json` over loopback against a real server and its SQLite file:
 //! two users' sessions in world frames 1 m apart, each aligned by its anchor observations,
 //! give the cells computed here by hand from the sessions' own `results.json` (cell centres
-//! `(⌊p/c⌋ + ½)·c`, errors a 30 % trimmed mean as `scipy.stats.trim_mean`); the map follows
+//! `⌊p/c + ½⌋·c`, errors a 30 % trimmed mean as `scipy.stats.trim_mean`); the map follows
 //! its sessions (joined, given its log, finished, deleted) on the next request, and strangers
 //! get a 404. Also: `map.glb` (one node per cell, the Khronos validator), the venue report
 //! (its 3-D view data, problem regions with causes and the reader's own thumbnails, the saved
@@ -237,7 +237,8 @@ fn trim_mean_30(values: &[f64]) -> f64 {
 }
 
 fn centre(p: [f64; 3]) -> [f64; 3] {
-    p.map(|v| ((v / CELL_M).floor() + 0.5) * CELL_M)
+    // Cells centred on multiples of `cell_m` (sitar_core::venue::cell_index).
+    p.map(|v| (v / CELL_M + 0.5).floor() * CELL_M)
 }
 
 /// Expected cells: (kind, centre as µm integers) → errors of the sub-trajectories in it.
