@@ -24,7 +24,8 @@ The reference follows the documented definitions, not the Rust code:
   heading     camera forward (unity +Z, arcore -Z) in the venue frame, counter-clockwise from
               +X seen from above: atan2(z, x) (unity) or atan2(-z, x) (arcore); sector
               floor((a + pi/8) / (pi/4)) mod 8
-  cells       index floor(c / cell_m), centre (i + 0.5) cell_m, error
+  cells       index floor(c / cell_m + 0.5), centre i cell_m (cells centred on multiples
+              of cell_m, so the anchor's plane is mid-cell), error
               scipy.stats.trim_mean(errors, 0.3), classes 0.05 / 0.10 m
 Usage: python3 scripts/golden/make_venue_goldens.py   (needs numpy, scipy)
 """
@@ -271,7 +272,7 @@ def reference_map(sessions, min_sessions):
             for kind, point in ((0, position), (1, surface)):
                 if point is None:
                     continue
-                key = (kind,) + tuple(int(v) for v in np.floor(point / CELL_M))
+                key = (kind,) + tuple(int(v) for v in np.floor(point / CELL_M + 0.5))
                 cells.setdefault(key, []).append((name, error, sector))
     out = []
     for key in sorted(cells):
@@ -283,7 +284,7 @@ def reference_map(sessions, min_sessions):
         directions = [0] * 8
         for m in members:
             directions[m[2]] += 1
-        out.append({"center": [(i + 0.5) * CELL_M for i in key[1:]],
+        out.append({"center": [i * CELL_M for i in key[1:]],
                     "kind": "path" if key[0] == 0 else "surface",
                     "sessions": n_sessions, "subtrajectories": len(members),
                     "error_m": error,

@@ -84,6 +84,7 @@ pub fn run(options: &Options, url: &str, token: &str) -> Result<()> {
         .context("cannot fetch the venue map")?;
     let map = VenueMap::from_json(&map_json).context("the venue map")?;
     print_worst_cells(&venue, &map);
+    print_regions(&venue, &map);
     print_match(&venue, &map);
     let report = http
         // The one-file copy: script, style and 3-D view data inline, so it opens from disk.
@@ -250,6 +251,41 @@ fn print_worst_cells(venue: &Venue, map: &VenueMap) {
             cell.subtrajectories
         );
     }
+}
+
+/// The report's problem regions (surface cells classed high, seen by at least 2 sessions)
+/// and what they truly are.
+fn print_regions(venue: &Venue, map: &VenueMap) {
+    let regions: Vec<String> = map
+        .cells
+        .iter()
+        .filter(|c| c.kind == CellKind::Surface && c.class == ErrorClass::High && c.sessions >= 2)
+        .map(|c| {
+            venue
+                .truth_at(DVec3::from_array(c.center))
+                .map_or_else(|| "nothing".to_owned(), |t| t.label())
+        })
+        .collect();
+    let mut labels: Vec<(String, usize)> = Vec::new();
+    for label in regions.iter() {
+        match labels.iter_mut().find(|(l, _)| l == label) {
+            Some((_, n)) => *n += 1,
+            None => labels.push((label.clone(), 1)),
+        }
+    }
+    let on: Vec<String> = labels
+        .iter()
+        .map(|(label, n)| format!("{n} on {label}"))
+        .collect();
+    println!(
+        "regions     {} problem regions (high surface cells seen by ≥ 2 sessions){}",
+        regions.len(),
+        if on.is_empty() {
+            String::new()
+        } else {
+            format!(": {}", on.join(", "))
+        }
+    );
 }
 
 /// The match line: problem cells (high or medium surface cells) against the hard surfaces.

@@ -46,6 +46,25 @@ fn the_venue_demo_aligns_every_user_and_maps_the_blank_wall() {
     let worst: Vec<&str> = stdout.lines().filter(|l| l.contains(" → ")).collect();
     assert!(!worst.is_empty(), "{stdout}");
     assert!(stdout.contains("blank wall (hard)"), "{stdout}");
+    // The report's problem regions (high, seen by ≥ 2 sessions) include the blank wall: the
+    // three users' samples of it share cells (the grid puts the anchor's wall mid-cell).
+    let regions = stdout
+        .lines()
+        .find(|l| l.starts_with("regions"))
+        .unwrap_or_else(|| panic!("{stdout}"));
+    let on_wall: usize = regions
+        .split([':', ','])
+        .filter_map(|part| {
+            part.trim()
+                .strip_suffix(" on blank wall (hard)")?
+                .parse::<usize>()
+                .ok()
+        })
+        .sum();
+    assert!(
+        on_wall >= 1,
+        "no problem region on the blank wall: {regions}"
+    );
     let matched = stdout
         .lines()
         .find(|l| l.starts_with("match"))
@@ -58,4 +77,9 @@ fn the_venue_demo_aligns_every_user_and_maps_the_blank_wall() {
         .unwrap_or_else(|| panic!("{stdout}"));
     let html = std::fs::read_to_string(report.trim()).unwrap();
     assert!(html.contains("<html") || html.contains("<!doctype") || html.contains("<!DOCTYPE"));
+    // Its "Problem regions" lists them (the table is there only when there is one).
+    assert!(
+        html.contains("<table id=\"regions\">"),
+        "no problem regions in the report"
+    );
 }

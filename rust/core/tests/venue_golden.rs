@@ -134,7 +134,8 @@ fn the_map_matches_the_numpy_reference() {
     );
     for min_sessions in [1, 2] {
         let reference = VenueMap::from_json(&read(&format!("map_min{min_sessions}.json"))).unwrap();
-        assert!(reference.cells.len() >= 20, "a venue worth comparing");
+        // 226 and 17 cells (cells centred on multiples of cell_m).
+        assert!(reference.cells.len() >= 15, "a venue worth comparing");
         assert_same_map(&build_map(&spec, &contributions, min_sessions), &reference);
     }
 }

@@ -1,7 +1,7 @@
 //! `GET /v1/venues/{id}/map.json` over loopback against a real server and its SQLite file:
 //! two users' sessions in world frames 1 m apart, each aligned by its anchor observations,
 //! give the cells computed here by hand from the sessions' own `results.json` (cell centres
-//! `(⌊p/c⌋ + ½)·c`, errors a 30 % trimmed mean as `scipy.stats.trim_mean`); the map follows
+//! `⌊p/c + ½⌋·c`, errors a 30 % trimmed mean as `scipy.stats.trim_mean`); the map follows
 //! its sessions (joined, given its log, finished, deleted) on the next request, and strangers
 //! get a 404. Also: `map.glb` (one node per cell, the Khronos validator), the venue report
 //! (its 3-D view data, problem regions with causes and the reader's own thumbnails, the saved
@@ -237,7 +237,8 @@ fn trim_mean_30(values: &[f64]) -> f64 {
 }
 
 fn centre(p: [f64; 3]) -> [f64; 3] {
-    p.map(|v| ((v / CELL_M).floor() + 0.5) * CELL_M)
+    // Cells centred on multiples of `cell_m` (sitar_core::venue::cell_index).
+    p.map(|v| (v / CELL_M + 0.5).floor() * CELL_M)
 }
 
 /// Expected cells: (kind, centre as µm integers) → errors of the sub-trajectories in it.
@@ -898,5 +899,97 @@ fn problem_regions_name_the_evidences_causes_and_show_only_the_readers_thumbnail
             _ => assert!(ids.iter().all(|id| shown(id)), "admins see all: {regions}"),
         }
     }
+    server.stop();
+}
+
+/// The map from kept contributions at 50 sessions: asked twice, the same answer, every
+/// contribution kept in the database; a 51st session joining changes the next answer (each
+/// cell seen by one more session, as computed by hand), its log sent again changes it, and
+/// leaving (deleted) gives the 50-session answer back.
+#[test]
+fn a_session_joining_a_fifty_session_venue_changes_the_next_map_and_leaving_removes_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let (server, admin) = support::spawn_with_admin(dir.path());
+    let body = json!({"name": "Hall", "anchor": "poster-1", "cell_m": CELL_M}).to_string();
+    let a = call(
+        &server,
+        &admin,
+        "POST",
+        "/v1/venues",
+        Some("application/json"),
+        body.as_bytes(),
+    );
+    let venue = a.json()["id"].as_str().unwrap().to_owned();
+    let map_path = format!("/v1/venues/{venue}/map.json");
+    // 50 users, each in its own world frame, 4 at a time.
+    let results: Vec<Value> = std::thread::scope(|scope| {
+        let handles: Vec<_> = (0..4)
+            .map(|k| {
+                let (server, admin, venue) = (&server, &admin, &venue);
+                scope.spawn(move || {
+                    (k..50)
+                        .step_by(4)
+                        .map(|i| {
+                            let phone = Phone {
+                                dx: 0.1 * i as f64 - 2.0,
+                            };
+                            finished_session(server, admin, venue, &phone).1
+                        })
+                        .collect::<Vec<_>>()
+                })
+            })
+            .collect();
+        handles
+            .into_iter()
+            .flat_map(|h| h.join().unwrap())
+            .collect()
+    });
+    let fifty = get(&server, &admin, &map_path);
+    assert_eq!(fifty.status, 200);
+    let refs: Vec<&Value> = results.iter().collect();
+    assert_cells(&fifty.json(), &expected(&refs), 50);
+    assert_eq!(get(&server, &admin, &map_path).body, fifty.body);
+    let kept: i64 = rusqlite::Connection::open(dir.path().join("sitar.db"))
+        .unwrap()
+        .query_row(
+            "SELECT COUNT(*) FROM venue_contributions WHERE body IS NOT NULL",
+            [],
+            |r| r.get(0),
+        )
+        .unwrap();
+    assert_eq!(kept, 50, "every contribution is kept");
+
+    // A 51st joins: every cell is seen by one more session.
+    let phone = Phone { dx: 3.0 };
+    let (joined, joined_results) = finished_session(&server, &admin, &venue, &phone);
+    let map = get(&server, &admin, &map_path).json();
+    assert_eq!(map["sessions"].as_array().unwrap().len(), 51);
+    let mut refs = refs.clone();
+    refs.push(&joined_results);
+    assert_cells(&map, &expected(&refs), 51);
+
+    // Its anchor seen 0.5 m elsewhere: its samples move, so the next answer changes.
+    let moved = Phone { dx: 3.5 }.anchors_csv();
+    put(
+        &server,
+        &admin,
+        &format!("/v1/sessions/{joined}/anchors.csv"),
+        &moved,
+    );
+    let after_move = get(&server, &admin, &map_path).json();
+    assert_ne!(after_move["cells"], map["cells"]);
+    assert_eq!(after_move["sessions"].as_array().unwrap().len(), 51);
+
+    // Leaving: the 50-session answer again.
+    let gone = call(
+        &server,
+        &admin,
+        "DELETE",
+        &format!("/v1/sessions/{joined}"),
+        None,
+        &[],
+    );
+    assert_eq!(gone.status, 200, "{}", gone.body);
+    assert_eq!(get(&server, &admin, &map_path).body, fifty.body);
     server.stop();
 }

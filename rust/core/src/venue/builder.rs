@@ -72,10 +72,25 @@ fn placements(
 /// the map's order of cells.
 type CellKey = (u8, [i64; 3]);
 
-/// The index of the cell holding `p`: `floor(coord / cell_m)` per axis.
+/// The index of the cell holding `p`: [`cell_index`] per axis.
 fn cell_key(kind: CellKind, p: DVec3, cell_m: f64) -> CellKey {
-    let index = |v: f64| (v / cell_m).floor() as i64;
+    let index = |v: f64| cell_index(v, cell_m);
     (kind as u8, [index(p.x), index(p.y), index(p.z)])
+}
+
+/// The index along one axis of the cell holding venue coordinate `v`: `floor(v / cell_m +
+/// ½)`, the nearest multiple of `cell_m`. Cells are centred on multiples of `cell_m` (cell
+/// `i` spans `[(i − ½)·cell_m, (i + ½)·cell_m)`, centre `i·cell_m`), so the anchor's own
+/// plane (a venue coordinate of 0) and planes at whole multiples of `cell_m` — walls at whole
+/// metres for the usual cell sizes — lie in the middle of a cell, never on a boundary where
+/// millimetres of alignment would split one wall between two rows of cells.
+pub fn cell_index(v: f64, cell_m: f64) -> i64 {
+    (v / cell_m + 0.5).floor() as i64
+}
+
+/// The centre along one axis of cell `i` ([`cell_index`]): `i·cell_m`.
+pub fn cell_centre(i: i64, cell_m: f64) -> f64 {
+    i as f64 * cell_m
 }
 
 /// One sub-trajectory in one cell.
@@ -269,7 +284,7 @@ impl MapBuilder {
 /// direction counts.
 fn compute_cell(key: CellKey, members: &[Member], cell_m: f64, errors: &mut Vec<f64>) -> VenueCell {
     let (kind, index) = key;
-    let centre = |i: i64| (i as f64 + 0.5) * cell_m;
+    let centre = |i: i64| cell_centre(i, cell_m);
     let mut directions = [0u32; 8];
     let mut sessions = 0u32;
     let mut last_slot = None;

@@ -178,11 +178,12 @@ fn one_session_analytically() {
         assert_eq!(samples[1].surface, None);
 
         let map = build_map(&spec(Convention::Unity), &[c], 1);
-        // Path cells (−1, 2, 1) and (2, 3, 0) at 0.5 m, then the surface cell (2, 3, 4).
+        // Path cells (−1, 2, 1) and (2, 3, 0) at 0.5 m, then the surface cell (2, 3, 4):
+        // cells centred on multiples of 0.5 m.
         let centres: Vec<[f64; 3]> = map.cells.iter().map(|c| c.center).collect();
         assert_eq!(
             centres,
-            [[-0.25, 1.25, 0.75], [1.25, 1.75, 0.25], [1.25, 1.75, 2.25]]
+            [[-0.5, 1.0, 0.5], [1.0, 1.5, 0.0], [1.0, 1.5, 2.0]]
         );
         let kinds: Vec<CellKind> = map.cells.iter().map(|c| c.kind).collect();
         assert_eq!(kinds, [CellKind::Path, CellKind::Path, CellKind::Surface]);
@@ -408,6 +409,81 @@ fn removing_every_session_empties_the_map() {
     assert!(map.cells.is_empty() && map.sessions.is_empty() && b.is_empty());
 }
 
+/// The anchor's wall (the plane z = 0 of the venue frame) seen by three users, each
+/// aligned to the venue with millimetres of error on either side of the plane: one row of
+/// surface cells, each seen by all three (on a grid with faces at multiples of `cell_m`
+/// the wall would split into two rows, each seen by one or two).
+#[test]
+fn the_anchor_wall_is_one_row_of_cells_seen_by_every_user() {
+    let jitters = [-0.002, 0.0015, 0.0004];
+    let mut contributions = Vec::new();
+    for (u, jitter) in jitters.iter().enumerate() {
+        // Along the wall, 12 mm or more from any cell face of the sizes below.
+        let xs: Vec<f64> = (0..12).map(|i| 0.012 + 0.15 * f64::from(i)).collect();
+        let mids: Vec<Pose> = xs
+            .iter()
+            .map(|x| camera(DVec3::new(*x, 1.5, -2.0), 0.0))
+            .collect();
+        // Each sample's own millimetre of depth noise around the user's offset.
+        let surfaces: Vec<Option<DVec3>> = xs
+            .iter()
+            .enumerate()
+            .map(|(i, x)| {
+                let wobble = if i % 2 == 0 { 0.0005 } else { -0.0005 };
+                Some(DVec3::new(*x, 1.4, jitter + wobble))
+            })
+            .collect();
+        let errors = vec![Some(0.15); mids.len()];
+        let heading = 0.3 * u as f64;
+        let r = record(
+            Convention::Unity,
+            DVec3::new(u as f64, 0.0, -1.0),
+            heading,
+            &mids,
+            &surfaces,
+            &errors,
+        );
+        let id = format!("s{u}");
+        contributions
+            .push(Contribution::from_files(&files(&r, Convention::Unity, &id), "a").unwrap());
+    }
+    for cell_m in [0.05, 0.1, 0.25, 0.5, 1.0] {
+        let spec = VenueSpec {
+            cell_m,
+            ..spec(Convention::Unity)
+        };
+        let map = build_map(&spec, &contributions, 1);
+        let walls: Vec<_> = map
+            .cells
+            .iter()
+            .filter(|c| c.kind == CellKind::Surface)
+            .collect();
+        assert!(!walls.is_empty());
+        for c in &walls {
+            assert_eq!(c.center[2], 0.0, "cell_m {cell_m}: {c:?}");
+            assert_eq!(c.sessions, 3, "cell_m {cell_m}: {c:?}");
+            assert_eq!(c.class, ErrorClass::High);
+        }
+    }
+    // Whole metres are mid-cell for every cell size that divides a metre.
+    for cell_m in [0.05, 0.1, 0.2, 0.25, 0.5, 1.0] {
+        for metres in [-3.0, -1.0, 0.0, 1.0, 2.0, 4.0] {
+            let i = cell_index(metres, cell_m);
+            assert_eq!(
+                cell_index(metres - 0.003, cell_m),
+                i,
+                "{metres} at {cell_m}"
+            );
+            assert_eq!(
+                cell_index(metres + 0.003, cell_m),
+                i,
+                "{metres} at {cell_m}"
+            );
+            assert!((cell_centre(i, cell_m) - metres).abs() < 1e-9);
+        }
+    }
+}
+
 proptest! {
     /// The same walk recorded in any world frame (translation and heading) and either
     /// convention lands in the same cells with the same errors and directions. Points sit
@@ -417,7 +493,7 @@ proptest! {
     fn a_moved_session_maps_to_the_same_cells(
         t in prop::array::uniform3(-30.0..30.0f64), heading in -PI..PI,
         arcore in any::<bool>(),
-        walk in prop::collection::vec((prop::array::uniform3(-8i32..8), prop::array::uniform3(0.002..0.498f64),
+        walk in prop::collection::vec((prop::array::uniform3(-8i32..8), prop::array::uniform3(-0.248..0.248f64),
             0u8..8, -20.0..20.0f64, prop::option::of(prop::array::uniform3(-8i32..8)), 0.0..0.3f64), 1..40),
     ) {
         let cell_m = 0.5;

@@ -41,7 +41,7 @@ pub use anchors::{
     ANCHORS_HEADER, AnchorObservation, MAX_ANCHOR_ID_BYTES, Tracking, anchors_csv, check_anchor_id,
     parse_anchors_csv,
 };
-pub use builder::{MapBuilder, VenueSpec, build_map};
+pub use builder::{MapBuilder, VenueSpec, build_map, cell_centre, cell_index};
 pub use contribution::{Contribution, Sample, SessionFiles, heading_seen_from_above, sector_of};
 pub use map::{CellKind, VenueCell, VenueMap, VenueSession, WorldCell, world_cells};
 pub use trim_mean::{CELL_TRIM, trim_mean};

@@ -41,6 +41,11 @@ fn conclude(shared: &Arc<App>, id: &str, job: Option<i64>, outcome: Result<Outco
                 let _ = shared.db.finish_job(job, JobEnd::Done, None);
             }
             crate::report::scene::prepare(shared.clone(), id.to_string());
+            // Its contribution to its venue's map, computed once now that it is final.
+            let (shared, id) = (shared.clone(), id.to_string());
+            tokio::task::spawn_blocking(move || {
+                crate::venue::map::keep_now(&*shared.db, &*shared.blobs, &id)
+            });
         }
         Ok(Outcome::Interrupted) => {
             log::info!("session {id}: interrupted by shutdown, resumes on next start")

@@ -253,10 +253,10 @@ impl VenueReport<'_> {
         contributions: &[(Session, Contribution)],
         evidence: &mut HashMap<String, Vec<EvidenceRow>>,
     ) -> Result<Value, Error> {
-        // The map's own rule: a point is in the cell whose index is ⌊p / cell_m⌋ on each axis
-        // (the centre's index too, as the centre is (k + ½)·cell_m).
+        // The map's own rule (`sitar_core::venue::cell_index`: ⌊p / cell_m + ½⌋ on each
+        // axis; the centre's index too, as the centre is k·cell_m).
         let c = self.venue.cell_m;
-        let index = |v: f64| (v / c).floor();
+        let index = |v: f64| sitar_core::venue::cell_index(v, c);
         let inside = |p: glam::DVec3| {
             index(p.x) == index(cell.center[0])
                 && index(p.y) == index(cell.center[1])

@@ -24,6 +24,7 @@ pub(crate) fn metadata_store(store: &dyn MetadataStore) {
     usage_is_counted_over_its_windows(store);
     deleting_a_session_removes_what_belongs_to_it(store);
     venues_hold_members_and_sessions_of_one_convention(store);
+    venue_contributions_are_kept_per_generation(store);
     instances_own_adopt_and_stop_sessions(store);
 }
 
@@ -719,6 +720,92 @@ fn venues_hold_members_and_sessions_of_one_convention(store: &dyn MetadataStore)
     assert!(!store.is_member(venue, member_id).unwrap());
     let kept = store.session("s2000000000000001").unwrap().unwrap();
     assert_eq!((kept.venue, kept.convention), (None, Convention::Arcore));
+}
+
+/// A venue session's kept map contribution: kept only at the generation read before its
+/// files, forgotten (generation raised) on request and when the session becomes `done`,
+/// removed with the session and with its venue; never kept for a session in no venue.
+fn venue_contributions_are_kept_per_generation(store: &dyn MetadataStore) {
+    use crate::venue::NewVenue;
+    let venue = "v3000000000000001";
+    let new = NewVenue {
+        name: "Atrium",
+        anchor: "poster-3",
+        cell_m: 0.25,
+        owner: None,
+    };
+    store.insert_venue(venue, &new).unwrap();
+    let (a, b, outside) = (
+        "s3000000000000001",
+        "s3000000000000002",
+        "s3000000000000003",
+    );
+    for id in [a, b] {
+        let joining = NewSession {
+            venue: Some(venue),
+            ..new_session(None, PlaybackKind::Upload, None)
+        };
+        store.insert_session(id, &joining).unwrap();
+    }
+    store
+        .insert_session(outside, &new_session(None, PlaybackKind::Upload, None))
+        .unwrap();
+    let kept = |session: &str| {
+        let rows = store.kept_contributions(venue).unwrap();
+        rows.into_iter()
+            .find(|k| k.session == session)
+            .map(|k| (k.generation, k.body))
+    };
+    assert_eq!(store.kept_contributions(venue).unwrap().len(), 2);
+    assert_eq!(kept(a), Some((0, None)), "nothing kept yet");
+    assert!(store.keep_contribution(a, 0, b"first").unwrap());
+    assert_eq!(kept(a), Some((0, Some(b"first".to_vec()))));
+    assert!(
+        store.keep_contribution(a, 0, b"again").unwrap(),
+        "the same generation"
+    );
+    assert_eq!(kept(a), Some((0, Some(b"again".to_vec()))));
+    // A session in no venue keeps nothing, and forgetting it is no error.
+    assert!(!store.keep_contribution(outside, 0, b"x").unwrap());
+    store.forget_contribution(outside).unwrap();
+    assert!(
+        store
+            .kept_contributions("v3000000000000009")
+            .unwrap()
+            .is_empty()
+    );
+    // Forgotten: the body goes, the generation rises, a body computed before is refused.
+    store.forget_contribution(a).unwrap();
+    assert_eq!(kept(a), Some((1, None)));
+    assert!(!store.keep_contribution(a, 0, b"stale").unwrap());
+    assert_eq!(kept(a), Some((1, None)));
+    assert!(store.keep_contribution(a, 1, b"fresh").unwrap());
+    assert_eq!(kept(a), Some((1, Some(b"fresh".to_vec()))));
+    // Forgetting one never kept; and a computation racing it (read generation 0) is refused.
+    store.forget_contribution(b).unwrap();
+    assert!(!store.keep_contribution(b, 0, b"raced").unwrap());
+    assert!(store.keep_contribution(b, 1, b"b1").unwrap());
+    // Becoming done forgets it in the transition's own transaction; other steps do not.
+    store
+        .transition(b, Step::StartEstimating, StepRecord::Nothing)
+        .unwrap();
+    assert_eq!(kept(b), Some((1, Some(b"b1".to_vec()))));
+    store
+        .transition(b, Step::Finish, StepRecord::Nothing)
+        .unwrap();
+    assert_eq!(kept(b), Some((2, None)));
+    assert!(store.keep_contribution(b, 2, b"b2").unwrap());
+    // Deleting a session removes its contribution; deleting the venue removes the rest.
+    assert!(store.delete_session(a).unwrap());
+    assert_eq!(kept(a), None);
+    assert_eq!(store.kept_contributions(venue).unwrap().len(), 1);
+    assert!(store.delete_venue(venue).unwrap());
+    assert!(store.kept_contributions(venue).unwrap().is_empty());
+    assert!(
+        !store.keep_contribution(b, 2, b"gone").unwrap(),
+        "in no venue now"
+    );
+    store.forget_contribution(b).unwrap();
 }
 
 /// Several instances on one store: one player per session in flight, adoption of a dead

@@ -221,8 +221,30 @@ pub(crate) trait VenueStore {
     fn members(&self, venue: &str) -> Result<Vec<String>, Error>;
     /// The sessions that joined `venue`, oldest first (unreadable rows left out and logged).
     fn venue_sessions(&self, venue: &str) -> Result<Vec<Session>, Error>;
-    /// Deletes `venue` and its memberships; its sessions stay, in no venue. Whether it existed.
+    /// Deletes `venue` and its memberships (and its sessions' kept contributions); its
+    /// sessions stay, in no venue. Whether it existed.
     fn delete_venue(&self, id: &str) -> Result<bool, Error>;
+    /// The kept contribution of every session of `venue` (any order): its generation and its
+    /// body, `None` when none is kept (never computed, or forgotten since).
+    fn kept_contributions(&self, venue: &str) -> Result<Vec<KeptContribution>, Error>;
+    /// Keeps `body` as `session`'s contribution if its generation is still `generation` (the
+    /// one read before its files were: a contribution forgotten meanwhile is not kept) and
+    /// the session is still in a venue. Whether it was kept.
+    fn keep_contribution(&self, session: &str, generation: i64, body: &[u8])
+    -> Result<bool, Error>;
+    /// Forgets `session`'s kept contribution, raising its generation, when it is in a venue
+    /// (after one of its files changed). [`SessionStore::transition`] does the same inside its
+    /// transaction when a session becomes `done`, and deleting the session removes it.
+    fn forget_contribution(&self, session: &str) -> Result<(), Error>;
+}
+
+/// A session's kept contribution to its venue map (`venue_contributions`): a generation,
+/// raised whenever what it was computed from changes, and the body (`venue::kept`).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub(crate) struct KeptContribution {
+    pub session: String,
+    pub generation: i64,
+    pub body: Option<Vec<u8>>,
 }
 
 /// Every concern of the metadata store: what the server holds as `Arc<dyn MetadataStore>`.

@@ -58,7 +58,8 @@ pub(crate) struct TableSpec {
 
 /// The tables copied, in the order they are written (a row's references first). Left out:
 /// `devices` (the phones on this host's USB; the cluster's hosts report their own) and the
-/// worker tables (hosts, leases, failed-trial notes: each instance's own).
+/// worker tables (hosts, leases, failed-trial notes: each instance's own) and
+/// `venue_contributions` (kept venue-map contributions: computed again on first use).
 pub(crate) const COPIED: &[TableSpec] = &[
     TableSpec {
         name: "tokens",

@@ -77,6 +77,8 @@ pub(crate) async fn put_spans(
         f.store_spans(&table.spans)
     })
     .await?;
+    // Its venue's map computes its contribution again from the new table.
+    shared.db.forget_contribution(&session.id)?;
     // The scene from the phone's log takes its depth from this table.
     crate::report::scene::phone_log_changed(&shared, &session.id);
     let mut answer = json!({"subtrajectories": table.spans.len()});

@@ -24,7 +24,9 @@ async fn store(shared: &App, id: &str, object: SessionObject, text: &str) -> Res
     let lock = shared.session_lock(id);
     let _held = lock.lock().await;
     shared.session(id)?;
-    shared.blobs.put(id, object, text.as_bytes())
+    shared.blobs.put(id, object, text.as_bytes())?;
+    // Its venue's map computes its contribution again from the new file.
+    shared.db.forget_contribution(id)
 }
 
 /// `PUT /v1/sessions/{id}/trajectory.txt` → 200 `{"poses"}`.

@@ -28,6 +28,11 @@ const MIGRATIONS: &[(i64, &str, &str)] = &[
         "calibration",
         include_str!("migrations/0006_calibration.sql"),
     ),
+    (
+        7,
+        "venue_contributions",
+        include_str!("migrations/0007_venue_contributions.sql"),
+    ),
 ];
 
 /// The advisory lock key the migrating instance holds (`sitar` in ASCII).

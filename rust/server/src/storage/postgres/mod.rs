@@ -19,6 +19,7 @@ pub(crate) mod copy;
 mod hosts;
 mod instances;
 mod jobs;
+mod joining;
 mod leases;
 mod migrations;
 mod pool;

@@ -73,7 +73,7 @@ fn session_from_row(r: &Row) -> Result<Session, String> {
         legacy: r.try_get(11).map_err(get)?,
         owner: r.try_get(14).map_err(get)?,
         venue: r.try_get(15).map_err(get)?,
-        convention: typed(r, 16, "convention", super::venues::parse_convention)?,
+        convention: typed(r, 16, "convention", super::joining::parse_convention)?,
         calibration: r.try_get(17).map_err(get)?,
     })
 }
@@ -162,7 +162,7 @@ impl SessionStore for PgStore {
                 return Ok((existing, false));
             }
             if let Some(venue) = &row.venue {
-                super::venues::check_joining(&mut tx, venue, row.convention)?;
+                super::joining::check_joining(&mut tx, venue, row.convention)?;
             }
             // ON CONFLICT: two instances given the same key at once make one session.
             let inserted = tx.query_opt(
@@ -318,6 +318,10 @@ impl SessionStore for PgStore {
             tx.execute("DELETE FROM jobs WHERE session_id = $1", &[&id])?;
             tx.execute("DELETE FROM share_links WHERE session_id = $1", &[&id])?;
             tx.execute(
+                "DELETE FROM venue_contributions WHERE session_id = $1",
+                &[&id],
+            )?;
+            tx.execute(
                 "UPDATE devices SET session_id = NULL WHERE session_id = $1",
                 &[&id],
             )?;
@@ -377,6 +381,10 @@ impl SessionStore for PgStore {
             if let (Some(column), Some(value)) = (column, &value) {
                 let value: &(dyn ToSql + Sync) = &**value;
                 tx.execute(&format!("UPDATE sessions SET {column} = $2 WHERE id = $1"), &[&id, value])?;
+            }
+            if after == SessionState::Done {
+                // Its final results now enter its venue's map.
+                tx.execute(super::joining::FORGET_CONTRIBUTION, &[&id])?;
             }
             tx.commit()?;
             Ok(before)

@@ -1,53 +1,16 @@
-//! The `venues` and `venue_members` tables in Postgres, and the check a session joining a
-//! venue passes inside `insert_session`'s transaction: the venue's row is locked, so two
-//! instances cannot bring two conventions into one venue at once.
+//! The `venues`, `venue_members` and `venue_contributions` tables in Postgres (the check a session joining a venue
+//! passes is `joining`'s, below both this file and `sessions`).
 
-use postgres::{Row, Transaction};
-use sitar_core::Convention;
+use postgres::Row;
 
 use super::PgStore;
 use crate::Error;
 use crate::session::Session;
-use crate::storage::metadata::VenueStore;
+use crate::storage::metadata::{KeptContribution, VenueStore};
 use crate::storage::now_ms;
 use crate::venue::{NewVenue, Venue};
 
 const COLUMNS: &str = "id, name, anchor, cell_m, owner, created_ms";
-
-/// A stored convention name; a value no version writes is `None`.
-pub(super) fn parse_convention(name: &str) -> Option<Convention> {
-    match name {
-        "unity" => Some(Convention::Unity),
-        "arcore" => Some(Convention::Arcore),
-        _ => None,
-    }
-}
-
-/// Session joining `venue` with `convention`: the venue exists (a 422 naming `venue` when it
-/// was deleted meanwhile) and its sessions have that convention (else a 409 naming both).
-pub(super) fn check_joining(
-    tx: &mut Transaction<'_>,
-    venue: &str,
-    convention: Convention,
-) -> Result<(), Error> {
-    let exists = tx.query_opt("SELECT 1 FROM venues WHERE id = $1 FOR UPDATE", &[&venue])?;
-    if exists.is_none() {
-        return Err(Error::InvalidContent(format!("venue: no venue {venue:?}")));
-    }
-    let theirs = tx.query_opt(
-        "SELECT convention FROM sessions WHERE venue = $1 AND convention <> $2 LIMIT 1",
-        &[&venue, &convention.name()],
-    )?;
-    match theirs {
-        None => Ok(()),
-        Some(row) => Err(Error::Conflict(format!(
-            "convention: venue {venue}'s sessions use {}; this session's is {} \
-             (a venue's sessions share one convention)",
-            row.get::<_, String>(0),
-            convention.name()
-        ))),
-    }
-}
 
 fn venue_from_row(r: &Row) -> Venue {
     Venue {
@@ -187,10 +150,60 @@ impl VenueStore for PgStore {
         self.pool.run(move |c| {
             let mut tx = c.transaction()?;
             tx.execute("DELETE FROM venue_members WHERE venue_id = $1", &[&id])?;
+            tx.execute(
+                "DELETE FROM venue_contributions WHERE session_id IN \
+                 (SELECT id FROM sessions WHERE venue = $1)",
+                &[&id],
+            )?;
             tx.execute("UPDATE sessions SET venue = NULL WHERE venue = $1", &[&id])?;
             let deleted = tx.execute("DELETE FROM venues WHERE id = $1", &[&id])? == 1;
             tx.commit()?;
             Ok(deleted)
+        })
+    }
+
+    fn kept_contributions(&self, venue: &str) -> Result<Vec<KeptContribution>, Error> {
+        let venue = venue.to_string();
+        self.pool.run(move |c| {
+            Ok(c.query(
+                "SELECT s.id, COALESCE(k.generation, 0), k.body FROM sessions s \
+                 LEFT JOIN venue_contributions k ON k.session_id = s.id WHERE s.venue = $1",
+                &[&venue],
+            )?
+            .iter()
+            .map(|r| KeptContribution {
+                session: r.get(0),
+                generation: r.get(1),
+                body: r.get(2),
+            })
+            .collect())
+        })
+    }
+
+    fn keep_contribution(
+        &self,
+        session: &str,
+        generation: i64,
+        body: &[u8],
+    ) -> Result<bool, Error> {
+        let (session, body) = (session.to_string(), body.to_vec());
+        self.pool.run(move |c| {
+            Ok(c.execute(
+                "INSERT INTO venue_contributions (session_id, generation, body) \
+                 SELECT $1::text, $2::bigint, $3::bytea WHERE EXISTS \
+                 (SELECT 1 FROM sessions WHERE id = $1::text AND venue IS NOT NULL) \
+                 ON CONFLICT (session_id) DO UPDATE SET body = EXCLUDED.body \
+                 WHERE venue_contributions.generation = EXCLUDED.generation",
+                &[&session, &generation, &body],
+            )? == 1)
+        })
+    }
+
+    fn forget_contribution(&self, session: &str) -> Result<(), Error> {
+        let session = session.to_string();
+        self.pool.run(move |c| {
+            c.execute(super::joining::FORGET_CONTRIBUTION, &[&session])?;
+            Ok(())
         })
     }
 }

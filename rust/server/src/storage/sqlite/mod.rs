@@ -18,6 +18,7 @@ mod hosts;
 mod instance_schema;
 mod instances;
 mod jobs;
+mod joining;
 mod leases;
 mod sessions;
 mod tokens;
@@ -100,6 +101,11 @@ CREATE TABLE IF NOT EXISTS venue_members (
     venue_id TEXT NOT NULL REFERENCES venues(id),
     token_id INTEGER NOT NULL,
     PRIMARY KEY (venue_id, token_id)
+);
+CREATE TABLE IF NOT EXISTS venue_contributions (
+    session_id TEXT PRIMARY KEY,
+    generation INTEGER NOT NULL,
+    body BLOB
 );
 CREATE TABLE IF NOT EXISTS trials (
     session_id TEXT NOT NULL REFERENCES sessions(id),

@@ -88,7 +88,7 @@ fn session_from_row(r: &rusqlite::Row<'_>) -> rusqlite::Result<Session> {
         legacy: r.get::<_, i64>(11)? != 0,
         owner: r.get(14)?,
         venue: r.get(15)?,
-        convention: typed(r, 16, "convention", super::venues::parse_convention)?,
+        convention: typed(r, 16, "convention", super::joining::parse_convention)?,
         calibration: r.get(17)?,
     })
 }
@@ -139,7 +139,7 @@ impl SessionStore for SqliteStore {
                 }
             }
             if let Some(venue) = new.venue {
-                super::venues::check_joining(tx, venue, new.convention)?;
+                super::joining::check_joining(tx, venue, new.convention)?;
             }
             tx.execute_cached(
                 "INSERT INTO sessions (id, idempotency_key, created_ms, trials_total, setting, playback, \
@@ -277,6 +277,10 @@ impl SessionStore for SqliteStore {
             tx.execute_cached("DELETE FROM jobs WHERE session_id = ?1", [id])?;
             tx.execute_cached("DELETE FROM share_links WHERE session_id = ?1", [id])?;
             tx.execute_cached(
+                "DELETE FROM venue_contributions WHERE session_id = ?1",
+                [id],
+            )?;
+            tx.execute_cached(
                 "UPDATE devices SET session_id = NULL WHERE session_id = ?1",
                 [id],
             )?;
@@ -329,6 +333,10 @@ impl SessionStore for SqliteStore {
                 "UPDATE sessions SET state = ?2, finished_ms = COALESCE(?3, finished_ms) WHERE id = ?1",
                 params![id, after.as_str(), finished],
             )?;
+            if after == SessionState::Done {
+                // Its final results now enter its venue's map.
+                tx.execute_cached(super::joining::FORGET_CONTRIBUTION, [id])?;
+            }
             match also {
                 StepRecord::Nothing => 0,
                 StepRecord::RecordingBytes(bytes) => tx.execute_cached(

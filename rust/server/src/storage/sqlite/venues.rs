@@ -1,57 +1,16 @@
-//! The `venues` and `venue_members` tables, and the check a session joining a venue passes
-//! (inside `insert_session`'s transaction, so two racing sessions cannot bring two
-//! conventions into one venue).
+//! The `venues`, `venue_members` and `venue_contributions` tables (the check a session joining a venue passes is
+//! `joining`'s, below both this file and `sessions`).
 
-use rusqlite::{OptionalExtension, Transaction, params};
-use sitar_core::Convention;
+use rusqlite::{OptionalExtension, params};
 
 use super::{CachedSql, SqliteStore};
 use crate::Error;
 use crate::session::Session;
-use crate::storage::metadata::VenueStore;
+use crate::storage::metadata::{KeptContribution, VenueStore};
 use crate::storage::now_ms;
 use crate::venue::{NewVenue, Venue};
 
 const COLUMNS: &str = "id, name, anchor, cell_m, owner, created_ms";
-
-/// A stored convention name; a value no version writes is `None`.
-pub(super) fn parse_convention(name: &str) -> Option<Convention> {
-    match name {
-        "unity" => Some(Convention::Unity),
-        "arcore" => Some(Convention::Arcore),
-        _ => None,
-    }
-}
-
-/// Session joining `venue` with `convention`: the venue exists (a 422 naming `venue` when it
-/// was deleted meanwhile) and its sessions have that convention (else a 409 naming both).
-pub(super) fn check_joining(
-    tx: &Transaction<'_>,
-    venue: &str,
-    convention: Convention,
-) -> Result<(), Error> {
-    let exists = tx
-        .prepare_cached("SELECT 1 FROM venues WHERE id = ?1")?
-        .exists([venue])?;
-    if !exists {
-        return Err(Error::InvalidContent(format!("venue: no venue {venue:?}")));
-    }
-    let theirs: Option<String> = tx
-        .query_row_cached(
-            "SELECT convention FROM sessions WHERE venue = ?1 AND convention != ?2 LIMIT 1",
-            params![venue, convention.name()],
-            |r| r.get(0),
-        )
-        .optional()?;
-    match theirs {
-        None => Ok(()),
-        Some(theirs) => Err(Error::Conflict(format!(
-            "convention: venue {venue}'s sessions use {theirs}; this session's is {} \
-             (a venue's sessions share one convention)",
-            convention.name()
-        ))),
-    }
-}
 
 fn venue_from_row(r: &rusqlite::Row<'_>) -> rusqlite::Result<Venue> {
     Ok(Venue {
@@ -169,8 +128,54 @@ impl VenueStore for SqliteStore {
     fn delete_venue(&self, id: &str) -> Result<bool, Error> {
         self.transaction(|tx| {
             tx.execute_cached("DELETE FROM venue_members WHERE venue_id = ?1", [id])?;
+            tx.execute_cached(
+                "DELETE FROM venue_contributions WHERE session_id IN \
+                 (SELECT id FROM sessions WHERE venue = ?1)",
+                [id],
+            )?;
             tx.execute_cached("UPDATE sessions SET venue = NULL WHERE venue = ?1", [id])?;
             Ok(tx.execute_cached("DELETE FROM venues WHERE id = ?1", [id])? == 1)
         })
     }
+
+    fn kept_contributions(&self, venue: &str) -> Result<Vec<KeptContribution>, Error> {
+        self.with(|c| {
+            let mut stmt = c.prepare_cached(
+                "SELECT s.id, COALESCE(k.generation, 0), k.body FROM sessions s \
+                 LEFT JOIN venue_contributions k ON k.session_id = s.id WHERE s.venue = ?1",
+            )?;
+            let rows = stmt.query_map([venue], |r| {
+                Ok(KeptContribution {
+                    session: r.get(0)?,
+                    generation: r.get(1)?,
+                    body: r.get(2)?,
+                })
+            })?;
+            rows.collect()
+        })
+    }
+
+    fn keep_contribution(
+        &self,
+        session: &str,
+        generation: i64,
+        body: &[u8],
+    ) -> Result<bool, Error> {
+        self.with(|c| {
+            c.execute_cached(KEEP, params![session, generation, body])
+                .map(|n| n == 1)
+        })
+    }
+
+    fn forget_contribution(&self, session: &str) -> Result<(), Error> {
+        self.with(|c| c.execute_cached(super::joining::FORGET_CONTRIBUTION, [session]))
+            .map(drop)
+    }
 }
+
+/// Keeps a contribution (`?1` session, `?2` generation, `?3` body) when the generation is
+/// still the kept one (0: none kept yet) and the session is in a venue.
+const KEEP: &str = "INSERT INTO venue_contributions (session_id, generation, body) \
+     SELECT ?1, ?2, ?3 WHERE EXISTS (SELECT 1 FROM sessions WHERE id = ?1 AND venue IS NOT NULL) \
+     ON CONFLICT (session_id) DO UPDATE SET body = excluded.body \
+     WHERE venue_contributions.generation = excluded.generation";
