@@ -6,12 +6,14 @@
 use std::path::PathBuf;
 
 use anyhow::{Result, bail};
+#[cfg(feature = "cluster")]
 use sitar_server::{MigrateOptions, migrate};
 
 /// Moves an embedded installation into Postgres and an S3-compatible bucket. DIR/sitar.db and
 /// DIR/sessions are copied and verified for `sitar serve --database URL --store URL`; stop the
 /// server on DIR first (a running one is refused). Run it again after an interruption: what
-/// is there and equal is skipped, what is partial is copied again.
+/// is there and equal is skipped, what is partial is copied again. (A build with the
+/// `cluster` feature: `cargo build --release -p sitar-cli --features cluster`.)
 #[derive(clap::Args, Debug)]
 #[command(after_help = "Example:
   sitar migrate --data sitar-data --database postgres://sitar@db.lab:5432/sitar \\
@@ -33,6 +35,15 @@ pub struct Args {
     store: String,
 }
 
+/// Without the cluster backends there is nothing to copy into: say how to get a build that
+/// has them.
+#[cfg(not(feature = "cluster"))]
+pub fn run(args: Args) -> Result<()> {
+    let _ = (args.data, args.database, args.store);
+    bail!("sitar migrate: {}", sitar_server::NO_CLUSTER)
+}
+
+#[cfg(feature = "cluster")]
 pub fn run(args: Args) -> Result<()> {
     let options = MigrateOptions {
         data: args.data,

@@ -26,12 +26,13 @@ pub struct Args {
     data: PathBuf,
     /// Postgres for the metadata several instances share, instead of DIR/sitar.db
     /// (postgres://USER@HOST:PORT/DATABASE; the PG* variables fill in what it leaves out).
-    /// Migrations are applied at start.
+    /// Migrations are applied at start. Needs a build with the `cluster` feature.
     #[arg(long, value_name = "URL")]
     database: Option<String>,
     /// An S3-compatible bucket for every session's bytes, instead of DIR/sessions
     /// (s3://BUCKET/PREFIX; endpoint, region and credentials from AWS_ENDPOINT_URL,
-    /// AWS_REGION, AWS_ACCESS_KEY_ID, AWS_SECRET_ACCESS_KEY, AWS_ALLOW_HTTP).
+    /// AWS_REGION, AWS_ACCESS_KEY_ID, AWS_SECRET_ACCESS_KEY, AWS_ALLOW_HTTP). Needs a build
+    /// with the `cluster` feature.
     #[arg(long, value_name = "URL")]
     store: Option<String>,
     /// With --database: an instance silent this long (no heartbeat in the database) is dead,
@@ -198,6 +199,17 @@ enum Playback {
 }
 
 pub fn run(args: Args) -> Result<()> {
+    // A cluster flag in a build without the backends: say how to get one, before anything.
+    if !sitar_server::CLUSTER {
+        for (flag, given) in [
+            ("--database", args.database.is_some()),
+            ("--store", args.store.is_some()),
+        ] {
+            if given {
+                anyhow::bail!("sitar serve {flag}: {}", sitar_server::NO_CLUSTER);
+            }
+        }
+    }
     crate::logging::init(args.log_level);
     let mut config = ServerConfig::new(&args.data);
     config.database = args.database.clone();

@@ -931,3 +931,42 @@ fn the_demo_serves_its_report_until_ctrl_c() {
     };
     assert!(status.success(), "{status:?}");
 }
+
+/// A build without the cluster backends refuses every cluster flag and `sitar migrate`,
+/// saying how to get a build that has them (and touches nothing first).
+#[cfg(not(feature = "cluster"))]
+#[test]
+fn cluster_flags_say_how_to_get_a_cluster_build() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("data");
+    let data = data.to_str().unwrap();
+    let database = "postgres://sitar@127.0.0.1:9/sitar";
+    let store = "s3://bucket/prefix";
+    let runs: [&[&str]; 4] = [
+        &["serve", "--data", data, "--database", database],
+        &["serve", "--data", data, "--store", store],
+        &[
+            "migrate",
+            "--data",
+            data,
+            "--database",
+            database,
+            "--store",
+            store,
+        ],
+        &["token", "list", "--database", database],
+    ];
+    for args in runs {
+        let out = sitar(args);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{args:?}: {stderr}");
+        assert!(
+            stderr.contains("cargo build --release -p sitar-cli --features cluster"),
+            "{args:?}: {stderr}"
+        );
+    }
+    assert!(
+        !dir.path().join("data").exists(),
+        "a refused command made its data folder"
+    );
+}

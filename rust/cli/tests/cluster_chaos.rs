@@ -7,6 +7,8 @@
 //! same recording and trials. Its own test binary: restarting Postgres must not disturb
 //! other tests. Without `SITAR_TEST_DATABASE_URL`, `SITAR_TEST_S3_URL` and
 //! `SITAR_TEST_PG_DATA` (`scripts/cluster-services start`) it prints SKIPPED.
+// The cluster backends are in a build with the `cluster` feature only.
+#![cfg(feature = "cluster")]
 
 mod support;
 

@@ -7,6 +7,8 @@
 //! server's. A second run copies nothing; a run killed with SIGKILL mid-copy completes when
 //! run again; a running server, a database holding other data and a changed side are refused
 //! naming them. Without `SITAR_TEST_DATABASE_URL` and `SITAR_TEST_S3_URL` it prints SKIPPED.
+// The cluster backends are in a build with the `cluster` feature only.
+#![cfg(feature = "cluster")]
 
 mod support;
 

@@ -3,6 +3,8 @@
 //! started by `scripts/cluster-services`). A sim session goes upload → playback → done, and
 //! its results are byte-identical to the embedded server's for the same recording. Without
 //! `SITAR_TEST_DATABASE_URL` and `SITAR_TEST_S3_URL` the tests print SKIPPED.
+// The cluster backends are in a build with the `cluster` feature only.
+#![cfg(feature = "cluster")]
 
 mod support;
 

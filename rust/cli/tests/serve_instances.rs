@@ -5,6 +5,8 @@
 //! cancel, an estimate and a delete sent to B reach the sessions A plays; B shows the queue
 //! position and ETA of A's sessions as A does. Without the services of
 //! `scripts/cluster-services` the test prints SKIPPED.
+// The cluster backends are in a build with the `cluster` feature only.
+#![cfg(feature = "cluster")]
 
 mod instances;
 mod support;

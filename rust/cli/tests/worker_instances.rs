@@ -5,6 +5,8 @@
 //! the store, every session ends `done` with every trial committed once, and the results are
 //! byte-identical to the embedded server's. Without `SITAR_TEST_DATABASE_URL` and
 //! `SITAR_TEST_S3_URL` (`scripts/cluster-services start`) the test prints SKIPPED.
+// The cluster backends are in a build with the `cluster` feature only.
+#![cfg(feature = "cluster")]
 
 mod support;
 

@@ -88,7 +88,7 @@ pub enum Error {
     /// The results sink of an [`crate::UploadJob`] refused the final results; the sink's
     /// own error (downcast it to get it back).
     #[error(transparent)]
-    Results(crate::job::SinkError),
+    Results(crate::job_state::SinkError),
     /// An [`crate::UploadJob`]'s thread panicked (a bug; the message is the panic's).
     #[error("internal panic in the upload job: {0}")]
     Panicked(String),

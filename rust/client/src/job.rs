@@ -4,203 +4,11 @@
 
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
-use std::time::Duration;
+use std::sync::Arc;
+use std::sync::atomic::Ordering;
 
-use crate::{Client, Error, NewSession, SessionFrame, check_session_id};
-
-/// What an [`UploadJob`] does.
-#[derive(Debug, Clone, PartialEq)]
-pub struct JobOptions {
-    /// The server session to create (trials, statistic, playback, window settings). Ignored
-    /// when [`JobOptions::session_id`] is set: that session's own settings hold.
-    pub session: NewSession,
-    /// An existing server session to continue (e.g. a failed job's
-    /// [`UploadJob::server_id`]): no new session is created, its recording upload resumes
-    /// from the bytes the server kept, or is skipped once the server has it all.
-    pub session_id: Option<String>,
-    /// How often the server's status is asked for while it works (at least 10 ms).
-    pub poll_interval: Duration,
-    /// The phone's session folder (as sitar-core's `Session::save` writes it). Before the
-    /// recording, its log (`trajectory.txt`, `subtrajectories.csv`, `anchors.csv`:
-    /// [`Client::upload_phone_logs`]) is sent: a file the server refuses fails the job, a
-    /// backend without the routes (404/405) is skipped with a warning. After the recording,
-    /// its evidence (`evidence.csv`, `thumbnails/`) is sent when it is there: a folder without
-    /// evidence, or an evidence upload that fails after its retries, never fails the job.
-    pub evidence_dir: Option<PathBuf>,
-    /// The phone's convention and the venue the new session joins (sent with the session
-    /// request only when set). Ignored with [`JobOptions::session_id`].
-    pub frame: SessionFrame,
-}
-
-impl JobOptions {
-    /// A job that creates `session`, polling every 500 ms.
-    pub fn new(session: NewSession) -> Self {
-        JobOptions {
-            session,
-            session_id: None,
-            poll_interval: Duration::from_millis(500),
-            evidence_dir: None,
-            frame: SessionFrame::default(),
-        }
-    }
-
-    /// Checks what can be checked before anything is sent.
-    fn validate(&self) -> Result<(), Error> {
-        match &self.session_id {
-            Some(id) => check_session_id(id).map(drop).map_err(|_| {
-                Error::InvalidArgument(format!(
-                    "session_id {id:?} is not a server-made id ([A-Za-z0-9_-], 1 to 64 bytes)"
-                ))
-            }),
-            None if self.session.trials < 2 => Err(Error::InvalidArgument(format!(
-                "trials must be at least 2 (an estimate compares pairs of trials), not {}",
-                self.session.trials
-            ))),
-            None => Ok(()),
-        }
-    }
-}
-
-/// Where a job is; the order is the life cycle (`Done`, `Failed` and `Cancelled` are final).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default)]
-pub enum JobState {
-    /// Creating (or looking up) the server session.
-    #[default]
-    Starting,
-    /// Sending the recording.
-    Uploading,
-    /// Playback trials running on the server.
-    Playing,
-    /// The server computes the final estimate.
-    Estimating,
-    /// Fetching the final results.
-    Downloading,
-    /// The final results were delivered.
-    Done,
-    /// Failed: [`JobProgress::error`] says why.
-    Failed,
-    /// Cancelled by [`UploadJob::cancel`] (or by dropping the job).
-    Cancelled,
-}
-
-impl JobState {
-    /// Whether the job will not change any more.
-    pub fn is_finished(self) -> bool {
-        self >= JobState::Done
-    }
-}
-
-/// What a results sink may fail with (any error: the job keeps it as [`Error::Results`]).
-pub type SinkError = Box<dyn std::error::Error + Send + Sync>;
-
-/// A snapshot of a job.
-#[derive(Debug, Clone, Default)]
-pub struct JobProgress {
-    /// Where the job is.
-    pub state: JobState,
-    /// Overall progress 0 … 1 (sending the recording is the first [`UPLOAD_SHARE`]); it never
-    /// goes back, also when a resumed upload restarts below an earlier byte count.
-    pub progress: f64,
-    /// Seconds until done as the server estimates them, when it does.
-    pub eta_s: Option<f64>,
-    /// Recording bytes sent so far (a resume restarts at what the server kept).
-    pub bytes_sent: u64,
-    /// Recording size in bytes.
-    pub bytes_total: u64,
-    /// Playback trials finished on the server.
-    pub trials_done: u32,
-    /// Playback trials planned.
-    pub trials_total: u32,
-    /// How many times results were delivered to the sink (progressive and final).
-    pub results_revision: u32,
-    /// Trials behind the results delivered last (0 = none yet).
-    pub results_trials: u32,
-    /// How many files of the phone's log ([`crate::PHONE_LOG_FILES`]) the server took (0
-    /// without [`JobOptions::evidence_dir`], or from a backend that predates them).
-    pub logs_sent: u32,
-    /// Whether the session folder's evidence reached the server (false without
-    /// [`JobOptions::evidence_dir`], without evidence in it, or when its upload failed).
-    pub evidence_sent: bool,
-    /// Why the job failed, once it has: a client error, [`Error::SessionFailed`],
-    /// [`Error::Results`] (the sink refused the final results) or [`Error::Panicked`].
-    pub error: Option<Arc<Error>>,
-}
-
-/// Share of [`JobProgress::progress`] given to sending the recording; the server's work is
-/// the rest.
-pub const UPLOAD_SHARE: f64 = 0.2;
-
-/// The job's state, shared by the handle and the worker thread.
-pub(crate) struct Shared {
-    status: Mutex<Status>,
-    pub(crate) cancelled: AtomicBool,
-}
-
-struct Status {
-    progress: JobProgress,
-    server_id: Option<String>,
-}
-
-impl Shared {
-    fn lock(&self) -> MutexGuard<'_, Status> {
-        self.status.lock().unwrap_or_else(PoisonError::into_inner)
-    }
-
-    /// Applies `f` to the progress unless the job already finished (e.g. was cancelled).
-    pub(crate) fn update(&self, f: impl FnOnce(&mut JobProgress)) {
-        let mut s = self.lock();
-        if !s.progress.state.is_finished() {
-            f(&mut s.progress);
-        }
-    }
-
-    pub(crate) fn set_state(&self, state: JobState) {
-        self.update(|p| p.state = state);
-    }
-
-    pub(crate) fn set_server_id(&self, id: &str) {
-        self.lock().server_id = Some(id.to_owned());
-    }
-
-    pub(crate) fn is_cancelled(&self) -> bool {
-        self.cancelled.load(Ordering::Acquire)
-    }
-
-    /// Hands `text` to `sink` unless the job finished; the status lock is held throughout,
-    /// so a concurrent cancel either wins entirely (nothing delivered) or comes after.
-    /// `done` finishes the job with these results. Returns whether they were delivered.
-    pub(crate) fn deliver(
-        &self,
-        sink: &mut dyn FnMut(&str) -> Result<(), SinkError>,
-        text: &str,
-        trials: u32,
-        done: bool,
-    ) -> Result<bool, SinkError> {
-        let mut s = self.lock();
-        if s.progress.state.is_finished() {
-            return Ok(false);
-        }
-        sink(text)?;
-        let p = &mut s.progress;
-        p.results_revision += 1;
-        p.results_trials = trials;
-        if done {
-            p.state = JobState::Done;
-            p.progress = 1.0;
-            p.eta_s = Some(0.0);
-        }
-        Ok(true)
-    }
-
-    fn fail(&self, error: Error) {
-        self.update(|p| {
-            p.state = JobState::Failed;
-            p.error = Some(Arc::new(error));
-        });
-    }
-}
+use crate::job_state::{JobOptions, JobProgress, JobState, Shared, SinkError};
+use crate::{Client, Error};
 
 /// A running (or finished) upload job; dropping it cancels it.
 ///
@@ -256,16 +64,7 @@ impl UploadJob {
         if options.session_id.is_none() {
             crate::client::recording_file(recording)?;
         }
-        let shared = Arc::new(Shared {
-            status: Mutex::new(Status {
-                progress: JobProgress {
-                    trials_total: options.session.trials,
-                    ..JobProgress::default()
-                },
-                server_id: None,
-            }),
-            cancelled: AtomicBool::new(false),
-        });
+        let shared = Arc::new(Shared::new(options.session.trials));
         let worker = Arc::clone(&shared);
         let recording: PathBuf = recording.to_path_buf();
         let mut sink = move |text: &str| sink(text).map_err(Into::into);
@@ -325,6 +124,9 @@ fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
 mod tests {
     use super::*;
     use crate::test_server::{Reply, serve};
+    use crate::{NewSession, SessionFrame};
+    use std::sync::Mutex;
+    use std::time::Duration;
     use std::time::Instant;
 
     #[derive(Debug, thiserror::Error)]

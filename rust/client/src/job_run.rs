@@ -4,7 +4,7 @@
 use std::path::Path;
 use std::time::Duration;
 
-use crate::job::{JobOptions, JobState, Shared, SinkError, UPLOAD_SHARE};
+use crate::job_state::{JobOptions, JobState, Shared, SinkError, UPLOAD_SHARE};
 use crate::{Client, Error, SessionOptions, SessionState};
 
 type Sink<'a> = &'a mut dyn FnMut(&str) -> Result<(), SinkError>;

@@ -54,6 +54,7 @@ mod client;
 mod error;
 mod job;
 mod job_run;
+mod job_state;
 mod phone_logs;
 mod pin;
 pub mod platform_tls;
@@ -64,7 +65,8 @@ mod worker_api;
 
 pub use client::{Client, IDEMPOTENCY_HEADER, UPLOAD_OFFSET_HEADER, check_session_id};
 pub use error::Error;
-pub use job::{JobOptions, JobProgress, JobState, SinkError, UPLOAD_SHARE, UploadJob};
+pub use job::UploadJob;
+pub use job_state::{JobOptions, JobProgress, JobState, SinkError, UPLOAD_SHARE};
 pub use phone_logs::{PHONE_LOG_FILES, PhoneLogsSent};
 pub use types::{
     NewSession, SessionFrame, SessionOptions, SessionState, SessionStatus, VenueAlignment,

@@ -121,6 +121,7 @@ mod evidence;
 mod evidence_table;
 mod guide;
 mod image;
+mod logged_pose;
 mod markers;
 mod persist;
 mod playback;
@@ -148,14 +149,14 @@ pub use guide::{Guide, ScreenView};
 pub use image::{
     FAST_THRESHOLD, ImageProperties, LumaImage, MAX_FAST_WIDTH, SATURATED_LUMA, fast_corners,
 };
+pub use logged_pose::LoggedPose;
 pub use markers::{Marker, MarkerCandidate, select_markers, warning_sign_rotation};
 pub use playback::PlaybackLogger;
 pub use relation::{ErrorUnit, PoseRelation};
 pub use render::{Frustum, Joint, RenderPlan, Segment};
 pub use results::{ErrorInterval, ResultWindow, Results};
 pub use session::{
-    DepthStatus, FrameFlags, LoggedPose, MidpointInput, Session, SessionState, SubTrajectory,
-    Summary,
+    DepthStatus, FrameFlags, MidpointInput, Session, SessionState, SubTrajectory, Summary,
 };
 pub use thumbnail::{THUMBNAIL_QUALITY, downsample_rotated, encode_jpeg, thumbnail_size};
 pub use tum::{parse_tum_ns, to_tum};

@@ -6,7 +6,8 @@ use std::path::Path;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
-use crate::session::{DepthStatus, LoggedPose, SessionState, SubTrajectory};
+use crate::logged_pose::LoggedPose;
+use crate::session::{DepthStatus, SessionState, SubTrajectory};
 use crate::{DepthSample, Error, ErrorUnit, InvalidDepth, Pose, Results, Session, SessionConfig};
 
 #[derive(Debug, Clone, Copy, Serialize, Deserialize)]

@@ -3,7 +3,8 @@
 use glam::{DQuat, DVec3};
 use serde::{Deserialize, Serialize};
 
-use crate::{LoggedPose, Pose};
+use crate::Pose;
+use crate::logged_pose::LoggedPose;
 
 /// A cylinder between two consecutive logged positions.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]

@@ -5,6 +5,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::depth::sample_surface;
 use crate::evidence::{DepthProperties, Evidence, MotionProperties, SessionMedians, likely_causes};
+use crate::logged_pose::LoggedPose;
 use crate::markers::{MarkerCandidate, select_markers};
 use crate::thumbnail::{PixelScratch, downsample_rotated, encode_jpeg};
 use crate::venue::{Alignment, AnchorObservation, NotAligned, Tracking, VenueMap, WorldCell};
@@ -67,19 +68,6 @@ pub enum SessionState {
     Recording,
     /// Stopped; results can be attached.
     Stopped,
-}
-
-/// A logged pose: the start pose, a midpoint or an endpoint.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct LoggedPose {
-    /// Timestamp (ns).
-    pub t_ns: i64,
-    /// Frame number counted from the start call (frame 0).
-    pub frame: u32,
-    /// World-from-camera pose.
-    pub pose: Pose,
-    /// Path length from the start through every frame up to this one (metres).
-    pub path_m: f64,
 }
 
 /// The depth sample of a midpoint.

@@ -204,6 +204,7 @@ mod formats;
 mod incremental;
 mod metrics;
 mod pairwise;
+mod pose_messages;
 mod ranking;
 mod ros1;
 mod rosbag;
@@ -249,16 +250,16 @@ pub use formats::{
 };
 pub use incremental::IncrementalEstimate;
 pub use metrics::{
-    DeltaUnit, PoseErrors, PoseRelation, RigidPose, RpeOptions, ape, delta_pairs, rotation_angle,
-    rpe,
+    DeltaUnit, PoseErrors, PoseRelation, RigidPose, RpeOptions, ape, delta_pairs, rpe,
 };
+pub use pose_messages::{Encoding, PoseMessage, StampedPoseValue, TopicMessages};
 pub use ranking::{
     MIN_FIT_ERROR_M, SweepPoint, ThresholdSweep, fit_scale, median_ratio, spearman, threshold_sweep,
 };
 pub use ros1::{decode_ros1_pose, read_ros1_bag, read_ros1_bag_topics};
 pub use rosbag::{
-    BagTrajectory, Encoding, PoseMessage, StampedPoseValue, TopicMessages, decode_pose,
-    decode_pose_as, read_mcap, read_mcap_from, read_mcap_topics, topic_trajectory,
+    BagTrajectory, decode_pose, decode_pose_as, read_mcap, read_mcap_from, read_mcap_topics,
+    topic_trajectory,
 };
 /// The class rule and its defaults, shared with the phone and the backend.
 pub use sitar_core::{DEFAULT_SETTING, ErrorClass, Thresholds};
@@ -275,4 +276,5 @@ pub use tf::{
 };
 pub use trajectory::{
     Plane, QUATERNION_NORM_TOLERANCE, TimeUnit, Trajectory, euler_sxyz, pairwise_sum,
+    rotation_angle,
 };

@@ -5,6 +5,7 @@ use std::str::FromStr;
 
 use glam::{DQuat, DVec3};
 
+use crate::trajectory::rotation_angle;
 use crate::{Error, Statistics, Trajectory};
 
 /// Which part of the error pose is measured (evo's `PoseRelation`, `-r`).
@@ -139,12 +140,6 @@ impl RigidPose {
             }
         }
     }
-}
-
-/// The rotation angle in [0, π] of a unit quaternion (as scipy's `as_rotvec` norm).
-#[inline]
-pub fn rotation_angle(q: DQuat) -> f64 {
-    2.0 * q.xyz().length().atan2(q.w.abs())
 }
 
 impl Trajectory {

@@ -10,8 +10,11 @@ use std::path::Path;
 
 use glam::{DQuat, DVec3};
 
-use crate::rosbag::{Header, Pose, Quaternion, StampedTransform, Time, Vector};
-use crate::{Encoding, Error, PoseMessage, StampedPoseValue, TopicMessages};
+use crate::Error;
+use crate::pose_messages::{
+    Encoding, Header, Pose, PoseMessage, Quaternion, StampedPoseValue, StampedTransform, Time,
+    TopicMessages, Vector,
+};
 
 const MAGIC: &[u8] = b"#ROSBAG V2.0\n";
 

@@ -13,8 +13,9 @@ use std::collections::{BTreeMap, HashMap};
 use glam::{DQuat, DVec3};
 use serde::Deserialize;
 
+use crate::pose_messages::{StampedTransform, quaternion, vector};
 use crate::ros1::Ros1Reader;
-use crate::rosbag::{StampedTransform, decode_cdr, quaternion, vector};
+use crate::rosbag::decode_cdr;
 use crate::{BagTrajectory, Encoding, Error, TimeUnit, TopicMessages, Trajectory};
 
 /// evo's default lookup step (1 / `tf_cache_lookup_frequency` of 10 Hz), in ns.

@@ -305,8 +305,7 @@ impl Trajectory {
         let (mut last, mut last_distance) = (0usize, 0.0);
         let mut ids = vec![0];
         for (i, &distance) in distances.iter().enumerate().skip(1) {
-            let turned =
-                crate::rotation_angle(self.orientations[last].conjugate() * self.orientations[i]);
+            let turned = rotation_angle(self.orientations[last].conjugate() * self.orientations[i]);
             if distance - last_distance >= distance_m || turned >= angle {
                 ids.push(i);
                 last = i;
@@ -498,6 +497,12 @@ fn slerp(q0: DQuat, q1: DQuat, f: f64) -> DQuat {
     }
     let isin = 1.0 / angle.sin();
     q0 * (((1.0 - f) * angle).sin() * isin) + q1 * ((f * angle).sin() * isin)
+}
+
+/// The rotation angle in [0, π] of a unit quaternion (as scipy's `as_rotvec` norm).
+#[inline]
+pub fn rotation_angle(q: DQuat) -> f64 {
+    2.0 * q.xyz().length().atan2(q.w.abs())
 }
 
 #[cfg(test)]

@@ -3,7 +3,7 @@
 
 use std::ffi::CStr;
 use std::path::{Path, PathBuf};
-use std::sync::{LazyLock, Mutex, MutexGuard};
+use std::sync::{LazyLock, Mutex};
 
 use sitar_core::{
     DepthImage, DisplayRotation, LumaImage, PlaybackLogger, ScreenView, Session, SessionConfig,
@@ -13,7 +13,7 @@ use sitar_core::{
 use sitar_client::UploadJob;
 
 pub(crate) use crate::android_tls::platform_tls_init;
-use crate::error::Error;
+use crate::error::{lock, Error};
 use crate::registry::{Registry, SitarHandle};
 use crate::types::{
     SitarEvidence, SitarFrustum, SitarGuide, SitarIntrinsics, SitarJobProgress, SitarJoint,
@@ -118,11 +118,6 @@ pub fn version() -> Result<&'static CStr, Error> {
             Err(_) => panic!("the crate version contains a NUL byte"),
         };
     Ok(VERSION)
-}
-
-pub(crate) fn lock<T>(m: &Mutex<T>) -> Result<MutexGuard<'_, T>, Error> {
-    m.lock()
-        .map_err(|_| Error::Panic("an earlier panic left this object unusable; free it".to_owned()))
 }
 
 fn with_session<R>(

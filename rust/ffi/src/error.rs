@@ -1,4 +1,5 @@
 use std::str::Utf8Error;
+use std::sync::{Mutex, MutexGuard};
 
 crate::descriptors::c_enum! {
     /// Status codes of every C ABI function (`int32_t`); negative is an error.
@@ -164,4 +165,10 @@ fn client_status(e: &sitar_client::Error) -> SitarStatus {
 /// The status code of a client error (an upload job's failure).
 pub(crate) fn client_code(e: &sitar_client::Error) -> i32 {
     client_status(e) as i32
+}
+
+/// Locks `m`; a lock poisoned by an earlier panic is an error of the object it guards.
+pub(crate) fn lock<T>(m: &Mutex<T>) -> Result<MutexGuard<'_, T>, Error> {
+    m.lock()
+        .map_err(|_| Error::Panic("an earlier panic left this object unusable; free it".to_owned()))
 }

@@ -69,7 +69,7 @@ pub(crate) fn start(
     } else {
         serde_json::from_str(options_json)?
     };
-    let config = crate::bridge::lock(&session)?.config().clone();
+    let config = crate::error::lock(&session)?.config().clone();
     let url = o.server_url.or(config.server_url.clone()).ok_or_else(|| {
         Error::invalid(
             "options_json",
@@ -127,7 +127,7 @@ pub(crate) fn start(
     }
     let job = UploadJob::start(client, recording, options, move |text: &str| {
         let _trace = crate::trace::section("sitar load results");
-        crate::bridge::lock(&session)?.load_results(text)?;
+        crate::error::lock(&session)?.load_results(text)?;
         Ok::<(), Error>(())
     })?;
     Ok(job)
@@ -191,7 +191,7 @@ fn save_session_folder(
     recording: &Path,
     config: &sitar_core::SessionConfig,
 ) -> Option<PathBuf> {
-    let session = crate::bridge::lock(session).ok()?;
+    let session = crate::error::lock(session).ok()?;
     if session.logged().is_empty() {
         return None;
     }

@@ -86,7 +86,7 @@
 // auth                                          — tokens, callers, limits (middleware)
 // venue                                         — venues: rows, who sees them, sessions' alignment
 // http                                          — router, server, connections, limits, handlers, TLS
-// migrate                                       — `sitar migrate`: an embedded installation into the cluster stores
+// migrate                                       — `sitar migrate`: an embedded installation into the cluster stores (feature `cluster`)
 // fuzzing                                       — the parsers, for fuzz/ only (doc-hidden)
 mod app_state;
 mod auth;
@@ -97,6 +97,7 @@ mod estimate;
 pub mod fuzzing;
 mod http;
 mod ingest;
+#[cfg(feature = "cluster")]
 mod migrate;
 mod playback;
 mod report;
@@ -114,7 +115,16 @@ pub use estimate::calibrations::{Calibrations, MAX_CALIBRATIONS, is_calibration_
 pub use http::helpers::IDEMPOTENCY_HEADER;
 pub use http::server::{Server, ServerHandle};
 pub use http::tls::TlsConfig;
+#[cfg(feature = "cluster")]
 pub use migrate::{MigrateOptions, Summary as MigrateSummary, TableCount, migrate};
+
+/// Whether this build has the cluster backends (Postgres metadata, S3-compatible blobs:
+/// `--database`, `--store`, `sitar migrate`): the `cluster` feature.
+pub const CLUSTER: bool = cfg!(feature = "cluster");
+
+/// What a cluster flag or `sitar migrate` says in a build without the cluster backends.
+pub const NO_CLUSTER: &str = "this build has no cluster backends (Postgres, S3-compatible store); \
+     build one with `cargo build --release -p sitar-cli --features cluster`";
 pub use playback::adb::{AdbPlayback, contract as adb_contract, mp4_duration_s};
 pub use playback::{
     DeviceInfo, Playback, PlaybackJob, PlaybackPlan, SimPlayback, TrialOutput, UploadPlayback,

@@ -117,7 +117,7 @@ impl Room {
                     .raycast(position, world_dir)
                     .filter(|hit| {
                         hit.surface != SurfaceKind::Glass
-                            || crate::luma::hash(i64::from(u), i64::from(v), 0x61A55)
+                            || crate::noise::hash(i64::from(u), i64::from(v), 0x61A55)
                                 < camera.glass_valid_share
                     })
                     // Distance along the unit ray / |ray| = z-depth (the ray has z = −1).

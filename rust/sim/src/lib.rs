@@ -69,8 +69,11 @@
 mod anchor;
 mod camera;
 mod checks;
+mod draws;
 mod error;
 mod luma;
+mod models;
+mod noise;
 mod observations;
 mod p3p;
 mod phone;
@@ -89,10 +92,10 @@ pub use anchor::{ANCHOR_SURFACE, AnchorSensor, DEMO_ANCHOR_ID, PrintedAnchor, Si
 pub use camera::{DepthCamera, Intrinsics, View};
 pub use error::Error;
 pub use luma::LumaCamera;
-pub use ransac_tracker::RansacModel;
+pub use models::{DriftModel, RansacModel};
 pub use recording::{RECORDING_MAGIC, RECORDING_VERSION, Recording, Tracker};
 pub use room::{Hit, Room, Surface, SurfaceKind};
-pub use trial::{DriftModel, TrialOptions, play_trial, play_trial_with, simulate_trials};
+pub use trial::{TrialOptions, play_trial, play_trial_with, simulate_trials};
 pub use venue_truth::{CellTruth, ProblemCellScore};
 pub use venue_users::{MAX_VENUE_USERS, Venue, VenueTruth, VenueUser};
 pub use walk::{FIRST_STAMP_NS, Walk, look_rotation};

@@ -12,7 +12,9 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal, Poisson};
 
-use crate::{RansacModel, Room, SurfaceKind, Trajectory};
+use crate::draws::uniform_direction;
+use crate::models::RansacModel;
+use crate::{Room, SurfaceKind, Trajectory};
 
 /// RNG stream of the landmarks and observations (the walk uses 1, the shared drift 2).
 const OBSERVATION_STREAM: u64 = 3;
@@ -159,7 +161,7 @@ impl Observations {
                 noise: accel_error * dt,
             });
         }
-        let direction = crate::trial::uniform_direction(&mut rng);
+        let direction = uniform_direction(&mut rng);
         Self {
             landmarks,
             frames,

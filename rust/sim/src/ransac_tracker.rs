@@ -14,165 +14,17 @@
 use glam::{DMat3, DQuat, DVec3};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use serde::{Deserialize, Serialize};
 use sitar_estimator::Trajectory;
 
+use crate::Recording;
+use crate::draws::world_frame;
+use crate::models::RansacModel;
 use crate::observations::{ARCORE_TO_CV, Observations, camera_from_world};
 use crate::p3p::CameraPose;
 use crate::pnp::{Gate, LocateOptions, Match, locate};
-use crate::{Recording, checks};
 
 /// RNG stream of the RANSAC trial `i` is `RANSAC_STREAM_BASE + i`.
 const RANSAC_STREAM_BASE: u64 = 3 << 32;
-
-/// Every knob of the RANSAC tracker and of the camera and IMU it replays
-/// ([`crate::Recording::with_ransac_model`]).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct RansacModel {
-    /// Focal length of the tracking camera (pixels).
-    pub focal_px: f64,
-    /// Image width (pixels).
-    pub width_px: f64,
-    /// Image height (pixels).
-    pub height_px: f64,
-    /// Scale of every surface's feature noise ([`crate::SurfaceKind::feature_noise_px`]).
-    pub pixel_noise_scale: f64,
-    /// Light level, 1 = normal: landmark density scales with it, noise and spurious corners
-    /// with its inverse.
-    pub lighting: f64,
-    /// Scale of every surface's spurious corners ([`crate::SurfaceKind::spurious_per_view`]).
-    pub spurious_scale: f64,
-    /// Probability that a visible landmark is detected in a frame.
-    pub detection_probability: f64,
-    /// Probability that a reflection in glass is matched to the real landmark it mirrors.
-    pub reflection_match_probability: f64,
-    /// The detector's real-time budget: at most this many features are matched per frame, a
-    /// fixed subset of the recording when more are detected (every replay sees the same).
-    pub features_per_frame: usize,
-    /// RANSAC iterations per frame: the fixed real-time budget. Where the inlier share is low
-    /// (blank walls, reflections) so few iterations often miss the largest consensus, and the
-    /// trials disagree; a large budget finds it every time.
-    pub ransac_hypotheses: usize,
-    /// Inlier threshold (pixels).
-    pub inlier_threshold_px: f64,
-    /// Fewest inliers for a visual pose; with fewer the frame rides on the inertial prior.
-    pub min_inliers: usize,
-    /// Inlier count at which vision and the inertial prior weigh the same in the fusion.
-    pub prior_weight_inliers: f64,
-    /// Smallest angle (degrees) between two rays to triangulate a new landmark.
-    pub min_parallax_deg: f64,
-    /// Farthest a visual pose may be from the prior (metres) right after a visual fix; the
-    /// gate widens by this much again every `gate_growth_frames` frames without one, so the
-    /// tracker relocalises after coasting.
-    pub gate_m: f64,
-    /// Largest rotation (degrees) a visual pose may be from the prior, widening likewise.
-    pub gate_deg: f64,
-    /// Frames without a visual fix over which the gate widens by its own size.
-    pub gate_growth_frames: f64,
-    /// Gyroscope noise per frame (degrees per axis).
-    pub gyro_noise_deg: f64,
-    /// Accelerometer white noise, as a velocity error per frame (m/s).
-    pub accel_noise_mps: f64,
-    /// Magnitude of the accelerometer bias (m/s²): while vision is lost the velocity error
-    /// grows by it every second, the same in every trial.
-    pub accel_bias_mps2: f64,
-    /// Give each trial its own random world frame (yaw and offset), as separate SLAM runs have.
-    pub world_offset: bool,
-}
-
-impl Default for RansacModel {
-    fn default() -> Self {
-        Self {
-            focal_px: 500.0,
-            width_px: 640.0,
-            height_px: 480.0,
-            pixel_noise_scale: 1.0,
-            lighting: 1.0,
-            spurious_scale: 1.0,
-            detection_probability: 0.85,
-            reflection_match_probability: 0.3,
-            features_per_frame: 40,
-            ransac_hypotheses: 16,
-            inlier_threshold_px: 5.0,
-            min_inliers: 4,
-            prior_weight_inliers: 20.0,
-            min_parallax_deg: 4.0,
-            gate_m: 0.08,
-            gate_deg: 4.0,
-            gate_growth_frames: 15.0,
-            gyro_noise_deg: 0.03,
-            accel_noise_mps: 0.01,
-            accel_bias_mps2: 0.03,
-            world_offset: true,
-        }
-    }
-}
-
-impl RansacModel {
-    /// Checks every parameter; the error names the field.
-    pub fn validate(&self) -> Result<(), (String, String)> {
-        checks::positive(&[
-            ("focal_px", self.focal_px),
-            ("width_px", self.width_px),
-            ("height_px", self.height_px),
-            ("lighting", self.lighting),
-            ("inlier_threshold_px", self.inlier_threshold_px),
-            ("prior_weight_inliers", self.prior_weight_inliers),
-            ("gate_m", self.gate_m),
-            ("gate_deg", self.gate_deg),
-            ("gate_growth_frames", self.gate_growth_frames),
-        ])?;
-        checks::non_negative(&[
-            ("pixel_noise_scale", self.pixel_noise_scale),
-            ("spurious_scale", self.spurious_scale),
-            ("min_parallax_deg", self.min_parallax_deg),
-            ("gyro_noise_deg", self.gyro_noise_deg),
-            ("accel_noise_mps", self.accel_noise_mps),
-            ("accel_bias_mps2", self.accel_bias_mps2),
-        ])?;
-        checks::unit_range(&[
-            ("detection_probability", self.detection_probability, 1.0),
-            (
-                "reflection_match_probability",
-                self.reflection_match_probability,
-                1.0,
-            ),
-        ])?;
-        if self.lighting > 10.0 || self.width_px > 1e5 || self.height_px > 1e5 {
-            return Err((
-                "lighting".into(),
-                "lighting must be at most 10 and the image at most 100 000 pixels wide".into(),
-            ));
-        }
-        let counts = [
-            ("features_per_frame", self.features_per_frame, 3, 256),
-            ("ransac_hypotheses", self.ransac_hypotheses, 1, 100_000),
-            ("min_inliers", self.min_inliers, 3, 256),
-        ];
-        for (name, v, lo, hi) in counts {
-            if !(lo..=hi).contains(&v) {
-                return Err((name.into(), format!("must be in [{lo}, {hi}], got {v}")));
-            }
-        }
-        Ok(())
-    }
-
-    /// Normalised image coordinates of a camera-frame (computer-vision) point, if it is in
-    /// front, within 6 m and inside the image.
-    pub(crate) fn project(&self, p: DVec3) -> Option<glam::DVec2> {
-        if p.z <= 0.1 || p.length_squared() > 36.0 {
-            return None;
-        }
-        let (x, y) = (p.x / p.z, p.y / p.z);
-        let (u, v) = (
-            x * self.focal_px + self.width_px / 2.0,
-            y * self.focal_px + self.height_px / 2.0,
-        );
-        ((0.0..self.width_px).contains(&u) && (0.0..self.height_px).contains(&v))
-            .then_some(glam::DVec2::new(x, y))
-    }
-}
 
 /// The trial's growing map: per landmark index, its point once confirmed, the candidate a
 /// two-view triangulation gave, the first ray seen, and how often in a row it failed as an
@@ -328,7 +180,7 @@ pub(crate) fn play(
     let n = gt.len();
     let mut rng = ChaCha8Rng::seed_from_u64(rec.seed());
     rng.set_stream(RANSAC_STREAM_BASE + u64::from(trial_index));
-    let (world_rotation, world_offset) = crate::trial::world_frame(model.world_offset, &mut rng);
+    let (world_rotation, world_offset) = world_frame(model.world_offset, &mut rng);
     let mut options = LocateOptions {
         hypotheses: model.ransac_hypotheses,
         threshold: model.inlier_threshold_px / model.focal_px,

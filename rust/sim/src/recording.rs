@@ -6,8 +6,9 @@ use glam::{DQuat, DVec3};
 use serde::{Deserialize, Serialize};
 use sitar_estimator::{TimeUnit, Trajectory};
 
+use crate::models::{DriftModel, RansacModel};
 use crate::observations::Observations;
-use crate::{DriftModel, Error, RansacModel, Room, View, Walk};
+use crate::{Error, Room, View, Walk};
 
 /// First bytes of every serialised recording.
 pub const RECORDING_MAGIC: &[u8; 8] = b"SITARSIM";

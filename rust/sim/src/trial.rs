@@ -1,140 +1,19 @@
 //! Repeated SLAM-like trials: ground truth plus locally accumulated, surface-dependent drift.
 
-use std::f64::consts::TAU;
-
 use glam::{DQuat, DVec3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, LogNormal, Pareto, StudentT};
-use serde::{Deserialize, Serialize};
 use sitar_estimator::Trajectory;
 
-use crate::{Recording, checks};
+use crate::Recording;
+use crate::draws::{uniform_direction, world_frame};
+use crate::models::DriftModel;
 
 /// RNG stream of the error all trials share (the recording's own systematic error).
 const SHARED_STREAM: u64 = 2;
 /// RNG stream of trial `i` is `TRIAL_STREAM_BASE + i`.
 const TRIAL_STREAM_BASE: u64 = 1 << 32;
-
-/// How a simulated SLAM system errs. All magnitudes grow with the *difficulty* of the view
-/// (0 = feature-rich, 1 = nothing to track; see [`crate::View`]), smoothed over
-/// `difficulty_time_constant_s` because tracked features outlive the view they came from.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct DriftModel {
-    /// RMS translation error (m) a trial accumulates over `calibration_frames` frames while
-    /// the camera sees a feature-rich view.
-    pub window_error_m: f64,
-    /// The window length `window_error_m` refers to (frames).
-    pub calibration_frames: u32,
-    /// Error gain at difficulty `d` is `1 + hard_gain·d²` (17× on a blank wall by default).
-    pub hard_gain: f64,
-    /// Frame-to-frame correlation of the translation error (AR(1) coefficient).
-    pub correlation: f64,
-    /// Degrees of freedom of the Student-t innovations (heavy tails; must exceed 2).
-    pub tail_dof: f64,
-    /// Per-frame rotation noise (degrees, per axis) on a feature-rich view.
-    pub rotation_noise_deg: f64,
-    /// Share (0–1, of standard deviation) of the error that every trial makes alike.
-    pub shared_share: f64,
-    /// Log-normal sigma of a per-trial quality factor: some runs are better than others.
-    pub trial_quality_sigma: f64,
-    /// Per-frame probability of a sudden jump (bad RANSAC hypothesis, relocalisation).
-    pub jump_rate: f64,
-    /// Additional jump probability per frame at difficulty 1 (scaled by `d²`).
-    pub jump_rate_hard: f64,
-    /// Additional jump probability per frame when the view is all glass (reflections).
-    pub jump_rate_reflective: f64,
-    /// Scale (m) of the Pareto-distributed jump size (shape 2, capped at 0.5 m).
-    pub jump_scale_m: f64,
-    /// Smoothing time constant of the difficulty seen by the tracker (s).
-    pub difficulty_time_constant_s: f64,
-    /// Give each trial its own random world frame (yaw and offset), as separate SLAM runs have.
-    pub world_offset: bool,
-}
-
-impl Default for DriftModel {
-    fn default() -> Self {
-        Self {
-            window_error_m: 0.006,
-            calibration_frames: 10,
-            hard_gain: 16.0,
-            correlation: 0.8,
-            tail_dof: 3.0,
-            rotation_noise_deg: 0.02,
-            shared_share: 0.3,
-            trial_quality_sigma: 0.2,
-            jump_rate: 0.0003,
-            jump_rate_hard: 0.004,
-            jump_rate_reflective: 0.006,
-            jump_scale_m: 0.03,
-            difficulty_time_constant_s: 0.25,
-            world_offset: true,
-        }
-    }
-}
-
-impl DriftModel {
-    /// Checks every parameter; the error names the field.
-    pub fn validate(&self) -> Result<(), (String, String)> {
-        checks::positive(&[
-            ("window_error_m", self.window_error_m),
-            ("jump_scale_m", self.jump_scale_m),
-            (
-                "difficulty_time_constant_s",
-                self.difficulty_time_constant_s,
-            ),
-        ])?;
-        checks::non_negative(&[
-            ("hard_gain", self.hard_gain),
-            ("rotation_noise_deg", self.rotation_noise_deg),
-            ("trial_quality_sigma", self.trial_quality_sigma),
-        ])?;
-        checks::unit_range(&[
-            ("correlation", self.correlation, 0.999),
-            ("shared_share", self.shared_share, 1.0),
-            ("jump_rate", self.jump_rate, 1.0),
-            ("jump_rate_hard", self.jump_rate_hard, 1.0),
-            ("jump_rate_reflective", self.jump_rate_reflective, 1.0),
-        ])?;
-        if !(self.tail_dof.is_finite() && self.tail_dof > 2.0) {
-            return Err((
-                "tail_dof".into(),
-                format!("must exceed 2, got {}", self.tail_dof),
-            ));
-        }
-        if self.calibration_frames == 0 {
-            return Err(("calibration_frames".into(), "must be at least 1".into()));
-        }
-        Ok(())
-    }
-
-    /// Per-frame translation innovation scale (m) that makes an AR(1) error sum to an RMS 3D
-    /// error of `window_error_m` over `calibration_frames` frames.
-    fn frame_sigma(&self) -> f64 {
-        let n = f64::from(self.calibration_frames);
-        let rho = self.correlation;
-        // Variance of a sum of n stationary AR(1) values with unit variance.
-        let var_sum: f64 = n + 2.0
-            * (1..self.calibration_frames)
-                .map(|k| (n - f64::from(k)) * rho.powi(k as i32))
-                .sum::<f64>();
-        self.window_error_m / (3.0 * var_sum).sqrt()
-    }
-
-    /// Error gain at (smoothed) difficulty `d`.
-    pub fn gain(&self, difficulty: f64) -> f64 {
-        1.0 + self.hard_gain * difficulty * difficulty
-    }
-
-    /// Probability of a jump in one frame at difficulty `d` and reflectivity `r`.
-    pub fn jump_probability(&self, difficulty: f64, reflectivity: f64) -> f64 {
-        (self.jump_rate
-            + self.jump_rate_hard * difficulty * difficulty
-            + self.jump_rate_reflective * reflectivity)
-            .min(1.0)
-    }
-}
 
 /// Options of one trial beyond the recording.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -185,29 +64,6 @@ fn gaussian3(rng: &mut ChaCha8Rng, sigma: f64) -> DVec3 {
     let normal = rand_distr::StandardNormal;
     let mut g = || -> f64 { normal.sample(rng) };
     DVec3::new(g(), g(), g()) * sigma
-}
-
-/// A trial's own world frame (random yaw about +Y and offset), or the identity when not
-/// `enabled`; separate SLAM runs start in frames of their own.
-pub(crate) fn world_frame(enabled: bool, rng: &mut ChaCha8Rng) -> (DQuat, DVec3) {
-    if !enabled {
-        return (DQuat::IDENTITY, DVec3::ZERO);
-    }
-    let yaw: f64 = rng.random_range(-std::f64::consts::PI..std::f64::consts::PI);
-    let offset = DVec3::new(
-        rng.random_range(-1.0..1.0),
-        rng.random_range(-0.2..0.2),
-        rng.random_range(-1.0..1.0),
-    );
-    (DQuat::from_rotation_y(yaw), offset)
-}
-
-/// A direction uniform on the unit sphere.
-pub(crate) fn uniform_direction(rng: &mut ChaCha8Rng) -> DVec3 {
-    let z: f64 = rng.random_range(-1.0..1.0);
-    let phi: f64 = rng.random_range(0.0..TAU);
-    let r = (1.0 - z * z).sqrt();
-    DVec3::new(r * phi.cos(), r * phi.sin(), z)
 }
 
 /// Replays `rec` as one SLAM trial (no dropped frames); see [`play_trial_with`].

@@ -75,7 +75,7 @@ pub(crate) fn from_phone_log(
                 && let Some(k) = session.subtrajectories().last().map(|s| s.index as usize)
                 && let Some(Some(depth_m)) = depths.get(k)
             {
-                super::scene::flat_depth_sample(&mut session, *depth_m);
+                super::flat_depth::flat_depth_sample(&mut session, *depth_m);
             }
         }
     }

@@ -6,6 +6,7 @@
 use std::sync::mpsc::Receiver;
 
 /// The answer sent on `receive`, or `None` when its sender went away without one.
+#[cfg_attr(not(feature = "cluster"), allow(dead_code))] // the cluster stores use it
 pub(crate) fn wait<T>(receive: Receiver<T>) -> Option<T> {
     let on_workers = tokio::runtime::Handle::try_current()
         .is_ok_and(|h| h.runtime_flavor() == tokio::runtime::RuntimeFlavor::MultiThread);

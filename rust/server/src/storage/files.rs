@@ -120,6 +120,7 @@ impl Files {
 
     /// The same files counting every upload against `quota` (the cluster store stages its
     /// uploads here, counted against the bucket's quotas).
+    #[cfg_attr(not(feature = "cluster"), allow(dead_code))] // the cluster stores use it
     pub fn with_quota(mut self, quota: std::sync::Arc<DiskQuota>) -> Files {
         self.quota = quota;
         self

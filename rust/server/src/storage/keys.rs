@@ -44,6 +44,7 @@ impl SessionObject {
     /// The object stored at `relative` inside a session's folder (the inverse of
     /// [`SessionObject::relative_path`]); `None` for anything else there (working folders,
     /// caches).
+    #[cfg_attr(not(feature = "cluster"), allow(dead_code))] // the cluster stores use it
     pub(crate) fn from_relative_path(relative: &str) -> Option<SessionObject> {
         let number = |text: &str| -> Option<u32> {
             (!text.is_empty() && text.bytes().all(|b| b.is_ascii_digit()))

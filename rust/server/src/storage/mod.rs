@@ -8,24 +8,28 @@
 //! token, TLS certificate, instance id) are [`instance`]'s; which instance plays which session
 //! is [`instances`]'. One conformance suite per seam
 //! (`conformance`) runs against any implementation. The cluster implementations, for several
-//! instances on one database and bucket, are [`postgres`] and [`s3`] ([`open`] picks). For
-//! `sitar migrate`: an embedded installation read under SQLite's exclusive lock
-//! ([`installation`]) and rows as plain values ([`rows`]), written into Postgres as they are.
+//! instances on one database and bucket, are `postgres` and `s3` ([`open`] picks), built with the
+//! `cluster` feature only (as is all of `sitar migrate`). For `sitar migrate`: an embedded installation read under SQLite's exclusive lock
+//! (`installation`) and rows as plain values (`rows`), written into Postgres as they are.
 //! Only this folder speaks SQL or touches the data directory (`tests/layout.rs` checks both).
 
 pub(crate) mod blobs;
 pub(crate) mod blocking;
 pub(crate) mod embedded;
 pub(crate) mod files;
+#[cfg(feature = "cluster")]
 pub(crate) mod installation;
 pub(crate) mod instance;
 pub(crate) mod instances;
 pub(crate) mod keys;
 pub(crate) mod metadata;
 pub(crate) mod open;
+#[cfg(feature = "cluster")]
 pub(crate) mod postgres;
 pub(crate) mod quota;
+#[cfg(feature = "cluster")]
 pub(crate) mod rows;
+#[cfg(feature = "cluster")]
 pub(crate) mod s3;
 pub(crate) mod sqlite;
 pub(crate) mod staged;

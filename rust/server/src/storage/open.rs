@@ -1,6 +1,7 @@
 //! Which stores an instance opens: the embedded default (SQLite in `DATA/sitar.db`, the data
 //! directory's session folders) or, with `--database postgres://…` and `--store s3://…`, the
-//! cluster stores ([`super::postgres`], [`super::s3`]) that several instances share. Either
+//! cluster stores (`postgres`, `s3`; built with the `cluster` feature) that several instances
+//! share. Either
 //! flag alone is allowed (e.g. Postgres with the files on one host). The worker store (hosts
 //! and leases of `sitar worker`) lives with the metadata: the data directory's SQLite, or with
 //! `--database` the same Postgres, shared by every instance (a host may register, lease and
@@ -14,7 +15,9 @@ use crate::config::ServerConfig;
 use crate::storage::blobs::BlobStore;
 use crate::storage::files::Files;
 use crate::storage::metadata::MetadataStore;
+#[cfg(feature = "cluster")]
 use crate::storage::postgres::{PgStore, is_postgres_url};
+#[cfg(feature = "cluster")]
 use crate::storage::s3::S3Blobs;
 use crate::storage::workers::WorkerStore;
 
@@ -25,12 +28,23 @@ pub(crate) fn open_metadata(
 ) -> Result<Arc<dyn MetadataStore>, Error> {
     match database {
         None => crate::storage::embedded::open_metadata(data_dir),
+        #[cfg(feature = "cluster")]
         Some(url) if is_postgres_url(url) => Ok(Arc::new(PgStore::open(url)?)),
+        #[cfg(feature = "cluster")]
         Some(url) => Err(not_postgres(url)),
+        #[cfg(not(feature = "cluster"))]
+        Some(_) => Err(no_cluster("--database")),
     }
 }
 
+/// The error of a cluster flag in a build without the cluster backends.
+#[cfg(not(feature = "cluster"))]
+fn no_cluster(flag: &str) -> Error {
+    Error::Config(format!("{flag}: {}", crate::NO_CLUSTER))
+}
+
 /// The error of a `--database` that is not a Postgres URL.
+#[cfg(feature = "cluster")]
 fn not_postgres(url: &str) -> Error {
     Error::Config(format!(
         "--database {}: expected postgres://USER@HOST:PORT/DATABASE",
@@ -55,6 +69,9 @@ pub(crate) fn open(config: &ServerConfig) -> Result<Stores, Error> {
                 .with_idle_timeout(config.upload_idle_timeout)
                 .with_quotas(config.session_disk_quota, config.disk_quota),
         ),
+        #[cfg(not(feature = "cluster"))]
+        Some(_) => return Err(no_cluster("--store")),
+        #[cfg(feature = "cluster")]
         Some(url) => Arc::new(S3Blobs::open(
             url,
             &config.data_dir,
@@ -65,11 +82,15 @@ pub(crate) fn open(config: &ServerConfig) -> Result<Stores, Error> {
     };
     let (db, workers): (Arc<dyn MetadataStore>, Arc<dyn WorkerStore>) = match &config.database {
         None => crate::storage::embedded::open_embedded(&config.data_dir)?,
+        #[cfg(feature = "cluster")]
         Some(url) if is_postgres_url(url) => {
             let store = Arc::new(PgStore::open(url)?);
             (store.clone(), store)
         }
+        #[cfg(feature = "cluster")]
         Some(url) => return Err(not_postgres(url)),
+        #[cfg(not(feature = "cluster"))]
+        Some(_) => return Err(no_cluster("--database")),
     };
     Ok((db, blobs, workers))
 }

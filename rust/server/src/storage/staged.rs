@@ -50,6 +50,7 @@ impl TakenAway {
     }
 
     /// Objects a blob store put aside its own way.
+    #[cfg_attr(not(feature = "cluster"), allow(dead_code))] // the cluster stores use it
     pub(crate) fn put_aside(objects: Box<dyn PutAside>) -> TakenAway {
         TakenAway(objects)
     }

@@ -13,6 +13,7 @@ use rusqlite::{Connection, Params, Row};
 use crate::Error;
 
 mod component_schema;
+#[cfg(feature = "cluster")]
 pub(crate) mod export;
 mod hosts;
 mod instance_schema;
