@@ -32,7 +32,7 @@ use std::str::FromStr;
 
 use glam::{DQuat, DVec3};
 
-use crate::metrics::rotation_angle;
+use crate::trajectory::rotation_angle;
 use crate::{Error, GravityAxis, PoseErrors, Trajectory};
 
 /// The APE split by direction, at one pose: signed metres and degrees (see the module).
