@@ -9,21 +9,21 @@ use std::time::Duration;
 
 use crate::{Error, NewSession, SessionFrame, check_session_id};
 
-/// What an [`UploadJob`] does.
+/// What an [`crate::UploadJob`] does.
 #[derive(Debug, Clone, PartialEq)]
 pub struct JobOptions {
     /// The server session to create (trials, statistic, playback, window settings). Ignored
     /// when [`JobOptions::session_id`] is set: that session's own settings hold.
     pub session: NewSession,
     /// An existing server session to continue (e.g. a failed job's
-    /// [`UploadJob::server_id`]): no new session is created, its recording upload resumes
+    /// [`crate::UploadJob::server_id`]): no new session is created, its recording upload resumes
     /// from the bytes the server kept, or is skipped once the server has it all.
     pub session_id: Option<String>,
     /// How often the server's status is asked for while it works (at least 10 ms).
     pub poll_interval: Duration,
     /// The phone's session folder (as sitar-core's `Session::save` writes it). Before the
     /// recording, its log (`trajectory.txt`, `subtrajectories.csv`, `anchors.csv`:
-    /// [`Client::upload_phone_logs`]) is sent: a file the server refuses fails the job, a
+    /// [`crate::Client::upload_phone_logs`]) is sent: a file the server refuses fails the job, a
     /// backend without the routes (404/405) is skipped with a warning. After the recording,
     /// its evidence (`evidence.csv`, `thumbnails/`) is sent when it is there: a folder without
     /// evidence, or an evidence upload that fails after its retries, never fails the job.
@@ -80,7 +80,7 @@ pub enum JobState {
     Done,
     /// Failed: [`JobProgress::error`] says why.
     Failed,
-    /// Cancelled by [`UploadJob::cancel`] (or by dropping the job).
+    /// Cancelled by [`crate::UploadJob::cancel`] (or by dropping the job).
     Cancelled,
 }
 
