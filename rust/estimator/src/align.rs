@@ -105,8 +105,9 @@ impl GravityAxis {
     }
 }
 
-/// The least-squares 4-DoF fit `y ≈ R_axis(θ)·x + t` (see [`Alignment::PositionYaw`]).
-pub fn position_yaw(x: &[DVec3], y: &[DVec3], axis: GravityAxis) -> Result<Similarity, Error> {
+/// Checks two point sets for a fit (same size, not empty, finite) and gives their size and
+/// centroids.
+fn centroids(x: &[DVec3], y: &[DVec3]) -> Result<(f64, DVec3, DVec3), Error> {
     if x.len() != y.len() {
         return Err(Error::InvalidArgument(format!(
             "point sets differ in size: {} vs {}",
@@ -125,6 +126,12 @@ pub fn position_yaw(x: &[DVec3], y: &[DVec3], axis: GravityAxis) -> Result<Simil
     let n = x.len() as f64;
     let mean_x = x.iter().copied().sum::<DVec3>() / n;
     let mean_y = y.iter().copied().sum::<DVec3>() / n;
+    Ok((n, mean_x, mean_y))
+}
+
+/// The least-squares 4-DoF fit `y ≈ R_axis(θ)·x + t` (see [`Alignment::PositionYaw`]).
+pub fn position_yaw(x: &[DVec3], y: &[DVec3], axis: GravityAxis) -> Result<Similarity, Error> {
+    let (_, mean_x, mean_y) = centroids(x, y)?;
     let (mut sin_sum, mut cos_sum) = (0.0, 0.0);
     for (p, q) in x.iter().zip(y) {
         let (ae, be) = axis.horizontal(*p - mean_x);
@@ -150,24 +157,7 @@ pub fn position_yaw(x: &[DVec3], y: &[DVec3], axis: GravityAxis) -> Result<Simil
 /// Umeyama's least-squares `y ≈ c·R·x + t` as evo's `umeyama_alignment(x, y, with_scale)`,
 /// including the reflection fix; rank-deficient covariance (e.g. collinear points) is an error.
 pub fn umeyama(x: &[DVec3], y: &[DVec3], with_scale: bool) -> Result<Similarity, Error> {
-    if x.len() != y.len() {
-        return Err(Error::InvalidArgument(format!(
-            "point sets differ in size: {} vs {}",
-            x.len(),
-            y.len()
-        )));
-    }
-    if x.is_empty() {
-        return Err(Error::DegenerateAlignment("no points".into()));
-    }
-    if !x.iter().chain(y).all(|p| p.is_finite()) {
-        return Err(Error::InvalidArgument(
-            "alignment points must be finite".into(),
-        ));
-    }
-    let n = x.len() as f64;
-    let mean_x = x.iter().copied().sum::<DVec3>() / n;
-    let mean_y = y.iter().copied().sum::<DVec3>() / n;
+    let (n, mean_x, mean_y) = centroids(x, y)?;
     let sigma_x = x
         .iter()
         .map(|p| (*p - mean_x).length_squared())
