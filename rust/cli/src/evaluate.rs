@@ -11,8 +11,8 @@ use plotters::prelude::*;
 use sitar_estimator::{
     Calibration, ClassificationScores, EstimateOptions, EvaluationOptions, MatchedWindows,
     MeanInterval, PAPER_CLASSIFIERS, Setting, ThresholdSweep, Thresholds, bootstrap_mean,
-    calibrated_matched_windows, classification_scores, fit_scale, matched_windows, median_ratio,
-    spearman, threshold_sweep,
+    calibrated_matched_windows, classification_scores, fit_scale, high_called_low, matched_windows,
+    median_ratio, spearman, threshold_sweep,
 };
 
 use crate::input::{self, Format, progress_bar};
@@ -418,17 +418,6 @@ fn pooled(windows: &[&MatchedWindows]) -> (Vec<f64>, Vec<f64>) {
     (truth, estimate)
 }
 
-/// The share of windows with a true error at or above 10 cm whose estimate is below 5 cm
-/// (NaN without such windows): the failure the product exists to prevent.
-fn share_high_called_low(truth: &[f64], estimate: &[f64]) -> f64 {
-    let b = Thresholds::DEFAULT_M;
-    let high: Vec<usize> = (0..truth.len()).filter(|&i| truth[i] >= b.high).collect();
-    if high.is_empty() {
-        return f64::NAN;
-    }
-    high.iter().filter(|&&i| estimate[i] < b.medium).count() as f64 / high.len() as f64
-}
-
 /// (windows whose interval holds the truth, windows).
 fn held(m: &MatchedWindows) -> (usize, usize) {
     let inside = (0..m.truth.len())
@@ -473,9 +462,9 @@ impl Computed {
                         })
                         .unzip();
                     let (truth, estimate) = pooled(&windows);
-                    let high_called_low: Vec<f64> = windows
+                    let high_low_per_sequence: Vec<f64> = windows
                         .iter()
-                        .map(|m| share_high_called_low(&m.truth, &m.estimate))
+                        .map(|m| high_called_low(&m.truth, &m.estimate, Thresholds::DEFAULT_M))
                         .collect();
                     let coverage = windows.iter().all(|m| !m.lower.is_empty()).then(|| {
                         let per: Vec<(usize, usize)> = windows.iter().map(|m| held(m)).collect();
@@ -488,8 +477,12 @@ impl Computed {
                     });
                     salt += 1;
                     agreement.push(AgreementRow {
-                        pooled_high_called_low: share_high_called_low(&truth, &estimate),
-                        high_called_low,
+                        pooled_high_called_low: high_called_low(
+                            &truth,
+                            &estimate,
+                            Thresholds::DEFAULT_M,
+                        ),
+                        high_called_low: high_low_per_sequence,
                         coverage,
                         window_frames: frames,
                         setting,

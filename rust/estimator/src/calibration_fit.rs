@@ -242,6 +242,22 @@ fn log_residuals(model: &CalibrationModel, s: &CalibrationSequence) -> Vec<f64> 
         .collect()
 }
 
+/// The share of the truly high windows (`truth ≥ thresholds.high`) whose `values` are low
+/// (`< thresholds.medium`): the failure the product exists to prevent. NaN without high ones.
+pub fn high_called_low(truth: &[f64], values: &[f64], thresholds: Thresholds) -> f64 {
+    let high: Vec<usize> = (0..truth.len())
+        .filter(|&i| truth[i] >= thresholds.high)
+        .collect();
+    if high.is_empty() {
+        return f64::NAN;
+    }
+    let low = high
+        .iter()
+        .filter(|&&i| values[i] < thresholds.medium)
+        .count();
+    low as f64 / high.len() as f64
+}
+
 /// How `estimate` agrees with `truth`; `interval` gives coverage.
 pub fn agreement_scores(
     truth: &[f64],
@@ -250,23 +266,13 @@ pub fn agreement_scores(
     thresholds: Thresholds,
 ) -> Result<AgreementScores, Error> {
     let classes = classification_scores(truth, estimate, thresholds)?;
-    let high: Vec<usize> = (0..truth.len())
-        .filter(|&i| truth[i] >= thresholds.high)
-        .collect();
-    let share_of_high = |low: &dyn Fn(usize) -> bool| {
-        if high.is_empty() {
-            f64::NAN
-        } else {
-            high.iter().filter(|&&i| low(i)).count() as f64 / high.len() as f64
-        }
-    };
     Ok(AgreementScores {
         accuracy: classes.accuracy,
         macro_f1: classes.macro_f1,
         spearman: spearman(truth, estimate)?,
         median_ratio: median_ratio(truth, estimate)?,
-        high_called_low: share_of_high(&|i| estimate[i] < thresholds.medium),
-        high_upper_low: interval.map(|(_, upper)| share_of_high(&|i| upper[i] < thresholds.medium)),
+        high_called_low: high_called_low(truth, estimate, thresholds),
+        high_upper_low: interval.map(|(_, upper)| high_called_low(truth, upper, thresholds)),
         coverage: interval.map(|(lower, upper)| {
             let held = (0..truth.len())
                 .filter(|&i| lower[i] <= truth[i] && truth[i] <= upper[i])

@@ -224,7 +224,7 @@ pub use calibration::{
 };
 pub use calibration_fit::{
     CalibrationSequence, DEFAULT_SMOOTHING_WINDOWS, DEFAULT_SPREAD_MATCH, FitOptions,
-    agreement_scores, fit_calibration, leave_one_sequence_out,
+    agreement_scores, fit_calibration, high_called_low, leave_one_sequence_out,
 };
 pub use direction::{
     DirectionComponents, DirectionRelation, ape_by_direction, direction_components, headings,
