@@ -76,6 +76,10 @@ pub(crate) struct Arrival<'a> {
     pub play_index: Option<u32>,
     /// Which device made it (`upload`, `sim:0`, `adb:SERIAL`).
     pub source: &'a str,
+    /// An earlier attempt to store it failed at the metadata store. Had that attempt
+    /// committed before its answer was lost, the row is there now but the trial never
+    /// joined `live`: it joins it then.
+    pub retried: bool,
 }
 
 /// Stores a parsed trial under the next index: its memory is counted in `live` first (a
@@ -94,6 +98,7 @@ pub(crate) fn store_trial(
         key,
         play_index,
         source,
+        retried,
     } = arrival;
     let reservation = live.reserve(crate::estimate::held_trials::trial_bytes(&trial))?;
     let (index, created) =
@@ -102,7 +107,7 @@ pub(crate) fn store_trial(
             .add_trial(id, key, play_index, trial.len(), source, &mut |index| {
                 shared.blobs.put(id, SessionObject::Trial(index), bytes)
             })?;
-    if created {
+    if created || retried {
         live.add(play_index.unwrap_or(index), index, trial, reservation);
     }
     Ok((index, created))

@@ -301,7 +301,7 @@ async fn play_and_estimate(shared: &Arc<App>, ticket: &Ticket) -> Result<Outcome
     };
     run.publish_resumed().await?;
     while let Some(batch) = run.next_batch().await {
-        run.store(batch)?;
+        run.store(batch).await?;
         run.publish_progressive().await?;
     }
     if let Some(outcome) = run.end_playback().await? {

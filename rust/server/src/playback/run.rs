@@ -6,6 +6,7 @@
 use std::collections::{BTreeMap, BTreeSet};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Duration;
 
 use sitar_core::ErrorClass;
 use tokio::sync::{mpsc, oneshot};
@@ -21,6 +22,17 @@ use crate::playback::{PlaybackJob, TrialOutput, indices_to_play};
 use crate::session::Session;
 use crate::storage::keys::SessionObject;
 use crate::storage::workers::TrialFailure;
+
+/// Pauses between attempts to store a trial while the metadata store fails: 31.5 s in all,
+/// longer than a Postgres restart takes the pool to reconnect (`RECONNECT_WAIT`, 20 s).
+const STORE_RETRY_PAUSES: [Duration; 6] = [
+    Duration::from_millis(500),
+    Duration::from_secs(1),
+    Duration::from_secs(2),
+    Duration::from_secs(4),
+    Duration::from_secs(8),
+    Duration::from_secs(16),
+];
 
 /// How a job ended.
 pub(crate) enum Outcome {
@@ -201,18 +213,42 @@ impl Run<'_> {
     }
 
     /// Parses and stores each trial of `batch`; at the memory bound, playback stops with
-    /// what is there.
-    pub(crate) fn store(&mut self, batch: Vec<TrialOutput>) -> Result<(), Error> {
+    /// what is there. A trial the metadata store could not take (Postgres restarting, a
+    /// transaction lost with its connection) is stored again after a pause, for up to
+    /// [`STORE_RETRY_PAUSES`]: a remote trial was already taken from its lease, so giving up
+    /// on it would lose a trial the phone played.
+    pub(crate) async fn store(&mut self, batch: Vec<TrialOutput>) -> Result<(), Error> {
         for trial in batch {
-            let arrival = Arrival {
-                key: None,
-                play_index: Some(trial.index),
-                source: &trial.source,
-            };
             let bytes = trial.tum.as_bytes();
-            let stored = trials::parse_trial(bytes, "trial").and_then(|parsed| {
-                trials::store_trial(self.shared, &self.live, self.id, arrival, bytes, parsed)
-            });
+            let mut pauses = STORE_RETRY_PAUSES.iter();
+            // The key makes a second attempt find the first one's row if that committed (API
+            // trials, the only others with keys, never go to a played session).
+            let key = format!("play:{}", trial.index);
+            let mut retried = false;
+            let stored = loop {
+                let arrival = Arrival {
+                    key: Some(&key),
+                    play_index: Some(trial.index),
+                    source: &trial.source,
+                    retried,
+                };
+                let stored = trials::parse_trial(bytes, "trial").and_then(|parsed| {
+                    trials::store_trial(self.shared, &self.live, self.id, arrival, bytes, parsed)
+                });
+                match (&stored, pauses.next()) {
+                    (Err(e @ Error::Database(_)), Some(pause)) if !self.shared.stopping() => {
+                        log::warn!(
+                            "session {}: trial {} not stored yet ({e}); trying again in {} ms",
+                            self.id,
+                            trial.index,
+                            pause.as_millis()
+                        );
+                        tokio::time::sleep(*pause).await;
+                        retried = true;
+                    }
+                    _ => break stored,
+                }
+            };
             match stored {
                 Ok(_) => {}
                 Err(e @ (Error::TooLarge { .. } | Error::Busy(_)))

@@ -68,6 +68,7 @@ pub(crate) async fn post(
         key: key.as_deref(),
         play_index: None,
         source: "upload",
+        retried: false,
     };
     let (index, created) = trials::store_trial(&shared, &live, &id, arrival, &bytes, trial)?;
     if created && shared.db.trial_count(&id)? >= 2 {
