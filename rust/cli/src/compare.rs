@@ -28,6 +28,15 @@ pub fn finish(outcome: &Outcome, output: &OutputArgs, console: &Console) -> Resu
         }
     }
     crate::figures::collection(outcome, output, console)?;
+    if let Some(path) = &output.html {
+        let figure = crate::figures::error_figure(outcome, output)?;
+        let pages = [
+            ("raw", crate::canvas::Page::Raw(&figure)),
+            ("map", crate::canvas::Page::Map(&figure, output.plot_mode)),
+        ];
+        crate::html::write(path, &json(outcome), &pages)?;
+        console.debug(&format!("Page saved to {}", path.display()))?;
+    }
     if let Some(path) = &output.save_results {
         console.debug(SEP)?;
         if path.exists() {

@@ -82,6 +82,10 @@ pub struct Options {
     /// Write the --format output to this file instead of stdout.
     #[arg(short = 'o', long, requires = "format")]
     output: Option<PathBuf>,
+    /// SiTAR extra: also write one self-contained HTML page (tables, both plots inline, the
+    /// JSON document); it fetches nothing when opened.
+    #[arg(long, value_name = "FILE")]
+    html: Option<PathBuf>,
     #[command(flatten)]
     usability: UsabilityArgs,
 }
@@ -403,7 +407,27 @@ fn finish_one(
         options.save_plot.as_deref(),
         None,
         console,
+    )?;
+    html_page(
+        options,
+        &document(outcome, title, settings),
+        &pages,
+        console,
     )
+}
+
+/// `--html FILE`, when given.
+fn html_page(
+    options: &Options,
+    document: &Value,
+    pages: &[(&str, Page<'_>)],
+    console: &Console,
+) -> Result<()> {
+    let Some(path) = &options.html else {
+        return Ok(());
+    };
+    crate::html::write(path, document, pages)?;
+    console.debug(&format!("Page saved to {}", path.display()))
 }
 
 fn finish_runs(
@@ -419,18 +443,23 @@ fn finish_runs(
         "t_err_percent" => outcomes[k].drift.t_err_percent,
         _ => outcomes[k].drift.r_err_deg_per_m,
     };
+    let runs_document = || {
+        json!({
+            "version": 1,
+            "metric": "drift",
+            "title": title,
+            "reference": outcomes[0].ref_name,
+            "runs": n,
+            "trials": outcomes.iter().map(|o| document(o, title, settings)).collect::<Vec<_>>(),
+            "across_trials": across_trials(&NAMES, value, n),
+        })
+    };
     match options.format {
         Some(OutputFormat::Json) => {
-            let doc = json!({
-                "version": 1,
-                "metric": "drift",
-                "title": title,
-                "reference": outcomes[0].ref_name,
-                "runs": n,
-                "trials": outcomes.iter().map(|o| document(o, title, settings)).collect::<Vec<_>>(),
-                "across_trials": across_trials(&NAMES, value, n),
-            });
-            emit(options.output.as_deref(), &(doc.to_string() + "\n"))?;
+            emit(
+                options.output.as_deref(),
+                &(runs_document().to_string() + "\n"),
+            )?;
         }
         Some(OutputFormat::Csv) => {
             let mut text = format!("trial,estimate,segments,{}\n", NAMES.join(","));
@@ -519,5 +548,6 @@ fn finish_runs(
         options.save_plot.as_deref(),
         None,
         console,
-    )
+    )?;
+    html_page(options, &runs_document(), &pages, console)
 }

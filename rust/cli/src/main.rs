@@ -22,6 +22,7 @@ mod evaluate;
 mod figure;
 mod figures;
 mod hints;
+mod html;
 mod input;
 mod logging;
 mod metric;

@@ -124,6 +124,10 @@ pub struct OutputArgs {
     /// SiTAR extra: write the --format output to this file instead of stdout.
     #[arg(short = 'o', long, requires = "format")]
     pub output: Option<PathBuf>,
+    /// SiTAR extra: also write one self-contained HTML page (tables, every figure inline,
+    /// the JSON document); it fetches nothing when opened.
+    #[arg(long, value_name = "FILE")]
+    pub html: Option<PathBuf>,
 }
 
 /// `--change_unit`: evo's angle and length units.

@@ -174,20 +174,22 @@ pub fn finish(outcomes: &[Outcome], output: &OutputArgs, console: &Console) -> R
     let pages = [("box_plot", Page::Other(&box_plot))];
     // An unwritable `--plot FILE` fails before anything is printed, as for one run.
     plots(&pages[..1], false, None, single_file, console)?;
+    let document = || {
+        let first = &outcomes[0];
+        serde_json::json!({
+            "version": 1,
+            "metric": first.metric.name().to_lowercase(),
+            "reference": first.ref_name,
+            "title": first.title,
+            "unit": first.unit,
+            "runs": n,
+            "trials": outcomes.iter().map(crate::compare::json).collect::<Vec<_>>(),
+            "across_trials": across_trials(&STATS, value, n),
+        })
+    };
     match output.format {
         Some(OutputFormat::Json) => {
-            let first = &outcomes[0];
-            let doc = serde_json::json!({
-                "version": 1,
-                "metric": first.metric.name().to_lowercase(),
-                "reference": first.ref_name,
-                "title": first.title,
-                "unit": first.unit,
-                "runs": n,
-                "trials": outcomes.iter().map(crate::compare::json).collect::<Vec<_>>(),
-                "across_trials": across_trials(&STATS, value, n),
-            });
-            emit(output.output.as_deref(), &(doc.to_string() + "\n"))?;
+            emit(output.output.as_deref(), &(document().to_string() + "\n"))?;
         }
         Some(OutputFormat::Csv) => {
             let mut text = format!("trial,estimate,{}\n", STATS.join(","));
@@ -233,6 +235,10 @@ pub fn finish(outcomes: &[Outcome], output: &OutputArgs, console: &Console) -> R
     }
     let show = output.plot.as_ref().is_some_and(|p| p.is_empty());
     plots(&pages, show, output.save_plot.as_deref(), None, console)?;
+    if let Some(path) = &output.html {
+        crate::html::write(path, &document(), &pages)?;
+        console.debug(&format!("Page saved to {}", path.display()))?;
+    }
     if let Some(path) = &output.save_results {
         console.debug(SEP)?;
         for (k, outcome) in outcomes.iter().enumerate() {

@@ -1,0 +1,200 @@
+//! `--html FILE` of `sitar ape`, `rpe` and `drift`: one page that holds the tables, every
+//! figure inline and the very JSON document `--format json` prints, and asks for nothing
+//! when opened.
+
+use std::path::Path;
+use std::process::Command;
+
+use serde_json::Value;
+
+fn sitar(dir: &Path, args: &[&str]) -> String {
+    let out = Command::new(env!("CARGO_BIN_EXE_sitar"))
+        .args(args)
+        .current_dir(dir)
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .expect("run sitar");
+    assert!(
+        out.status.success(),
+        "sitar {args:?} failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout).unwrap()
+}
+
+/// A 20 m walk on a helix (TUM, seconds) and two estimates that drift from it differently.
+fn files(dir: &Path) {
+    let pose = |i: usize, drift: f64| {
+        let t = i as f64 * 0.1;
+        let a = t * 0.3;
+        format!(
+            "{t:.3} {:.6} {:.6} {:.6} 0 0 {:.6} {:.6}\n",
+            4.0 * a.cos() + drift * t,
+            4.0 * a.sin(),
+            0.05 * t + 0.5 * drift * (t * 0.7).sin(),
+            (a / 2.0).sin(),
+            (a / 2.0).cos()
+        )
+    };
+    let write = |name: &str, drift: f64| {
+        let text: String = (0..200).map(|i| pose(i, drift)).collect();
+        std::fs::write(dir.join(name), text).unwrap();
+    };
+    write("gt.txt", 0.0);
+    write("run0.txt", 0.01);
+    write("run1.txt", 0.03);
+}
+
+/// The JSON document shown in the page (HTML-unescaped from its `<pre>`).
+fn page_document(html: &str) -> Value {
+    let start = html.find("<pre class=\"json\">").expect("a JSON block") + 18;
+    let end = start + html[start..].find("</pre>").unwrap();
+    let text = html[start..end]
+        .replace("&quot;", "\"")
+        .replace("&#x27;", "'")
+        .replace("&#x2f;", "/")
+        .replace("&lt;", "<")
+        .replace("&gt;", ">")
+        .replace("&amp;", "&");
+    serde_json::from_str(&text).expect("the page's JSON parses")
+}
+
+/// Asserts the page is self-contained and returns its figures' count.
+fn self_contained(html: &str) -> usize {
+    assert!(html.starts_with("<!DOCTYPE html>"));
+    assert!(html.contains("Content-Security-Policy"));
+    assert!(html.contains("default-src 'none'"));
+    for fetch in [
+        "src=\"http",
+        "src=\"/",
+        "href=\"",
+        "url(",
+        "<script",
+        "<link",
+    ] {
+        assert!(
+            !html.contains(fetch),
+            "the page would fetch something: {fetch}"
+        );
+    }
+    html.matches("<img src=\"data:image/svg+xml;base64,")
+        .count()
+}
+
+#[test]
+fn ape_of_one_run_gives_its_table_both_figures_and_its_json() {
+    let dir = tempfile::tempdir().unwrap();
+    files(dir.path());
+    let json = sitar(
+        dir.path(),
+        &["ape", "tum", "gt.txt", "run1.txt", "-a", "--format", "json"],
+    );
+    sitar(
+        dir.path(),
+        &[
+            "ape", "tum", "gt.txt", "run1.txt", "-a", "--html", "ape.html",
+        ],
+    );
+    let html = std::fs::read_to_string(dir.path().join("ape.html")).unwrap();
+    assert_eq!(self_contained(&html), 2, "raw and map figures");
+    let expected: Value = serde_json::from_str(&json).unwrap();
+    assert_eq!(page_document(&html), expected);
+    let rmse = expected["statistics"]["rmse"].as_f64().unwrap();
+    assert!(
+        html.contains(&format!("<td class=\"num\">{rmse:.6}</td>")),
+        "the RMSE is in a table"
+    );
+    assert!(html.contains("<td>pairing.paired</td>"));
+}
+
+#[test]
+fn repeated_runs_give_the_runs_table_and_the_box_plot() {
+    let dir = tempfile::tempdir().unwrap();
+    files(dir.path());
+    let args = [
+        "rpe",
+        "tum",
+        "gt.txt",
+        "run0.txt",
+        "run1.txt",
+        "-a",
+        "--delta",
+        "1",
+        "--delta_unit",
+        "m",
+    ];
+    let json = sitar(dir.path(), &[&args[..], &["--format", "json"]].concat());
+    sitar(dir.path(), &[&args[..], &["--html", "rpe.html"]].concat());
+    let html = std::fs::read_to_string(dir.path().join("rpe.html")).unwrap();
+    assert_eq!(self_contained(&html), 1, "the box plot over runs");
+    assert_eq!(
+        page_document(&html),
+        serde_json::from_str::<Value>(&json).unwrap()
+    );
+    assert!(html.contains("<h2>trials</h2>"));
+    assert!(html.contains("<h2>across runs</h2>"));
+}
+
+#[test]
+fn drift_pages_hold_the_per_length_table_and_every_plot() {
+    let dir = tempfile::tempdir().unwrap();
+    files(dir.path());
+    let one = [
+        "drift",
+        "tum",
+        "gt.txt",
+        "run1.txt",
+        "--lengths",
+        "2,4",
+        "--step",
+        "5",
+    ];
+    let json = sitar(dir.path(), &[&one[..], &["--format", "json"]].concat());
+    sitar(dir.path(), &[&one[..], &["--html", "drift.html"]].concat());
+    let html = std::fs::read_to_string(dir.path().join("drift.html")).unwrap();
+    assert_eq!(
+        self_contained(&html),
+        2,
+        "error against length and against speed"
+    );
+    assert_eq!(
+        page_document(&html),
+        serde_json::from_str::<Value>(&json).unwrap()
+    );
+    assert!(html.contains("<h2>by length</h2>"));
+
+    let runs = [
+        "drift",
+        "tum",
+        "gt.txt",
+        "run0.txt",
+        "run1.txt",
+        "--lengths",
+        "2,4",
+    ];
+    sitar(dir.path(), &[&runs[..], &["--html", "runs.html"]].concat());
+    let html = std::fs::read_to_string(dir.path().join("runs.html")).unwrap();
+    assert_eq!(self_contained(&html), 4, "two curves and two box plots");
+}
+
+#[test]
+fn an_unwritable_page_is_an_error_that_names_it() {
+    let dir = tempfile::tempdir().unwrap();
+    files(dir.path());
+    let out = Command::new(env!("CARGO_BIN_EXE_sitar"))
+        .args([
+            "ape",
+            "tum",
+            "gt.txt",
+            "run0.txt",
+            "--html",
+            "missing/ape.html",
+        ])
+        .current_dir(dir.path())
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("missing/ape.html"), "{stderr}");
+}
