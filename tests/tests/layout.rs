@@ -7,6 +7,10 @@
 //! out); a path points into the longest module it names, and an item re-exported at the crate
 //! root (`crate::Error`) counts as its defining module. A module's own ancestors (whose `mod`
 //! lines declare it) are not counted as its uses.
+//!
+//! Folders too: drawn as its top-level folders (and root files), each crate's graph has no
+//! cycle, and the server's layer comment in `lib.rs` lists its folders in an order every
+//! import follows (a folder uses only folders listed before it).
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -315,4 +319,132 @@ fn no_crate_has_a_file_level_import_cycle() {
         stale.is_empty(),
         "allowed cycles that no longer exist (remove them from ALLOWED_CYCLES): {stale:?}"
     );
+}
+
+/// A module's top-level folder (or root file): `storage::sqlite::sessions` → `storage`.
+fn folder(module: &str) -> String {
+    module.split("::").next().unwrap_or("").to_string()
+}
+
+/// Folder → the folders its files use (itself left out).
+fn folder_graph(graph: &BTreeMap<String, BTreeSet<String>>) -> BTreeMap<String, BTreeSet<String>> {
+    let mut out: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
+    for (module, uses) in graph {
+        let from = folder(module);
+        let entry = out.entry(from.clone()).or_default();
+        entry.extend(uses.iter().map(|m| folder(m)).filter(|f| *f != from));
+    }
+    out
+}
+
+/// Folder cycles known and being broken elsewhere, by crate, each with its exact members:
+/// a folder that joins one fails the test as a new cycle would, and an entry is shrunk or
+/// removed as the work lands. The server's: `app_state` is the hub every service imports and
+/// that imports every service, and `config` holds the auth limits, calibrations and TLS
+/// settings; both wait for the services to take narrow dependencies.
+const ALLOWED_FOLDER_CYCLES: &[(&str, &[&str])] = &[
+    ("core", &["evidence_table", "persist", "session", "venue"]),
+    (
+        "server",
+        &[
+            "app_state",
+            "auth",
+            "config",
+            "estimate",
+            "http",
+            "ingest",
+            "playback",
+            "report",
+            "session",
+            "venue",
+        ],
+    ),
+];
+
+#[test]
+fn no_crate_has_a_new_import_cycle_between_folders() {
+    let mut found = Vec::new();
+    let mut allowed_seen = BTreeSet::new();
+    for (name, src) in &crates() {
+        let folders = folder_graph(&graph(&sources(src)));
+        for cycle in cycles(&folders) {
+            let allowed = ALLOWED_FOLDER_CYCLES
+                .iter()
+                .position(|(c, members)| c == name && cycle.iter().eq(members.iter()));
+            match allowed {
+                Some(i) => {
+                    allowed_seen.insert(i);
+                }
+                None => found.push(format!("{name}: {}", cycle.join(" ↔ "))),
+            }
+        }
+        if name == "server" {
+            // The parser sees folder arrows (none found would prove nothing).
+            assert!(folders["storage"].contains("model"), "{folders:?}");
+            assert!(folders["session"].contains("storage"), "{folders:?}");
+        }
+    }
+    assert!(
+        found.is_empty(),
+        "import cycles between folders:\n{}",
+        found.join("\n")
+    );
+    let stale: Vec<_> = (0..ALLOWED_FOLDER_CYCLES.len())
+        .filter(|i| !allowed_seen.contains(i))
+        .map(|i| ALLOWED_FOLDER_CYCLES[i])
+        .collect();
+    assert!(
+        stale.is_empty(),
+        "allowed folder cycles that changed or no longer exist (update ALLOWED_FOLDER_CYCLES): \
+         {stale:?}"
+    );
+}
+
+#[test]
+fn the_server_stores_sit_on_the_vocabulary_alone() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("../rust/server/src");
+    let folders = folder_graph(&graph(&sources(&src)));
+    let only = |folder: &str, allowed: &[&str]| {
+        let extra: Vec<&String> = folders[folder]
+            .iter()
+            .filter(|f| !allowed.contains(&f.as_str()))
+            .collect();
+        assert!(extra.is_empty(), "{folder} imports {extra:?}, above it");
+    };
+    // The vocabulary at the bottom, the stores on it; the lifecycle, access control and
+    // venue logic above both.
+    only("model", &["error"]);
+    only("storage", &["model", "error"]);
+    for logic in ["session", "auth", "venue"] {
+        assert!(folders[logic].contains("storage") || folders[logic].contains("model"));
+        assert!(!folders["storage"].contains(logic));
+    }
+    // lib.rs's layer comment lists them in that order.
+    let lib = std::fs::read_to_string(src.join("lib.rs")).unwrap();
+    let layers = layer_comment(&lib);
+    let rank = |name: &str| {
+        layers
+            .iter()
+            .position(|l| l.iter().any(|n| n == name))
+            .unwrap_or_else(|| panic!("lib.rs's layer comment does not list {name}"))
+    };
+    assert!(rank("error") < rank("model") && rank("model") < rank("storage"));
+    for logic in ["session", "auth", "venue"] {
+        assert!(rank("storage") < rank(logic), "{logic}");
+    }
+}
+
+/// The server's layer comment: the modules its `// name, name — what` lines list, in order.
+fn layer_comment(lib: &str) -> Vec<Vec<String>> {
+    lib.lines()
+        .filter_map(|l| l.strip_prefix("// "))
+        .filter_map(|l| l.split_once('—').map(|(names, _)| names))
+        .map(|names| {
+            names
+                .split(',')
+                .map(|n| n.trim().to_string())
+                .filter(|n| !n.is_empty())
+                .collect()
+        })
+        .collect()
 }

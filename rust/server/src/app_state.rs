@@ -71,7 +71,15 @@ pub(crate) struct App {
 
 impl App {
     pub fn open(config: ServerConfig) -> Result<App, Error> {
-        let (db, blobs, workers) = crate::storage::open::open(&config)?;
+        let (db, blobs, workers) =
+            crate::storage::open::open(&crate::storage::open::StoreSettings {
+                data_dir: &config.data_dir,
+                database: config.database.as_deref(),
+                store: config.store.as_deref(),
+                upload_idle_timeout: config.upload_idle_timeout,
+                session_disk_quota: config.session_disk_quota,
+                disk_quota: config.disk_quota,
+            })?;
         let instance = crate::storage::instance::instance_id(&config.data_dir)?;
         let board = Arc::new(RemoteBoard::default());
         let local_sim: Arc<dyn Playback> = Arc::new(SimPlayback::new(config.sim.clone()));

@@ -52,7 +52,7 @@ pub fn session_request(body: &[u8]) -> Result<(PlaybackKind, u32, &'static str),
             .map_err(|e| Error::BadRequest(format!("playback: {}", short(&e, QUOTE_LIMIT))))?,
     };
     let settings = EstimateSettings::from_request(
-        &config,
+        &config.default_setting,
         text("setting"),
         window_frames,
         text("pose_relation"),

@@ -75,8 +75,10 @@
 // Folders by concern, lowest first. `tests/layout.rs` checks that no import cycle exists
 // among the modules, that only `storage` speaks SQL or touches the data directory, and that
 // this comment names every module declared here:
-// error, config                                 — vocabulary
-// storage                                       — where bytes are kept: metadata store, blob store (traits)
+// error                                         — the one error enum
+// model                                         — vocabulary: sessions, states, steps, estimate settings, venues, callers, roles, tokens, usage
+// storage                                       — where bytes are kept: metadata store, blob store (traits); imports model alone
+// config                                        — the server's settings
 // session                                       — a session's life; the only state writer
 // estimate                                      — estimates over trials held in memory, published
 // playback                                      — how trials are played: adb, sim, upload, queue, jobs
@@ -99,6 +101,7 @@ mod http;
 mod ingest;
 #[cfg(feature = "cluster")]
 mod migrate;
+mod model;
 mod playback;
 mod report;
 mod session;

@@ -285,7 +285,7 @@ fn only_the_lifecycle_writes_a_sessions_state() {
                 // `failed MESSAGE` line of its own: a word of that contract, not a state.
                 let status_file = module == "playback::adb" && name == "failed";
                 assert!(
-                    module == "session::state" || jobs || status_file,
+                    module == "model::session_state" || jobs || status_file,
                     "{module} spells the state {literal}"
                 );
             }

@@ -5,8 +5,8 @@
 use std::path::Path;
 
 use crate::Error;
-use crate::auth::role::Role;
 use crate::auth::secret;
+use crate::model::Role;
 use crate::storage::TokenStore;
 use crate::storage::instance;
 

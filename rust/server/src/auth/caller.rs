@@ -1,4 +1,4 @@
-//! Who is asking: the caller the authentication middleware found, as axum extractors
+//! Who is asking, as axum extractors of the caller the authentication middleware found
 //! (`Caller` for any authenticated request, `Admin` for admin-only routes, `WorkerCaller` for
 //! the playback hosts' routes; atuin's `UserAuth` pattern).
 
@@ -6,59 +6,7 @@ use axum::extract::FromRequestParts;
 use axum::http::request::Parts;
 
 use crate::Error;
-use crate::auth::role::Role;
-use crate::session::Session;
-
-/// The authenticated caller of a request.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub(crate) enum Caller {
-    /// A token from the `tokens` table.
-    Token { id: i64, name: String, role: Role },
-    /// `--insecure-no-auth` on loopback: everything is allowed.
-    Open,
-}
-
-impl Caller {
-    pub fn is_admin(&self) -> bool {
-        matches!(
-            self,
-            Caller::Open
-                | Caller::Token {
-                    role: Role::Admin,
-                    ..
-                }
-        )
-    }
-
-    /// The token id new sessions are recorded under (`None` without authentication).
-    pub fn owner(&self) -> Option<i64> {
-        match self {
-            Caller::Token { id, .. } => Some(*id),
-            Caller::Open => None,
-        }
-    }
-
-    /// The sessions this caller sees: `None` every one, `Some(id)` those of token `id`.
-    pub fn scope(&self) -> Option<i64> {
-        if self.is_admin() { None } else { self.owner() }
-    }
-
-    /// Whether the caller may see `session` (an app token: only its own).
-    pub fn may_see(&self, session: &Session) -> bool {
-        match self.scope() {
-            None => true,
-            Some(id) => session.owner == Some(id),
-        }
-    }
-
-    /// The name request logs show (never the token).
-    pub fn name(&self) -> &str {
-        match self {
-            Caller::Token { name, .. } => name,
-            Caller::Open => "-",
-        }
-    }
-}
+use crate::model::{Caller, Role};
 
 impl<S: Send + Sync> FromRequestParts<S> for Caller {
     type Rejection = Error;

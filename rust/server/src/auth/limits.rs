@@ -15,8 +15,8 @@ use futures_util::StreamExt;
 
 use crate::Error;
 use crate::app_state::App;
-use crate::auth::caller::Caller;
-use crate::auth::usage::UsageFull;
+use crate::model::Caller;
+use crate::model::UsageFull;
 use crate::storage::{UsageStore, now_ms};
 
 /// The limits every token has (`sitar serve --max-sessions-per-hour`, `--max-upload-gib-per-day`,
@@ -206,8 +206,8 @@ pub(crate) async fn limit_uploads(
 mod tests {
     use super::*;
 
-    use crate::auth::usage::HOUR_MS;
     use crate::config::ServerConfig;
+    use crate::model::HOUR_MS;
 
     fn shared(dir: &std::path::Path, limits: Limits) -> Arc<App> {
         let mut config = ServerConfig::new(dir);

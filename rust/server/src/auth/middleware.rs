@@ -11,8 +11,8 @@ use axum::response::{IntoResponse, Response};
 
 use crate::Error;
 use crate::app_state::App;
-use crate::auth::caller::Caller;
 use crate::auth::secret::{self, COOKIE_NAME};
+use crate::model::Caller;
 
 /// The caller's name, put on the response for the request log.
 #[derive(Debug, Clone)]

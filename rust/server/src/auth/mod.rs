@@ -7,22 +7,19 @@ mod bootstrap;
 mod caller;
 mod limits;
 mod middleware;
-mod role;
 pub(crate) mod secret;
 mod tokens;
-mod usage;
 
+pub(crate) use crate::model::Caller;
+pub use crate::model::Role;
+pub use crate::model::TokenInfo;
 pub(crate) use bootstrap::ensure_admin_token;
 pub use bootstrap::{ADMIN_TOKEN_FILE, PresetToken};
-pub(crate) use caller::{Admin, Caller, WorkerCaller};
+pub(crate) use caller::{Admin, WorkerCaller};
 pub use limits::Limits;
 pub(crate) use limits::{UploadLimiter, limit_uploads};
 pub(crate) use middleware::{CallerName, authenticate};
-pub use role::Role;
 pub use secret::new_token;
-pub(crate) use tokens::check_token_name;
 pub use tokens::{
-    TokenInfo, create_token, create_token_at, list_tokens, list_tokens_at, revoke_token,
-    revoke_token_at,
+    create_token, create_token_at, list_tokens, list_tokens_at, revoke_token, revoke_token_at,
 };
-pub(crate) use usage::{DAY_HOURS, HOUR_MS, UsageFull};

@@ -1,64 +1,12 @@
-//! Secrets on the wire: making tokens, hashing them for storage, and finding them in an
-//! `Authorization` header, a cookie or a query string. Pure functions: the property tests and
-//! the fuzz target call them with arbitrary input, and none of them panics.
+//! Secrets on the wire: finding a token in an `Authorization` header, a cookie or a query
+//! string (what a token is and how it is kept: [`crate::model::token_secret`]). Pure
+//! functions: the property tests and the fuzz target call them with arbitrary input, and
+//! none of them panics.
 
-use ring::rand::SecureRandom;
-
-/// Every token starts with this, so a secret scanner (or a person) recognises one.
-pub const TOKEN_PREFIX: &str = "sitar_";
+pub use crate::model::token_secret::{new_token, plausible};
 
 /// The cookie the HTML pages authenticate with after a `?token=` visit.
 pub const COOKIE_NAME: &str = "sitar_token";
-
-/// Longest token accepted from a client (ours have 70 characters); longer input is unknown.
-const MAX_TOKEN_LEN: usize = 128;
-
-/// A new random token: the prefix and 256 bits from the system's secure generator, as 64
-/// lower-case hex digits (URL-safe, no encoding needed in a query string or cookie).
-pub fn new_token() -> Result<String, crate::Error> {
-    let mut bytes = [0u8; 32];
-    ring::rand::SystemRandom::new()
-        .fill(&mut bytes)
-        .map_err(|_| crate::Error::Internal("the system's random generator failed".into()))?;
-    let mut token = String::with_capacity(TOKEN_PREFIX.len() + 64);
-    token.push_str(TOKEN_PREFIX);
-    for b in bytes {
-        token.push_str(&format!("{b:02x}"));
-    }
-    Ok(token)
-}
-
-/// What the database keeps of a token: its SHA-256, and the first 8 bytes of that as the
-/// index a lookup goes by (the full hashes are then compared in constant time).
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Digest {
-    pub lookup: [u8; 8],
-    pub hash: [u8; 32],
-}
-
-pub fn digest(token: &str) -> Digest {
-    let d = ring::digest::digest(&ring::digest::SHA256, token.as_bytes());
-    let mut hash = [0u8; 32];
-    hash.copy_from_slice(d.as_ref());
-    let mut lookup = [0u8; 8];
-    lookup.copy_from_slice(&hash[..8]);
-    Digest { lookup, hash }
-}
-
-/// Equal hashes, compared in constant time.
-pub fn same_hash(a: &[u8], b: &[u8]) -> bool {
-    use subtle::ConstantTimeEq;
-    a.len() == b.len() && bool::from(a.ct_eq(b))
-}
-
-/// Whether `s` could be a token at all: 1 to 128 characters of `[A-Za-z0-9_-]`. Anything
-/// else is refused before it reaches the database.
-pub fn plausible(s: &str) -> bool {
-    !s.is_empty()
-        && s.len() <= MAX_TOKEN_LEN
-        && s.bytes()
-            .all(|b| b.is_ascii_alphanumeric() || b == b'_' || b == b'-')
-}
 
 /// The token of an `Authorization: Bearer TOKEN` header value (scheme case-insensitive, as
 /// RFC 7235 says); `None` for another scheme or an implausible token.
@@ -111,37 +59,8 @@ pub fn has_param(query: &str, name: &str) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::token_secret::{digest, same_hash};
     use proptest::prelude::*;
-
-    #[test]
-    fn tokens_are_long_random_and_url_safe() {
-        let a = new_token().unwrap();
-        let b = new_token().unwrap();
-        assert_ne!(a, b);
-        assert_eq!(a.len(), TOKEN_PREFIX.len() + 64);
-        assert!(plausible(&a));
-        assert!(a.starts_with(TOKEN_PREFIX));
-        // 256 bits: every hex digit appears over a few tokens (not a counter, not constant).
-        let many: String = (0..20).map(|_| new_token().unwrap()).collect();
-        for digit in "0123456789abcdef".chars() {
-            assert!(many.contains(digit), "{digit}");
-        }
-    }
-
-    #[test]
-    fn the_digest_is_sha256_of_the_token() {
-        // `printf abc | sha256sum`
-        let d = digest("abc");
-        let hex: String = d.hash.iter().map(|b| format!("{b:02x}")).collect();
-        assert_eq!(
-            hex,
-            "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"
-        );
-        assert_eq!(d.lookup, d.hash[..8]);
-        assert!(same_hash(&d.hash, &digest("abc").hash));
-        assert!(!same_hash(&d.hash, &digest("abd").hash));
-        assert!(!same_hash(&d.hash, &d.hash[..31]));
-    }
 
     #[test]
     fn headers_cookies_and_queries_give_the_token() {

@@ -6,38 +6,9 @@
 use std::path::Path;
 
 use crate::Error;
-use crate::auth::role::Role;
 use crate::auth::secret;
+use crate::model::{Role, TokenInfo};
 use crate::storage::open::open_metadata;
-
-/// A token as `sitar token list` shows it: never the token itself.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct TokenInfo {
-    /// The name given when it was made (unique).
-    pub name: String,
-    /// What it may do.
-    pub role: Role,
-    /// Made at, ms since the Unix epoch.
-    pub created_ms: i64,
-    /// Last request with it, ms since the Unix epoch (to the minute).
-    pub last_used_ms: Option<i64>,
-}
-
-/// Token names: 1 to 64 letters, digits and `._-` (they appear in logs and listings).
-pub(crate) fn check_token_name(name: &str) -> Result<(), Error> {
-    let ok = !name.is_empty()
-        && name.len() <= 64
-        && name
-            .chars()
-            .all(|c| c.is_ascii_alphanumeric() || "._-".contains(c));
-    if ok {
-        Ok(())
-    } else {
-        Err(Error::BadRequest(format!(
-            "token name {name:?}: use 1 to 64 letters, digits, '.', '_' or '-'"
-        )))
-    }
-}
 
 /// Makes a token named `name` with `role` in the data directory's database and returns it
 /// (the only time it is shown: only its hash is stored).
@@ -81,7 +52,7 @@ pub fn revoke_token_at(data_dir: &Path, database: Option<&str>, name: &str) -> R
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::auth::caller::Caller;
+    use crate::model::Caller;
     use crate::storage::TokenStore;
     use crate::storage::sqlite::SqliteStore;
 
@@ -104,7 +75,7 @@ mod tests {
             if let Ok(bytes) = std::fs::read(dir.path().join(file)) {
                 let text = String::from_utf8_lossy(&bytes);
                 assert!(
-                    !text.contains(&token[secret::TOKEN_PREFIX.len()..]),
+                    !text.contains(&token[crate::model::token_secret::TOKEN_PREFIX.len()..]),
                     "{file}"
                 );
             }

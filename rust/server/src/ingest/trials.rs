@@ -125,7 +125,9 @@ pub(crate) async fn live_session(
     let (shared, session) = (shared.clone(), session.clone());
     let id = session.id.clone();
     tokio::task::spawn_blocking(move || {
-        let thresholds = session.settings.thresholds(&shared.config);
+        let thresholds = session
+            .settings
+            .thresholds(shared.config.thresholds, shared.config.thresholds_deg);
         let calibration = shared
             .config
             .calibrations

@@ -454,7 +454,9 @@ struct Analysis {
 /// Step 1: the results read, the walk classified, regions found and their evidence attached.
 fn analyse(input: &ReportInput<'_>) -> Result<Analysis, Error> {
     let row = input.row;
-    let thresholds: Thresholds = row.settings.thresholds(input.config);
+    let thresholds: Thresholds = row
+        .settings
+        .thresholds(input.config.thresholds, input.config.thresholds_deg);
     let doc: ResultsDoc = serde_json::from_str(input.results_json)
         .map_err(|e| Error::Internal(format!("results.json of {} is unreadable: {e}", row.id)))?;
     let calibration = CalibrationView::of(&doc, input.config);
@@ -973,7 +975,7 @@ mod tests {
             playback: crate::config::PlaybackKind::Upload,
             trials_total: 3,
             settings: crate::session::estimate_settings::EstimateSettings::defaults(
-                &ServerConfig::new("unused"),
+                &ServerConfig::new("unused").default_setting,
             )
             .unwrap(),
             error: None,

@@ -3,7 +3,7 @@
 //! cannot both take it. A refused step is [`Error::Transition`], a 409 naming the state.
 
 use crate::Error;
-use crate::session::state::{SessionState, Step};
+use crate::model::{SessionState, Step};
 use crate::storage::{SessionStore, StepRecord};
 
 /// The transitions of the sessions in one store.

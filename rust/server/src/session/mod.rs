@@ -5,12 +5,9 @@
 //! deletion (`deletion`).
 
 pub(crate) mod deletion;
-pub(crate) mod estimate_settings;
 mod lifecycle;
-mod record;
-mod state;
 pub(crate) mod status;
 
+pub(crate) use crate::model::estimate_settings;
+pub(crate) use crate::model::{NewSession, Session, SessionState, Step};
 pub(crate) use lifecycle::Lifecycle;
-pub(crate) use record::{NewSession, Session};
-pub(crate) use state::{SessionState, Step};

@@ -5,10 +5,10 @@
 //! own.
 
 use crate::Error;
-use crate::auth::{Caller, Role, UsageFull};
-use crate::config::PlaybackKind;
-use crate::session::estimate_settings::EstimateSettings;
-use crate::session::{NewSession, SessionState, Step};
+use crate::model::PlaybackKind;
+use crate::model::estimate_settings::EstimateSettings;
+use crate::model::{Caller, Role, UsageFull};
+use crate::model::{NewSession, SessionState, Step};
 use crate::storage::blobs::{BlobStore, body_stream};
 use crate::storage::keys::SessionObject;
 use crate::storage::metadata::{JobEnd, MetadataStore, StepRecord};
@@ -38,7 +38,7 @@ pub(crate) fn new_session(
         idempotency_key: key,
         trials_total: 5,
         playback,
-        settings: EstimateSettings::defaults(&crate::ServerConfig::new("unused")).unwrap(),
+        settings: EstimateSettings::defaults(sitar_core::DEFAULT_SETTING).unwrap(),
         adaptive_min: None,
         adaptive_k: 3,
         legacy: false,
@@ -602,7 +602,7 @@ fn scenes_are_kept_whole_with_their_tag(store: &dyn BlobStore) {
 }
 
 fn venues_hold_members_and_sessions_of_one_convention(store: &dyn MetadataStore) {
-    use crate::venue::NewVenue;
+    use crate::model::NewVenue;
     use sitar_core::Convention;
     let (owner, member, stranger) = ("venue-owner", "venue-member", "venue-stranger");
     for (name, token) in [
@@ -726,7 +726,7 @@ fn venues_hold_members_and_sessions_of_one_convention(store: &dyn MetadataStore)
 /// files, forgotten (generation raised) on request and when the session becomes `done`,
 /// removed with the session and with its venue; never kept for a session in no venue.
 fn venue_contributions_are_kept_per_generation(store: &dyn MetadataStore) {
-    use crate::venue::NewVenue;
+    use crate::model::NewVenue;
     let venue = "v3000000000000001";
     let new = NewVenue {
         name: "Atrium",

@@ -10,10 +10,10 @@
 //! its imports say which rows it touches.
 
 use crate::Error;
-use crate::auth::{Caller, Role, TokenInfo, UsageFull};
-use crate::session::{NewSession, Session, SessionState, Step};
+use crate::model::{Caller, Role, TokenInfo, UsageFull};
+use crate::model::{NewSession, Session, SessionState, Step};
+use crate::model::{NewVenue, Venue};
 use crate::storage::instances::InstanceStore;
-use crate::venue::{NewVenue, Venue};
 
 /// How a job ended (a job is `running`, then one of these; also `interrupted` when its
 /// instance restarts, or another adopts its session, and finds it left running by a dead

@@ -9,9 +9,9 @@
 
 use std::path::Path;
 use std::sync::Arc;
+use std::time::Duration;
 
 use crate::Error;
-use crate::config::ServerConfig;
 use crate::storage::blobs::BlobStore;
 use crate::storage::files::Files;
 use crate::storage::metadata::MetadataStore;
@@ -59,13 +59,26 @@ pub(crate) type Stores = (
     Arc<dyn WorkerStore>,
 );
 
-/// The stores of `config`.
-pub(crate) fn open(config: &ServerConfig) -> Result<Stores, Error> {
+/// What the stores are opened with: the part of the server's configuration that is theirs
+/// (the configuration itself sits above storage).
+pub(crate) struct StoreSettings<'a> {
+    pub data_dir: &'a Path,
+    /// `--database`: a Postgres URL, or the embedded SQLite store.
+    pub database: Option<&'a str>,
+    /// `--store`: an S3-compatible bucket URL, or the data directory's files.
+    pub store: Option<&'a str>,
+    pub upload_idle_timeout: Duration,
+    pub session_disk_quota: u64,
+    pub disk_quota: u64,
+}
+
+/// The stores `config` names.
+pub(crate) fn open(config: &StoreSettings<'_>) -> Result<Stores, Error> {
     std::fs::create_dir_all(&config.data_dir)
-        .map_err(|e| Error::io("cannot create data directory", &config.data_dir, e))?;
-    let blobs: Arc<dyn BlobStore> = match &config.store {
+        .map_err(|e| Error::io("cannot create data directory", config.data_dir, e))?;
+    let blobs: Arc<dyn BlobStore> = match config.store {
         None => Arc::new(
-            Files::open(&config.data_dir)?
+            Files::open(config.data_dir)?
                 .with_idle_timeout(config.upload_idle_timeout)
                 .with_quotas(config.session_disk_quota, config.disk_quota),
         ),
@@ -74,14 +87,14 @@ pub(crate) fn open(config: &ServerConfig) -> Result<Stores, Error> {
         #[cfg(feature = "cluster")]
         Some(url) => Arc::new(S3Blobs::open(
             url,
-            &config.data_dir,
+            config.data_dir,
             config.upload_idle_timeout,
             config.session_disk_quota,
             config.disk_quota,
         )?),
     };
-    let (db, workers): (Arc<dyn MetadataStore>, Arc<dyn WorkerStore>) = match &config.database {
-        None => crate::storage::embedded::open_embedded(&config.data_dir)?,
+    let (db, workers): (Arc<dyn MetadataStore>, Arc<dyn WorkerStore>) = match config.database {
+        None => crate::storage::embedded::open_embedded(config.data_dir)?,
         #[cfg(feature = "cluster")]
         Some(url) if is_postgres_url(url) => {
             let store = Arc::new(PgStore::open(url)?);

@@ -585,8 +585,8 @@ pub(crate) fn only_the_player_takes<S>(store: &S)
 where
     S: crate::storage::MetadataStore + WorkerStore,
 {
-    use crate::config::PlaybackKind;
-    use crate::session::Step;
+    use crate::model::PlaybackKind;
+    use crate::model::Step;
     use crate::storage::instances::InstanceStore;
     use crate::storage::metadata::StepRecord;
     let session = "s9000000000000001";

@@ -8,9 +8,8 @@ mod access;
 pub(crate) mod alignment;
 pub(crate) mod kept;
 pub(crate) mod map;
-mod record;
 
-pub(crate) use access::Standing;
-pub(crate) use record::{
+pub(crate) use crate::model::{
     CELL_M_RANGE, DEFAULT_CELL_M, MAX_NAME_CHARS, NewVenue, Venue, is_venue_id, new_venue_id,
 };
+pub(crate) use access::Standing;

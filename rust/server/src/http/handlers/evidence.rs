@@ -219,7 +219,9 @@ pub(crate) async fn list(
                 .map_err(|e| Error::Internal(format!("published results: {e}")))?,
         ),
     };
-    let thresholds = session.settings.thresholds(&shared.config);
+    let thresholds = session
+        .settings
+        .thresholds(shared.config.thresholds, shared.config.thresholds_deg);
     let n = rows.len().max(spans.len());
     let from = page.offset.min(n);
     let to = from.saturating_add(page.limit).min(n);

@@ -115,7 +115,7 @@ pub(crate) async fn recording(
         idempotency_key: None,
         trials_total: shared.config.default_trials,
         playback: shared.config.playback,
-        settings: EstimateSettings::defaults(&shared.config)?,
+        settings: EstimateSettings::defaults(&shared.config.default_setting)?,
         adaptive_min: None,
         adaptive_k: shared.config.default_adaptive_k,
         legacy: true,

@@ -243,7 +243,9 @@ pub(crate) async fn render_report(
         };
         // A stand-alone page carries the 3-D view's data (what `scene.json` serves).
         let scene = phone.as_deref().filter(|_| standalone).map(|(p, source)| {
-            let thresholds = session.settings.thresholds(&shared.config);
+            let thresholds = session
+                .settings
+                .thresholds(shared.config.thresholds, shared.config.thresholds_deg);
             let subs = crate::report::regions::sub_rows(p, thresholds);
             let unit = page::Unit::of(&session);
             crate::report::scene_view::scene_json(p, &subs, thresholds, &unit, source.describe())

@@ -28,7 +28,9 @@ pub(crate) async fn json(
     let value = blocking("scene data", move || {
         let loaded = scene::load(&shared, &session)?;
         let (phone, source) = (&loaded.0, loaded.1);
-        let thresholds = session.settings.thresholds(&shared.config);
+        let thresholds = session
+            .settings
+            .thresholds(shared.config.thresholds, shared.config.thresholds_deg);
         let subs = crate::report::regions::sub_rows(phone, thresholds);
         Ok(crate::report::scene_view::scene_json(
             phone,

@@ -154,7 +154,7 @@ pub(crate) async fn create(
         )));
     }
     let settings = EstimateSettings::from_request(
-        &shared.config,
+        &shared.config.default_setting,
         req.setting.as_deref(),
         req.window_frames,
         req.pose_relation.as_deref(),

@@ -252,7 +252,7 @@ mod tests {
         store
             .insert_token(
                 "before",
-                crate::auth::Role::App,
+                crate::model::Role::App,
                 "sitar_reconnectAAAAAAAAAAAAAAAAAAAA",
             )
             .unwrap();

@@ -6,9 +6,9 @@ use postgres::types::ToSql;
 
 use super::{PgStore, u32_column};
 use crate::Error;
-use crate::config::PlaybackKind;
-use crate::session::estimate_settings::{self, EstimateSettings};
-use crate::session::{NewSession, Session, SessionState, Step};
+use crate::model::PlaybackKind;
+use crate::model::estimate_settings::{self, EstimateSettings};
+use crate::model::{NewSession, Session, SessionState, Step};
 use crate::storage::metadata::{Rows, SessionStore, StepRecord, Unreadable};
 use crate::storage::now_ms;
 

@@ -4,7 +4,7 @@
 
 use super::PgStore;
 use crate::Error;
-use crate::auth::{DAY_HOURS, HOUR_MS, UsageFull};
+use crate::model::{DAY_HOURS, HOUR_MS, UsageFull};
 use crate::storage::metadata::UsageStore;
 
 impl UsageStore for PgStore {

@@ -5,10 +5,10 @@ use postgres::Row;
 
 use super::PgStore;
 use crate::Error;
-use crate::session::Session;
+use crate::model::Session;
+use crate::model::{NewVenue, Venue};
 use crate::storage::metadata::{KeptContribution, VenueStore};
 use crate::storage::now_ms;
-use crate::venue::{NewVenue, Venue};
 
 const COLUMNS: &str = "id, name, anchor, cell_m, owner, created_ms";
 

@@ -124,7 +124,7 @@ mod tests {
         server
             .insert_token(
                 "a",
-                crate::auth::Role::App,
+                crate::model::Role::App,
                 "sitar_exportAAAAAAAAAAAAAAAAAAAAAAAA",
             )
             .unwrap();

@@ -7,9 +7,9 @@ use rusqlite::{OptionalExtension, params};
 
 use super::{CachedSql, SqliteStore};
 use crate::Error;
-use crate::config::PlaybackKind;
-use crate::session::estimate_settings::{self, EstimateSettings};
-use crate::session::{NewSession, Session, SessionState, Step};
+use crate::model::PlaybackKind;
+use crate::model::estimate_settings::{self, EstimateSettings};
+use crate::model::{NewSession, Session, SessionState, Step};
 use crate::storage::metadata::{Rows, SessionStore, StepRecord, Unreadable};
 use crate::storage::now_ms;
 
@@ -480,9 +480,7 @@ mod tests {
             (1, 2)
         );
         // Failing an unreadable row needs no typed row.
-        crate::session::Lifecycle::new(&db)
-            .fail_unreadable("a", "bad row")
-            .unwrap();
+        db.fail_unreadable("a", "bad row").unwrap();
         let failed = db.sessions_in(&[SessionState::Failed]).unwrap();
         assert_eq!(failed.unreadable[0].id, "a");
     }

@@ -6,8 +6,8 @@ use rusqlite::params;
 
 use super::{CachedSql, SqliteStore};
 use crate::Error;
-use crate::auth::secret::{self, digest};
-use crate::auth::{Caller, Role, TokenInfo, check_token_name};
+use crate::model::token_secret::{self as secret, digest};
+use crate::model::{Caller, Role, TokenInfo, check_token_name};
 use crate::storage::metadata::TokenStore;
 use crate::storage::now_ms;
 

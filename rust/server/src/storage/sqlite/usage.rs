@@ -7,7 +7,7 @@ use rusqlite::{OptionalExtension, params};
 
 use super::{CachedSql, SqliteStore};
 use crate::Error;
-use crate::auth::{DAY_HOURS, HOUR_MS, UsageFull};
+use crate::model::{DAY_HOURS, HOUR_MS, UsageFull};
 use crate::storage::metadata::UsageStore;
 
 impl UsageStore for SqliteStore {

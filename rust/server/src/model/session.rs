@@ -2,9 +2,9 @@
 
 use sitar_core::Convention;
 
-use crate::config::PlaybackKind;
-use crate::session::estimate_settings::EstimateSettings;
-use crate::session::state::{SessionState, Step};
+use crate::model::PlaybackKind;
+use crate::model::estimate_settings::EstimateSettings;
+use crate::model::session_state::{SessionState, Step};
 
 /// One session, every column typed.
 #[derive(Debug, Clone, PartialEq)]

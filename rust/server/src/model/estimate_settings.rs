@@ -5,7 +5,6 @@ use sitar_core::Thresholds;
 use sitar_estimator::{EstimateOptions, PoseRelation, Setting};
 
 use crate::Error;
-use crate::config::ServerConfig;
 use crate::error::short;
 
 /// Window length when a session names none: the phone's 10-frame sub-trajectories.
@@ -27,10 +26,11 @@ pub(crate) struct EstimateSettings {
 }
 
 impl EstimateSettings {
-    /// The server's defaults: its setting, 10-frame windows, the translation part.
-    pub fn defaults(config: &ServerConfig) -> Result<EstimateSettings, Error> {
+    /// The server's defaults: its setting (`--setting`), 10-frame windows, the translation
+    /// part.
+    pub fn defaults(default_setting: &str) -> Result<EstimateSettings, Error> {
         Ok(EstimateSettings {
-            setting: parse_setting(&config.default_setting)?,
+            setting: parse_setting(default_setting)?,
             window_frames: DEFAULT_WINDOW_FRAMES,
             pose_relation: PoseRelation::TranslationPart,
         })
@@ -39,12 +39,12 @@ impl EstimateSettings {
     /// The defaults with whatever a request names replaced; a bad value is a 400 that names
     /// its JSON key.
     pub fn from_request(
-        config: &ServerConfig,
+        default_setting: &str,
         setting: Option<&str>,
         window_frames: Option<u32>,
         pose_relation: Option<&str>,
     ) -> Result<EstimateSettings, Error> {
-        let mut settings = EstimateSettings::defaults(config)?;
+        let mut settings = EstimateSettings::defaults(default_setting)?;
         if let Some(name) = setting {
             settings.setting = parse_setting(name)?;
         }
@@ -67,11 +67,12 @@ impl EstimateSettings {
         }
     }
 
-    /// The class thresholds in the unit of these settings' errors.
-    pub fn thresholds(&self, config: &ServerConfig) -> Thresholds {
+    /// The class thresholds in the unit of these settings' errors, of the server's metre
+    /// and degree thresholds.
+    pub fn thresholds(&self, metres: Thresholds, degrees: Thresholds) -> Thresholds {
         match self.pose_relation {
-            PoseRelation::RotationAngleDeg => config.thresholds_deg,
-            _ => config.thresholds,
+            PoseRelation::RotationAngleDeg => degrees,
+            _ => metres,
         }
     }
 
@@ -125,29 +126,43 @@ mod tests {
 
     #[test]
     fn requests_override_the_defaults_and_bad_values_name_their_key() {
-        let config = ServerConfig::new("unused");
-        let defaults = EstimateSettings::from_request(&config, None, None, None).unwrap();
+        let config = crate::ServerConfig::new("unused");
+        let defaults =
+            EstimateSettings::from_request(&config.default_setting, None, None, None).unwrap();
         assert_eq!(defaults.setting, Setting::TrimMean(30));
         assert_eq!(defaults.window_frames, 10);
         assert_eq!(defaults.pose_relation, PoseRelation::TranslationPart);
         assert_eq!(defaults.options().delta, 10);
-        assert_eq!(defaults.thresholds(&config), Thresholds::DEFAULT_M);
+        assert_eq!(
+            defaults.thresholds(config.thresholds, config.thresholds_deg),
+            Thresholds::DEFAULT_M
+        );
         assert_eq!(defaults.unit(), "m");
 
-        let asked =
-            EstimateSettings::from_request(&config, Some("median"), Some(20), Some("angle_deg"))
-                .unwrap();
+        let asked = EstimateSettings::from_request(
+            &config.default_setting,
+            Some("median"),
+            Some(20),
+            Some("angle_deg"),
+        )
+        .unwrap();
         assert_eq!(asked.setting, Setting::Median);
         assert_eq!(asked.options().delta, 20);
         assert_eq!(
             asked.options().pose_relation,
             PoseRelation::RotationAngleDeg
         );
-        assert_eq!(asked.thresholds(&config), Thresholds::DEFAULT_DEG);
+        assert_eq!(
+            asked.thresholds(config.thresholds, config.thresholds_deg),
+            Thresholds::DEFAULT_DEG
+        );
         assert_eq!(asked.unit(), "deg");
 
         for frames in [2, 1000] {
-            assert!(EstimateSettings::from_request(&config, None, Some(frames), None).is_ok());
+            assert!(
+                EstimateSettings::from_request(&config.default_setting, None, Some(frames), None)
+                    .is_ok()
+            );
         }
         let bad = [
             (Some("trim_mean_33"), None, None, "setting"),
@@ -158,9 +173,10 @@ mod tests {
             (None, None, Some("trans"), "pose_relation"),
         ];
         for (setting, frames, relation, key) in bad {
-            let err = EstimateSettings::from_request(&config, setting, frames, relation)
-                .unwrap_err()
-                .to_string();
+            let err =
+                EstimateSettings::from_request(&config.default_setting, setting, frames, relation)
+                    .unwrap_err()
+                    .to_string();
             assert!(err.starts_with(key), "{key}: {err}");
         }
     }

@@ -1,6 +1,6 @@
 //! The states of a session and the one table of which step each allows.
 
-use crate::config::PlaybackKind;
+use crate::model::PlaybackKind;
 
 /// Where a session is in its life (the wire names are those of `GET /v1/sessions/{id}`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
