@@ -74,7 +74,7 @@ pub(crate) struct StoreSettings<'a> {
 
 /// The stores `config` names.
 pub(crate) fn open(config: &StoreSettings<'_>) -> Result<Stores, Error> {
-    std::fs::create_dir_all(&config.data_dir)
+    std::fs::create_dir_all(config.data_dir)
         .map_err(|e| Error::io("cannot create data directory", config.data_dir, e))?;
     let blobs: Arc<dyn BlobStore> = match config.store {
         None => Arc::new(
