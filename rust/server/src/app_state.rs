@@ -71,6 +71,7 @@ pub(crate) struct App {
 
 impl App {
     pub fn open(config: ServerConfig) -> Result<App, Error> {
+        config.check_delete_sweep()?;
         let (db, blobs, workers) = crate::storage::open::open(&config)?;
         let instance = crate::storage::instance::instance_id(&config.data_dir)?;
         let board = Arc::new(RemoteBoard::default());
