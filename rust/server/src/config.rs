@@ -372,6 +372,26 @@ mod tests {
     }
 
     #[test]
+    fn the_delete_sweep_period_is_bounded() {
+        let mut config = ServerConfig::new("");
+        assert!(config.check_delete_sweep().is_ok(), "the default");
+        for (period, ok) in [
+            (Duration::from_millis(100), true),
+            (Duration::from_secs(20), true),
+            (Duration::ZERO, false),
+            (Duration::from_millis(99), false),
+            (Duration::from_secs(21), false),
+        ] {
+            config.delete_sweep = period;
+            let checked = config.check_delete_sweep();
+            assert_eq!(checked.is_ok(), ok, "{period:?}");
+            if let Err(e) = checked {
+                assert!(e.to_string().contains("0.1 s to 20 s"), "{e}");
+            }
+        }
+    }
+
+    #[test]
     fn names_that_would_reach_the_phone_shell_are_checked() {
         let ok = AdbConfig::default();
         assert!(ok.check().is_ok());
