@@ -103,6 +103,15 @@ pub struct Args {
     /// after they were created. Without it everything is kept (DELETE frees one).
     #[arg(long, value_name = "DAYS")]
     keep_days: Option<u32>,
+    /// How often this instance looks for deletes a crash cut off (the session gone, some of
+    /// its bytes not) and removes what is left, 0.1–20 s; any live instance finishes another's
+    /// within three periods.
+    #[arg(long, value_name = "SECS", default_value_t = 15.0)]
+    delete_sweep_s: f64,
+    /// Test hook: a delete waits this long between removing the session's rows and its bytes
+    /// (the tests kill the instance then).
+    #[arg(long, value_name = "SECS", hide = true)]
+    delete_pause_s: Option<f64>,
     /// Log level: error, warn, info, debug or trace [default: RUST_LOG's, else info]. Every
     /// line starts with an RFC 3339 time stamp (UTC).
     #[arg(long, value_name = "LEVEL")]
@@ -288,6 +297,20 @@ pub fn run(args: Args) -> Result<()> {
             .read(&name, &file)
             .with_context(|| format!("sitar serve --calibration {argument}"))?;
     }
+    let sweep_range = sitar_server::DELETE_SWEEP_RANGE;
+    let sweep = Duration::try_from_secs_f64(args.delete_sweep_s).ok();
+    config.delete_sweep = sweep.filter(|d| sweep_range.contains(d)).with_context(|| {
+        format!(
+            "--delete-sweep-s {} is not a number of seconds from {} to {}",
+            args.delete_sweep_s,
+            sweep_range.start().as_secs_f64(),
+            sweep_range.end().as_secs_f64()
+        )
+    })?;
+    config.delete_pause = match args.delete_pause_s {
+        Some(s) => Some(Duration::try_from_secs_f64(s).context("--delete-pause-s")?),
+        None => None,
+    };
     config.retention = args
         .keep_days
         .map(|days| Duration::from_secs(u64::from(days) * 86_400));

@@ -71,6 +71,7 @@ pub(crate) struct App {
 
 impl App {
     pub fn open(config: ServerConfig) -> Result<App, Error> {
+        config.check_delete_sweep()?;
         let (db, blobs, workers) =
             crate::storage::open::open(&crate::storage::open::StoreSettings {
                 data_dir: &config.data_dir,

@@ -180,6 +180,15 @@ pub struct ServerConfig {
     pub retention: Option<Duration>,
     /// How often finished sessions are checked against `retention` (default 10 min).
     pub retention_sweep: Duration,
+    /// How often every instance looks for deletes a crash cut off (the session's row gone,
+    /// some of its bytes not) and finishes them (default 15 s; within
+    /// [`DELETE_SWEEP_RANGE`]). A delete's own instance holds the work for twice this, so
+    /// what a crash left is removed by a live instance within three periods (45 s).
+    pub delete_sweep: Duration,
+    /// A test hook: a delete waits this long after the session's row is gone and before its
+    /// bytes are removed, so a test can kill the instance mid-delete. `None` (the default):
+    /// no wait.
+    pub delete_pause: Option<Duration>,
     /// An upload body that sends nothing for this long is taken as broken off: what
     /// arrived is kept for a resume and the request ends (default 60 s).
     pub upload_idle_timeout: Duration,
@@ -234,7 +243,24 @@ pub struct ServerConfig {
 /// count it dead and adopt the sessions it played: 30 s, six missed heartbeats.
 pub const INSTANCE_TIMEOUT: Duration = Duration::from_secs(30);
 
+/// Periods `delete_sweep` may take: at most 20 s, so that a crash's leftovers go within a
+/// minute (three periods); at least 0.1 s, so that the sweeps stay cheap.
+pub const DELETE_SWEEP_RANGE: std::ops::RangeInclusive<Duration> =
+    Duration::from_millis(100)..=Duration::from_secs(20);
+
 impl ServerConfig {
+    /// Refuses a `delete_sweep` outside [`DELETE_SWEEP_RANGE`], naming it.
+    pub fn check_delete_sweep(&self) -> Result<(), crate::Error> {
+        if DELETE_SWEEP_RANGE.contains(&self.delete_sweep) {
+            Ok(())
+        } else {
+            Err(crate::Error::Config(format!(
+                "delete sweep every {:?}: must be from 0.1 s to 20 s",
+                self.delete_sweep
+            )))
+        }
+    }
+
     /// Defaults with the given data directory.
     pub fn new(data_dir: impl Into<PathBuf>) -> ServerConfig {
         ServerConfig {
@@ -264,6 +290,8 @@ impl ServerConfig {
             adb: AdbConfig::default(),
             retention: None,
             retention_sweep: Duration::from_secs(600),
+            delete_sweep: Duration::from_secs(15),
+            delete_pause: None,
             upload_idle_timeout: Duration::from_secs(60),
             insecure_no_auth: false,
             preset_tokens: Vec::new(),
@@ -306,6 +334,26 @@ mod tests {
         adb.remote_dir = Some("/sdcard/Download/sitar/".into());
         assert_eq!(adb.remote_dir(), "/sdcard/Download/sitar");
         assert!(adb.check().is_ok());
+    }
+
+    #[test]
+    fn the_delete_sweep_period_is_bounded() {
+        let mut config = ServerConfig::new("");
+        assert!(config.check_delete_sweep().is_ok(), "the default");
+        for (period, ok) in [
+            (Duration::from_millis(100), true),
+            (Duration::from_secs(20), true),
+            (Duration::ZERO, false),
+            (Duration::from_millis(99), false),
+            (Duration::from_secs(21), false),
+        ] {
+            config.delete_sweep = period;
+            let checked = config.check_delete_sweep();
+            assert_eq!(checked.is_ok(), ok, "{period:?}");
+            if let Err(e) = checked {
+                assert!(e.to_string().contains("0.1 s to 20 s"), "{e}");
+            }
+        }
     }
 
     #[test]

@@ -112,7 +112,7 @@ pub use auth::{
     ADMIN_TOKEN_FILE, Limits, PresetToken, Role, TokenInfo, create_token, create_token_at,
     list_tokens, list_tokens_at, new_token, revoke_token, revoke_token_at,
 };
-pub use config::{AdbConfig, PlaybackKind, ServerConfig, SimConfig};
+pub use config::{AdbConfig, DELETE_SWEEP_RANGE, PlaybackKind, ServerConfig, SimConfig};
 pub use error::Error;
 pub use estimate::calibrations::{Calibrations, MAX_CALIBRATIONS, is_calibration_name};
 pub use http::helpers::IDEMPOTENCY_HEADER;

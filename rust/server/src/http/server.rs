@@ -6,7 +6,8 @@ use std::time::Duration;
 
 use crate::app_state::App;
 use crate::config::ServerConfig;
-use crate::{Error, auth, http::router, http::tls, playback::jobs, session::deletion};
+use crate::session::{delete_sweep, deletion};
+use crate::{Error, auth, http::router, http::tls, playback::jobs};
 
 /// The backend: storage opened, ready to serve.
 pub struct Server {
@@ -73,6 +74,8 @@ impl Server {
             crate::playback::instances::spawn(self.shared.clone());
         }
         deletion::spawn_retention_sweep(self.shared.clone());
+        // Deletes a crash cut off, on every instance (the embedded one's own, after a restart).
+        delete_sweep::spawn(self.shared.clone());
         let shared = self.shared.clone();
         let stop = async move {
             shutdown.await;

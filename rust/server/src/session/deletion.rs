@@ -1,6 +1,9 @@
 //! Deleting sessions: `DELETE /v1/sessions/{id}` and the retention sweep, the ways to free
 //! the data directory. A session is deleted whole (its row, trials, jobs, folder and
-//! trials in memory) or not at all, and never while a job or an estimate works on it.
+//! trials in memory) or not at all, and never while a job or an estimate works on it: its
+//! rows go in one transaction, which records its bytes as still to remove; the bytes go
+//! next, and if the instance dies first, any live instance's sweep removes them
+//! (`delete_sweep`).
 
 use std::sync::Arc;
 use std::time::Duration;
@@ -58,24 +61,24 @@ async fn delete(shared: &Arc<App>, id: &str, playback_stopped: bool) -> Result<(
             "session {id}: an estimate of its trials runs (a job works on it); try again shortly"
         )));
     }
-    let taken = shared.blobs.take_away(&id)?;
-    if let Err(e) = shared.db.delete_session(&id) {
-        if let Some(taken) = taken {
-            taken.restore()?;
-        }
-        return Err(e);
+    // Gone for every instance at once; another instance's delete that got here first
+    // leaves nothing to delete: a 404, as for any unknown id.
+    if !shared
+        .db
+        .delete_session(&id, super::delete_sweep::claim(shared))?
+    {
+        return Err(Error::NotFound(format!("no session {id:?}")));
     }
     shared.live.remove(&id);
-    if let Err(e) = shared.workers.forget(&id) {
-        log::warn!("session {id}: its leases and failed trials stay: {e}");
-    }
     shared.forget_session_lock(&id);
     crate::report::scene::forget(shared, &id);
-    if let Some(taken) = taken {
-        // Already out of sight.
-        taken.remove();
+    log::info!("session {id} deleted; its bytes go next");
+    if let Some(pause) = shared.config.delete_pause {
+        tokio::time::sleep(pause).await;
     }
-    log::info!("session {id} deleted");
+    if let Err(e) = super::delete_sweep::finish(shared, &id) {
+        log::warn!("session {id}: its bytes are left for the delete sweep: {e}");
+    }
     Ok(())
 }
 

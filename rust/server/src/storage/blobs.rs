@@ -20,7 +20,7 @@ use futures_util::{Stream, StreamExt};
 use crate::Error;
 use crate::storage::keys::SessionObject;
 use crate::storage::quota::Reservation;
-use crate::storage::staged::{Appended, TakenAway, TempFile};
+use crate::storage::staged::{Appended, TempFile};
 
 /// A request body as the blob store reads it; a transport error is kept as its text, which
 /// the answer names.
@@ -114,9 +114,10 @@ pub(crate) trait BlobStore: Send + Sync {
     /// Whether the staged upload `temp` holds exactly the bytes of session `id`'s `object`.
     fn same_content(&self, temp: &TempFile, id: &str, object: SessionObject)
     -> Result<bool, Error>;
-    /// Takes session `id`'s objects out of sight at once, to be removed or put back;
-    /// `None` when it has none.
-    fn take_away(&self, id: &str) -> Result<Option<TakenAway>, Error>;
+    /// Removes every object of deleted session `id`, wherever a delete may have left it
+    /// (idempotent: objects already gone, or none at all, are success; another instance may be
+    /// removing them at the same time). Called once its row is gone (`storage::deletes`).
+    fn remove_session(&self, id: &str) -> Result<(), Error>;
 
     /// A local folder for session `id`'s playback working files (trials pulled from the
     /// phones before they are parsed); removed with the session.

@@ -15,7 +15,7 @@ use crate::Error;
 use crate::storage::blobs::{BlobStore, BodyStream, Upload};
 use crate::storage::keys::SessionObject;
 use crate::storage::quota::{DiskQuota, Reservation};
-use crate::storage::staged::{Appended, TakenAway, TempFile};
+use crate::storage::staged::{Appended, TempFile};
 
 /// The data directory's file layout. Every path is made here, from server-made ids and
 /// indices only (a session's objects are typed, [`SessionObject`]): no client-supplied name
@@ -56,6 +56,15 @@ const SCENE_TAG: &str = "source.txt";
 
 /// Default of [`Files::with_idle_timeout`].
 const DEFAULT_IDLE: std::time::Duration = std::time::Duration::from_secs(60);
+
+/// Removes folder `dir` and what it holds; one that is not there is success.
+fn remove_folder(dir: &Path) -> Result<(), Error> {
+    match std::fs::remove_dir_all(dir) {
+        Ok(()) => Ok(()),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(()),
+        Err(e) => Err(Error::io("cannot remove", dir, e)),
+    }
+}
 
 /// A fresh server-made id: `s` and 16 hex digits.
 pub(crate) fn new_id() -> String {
@@ -383,14 +392,18 @@ impl BlobStore for Files {
         }
     }
 
-    fn take_away(&self, id: &str) -> Result<Option<TakenAway>, Error> {
+    fn remove_session(&self, id: &str) -> Result<(), Error> {
+        // The folder goes out of sight in one rename, then is removed; what an older version's
+        // delete left in `tmp/deleted-ID` goes too.
         let dir = self.session_dir(id);
         let trash = self.root.join("tmp").join(format!("deleted-{id}"));
+        remove_folder(&trash)?;
         match std::fs::rename(&dir, &trash) {
-            Ok(()) => Ok(Some(TakenAway::new(dir, trash))),
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
-            Err(e) => Err(Error::io("cannot move away", &dir, e)),
+            Ok(()) => {}
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()),
+            Err(e) => return Err(Error::io("cannot move away", &dir, e)),
         }
+        remove_folder(&trash)
     }
 
     fn create_session(&self, id: &str) -> Result<(), Error> {
@@ -755,28 +768,40 @@ mod tests {
     }
 
     #[test]
-    fn a_restart_clears_what_uploads_and_deletes_left_in_tmp() {
+    fn a_deleted_sessions_folder_is_removed_again_and_again() {
         let dir = tempfile::tempdir().unwrap();
         let files = Files::open(dir.path()).unwrap();
-        std::fs::create_dir_all(dir.path().join("sessions/s0123456789abcdef/trials")).unwrap();
+        let id = "s0123456789abcdef";
+        std::fs::create_dir_all(dir.path().join(format!("sessions/{id}/trials"))).unwrap();
         std::fs::write(
             dir.path()
-                .join("sessions/s0123456789abcdef/trials/trial_000.txt"),
+                .join(format!("sessions/{id}/trials/trial_000.txt")),
             "x",
         )
         .unwrap();
-        let taken = files.take_away("s0123456789abcdef").unwrap().unwrap();
+        // What an older version's interrupted delete left goes with it.
+        std::fs::create_dir_all(dir.path().join(format!("tmp/deleted-{id}/trials"))).unwrap();
+        files.remove_session(id).unwrap();
+        assert!(!dir.path().join(format!("sessions/{id}")).exists());
+        assert!(!dir.path().join(format!("tmp/deleted-{id}")).exists());
+        assert!(!files.exists(id, SessionObject::Trial(0)));
+        // Nothing left: success again (another sweep, a repeated delete).
+        files.remove_session(id).unwrap();
+        // Another session's folder stays.
+        std::fs::create_dir_all(dir.path().join("sessions/s1111111111111111/trials")).unwrap();
+        files.remove_session(id).unwrap();
         assert!(
             dir.path()
-                .join("tmp/deleted-s0123456789abcdef/trials/trial_000.txt")
-                .is_file()
+                .join("sessions/s1111111111111111/trials")
+                .is_dir()
         );
-        assert!(!dir.path().join("sessions/s0123456789abcdef").exists());
-        assert!(files.take_away("s0123456789abcdef").unwrap().is_none());
-        // Put back, then taken away again and left for the next start.
-        taken.restore().unwrap();
-        assert!(files.exists("s0123456789abcdef", SessionObject::Trial(0)));
-        std::mem::forget(files.take_away("s0123456789abcdef").unwrap());
+    }
+
+    #[test]
+    fn a_restart_clears_what_uploads_and_deletes_left_in_tmp() {
+        let dir = tempfile::tempdir().unwrap();
+        let files = Files::open(dir.path()).unwrap();
+        std::fs::create_dir_all(dir.path().join("tmp/deleted-s0123456789abcdef/trials")).unwrap();
         std::fs::write(dir.path().join("tmp/upload-x.part"), "half").unwrap();
         drop(files);
         Files::open(dir.path()).unwrap();

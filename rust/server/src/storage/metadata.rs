@@ -13,6 +13,7 @@ use crate::Error;
 use crate::model::{Caller, Role, TokenInfo, UsageFull};
 use crate::model::{NewSession, Session, SessionState, Step};
 use crate::model::{NewVenue, Venue};
+use crate::storage::deletes::{Claim, DeleteStore};
 use crate::storage::instances::InstanceStore;
 
 /// How a job ended (a job is `running`, then one of these; also `interrupted` when its
@@ -94,8 +95,9 @@ pub(crate) trait SessionStore {
     /// When `session` was created (ms since the Unix epoch).
     fn session_created_ms(&self, session: &str) -> Result<Option<i64>, Error>;
     /// Removes a session with its trials, jobs and share links (devices forget it), all or
-    /// nothing. Returns whether it existed.
-    fn delete_session(&self, id: &str) -> Result<bool, Error>;
+    /// nothing, and records its bytes as an unfinished delete held by `claim`
+    /// ([`DeleteStore`]). Returns whether it existed (nothing is recorded when it did not).
+    fn delete_session(&self, id: &str, claim: Claim<'_>) -> Result<bool, Error>;
     /// Takes `step` if the session's state allows it ([`Step::next`], checked atomically with
     /// the write, so two racing requests cannot both take one step) and records `record`.
     /// Returns the state before; a refused step is [`Error::Transition`]. Only
@@ -251,6 +253,7 @@ pub(crate) struct KeptContribution {
 pub(crate) trait MetadataStore:
     SessionStore
     + InstanceStore
+    + DeleteStore
     + TrialStore
     + JobStore
     + DeviceStore
@@ -265,6 +268,7 @@ pub(crate) trait MetadataStore:
 impl<T> MetadataStore for T where
     T: SessionStore
         + InstanceStore
+        + DeleteStore
         + TrialStore
         + JobStore
         + DeviceStore

@@ -5,7 +5,8 @@
 //! playback hosts, their phones, trials leased to them). The embedded default is SQLite in
 //! `DATA/sitar.db` ([`sqlite`], opened by [`embedded`]) and the data directory's session
 //! folders ([`files`], with the disk quotas of [`quota`]); each instance's own files (admin
-//! token, TLS certificate, instance id) are [`instance`]'s; which instance plays which session
+//! token, TLS certificate, instance id) are [`instance`]'s; deletes cut off by a crash are
+//! finished from [`deletes`]' records; which instance plays which session
 //! is [`instances`]'. One conformance suite per seam
 //! (`conformance`) runs against any implementation. The cluster implementations, for several
 //! instances on one database and bucket, are `postgres` and `s3` ([`open`] picks), built with the
@@ -15,6 +16,7 @@
 
 pub(crate) mod blobs;
 pub(crate) mod blocking;
+pub(crate) mod deletes;
 pub(crate) mod embedded;
 pub(crate) mod files;
 #[cfg(feature = "cluster")]
@@ -39,9 +41,12 @@ pub(crate) mod workers;
 #[cfg(test)]
 pub(crate) mod conformance;
 #[cfg(test)]
+pub(crate) mod delete_conformance;
+#[cfg(test)]
 pub(crate) mod worker_conformance;
 
 pub(crate) use blobs::{BlobStore, body_stream};
+pub(crate) use deletes::Claim;
 pub(crate) use instances::StopRequest;
 pub(crate) use metadata::{
     JobEnd, MetadataStore, SessionStore, StepRecord, TokenStore, UsageStore, VenueStore,

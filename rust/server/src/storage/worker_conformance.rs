@@ -641,5 +641,9 @@ where
     assert_eq!(taken.iter().map(|t| t.index).collect::<Vec<_>>(), [1]);
     // Alone on its database (no player named), a job takes as before.
     assert!(store.take_committed(session, None).unwrap().is_empty());
-    assert!(store.delete_session(session).unwrap());
+    assert!(
+        store
+            .delete_session(session, crate::storage::conformance::KEEP)
+            .unwrap()
+    );
 }

@@ -33,6 +33,11 @@ const MIGRATIONS: &[(i64, &str, &str)] = &[
         "venue_contributions",
         include_str!("migrations/0007_venue_contributions.sql"),
     ),
+    (
+        8,
+        "unfinished_deletes",
+        include_str!("migrations/0008_unfinished_deletes.sql"),
+    ),
 ];
 
 /// The advisory lock key the migrating instance holds (`sitar` in ASCII).

@@ -16,6 +16,7 @@ use tokio_postgres_rustls::MakeRustlsConnect;
 use crate::Error;
 
 pub(crate) mod copy;
+mod deletes;
 mod hosts;
 mod instances;
 mod jobs;
@@ -186,6 +187,16 @@ mod tests {
         };
         let (a, b) = (PgStore::open(&url).unwrap(), PgStore::open(&url).unwrap());
         crate::storage::worker_conformance::racing_instances(&a, &b);
+    }
+
+    #[test]
+    fn unfinished_deletes_are_claimed_once_across_instances() {
+        let Some(url) = test_database::fresh("unfinished_deletes") else {
+            return;
+        };
+        let (a, b) = (PgStore::open(&url).unwrap(), PgStore::open(&url).unwrap());
+        crate::storage::delete_conformance::unfinished_deletes(&a);
+        crate::storage::delete_conformance::racing_sweepers(&a, &b);
     }
 
     #[test]

@@ -9,6 +9,7 @@ use crate::Error;
 use crate::model::PlaybackKind;
 use crate::model::estimate_settings::{self, EstimateSettings};
 use crate::model::{NewSession, Session, SessionState, Step};
+use crate::storage::deletes::Claim;
 use crate::storage::metadata::{Rows, SessionStore, StepRecord, Unreadable};
 use crate::storage::now_ms;
 
@@ -310,8 +311,9 @@ impl SessionStore for PgStore {
         })
     }
 
-    fn delete_session(&self, id: &str) -> Result<bool, Error> {
+    fn delete_session(&self, id: &str, claim: Claim<'_>) -> Result<bool, Error> {
         let id = id.to_string();
+        let (instance, until_ms) = (claim.instance.to_string(), claim.until_ms);
         self.pool.run(move |c| {
             let mut tx = c.transaction()?;
             tx.execute("DELETE FROM trials WHERE session_id = $1", &[&id])?;
@@ -326,6 +328,13 @@ impl SessionStore for PgStore {
                 &[&id],
             )?;
             let deleted = tx.execute("DELETE FROM sessions WHERE id = $1", &[&id])? == 1;
+            if deleted {
+                tx.execute(
+                    "INSERT INTO unfinished_deletes (session_id, deleted_ms, claimed_by, \
+                     claimed_until_ms) VALUES ($1, $2, $3, $4) ON CONFLICT (session_id) DO NOTHING",
+                    &[&id, &now_ms(), &instance, &until_ms],
+                )?;
+            }
             tx.commit()?;
             Ok(deleted)
         })

@@ -15,7 +15,8 @@
 //!   completed only when the recording is published (aborted when it is not, and stored as a
 //!   part from its staged copy when the body breaks off);
 //! - quotas: counted as bytes arrive, against the bucket's usage (listed, reused 30 s);
-//! - deletes: objects put aside in `trash/` first ([`trash`]).
+//! - deletes: a deleted session's objects are removed after its row, idempotently, by the
+//!   instance deleting it or, if it died, by any instance's sweep ([`trash`]).
 //!
 //! Tools that need a path get a local copy ([`cache`], bounded); an `append_line` log is read,
 //! extended and put back whole (the session's history: one writer, a few KiB).
@@ -30,7 +31,7 @@ use crate::storage::blobs::{BlobStore, BodyStream, Upload};
 use crate::storage::files::Files;
 use crate::storage::keys::SessionObject;
 use crate::storage::quota::{DiskQuota, Measure, Reservation};
-use crate::storage::staged::{Appended, TakenAway, TempFile};
+use crate::storage::staged::{Appended, TempFile};
 
 pub(crate) mod cache;
 mod client;
@@ -171,6 +172,13 @@ impl S3Blobs {
     /// Removes session `id`'s parts and their local copies, and gives up its recordings
     /// received whole but not published.
     fn remove_parts(&self, id: &str) -> Result<(), Error> {
+        self.forget_uploads(id);
+        parts::remove(&self.bucket, id)
+    }
+
+    /// Forgets what this instance holds of session `id`'s uploads: local copies of parts,
+    /// recordings received whole but not published (their unfinished uploads aborted).
+    fn forget_uploads(&self, id: &str) {
         self.local_parts
             .forget_under(&self.bucket.key(&parts::folder(id)));
         let unpublished = self.lock_streamed().remove(id);
@@ -179,7 +187,6 @@ impl S3Blobs {
             self.abort(id, whole.sent);
         }
         self.forget_joined(|_, session| session == id);
-        parts::remove(&self.bucket, id)
     }
 
     fn lock_streamed(
@@ -590,17 +597,12 @@ impl BlobStore for S3Blobs {
         same_file(&temp.path, &copy)
     }
 
-    fn take_away(&self, id: &str) -> Result<Option<TakenAway>, Error> {
-        self.local_parts
-            .forget_under(&self.bucket.key(&parts::folder(id)));
-        let taken = trash::take_away(&self.bucket, &self.cache, id)?;
-        match taken {
-            Some(t) => Ok(Some(TakenAway::put_aside(Box::new(t)))),
-            None => {
-                self.cache.forget_session(id);
-                Ok(None)
-            }
-        }
+    fn remove_session(&self, id: &str) -> Result<(), Error> {
+        self.forget_uploads(id);
+        self.cache.forget_session(id);
+        let removed = trash::remove_session(&self.bucket, id)?;
+        log::debug!("session {id}: {removed} objects removed");
+        Ok(())
     }
 
     fn playback_folder(&self, id: &str) -> PathBuf {

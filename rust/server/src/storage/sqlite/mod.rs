@@ -13,6 +13,7 @@ use rusqlite::{Connection, Params, Row};
 use crate::Error;
 
 mod component_schema;
+mod deletes;
 #[cfg(feature = "cluster")]
 pub(crate) mod export;
 mod hosts;
@@ -212,6 +213,7 @@ impl SqliteStore {
         )?;
         worker_schema::migrate(&mut conn)?;
         instance_schema::migrate(&mut conn)?;
+        deletes::migrate(&mut conn)?;
         Ok(SqliteStore {
             conn: Mutex::new(conn),
         })
@@ -265,6 +267,8 @@ mod tests {
         crate::storage::worker_conformance::only_the_player_takes(&store);
         let racing = SqliteStore::open(&dir.path().join("racing.db")).unwrap();
         crate::storage::worker_conformance::racing_instances(&racing, &racing);
+        crate::storage::delete_conformance::unfinished_deletes(&store);
+        crate::storage::delete_conformance::racing_sweepers(&racing, &racing);
         // What it stored survives a reopen of the file.
         drop(store);
         let again = SqliteStore::open(&dir.path().join("sitar.db")).unwrap();

@@ -10,6 +10,7 @@ use crate::Error;
 use crate::model::PlaybackKind;
 use crate::model::estimate_settings::{self, EstimateSettings};
 use crate::model::{NewSession, Session, SessionState, Step};
+use crate::storage::deletes::Claim;
 use crate::storage::metadata::{Rows, SessionStore, StepRecord, Unreadable};
 use crate::storage::now_ms;
 
@@ -271,7 +272,7 @@ impl SessionStore for SqliteStore {
 
     /// Removes a session with its trials and jobs (devices forget it) in one transaction.
     /// Returns whether it existed.
-    fn delete_session(&self, id: &str) -> Result<bool, Error> {
+    fn delete_session(&self, id: &str, claim: Claim<'_>) -> Result<bool, Error> {
         self.transaction(|tx| {
             tx.execute_cached("DELETE FROM trials WHERE session_id = ?1", [id])?;
             tx.execute_cached("DELETE FROM jobs WHERE session_id = ?1", [id])?;
@@ -284,7 +285,11 @@ impl SessionStore for SqliteStore {
                 "UPDATE devices SET session_id = NULL WHERE session_id = ?1",
                 [id],
             )?;
-            Ok(tx.execute_cached("DELETE FROM sessions WHERE id = ?1", [id])? == 1)
+            let deleted = tx.execute_cached("DELETE FROM sessions WHERE id = ?1", [id])? == 1;
+            if deleted {
+                super::deletes::record(tx, id, claim)?;
+            }
+            Ok(deleted)
         })
     }
 
@@ -374,6 +379,7 @@ impl SessionStore for SqliteStore {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::storage::deletes::DeleteStore;
     use sitar_estimator::{PoseRelation, Setting};
 
     pub(crate) fn new_session(key: Option<&str>) -> NewSession<'_> {
@@ -447,8 +453,13 @@ mod tests {
             Some("a")
         );
         assert_eq!(db.latest_session(true, false, None).unwrap(), None);
-        assert!(db.delete_session("a").unwrap());
-        assert!(!db.delete_session("a").unwrap());
+        let claim = crate::storage::Claim {
+            instance: "test",
+            until_ms: i64::MAX,
+        };
+        assert!(db.delete_session("a", claim).unwrap());
+        assert!(!db.delete_session("a", claim).unwrap());
+        assert_eq!(db.unfinished_deletes().unwrap(), ["a"]);
     }
 
     #[test]
