@@ -250,7 +250,10 @@ mod tests {
                     continue;
                 };
                 let errors = absolute_translation_errors(&est, &gt, &t);
-                assert!(errors.iter().all(|e| *e < 1e-9), "{alignment:?}: {errors:?}");
+                assert!(
+                    errors.iter().all(|e| *e < 1e-9),
+                    "{alignment:?}: {errors:?}"
+                );
             }
         }
         let too_many = RpgAlignment {

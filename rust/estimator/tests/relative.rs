@@ -8,9 +8,8 @@ use std::path::{Path, PathBuf};
 
 use serde_json::Value;
 use sitar_estimator::{
-    RPG_MAX_DIFF_NS, RpgAlignment, Statistics, absolute_translation_errors,
-    cumulative_path_length, lengths_from_percents, read_tum, relative_errors, rpg_align,
-    rpg_associate,
+    RPG_MAX_DIFF_NS, RpgAlignment, Statistics, absolute_translation_errors, cumulative_path_length,
+    lengths_from_percents, read_tum, relative_errors, rpg_align, rpg_associate,
 };
 
 /// Tolerance against numpy, relative to the value (absolute below 1).
@@ -18,7 +17,9 @@ const TOLERANCE: f64 = 1e-9;
 
 /// A path in the golden file is relative to the repository root.
 fn repo(path: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..").join(path)
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../..")
+        .join(path)
 }
 
 fn f(v: &Value) -> f64 {
@@ -50,10 +51,18 @@ fn check(case: &Value) {
     let reference = read_tum(&repo(case["reference"].as_str().unwrap())).unwrap();
     let estimate = read_tum(&repo(case["estimate"].as_str().unwrap())).unwrap();
     let pairs = rpg_associate(&estimate, &reference, RPG_MAX_DIFF_NS);
-    assert_eq!(pairs.len() as u64, case["pairs"].as_u64().unwrap(), "{name}");
+    assert_eq!(
+        pairs.len() as u64,
+        case["pairs"].as_u64().unwrap(),
+        "{name}"
+    );
     for (k, want) in case["first_pairs"].as_array().unwrap().iter().enumerate() {
         let want = (want[0].as_u64().unwrap(), want[1].as_u64().unwrap());
-        assert_eq!((pairs[k].0 as u64, pairs[k].1 as u64), want, "{name} pair {k}");
+        assert_eq!(
+            (pairs[k].0 as u64, pairs[k].1 as u64),
+            want,
+            "{name} pair {k}"
+        );
     }
     let est = estimate.reduce_to_ids(&pairs.iter().map(|p| p.0).collect::<Vec<_>>());
     let gt = reference.reduce_to_ids(&pairs.iter().map(|p| p.1).collect::<Vec<_>>());
@@ -95,7 +104,11 @@ fn check(case: &Value) {
         // Truncated to centimetres on both sides: equal, not merely close.
         assert_eq!(at.length_m, f(&want["length_m"]), "{name}");
         let what = format!("{name} at {} m", at.length_m);
-        assert_eq!(at.samples.len() as u64, want["count"].as_u64().unwrap(), "{what}");
+        assert_eq!(
+            at.samples.len() as u64,
+            want["count"].as_u64().unwrap(),
+            "{what}"
+        );
         let metric = |s: &sitar_estimator::RelativeSample, m: &str| match m {
             "trans_m" => s.trans_m,
             "trans_percent" => s.trans_percent,
@@ -149,10 +162,7 @@ fn relative_errors_equal_numpy_on_synthetic_and_real_runs() {
 
 #[test]
 fn bad_lengths_and_unpaired_trajectories_are_errors() {
-    let gt = read_tum(&repo(
-        "rust/estimator/tests/data/relative/synthetic_gt.txt",
-    ))
-    .unwrap();
+    let gt = read_tum(&repo("rust/estimator/tests/data/relative/synthetic_gt.txt")).unwrap();
     for bad in [0.0, -1.0, f64::NAN, f64::INFINITY] {
         let e = relative_errors(&gt, &gt, 1.0, &[bad]).unwrap_err();
         assert!(e.to_string().contains("lengths"), "{e}");
