@@ -218,11 +218,13 @@ fn plain_tree_equals_rpg_layout_and_formats_agree() {
         dir,
         "--format",
         "json",
+        "--lengths",
+        "8,16",
         "-o",
         out.to_str().unwrap(),
     ]);
     let doc: Value = serde_json::from_str(&std::fs::read_to_string(out).unwrap()).unwrap();
-    assert_eq!(doc["results"][0]["lengths_m"][0], 8.0.into());
+    assert_eq!(doc["results"][0]["lengths_m"][0].as_f64(), Some(8.0));
     // Without eval_cfg.yaml: rpg's default, Sim(3) on every pose.
     std::fs::remove_file(b.path().join("vislam/MH_04/eval_cfg.yaml")).unwrap();
     assert_eq!(json(b.path())["results"][0]["align_type"], "sim3");
