@@ -66,6 +66,11 @@ pub struct Args {
     /// (-1: all).
     #[arg(long = "align_num_frames", alias = "align-num-frames", default_value_t = -1, allow_negative_numbers = true)]
     align_num_frames: i64,
+    /// Save rpg's comparison box plots: PNG, SVG or PDF by the extension (FILE_ape_rmse.EXT,
+    /// and per sequence FILE_SEQ_trans_percent.EXT and FILE_SEQ_yaw_deg.EXT: a box per
+    /// algorithm and length, every run pooled; a PDF gets every page).
+    #[arg(long = "save_plot", value_name = "FILE")]
+    save_plot: Option<PathBuf>,
 }
 
 fn parse_align_type(s: &str) -> Result<RpgAlignType, String> {
@@ -124,7 +129,11 @@ pub fn run(args: Args) -> Result<()> {
         num_frames: args.align_num_frames,
     };
     let bench = compute(&args.dir, default, lengths)?;
-    crate::output::emit(args.output.as_deref(), &render(&bench, args.format))
+    crate::output::emit(args.output.as_deref(), &render(&bench, args.format))?;
+    match &args.save_plot {
+        Some(path) => crate::bench_plot::save(&bench, path),
+        None => Ok(()),
+    }
 }
 
 /// Discovers the cells under `dir` and computes every run.

@@ -10,6 +10,7 @@ mod archive;
 mod bag;
 mod bench;
 mod bench_layout;
+mod bench_plot;
 mod bench_table;
 mod calibrate;
 mod canvas;

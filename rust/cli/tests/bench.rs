@@ -225,6 +225,14 @@ fn plain_tree_equals_rpg_layout_and_formats_agree() {
     ]);
     let doc: Value = serde_json::from_str(&std::fs::read_to_string(out).unwrap()).unwrap();
     assert_eq!(doc["results"][0]["lengths_m"][0].as_f64(), Some(8.0));
+    // The box plots: APE RMSE, and per sequence a box per algorithm and length.
+    let plot = b.path().join("plots").join("bench.svg");
+    std::fs::create_dir_all(plot.parent().unwrap()).unwrap();
+    ok(&["bench", dir, "--save_plot", plot.to_str().unwrap()]);
+    for page in ["ape_rmse", "MH_04_trans_percent", "V1_02_yaw_deg"] {
+        let file = b.path().join(format!("plots/bench_{page}.svg"));
+        assert!(file.is_file(), "{page}");
+    }
     // Without eval_cfg.yaml: rpg's default, Sim(3) on every pose.
     std::fs::remove_file(b.path().join("vislam/MH_04/eval_cfg.yaml")).unwrap();
     assert_eq!(json(b.path())["results"][0]["align_type"], "sim3");
