@@ -3,6 +3,7 @@
 //! error at sub-trajectory lengths, KITTI drift; printed by `bench_table`. Every run is read
 //! once and computed in parallel (rayon).
 
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, anyhow, bail};
@@ -139,9 +140,20 @@ pub fn run(args: Args) -> Result<()> {
 /// Discovers the cells under `dir` and computes every run.
 pub fn compute(dir: &Path, default: RpgAlignment, lengths: Lengths) -> Result<Bench> {
     let cells = discover(dir, default)?;
+    // Each ground truth once, however many algorithms share it (the plain tree's gt/SEQ.txt).
+    let mut files: Vec<&Path> = cells.iter().map(|c| c.ground_truth.as_path()).collect();
+    files.sort_unstable();
+    files.dedup();
+    let truths: HashMap<PathBuf, Trajectory> = files
+        .into_par_iter()
+        .map(|f| Ok((f.to_path_buf(), read(f)?)))
+        .collect::<Result<_>>()?;
     let cells = cells
         .into_par_iter()
-        .map(|cell| compute_cell(cell, &lengths))
+        .map(|cell| {
+            let gt = &truths[&cell.ground_truth];
+            compute_cell(cell, gt, &lengths)
+        })
         .collect::<Result<Vec<_>>>()?;
     Ok(Bench { lengths, cells })
 }
@@ -152,17 +164,16 @@ fn read(path: &Path) -> Result<Trajectory> {
         .with_context(|| format!("{}", path.display()))
 }
 
-fn compute_cell(cell: Cell, lengths: &Lengths) -> Result<CellResult> {
-    let gt = read(&cell.ground_truth)?;
+fn compute_cell(cell: Cell, gt: &Trajectory, lengths: &Lengths) -> Result<CellResult> {
     let lengths_m = match lengths {
         Lengths::Metres(m) => m.clone(),
-        Lengths::Percent(p) => lengths_from_percents(cumulative_path_length(&gt), p),
+        Lengths::Percent(p) => lengths_from_percents(cumulative_path_length(gt), p),
     };
     let runs = cell
         .runs
         .par_iter()
         .map(|file| {
-            compute_run(&gt, file, cell.alignment, &lengths_m).with_context(|| {
+            compute_run(gt, file, cell.alignment, &lengths_m).with_context(|| {
                 format!("{} against {}", file.display(), cell.ground_truth.display())
             })
         })
