@@ -8,6 +8,10 @@
 mod ape;
 mod archive;
 mod bag;
+mod bench;
+mod bench_layout;
+mod bench_plot;
+mod bench_table;
 mod calibrate;
 mod canvas;
 mod compare;
@@ -33,6 +37,7 @@ mod panels;
 mod pdf;
 mod plot;
 mod pyfmt;
+mod relative;
 mod res;
 mod rpe;
 mod runs;
@@ -68,6 +73,8 @@ enum Command {
     Traj(traj::Args),
     Res(res::Args),
     Drift(drift::Args),
+    Relative(relative::Args),
+    Bench(bench::Args),
     Completions(shell::CompletionsArgs),
     Man(shell::ManArgs),
     Estimate(estimate::Args),
@@ -94,7 +101,10 @@ const GROUPS: &[(&str, &[&str])] = &[
         "evo-compatible (evo's command lines)",
         &["ape", "rpe", "traj", "res"],
     ),
-    ("Beyond evo (ground-truth metrics evo lacks)", &["drift"]),
+    (
+        "Beyond evo (ground-truth metrics evo lacks)",
+        &["drift", "relative", "bench"],
+    ),
     (
         "SiTAR analysis",
         &["estimate", "evaluate", "calibrate", "scene"],
@@ -162,6 +172,8 @@ fn main() -> ExitCode {
         Command::Traj(args) => traj::run(args),
         Command::Res(args) => res::run(args),
         Command::Drift(args) => drift::run(args),
+        Command::Relative(args) => relative::run(args),
+        Command::Bench(args) => bench::run(args),
         Command::Completions(args) => shell::completions(args, &mut cli()),
         Command::Man(args) => shell::man(args, cli()),
         Command::Estimate(args) => estimate::run(args),

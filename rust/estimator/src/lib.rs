@@ -206,8 +206,10 @@ mod metrics;
 mod pairwise;
 mod pose_messages;
 mod ranking;
+mod relative_lengths;
 mod ros1;
 mod rosbag;
+mod rpg_align;
 mod sorted_runs;
 mod statistics;
 mod sync;
@@ -256,10 +258,18 @@ pub use pose_messages::{Encoding, PoseMessage, StampedPoseValue, TopicMessages};
 pub use ranking::{
     MIN_FIT_ERROR_M, SweepPoint, ThresholdSweep, fit_scale, median_ratio, spearman, threshold_sweep,
 };
+pub use relative_lengths::{
+    RPG_DEFAULT_PERCENTS, RPG_LENGTH_TOLERANCE, RelativeAtLength, RelativeSample,
+    cumulative_path_length, lengths_from_percents, relative_errors,
+};
 pub use ros1::{decode_ros1_pose, read_ros1_bag, read_ros1_bag_topics};
 pub use rosbag::{
     BagTrajectory, decode_pose, decode_pose_as, read_mcap, read_mcap_from, read_mcap_topics,
     topic_trajectory,
+};
+pub use rpg_align::{
+    RPG_MAX_DIFF_NS, RpgAlignType, RpgAlignment, absolute_translation_errors, rpg_align,
+    rpg_associate,
 };
 /// The class rule and its defaults, shared with the phone and the backend.
 pub use sitar_core::{DEFAULT_SETTING, ErrorClass, Thresholds};
