@@ -72,6 +72,10 @@ pub struct Args {
     /// algorithm and length, every run pooled; a PDF gets every page).
     #[arg(long = "save_plot", value_name = "FILE")]
     save_plot: Option<PathBuf>,
+    /// Also write one self-contained HTML page: the table, every box plot inline and the
+    /// JSON document; it fetches nothing when opened.
+    #[arg(long, value_name = "FILE")]
+    html: Option<PathBuf>,
 }
 
 fn parse_align_type(s: &str) -> Result<RpgAlignType, String> {
@@ -131,10 +135,18 @@ pub fn run(args: Args) -> Result<()> {
     };
     let bench = compute(&args.dir, default, lengths)?;
     crate::output::emit(args.output.as_deref(), &render(&bench, args.format))?;
-    match &args.save_plot {
-        Some(path) => crate::bench_plot::save(&bench, path),
-        None => Ok(()),
+    if let Some(path) = &args.save_plot {
+        crate::bench_plot::save(&bench, path)?;
     }
+    if let Some(path) = &args.html {
+        let drawings = crate::bench_plot::drawings(&bench);
+        let pages: Vec<(&str, crate::canvas::Page<'_>)> = drawings
+            .iter()
+            .map(|(name, d)| (name.as_str(), crate::canvas::Page::Other(d)))
+            .collect();
+        crate::html::write(path, &crate::bench_table::document(&bench), &pages)?;
+    }
+    Ok(())
 }
 
 /// Discovers the cells under `dir` and computes every run.

@@ -22,6 +22,18 @@ fn label(lengths: &Lengths, k: usize, metres: f64) -> String {
 /// Writes the pages: `FILE_ape_rmse.EXT`, then per sequence `FILE_SEQ_trans_percent.EXT` and
 /// `FILE_SEQ_yaw_deg.EXT` (one PDF with every page).
 pub fn save(bench: &Bench, path: &Path) -> Result<()> {
+    let drawings = drawings(bench);
+    let pages: Vec<(&str, Page<'_>)> = drawings
+        .iter()
+        .map(|(name, d)| (name.as_str(), Page::Other(d)))
+        .collect();
+    let console = Console::new(&UsabilityArgs::default())?;
+    crate::runs::plots(&pages, false, Some(path), None, &console)
+}
+
+/// The figures, by page name: APE RMSE over runs, then per sequence the relative
+/// translation and yaw errors by algorithm and length.
+pub fn drawings(bench: &Bench) -> Vec<(String, Drawing)> {
     let mut sequences: Vec<&str> = bench
         .cells
         .iter()
@@ -81,10 +93,5 @@ pub fn save(bench: &Bench, path: &Path) -> Result<()> {
             ));
         }
     }
-    let pages: Vec<(&str, Page<'_>)> = drawings
-        .iter()
-        .map(|(name, d)| (name.as_str(), Page::Other(d)))
-        .collect();
-    let console = Console::new(&UsabilityArgs::default())?;
-    crate::runs::plots(&pages, false, Some(path), None, &console)
+    drawings
 }

@@ -94,7 +94,7 @@ fn length_label(lengths: &Lengths, k: usize) -> String {
     }
 }
 
-fn document(bench: &Bench) -> Value {
+pub fn document(bench: &Bench) -> Value {
     let results: Vec<Value> = bench
         .cells
         .iter()

@@ -113,7 +113,10 @@ pub fn page(document: &Value, figures: &[(&str, Page<'_>)], path: &Path) -> Resu
         .get("title")
         .and_then(Value::as_str)
         .map(|t| t.lines().next().unwrap_or(t).to_owned())
-        .unwrap_or_else(|| "sitar result".into());
+        .unwrap_or_else(|| match document.get("metric").and_then(Value::as_str) {
+            Some(metric) => format!("sitar {metric}"),
+            None => "sitar result".into(),
+        });
     let command = std::iter::once("sitar".to_owned())
         .chain(std::env::args().skip(1).map(|a| quoted(&a)))
         .collect::<Vec<_>>()

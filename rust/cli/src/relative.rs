@@ -79,6 +79,10 @@ pub struct Options {
     /// Write the --format output to this file instead of stdout.
     #[arg(short = 'o', long, requires = "format")]
     output: Option<PathBuf>,
+    /// Also write one self-contained HTML page (tables, every box plot inline, the JSON
+    /// document); it fetches nothing when opened.
+    #[arg(long, value_name = "FILE")]
+    html: Option<PathBuf>,
     #[command(flatten)]
     usability: UsabilityArgs,
 }
@@ -252,22 +256,23 @@ fn emit_outcomes(outcomes: &[Outcome], options: &Options, console: &Console) -> 
     let names: Vec<&str> = METRICS.map(|m| m.0).to_vec();
     let n = outcomes.len();
     let value = |k: usize, name: &str| outcomes[k].mean(name);
+    // The JSON document: one run's, or the runs' with their summary.
+    let full_document = || match n {
+        1 => document(&outcomes[0]),
+        _ => json!({
+            "version": 1,
+            "metric": "relative",
+            "reference": outcomes[0].ref_name,
+            "runs": n,
+            "trials": outcomes.iter().map(document).collect::<Vec<_>>(),
+            "across_trials": across_trials(&names, value, n),
+        }),
+    };
     match (options.format, n) {
-        (Some(OutputFormat::Json), 1) => emit(
+        (Some(OutputFormat::Json), _) => emit(
             options.output.as_deref(),
-            &(document(&outcomes[0]).to_string() + "\n"),
+            &(full_document().to_string() + "\n"),
         )?,
-        (Some(OutputFormat::Json), _) => {
-            let doc = json!({
-                "version": 1,
-                "metric": "relative",
-                "reference": outcomes[0].ref_name,
-                "runs": n,
-                "trials": outcomes.iter().map(document).collect::<Vec<_>>(),
-                "across_trials": across_trials(&names, value, n),
-            });
-            emit(options.output.as_deref(), &(doc.to_string() + "\n"))?;
-        }
         (Some(OutputFormat::Csv), _) => {
             let mut text = format!("trial,estimate,length_m,start,end,{}\n", names.join(","));
             for (k, o) in outcomes.iter().enumerate() {
@@ -344,5 +349,9 @@ fn emit_outcomes(outcomes: &[Outcome], options: &Options, console: &Console) -> 
         options.save_plot.as_deref(),
         None,
         console,
-    )
+    )?;
+    if let Some(path) = &options.html {
+        crate::html::write(path, &full_document(), &pages)?;
+    }
+    Ok(())
 }

@@ -198,3 +198,76 @@ fn an_unwritable_page_is_an_error_that_names_it() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(stderr.contains("missing/ape.html"), "{stderr}");
 }
+
+#[test]
+fn relative_and_bench_pages_hold_their_tables_and_box_plots() {
+    let dir = tempfile::tempdir().unwrap();
+    files(dir.path());
+    let rel = [
+        "relative",
+        "tum",
+        "gt.txt",
+        "run0.txt",
+        "run1.txt",
+        "--lengths",
+        "2,4",
+    ];
+    let json = sitar(dir.path(), &[&rel[..], &["--format", "json"]].concat());
+    sitar(
+        dir.path(),
+        &[&rel[..], &["--html", "relative.html"]].concat(),
+    );
+    let html = std::fs::read_to_string(dir.path().join("relative.html")).unwrap();
+    assert!(self_contained(&html) >= 2, "a box plot per error");
+    assert_eq!(
+        page_document(&html),
+        serde_json::from_str::<Value>(&json).unwrap()
+    );
+
+    // A plain tree: ALG/SEQ/runN.txt beside gt/SEQ.txt.
+    let tree = dir.path().join("tree");
+    for (alg, runs) in [
+        ("vio", ["run0.txt", "run1.txt"]),
+        ("slam", ["run1.txt", "run0.txt"]),
+    ] {
+        std::fs::create_dir_all(tree.join(alg).join("helix")).unwrap();
+        for (k, run) in runs.iter().enumerate() {
+            std::fs::copy(
+                dir.path().join(run),
+                tree.join(alg).join("helix").join(format!("run{k}.txt")),
+            )
+            .unwrap();
+        }
+    }
+    std::fs::create_dir_all(tree.join("gt")).unwrap();
+    std::fs::copy(dir.path().join("gt.txt"), tree.join("gt/helix.txt")).unwrap();
+    let json = sitar(
+        dir.path(),
+        &["bench", "tree", "--lengths", "2,4", "--format", "json"],
+    );
+    sitar(
+        dir.path(),
+        &["bench", "tree", "--lengths", "2,4", "--html", "bench.html"],
+    );
+    let html = std::fs::read_to_string(dir.path().join("bench.html")).unwrap();
+    assert_eq!(
+        self_contained(&html),
+        3,
+        "APE RMSE, then the sequence's translation and yaw"
+    );
+    let expected: Value = serde_json::from_str(&json).unwrap();
+    assert_eq!(page_document(&html), expected);
+    assert!(
+        html.contains("<h1>sitar bench</h1>"),
+        "titled by its metric"
+    );
+    assert!(html.contains("<h2>results</h2>"));
+    assert!(html.contains("<th>ape_rmse.mean</th>"));
+    for row in expected["results"].as_array().unwrap() {
+        let mean = row["ape_rmse"]["mean"].as_f64().unwrap();
+        assert!(
+            html.contains(&format!("<td class=\"num\">{mean:.6}</td>")),
+            "{mean}"
+        );
+    }
+}
