@@ -110,7 +110,7 @@ fn no_import_cycle_among_the_modules() {
     let uses = |module: &str, used: &str| graph[module].contains(used);
     assert!(uses("plot", "figure") && uses("panels", "plot") && uses("canvas", "panels"));
     assert!(
-        uses("figures", "canvas") && uses("figures", "metric") && uses("metric", "metric_args")
+        uses("figures", "canvas") && uses("figures", "metric_args") && uses("figures", "archive")
     );
     assert!(!uses("plot", "canvas") && !uses("canvas", "figures"));
 }
