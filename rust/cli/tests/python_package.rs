@@ -67,8 +67,8 @@ fn the_python_package_builds_and_its_pytest_suite_passes() {
     }
     let has_pytest = Command::new(&python)
         .args(["-c", "import pytest"])
-        .status()
-        .is_ok_and(|s| s.success());
+        .output()
+        .is_ok_and(|o| o.status.success());
     if !has_pytest {
         run("pip install pytest", &mut pip(&["pytest"])).unwrap();
     }

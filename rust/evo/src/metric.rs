@@ -84,6 +84,7 @@ impl Metric {
 }
 
 /// A computed metric with everything evo prints, saves and plots.
+#[derive(Debug, Clone)]
 pub struct Outcome {
     /// The metric.
     pub metric: Metric,
