@@ -4,9 +4,9 @@ use anyhow::Result;
 use sitar_estimator::{DirectionRelation, PoseRelation};
 
 use crate::console::{Console, UsabilityArgs};
-use crate::metric::{self, ApeRelation, Metric};
 use crate::metric_args::{AlgorithmArgs, OutputArgs, check_supported};
 use crate::source::{self, format_subcommands};
+use sitar_evo::metric::{self, ApeRelation, Metric};
 
 /// Absolute pose error of an estimate against a reference, as evo_ape.
 ///
@@ -57,18 +57,19 @@ pub fn run(args: Args) -> Result<()> {
     let console = Console::new(&options.usability)?;
     check_supported(&options.output)?;
     let runs = source::load(&source, &console)?;
+    let algorithm = options.algorithm.options();
     let outcomes = runs
         .into_iter()
         .map(|loaded| {
             metric::compute(
                 Metric::Ape(options.pose_relation),
                 loaded,
-                &options.algorithm,
+                &algorithm,
                 options.output.plot_full_ref,
                 &console,
             )
         })
-        .collect::<Result<Vec<_>>>()?;
+        .collect::<sitar_evo::Result<Vec<_>>>()?;
     match outcomes.as_slice() {
         [one] => crate::compare::finish(one, &options.output, &console),
         several => crate::runs::finish(several, &options.output, &console),

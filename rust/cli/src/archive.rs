@@ -9,6 +9,7 @@ use std::io::{Read, Write};
 use std::path::Path;
 
 use anyhow::{Context, Result, bail};
+use sitar_evo::metric::{Metric, Outcome};
 
 /// Most entries `sitar res` reads from one archive.
 pub const MAX_ENTRIES: usize = 64;
@@ -55,6 +56,61 @@ pub struct ResultArchive {
 }
 
 impl ResultArchive {
+    /// The result as evo's archive: info, stats, the arrays evo writes.
+    pub fn of(outcome: &Outcome) -> ResultArchive {
+        let info = vec![
+            ("title".to_owned(), outcome.title.clone()),
+            ("ref_name".to_owned(), outcome.ref_name.clone()),
+            ("est_name".to_owned(), outcome.est_name.clone()),
+            ("label".to_owned(), outcome.label()),
+        ];
+        let stats = outcome
+            .stats_list()
+            .iter()
+            .map(|&(k, v)| (k.to_owned(), v))
+            .collect();
+        let mut arrays = vec![(
+            "error_array".to_owned(),
+            Array::vector(outcome.errors.errors.clone()),
+        )];
+        if outcome.timed {
+            let ids = outcome.result_ids();
+            let (reference, estimate) = (
+                outcome.reference.reduce_to_ids(&ids),
+                outcome.estimate.reduce_to_ids(&ids),
+            );
+            // RPE drops the first pose again: it only anchors the distances.
+            let skip = usize::from(matches!(outcome.metric, Metric::Rpe(_)));
+            // Seconds as evo holds them (floats), differences taken in floats as evo does.
+            let stamps = estimate.seconds();
+            let from_start: Vec<f64> = stamps.iter().map(|&t| t - stamps[0]).collect();
+            arrays.push((
+                "seconds_from_start".into(),
+                Array::vector(from_start[skip..].to_vec()),
+            ));
+            arrays.push(("timestamps".into(), Array::vector(stamps[skip..].to_vec())));
+            arrays.push((
+                "distances_from_start".into(),
+                Array::vector(reference.distances()[skip..].to_vec()),
+            ));
+            arrays.push((
+                "distances".into(),
+                Array::vector(estimate.distances()[skip..].to_vec()),
+            ));
+        }
+        if let Some(m) = outcome.alignment_matrix {
+            arrays.push((
+                "alignment_transformation_sim3".into(),
+                Array::matrix(m.iter().flatten().copied().collect(), 4, 4),
+            ));
+        }
+        ResultArchive {
+            info,
+            stats,
+            arrays,
+        }
+    }
+
     /// An info value.
     pub fn info(&self, key: &str) -> Option<&str> {
         self.info
@@ -186,7 +242,7 @@ fn json_float(v: f64) -> String {
     } else if v.is_infinite() {
         if v > 0.0 { "Infinity" } else { "-Infinity" }.into()
     } else {
-        crate::pyfmt::repr(v)
+        sitar_evo::pyfmt::repr(v)
     }
 }
 

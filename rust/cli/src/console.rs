@@ -10,8 +10,7 @@ use std::sync::Mutex;
 use anyhow::{Context, Result};
 
 /// evo's separator line of verbose output.
-pub const SEP: &str =
-    "--------------------------------------------------------------------------------";
+pub use sitar_evo::SEP;
 
 /// evo's usability options, shared by `ape`, `rpe`, `traj` and `res`.
 #[derive(clap::Args, Debug, Clone, Default)]
@@ -102,5 +101,34 @@ impl Console {
     /// True with `-v`/`--debug`.
     pub fn is_verbose(&self) -> bool {
         self.verbose
+    }
+}
+
+/// The library's messages go where evo prints them; a failed write is the same error the
+/// console's own lines give (the chain still ends in the I/O error, so a closed pipe ends
+/// `sitar` quietly).
+impl sitar_evo::Messages for Console {
+    fn debug(&self, text: &str) -> sitar_evo::Result<()> {
+        Console::debug(self, text).map_err(to_library)
+    }
+
+    fn info(&self, text: &str) -> sitar_evo::Result<()> {
+        Console::info(self, text).map_err(to_library)
+    }
+
+    fn warn(&self, text: &str) {
+        Console::warn(self, text);
+    }
+
+    fn note(&self, text: &str) {
+        eprintln!("{text}");
+    }
+}
+
+/// A console error (stdout could not be written) as the library's.
+fn to_library(error: anyhow::Error) -> sitar_evo::Error {
+    match error.downcast::<std::io::Error>() {
+        Ok(io) => sitar_evo::Error::Output(io),
+        Err(other) => sitar_evo::Error::Invalid(format!("{other:#}")),
     }
 }

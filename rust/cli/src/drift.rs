@@ -4,20 +4,21 @@
 
 use std::path::PathBuf;
 
-use anyhow::{Result, anyhow, bail};
-use serde_json::{Value, json};
+use anyhow::Result;
+use serde_json::Value;
 use sitar_estimator::{
-    Alignment, Drift, DriftBin, DriftOptions, KITTI_FRAME_INTERVAL_S, KITTI_LENGTHS_M,
-    KITTI_SPEED_STEP_M_S, KITTI_STEP, SegmentDuration, drift,
+    Drift, DriftBin, DriftOptions, KITTI_LENGTHS_M, KITTI_SPEED_STEP_M_S, KITTI_STEP,
 };
+use sitar_evo::DriftSettings;
+use sitar_evo::drift::{DriftOutcome as Outcome, compute_drift, drift_runs_json, lengths_text};
 
 use crate::canvas::Page;
 use crate::console::{Console, SEP, UsabilityArgs};
 use crate::figure::{DistributionKind, Drawing, PALETTE, Series};
-use crate::metric_args::{AlgorithmArgs, AxisArg};
-use crate::output::{OutputFormat, emit, json_number};
-use crate::runs::{across_table, across_trials, csv_field, run_label, table};
-use crate::source::{self, Loaded, format_subcommands};
+use crate::metric_args::AxisArg;
+use crate::output::{OutputFormat, emit};
+use crate::runs::{across_table, csv_field, run_label, table};
+use crate::source::{self, format_subcommands};
 
 /// Drift over path length, as the KITTI odometry benchmark measures it.
 ///
@@ -92,181 +93,33 @@ pub struct Options {
 
 format_subcommands!(Format, Options);
 
-/// One run's drift and what it was computed on.
-struct Outcome {
-    ref_name: String,
-    est_name: String,
-    drift: Drift,
-    alignment: Alignment,
-    scale: Option<f64>,
-    poses: usize,
-    path_m: f64,
-    stamps: bool,
-}
-
 pub fn run(args: Args) -> Result<()> {
     let (source, options) = args.source.split();
     let console = Console::new(&options.usability)?;
-    if !(options.speed_step.is_finite() && options.speed_step > 0.0) {
-        bail!(
-            "--speed_step must be a positive number of m/s, got {}",
-            options.speed_step
-        );
-    }
-    let settings = DriftOptions {
-        lengths_m: options
+    let drift = DriftSettings {
+        lengths: options
             .lengths
             .clone()
             .unwrap_or_else(|| KITTI_LENGTHS_M.to_vec()),
         step: options.step,
-        ..DriftOptions::default()
-    }
-    .with_speed_step(options.speed_step);
-    let runs = source::load(&source, &console)?;
-    let outcomes = runs
-        .into_iter()
-        .map(|loaded| compute(loaded, &options, settings.clone(), &console))
-        .collect::<Result<Vec<_>>>()?;
-    let title = title(&settings, &options);
-    match outcomes.as_slice() {
-        [one] => finish_one(one, &title, &settings, &options, &console),
-        several => finish_runs(several, &title, &settings, &options, &console),
-    }
-}
-
-/// Pairs (stamps or index), aligns as asked and computes one run's drift.
-fn compute(
-    loaded: Loaded,
-    options: &Options,
-    mut settings: DriftOptions,
-    console: &Console,
-) -> Result<Outcome> {
-    let Loaded {
-        reference,
-        estimate,
-        sync,
-    } = loaded;
-    let (ref_name, est_name) = (reference.name, estimate.name);
-    let (mut reference, mut estimate) = (reference.trajectory, estimate.trajectory);
-    if let Some(sync) = &sync {
-        (reference, estimate, _) =
-            crate::metric::synchronise(reference, estimate, sync, (&ref_name, &est_name), console)?;
-        settings.duration = SegmentDuration::Stamps;
-    } else {
-        if reference.len() != estimate.len() {
-            bail!(
-                "trajectories must have same number of poses ({ref_name}: {}, {est_name}: {})",
-                reference.len(),
-                estimate.len()
-            );
-        }
-        settings.duration = SegmentDuration::Frames {
-            interval_s: KITTI_FRAME_INTERVAL_S,
-        };
-    }
-    let algorithm = AlgorithmArgs {
+        speed_step: options.speed_step,
         align: options.align,
         correct_scale: options.correct_scale,
         n_to_align: options.n_to_align,
         yaw_only: options.yaw_only,
-        yaw_axis: options.yaw_axis,
-        estimate_t_offset: false,
-        t_offset_range: 1.0,
-        show_pairing: false,
-        align_origin: false,
-        change_unit: None,
-        project_to_plane: None,
-        downsample: None,
-        motion_filter: None,
+        yaw_axis: options.yaw_axis.axis(),
     };
-    let (alignment, transform, _) =
-        crate::metric::align_estimate(&algorithm, &mut estimate, &reference, console)?;
-    console.debug(SEP)?;
-    let result = drift(&reference, &estimate, &settings).map_err(|e| match e {
-        sitar_estimator::Error::NoPairs(_) => anyhow!(
-            "{est_name}: {e} (--lengths sets shorter segments, e.g. 1,2,3,4,5,6,7,8 indoors)"
-        ),
-        e => anyhow!("{est_name}: {e}"),
-    })?;
-    console.debug(&format!(
-        "{} segments of {} over {} poses of {est_name}",
-        result.segments.len(),
-        lengths_text(&settings.lengths_m),
-        reference.len()
-    ))?;
-    Ok(Outcome {
-        ref_name,
-        est_name,
-        drift: result,
-        alignment,
-        scale: transform.map(|t| t.scale),
-        poses: reference.len(),
-        path_m: reference.distances().last().copied().unwrap_or(0.0),
-        stamps: sync.is_some(),
-    })
-}
-
-/// `1, 2, 3 m`.
-fn lengths_text(lengths: &[f64]) -> String {
-    let list: Vec<String> = lengths.iter().map(f64::to_string).collect();
-    format!("{} m", list.join(", "))
-}
-
-/// The title: the metric, its segments, the alignment (as evo names it).
-fn title(settings: &DriftOptions, options: &Options) -> String {
-    let mut title = format!(
-        "KITTI drift over segments of {} (a start every {} poses)",
-        lengths_text(&settings.lengths_m),
-        settings.step
-    );
-    title += match (options.align, options.correct_scale) {
-        (true, _) if options.yaw_only => match options.yaw_axis {
-            AxisArg::Z => "\n(with 4-DoF position and yaw alignment about z)",
-            AxisArg::Y => "\n(with 4-DoF position and yaw alignment about y)",
-        },
-        (true, false) => "\n(with SE(3) Umeyama alignment)",
-        (true, true) => "\n(with Sim(3) Umeyama alignment)",
-        (false, true) => "\n(scale corrected)",
-        (false, false) => "\n(not aligned)",
-    };
-    if (options.align || options.correct_scale) && options.n_to_align != -1 {
-        title += &format!(" (aligned poses: {})", options.n_to_align);
+    let settings = drift.options()?;
+    let runs = source::load(&source, &console)?;
+    let outcomes = runs
+        .into_iter()
+        .map(|loaded| compute_drift(loaded, &drift, settings.clone(), &console))
+        .collect::<sitar_evo::Result<Vec<_>>>()?;
+    let title = drift.title();
+    match outcomes.as_slice() {
+        [one] => finish_one(one, &title, &settings, &options, &console),
+        several => finish_runs(several, &title, &settings, &options, &console),
     }
-    title
-}
-
-/// A bin as JSON, its centre under `key`.
-fn bin_json(key: &str, bin: &DriftBin) -> Value {
-    json!({
-        key: bin.centre,
-        "segments": bin.segments,
-        "t_err_percent": json_number(bin.t_err_percent),
-        "r_err_deg_per_m": json_number(bin.r_err_deg_per_m),
-    })
-}
-
-/// One run's JSON document.
-fn document(outcome: &Outcome, title: &str, settings: &DriftOptions) -> Value {
-    let d = &outcome.drift;
-    json!({
-        "version": 1,
-        "metric": "drift",
-        "title": title,
-        "reference": outcome.ref_name,
-        "estimate": outcome.est_name,
-        "lengths_m": settings.lengths_m,
-        "step": settings.step,
-        "speed_from": if outcome.stamps { "stamps" } else { "frames" },
-        "alignment": crate::compare::alignment_name(outcome.alignment),
-        "scale": outcome.scale,
-        "associated_poses": outcome.poses,
-        "path_length_m": json_number(outcome.path_m),
-        "t_err_percent": json_number(d.t_err_percent),
-        "r_err_deg_per_m": json_number(d.r_err_deg_per_m),
-        "segments": d.segments.len(),
-        "by_length": d.by_length.iter().map(|b| bin_json("length_m", b)).collect::<Vec<_>>(),
-        "by_speed": d.by_speed.iter().map(|b| bin_json("speed_m_s", b)).collect::<Vec<_>>(),
-    })
 }
 
 /// Lengths with too few segments for their average (the devkit's plots need 3), none
@@ -383,7 +236,7 @@ fn finish_one(
     match options.format {
         Some(OutputFormat::Json) => emit(
             options.output.as_deref(),
-            &(document(outcome, title, settings).to_string() + "\n"),
+            &(outcome.json(title, settings).to_string() + "\n"),
         )?,
         Some(OutputFormat::Csv) => emit(options.output.as_deref(), &segments_csv(outcome))?,
         None => {
@@ -408,12 +261,7 @@ fn finish_one(
         None,
         console,
     )?;
-    html_page(
-        options,
-        &document(outcome, title, settings),
-        &pages,
-        console,
-    )
+    html_page(options, &outcome.json(title, settings), &pages, console)
 }
 
 /// `--html FILE`, when given.
@@ -443,23 +291,10 @@ fn finish_runs(
         "t_err_percent" => outcomes[k].drift.t_err_percent,
         _ => outcomes[k].drift.r_err_deg_per_m,
     };
-    let runs_document = || {
-        json!({
-            "version": 1,
-            "metric": "drift",
-            "title": title,
-            "reference": outcomes[0].ref_name,
-            "runs": n,
-            "trials": outcomes.iter().map(|o| document(o, title, settings)).collect::<Vec<_>>(),
-            "across_trials": across_trials(&NAMES, value, n),
-        })
-    };
     match options.format {
         Some(OutputFormat::Json) => {
-            emit(
-                options.output.as_deref(),
-                &(runs_document().to_string() + "\n"),
-            )?;
+            let doc = drift_runs_json(outcomes, title, settings);
+            emit(options.output.as_deref(), &(doc.to_string() + "\n"))?;
         }
         Some(OutputFormat::Csv) => {
             let mut text = format!("trial,estimate,segments,{}\n", NAMES.join(","));
@@ -549,5 +384,10 @@ fn finish_runs(
         None,
         console,
     )?;
-    html_page(options, &runs_document(), &pages, console)
+    html_page(
+        options,
+        &drift_runs_json(outcomes, title, settings),
+        &pages,
+        console,
+    )
 }

@@ -8,12 +8,14 @@ use crate::canvas::{self, Page};
 use crate::console::Console;
 use crate::distribution::percentile;
 use crate::figure::{ErrorFigure, PAGE, SIZE, Sample};
-use crate::metric::{Metric, Outcome};
+use sitar_evo::metric::{Metric, Outcome};
+
+use crate::archive::ResultArchive;
 use crate::metric_args::{OutputArgs, XDimension};
 
 /// The error figure of a metric outcome, with evo's x dimension and colour-map limits.
 pub fn error_figure(outcome: &Outcome, output: &OutputArgs) -> Result<ErrorFigure> {
-    let archive_like = outcome.archive();
+    let archive_like = ResultArchive::of(outcome);
     let array = |name: &str| archive_like.array(name).map(|a| a.data.clone());
     let n = outcome.errors.errors.len();
     let (xs, x_label) = match (output.plot_x_dimension, outcome.timed) {

@@ -5,6 +5,7 @@ use std::path::PathBuf;
 
 use clap::ValueEnum;
 use sitar_estimator::{GravityAxis, Plane};
+use sitar_evo::AlgorithmOptions;
 
 use crate::figure::PlotMode;
 use crate::output::OutputFormat;
@@ -70,6 +71,30 @@ pub struct AlgorithmArgs {
     /// threshold distance (m) or angle (degrees).
     #[arg(long = "motion_filter", num_args = 2, value_names = ["DISTANCE", "ANGLE_DEGREES"])]
     pub motion_filter: Option<Vec<f64>>,
+}
+
+impl AlgorithmArgs {
+    /// The library's options.
+    pub fn options(&self) -> AlgorithmOptions {
+        AlgorithmOptions {
+            align: self.align,
+            correct_scale: self.correct_scale,
+            n_to_align: self.n_to_align,
+            yaw_only: self.yaw_only,
+            yaw_axis: self.yaw_axis.axis(),
+            estimate_t_offset: self.estimate_t_offset,
+            t_offset_range: self.t_offset_range,
+            show_pairing: self.show_pairing,
+            align_origin: self.align_origin,
+            change_unit: self.change_unit.map(ChangeUnit::unit),
+            project_to_plane: self.project_to_plane.map(PlaneArg::plane),
+            downsample: self.downsample,
+            motion_filter: self
+                .motion_filter
+                .as_deref()
+                .and_then(|f| Some([*f.first()?, *f.get(1)?])),
+        }
+    }
 }
 
 /// evo's output options of `ape` and `rpe`, and SiTAR's `--format`/`-o`.
@@ -148,55 +173,16 @@ pub enum ChangeUnit {
 }
 
 impl ChangeUnit {
-    /// evo's unit name.
-    pub fn name(self) -> &'static str {
+    /// The library's unit.
+    pub fn unit(self) -> sitar_evo::ChangeUnit {
         match self {
-            ChangeUnit::Deg => "deg",
-            ChangeUnit::Rad => "rad",
-            ChangeUnit::Mm => "mm",
-            ChangeUnit::Cm => "cm",
-            ChangeUnit::M => "m",
-            ChangeUnit::Km => "km",
+            ChangeUnit::Deg => sitar_evo::ChangeUnit::Deg,
+            ChangeUnit::Rad => sitar_evo::ChangeUnit::Rad,
+            ChangeUnit::Mm => sitar_evo::ChangeUnit::Mm,
+            ChangeUnit::Cm => sitar_evo::ChangeUnit::Cm,
+            ChangeUnit::M => sitar_evo::ChangeUnit::M,
+            ChangeUnit::Km => sitar_evo::ChangeUnit::Km,
         }
-    }
-
-    /// Metres per unit for lengths.
-    fn metres(self) -> Option<f64> {
-        match self {
-            ChangeUnit::Mm => Some(1e-3),
-            ChangeUnit::Cm => Some(1e-2),
-            ChangeUnit::M => Some(1.0),
-            ChangeUnit::Km => Some(1e3),
-            ChangeUnit::Deg | ChangeUnit::Rad => None,
-        }
-    }
-
-    /// Converts `values` from the unit named `from` (evo's `change_unit`); errors name both.
-    pub fn convert(self, from: &str, values: &mut [f64]) -> Result<(), String> {
-        if from == self.name() {
-            return Ok(());
-        }
-        let from_unit = ChangeUnit::value_variants()
-            .iter()
-            .find(|u| u.name() == from)
-            .copied()
-            .ok_or_else(|| format!("{from} does not support conversions"))?;
-        let factor = match (from_unit.metres(), self.metres()) {
-            (Some(a), Some(b)) => a / b,
-            (None, None) if from_unit == ChangeUnit::Rad => 180.0 / std::f64::consts::PI,
-            (None, None) => std::f64::consts::PI / 180.0,
-            _ => return Err(format!("cannot convert {from} to {}", self.name())),
-        };
-        for v in values {
-            *v = if from_unit == ChangeUnit::Rad && self == ChangeUnit::Deg {
-                v.to_degrees()
-            } else if from_unit == ChangeUnit::Deg && self == ChangeUnit::Rad {
-                v.to_radians()
-            } else {
-                *v * factor
-            };
-        }
-        Ok(())
     }
 }
 

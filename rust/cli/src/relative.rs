@@ -14,10 +14,11 @@ use sitar_estimator::{
 use crate::canvas::Page;
 use crate::console::{Console, SEP, UsabilityArgs};
 use crate::figure::{DistributionKind, Drawing};
-use crate::metric_args::{AlgorithmArgs, AxisArg};
 use crate::output::{OutputFormat, emit, json_number};
-use crate::runs::{across_table, across_trials, csv_field, run_label, table};
-use crate::source::{self, Loaded, format_subcommands};
+use crate::runs::{across_table, csv_field, run_label, table};
+use crate::source::{self, format_subcommands};
+use sitar_evo::document::across_trials;
+use sitar_evo::{AlgorithmOptions, Loaded};
 
 /// Relative error at sub-trajectory lengths, as rpg_trajectory_evaluation defines it.
 ///
@@ -159,8 +160,13 @@ fn compute(loaded: Loaded, options: &Options, console: &Console) -> Result<Outco
     };
     let (mut reference, mut estimate) = (reference.trajectory, estimate.trajectory);
     if let Some(sync) = &sync {
-        (reference, estimate, _) =
-            crate::metric::synchronise(reference, estimate, sync, (&ref_name, &est_name), console)?;
+        (reference, estimate, _) = sitar_evo::sync::synchronise(
+            reference,
+            estimate,
+            sync,
+            (&ref_name, &est_name),
+            console,
+        )?;
     } else if reference.len() != estimate.len() {
         bail!(
             "trajectories must have same number of poses ({ref_name}: {}, {est_name}: {})",
@@ -168,25 +174,17 @@ fn compute(loaded: Loaded, options: &Options, console: &Console) -> Result<Outco
             estimate.len()
         );
     }
-    let algorithm = AlgorithmArgs {
+    let algorithm = AlgorithmOptions {
         align: options.align,
         correct_scale: options.correct_scale,
         n_to_align: options.n_to_align,
         yaw_only: options.yaw_only,
-        yaw_axis: AxisArg::Z,
-        estimate_t_offset: false,
-        t_offset_range: 1.0,
-        show_pairing: false,
-        align_origin: false,
-        change_unit: None,
-        project_to_plane: None,
-        downsample: None,
-        motion_filter: None,
+        ..AlgorithmOptions::default()
     };
     // rpg uses the estimate as read and only the alignment's scale (see the estimator).
     let mut aligned = estimate.clone();
     let (_, transform, _) =
-        crate::metric::align_estimate(&algorithm, &mut aligned, &reference, console)?;
+        sitar_evo::align::align_estimate(&algorithm, &mut aligned, &reference, console)?;
     let scale = transform.map_or(1.0, |t| t.scale);
     let at = relative_errors(&reference, &estimate, scale, &lengths)
         .map_err(|e| anyhow!("{est_name}: {e}"))?;

@@ -275,7 +275,7 @@ fn table(results: &[Labelled], keys: &[String]) -> String {
         .map(|k| {
             let cells: Vec<String> = results
                 .iter()
-                .map(|r| stat(r, k).map_or_else(|| "NaN".into(), crate::pyfmt::pandas_cell))
+                .map(|r| stat(r, k).map_or_else(|| "NaN".into(), sitar_evo::pyfmt::pandas_cell))
                 .collect();
             let width = cells
                 .iter()
@@ -338,7 +338,7 @@ fn csv(results: &[Labelled], keys: &[String]) -> String {
         for k in keys {
             out.push(',');
             if let Some(v) = stat(r, k) {
-                out += &crate::pyfmt::repr(v);
+                out += &sitar_evo::pyfmt::repr(v);
             }
         }
         out.push('\n');

@@ -2,12 +2,12 @@
 
 use anyhow::Result;
 use clap::ValueEnum;
-use sitar_estimator::{DeltaUnit, PoseRelation, RpeOptions};
+use sitar_estimator::{DeltaUnit, PoseRelation};
 
 use crate::console::{Console, UsabilityArgs};
-use crate::metric::{self, Metric};
 use crate::metric_args::{AlgorithmArgs, OutputArgs, check_supported};
 use crate::source::{self, format_subcommands};
+use sitar_evo::metric::{self, Metric};
 
 /// Relative pose error of an estimate against a reference, as evo_rpe.
 ///
@@ -84,35 +84,33 @@ pub fn run(args: Args) -> Result<()> {
     let (source, options) = args.source.split();
     let console = Console::new(&options.usability)?;
     check_supported(&options.output)?;
-    if !(options.delta >= 0.0 && options.delta.is_finite()) {
-        anyhow::bail!("delta must be a positive number, got {}", options.delta);
-    }
-    let rpe = RpeOptions {
-        pose_relation: options.pose_relation,
-        delta: options.delta,
-        delta_unit: match options.delta_unit {
+    let rpe = sitar_evo::rpe_options(
+        options.pose_relation,
+        options.delta,
+        match options.delta_unit {
             Unit::F => DeltaUnit::Frames,
             Unit::D => DeltaUnit::Degrees,
             Unit::R => DeltaUnit::Radians,
             Unit::M => DeltaUnit::Meters,
         },
-        all_pairs: options.all_pairs,
-        rel_delta_tol: options.delta_tol,
-        pairs_from_reference: options.pairs_from_reference,
-    };
+        options.delta_tol,
+        options.all_pairs,
+        options.pairs_from_reference,
+    )?;
     let runs = source::load(&source, &console)?;
+    let algorithm = options.algorithm.options();
     let outcomes = runs
         .into_iter()
         .map(|loaded| {
             metric::compute(
                 Metric::Rpe(rpe),
                 loaded,
-                &options.algorithm,
+                &algorithm,
                 options.output.plot_full_ref,
                 &console,
             )
         })
-        .collect::<Result<Vec<_>>>()?;
+        .collect::<sitar_evo::Result<Vec<_>>>()?;
     match outcomes.as_slice() {
         [one] => crate::compare::finish(one, &options.output, &console),
         several => crate::runs::finish(several, &options.output, &console),

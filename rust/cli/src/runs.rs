@@ -5,47 +5,17 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::Result;
-use serde_json::{Map, Value};
-use sitar_estimator::Statistics;
+use sitar_evo::document::STATS;
+use sitar_evo::metric::Outcome;
 
 use crate::canvas::{self, Page};
 use crate::console::{Console, SEP};
 use crate::figure::{DistributionKind, Drawing, PAGE};
-use crate::metric::Outcome;
 use crate::metric_args::OutputArgs;
-use crate::output::{OutputFormat, emit, json_number};
+use crate::output::{OutputFormat, emit};
 
-/// The names of the statistics over runs, in the order printed.
-pub const ACROSS: [&str; 5] = ["mean", "median", "min", "max", "std"];
-
-/// A statistic's summary over runs: mean, median, min, max, std (population, as numpy's
-/// `std` with ddof 0), in [`ACROSS`]'s order.
-pub fn across(values: &[f64]) -> [f64; 5] {
-    let s = Statistics::from_errors(values);
-    [s.mean, s.median, s.min, s.max, s.std]
-}
-
-/// `{"mean": …, "median": …, "min": …, "max": …, "std": …}` of `values`.
-pub fn across_json(values: &[f64]) -> Value {
-    let summary = across(values);
-    Value::Object(
-        ACROSS
-            .iter()
-            .zip(summary)
-            .map(|(k, v)| ((*k).to_owned(), json_number(v)))
-            .collect(),
-    )
-}
-
-/// `{statistic: across_json(its value in each run)}` for the named statistics.
-pub fn across_trials(names: &[&str], value: impl Fn(usize, &str) -> f64, runs: usize) -> Value {
-    let mut object = Map::new();
-    for name in names {
-        let values: Vec<f64> = (0..runs).map(|k| value(k, name)).collect();
-        object.insert((*name).to_owned(), across_json(&values));
-    }
-    Value::Object(object)
-}
+// The summaries over runs are the library's (the JSON documents use them too).
+pub use sitar_evo::document::{ACROSS, across};
 
 /// A text table: the first `left` columns left-aligned, the others right-aligned, two
 /// spaces apart.
@@ -139,23 +109,12 @@ pub fn plots(
     Ok(())
 }
 
-/// evo's statistics, as `ape`/`rpe` print them.
-const STATS: [&str; 7] = ["rmse", "mean", "median", "std", "min", "max", "sse"];
-
-fn stat(outcome: &Outcome, name: &str) -> f64 {
-    outcome
-        .stats_list()
-        .iter()
-        .find(|(k, _)| *k == name)
-        .map_or(f64::NAN, |(_, v)| *v)
-}
-
 /// Prints, saves and plots the outcomes of `ape`/`rpe` on several runs: the per-run and the
 /// across-runs tables (or `--format csv|json`), one evo archive per run
 /// (`--save_results FILE.zip` → `FILE_trialK.zip`), and a box plot of each run's errors.
 pub fn finish(outcomes: &[Outcome], output: &OutputArgs, console: &Console) -> Result<()> {
     let n = outcomes.len();
-    let value = |k: usize, name: &str| stat(&outcomes[k], name);
+    let value = |k: usize, name: &str| outcomes[k].stat(name);
     let single_file = output
         .plot
         .as_deref()
@@ -174,22 +133,10 @@ pub fn finish(outcomes: &[Outcome], output: &OutputArgs, console: &Console) -> R
     let pages = [("box_plot", Page::Other(&box_plot))];
     // An unwritable `--plot FILE` fails before anything is printed, as for one run.
     plots(&pages[..1], false, None, single_file, console)?;
-    let document = || {
-        let first = &outcomes[0];
-        serde_json::json!({
-            "version": 1,
-            "metric": first.metric.name().to_lowercase(),
-            "reference": first.ref_name,
-            "title": first.title,
-            "unit": first.unit,
-            "runs": n,
-            "trials": outcomes.iter().map(crate::compare::json).collect::<Vec<_>>(),
-            "across_trials": across_trials(&STATS, value, n),
-        })
-    };
     match output.format {
         Some(OutputFormat::Json) => {
-            emit(output.output.as_deref(), &(document().to_string() + "\n"))?;
+            let doc = sitar_evo::document::runs_json(outcomes);
+            emit(output.output.as_deref(), &(doc.to_string() + "\n"))?;
         }
         Some(OutputFormat::Csv) => {
             let mut text = format!("trial,estimate,{}\n", STATS.join(","));
@@ -236,7 +183,7 @@ pub fn finish(outcomes: &[Outcome], output: &OutputArgs, console: &Console) -> R
     let show = output.plot.as_ref().is_some_and(|p| p.is_empty());
     plots(&pages, show, output.save_plot.as_deref(), None, console)?;
     if let Some(path) = &output.html {
-        crate::html::write(path, &document(), &pages)?;
+        crate::html::write(path, &sitar_evo::document::runs_json(outcomes), &pages)?;
         console.debug(&format!("Page saved to {}", path.display()))?;
     }
     if let Some(path) = &output.save_results {
@@ -246,7 +193,7 @@ pub fn finish(outcomes: &[Outcome], output: &OutputArgs, console: &Console) -> R
             if file.exists() {
                 console.warn(&format!("{} exists, overwriting", file.display()));
             }
-            outcome.archive().write(&file)?;
+            crate::archive::ResultArchive::of(outcome).write(&file)?;
             console.debug(&format!("Saved results to {}", file.display()))?;
         }
     }

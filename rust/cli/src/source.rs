@@ -1,14 +1,13 @@
 //! evo's format subcommands (`tum`, `euroc`, `kitti`, `bag`, `bag2`/`mcap`) and
 //! reading REF and EST the way evo does.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
-use anyhow::{Result, bail};
+use anyhow::Result;
 use clap::ValueEnum;
-use sitar_estimator::{
-    ReadOptions, ReadReport, StampOrder, TimeUnitRule, Trajectory, read_euroc_csv_with, read_kitti,
-    read_tum_with,
-};
+use sitar_estimator::TimeUnitRule;
+use sitar_evo::read::{read_euroc_evo, read_kitti_evo, read_tum_evo};
+use sitar_evo::{Loaded, Named, SyncOptions};
 
 use crate::console::{Console, SEP};
 
@@ -41,6 +40,20 @@ pub struct SyncArgs {
     pub time_unit: StampUnit,
 }
 
+impl SyncArgs {
+    /// The library's options.
+    pub fn options(&self) -> SyncOptions {
+        SyncOptions {
+            t_max_diff: self.t_max_diff,
+            t_offset: self.t_offset,
+            sync_method: self.sync_method.method(),
+            t_start: self.t_start,
+            t_end: self.t_end,
+            time_unit: self.time_unit.unit(),
+        }
+    }
+}
+
 impl Default for SyncArgs {
     fn default() -> Self {
         Self {
@@ -64,6 +77,16 @@ pub enum SyncMethod {
     Interpolation,
 }
 
+impl SyncMethod {
+    /// The library's method.
+    pub fn method(self) -> sitar_evo::SyncMethod {
+        match self {
+            SyncMethod::NearestTime => sitar_evo::SyncMethod::NearestTime,
+            SyncMethod::Interpolation => sitar_evo::SyncMethod::Interpolation,
+        }
+    }
+}
+
 /// `--time_unit`: how TUM stamps are read.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum StampUnit {
@@ -76,7 +99,16 @@ pub enum StampUnit {
 }
 
 impl StampUnit {
-    /// The library's rule.
+    /// The library's unit.
+    pub fn unit(self) -> sitar_evo::StampUnit {
+        match self {
+            StampUnit::S => sitar_evo::StampUnit::S,
+            StampUnit::Ns => sitar_evo::StampUnit::Ns,
+            StampUnit::Auto => sitar_evo::StampUnit::Auto,
+        }
+    }
+
+    /// The trajectory library's rule.
     pub fn rule(self) -> TimeUnitRule {
         match self {
             StampUnit::S => TimeUnitRule::Seconds,
@@ -279,121 +311,6 @@ macro_rules! format_subcommands {
 }
 pub(crate) use format_subcommands;
 
-/// What evo knows of a loaded trajectory: its poses and its name (the path as given).
-#[derive(Clone)]
-pub struct Named {
-    /// The poses.
-    pub trajectory: Trajectory,
-    /// The path as given on the command line (evo's `name`).
-    pub name: String,
-    /// Every quaternion was read with unit norm (by numpy's `allclose`, as evo's check).
-    pub unit_quaternions: bool,
-}
-
-/// Reference and estimate as read, with whether they have stamps (KITTI has none).
-pub struct Loaded {
-    /// The reference.
-    pub reference: Named,
-    /// The estimate.
-    pub estimate: Named,
-    /// The sync options (None for KITTI).
-    pub sync: Option<SyncArgs>,
-}
-
-/// evo's reading options with the stamp unit of `--time_unit`.
-pub fn evo_read_options(unit: StampUnit) -> ReadOptions {
-    ReadOptions {
-        time_unit: unit.rule(),
-        stamp_order: StampOrder::AsWritten,
-        normalise_quaternions: true,
-    }
-}
-
-/// Reads one TUM file by evo's rules, telling `console` what it met.
-pub fn read_tum_evo(path: &Path, unit: StampUnit, console: &Console) -> Result<Named> {
-    let (trajectory, report) = read_tum_with(path, &evo_read_options(unit))
-        .map_err(|e| with_format_hint(e.into(), path, "tum"))?;
-    finish(path, trajectory, &report, true, console)
-}
-
-/// Reads one EuRoC ground-truth file by evo's rules.
-pub fn read_euroc_evo(path: &Path, console: &Console) -> Result<Named> {
-    let (trajectory, report) = read_euroc_csv_with(path, &evo_read_options(StampUnit::Ns))
-        .map_err(|e| with_format_hint(e.into(), path, "euroc"))?;
-    finish(path, trajectory, &report, true, console)
-}
-
-/// Reads one KITTI file.
-pub fn read_kitti_evo(path: &Path, console: &Console) -> Result<Named> {
-    let trajectory = read_kitti(path).map_err(|e| with_format_hint(e.into(), path, "kitti"))?;
-    finish(path, trajectory, &ReadReport::default(), false, console)
-}
-
-/// `error` (reading `path` as `given`), with a hint naming the format the file does read
-/// as, if one does: `ape euroc` on a TUM file suggests `tum`.
-fn with_format_hint(error: anyhow::Error, path: &Path, given: &str) -> anyhow::Error {
-    let options = evo_read_options(StampUnit::S);
-    let readers: [(&str, &dyn Fn() -> bool); 3] = [
-        ("tum", &|| {
-            read_tum_with(path, &options).is_ok_and(|t| !t.0.is_empty())
-        }),
-        ("euroc", &|| {
-            read_euroc_csv_with(path, &options).is_ok_and(|t| !t.0.is_empty())
-        }),
-        ("kitti", &|| read_kitti(path).is_ok_and(|t| !t.is_empty())),
-    ];
-    match readers
-        .iter()
-        .find(|(name, reads)| *name != given && reads())
-    {
-        Some((name, _)) => anyhow::anyhow!(
-            "{error:#} (the file reads as the {name} format: use `{name}` in place of `{given}`)"
-        ),
-        None => error,
-    }
-}
-
-fn finish(
-    path: &Path,
-    trajectory: Trajectory,
-    report: &ReadReport,
-    timed: bool,
-    console: &Console,
-) -> Result<Named> {
-    let name = path.display().to_string();
-    if trajectory.is_empty() {
-        bail!("{name}: no poses");
-    }
-    if let Some(line) = report.first_repeated_line {
-        console.warn(&format!(
-            "{name}: {} repeated timestamp(s), the first on line {line}; both poses are kept, as evo keeps them",
-            report.repeated_stamps
-        ));
-    }
-    if let Some(line) = report.first_decreasing_line {
-        console.warn(&format!(
-            "{name}: {} timestamp(s) below the previous one, the first on line {line}; the poses are kept in file order, as evo keeps them",
-            report.decreasing_stamps
-        ));
-    }
-    if report.normalised_quaternions > 0 {
-        console.debug(&format!(
-            "{name}: normalised {} quaternion(s) whose norm was not 1",
-            report.normalised_quaternions
-        ))?;
-    }
-    console.debug(&format!(
-        "Loaded {} {} from: {name}",
-        trajectory.len(),
-        if timed { "stamps and poses" } else { "poses" }
-    ))?;
-    Ok(Named {
-        trajectory,
-        name,
-        unit_quaternions: report.quaternions_off_unit == 0,
-    })
-}
-
 /// Reads the reference and every estimate: one [`Loaded`] per estimate (the reference read
 /// once, then each estimate in the order given).
 pub fn load(source: &Source, console: &Console) -> Result<Vec<Loaded>> {
@@ -401,7 +318,7 @@ pub fn load(source: &Source, console: &Console) -> Result<Vec<Loaded>> {
     let pair = |reference: &Named, estimate: Named, sync: Option<&SyncArgs>| Loaded {
         reference: reference.clone(),
         estimate,
-        sync: sync.cloned(),
+        sync: sync.map(SyncArgs::options),
     };
     match source {
         Source::Tum {
@@ -409,13 +326,13 @@ pub fn load(source: &Source, console: &Console) -> Result<Vec<Loaded>> {
             estimates,
             sync,
         } => {
-            let reference = read_tum_evo(reference, sync.time_unit, console)?;
+            let reference = read_tum_evo(reference, sync.time_unit.unit(), console)?;
             estimates
                 .iter()
                 .map(|e| {
                     Ok(pair(
                         &reference,
-                        read_tum_evo(e, sync.time_unit, console)?,
+                        read_tum_evo(e, sync.time_unit.unit(), console)?,
                         Some(sync),
                     ))
                 })
@@ -432,7 +349,7 @@ pub fn load(source: &Source, console: &Console) -> Result<Vec<Loaded>> {
                 .map(|e| {
                     Ok(pair(
                         &reference,
-                        read_tum_evo(e, sync.time_unit, console)?,
+                        read_tum_evo(e, sync.time_unit.unit(), console)?,
                         Some(sync),
                     ))
                 })

@@ -14,7 +14,8 @@ use crate::canvas::{self, Page};
 use crate::console::{Console, SEP, UsabilityArgs};
 use crate::figure::{Drawing, PAGE, PALETTE, Path3, PlotMode, Series};
 use crate::metric_args::PlaneArg;
-use crate::source::{StampUnit, SyncMethod, read_euroc_evo, read_kitti_evo, read_tum_evo};
+use crate::source::{StampUnit, SyncMethod};
+use sitar_evo::read::{read_euroc_evo, read_kitti_evo, read_tum_evo};
 
 /// Trajectory analysis and manipulation, as evo_traj.
 ///
@@ -279,7 +280,7 @@ pub fn run(args: Args) -> Result<()> {
     let mut off_unit = std::collections::BTreeSet::new();
     let mut read = |path: &Path| -> Result<(String, Trajectory)> {
         let named = match kind {
-            Kind::Tum => read_tum_evo(path, options.time_unit, &console)?,
+            Kind::Tum => read_tum_evo(path, options.time_unit.unit(), &console)?,
             Kind::Euroc => read_euroc_evo(path, &console)?,
             Kind::Kitti => read_kitti_evo(path, &console)?,
         };
@@ -492,7 +493,7 @@ fn add_time_offset(
         }
         console.info(&format!(
             "Adding time offset to {name}: {} (s)",
-            crate::pyfmt::repr(t_offset)
+            sitar_evo::pyfmt::repr(t_offset)
         ))?;
         let unit = t.time_unit;
         for s in &mut t.stamps {
@@ -530,14 +531,14 @@ fn sync_with_reference(
         return Ok(());
     }
     console.debug(SEP)?;
-    let sync = crate::source::SyncArgs {
+    let sync = sitar_evo::SyncOptions {
         t_max_diff: options.t_max_diff,
-        sync_method: options.sync_method,
+        sync_method: options.sync_method.method(),
         ..Default::default()
     };
     for (name, t) in &mut bundle.trajectories {
         console.debug(&format!("Syncing {name} with reference."))?;
-        let (r, e, _) = crate::metric::synchronise(
+        let (r, e, _) = sitar_evo::sync::synchronise(
             reference.clone(),
             t.clone(),
             &sync,
@@ -574,7 +575,7 @@ fn align_to_reference(bundle: &mut Bundle, options: &Options, console: &Console)
                     r.len()
                 );
             }
-            crate::metric::align_logged(t, r, alignment, n, console)
+            sitar_evo::align::align_logged(t, r, alignment, n, console)
                 .with_context(|| format!("aligning {name}"))?;
         }
     }
@@ -746,7 +747,7 @@ fn print_traj_info(
     console.info(SEP)?;
     console.info(&format!("name:\t{name}"))?;
     let timed = kind != Kind::Kitti;
-    let repr = |v: f64| crate::pyfmt::repr(v);
+    let repr = |v: f64| sitar_evo::pyfmt::repr(v);
     if !(console.is_verbose() || options.full_check) {
         let mut line = format!("{} poses, {:.3}m path length", t.len(), t.path_length());
         if timed {
@@ -760,15 +761,15 @@ fn print_traj_info(
         ("nr. of poses".to_owned(), t.len().to_string()),
         (
             "path length (m)".to_owned(),
-            crate::pyfmt::repr(t.path_length()),
+            sitar_evo::pyfmt::repr(t.path_length()),
         ),
         (
             "pos_start (m)".to_owned(),
-            crate::pyfmt::numpy_vector(&t.positions[0].to_array()),
+            sitar_evo::pyfmt::numpy_vector(&t.positions[0].to_array()),
         ),
         (
             "pos_end (m)".to_owned(),
-            crate::pyfmt::numpy_vector(&t.positions[t.len() - 1].to_array()),
+            sitar_evo::pyfmt::numpy_vector(&t.positions[t.len() - 1].to_array()),
         ),
     ];
     if timed {
@@ -851,8 +852,8 @@ fn statistics(t: &Trajectory, timed: bool) -> Result<Vec<(String, f64)>> {
         if dt <= 0.0 {
             bail!(
                 "bad timestamps: {} & {}",
-                crate::pyfmt::repr(t.time_unit.seconds(t.stamps[i])),
-                crate::pyfmt::repr(t.time_unit.seconds(t.stamps[i + 1]))
+                sitar_evo::pyfmt::repr(t.time_unit.seconds(t.stamps[i])),
+                sitar_evo::pyfmt::repr(t.time_unit.seconds(t.stamps[i + 1]))
             );
         }
         speeds.push((t.positions[i + 1] - t.positions[i]).length() / dt);
@@ -1119,7 +1120,7 @@ fn stats_table(bundle: &Bundle, kind: Kind) -> Result<String> {
         for (_, rows) in &columns {
             out.push(',');
             if let Some((_, v)) = rows.iter().find(|r| r.0 == key) {
-                out += &crate::pyfmt::repr(*v);
+                out += &sitar_evo::pyfmt::repr(*v);
             }
         }
         out.push('\n');
