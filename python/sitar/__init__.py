@@ -5,8 +5,7 @@ evo's option names (``align=True``, ``correct_scale``, ``n_to_align``, ``pose_re
 ``delta``, ``delta_unit``, ``all_pairs``, ``t_max_diff``, ``t_offset``, ...) and return the
 dict that ``sitar ape|rpe|drift --format json`` prints. In it, the per-pose errors are numpy
 arrays: ``"errors"`` (float64, the error of each row of the JSON's ``errors``; NaN where
-the JSON has null) and ``"error_stamps"`` (int64: APE each row's ``t``, RPE each row's
-``[start, end]``). With several estimates (a list: repeated runs) each of ``"trials"`` has
+the JSON has null); the keys are exactly the JSON's. With several estimates (a list: repeated runs) each of ``"trials"`` has
 them. Warnings go to :mod:`warnings` as :class:`SitarWarning`; a bad file raises
 :class:`SitarError` (a ValueError) or ``FileNotFoundError`` naming the file (and line);
 an unknown option raises TypeError naming it.
@@ -81,11 +80,6 @@ def _arrays(doc: Dict[str, Any]) -> Dict[str, Any]:
     if isinstance(rows, list):
         errors = [r["error"] for r in rows]
         doc["errors"] = np.array([np.nan if e is None else e for e in errors], dtype=np.float64)
-        if doc.get("metric") == "rpe":
-            stamps = np.array([[r["start"], r["end"]] for r in rows], dtype=np.int64)
-            doc["error_stamps"] = stamps.reshape(len(rows), 2)
-        else:
-            doc["error_stamps"] = np.array([r["t"] for r in rows], dtype=np.int64)
     return doc
 
 
