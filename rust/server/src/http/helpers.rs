@@ -27,6 +27,21 @@ pub(crate) async fn blocking<T: Send + 'static>(
         .map_err(|e| Error::Internal(format!("{what}: {e}")))?
 }
 
+/// [`blocking`] within one of `shared`'s render permits ([`App::renders`]): for answers
+/// built from a session's scene, whose memory grows with the walk.
+pub(crate) async fn rendering<T: Send + 'static>(
+    shared: &App,
+    what: &'static str,
+    f: impl FnOnce() -> Result<T, Error> + Send + 'static,
+) -> Result<T, Error> {
+    let _permit = shared
+        .renders
+        .acquire()
+        .await
+        .map_err(|e| Error::Internal(format!("{what}: {e}")))?;
+    blocking(what, f).await
+}
+
 /// The state every handler gets.
 pub(crate) type AppState = axum::extract::State<Arc<App>>;
 
@@ -178,8 +193,13 @@ pub(crate) fn utf8(bytes: Vec<u8>, what: &str) -> Result<String, Error> {
     })
 }
 
-/// A download: `body` as the file `file_name` of type `content_type`.
-pub(crate) fn attachment(content_type: &'static str, file_name: &str, body: Vec<u8>) -> Response {
+/// A download: `body` (bytes, text or a streamed body) as the file `file_name` of type
+/// `content_type`.
+pub(crate) fn attachment(
+    content_type: &'static str,
+    file_name: &str,
+    body: impl IntoResponse,
+) -> Response {
     let disposition = format!("attachment; filename=\"{file_name}\"");
     (
         [

@@ -222,7 +222,13 @@ pub(crate) async fn render_report(
     base: String,
     standalone: bool,
 ) -> Result<(String, Option<String>), Error> {
+    let _permit = shared
+        .renders
+        .acquire()
+        .await
+        .map_err(|e| Error::Internal(format!("report: {e}")))?;
     let json = results_files::read(&shared, &session, Form::Json)?;
+    let shared = shared.clone();
     tokio::task::spawn_blocking(move || {
         // No trajectory (e.g. trials without a readable reference) still gets a page.
         let phone = scene::load(&shared, &session).ok();
