@@ -27,19 +27,20 @@ pub(crate) async fn blocking<T: Send + 'static>(
         .map_err(|e| Error::Internal(format!("{what}: {e}")))?
 }
 
-/// [`blocking`] within one of `shared`'s render permits ([`App::renders`]): for answers
-/// built from a session's scene, whose memory grows with the walk.
+/// [`blocking`] within one of the render permits ([`App::renders`]): for answers built from
+/// a session's scene, whose memory grows with the walk. `f` gets `shared`.
 pub(crate) async fn rendering<T: Send + 'static>(
-    shared: &App,
+    shared: Arc<App>,
     what: &'static str,
-    f: impl FnOnce() -> Result<T, Error> + Send + 'static,
+    f: impl FnOnce(&App) -> Result<T, Error> + Send + 'static,
 ) -> Result<T, Error> {
-    let _permit = shared
+    let gate = shared.clone();
+    let _permit = gate
         .renders
         .acquire()
         .await
         .map_err(|e| Error::Internal(format!("{what}: {e}")))?;
-    blocking(what, f).await
+    blocking(what, move || f(&shared)).await
 }
 
 /// The state every handler gets.

@@ -13,8 +13,8 @@ use crate::storage::streamed;
 
 /// `GET /v1/sessions/{id}/scene.glb`: trajectory by class, frustums, markers, surface points.
 pub(crate) async fn glb(State(shared): AppState, Found(session): Found) -> Result<Response, Error> {
-    let glb = rendering(&shared.clone(), "scene export", move || {
-        let loaded = scene::load(&shared, &session)?;
+    let glb = rendering(shared, "scene export", move |shared| {
+        let loaded = scene::load(shared, &session)?;
         sitar_scene::to_glb(&sitar_scene::SceneParts::from_session(&loaded.0))
             .map_err(|e| Error::Conflict(format!("no scene for session {}: {e}", session.id)))
     })
@@ -28,8 +28,8 @@ pub(crate) async fn json(
     State(shared): AppState,
     Found(session): Found,
 ) -> Result<Response, Error> {
-    let value = rendering(&shared.clone(), "scene data", move || {
-        let loaded = scene::load(&shared, &session)?;
+    let value = rendering(shared, "scene data", move |shared| {
+        let loaded = scene::load(shared, &session)?;
         let (phone, source) = (&loaded.0, loaded.1);
         let thresholds = session.settings.thresholds(&shared.config);
         let subs = crate::report::regions::sub_rows(phone, thresholds);
@@ -69,8 +69,8 @@ pub(crate) async fn trajectory(
             .insert(header::CONTENT_LENGTH, len.into());
         return Ok(answer);
     }
-    let tum = rendering(&shared.clone(), "trajectory", move || {
-        scene::load(&shared, &session).map(|loaded| loaded.0.trajectory_tum())
+    let tum = rendering(shared, "trajectory", move |shared| {
+        scene::load(shared, &session).map(|loaded| loaded.0.trajectory_tum())
     })
     .await?;
     Ok(attachment(TYPE, "trajectory.tum", tum))
