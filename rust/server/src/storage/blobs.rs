@@ -123,7 +123,8 @@ pub(crate) trait BlobStore: Send + Sync {
         what: &'static str,
         room: Reservation<'a>,
     ) -> Upload<'a, Appended>;
-    /// Moves a staged upload into place as session `id`'s `object`, atomically.
+    /// Moves a staged upload into place as session `id`'s `object`, atomically (as
+    /// `RecordingPart`: the whole kept prefix, replacing what was kept).
     fn publish(&self, temp: TempFile, id: &str, object: SessionObject) -> Result<(), Error>;
     /// Session `id`'s kept recording prefix, `bytes` long, as a staged upload.
     fn staged_part(&self, id: &str, bytes: u64) -> TempFile;

@@ -554,6 +554,16 @@ async fn resumable_parts_keep_exactly_what_arrived(store: &dyn BlobStore) {
         b"abc"
     );
     assert!(!store.exists(B, part), "the part became the recording");
+    // A kept prefix published whole (`sitar migrate`) replaces what was kept.
+    append(&[b"old"], true, 0).await.unwrap();
+    let staged = store
+        .receive(chunks(&[b"abcd", b"efg"], false), 100, "recording")
+        .await
+        .unwrap();
+    store.publish(staged, B, part).unwrap();
+    assert_eq!(store.get(B, part).unwrap().unwrap(), b"abcdefg");
+    assert_eq!(store.len(B, part).unwrap(), Some(7));
+    store.remove(B, part).unwrap();
 }
 
 /// A body from byte 0 that carries a whole recording of declared size (a plain `PUT`):

@@ -155,12 +155,6 @@ impl Installation {
         blobs: &dyn BlobStore,
     ) -> Result<(), Error> {
         let path = self.path(id, object);
-        if object == SessionObject::RecordingPart {
-            // The bucket keeps a kept prefix as parts: stored through `put` (in memory; at
-            // most the largest recording a server accepts).
-            let bytes = std::fs::read(&path).map_err(|e| Error::io("cannot read", &path, e))?;
-            return blobs.put(id, object, &bytes);
-        }
         // A second name for the file, which publishing consumes (the original stays).
         let link = self
             .scratch

@@ -510,6 +510,12 @@ impl BlobStore for S3Blobs {
     }
 
     fn publish(&self, temp: TempFile, id: &str, object: SessionObject) -> Result<(), Error> {
+        if object == SessionObject::RecordingPart {
+            // A kept prefix as a whole (`sitar migrate`): one part from byte 0, sent from
+            // the staged file a part at a time.
+            self.remove_parts(id)?;
+            return self.upload(temp.path.clone(), parts::part_key(&self.bucket, id, 0));
+        }
         let joined = self
             .joined
             .lock()
