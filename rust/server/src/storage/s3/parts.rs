@@ -94,7 +94,7 @@ pub(crate) fn gather(
             .reader(key.clone())?
             .ok_or_else(|| Error::Internal(format!("part {key} went away")))?;
         let copied = std::io::copy(&mut part.take(bytes - written), &mut file)
-            .map_err(|e| Error::io("cannot write", path, e))?;
+            .map_err(|e| Error::io(format!("cannot join {key} into"), path, e))?;
         written += copied;
     }
     file.sync_all()
