@@ -407,6 +407,28 @@ pub fn minimal_mp4(duration_ms: u32) -> Vec<u8> {
     mp4_header::minimal_mp4(1000, duration_ms)
 }
 
+/// Writes at `path` an MP4 of `len` bytes shaped as a phone's recording: `ftyp`, an `mdat`
+/// of zeros (a sparse file: no disk and no time to write, however long), then `moov` at the
+/// end, as Android's muxer writes it, with a header saying `duration_ms`.
+pub fn sparse_mp4(path: &Path, len: u64, duration_ms: u32) {
+    use std::io::{Seek, SeekFrom};
+    let header = minimal_mp4(duration_ms);
+    let (ftyp, moov) = header.split_at(20);
+    let mdat = len - header.len() as u64;
+    assert!(
+        mdat >= 8 && mdat <= u64::from(u32::MAX),
+        "an mdat of {mdat} bytes"
+    );
+    let mut file = std::fs::File::create(path).expect("create the recording");
+    file.write_all(ftyp).unwrap();
+    file.write_all(&(mdat as u32).to_be_bytes()).unwrap();
+    file.write_all(b"mdat").unwrap();
+    file.seek(SeekFrom::Start(ftyp.len() as u64 + mdat))
+        .unwrap();
+    file.write_all(moov).unwrap();
+    assert_eq!(file.metadata().unwrap().len(), len);
+}
+
 /// Parses a legacy CSV into (start, error) rows, checking the header.
 pub fn parse_csv(text: &str) -> Vec<(String, f64)> {
     let mut lines = text.lines();

@@ -55,6 +55,11 @@ pub(crate) struct App {
     pub queue: PlaybackQueue,
     /// One permit per estimate worker: `upload` sessions' estimates run within it.
     pub estimates: tokio::sync::Semaphore,
+    /// One permit per answer built from a session's scene at once (report, `scene.glb`,
+    /// `scene.json`, a rebuilt trajectory; `http::helpers::rendering`): as many as estimate
+    /// workers, so however many clients ask, a long walk's answers are in memory only that
+    /// many times at once (the others wait their turn; the work is CPU-bound anyway).
+    pub renders: tokio::sync::Semaphore,
     /// This instance's id (`DATA/instance.id`): which sessions in flight it plays.
     pub instance: String,
     sim: Arc<dyn Playback>,
@@ -123,6 +128,7 @@ impl App {
                 max_waiting: config.max_queued,
             }),
             estimates: tokio::sync::Semaphore::new(config.estimate_workers.max(1)),
+            renders: tokio::sync::Semaphore::new(config.estimate_workers.max(1)),
             instance,
             config,
             db,

@@ -369,10 +369,9 @@ fn only_the_storage_folder_touches_the_data_directory() {
             "the playback scratch folder beside the local recording it is handed",
         ),
         (
-            "playback",
-            "the sim player reads the local recording it is handed",
+            "ingest::mp4_check",
+            "reads the staged upload it is handed, and the local sim recording the sim player is",
         ),
-        ("ingest::mp4_check", "reads the staged upload it is handed"),
         (
             "playback::remote",
             "hashes the local recording it is handed (the playback hosts' cache key)",

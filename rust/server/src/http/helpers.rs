@@ -27,6 +27,22 @@ pub(crate) async fn blocking<T: Send + 'static>(
         .map_err(|e| Error::Internal(format!("{what}: {e}")))?
 }
 
+/// [`blocking`] within one of the render permits ([`App::renders`]): for answers built from
+/// a session's scene, whose memory grows with the walk. `f` gets `shared`.
+pub(crate) async fn rendering<T: Send + 'static>(
+    shared: Arc<App>,
+    what: &'static str,
+    f: impl FnOnce(&App) -> Result<T, Error> + Send + 'static,
+) -> Result<T, Error> {
+    let gate = shared.clone();
+    let _permit = gate
+        .renders
+        .acquire()
+        .await
+        .map_err(|e| Error::Internal(format!("{what}: {e}")))?;
+    blocking(what, move || f(&shared)).await
+}
+
 /// The state every handler gets.
 pub(crate) type AppState = axum::extract::State<Arc<App>>;
 
@@ -178,8 +194,13 @@ pub(crate) fn utf8(bytes: Vec<u8>, what: &str) -> Result<String, Error> {
     })
 }
 
-/// A download: `body` as the file `file_name` of type `content_type`.
-pub(crate) fn attachment(content_type: &'static str, file_name: &str, body: Vec<u8>) -> Response {
+/// A download: `body` (bytes, text or a streamed body) as the file `file_name` of type
+/// `content_type`.
+pub(crate) fn attachment(
+    content_type: &'static str,
+    file_name: &str,
+    body: impl IntoResponse,
+) -> Response {
     let disposition = format!("attachment; filename=\"{file_name}\"");
     (
         [

@@ -15,4 +15,5 @@ pub(crate) mod parse_errors;
 pub(crate) mod request_limits;
 pub(crate) mod router;
 pub(crate) mod server;
+pub(crate) mod stored_zip;
 pub(crate) mod tls;

@@ -30,17 +30,46 @@ pub(crate) fn check_recording(playback: PlaybackKind, path: &Path) -> Result<(),
     }
 }
 
+/// The largest `sitar-sim` recording this server reads (its JSON takes about 160 bytes a
+/// frame: an hour at 30 fps is 17 MB). A sim recording is the only kind ever read whole —
+/// every other recording is only streamed or peeked at — so this bounds what reading one
+/// costs; a larger `sim` upload is refused.
+pub(crate) const MAX_SIM_RECORDING_BYTES: u64 = 64 << 20;
+
+/// Bytes of a recording that tell whether it is a `sitar-sim` one (magic and version).
+pub(crate) const SIM_HEADER_BYTES: usize = 12;
+
+/// Whether `head`, a recording's first bytes, is the `sitar-sim` header.
+pub(crate) fn is_sim_header(head: &[u8]) -> bool {
+    head.starts_with(sitar_sim::RECORDING_MAGIC)
+}
+
+/// The `sitar-sim` recording at `path`: its header is checked (and its length against
+/// [`MAX_SIM_RECORDING_BYTES`]) before it is read whole.
+pub(crate) fn read_sim_recording(path: &Path) -> Result<sitar_sim::Recording, Error> {
+    check_sim_header(path)?;
+    let bytes = std::fs::read(path).map_err(|e| Error::io("cannot read", path, e))?;
+    sitar_sim::Recording::from_bytes(&bytes).map_err(|e| {
+        Error::InvalidContent(format!("the recording is not a sitar-sim recording: {e}"))
+    })
+}
+
 /// A `sim` session's recording must start with the `sitar-sim` header (magic and a format
-/// version this build reads): a 422 naming what is wrong at upload, not a session that
-/// fails later. Only the 12 header bytes are read; the body is checked when it is played.
+/// version this build reads) and be at most [`MAX_SIM_RECORDING_BYTES`]: a 422 naming what
+/// is wrong at upload, not a session that fails later. Only the 12 header bytes are read;
+/// the body is checked when it is played.
 fn check_sim_header(path: &std::path::Path) -> Result<(), Error> {
-    use std::io::Read;
-    let mut head = Vec::with_capacity(12);
-    std::fs::File::open(path)
-        .and_then(|f| f.take(12).read_to_end(&mut head))
+    let mut head = Vec::with_capacity(SIM_HEADER_BYTES);
+    let file = std::fs::File::open(path).map_err(|e| Error::io("cannot read", path, e))?;
+    let len = file
+        .metadata()
+        .map_err(|e| Error::io("cannot stat", path, e))?
+        .len();
+    file.take(SIM_HEADER_BYTES as u64)
+        .read_to_end(&mut head)
         .map_err(|e| Error::io("cannot read", path, e))?;
     let magic = sitar_sim::RECORDING_MAGIC;
-    if head.len() < 12 || head[..8] != magic[..] {
+    if head.len() < SIM_HEADER_BYTES || !is_sim_header(&head) {
         let start: String = head
             .iter()
             .take(8)
@@ -58,6 +87,12 @@ fn check_sim_header(path: &std::path::Path) -> Result<(), Error> {
             "the recording is a sitar-sim recording of format version {version}; this server \
              reads version {}",
             sitar_sim::RECORDING_VERSION
+        )));
+    }
+    if len > MAX_SIM_RECORDING_BYTES {
+        return Err(Error::InvalidContent(format!(
+            "the sitar-sim recording is {len} bytes; this server reads at most \
+             {MAX_SIM_RECORDING_BYTES}"
         )));
     }
     Ok(())

@@ -162,10 +162,7 @@ impl SimPlayback {
     }
 
     fn load(recording: &Path) -> Result<sitar_sim::Recording, Error> {
-        let bytes = std::fs::read(recording).map_err(|e| Error::io("cannot read", recording, e))?;
-        sitar_sim::Recording::from_bytes(&bytes).map_err(|e| {
-            Error::InvalidContent(format!("the recording is not a sitar-sim recording: {e}"))
-        })
+        crate::ingest::mp4_check::read_sim_recording(recording)
     }
 
     fn trial_seconds(&self, rec: &sitar_sim::Recording) -> f64 {

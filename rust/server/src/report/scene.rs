@@ -12,6 +12,7 @@
 //! finishes ([`prepare`]) or else on the first request; the latest results are loaded into
 //! it on every request.
 
+use std::io::Read as _;
 use std::sync::{Arc, Mutex};
 
 use serde_json::json;
@@ -22,6 +23,7 @@ use crate::Error;
 use crate::app_state::App;
 use crate::estimate::results_files::{self, Form};
 use crate::ingest::evidence::{EvidenceFiles, EvidenceRow};
+use crate::ingest::mp4_check;
 use crate::session::Session as Row;
 use crate::storage::keys::SessionObject;
 
@@ -151,13 +153,7 @@ fn build(shared: &App, row: &Row) -> Result<(Session, Source), Error> {
         )?;
         return Ok((session, Source::PhoneLog));
     }
-    let simulated = shared
-        .blobs
-        .get(&row.id, SessionObject::Recording)
-        .ok()
-        .flatten()
-        .and_then(|bytes| sitar_sim::Recording::from_bytes(&bytes).ok());
-    if let Some(recording) = simulated {
+    if let Some(recording) = simulated_walk(shared, &row.id) {
         let session = recording
             .phone_session(config(row)?, DisplayRotation::Deg90)
             .map_err(|e| Error::InvalidContent(format!("simulated walk: {e}")))?;
@@ -173,6 +169,33 @@ fn build(shared: &App, row: &Row) -> Result<(Session, Source), Error> {
         from_reference_trial(shared, row, evidence.as_deref())?,
         source,
     ))
+}
+
+/// Session `id`'s recording when it is a `sitar-sim` one. Only its header is read to tell
+/// (a phone's recording is gigabytes of video that the scene never needs); a sim recording
+/// is read whole, within its bound ([`mp4_check::MAX_SIM_RECORDING_BYTES`]).
+fn simulated_walk(shared: &App, id: &str) -> Option<sitar_sim::Recording> {
+    let head = shared
+        .blobs
+        .peek(id, SessionObject::Recording, mp4_check::SIM_HEADER_BYTES)
+        .ok()??;
+    if !mp4_check::is_sim_header(&head) {
+        return None;
+    }
+    let found = shared.blobs.open(id, SessionObject::Recording).ok()??;
+    if found.len > mp4_check::MAX_SIM_RECORDING_BYTES {
+        log::info!(
+            "session {id}: a sitar-sim recording of {} bytes is not read for its scene",
+            found.len
+        );
+        return None;
+    }
+    // Read no further than the bound, even if the recording was replaced meanwhile.
+    let mut bytes = Vec::with_capacity(found.len as usize);
+    std::io::Read::take(found.bytes, mp4_check::MAX_SIM_RECORDING_BYTES)
+        .read_to_end(&mut bytes)
+        .ok()?;
+    sitar_sim::Recording::from_bytes(&bytes).ok()
 }
 
 /// The phone's evidence rows of `row`, if it sent any (an unreadable table counts as none:
@@ -251,23 +274,55 @@ pub(crate) fn forget(shared: &App, id: &str) {
     locked(&CACHE).retain(|(k, _, _)| *k != key);
 }
 
-/// The phone session of `row` with its latest results loaded. Blocking.
+/// One gate per scene being loaded (keyed as [`CACHE`]): requests for the same session at
+/// once wait for one load and share it, instead of each building its own copy.
+static LOADING: Mutex<Vec<(std::path::PathBuf, Arc<Mutex<()>>)>> = Mutex::new(Vec::new());
+
+fn cached(key: &std::path::Path, trials: u32) -> Option<Arc<(Session, Source)>> {
+    locked(&CACHE)
+        .iter()
+        .find(|(k, t, _)| k == key && *t == trials)
+        .map(|(_, _, hit)| hit.clone())
+}
+
+/// The phone session of `row` with its latest results loaded. Blocking. Loaded once however
+/// many requests ask at the same time: the first loads, the others wait for it.
 pub(crate) fn load(shared: &App, row: &Row) -> Result<Arc<(Session, Source)>, Error> {
     let key = shared.blobs.scene_folder(&row.id);
-    if let Some((_, _, hit)) = locked(&CACHE)
-        .iter()
-        .find(|(k, trials, _)| *k == key && *trials == row.results_trials)
-    {
-        return Ok(hit.clone());
+    if let Some(hit) = cached(&key, row.results_trials) {
+        return Ok(hit);
     }
-    let loaded = Arc::new(load_uncached(shared, row)?);
-    let mut cache = locked(&CACHE);
-    cache.retain(|(k, _, _)| *k != key);
-    if cache.len() >= CACHED_SESSIONS {
-        cache.remove(0);
-    }
-    cache.push((key, row.results_trials, loaded.clone()));
-    Ok(loaded)
+    let gate = {
+        let mut loading = locked(&LOADING);
+        match loading.iter().find(|(k, _)| *k == key) {
+            Some((_, gate)) => gate.clone(),
+            None => {
+                let gate = Arc::new(Mutex::new(()));
+                loading.push((key.clone(), gate.clone()));
+                gate
+            }
+        }
+    };
+    let loaded = {
+        let _turn = gate.lock().unwrap_or_else(|p| p.into_inner());
+        match cached(&key, row.results_trials) {
+            Some(hit) => Ok(hit),
+            None => load_uncached(shared, row).map(|loaded| {
+                let loaded = Arc::new(loaded);
+                let mut cache = locked(&CACHE);
+                cache.retain(|(k, _, _)| *k != key);
+                if cache.len() >= CACHED_SESSIONS {
+                    cache.remove(0);
+                }
+                cache.push((key.clone(), row.results_trials, loaded.clone()));
+                loaded
+            }),
+        }
+    };
+    drop(gate);
+    // The last one through removes the gate.
+    locked(&LOADING).retain(|(_, gate)| Arc::strong_count(gate) > 1);
+    loaded
 }
 
 fn load_uncached(shared: &App, row: &Row) -> Result<(Session, Source), Error> {
@@ -282,10 +337,7 @@ fn load_uncached(shared: &App, row: &Row) -> Result<(Session, Source), Error> {
         // Built before the phone's log arrived: built again from it.
         .filter(|(_, source)| {
             *source == Source::PhoneLog
-                || !matches!(
-                    shared.blobs.get(&row.id, SessionObject::PhoneTrajectory),
-                    Ok(Some(_))
-                )
+                || !shared.blobs.exists(&row.id, SessionObject::PhoneTrajectory)
         });
     if cached.is_none() {
         shared.blobs.discard_scene(&row.id);

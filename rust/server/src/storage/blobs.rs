@@ -38,6 +38,14 @@ where
     Box::pin(stream.map(|chunk| chunk.map_err(|e| e.to_string())))
 }
 
+/// A stored object being read ([`BlobStore::open`]): its length and its bytes.
+pub(crate) struct ObjectReader {
+    /// Its length in bytes.
+    pub len: u64,
+    /// Its bytes, from the first.
+    pub bytes: Box<dyn std::io::Read + Send>,
+}
+
 /// Every byte the server keeps for its sessions.
 pub(crate) trait BlobStore: Send + Sync {
     /// Room for an upload into session `id`'s objects (`None`: a new session's, only the
@@ -47,8 +55,16 @@ pub(crate) trait BlobStore: Send + Sync {
     fn create_session(&self, id: &str) -> Result<(), Error>;
     /// Whether session `id`'s `object` is stored.
     fn exists(&self, id: &str, object: SessionObject) -> bool;
-    /// Session `id`'s `object` whole; `None` when it is not stored.
+    /// Session `id`'s `object` whole; `None` when it is not stored. For objects bounded on
+    /// the way in (trials, results, evidence, logs); a recording is [`BlobStore::peek`]ed at
+    /// or [`BlobStore::open`]ed, never read whole.
     fn get(&self, id: &str, object: SessionObject) -> Result<Option<Vec<u8>>, Error>;
+    /// At most the first `max` bytes of session `id`'s `object` (all of it when shorter): a
+    /// header, read without the rest; `None` when it is not stored.
+    fn peek(&self, id: &str, object: SessionObject, max: usize) -> Result<Option<Vec<u8>>, Error>;
+    /// Session `id`'s `object` as a reader of its bytes in order, a bounded chunk at a time
+    /// (downloads, hashes: never whole in memory); `None` when it is not stored.
+    fn open(&self, id: &str, object: SessionObject) -> Result<Option<ObjectReader>, Error>;
     /// The length of session `id`'s `object`; `None` when it is not stored.
     fn len(&self, id: &str, object: SessionObject) -> Result<Option<u64>, Error>;
     /// Stores session `id`'s `object` whole, replacing it atomically.
@@ -107,7 +123,8 @@ pub(crate) trait BlobStore: Send + Sync {
         what: &'static str,
         room: Reservation<'a>,
     ) -> Upload<'a, Appended>;
-    /// Moves a staged upload into place as session `id`'s `object`, atomically.
+    /// Moves a staged upload into place as session `id`'s `object`, atomically (as
+    /// `RecordingPart`: the whole kept prefix, replacing what was kept).
     fn publish(&self, temp: TempFile, id: &str, object: SessionObject) -> Result<(), Error>;
     /// Session `id`'s kept recording prefix, `bytes` long, as a staged upload.
     fn staged_part(&self, id: &str, bytes: u64) -> TempFile;

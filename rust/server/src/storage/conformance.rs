@@ -4,6 +4,8 @@
 //! implementation calls [`metadata_store`] or [`blob_store`] on a fresh, empty store of its
 //! own.
 
+use std::io::Read as _;
+
 use crate::Error;
 use crate::model::PlaybackKind;
 use crate::model::estimate_settings::EstimateSettings;
@@ -387,6 +389,13 @@ fn chunks(parts: &[&'static [u8]], broken: bool) -> crate::storage::blobs::BodyS
     body_stream(futures_util::stream::iter(items))
 }
 
+fn read_all(opened: crate::storage::blobs::ObjectReader) -> Vec<u8> {
+    let mut bytes = Vec::new();
+    let mut reader = opened.bytes;
+    reader.read_to_end(&mut bytes).unwrap();
+    bytes
+}
+
 fn whole_objects_are_replaced_and_removed(store: &dyn BlobStore) {
     store.create_session(A).unwrap();
     store.create_session(B).unwrap();
@@ -408,12 +417,37 @@ fn whole_objects_are_replaced_and_removed(store: &dyn BlobStore) {
         assert!(store.exists(A, object));
         assert_eq!(store.get(A, object).unwrap().unwrap(), b"second, longer");
         assert_eq!(store.len(A, object).unwrap(), Some(14));
+        assert_eq!(store.peek(A, object, 6).unwrap().unwrap(), b"second");
+        assert_eq!(
+            store.peek(A, object, 99).unwrap().unwrap(),
+            b"second, longer"
+        );
+        let opened = store.open(A, object).unwrap().unwrap();
+        assert_eq!(opened.len, 14);
+        assert_eq!(read_all(opened), b"second, longer");
         // Another session's object of the same name is its own.
         assert_eq!(store.get(B, object).unwrap(), None, "{object:?}");
         store.remove(A, object).unwrap();
         store.remove(A, object).unwrap();
         assert_eq!(store.get(A, object).unwrap(), None);
+        assert_eq!(store.peek(A, object, 6).unwrap(), None);
+        assert!(store.open(A, object).unwrap().is_none());
     }
+    // An object of many chunks reads back whole through a reader; an empty one peeks empty.
+    let long: Vec<u8> = (0..(3 << 20) + 5).map(|i: u32| (i % 251) as u8).collect();
+    store.put(A, SessionObject::Trial(7), &long).unwrap();
+    assert!(read_all(store.open(A, SessionObject::Trial(7)).unwrap().unwrap()) == long);
+    assert_eq!(
+        store.peek(A, SessionObject::Trial(7), 3).unwrap().unwrap(),
+        &long[..3]
+    );
+    store.put(A, SessionObject::Trial(8), b"").unwrap();
+    assert_eq!(
+        store.peek(A, SessionObject::Trial(8), 3).unwrap().unwrap(),
+        b""
+    );
+    store.remove(A, SessionObject::Trial(7)).unwrap();
+    store.remove(A, SessionObject::Trial(8)).unwrap();
     store
         .append_line(A, SessionObject::History, "{\"trials\":2}")
         .unwrap();
@@ -509,13 +543,34 @@ async fn resumable_parts_keep_exactly_what_arrived(store: &dyn BlobStore) {
     assert_eq!(store.len(B, part).unwrap(), Some(6));
     let rest = append(&[b"ghi", b"jkl"], false, 6).await.unwrap();
     assert_eq!((rest.len, rest.broken.is_none()), (12, true));
+    // The kept upload reads back in order, whatever parts it is kept as.
+    assert_eq!(store.peek(B, part, 8).unwrap().unwrap(), b"abcdefgh");
+    assert_eq!(
+        read_all(store.open(B, part).unwrap().unwrap()),
+        b"abcdefghijkl"
+    );
+    assert_eq!(store.get(B, part).unwrap().unwrap(), b"abcdefghijkl");
     let staged = store.staged_part(B, 12);
     store.publish(staged, B, SessionObject::Recording).unwrap();
     assert_eq!(
         store.get(B, SessionObject::Recording).unwrap().unwrap(),
         b"abcdefghijkl"
     );
+    assert_eq!(
+        store.peek(B, SessionObject::Recording, 3).unwrap().unwrap(),
+        b"abc"
+    );
     assert!(!store.exists(B, part), "the part became the recording");
+    // A kept prefix published whole (`sitar migrate`) replaces what was kept.
+    append(&[b"old"], true, 0).await.unwrap();
+    let staged = store
+        .receive(chunks(&[b"abcd", b"efg"], false), 100, "recording")
+        .await
+        .unwrap();
+    store.publish(staged, B, part).unwrap();
+    assert_eq!(store.get(B, part).unwrap().unwrap(), b"abcdefg");
+    assert_eq!(store.len(B, part).unwrap(), Some(7));
+    store.remove(B, part).unwrap();
 }
 
 /// A body from byte 0 that carries a whole recording of declared size (a plain `PUT`):

@@ -12,7 +12,7 @@ use futures_util::{Stream, StreamExt};
 use tokio::io::AsyncWriteExt;
 
 use crate::Error;
-use crate::storage::blobs::{BlobStore, BodyStream, Upload};
+use crate::storage::blobs::{BlobStore, BodyStream, ObjectReader, Upload};
 use crate::storage::keys::SessionObject;
 use crate::storage::quota::{DiskQuota, Reservation};
 use crate::storage::staged::{Appended, TempFile};
@@ -308,6 +308,38 @@ impl BlobStore for Files {
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
             Err(e) => Err(Error::io("cannot read", &path, e)),
         }
+    }
+
+    fn peek(&self, id: &str, object: SessionObject, max: usize) -> Result<Option<Vec<u8>>, Error> {
+        use std::io::Read as _;
+        let path = self.path(id, object);
+        let Some(found) = self.open(id, object)? else {
+            return Ok(None);
+        };
+        let mut head = Vec::with_capacity(max.min(found.len as usize));
+        found
+            .bytes
+            .take(max as u64)
+            .read_to_end(&mut head)
+            .map_err(|e| Error::io("cannot read", &path, e))?;
+        Ok(Some(head))
+    }
+
+    fn open(&self, id: &str, object: SessionObject) -> Result<Option<ObjectReader>, Error> {
+        let path = self.path(id, object);
+        let file = match std::fs::File::open(&path) {
+            Ok(file) => file,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+            Err(e) => return Err(Error::io("cannot read", &path, e)),
+        };
+        let len = file
+            .metadata()
+            .map_err(|e| Error::io("cannot stat", &path, e))?
+            .len();
+        Ok(Some(ObjectReader {
+            len,
+            bytes: Box::new(file),
+        }))
     }
 
     fn put(&self, id: &str, object: SessionObject, bytes: &[u8]) -> Result<(), Error> {

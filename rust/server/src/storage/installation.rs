@@ -155,12 +155,6 @@ impl Installation {
         blobs: &dyn BlobStore,
     ) -> Result<(), Error> {
         let path = self.path(id, object);
-        if object == SessionObject::RecordingPart {
-            // The bucket keeps a kept prefix as parts: stored through `put` (in memory; at
-            // most the largest recording a server accepts).
-            let bytes = std::fs::read(&path).map_err(|e| Error::io("cannot read", &path, e))?;
-            return blobs.put(id, object, &bytes);
-        }
         // A second name for the file, which publishing consumes (the original stays).
         let link = self
             .scratch
@@ -183,35 +177,36 @@ impl Installation {
 }
 
 /// The SHA-256 of session `id`'s `object` in `blobs`, and its length; `None` when it is not
-/// stored. Read through a local copy that is removed afterwards (one object on disk at once).
+/// stored. Read from the store a chunk at a time.
 pub(crate) fn sha256_in(
     blobs: &dyn BlobStore,
     id: &str,
     object: SessionObject,
 ) -> Result<Option<(u64, Sha256)>, Error> {
-    let Some(len) = blobs.len(id, object)? else {
+    let Some(found) = blobs.open(id, object)? else {
         return Ok(None);
     };
-    if object == SessionObject::RecordingPart {
-        let bytes = blobs.get(id, object)?.unwrap_or_default();
-        let digest = ring::digest::digest(&ring::digest::SHA256, &bytes);
-        return Ok(Some((bytes.len() as u64, hex(digest.as_ref()))));
-    }
-    let path = blobs.local_file(id, object);
-    let sha = sha256_file(&path);
-    let _ = std::fs::remove_file(&path);
-    Ok(Some((len, sha?)))
+    let sha = sha256_of(found.bytes).map_err(|e| {
+        Error::Internal(format!(
+            "cannot read {} of {id}: {e}",
+            object.relative_path()
+        ))
+    })?;
+    Ok(Some((found.len, sha)))
 }
 
-/// The SHA-256 of the file at `path`, read in 1 MiB blocks.
+/// The SHA-256 of the file at `path`.
 fn sha256_file(path: &Path) -> Result<Sha256, Error> {
-    let mut file = std::fs::File::open(path).map_err(|e| Error::io("cannot open", path, e))?;
+    let file = std::fs::File::open(path).map_err(|e| Error::io("cannot open", path, e))?;
+    sha256_of(file).map_err(|e| Error::io("cannot read", path, e))
+}
+
+/// The SHA-256 of what `bytes` holds, read in 1 MiB blocks.
+fn sha256_of(mut bytes: impl Read) -> std::io::Result<Sha256> {
     let mut context = ring::digest::Context::new(&ring::digest::SHA256);
     let mut buffer = vec![0u8; 1 << 20];
     loop {
-        let n = file
-            .read(&mut buffer)
-            .map_err(|e| Error::io("cannot read", path, e))?;
+        let n = bytes.read(&mut buffer)?;
         if n == 0 {
             break;
         }

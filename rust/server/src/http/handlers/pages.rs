@@ -12,7 +12,7 @@ use crate::Error;
 use crate::auth::Admin;
 use crate::config::PlaybackKind;
 use crate::estimate::results_files::{self, Form};
-use crate::http::helpers::{AppState, Found};
+use crate::http::helpers::{AppState, Found, rendering};
 use crate::ingest::evidence::EvidenceFiles;
 use crate::report::index_ranges::index_ranges;
 use crate::report::page::{self, ReportInput, Standalone};
@@ -222,11 +222,11 @@ pub(crate) async fn render_report(
     base: String,
     standalone: bool,
 ) -> Result<(String, Option<String>), Error> {
-    let json = results_files::read(&shared, &session, Form::Json)?;
-    tokio::task::spawn_blocking(move || {
+    rendering(shared, "report", move |shared| {
+        let json = results_files::read(shared, &session, Form::Json)?;
         // No trajectory (e.g. trials without a readable reference) still gets a page.
-        let phone = scene::load(&shared, &session).ok();
-        let history = results_files::history(&shared, &session);
+        let phone = scene::load(shared, &session).ok();
+        let history = results_files::history(shared, &session);
         // Unreadable evidence costs the regions their thumbnails, not the page.
         let evidence = CameraEvidence::load(&*shared.blobs, &session.id).unwrap_or_else(|e| {
             log::warn!("report of {}: evidence left out: {e}", session.id);
@@ -268,7 +268,6 @@ pub(crate) async fn render_report(
         Ok((html, csp))
     })
     .await
-    .map_err(|e| Error::Internal(format!("report: {e}")))?
 }
 
 #[cfg(test)]

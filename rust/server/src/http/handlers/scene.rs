@@ -1,17 +1,20 @@
 //! `GET /v1/sessions/{id}/scene.glb`: the session's scene as glTF 2.0 binary.
 
 use axum::extract::State;
+use axum::http::header;
 use axum::response::Response;
 
 use crate::Error;
-use crate::http::helpers::{AppState, Found, attachment, blocking};
+use crate::http::helpers::{AppState, Found, attachment, blocking, rendering};
+use crate::http::stored_zip::{self, StoredZip};
 use crate::report::scene;
 use crate::storage::keys::SessionObject;
+use crate::storage::streamed;
 
 /// `GET /v1/sessions/{id}/scene.glb`: trajectory by class, frustums, markers, surface points.
 pub(crate) async fn glb(State(shared): AppState, Found(session): Found) -> Result<Response, Error> {
-    let glb = blocking("scene export", move || {
-        let loaded = scene::load(&shared, &session)?;
+    let glb = rendering(shared, "scene export", move |shared| {
+        let loaded = scene::load(shared, &session)?;
         sitar_scene::to_glb(&sitar_scene::SceneParts::from_session(&loaded.0))
             .map_err(|e| Error::Conflict(format!("no scene for session {}: {e}", session.id)))
     })
@@ -25,8 +28,8 @@ pub(crate) async fn json(
     State(shared): AppState,
     Found(session): Found,
 ) -> Result<Response, Error> {
-    let value = blocking("scene data", move || {
-        let loaded = scene::load(&shared, &session)?;
+    let value = rendering(shared, "scene data", move |shared| {
+        let loaded = scene::load(shared, &session)?;
         let (phone, source) = (&loaded.0, loaded.1);
         let thresholds = session
             .settings
@@ -49,50 +52,63 @@ pub(crate) async fn json(
 
 /// `GET /v1/sessions/{id}/trajectory.tum`: the user's trajectory as the phone logged it
 /// (start, midpoints, endpoints; TUM, integer nanoseconds): the phone's own `trajectory.txt`
-/// when it sent one, else as the scene rebuilt it.
+/// when it sent one (streamed from the store as stored), else as the scene rebuilt it.
 pub(crate) async fn trajectory(
     State(shared): AppState,
     Found(session): Found,
 ) -> Result<Response, Error> {
-    let tum = blocking("trajectory", move || {
-        if let Some(sent) = shared
-            .blobs
-            .get(&session.id, SessionObject::PhoneTrajectory)?
-        {
-            return String::from_utf8(sent)
-                .map_err(|e| Error::Internal(format!("stored trajectory.txt: {e}")));
-        }
-        scene::load(&shared, &session).map(|loaded| loaded.0.trajectory_tum())
+    const TYPE: &str = "text/plain; charset=utf-8";
+    let sent = streamed::object_body(
+        shared.blobs.clone(),
+        &session.id,
+        SessionObject::PhoneTrajectory,
+    )
+    .await?;
+    if let Some((len, body)) = sent {
+        let mut answer = attachment(TYPE, "trajectory.tum", body);
+        answer
+            .headers_mut()
+            .insert(header::CONTENT_LENGTH, len.into());
+        return Ok(answer);
+    }
+    let tum = rendering(shared, "trajectory", move |shared| {
+        scene::load(shared, &session).map(|loaded| loaded.0.trajectory_tum())
     })
     .await?;
-    Ok(attachment(
-        "text/plain; charset=utf-8",
-        "trajectory.tum",
-        tum.into_bytes(),
-    ))
+    Ok(attachment(TYPE, "trajectory.tum", tum))
 }
 
 /// `GET /v1/sessions/{id}/trials.zip`: every stored trial (`trial_NNN.txt`, TUM), stored
-/// uncompressed. Trials were bounded on the way in; the zip is built in memory.
+/// uncompressed, streamed as it is written: each trial is read twice from the store (its
+/// CRC-32 first, then its bytes), a chunk at a time, so the answer holds about 1.5 MiB
+/// however many trials of whatever length it carries. A trial that cannot be read cuts the
+/// answer off (the client sees a short body, not a complete-looking archive).
 pub(crate) async fn trials_zip(
     State(shared): AppState,
     Found(session): Found,
 ) -> Result<Response, Error> {
-    let bytes = blocking("trials.zip", move || {
-        use std::io::Write as _;
-        let mut zip = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
-        let options = zip::write::SimpleFileOptions::default()
-            .compression_method(zip::CompressionMethod::Stored);
-        let fail = |e: zip::result::ZipError| Error::Internal(format!("trials.zip: {e}"));
-        for (index, _) in shared.db.trials_in_order(&session.id)? {
-            let text = crate::ingest::trials::read_trial(&shared, &session.id, index)?;
-            zip.start_file(format!("trial_{index:03}.txt"), options)
-                .map_err(fail)?;
-            zip.write_all(&text)
-                .map_err(|e| Error::Internal(format!("trials.zip: trial {index}: {e}")))?;
+    let trials = {
+        let (shared, id) = (shared.clone(), session.id.clone());
+        blocking("trials.zip", move || shared.db.trials_in_order(&id)).await?
+    };
+    let id = session.id;
+    let body = streamed::written_body("trials.zip", move |out| {
+        let open = |index: u32| match shared.blobs.open(&id, SessionObject::Trial(index)) {
+            Ok(Some(found)) => Ok(found.bytes),
+            Ok(None) => Err(std::io::Error::other(format!("trial {index} is missing"))),
+            Err(e) => Err(std::io::Error::other(e.to_string())),
+        };
+        let mut zip = StoredZip::new(out);
+        for (index, _) in trials {
+            let (crc, len) = stored_zip::crc32(&mut open(index)?)?;
+            zip.add(
+                &format!("trial_{index:03}.txt"),
+                len,
+                crc,
+                &mut open(index)?,
+            )?;
         }
-        Ok(zip.finish().map_err(fail)?.into_inner())
-    })
-    .await?;
-    Ok(attachment("application/zip", "trials.zip", bytes))
+        zip.finish().map(drop)
+    });
+    Ok(attachment("application/zip", "trials.zip", body))
 }

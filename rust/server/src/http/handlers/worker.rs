@@ -292,15 +292,20 @@ pub(crate) async fn recording(
         })
         .await?
     };
-    let (len, chunks) =
-        streamed::object_stream(&*shared.blobs, &lease.session, SessionObject::Recording).await?;
+    let (len, body) = streamed::object_body(
+        shared.blobs.clone(),
+        &lease.session,
+        SessionObject::Recording,
+    )
+    .await?
+    .ok_or_else(|| Error::NotFound(format!("session {} has no recording", lease.session)))?;
     Ok((
         StatusCode::OK,
         [
             (header::CONTENT_TYPE, "application/octet-stream".to_string()),
             (header::CONTENT_LENGTH, len.to_string()),
         ],
-        Body::from_stream(chunks),
+        body,
     )
         .into_response())
 }

@@ -6,6 +6,7 @@
 use std::future::Future;
 use std::sync::Arc;
 
+use axum::body::Bytes;
 use object_store::aws::AmazonS3;
 use object_store::path::Path as Key;
 use object_store::{ObjectStoreExt, PutPayload};
@@ -139,6 +140,52 @@ impl Bucket {
         })
     }
 
+    /// At most the first `max` bytes of the object (one ranged GET); `None` when it is not
+    /// stored.
+    pub fn get_start(&self, key: Key, max: usize) -> Result<Option<Vec<u8>>, Error> {
+        let Some((len, _)) = self.head(key.clone())? else {
+            return Ok(None);
+        };
+        let end = len.min(max as u64);
+        if end == 0 {
+            return Ok(Some(Vec::new()));
+        }
+        let s3 = self.s3.clone();
+        self.block(async move {
+            match s3.get_range(&key, 0..end).await {
+                Ok(bytes) => Ok(Some(bytes.to_vec())),
+                Err(object_store::Error::NotFound { .. }) => Ok(None),
+                Err(e) => Err(s3_error(&key, e)),
+            }
+        })
+    }
+
+    /// The object as a blocking reader of its length: one GET, whose body is read as the
+    /// reader asks for it (a chunk of the HTTP body at a time, never the object whole);
+    /// `None` when it is not stored.
+    pub fn reader(self: &Arc<Self>, key: Key) -> Result<Option<(u64, BucketReader)>, Error> {
+        let s3 = self.s3.clone();
+        let name = key.clone();
+        let got = self.block(async move {
+            match s3.get(&name).await {
+                Ok(got) => Ok(Some((got.meta.size, got.into_stream()))),
+                Err(object_store::Error::NotFound { .. }) => Ok(None),
+                Err(e) => Err(s3_error(&name, e)),
+            }
+        })?;
+        Ok(got.map(|(len, body)| {
+            (
+                len,
+                BucketReader {
+                    bucket: self.clone(),
+                    key,
+                    body: Some(body),
+                    chunk: Bytes::new(),
+                },
+            )
+        }))
+    }
+
     /// The object's size and entity tag; `None` when it is not stored.
     pub fn head(&self, key: Key) -> Result<Option<(u64, String)>, Error> {
         let s3 = self.s3.clone();
@@ -172,6 +219,49 @@ impl Bucket {
     pub fn list(&self, relative: &str) -> Result<Vec<object_store::ObjectMeta>, Error> {
         let (s3, key) = (self.s3.clone(), self.key(relative));
         self.block(async move { list(&s3, &key).await })
+    }
+}
+
+/// An object's body read from synchronous code ([`Bucket::reader`]): each read that finds
+/// the last chunk used up waits for the next one on the client's runtime, so at most one
+/// chunk of the HTTP body is held here (a few KiB to a few hundred).
+pub(crate) struct BucketReader {
+    bucket: Arc<Bucket>,
+    key: Key,
+    /// `None` once it has ended or failed.
+    body: Option<futures_util::stream::BoxStream<'static, object_store::Result<Bytes>>>,
+    chunk: Bytes,
+}
+
+impl std::io::Read for BucketReader {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        use futures_util::StreamExt;
+        while self.chunk.is_empty() {
+            let Some(mut body) = self.body.take() else {
+                return Ok(0);
+            };
+            let key = self.key.clone();
+            let next = self.bucket.block(async move {
+                match body.next().await {
+                    None => Ok((None, None)),
+                    Some(Ok(chunk)) => Ok((Some(chunk), Some(body))),
+                    Some(Err(e)) => Err(s3_error(&key, e)),
+                }
+            });
+            match next {
+                Ok((chunk, body)) => {
+                    self.body = body;
+                    match chunk {
+                        Some(chunk) => self.chunk = chunk,
+                        None => return Ok(0),
+                    }
+                }
+                Err(e) => return Err(std::io::Error::other(e.to_string())),
+            }
+        }
+        let n = buf.len().min(self.chunk.len());
+        buf[..n].copy_from_slice(&self.chunk.split_to(n));
+        Ok(n)
     }
 }
 

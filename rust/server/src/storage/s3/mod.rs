@@ -27,7 +27,7 @@ use std::sync::{Arc, Mutex};
 use object_store::path::Path as Key;
 
 use crate::Error;
-use crate::storage::blobs::{BlobStore, BodyStream, Upload};
+use crate::storage::blobs::{BlobStore, BodyStream, ObjectReader, Upload};
 use crate::storage::files::Files;
 use crate::storage::keys::SessionObject;
 use crate::storage::quota::{DiskQuota, Measure, Reservation};
@@ -264,18 +264,53 @@ impl BlobStore for S3Blobs {
 
     fn get(&self, id: &str, object: SessionObject) -> Result<Option<Vec<u8>>, Error> {
         if object == SessionObject::RecordingPart {
+            return self.peek(id, object, usize::MAX);
+        }
+        self.bucket.get(self.key(id, object))
+    }
+
+    fn peek(&self, id: &str, object: SessionObject, max: usize) -> Result<Option<Vec<u8>>, Error> {
+        if object == SessionObject::RecordingPart {
+            let Some(found) = self.open(id, object)? else {
+                return Ok(None);
+            };
+            let mut head = Vec::new();
+            std::io::Read::read_to_end(
+                &mut std::io::Read::take(found.bytes, max as u64),
+                &mut head,
+            )
+            .map_err(|e| Error::Internal(format!("session {id}: recording.part: {e}")))?;
+            return Ok(Some(head));
+        }
+        self.bucket.get_start(self.key(id, object), max)
+    }
+
+    fn open(&self, id: &str, object: SessionObject) -> Result<Option<ObjectReader>, Error> {
+        if object == SessionObject::RecordingPart {
+            // The parts joined into a staged file, which is read and then gone.
             let (found, len) = parts::parts(&self.bucket, id)?;
             if found.is_empty() {
                 return Ok(None);
             }
             let temp = self.staging.temp_path();
-            let joined = parts::gather(&self.bucket, id, len, &temp).and_then(|()| {
-                std::fs::read(&temp).map_err(|e| Error::io("cannot read", &temp, e))
+            let opened = parts::gather(&self.bucket, id, len, &temp).and_then(|()| {
+                std::fs::File::open(&temp).map_err(|e| Error::io("cannot read", &temp, e))
             });
             let _ = std::fs::remove_file(&temp);
-            return joined.map(Some);
+            return opened.map(|file| {
+                Some(ObjectReader {
+                    len,
+                    bytes: Box::new(file),
+                })
+            });
         }
-        self.bucket.get(self.key(id, object))
+        Ok(self
+            .bucket
+            .reader(self.key(id, object))?
+            .map(|(len, reader)| ObjectReader {
+                len,
+                bytes: Box::new(reader),
+            }))
     }
 
     fn len(&self, id: &str, object: SessionObject) -> Result<Option<u64>, Error> {
@@ -482,6 +517,12 @@ impl BlobStore for S3Blobs {
     }
 
     fn publish(&self, temp: TempFile, id: &str, object: SessionObject) -> Result<(), Error> {
+        if object == SessionObject::RecordingPart {
+            // A kept prefix as a whole (`sitar migrate`): one part from byte 0, sent from
+            // the staged file a part at a time.
+            self.remove_parts(id)?;
+            return self.upload(temp.path.clone(), parts::part_key(&self.bucket, id, 0));
+        }
         let joined = self
             .joined
             .lock()

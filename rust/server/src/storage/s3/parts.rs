@@ -71,12 +71,12 @@ pub(crate) fn remove(bucket: &Bucket, id: &str) -> Result<(), Error> {
 
 /// Joins session `id`'s parts (the first `bytes` of them) into the local file `path`.
 pub(crate) fn gather(
-    bucket: &Bucket,
+    bucket: &std::sync::Arc<Bucket>,
     id: &str,
     bytes: u64,
     path: &std::path::Path,
 ) -> Result<(), Error> {
-    use std::io::Write as _;
+    use std::io::Read as _;
     let (parts, len) = parts(bucket, id)?;
     if len < bytes {
         return Err(Error::Internal(format!(
@@ -89,13 +89,13 @@ pub(crate) fn gather(
         if written >= bytes {
             break;
         }
-        let data = bucket
-            .get(key.clone())?
+        // Read a chunk at a time: a part may be most of a recording.
+        let (_, part) = bucket
+            .reader(key.clone())?
             .ok_or_else(|| Error::Internal(format!("part {key} went away")))?;
-        let take = data.len().min((bytes - written) as usize);
-        file.write_all(&data[..take])
-            .map_err(|e| Error::io("cannot write", path, e))?;
-        written += take as u64;
+        let copied = std::io::copy(&mut part.take(bytes - written), &mut file)
+            .map_err(|e| Error::io(format!("cannot join {key} into"), path, e))?;
+        written += copied;
     }
     file.sync_all()
         .map_err(|e| Error::io("cannot write", path, e))
