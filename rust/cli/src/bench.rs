@@ -9,13 +9,13 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, anyhow, bail};
 use rayon::prelude::*;
 use sitar_estimator::{
-    DriftOptions, RPG_DEFAULT_PERCENTS, RPG_MAX_DIFF_NS, RelativeAtLength, RpgAlignType,
-    RpgAlignment, SegmentDuration, Statistics, Trajectory, absolute_translation_errors,
-    cumulative_path_length, drift, lengths_from_percents, read_tum, relative_errors, rpg_align,
-    rpg_associate,
+    DriftOptions, RPG_DEFAULT_PERCENTS, RPG_MAX_DIFF_NS, RpgAlignType, RpgAlignment,
+    SegmentDuration, Statistics, Trajectory, absolute_translation_errors, cumulative_path_length,
+    drift, lengths_from_percents, read_tum, relative_errors, rpg_align, rpg_associate,
 };
 
 use crate::bench_layout::{Cell, discover};
+use crate::bench_results::{Bench, CellResult, Lengths, RunResult};
 use crate::bench_table::{TableFormat, render};
 
 /// One table of algorithms × sequences over a results tree.
@@ -80,37 +80,6 @@ pub struct Args {
 
 fn parse_align_type(s: &str) -> Result<RpgAlignType, String> {
     s.parse().map_err(|e: sitar_estimator::Error| e.to_string())
-}
-
-/// How the sub-trajectory lengths are chosen.
-#[derive(Debug, Clone, PartialEq)]
-pub enum Lengths {
-    Metres(Vec<f64>),
-    Percent(Vec<f64>),
-}
-
-/// One run's numbers.
-pub struct RunResult {
-    pub file: PathBuf,
-    pub pairs: usize,
-    pub scale: f64,
-    pub ape_rmse: f64,
-    pub relative: Vec<RelativeAtLength>,
-    /// KITTI drift over every segment (%, deg/m); none when no segment fits.
-    pub drift: Option<(f64, f64)>,
-}
-
-/// One cell: an algorithm on a sequence, every run.
-pub struct CellResult {
-    pub cell: Cell,
-    pub lengths_m: Vec<f64>,
-    pub runs: Vec<RunResult>,
-}
-
-/// What `bench` computes, for the table.
-pub struct Bench {
-    pub lengths: Lengths,
-    pub cells: Vec<CellResult>,
 }
 
 pub fn run(args: Args) -> Result<()> {

@@ -6,7 +6,7 @@ use std::path::Path;
 
 use anyhow::Result;
 
-use crate::bench::{Bench, Lengths};
+use crate::bench_results::{Bench, Lengths};
 use crate::canvas::Page;
 use crate::console::{Console, UsabilityArgs};
 use crate::figure::{DistributionKind, Drawing};

@@ -6,7 +6,7 @@
 use serde_json::{Value, json};
 use sitar_estimator::{RelativeSample, Statistics};
 
-use crate::bench::{Bench, CellResult, Lengths};
+use crate::bench_results::{Bench, CellResult, Lengths};
 use crate::output::json_number;
 
 /// `sitar bench --format`.

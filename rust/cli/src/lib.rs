@@ -12,6 +12,7 @@ mod bag;
 mod bench;
 mod bench_layout;
 mod bench_plot;
+mod bench_results;
 mod bench_table;
 mod calibrate;
 mod canvas;
