@@ -211,7 +211,7 @@ enum Playback {
 /// (up to 8 per core) and keeps what is freed in each for later: a server whose blocking
 /// threads take turns building reports and scenes holds a few dozen MiB more than it uses
 /// (1 GiB recording, 8 clients: 146 MiB peak with glibc's default, 104 MiB with two arenas;
-/// rust/server/README.md, "Memory whatever the recording's size"). So `sitar serve` runs
+/// rust/server/README.md, "Memory whatever the recording's size"). So the `sitar` binary's `serve` runs
 /// with `MALLOC_ARENA_MAX=2` unless the environment says otherwise: set, then the same
 /// binary (`/proc/self/exe`) started again in this process's place (same PID, arguments
 /// and open files) before anything else happens. Where that fails, it goes on as it is.
@@ -220,7 +220,16 @@ fn with_two_malloc_arenas() {
     {
         use std::os::unix::process::CommandExt;
         const ARENAS: &str = "MALLOC_ARENA_MAX";
-        if std::env::var_os(ARENAS).is_some() {
+        // Only the `sitar` binary re-executes itself: run from the Python package, this
+        // process is the interpreter, which must not be started again with sitar's arguments.
+        let own_binary = std::env::current_exe()
+            .ok()
+            .and_then(|p| {
+                p.file_name()
+                    .map(|n| n.to_string_lossy().starts_with("sitar"))
+            })
+            .unwrap_or(false);
+        if std::env::var_os(ARENAS).is_some() || !own_binary {
             return;
         }
         let mut argv = std::env::args_os();
