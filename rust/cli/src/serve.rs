@@ -211,8 +211,8 @@ enum Playback {
 /// (up to 8 per core) and keeps what is freed in each for later: a server whose blocking
 /// threads take turns building reports and scenes holds a few dozen MiB more than it uses
 /// (1 GiB recording, 8 clients: 146 MiB peak with glibc's default, 104 MiB with two arenas;
-/// rust/server/README.md, "Memory whatever the recording's size"). So the `sitar` binary's `serve` runs
-/// with `MALLOC_ARENA_MAX=2` unless the environment says otherwise: set, then the same
+/// rust/server/README.md, "Memory whatever the recording's size"). So the `sitar` binary's
+/// `serve` runs with `MALLOC_ARENA_MAX=2` unless the environment says otherwise: set, then the same
 /// binary (`/proc/self/exe`) started again in this process's place (same PID, arguments
 /// and open files) before anything else happens. Where that fails, it goes on as it is.
 fn with_two_malloc_arenas() {
