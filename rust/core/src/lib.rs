@@ -129,6 +129,7 @@ mod relation;
 mod render;
 mod results;
 mod session;
+mod subtrajectory_columns;
 mod thumbnail;
 mod tum;
 pub mod venue;

@@ -8,6 +8,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::logged_pose::LoggedPose;
 use crate::session::{DepthStatus, SessionState, SubTrajectory};
+use crate::subtrajectory_columns::{HEADER, header};
 use crate::{DepthSample, Error, ErrorUnit, InvalidDepth, Pose, Results, Session, SessionConfig};
 
 #[derive(Debug, Clone, Copy, Serialize, Deserialize)]
@@ -34,13 +35,6 @@ struct SessionFile {
     /// Set only when the app replaced the default lookup tolerance.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     lookup_tolerance_ns: Option<i64>,
-}
-
-pub(crate) const HEADER: &str = "index,start_ns,mid_ns,end_ns,depth,pixel_x,pixel_y,depth_m,distance_m,cam_x,cam_y,cam_z,cam_nx,cam_ny,cam_nz,x,y,z,nx,ny,nz,error_m,class";
-
-/// The header of a session whose results are in degrees: the error column is `error_deg`.
-pub(crate) fn header(unit: ErrorUnit) -> String {
-    HEADER.replace(",error_m,", &format!(",{},", unit.error_key()))
 }
 
 fn write_file(path: &Path, text: &str) -> Result<(), Error> {

@@ -276,8 +276,8 @@ struct Row {
 /// file, the line and the column.
 fn parse_subtrajectories(text: &str) -> Result<Vec<Row>, Error> {
     const SRC: &str = "subtrajectories.csv";
-    let header = crate::persist::HEADER;
-    let degrees = crate::persist::header(ErrorUnit::Degrees);
+    let header = crate::subtrajectory_columns::HEADER;
+    let degrees = crate::subtrajectory_columns::header(ErrorUnit::Degrees);
     let columns: Vec<&str> = header.split(',').collect();
     let at = |name: &str| columns.iter().position(|c| *c == name).unwrap_or(0);
     let mut out = Vec::new();

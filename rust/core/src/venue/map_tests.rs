@@ -51,7 +51,7 @@ fn record(
         tracking: Tracking::Full,
     }]);
     let mut trajectory = String::new();
-    let mut subs = format!("{}\n", crate::persist::HEADER);
+    let mut subs = format!("{}\n", crate::subtrajectory_columns::HEADER);
     let mut results = String::from("start,error\n");
     for (k, pose) in mid_poses.iter().enumerate() {
         let world = to_world(*pose);
