@@ -111,6 +111,30 @@
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
 
+// Modules lowest first: each uses only modules listed above it (`tests/layout.rs` checks that
+// no import cycle exists among them).
+// error                 — the crate's one error type
+// relation              — what the results measure (pose relation) and in which unit
+// classes               — the one error-class rule and the defaults every crate shares
+// convention            — coordinate conventions, poses, display rotation
+// csv_rows              — the rows of the session folder's comma-separated tables
+// subtrajectory_columns — the columns of `subtrajectories.csv`, for persist and venue
+// image                 — the camera's luminance plane and what is measured on it
+// results               — error-estimation results: parsing, lookup, classes
+// config                — the session configuration
+// depth                 — from an ARCore depth image to a surface point and normal
+// tum                   — TUM trajectory text with integer-nanosecond stamps
+// logged_pose           — the poses a session logs, with frame and path length
+// evidence              — what the camera saw and how it moved; the likely causes
+// thumbnail             — a midpoint's display-oriented thumbnail (greyscale JPEG)
+// guide                 — where an out-of-view target is on the screen or at its edge
+// markers               — where the warning markers go
+// render                — the render plan
+// playback              — the playback device's per-frame TUM log
+// venue                 — anchors, alignment, the venue map, contributions and the map builder
+// session               — the on-device session: cadence, depth, results, markers, venue
+// evidence_table        — the session folder's `evidence.csv` and `thumbnails/`
+// persist               — the session folder: `Session::save` and `Session::load`
 mod classes;
 mod config;
 mod convention;
