@@ -15,10 +15,6 @@
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
-/// Cycles known and being broken elsewhere, by crate and modules: each entry is to be removed
-/// when that work lands (then the test holds them to the rule like every other).
-const ALLOWED_CYCLES: &[(&str, [&str; 2])] = &[];
-
 /// The crates under `rust/` (each folder with a `src/`).
 fn crates() -> Vec<(String, PathBuf)> {
     let rust = Path::new(env!("CARGO_MANIFEST_DIR")).join("../rust");
@@ -285,19 +281,10 @@ fn no_crate_has_a_file_level_import_cycle() {
         assert!(names.contains(&expected), "{names:?}");
     }
     let mut found = Vec::new();
-    let mut allowed_seen = BTreeSet::new();
     for (name, src) in &crates {
         let graph = graph(&sources(src));
         for cycle in cycles(&graph) {
-            let allowed = ALLOWED_CYCLES
-                .iter()
-                .position(|(c, pair)| c == name && cycle.iter().eq(pair.iter()));
-            match allowed {
-                Some(i) => {
-                    allowed_seen.insert(i);
-                }
-                None => found.push(format!("{name}: {}", cycle.join(" ↔ "))),
-            }
+            found.push(format!("{name}: {}", cycle.join(" ↔ ")));
         }
         // The graph is what the files say (a parser that missed edges would find no cycle).
         if name == "server" {
@@ -310,15 +297,6 @@ fn no_crate_has_a_file_level_import_cycle() {
         }
     }
     assert!(found.is_empty(), "import cycles:\n{}", found.join("\n"));
-    // Each allowance is still needed (a stale one would hide a new cycle there).
-    let stale: Vec<_> = (0..ALLOWED_CYCLES.len())
-        .filter(|i| !allowed_seen.contains(i))
-        .map(|i| ALLOWED_CYCLES[i])
-        .collect();
-    assert!(
-        stale.is_empty(),
-        "allowed cycles that no longer exist (remove them from ALLOWED_CYCLES): {stale:?}"
-    );
 }
 
 /// A module's top-level folder (or root file): `storage::sqlite::sessions` → `storage`.
@@ -337,66 +315,24 @@ fn folder_graph(graph: &BTreeMap<String, BTreeSet<String>>) -> BTreeMap<String, 
     out
 }
 
-/// Folder cycles known and being broken elsewhere, by crate, each with its exact members:
-/// a folder that joins one fails the test as a new cycle would, and an entry is shrunk or
-/// removed as the work lands. The server's: `app_state` is the hub every service imports and
-/// that imports every service, and `config` holds the auth limits, calibrations and TLS
-/// settings; both wait for the services to take narrow dependencies.
-const ALLOWED_FOLDER_CYCLES: &[(&str, &[&str])] = &[
-    ("core", &["evidence_table", "persist", "session", "venue"]),
-    (
-        "server",
-        &[
-            "app_state",
-            "auth",
-            "config",
-            "estimate",
-            "http",
-            "ingest",
-            "playback",
-            "report",
-            "session",
-            "venue",
-        ],
-    ),
-];
-
 #[test]
-fn no_crate_has_a_new_import_cycle_between_folders() {
+fn no_crate_has_an_import_cycle_between_folders() {
     let mut found = Vec::new();
-    let mut allowed_seen = BTreeSet::new();
     for (name, src) in &crates() {
         let folders = folder_graph(&graph(&sources(src)));
         for cycle in cycles(&folders) {
-            let allowed = ALLOWED_FOLDER_CYCLES
-                .iter()
-                .position(|(c, members)| c == name && cycle.iter().eq(members.iter()));
-            match allowed {
-                Some(i) => {
-                    allowed_seen.insert(i);
-                }
-                None => found.push(format!("{name}: {}", cycle.join(" ↔ "))),
-            }
+            found.push(format!("{name}: {}", cycle.join(" ↔ ")));
         }
         if name == "server" {
             // The parser sees folder arrows (none found would prove nothing).
             assert!(folders["storage"].contains("model"), "{folders:?}");
-            assert!(folders["session"].contains("storage"), "{folders:?}");
+            assert!(folders["jobs"].contains("app_state"), "{folders:?}");
         }
     }
     assert!(
         found.is_empty(),
         "import cycles between folders:\n{}",
         found.join("\n")
-    );
-    let stale: Vec<_> = (0..ALLOWED_FOLDER_CYCLES.len())
-        .filter(|i| !allowed_seen.contains(i))
-        .map(|i| ALLOWED_FOLDER_CYCLES[i])
-        .collect();
-    assert!(
-        stale.is_empty(),
-        "allowed folder cycles that changed or no longer exist (update ALLOWED_FOLDER_CYCLES): \
-         {stale:?}"
     );
 }
 

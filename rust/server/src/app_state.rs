@@ -6,16 +6,18 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 
 use crate::Error;
-use crate::config::{PlaybackKind, ServerConfig};
+use crate::config::ServerConfig;
 use crate::estimate::live_sessions::LiveSessions;
+use crate::model::PlaybackKind;
+use crate::model::{NewSession, Session};
+use crate::model::{NewVenue, new_venue_id};
 use crate::playback::adb::AdbPlayback;
 use crate::playback::queue::{PlaybackQueue, QueueLimits};
 use crate::playback::remote::{RemoteBoard, RemotePlayback};
 use crate::playback::{Playback, PlaybackPlan, SimPlayback, UploadPlayback};
-use crate::session::{Lifecycle, NewSession, Session};
+use crate::session::Lifecycle;
 use crate::storage::BlobStore;
 use crate::storage::{MetadataStore, WorkerStore};
-use crate::venue::{NewVenue, new_venue_id};
 
 /// What a running job knows that the database does not: timing and the cancel flag.
 #[derive(Debug, Clone)]
@@ -23,7 +25,7 @@ pub(crate) struct RunningJob {
     pub cancel: Arc<AtomicBool>,
     pub plan: Option<PlaybackPlan>,
     /// When the job started (ms since the epoch: other instances read it,
-    /// `playback::progress_view`).
+    /// `jobs::progress_view`).
     pub started_ms: i64,
     /// Trials stored before this run started (resume after restart).
     pub done_before: u32,
@@ -137,6 +139,14 @@ impl App {
             session_locks: Mutex::new(HashMap::new()),
             shutdown: AtomicBool::new(false),
         })
+    }
+
+    /// Both stores, borrowed.
+    pub fn stores(&self) -> crate::storage::StoreRefs<'_> {
+        crate::storage::StoreRefs {
+            db: &*self.db,
+            blobs: &*self.blobs,
+        }
     }
 
     /// The transitions of this server's sessions.

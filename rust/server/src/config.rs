@@ -3,7 +3,7 @@ use std::time::Duration;
 
 use sitar_core::Thresholds;
 
-pub use crate::model::PlaybackKind;
+use crate::model::PlaybackKind;
 
 /// Settings of the `sim` backend.
 #[derive(Debug, Clone)]
@@ -201,7 +201,7 @@ pub struct ServerConfig {
     /// Limits per token (sessions per hour, upload bytes per day, concurrent uploads).
     pub limits: crate::auth::Limits,
     /// HTTPS with rustls (`sitar serve --tls`); `None` (the default): plain HTTP.
-    pub tls: Option<crate::http::tls::TlsConfig>,
+    pub tls: Option<TlsConfig>,
     /// Playback jobs (sim, adb) running at once, each on its own thread; more wait in the
     /// queue holding no thread (default: the machine's cores, at least 2, at most 8).
     ///
@@ -406,4 +406,18 @@ mod tests {
             assert!(err.contains("adb remote dir"), "{dir:?}: {err}");
         }
     }
+}
+
+/// `sitar serve --tls`: where the certificate comes from.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct TlsConfig {
+    /// PEM certificate chain (`--cert`); with [`TlsConfig::key`]. Without both, a
+    /// self-signed certificate is made once into `DATA/tls/`.
+    pub cert: Option<PathBuf>,
+    /// PEM private key (`--key`).
+    pub key: Option<PathBuf>,
+    /// Host names and addresses the self-signed certificate is made for (`--tls-name`,
+    /// repeatable); empty: `localhost`, `127.0.0.1`, `::1`, this machine's LAN address and
+    /// host name. Only used when the certificate is made: delete `DATA/tls/` to make another.
+    pub names: Vec<String>,
 }

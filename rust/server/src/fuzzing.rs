@@ -6,10 +6,11 @@
 use axum::http::{HeaderMap, HeaderValue};
 
 use crate::Error;
-use crate::config::{PlaybackKind, ServerConfig};
+use crate::config::ServerConfig;
 use crate::error::short;
 use crate::http::handlers::sessions::QUOTE_LIMIT;
-use crate::session::estimate_settings::EstimateSettings;
+use crate::model::PlaybackKind;
+use crate::model::estimate_settings::EstimateSettings;
 
 pub use crate::auth::secret::{
     COOKIE_NAME, bearer, cookie, has_param, plausible, query_param, without_param,

@@ -72,24 +72,26 @@
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
 
-// Folders by concern, lowest first. `tests/layout.rs` checks that no import cycle exists
-// among the modules, that only `storage` speaks SQL or touches the data directory, and that
-// this comment names every module declared here:
-// error                                         — the one error enum
-// model                                         — vocabulary: sessions, states, steps, estimate settings, venues, callers, roles, tokens, usage
-// storage                                       — where bytes are kept: metadata store, blob store (traits); imports model alone
-// config                                        — the server's settings
-// session                                       — a session's life; the only state writer
-// estimate                                      — estimates over trials held in memory, published
-// playback                                      — how trials are played: adb, sim, upload, queue, jobs
-// ingest                                        — what arrives from phones: recordings, trials, evidence
-// report                                        — what the report draws: page, charts, regions, scene
-// app_state                                     — what handlers and jobs share
-// auth                                          — tokens, callers, limits (middleware)
-// venue                                         — venues: rows, who sees them, sessions' alignment
-// http                                          — router, server, connections, limits, handlers, TLS
-// migrate                                       — `sitar migrate`: an embedded installation into the cluster stores (feature `cluster`)
-// fuzzing                                       — the parsers, for fuzz/ only (doc-hidden)
+// Folders by concern, lowest first: a module imports only modules above it in this list
+// (its own submodules aside). `tests/layout.rs` checks that, that no import cycle exists
+// among the files, that only `storage` speaks SQL or touches the data directory, and that
+// this list names every module declared here:
+// error      — the one error enum
+// model      — vocabulary: sessions, states, steps, estimate settings, venues, callers, roles, tokens, usage
+// storage    — where bytes are kept: metadata store, blob store (traits); imports model alone
+// session    — a session's life: the transitions, the only state writer
+// auth       — tokens, callers, per-token limits and their counters
+// estimate   — estimates over trials held in memory, published; results files; calibrations
+// config     — the server's settings (auth limits, calibrations, TLS among them)
+// venue      — venues: who sees them, sessions' alignment, venue maps
+// ingest     — what arrives from phones: trials, evidence, phone logs, the MP4 check
+// report     — what the report draws: page, charts, regions, scene
+// playback   — how trials are played: the backends (adb, sim, upload, remote) and the queue
+// app_state  — what handlers and jobs share: the stores, live sessions, queue, backends, locks
+// jobs       — what runs for a session beyond one request: playback jobs, heartbeats, stop requests, deletions, sweeps
+// http       — router, server, middleware (authentication, upload limits), handlers, status document, TLS
+// migrate    — `sitar migrate`: an embedded installation into the cluster stores (feature `cluster`)
+// fuzzing    — the parsers, for fuzz/ only (doc-hidden)
 mod app_state;
 mod auth;
 mod config;
@@ -99,6 +101,7 @@ mod estimate;
 pub mod fuzzing;
 mod http;
 mod ingest;
+mod jobs;
 #[cfg(feature = "cluster")]
 mod migrate;
 mod model;
@@ -109,17 +112,17 @@ mod storage;
 mod venue;
 
 pub use auth::{
-    ADMIN_TOKEN_FILE, Limits, PresetToken, Role, TokenInfo, create_token, create_token_at,
-    list_tokens, list_tokens_at, new_token, revoke_token, revoke_token_at,
+    ADMIN_TOKEN_FILE, Limits, PresetToken, create_token, create_token_at, list_tokens,
+    list_tokens_at, new_token, revoke_token, revoke_token_at,
 };
-pub use config::{AdbConfig, DELETE_SWEEP_RANGE, PlaybackKind, ServerConfig, SimConfig};
+pub use config::{AdbConfig, DELETE_SWEEP_RANGE, ServerConfig, SimConfig, TlsConfig};
 pub use error::Error;
 pub use estimate::calibrations::{Calibrations, MAX_CALIBRATIONS, is_calibration_name};
 pub use http::helpers::IDEMPOTENCY_HEADER;
 pub use http::server::{Server, ServerHandle};
-pub use http::tls::TlsConfig;
 #[cfg(feature = "cluster")]
 pub use migrate::{MigrateOptions, Summary as MigrateSummary, TableCount, migrate};
+pub use model::{PlaybackKind, Role, TokenInfo};
 
 /// Whether this build has the cluster backends (Postgres metadata, S3-compatible blobs:
 /// `--database`, `--store`, `sitar migrate`): the `cluster` feature.

@@ -224,8 +224,8 @@ fn no_import_cycle_among_the_modules() {
     let uses = |module: &str, used: &str| graph[module].contains(used);
     assert!(uses("http::handlers::trials", "http::helpers"));
     assert!(uses("http::handlers::trials", "ingest::trials"));
-    assert!(uses("playback::jobs", "app_state") && uses("playback::jobs", "session"));
-    assert!(uses("playback::jobs", "estimate::live_sessions"));
+    assert!(uses("jobs::playback", "app_state") && uses("jobs::playback_run", "ingest::trials"));
+    assert!(uses("jobs::live_session", "estimate::live_sessions"));
     assert!(uses("session::lifecycle", "storage") && uses("session::lifecycle", "error"));
     assert!(uses("storage::sqlite::sessions", "storage::metadata"));
     assert!(uses("http::router", "http::handlers") && uses("http::server", "http::router"));
@@ -325,16 +325,22 @@ fn only_the_storage_folder_speaks_sql() {
     assert!(sources["storage::sqlite::sessions"].contains("INSERT INTO sessions"));
 }
 
+/// The layer list of lib.rs's comment (`// name — what`), lowest first.
+fn layer_list(lib: &str) -> Vec<String> {
+    lib.lines()
+        .filter_map(|l| l.trim_start().strip_prefix("// "))
+        .filter_map(|l| l.split_once(" — "))
+        .map(|(name, _)| name.trim().to_string())
+        .filter(|name| name.chars().all(|c| c.is_ascii_lowercase() || c == '_'))
+        .collect()
+}
+
 #[test]
-fn the_layer_comment_names_every_module() {
+fn the_layer_comment_is_true() {
     let lib =
         std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("src/lib.rs")).unwrap();
-    let comment: String = lib
-        .lines()
-        .filter(|l| l.trim_start().starts_with("// "))
-        .map(|l| format!("{l}\n"))
-        .collect();
-    let declared: Vec<&str> = lib
+    let layers = layer_list(&lib);
+    let declared: BTreeSet<&str> = lib
         .lines()
         .filter_map(|l| {
             let l = l.trim();
@@ -344,15 +350,38 @@ fn the_layer_comment_names_every_module() {
         })
         .collect();
     assert!(declared.len() >= 10, "{declared:?}");
-    for module in declared {
-        let named = comment
-            .split(|c: char| !(c.is_alphanumeric() || c == '_'))
-            .any(|word| word == module);
-        assert!(
-            named,
-            "lib.rs declares `{module}` but its layer comment does not name it"
-        );
+    let listed: BTreeSet<&str> = layers.iter().map(String::as_str).collect();
+    assert_eq!(
+        declared, listed,
+        "lib.rs's layer comment must list exactly the modules it declares"
+    );
+    // Every import between top-level modules points down the list.
+    let rank = |module: &str| {
+        let top = module.split("::").next().unwrap_or(module);
+        layers.iter().position(|l| l == top)
+    };
+    let mut upward = Vec::new();
+    for (module, uses) in graph() {
+        let Some(from) = rank(&module) else { continue };
+        for used in uses {
+            if rank(&used).is_some_and(|to| to > from) {
+                upward.push(format!("{module} → {used}"));
+            }
+        }
     }
+    assert!(
+        upward.is_empty(),
+        "imports against lib.rs's layer list (a module may import only modules listed \
+         before it):\n{}",
+        upward.join("\n")
+    );
+}
+
+#[test]
+fn the_layer_list_is_read_in_order() {
+    let lib = "// Folders, lowest first:\n// error — the enum\n// model    — words\n\
+               // see `a — b` here\nmod error;";
+    assert_eq!(layer_list(lib), ["error", "model"]);
 }
 
 #[test]

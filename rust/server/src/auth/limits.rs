@@ -6,18 +6,9 @@
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 
-use axum::body::Body;
-use axum::extract::{Request, State};
-use axum::http::Method;
-use axum::middleware::Next;
-use axum::response::{IntoResponse, Response};
-use futures_util::StreamExt;
-
 use crate::Error;
-use crate::app_state::App;
-use crate::model::Caller;
 use crate::model::UsageFull;
-use crate::storage::{UsageStore, now_ms};
+use crate::storage::{MetadataStore, UsageStore, now_ms};
 
 /// The limits every token has (`sitar serve --max-sessions-per-hour`, `--max-upload-gib-per-day`,
 /// `--max-concurrent-uploads`). The defaults are generous for one lab: a phone that records
@@ -68,7 +59,12 @@ impl UploadLimiter {
 
     /// Counts a session creation at `now_ms`, or refuses it with the seconds until one is
     /// allowed.
-    fn create_session(&self, db: &dyn UsageStore, token: i64, now_ms: i64) -> Result<(), Error> {
+    pub fn create_session(
+        &self,
+        db: &dyn UsageStore,
+        token: i64,
+        now_ms: i64,
+    ) -> Result<(), Error> {
         let max = self.limits.sessions_per_hour;
         match db.count_session_creation(token, max, now_ms)? {
             Ok(()) => Ok(()),
@@ -81,14 +77,14 @@ impl UploadLimiter {
 
     /// Starts an upload at `now_ms`, or refuses it (too many at once, or the day's bytes are
     /// used up).
-    fn start_upload(
-        &self,
-        shared: &Arc<App>,
+    pub fn start_upload(
+        self: &Arc<Self>,
+        db: Arc<dyn MetadataStore>,
         token: i64,
         now_ms: i64,
     ) -> Result<UploadGuard, Error> {
         let limits = self.limits;
-        let day = shared.db.uploaded_in_day(token, now_ms)?;
+        let day = db.uploaded_in_day(token, now_ms)?;
         if day.used >= limits.upload_bytes_per_day {
             return Err(Error::TooManyRequests {
                 message: format!(
@@ -111,7 +107,8 @@ impl UploadLimiter {
         }
         *count += 1;
         Ok(UploadGuard {
-            shared: shared.clone(),
+            limiter: self.clone(),
+            db,
             token,
             bytes: 0,
         })
@@ -136,83 +133,29 @@ impl UploadLimiter {
 
 /// Held while an upload body is read: its bytes are counted, and the slot is freed when the
 /// body is done with (read to the end, or dropped).
-struct UploadGuard {
-    shared: Arc<App>,
+pub(crate) struct UploadGuard {
+    limiter: Arc<UploadLimiter>,
+    db: Arc<dyn MetadataStore>,
     token: i64,
-    bytes: u64,
+    /// Bytes read so far.
+    pub bytes: u64,
 }
 
 impl Drop for UploadGuard {
     fn drop(&mut self) {
-        self.shared
-            .limiter
-            .finish_upload(&*self.shared.db, self.token, self.bytes);
+        self.limiter
+            .finish_upload(&*self.db, self.token, self.bytes);
     }
-}
-
-fn creates_session(method: &Method, path: &str) -> bool {
-    method == Method::POST && matches!(path, "/v1/sessions" | "/recording")
-}
-
-fn is_upload(method: &Method, path: &str) -> bool {
-    let in_session = |suffix: &str| {
-        path.strip_prefix("/v1/sessions/")
-            .and_then(|rest| rest.strip_suffix(suffix))
-            .is_some_and(|id| !id.is_empty() && !id.contains('/'))
-    };
-    // Every PUT under a session is an upload: the recording and the evidence files.
-    (method == Method::PUT && path.starts_with("/v1/sessions/"))
-        || (method == Method::POST
-            && (in_session("/trials") || matches!(path, "/recording" | "/timestamps")))
-}
-
-/// The middleware: runs after authentication, on the caller's token.
-pub(crate) async fn limit_uploads(
-    State(shared): State<Arc<App>>,
-    request: Request,
-    next: Next,
-) -> Response {
-    let Some(Caller::Token { id, .. }) = request.extensions().get::<Caller>().cloned() else {
-        return next.run(request).await;
-    };
-    let (method, path) = (request.method().clone(), request.uri().path().to_owned());
-    if creates_session(&method, &path)
-        && let Err(e) = shared.limiter.create_session(&*shared.db, id, now_ms())
-    {
-        return e.into_response();
-    }
-    if !is_upload(&method, &path) {
-        return next.run(request).await;
-    }
-    let mut guard = match shared.limiter.start_upload(&shared, id, now_ms()) {
-        Ok(guard) => guard,
-        Err(e) => return e.into_response(),
-    };
-    let (parts, body) = request.into_parts();
-    let counted = body.into_data_stream().map(move |chunk| {
-        // The whole guard moves into the stream (not just its counter): the slot is held
-        // until the body is done with.
-        let guard = &mut guard;
-        if let Ok(bytes) = &chunk {
-            guard.bytes += bytes.len() as u64;
-        }
-        chunk
-    });
-    next.run(Request::from_parts(parts, Body::from_stream(counted)))
-        .await
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    use crate::config::ServerConfig;
     use crate::model::HOUR_MS;
 
-    fn shared(dir: &std::path::Path, limits: Limits) -> Arc<App> {
-        let mut config = ServerConfig::new(dir);
-        config.limits = limits;
-        Arc::new(App::open(config).unwrap())
+    fn usage_store(dir: &std::path::Path) -> Arc<dyn MetadataStore> {
+        crate::storage::open::open_metadata(dir, None).unwrap()
     }
 
     #[test]
@@ -223,8 +166,8 @@ mod tests {
             upload_bytes_per_day: 100,
             concurrent_uploads: 1,
         };
-        let shared = shared(dir.path(), limits);
-        let (limiter, db) = (&shared.limiter, &*shared.db);
+        let store = usage_store(dir.path());
+        let (limiter, db) = (&Arc::new(UploadLimiter::new(limits)), &*store);
         let t0 = 500_000 * HOUR_MS + 1_000;
         limiter.create_session(db, 1, t0).unwrap();
         limiter.create_session(db, 1, t0 + 1).unwrap();
@@ -238,9 +181,9 @@ mod tests {
         limiter.create_session(db, 2, t0 + 2).unwrap();
         limiter.create_session(db, 1, t0 + HOUR_MS).unwrap();
 
-        let mut first = limiter.start_upload(&shared, 1, t0).unwrap();
+        let mut first = limiter.start_upload(store.clone(), 1, t0).unwrap();
         assert!(matches!(
-            limiter.start_upload(&shared, 1, t0),
+            limiter.start_upload(store.clone(), 1, t0),
             Err(Error::TooManyRequests {
                 retry_after_s: 5,
                 ..
@@ -254,7 +197,7 @@ mod tests {
         let Err(Error::TooManyRequests {
             retry_after_s,
             message,
-        }) = limiter.start_upload(&shared, 1, now)
+        }) = limiter.start_upload(store.clone(), 1, now)
         else {
             panic!("over the day's bytes");
         };
@@ -263,9 +206,13 @@ mod tests {
             (82_800..=86_400).contains(&retry_after_s),
             "{retry_after_s}"
         );
-        assert!(limiter.start_upload(&shared, 2, now).is_ok());
+        assert!(limiter.start_upload(store.clone(), 2, now).is_ok());
         // A day later the bytes have left the window.
-        assert!(limiter.start_upload(&shared, 1, now + 24 * HOUR_MS).is_ok());
+        assert!(
+            limiter
+                .start_upload(store.clone(), 1, now + 24 * HOUR_MS)
+                .is_ok()
+        );
     }
 
     #[test]
@@ -278,43 +225,21 @@ mod tests {
         };
         let t0 = now_ms();
         {
-            let shared = shared(dir.path(), limits);
-            shared.limiter.create_session(&*shared.db, 7, t0).unwrap();
-            let mut upload = shared.limiter.start_upload(&shared, 7, t0).unwrap();
+            let (store, limiter) = (
+                usage_store(dir.path()),
+                Arc::new(UploadLimiter::new(limits)),
+            );
+            limiter.create_session(&*store, 7, t0).unwrap();
+            let mut upload = limiter.start_upload(store.clone(), 7, t0).unwrap();
             upload.bytes = 11;
         }
         // A new server on the same data directory: both limits still apply.
-        let shared = shared(dir.path(), limits);
-        assert!(
-            shared
-                .limiter
-                .create_session(&*shared.db, 7, t0 + 1)
-                .is_err()
+        let (store, limiter) = (
+            usage_store(dir.path()),
+            Arc::new(UploadLimiter::new(limits)),
         );
-        assert!(shared.limiter.start_upload(&shared, 7, t0 + 1).is_err());
-        assert!(
-            shared
-                .limiter
-                .create_session(&*shared.db, 8, t0 + 1)
-                .is_ok()
-        );
-    }
-
-    #[test]
-    fn upload_routes_are_recognised() {
-        assert!(is_upload(&Method::PUT, "/v1/sessions/s01/recording"));
-        assert!(is_upload(&Method::PUT, "/v1/sessions/s01/evidence.csv"));
-        assert!(is_upload(
-            &Method::PUT,
-            "/v1/sessions/s01/subtrajectories/3/image.jpg"
-        ));
-        assert!(!is_upload(&Method::GET, "/v1/sessions/s01/subtrajectories"));
-        assert!(is_upload(&Method::POST, "/v1/sessions/s01/trials"));
-        assert!(is_upload(&Method::POST, "/recording"));
-        assert!(is_upload(&Method::POST, "/timestamps"));
-        assert!(!is_upload(&Method::HEAD, "/v1/sessions/s01/recording"));
-        assert!(!is_upload(&Method::POST, "/v1/sessions"));
-        assert!(creates_session(&Method::POST, "/v1/sessions"));
-        assert!(!creates_session(&Method::GET, "/v1/sessions"));
+        assert!(limiter.create_session(&*store, 7, t0 + 1).is_err());
+        assert!(limiter.start_upload(store.clone(), 7, t0 + 1).is_err());
+        assert!(limiter.create_session(&*store, 8, t0 + 1).is_ok());
     }
 }

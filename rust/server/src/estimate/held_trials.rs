@@ -23,7 +23,7 @@ use std::borrow::Cow;
 use sitar_estimator::{Calibration, Estimate, IncrementalEstimate, Trajectory};
 
 use crate::Error;
-use crate::session::estimate_settings::EstimateSettings;
+use crate::model::estimate_settings::EstimateSettings;
 
 /// Bytes one parsed trial holds in memory.
 pub(crate) fn trial_bytes(trial: &Trajectory) -> usize {

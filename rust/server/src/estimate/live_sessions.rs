@@ -31,7 +31,7 @@ use crate::Error;
 use crate::estimate::calibrations::SessionCalibration;
 use crate::estimate::held_trials::{Held, HeldTrials, Purpose, StateBudget, trial_bytes};
 use crate::estimate::publishing::Published;
-use crate::session::estimate_settings::EstimateSettings;
+use crate::model::estimate_settings::EstimateSettings;
 
 /// The live sessions of one server, with the memory bound over them all.
 pub(crate) struct LiveSessions {

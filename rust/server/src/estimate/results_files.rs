@@ -3,9 +3,9 @@
 //! route.
 
 use crate::Error;
-use crate::app_state::App;
 use crate::estimate::publishing::Published;
-use crate::session::Session;
+use crate::model::Session;
+use crate::session::Lifecycle;
 use crate::storage::BlobStore;
 use crate::storage::keys::SessionObject;
 
@@ -18,24 +18,21 @@ pub(crate) enum Form {
     Json,
 }
 
-/// Writes a published estimate into the session's folder, then records it. Holds the
-/// session's lock, so a delete never sees half of it; a session deleted meanwhile gets
-/// nothing. Blocking.
-pub(crate) fn write(shared: &App, id: &str, published: &Published) -> Result<(), Error> {
-    let lock = shared.session_lock(id);
-    let _held = lock.blocking_lock();
-    shared.session(id)?;
-    let files = &shared.blobs;
-    files.put(id, SessionObject::ResultsCsv, published.csv.as_bytes())?;
-    files.put(id, SessionObject::ResultsJson, published.json.as_bytes())?;
-    append_history(&**files, id, published);
-    shared.lifecycle().publish(id, published.trials)
+/// Writes a published estimate into the session's folder, then records it. The caller
+/// holds the session's lock and has seen the session still there, so a delete never sees
+/// half of it and a session deleted meanwhile gets nothing. Blocking.
+pub(crate) fn write(
+    blobs: &dyn BlobStore,
+    lifecycle: &Lifecycle<'_>,
+    id: &str,
+    published: &Published,
+) -> Result<(), Error> {
+    blobs.put(id, SessionObject::ResultsCsv, published.csv.as_bytes())?;
+    blobs.put(id, SessionObject::ResultsJson, published.json.as_bytes())?;
+    append_history(blobs, id, published);
+    lifecycle.publish(id, published.trials)
 }
 
-/// Appends `{"trials","mean","max","high","medium","low"}` (window errors in the results'
-/// unit; sub-trajectory classes) to the session's history, one line per published estimate
-/// (at most one per trial). A history that cannot be written only loses the report's
-/// history table, so the error is logged, not returned.
 fn append_history(blobs: &dyn BlobStore, id: &str, published: &Published) {
     let count = |c: sitar_core::ErrorClass| published.classes.values().filter(|v| **v == c).count();
     let line = serde_json::json!({
@@ -52,8 +49,8 @@ fn append_history(blobs: &dyn BlobStore, id: &str, published: &Published) {
 }
 
 /// The published estimates of `session` in order (empty when none was recorded).
-pub(crate) fn history(shared: &App, session: &Session) -> Vec<serde_json::Value> {
-    let text = match shared.blobs.get(&session.id, SessionObject::History) {
+pub(crate) fn history(blobs: &dyn BlobStore, session: &Session) -> Vec<serde_json::Value> {
+    let text = match blobs.get(&session.id, SessionObject::History) {
         Ok(Some(bytes)) => String::from_utf8_lossy(&bytes).into_owned(),
         Ok(None) => return Vec::new(),
         Err(e) => {
@@ -67,7 +64,7 @@ pub(crate) fn history(shared: &App, session: &Session) -> Vec<serde_json::Value>
 }
 
 /// The latest published results of `session`; a 409 naming the state when there are none.
-pub(crate) fn read(shared: &App, session: &Session, form: Form) -> Result<String, Error> {
+pub(crate) fn read(blobs: &dyn BlobStore, session: &Session, form: Form) -> Result<String, Error> {
     if session.results_trials == 0 {
         return Err(Error::Conflict(format!(
             "session {} has no results yet (state {})",
@@ -78,7 +75,7 @@ pub(crate) fn read(shared: &App, session: &Session, form: Form) -> Result<String
         Form::Csv => SessionObject::ResultsCsv,
         Form::Json => SessionObject::ResultsJson,
     };
-    let bytes = shared.blobs.get(&session.id, object)?.ok_or_else(|| {
+    let bytes = blobs.get(&session.id, object)?.ok_or_else(|| {
         Error::Internal(format!(
             "session {}: {} is missing",
             session.id,

@@ -11,10 +11,11 @@ use axum::response::{IntoResponse, Response};
 
 use crate::Error;
 use crate::app_state::App;
-use crate::auth::Caller;
-use crate::session::Session;
+use crate::model::Caller;
+use crate::model::Session;
+use crate::model::{Venue, is_venue_id};
 use crate::storage::body_stream;
-use crate::venue::{Standing, Venue, is_venue_id};
+use crate::venue::Standing;
 
 /// Runs `f` on tokio's blocking pool (file and CPU work off the async workers); a task that
 /// panicked or was cancelled is an internal error naming `what`.

@@ -11,12 +11,13 @@ use axum::routing::{get, post, put};
 
 use crate::Error;
 use crate::app_state::App;
-use crate::auth::{self, CallerName};
+use crate::http::authenticate::{self, CallerName};
 use crate::http::handlers::{
     devices, evidence, health, legacy, pages, phone_log, recording, results, scene, sessions,
     share, trials, venues, worker,
 };
 use crate::http::helpers::json_response;
+use crate::http::upload_limits;
 
 pub(crate) fn router(shared: Arc<App>) -> Router {
     Router::new()
@@ -117,11 +118,11 @@ pub(crate) fn router(shared: Arc<App>) -> Router {
         ))
         .layer(axum::middleware::from_fn_with_state(
             shared.clone(),
-            auth::limit_uploads,
+            upload_limits::limit_uploads,
         ))
         .layer(axum::middleware::from_fn_with_state(
             shared.clone(),
-            auth::authenticate,
+            authenticate::authenticate,
         ))
         .layer(axum::middleware::from_fn(
             crate::http::json_errors::json_rejections,

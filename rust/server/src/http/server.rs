@@ -6,8 +6,8 @@ use std::time::Duration;
 
 use crate::app_state::App;
 use crate::config::ServerConfig;
-use crate::session::{delete_sweep, deletion};
-use crate::{Error, auth, http::router, http::tls, playback::jobs};
+use crate::jobs::{delete_sweep, deletion};
+use crate::{Error, auth, http::router, http::tls, jobs::playback as jobs};
 
 /// The backend: storage opened, ready to serve.
 pub struct Server {
@@ -71,7 +71,7 @@ impl Server {
         jobs::recover(&self.shared)?;
         if self.shared.clustered() {
             // Heartbeat, adoption of dead instances' sessions, stop requests from others.
-            crate::playback::instances::spawn(self.shared.clone());
+            crate::jobs::instances::spawn(self.shared.clone());
         }
         deletion::spawn_retention_sweep(self.shared.clone());
         // Deletes a crash cut off, on every instance (the embedded one's own, after a restart).
@@ -209,7 +209,7 @@ impl ServerHandle {
     }
 
     /// Makes a token with `role` named `name` (the demo's own tokens) and returns it.
-    pub fn create_token(&self, role: auth::Role, name: &str) -> Result<String, Error> {
+    pub fn create_token(&self, role: crate::model::Role, name: &str) -> Result<String, Error> {
         let token = auth::new_token()?;
         self.shared.db.insert_token(name, role, &token)?;
         Ok(token)

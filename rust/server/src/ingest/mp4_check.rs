@@ -14,7 +14,7 @@ use std::io::{Read, Seek, SeekFrom};
 use std::path::Path;
 
 use crate::Error;
-use crate::config::PlaybackKind;
+use crate::model::PlaybackKind;
 
 /// Top-level boxes looked at before giving up (a recording has fewer than ten), so a
 /// file of millions of tiny boxes costs no more than this many reads.

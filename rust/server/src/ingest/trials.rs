@@ -2,15 +2,12 @@
 //! the bytes received, checked, written once as its file, and kept parsed in the session's
 //! live session (`estimate/live_sessions.rs`) for every estimate after.
 
-use std::sync::Arc;
-
 use sitar_estimator::Trajectory;
 
 use crate::Error;
-use crate::app_state::App;
 use crate::estimate::live_sessions::LiveSession;
-use crate::session::Session;
 use crate::storage::keys::SessionObject;
+use crate::storage::{BlobStore, StoreRefs};
 
 /// Parses one trial's TUM text from the bytes received; the error names `source`, the line
 /// and the column.
@@ -87,7 +84,7 @@ pub(crate) struct Arrival<'a> {
 /// commits, and the parsed trial joins `live`. With an idempotency key seen before, returns
 /// the earlier index and stores nothing (the bool is false).
 pub(crate) fn store_trial(
-    shared: &App,
+    stores: StoreRefs<'_>,
     live: &LiveSession,
     id: &str,
     arrival: Arrival<'_>,
@@ -102,10 +99,10 @@ pub(crate) fn store_trial(
     } = arrival;
     let reservation = live.reserve(crate::estimate::held_trials::trial_bytes(&trial))?;
     let (index, created) =
-        shared
+        stores
             .db
             .add_trial(id, key, play_index, trial.len(), source, &mut |index| {
-                shared.blobs.put(id, SessionObject::Trial(index), bytes)
+                stores.blobs.put(id, SessionObject::Trial(index), bytes)
             })?;
     if created || retried {
         live.add(play_index.unwrap_or(index), index, trial, reservation);
@@ -113,61 +110,10 @@ pub(crate) fn store_trial(
     Ok((index, created))
 }
 
-/// The live session of `session`: in memory already, or rebuilt from its trial files (after
-/// a restart). Reading the files runs off the async runtime.
-pub(crate) async fn live_session(
-    shared: &Arc<App>,
-    session: &Session,
-) -> Result<Arc<LiveSession>, Error> {
-    if let Some(live) = shared.live.get(&session.id) {
-        return Ok(live);
-    }
-    let (shared, session) = (shared.clone(), session.clone());
-    let id = session.id.clone();
-    tokio::task::spawn_blocking(move || {
-        let thresholds = session
-            .settings
-            .thresholds(shared.config.thresholds, shared.config.thresholds_deg);
-        let calibration = shared
-            .config
-            .calibrations
-            .for_session(session.calibration.as_deref());
-        if let crate::estimate::calibrations::SessionCalibration::Missing(name) = &calibration {
-            log::warn!(
-                "session {}: calibration {name} is not on this server (sitar serve \
-                 --calibration {name}=FILE): its estimates are published uncalibrated",
-                session.id
-            );
-        }
-        shared.live.get_or_insert(
-            &session.id,
-            session.settings,
-            calibration,
-            thresholds,
-            session.results_trials,
-            || {
-                shared
-                    .db
-                    .trials_in_order(&session.id)?
-                    .into_iter()
-                    .map(|(index, play_index)| {
-                        let bytes = read_trial(&shared, &session.id, index)?;
-                        let source = format!("trial_{index:03}.txt");
-                        Ok((play_index, index, parse_trial(&bytes, &source)?))
-                    })
-                    .collect()
-            },
-        )
-    })
-    .await
-    .map_err(|e| Error::Internal(format!("rebuilding session {id}: {e}")))?
-}
-
 /// Trial `index` of session `id` as stored; a trial its row names but the store lacks is an
 /// internal error naming it.
-pub(crate) fn read_trial(shared: &App, id: &str, index: u32) -> Result<Vec<u8>, Error> {
-    shared
-        .blobs
+pub(crate) fn read_trial(blobs: &dyn BlobStore, id: &str, index: u32) -> Result<Vec<u8>, Error> {
+    blobs
         .get(id, SessionObject::Trial(index))?
         .ok_or_else(|| Error::Internal(format!("session {id}: trial {index} is missing")))
 }

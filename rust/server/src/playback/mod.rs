@@ -1,12 +1,11 @@
+//! How trials are played: the [`Playback`] trait and its backends — the simulator
+//! ([`SimPlayback`]), phones over adb (`adb`), trials from outside ([`UploadPlayback`]) and
+//! playback hosts (`remote`) — and the bounded queue of sessions waiting for one (`queue`).
+//! The jobs that drive them are `jobs::playback` and `jobs::playback_run`.
+
 pub(crate) mod adb;
-pub(crate) mod instances;
-pub(crate) mod jobs;
-pub(crate) mod progress_view;
 pub(crate) mod queue;
-pub(crate) mod reaper;
 pub(crate) mod remote;
-pub(crate) mod run;
-pub(crate) mod stop_requests;
 
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};

@@ -13,7 +13,7 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use crate::Error;
-use crate::config::PlaybackKind;
+use crate::model::PlaybackKind;
 use crate::playback::{DeviceInfo, Playback, PlaybackJob, PlaybackPlan, TrialOutput};
 use crate::storage::MetadataStore;
 use crate::storage::now_ms;

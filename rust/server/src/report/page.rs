@@ -18,13 +18,13 @@ use sitar_core::{Convention, ErrorClass, Session as Phone, Thresholds};
 
 use crate::Error;
 use crate::config::ServerConfig;
+use crate::model::Session;
 use crate::report::charts::{self, HIGH, LOW, MEDIUM, UNKNOWN};
 use crate::report::index_ranges::index_ranges;
 use crate::report::region_evidence::{self, CameraEvidence};
 use crate::report::regions::{self, SubRow};
 use crate::report::scene::Source;
 use crate::report::templates;
-use crate::session::Session;
 
 #[derive(Debug, Deserialize)]
 struct ResultsDoc {
@@ -628,7 +628,7 @@ fn calibration_missing(row: &Session, a: &Analysis) -> Option<String> {
 /// Step 5: whether the estimate is still partial (trials are arriving), for the banner
 /// and the page's reload.
 fn partial(row: &Session, doc: &ResultsDoc) -> Option<serde_json::Value> {
-    use crate::session::SessionState;
+    use crate::model::SessionState;
     let finished = matches!(row.state, SessionState::Done | SessionState::Failed);
     (!finished).then(|| {
         json!({
@@ -971,10 +971,10 @@ mod tests {
     fn row(calibration: Option<&str>) -> Session {
         Session {
             id: "s0123456789abcdef".into(),
-            state: crate::session::SessionState::Done,
-            playback: crate::config::PlaybackKind::Upload,
+            state: crate::model::SessionState::Done,
+            playback: crate::model::PlaybackKind::Upload,
             trials_total: 3,
-            settings: crate::session::estimate_settings::EstimateSettings::defaults(
+            settings: crate::model::estimate_settings::EstimateSettings::defaults(
                 &ServerConfig::new("unused").default_setting,
             )
             .unwrap(),

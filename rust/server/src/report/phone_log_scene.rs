@@ -11,7 +11,7 @@ use sitar_core::{Pose, Session, SessionConfig};
 
 use crate::Error;
 use crate::ingest::phone_log::SUBTRAJECTORIES_HEADER;
-use crate::session::Session as Row;
+use crate::model::Session as Row;
 
 /// The phone session replayed from `trajectory` (the stored `trajectory.txt`) with the depth
 /// of `subtrajectories` (the stored `subtrajectories.csv`, if any).

@@ -20,12 +20,12 @@ use sitar_core::{DisplayRotation, Session, SessionConfig};
 
 use super::flat_depth::flat_depth_sample;
 use crate::Error;
-use crate::app_state::App;
 use crate::estimate::results_files::{self, Form};
 use crate::ingest::evidence::{EvidenceFiles, EvidenceRow};
 use crate::ingest::mp4_check;
-use crate::session::Session as Row;
+use crate::model::Session as Row;
 use crate::storage::keys::SessionObject;
+use crate::storage::{BlobStore, MetadataStore, StoreRefs};
 
 /// Where the scene's poses came from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -93,17 +93,17 @@ fn config(row: &Row) -> Result<SessionConfig, Error> {
 /// The reference trial (the first stored) replayed through the phone logic, with each
 /// midpoint's surface distance from `evidence` (rows by sub-trajectory index) when given.
 fn from_reference_trial(
-    shared: &App,
+    stores: StoreRefs<'_>,
     row: &Row,
     evidence: Option<&[EvidenceRow]>,
 ) -> Result<Session, Error> {
-    let first = shared
+    let first = stores
         .db
         .trials_in_order(&row.id)?
         .first()
         .map(|(index, _)| *index)
         .ok_or_else(|| Error::Conflict(format!("session {} has no trials yet", row.id)))?;
-    let bytes = crate::ingest::trials::read_trial(shared, &row.id, first)?;
+    let bytes = crate::ingest::trials::read_trial(stores.blobs, &row.id, first)?;
     let text = String::from_utf8_lossy(&bytes);
     let trajectory = sitar_estimator::parse_tum(&text, "reference trial")
         .map_err(|e| Error::InvalidContent(format!("reference trial of {}: {e}", row.id)))?;
@@ -143,9 +143,9 @@ fn from_reference_trial(
 /// Builds the phone session of `row` (no results loaded): from the phone's own log when it
 /// sent one, else from the simulated walk, else from the reference trial. Blocking and
 /// CPU-heavy for simulated walks (one depth image per midpoint).
-fn build(shared: &App, row: &Row) -> Result<(Session, Source), Error> {
-    if let Some(log) = shared.blobs.get(&row.id, SessionObject::PhoneTrajectory)? {
-        let table = shared.blobs.get(&row.id, SessionObject::Subtrajectories)?;
+fn build(stores: StoreRefs<'_>, row: &Row) -> Result<(Session, Source), Error> {
+    if let Some(log) = stores.blobs.get(&row.id, SessionObject::PhoneTrajectory)? {
+        let table = stores.blobs.get(&row.id, SessionObject::Subtrajectories)?;
         let session = super::phone_log_scene::from_phone_log(
             row,
             &String::from_utf8_lossy(&log),
@@ -153,20 +153,20 @@ fn build(shared: &App, row: &Row) -> Result<(Session, Source), Error> {
         )?;
         return Ok((session, Source::PhoneLog));
     }
-    if let Some(recording) = simulated_walk(shared, &row.id) {
+    if let Some(recording) = simulated_walk(stores, &row.id) {
         let session = recording
             .phone_session(config(row)?, DisplayRotation::Deg90)
             .map_err(|e| Error::InvalidContent(format!("simulated walk: {e}")))?;
         return Ok((session, Source::SimulatedWalk));
     }
-    let evidence = stored_evidence(shared, row);
+    let evidence = stored_evidence(stores, row);
     let source = if evidence.is_some() {
         Source::ReferenceTrialWithEvidence
     } else {
         Source::ReferenceTrial
     };
     Ok((
-        from_reference_trial(shared, row, evidence.as_deref())?,
+        from_reference_trial(stores, row, evidence.as_deref())?,
         source,
     ))
 }
@@ -174,15 +174,15 @@ fn build(shared: &App, row: &Row) -> Result<(Session, Source), Error> {
 /// Session `id`'s recording when it is a `sitar-sim` one. Only its header is read to tell
 /// (a phone's recording is gigabytes of video that the scene never needs); a sim recording
 /// is read whole, within its bound ([`mp4_check::MAX_SIM_RECORDING_BYTES`]).
-fn simulated_walk(shared: &App, id: &str) -> Option<sitar_sim::Recording> {
-    let head = shared
+fn simulated_walk(stores: StoreRefs<'_>, id: &str) -> Option<sitar_sim::Recording> {
+    let head = stores
         .blobs
         .peek(id, SessionObject::Recording, mp4_check::SIM_HEADER_BYTES)
         .ok()??;
     if !mp4_check::is_sim_header(&head) {
         return None;
     }
-    let found = shared.blobs.open(id, SessionObject::Recording).ok()??;
+    let found = stores.blobs.open(id, SessionObject::Recording).ok()??;
     if found.len > mp4_check::MAX_SIM_RECORDING_BYTES {
         log::info!(
             "session {id}: a sitar-sim recording of {} bytes is not read for its scene",
@@ -200,9 +200,9 @@ fn simulated_walk(shared: &App, id: &str) -> Option<sitar_sim::Recording> {
 
 /// The phone's evidence rows of `row`, if it sent any (an unreadable table counts as none:
 /// the scene is drawn without it).
-fn stored_evidence(shared: &App, row: &Row) -> Option<Vec<EvidenceRow>> {
+fn stored_evidence(stores: StoreRefs<'_>, row: &Row) -> Option<Vec<EvidenceRow>> {
     EvidenceFiles {
-        blobs: &*shared.blobs,
+        blobs: stores.blobs,
         id: &row.id,
     }
     .evidence_rows()
@@ -232,7 +232,7 @@ fn locked<T>(mutex: &'static Mutex<T>) -> std::sync::MutexGuard<'static, T> {
 /// the in-memory cache — on a thread of its own, so the first load of its report does not pay
 /// for it (a simulated 10-minute walk takes seconds to rebuild). One at a time: a session that
 /// finishes while another's is built gets its scene on the first request instead, as before.
-pub(crate) fn prepare(shared: Arc<App>, id: String) {
+pub(crate) fn prepare(db: Arc<dyn MetadataStore>, blobs: Arc<dyn BlobStore>, id: String) {
     {
         let mut slot = locked(&PREPARING);
         if slot.is_some() {
@@ -243,7 +243,15 @@ pub(crate) fn prepare(shared: Arc<App>, id: String) {
     let spawned = std::thread::Builder::new()
         .name("sitar-scene".into())
         .spawn(move || {
-            let built = shared.session(&id).and_then(|row| load(&shared, &row));
+            let stores = StoreRefs {
+                db: &*db,
+                blobs: &*blobs,
+            };
+            let built = stores
+                .db
+                .session(&id)
+                .and_then(|row| row.ok_or_else(|| Error::NotFound(format!("no session {id:?}"))))
+                .and_then(|row| load(stores, &row));
             if let Err(e) = built {
                 log::debug!("session {id}: scene not built ahead: {e}");
             }
@@ -262,15 +270,15 @@ pub(crate) fn preparing(id: &str) -> bool {
 
 /// The phone's log of session `id` changed (`trajectory.txt` or `subtrajectories.csv`): its
 /// kept scene and cached copy are dropped, so the next request builds it from the new log.
-pub(crate) fn phone_log_changed(shared: &App, id: &str) {
-    shared.blobs.discard_scene(id);
-    forget(shared, id);
+pub(crate) fn phone_log_changed(blobs: &dyn BlobStore, id: &str) {
+    blobs.discard_scene(id);
+    forget(blobs, id);
 }
 
 /// Drops session `id`'s scene from the in-memory cache (a deleted session's data must not
 /// stay readable, even in memory).
-pub(crate) fn forget(shared: &App, id: &str) {
-    let key = shared.blobs.scene_folder(id);
+pub(crate) fn forget(blobs: &dyn BlobStore, id: &str) {
+    let key = blobs.scene_folder(id);
     locked(&CACHE).retain(|(k, _, _)| *k != key);
 }
 
@@ -287,8 +295,8 @@ fn cached(key: &std::path::Path, trials: u32) -> Option<Arc<(Session, Source)>> 
 
 /// The phone session of `row` with its latest results loaded. Blocking. Loaded once however
 /// many requests ask at the same time: the first loads, the others wait for it.
-pub(crate) fn load(shared: &App, row: &Row) -> Result<Arc<(Session, Source)>, Error> {
-    let key = shared.blobs.scene_folder(&row.id);
+pub(crate) fn load(stores: StoreRefs<'_>, row: &Row) -> Result<Arc<(Session, Source)>, Error> {
+    let key = stores.blobs.scene_folder(&row.id);
     if let Some(hit) = cached(&key, row.results_trials) {
         return Ok(hit);
     }
@@ -307,7 +315,7 @@ pub(crate) fn load(shared: &App, row: &Row) -> Result<Arc<(Session, Source)>, Er
         let _turn = gate.lock().unwrap_or_else(|p| p.into_inner());
         match cached(&key, row.results_trials) {
             Some(hit) => Ok(hit),
-            None => load_uncached(shared, row).map(|loaded| {
+            None => load_uncached(stores, row).map(|loaded| {
                 let loaded = Arc::new(loaded);
                 let mut cache = locked(&CACHE);
                 cache.retain(|(k, _, _)| *k != key);
@@ -325,28 +333,28 @@ pub(crate) fn load(shared: &App, row: &Row) -> Result<Arc<(Session, Source)>, Er
     loaded
 }
 
-fn load_uncached(shared: &App, row: &Row) -> Result<(Session, Source), Error> {
-    let cached = shared
+fn load_uncached(stores: StoreRefs<'_>, row: &Row) -> Result<(Session, Source), Error> {
+    let cached = stores
         .blobs
         .kept_scene(&row.id)
         .and_then(|(dir, tag)| Some((Session::load(&dir).ok()?, Source::from_tag(&tag))))
         // Built before the phone's evidence arrived: built again with it.
         .filter(|(_, source)| {
-            *source != Source::ReferenceTrial || stored_evidence(shared, row).is_none()
+            *source != Source::ReferenceTrial || stored_evidence(stores, row).is_none()
         })
         // Built before the phone's log arrived: built again from it.
         .filter(|(_, source)| {
             *source == Source::PhoneLog
-                || !shared.blobs.exists(&row.id, SessionObject::PhoneTrajectory)
+                || !stores.blobs.exists(&row.id, SessionObject::PhoneTrajectory)
         });
     if cached.is_none() {
-        shared.blobs.discard_scene(&row.id);
+        stores.blobs.discard_scene(&row.id);
     }
     let (mut session, source) = match cached {
         Some(found) => found,
         None => {
-            let (session, source) = build(shared, row)?;
-            shared
+            let (session, source) = build(stores, row)?;
+            stores
                 .blobs
                 .keep_scene(&row.id, source.tag(), &mut |scratch| {
                     session.save(scratch).is_ok()
@@ -355,7 +363,7 @@ fn load_uncached(shared: &App, row: &Row) -> Result<(Session, Source), Error> {
         }
     };
     if row.results_trials > 0 {
-        let json = results_files::read(shared, row, Form::Json)?;
+        let json = results_files::read(stores.blobs, row, Form::Json)?;
         session
             .load_results(&json)
             .map_err(|e| Error::Internal(format!("results of {} do not fit: {e}", row.id)))?;

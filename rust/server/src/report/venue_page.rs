@@ -17,12 +17,12 @@ use sitar_core::ErrorClass;
 use sitar_core::venue::{CellKind, Contribution, VenueMap, VenueSession};
 
 use crate::Error;
-use crate::auth::Caller;
 use crate::ingest::evidence::{EvidenceFiles, EvidenceRow};
+use crate::model::Caller;
+use crate::model::Session;
+use crate::model::Venue;
 use crate::report::templates;
-use crate::session::Session;
 use crate::storage::{BlobStore, MetadataStore};
-use crate::venue::Venue;
 
 /// Most problem regions listed, and thumbnails per region.
 const MAX_REGIONS: usize = 20;

@@ -81,7 +81,7 @@ impl<'a> Lifecycle<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::config::PlaybackKind;
+    use crate::model::PlaybackKind;
     use crate::storage::sqlite::SqliteStore;
 
     fn db_with(playback: PlaybackKind) -> (tempfile::TempDir, SqliteStore) {

@@ -2,7 +2,7 @@
 //! *unfinished delete* is recorded: its bytes are still to be removed from the blob store.
 //! The instance deleting it claims that work for a while; it removes the bytes and forgets
 //! the record. When it dies in between, the claim lapses and any live instance's sweep
-//! (`session::delete_sweep`) claims the record and finishes: removing bytes that are already
+//! (`jobs::delete_sweep`) claims the record and finishes: removing bytes that are already
 //! gone is success, so two instances finishing one delete never fail each other.
 
 use crate::Error;

@@ -87,7 +87,7 @@ pub(crate) trait InstanceStore {
     /// The stop requests on the sessions in flight `instance` plays, oldest session first.
     fn stop_requests(&self, instance: &str) -> Result<Vec<(String, StopRequest)>, Error>;
     /// Publishes `instance`'s view of the progress of session `id`, which it plays (a JSON
-    /// document, `playback::progress_view`; `None` clears it), for the other instances'
+    /// document, `jobs::progress_view`; `None` clears it), for the other instances'
     /// status answers. A session another instance plays now is left alone.
     fn publish_progress(&self, id: &str, instance: &str, view: Option<&str>) -> Result<(), Error>;
     /// The progress its player last published for session `id`, with the player's id; `None`

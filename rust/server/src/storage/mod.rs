@@ -53,6 +53,14 @@ pub(crate) use metadata::{
 };
 pub(crate) use workers::WorkerStore;
 
+/// A server's two stores, borrowed: what code that reads a session's rows and bytes, and
+/// nothing else of the server, takes.
+#[derive(Clone, Copy)]
+pub(crate) struct StoreRefs<'a> {
+    pub db: &'a dyn MetadataStore,
+    pub blobs: &'a dyn BlobStore,
+}
+
 /// Now, in ms since the Unix epoch (0 if the clock is before it): the unit of every stored
 /// time.
 pub(crate) fn now_ms() -> i64 {

@@ -2,9 +2,9 @@
 //! and admins. Everyone else is told it does not exist (404, never 403).
 
 use crate::Error;
-use crate::auth::Caller;
+use crate::model::Caller;
+use crate::model::Venue;
 use crate::storage::VenueStore;
-use crate::venue::Venue;
 
 /// How a caller stands to a venue it may see.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -5,7 +5,7 @@
 use serde_json::{Value, json};
 
 use crate::Error;
-use crate::session::Session;
+use crate::model::Session;
 use crate::storage::keys::SessionObject;
 use crate::storage::{BlobStore, VenueStore};
 

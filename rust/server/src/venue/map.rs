@@ -16,11 +16,12 @@ use sitar_core::Convention;
 use sitar_core::venue::{Contribution, SessionFiles, VenueMap, VenueSpec, build_map};
 
 use crate::Error;
-use crate::session::{Session, SessionState};
+use crate::model::Venue;
+use crate::model::{Session, SessionState};
 use crate::storage::keys::SessionObject;
 use crate::storage::metadata::KeptContribution;
 use crate::storage::{BlobStore, MetadataStore};
-use crate::venue::{Venue, kept};
+use crate::venue::kept;
 
 /// One session's stored files as text (`None` when not uploaded; only a finished session's
 /// results count, so a progressive estimate never enters the map).

@@ -9,7 +9,4 @@ pub(crate) mod alignment;
 pub(crate) mod kept;
 pub(crate) mod map;
 
-pub(crate) use crate::model::{
-    CELL_M_RANGE, DEFAULT_CELL_M, MAX_NAME_CHARS, NewVenue, Venue, is_venue_id, new_venue_id,
-};
 pub(crate) use access::Standing;

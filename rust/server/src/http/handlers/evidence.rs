@@ -16,7 +16,6 @@ use sitar_core::Results;
 
 use crate::Error;
 use crate::app_state::App;
-use crate::auth::Caller;
 use crate::estimate::results_files::{self, Form};
 use crate::http::helpers::{AppState, Found, json_value, small_body, utf8, visible_session};
 use crate::http::pagination::PageRequest;
@@ -25,7 +24,8 @@ use crate::ingest::evidence::{
     parse_evidence,
 };
 use crate::ingest::phone_log::parse_subtrajectories;
-use crate::session::Session;
+use crate::model::Caller;
+use crate::model::Session;
 use crate::storage::keys::SessionObject;
 
 /// Runs `store` under the session's lock, after checking the session still exists (it may
@@ -80,7 +80,7 @@ pub(crate) async fn put_spans(
     // Its venue's map computes its contribution again from the new table.
     shared.db.forget_contribution(&session.id)?;
     // The scene from the phone's log takes its depth from this table.
-    crate::report::scene::phone_log_changed(&shared, &session.id);
+    crate::report::scene::phone_log_changed(&*shared.blobs, &session.id);
     let mut answer = json!({"subtrajectories": table.spans.len()});
     if let Some(n) = table.depth_samples {
         answer["depth_samples"] = n.into();
@@ -215,7 +215,7 @@ pub(crate) async fn list(
     let results = match session.results_trials {
         0 => None,
         _ => Some(
-            Results::parse_json(&results_files::read(&shared, &session, Form::Json)?)
+            Results::parse_json(&results_files::read(&*shared.blobs, &session, Form::Json)?)
                 .map_err(|e| Error::Internal(format!("published results: {e}")))?,
         ),
     };

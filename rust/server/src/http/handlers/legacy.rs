@@ -12,13 +12,13 @@ use serde_json::json;
 
 use crate::Error;
 use crate::app_state::App;
-use crate::auth::Caller;
 use crate::config::ServerConfig;
 use crate::estimate::results_files::{self, Form};
 use crate::http::helpers::{AppState, check_declared_length, content_type, json_value};
-use crate::ingest::recordings::accept_recording;
-use crate::session::estimate_settings::EstimateSettings;
-use crate::session::{NewSession, SessionState};
+use crate::jobs::recordings::accept_recording;
+use crate::model::Caller;
+use crate::model::estimate_settings::EstimateSettings;
+use crate::model::{NewSession, SessionState};
 use crate::storage::body_stream;
 use crate::storage::keys::SessionObject;
 use crate::storage::staged::TempFile;
@@ -179,6 +179,6 @@ pub(crate) async fn results(State(shared): AppState, caller: Caller) -> Result<R
         .db
         .latest_session(true, true, caller.owner())?
         .ok_or_else(|| Error::NotFound("no finished session yet".into()))?;
-    let text = results_files::read(&shared, &shared.session(&id)?, Form::Csv)?;
+    let text = results_files::read(&*shared.blobs, &shared.session(&id)?, Form::Csv)?;
     Ok(([(header::CONTENT_TYPE, "text/csv; charset=utf-8")], text).into_response())
 }

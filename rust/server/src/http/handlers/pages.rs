@@ -10,16 +10,16 @@ use serde_json::json;
 
 use crate::Error;
 use crate::auth::Admin;
-use crate::config::PlaybackKind;
 use crate::estimate::results_files::{self, Form};
 use crate::http::helpers::{AppState, Found, rendering};
+use crate::http::session_status::status_json;
 use crate::ingest::evidence::EvidenceFiles;
+use crate::model::PlaybackKind;
 use crate::report::index_ranges::index_ranges;
 use crate::report::page::{self, ReportInput, Standalone};
 use crate::report::region_evidence::CameraEvidence;
 use crate::report::scene;
 use crate::report::templates;
-use crate::session::status::status_json;
 
 /// Sessions on the page (the newest).
 const PAGE_SESSIONS: u32 = 50;
@@ -127,9 +127,9 @@ pub(crate) async fn overview(State(shared): AppState, _: Admin) -> Result<Respon
 }
 
 /// `trim_mean_30`, with the window and relation when they are not the defaults.
-fn settings_label(settings: &crate::session::estimate_settings::EstimateSettings) -> String {
+fn settings_label(settings: &crate::model::estimate_settings::EstimateSettings) -> String {
     let mut label = settings.setting.to_string();
-    if settings.window_frames != crate::session::estimate_settings::DEFAULT_WINDOW_FRAMES
+    if settings.window_frames != crate::model::estimate_settings::DEFAULT_WINDOW_FRAMES
         || settings.pose_relation != sitar_estimator::PoseRelation::TranslationPart
     {
         let _ = write!(
@@ -164,7 +164,7 @@ pub(crate) fn wants_download(query: Option<&str>) -> bool {
 /// first estimate both are the waiting page (which a saved file never refreshes).
 pub(crate) async fn report_answer(
     shared: std::sync::Arc<crate::app_state::App>,
-    session: crate::session::Session,
+    session: crate::model::Session,
     base: String,
     download: bool,
 ) -> Result<Response, Error> {
@@ -184,10 +184,10 @@ pub(crate) async fn report_answer(
 /// reloading itself every few seconds unless the session failed (then it says why).
 fn waiting_page(
     shared: &crate::app_state::App,
-    session: &crate::session::Session,
+    session: &crate::model::Session,
     refresh: bool,
 ) -> Result<String, Error> {
-    use crate::session::SessionState;
+    use crate::model::SessionState;
     let status = status_json(shared, session)?;
     let failed = session.state == SessionState::Failed;
     let waiting_for = match session.state {
@@ -218,15 +218,15 @@ fn waiting_page(
 /// `standalone` page carries everything inline and comes with its Content-Security-Policy.
 pub(crate) async fn render_report(
     shared: std::sync::Arc<crate::app_state::App>,
-    session: crate::session::Session,
+    session: crate::model::Session,
     base: String,
     standalone: bool,
 ) -> Result<(String, Option<String>), Error> {
     rendering(shared, "report", move |shared| {
-        let json = results_files::read(shared, &session, Form::Json)?;
+        let json = results_files::read(&*shared.blobs, &session, Form::Json)?;
         // No trajectory (e.g. trials without a readable reference) still gets a page.
-        let phone = scene::load(shared, &session).ok();
-        let history = results_files::history(shared, &session);
+        let phone = scene::load(shared.stores(), &session).ok();
+        let history = results_files::history(&*shared.blobs, &session);
         // Unreadable evidence costs the regions their thumbnails, not the page.
         let evidence = CameraEvidence::load(&*shared.blobs, &session.id).unwrap_or_else(|e| {
             log::warn!("report of {}: evidence left out: {e}", session.id);

@@ -50,7 +50,7 @@ pub(crate) async fn put_trajectory(
     let poses = check_trajectory(&text)?;
     store(&shared, &session.id, SessionObject::PhoneTrajectory, &text).await?;
     // The session's scene is the phone's log from now on.
-    crate::report::scene::phone_log_changed(&shared, &session.id);
+    crate::report::scene::phone_log_changed(&*shared.blobs, &session.id);
     Ok(json_value(StatusCode::OK, &json!({"poses": poses})))
 }
 

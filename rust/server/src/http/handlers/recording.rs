@@ -24,13 +24,13 @@ use serde_json::json;
 
 use crate::Error;
 use crate::app_state::App;
-use crate::config::PlaybackKind;
 use crate::http::helpers::{
     AppState, CURL_DEFAULT_CONTENT_TYPE, Found, check_declared_length, content_type,
     declared_length, idempotency_key, json_response,
 };
-use crate::ingest::recordings::accept_recording;
-use crate::session::{Session, SessionState, Step};
+use crate::jobs::recordings::accept_recording;
+use crate::model::PlaybackKind;
+use crate::model::{Session, SessionState, Step};
 use crate::storage::body_stream;
 use crate::storage::keys::SessionObject;
 

@@ -7,12 +7,12 @@ use axum::response::{IntoResponse, Response};
 use serde_json::json;
 
 use crate::Error;
-use crate::config::PlaybackKind;
 use crate::estimate::results_files::{self, Form};
 use crate::http::helpers::{AppState, Found, json_response, json_value};
 use crate::http::pagination::{PageRequest, page_of};
-use crate::playback::{jobs, stop_requests};
-use crate::session::SessionState;
+use crate::jobs::{playback as jobs, stop_requests};
+use crate::model::PlaybackKind;
+use crate::model::SessionState;
 use crate::storage::StopRequest;
 
 /// `POST /v1/sessions/{id}/estimate`: `upload` sessions estimate now; sim and adb sessions
@@ -67,7 +67,7 @@ pub(crate) async fn estimate(
 
 /// `GET /v1/sessions/{id}/results.csv`.
 pub(crate) async fn csv(State(shared): AppState, Found(session): Found) -> Result<Response, Error> {
-    let text = results_files::read(&shared, &session, Form::Csv)?;
+    let text = results_files::read(&*shared.blobs, &session, Form::Csv)?;
     Ok(([(header::CONTENT_TYPE, "text/csv; charset=utf-8")], text).into_response())
 }
 
@@ -80,7 +80,7 @@ pub(crate) async fn json(
     RawQuery(query): RawQuery,
 ) -> Result<Response, Error> {
     let page = PageRequest::parse(query.as_deref())?;
-    let doc = results_files::read(&shared, &session, Form::Json)?;
+    let doc = results_files::read(&*shared.blobs, &session, Form::Json)?;
     Ok(json_response(
         StatusCode::OK,
         &page_of(doc, "windows", page)?,

@@ -14,7 +14,7 @@ use crate::storage::streamed;
 /// `GET /v1/sessions/{id}/scene.glb`: trajectory by class, frustums, markers, surface points.
 pub(crate) async fn glb(State(shared): AppState, Found(session): Found) -> Result<Response, Error> {
     let glb = rendering(shared, "scene export", move |shared| {
-        let loaded = scene::load(shared, &session)?;
+        let loaded = scene::load(shared.stores(), &session)?;
         sitar_scene::to_glb(&sitar_scene::SceneParts::from_session(&loaded.0))
             .map_err(|e| Error::Conflict(format!("no scene for session {}: {e}", session.id)))
     })
@@ -29,7 +29,7 @@ pub(crate) async fn json(
     Found(session): Found,
 ) -> Result<Response, Error> {
     let value = rendering(shared, "scene data", move |shared| {
-        let loaded = scene::load(shared, &session)?;
+        let loaded = scene::load(shared.stores(), &session)?;
         let (phone, source) = (&loaded.0, loaded.1);
         let thresholds = session
             .settings
@@ -72,7 +72,7 @@ pub(crate) async fn trajectory(
         return Ok(answer);
     }
     let tum = rendering(shared, "trajectory", move |shared| {
-        scene::load(shared, &session).map(|loaded| loaded.0.trajectory_tum())
+        scene::load(shared.stores(), &session).map(|loaded| loaded.0.trajectory_tum())
     })
     .await?;
     Ok(attachment(TYPE, "trajectory.tum", tum))

@@ -9,21 +9,21 @@ use serde_json::json;
 use sitar_core::Convention;
 
 use crate::Error;
-use crate::auth::Caller;
-use crate::config::PlaybackKind;
 use crate::error::short;
 use crate::http::helpers::{
     AppState, Found, check_declared_length, content_type, idempotency_key, json_value,
     visible_venue,
 };
 use crate::http::pagination::list_limit as limit;
-use crate::playback::jobs::{self, EndEarly, Stopped};
+use crate::http::session_status::status_json;
+use crate::jobs::deletion;
+use crate::jobs::playback::{self as jobs, EndEarly, Stopped};
+use crate::jobs::stop_requests;
+use crate::model::Caller;
+use crate::model::PlaybackKind;
+use crate::model::estimate_settings::EstimateSettings;
+use crate::model::{NewSession, SessionState};
 use crate::playback::queue::Intent;
-use crate::playback::stop_requests;
-use crate::session::deletion;
-use crate::session::estimate_settings::EstimateSettings;
-use crate::session::status::status_json;
-use crate::session::{NewSession, SessionState};
 use crate::storage::body_stream;
 
 /// The largest `POST /v1/sessions` body: a few short keys need far less.

@@ -14,7 +14,7 @@ use crate::app_state::App;
 use crate::auth::new_token;
 use crate::http::helpers::{AppState, Found, json_value};
 use crate::ingest::evidence::{EvidenceFiles, MAX_SUBTRAJECTORIES};
-use crate::session::Session;
+use crate::model::Session;
 
 /// The `Host` the client reached us by, if it is a plain host name or address with a port.
 fn host(headers: &HeaderMap) -> Result<&str, Error> {

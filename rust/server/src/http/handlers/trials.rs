@@ -7,14 +7,14 @@ use axum::response::Response;
 use serde_json::json;
 
 use crate::Error;
-use crate::config::PlaybackKind;
 use crate::http::helpers::{
     AppState, CURL_DEFAULT_CONTENT_TYPE, Found, check_declared_length, content_type,
     idempotency_key, json_value,
 };
 use crate::ingest::trials::{self, Arrival};
-use crate::playback::jobs;
-use crate::session::Step;
+use crate::jobs::playback as jobs;
+use crate::model::PlaybackKind;
+use crate::model::Step;
 use crate::storage::body_stream;
 
 /// Takes one TUM text as the raw body: parsed from the bytes received, stored once, kept in
@@ -63,14 +63,15 @@ pub(crate) async fn post(
     // Deleted, or estimated, while the body was arriving?
     let session = shared.session(&id)?;
     session.require(Step::AddTrial)?;
-    let live = trials::live_session(&shared, &session).await?;
+    let live = crate::jobs::live_session::live_session(&shared, &session).await?;
     let arrival = Arrival {
         key: key.as_deref(),
         play_index: None,
         source: "upload",
         retried: false,
     };
-    let (index, created) = trials::store_trial(&shared, &live, &id, arrival, &bytes, trial)?;
+    let (index, created) =
+        trials::store_trial(shared.stores(), &live, &id, arrival, &bytes, trial)?;
     if created && shared.db.trial_count(&id)? >= 2 {
         jobs::spawn_progressive(shared.clone(), live, id);
     }

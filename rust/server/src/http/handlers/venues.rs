@@ -13,15 +13,16 @@ use serde_json::{Value, json};
 
 use crate::Error;
 use crate::app_state::App;
-use crate::auth::Caller;
 use crate::error::short;
 use crate::http::helpers::{
     AppState, blocking, check_declared_length, content_type, json_value, visible_venue,
 };
 use crate::http::pagination::list_limit;
+use crate::model::Caller;
 use crate::model::check_token_name;
+use crate::model::{CELL_M_RANGE, DEFAULT_CELL_M, MAX_NAME_CHARS, NewVenue, Venue};
 use crate::storage::body_stream;
-use crate::venue::{CELL_M_RANGE, DEFAULT_CELL_M, MAX_NAME_CHARS, NewVenue, Standing, Venue};
+use crate::venue::Standing;
 
 /// The largest `POST /v1/venues` body.
 const MAX_REQUEST_BYTES: u64 = 16 * 1024;

@@ -14,9 +14,9 @@ use serde_json::json;
 
 use crate::Error;
 use crate::auth::WorkerCaller;
-use crate::config::PlaybackKind;
 use crate::http::helpers::{AppState, blocking, check_declared_length, json_value};
 use crate::ingest::trials::parse_trial;
+use crate::model::PlaybackKind;
 use crate::storage::keys::SessionObject;
 use crate::storage::now_ms;
 use crate::storage::workers::{HostRow, Lease, PhoneState, Requeued, TrialFailure};

@@ -1,28 +1,15 @@
 //! The server's certificate: loaded from `--cert`/`--key`, or made once (rcgen) for the
 //! `--tls-name` names and kept in `DATA/tls/` (the key readable by the owner only).
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::Arc;
 
 use rustls::pki_types::pem::PemObject;
 use rustls::pki_types::{CertificateDer, PrivateKeyDer};
 
 use crate::Error;
+use crate::config::TlsConfig;
 use crate::storage::instance;
-
-/// `sitar serve --tls`: where the certificate comes from.
-#[derive(Debug, Clone, Default, PartialEq, Eq)]
-pub struct TlsConfig {
-    /// PEM certificate chain (`--cert`); with [`TlsConfig::key`]. Without both, a
-    /// self-signed certificate is made once into `DATA/tls/`.
-    pub cert: Option<PathBuf>,
-    /// PEM private key (`--key`).
-    pub key: Option<PathBuf>,
-    /// Host names and addresses the self-signed certificate is made for (`--tls-name`,
-    /// repeatable); empty: `localhost`, `127.0.0.1`, `::1`, this machine's LAN address and
-    /// host name. Only used when the certificate is made: delete `DATA/tls/` to make another.
-    pub names: Vec<String>,
-}
 
 /// The TLS side of a server: the rustls configuration and the certificate's fingerprint.
 pub(crate) struct Tls {

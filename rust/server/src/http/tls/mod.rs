@@ -5,6 +5,5 @@
 mod certificate;
 mod listener;
 
-pub use certificate::TlsConfig;
 pub(crate) use certificate::{Tls, load};
 pub(crate) use listener::TlsListener;

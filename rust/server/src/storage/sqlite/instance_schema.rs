@@ -25,7 +25,7 @@ CREATE INDEX sessions_played_by ON sessions (played_by) WHERE played_by IS NOT N
 ALTER TABLE jobs ADD COLUMN instance TEXT;
 ",
     // 2: the progress the player publishes for the other instances' status answers
-    // (`playback::progress_view`). Postgres: migration 0005_progress_view.sql.
+    // (`jobs::progress_view`). Postgres: migration 0005_progress_view.sql.
     "
 ALTER TABLE sessions ADD COLUMN progress_view TEXT;
 ",

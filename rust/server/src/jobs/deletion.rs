@@ -49,7 +49,7 @@ async fn delete(shared: &Arc<App>, id: &str, playback_stopped: bool) -> Result<(
     };
     // Read again under the lock: the state may have moved on meanwhile.
     let session = shared.session(&id)?;
-    let stopped = playback_stopped && session.playback != crate::config::PlaybackKind::Upload;
+    let stopped = playback_stopped && session.playback != crate::model::PlaybackKind::Upload;
     if !(session.is_idle() || stopped) || shared.running(&id).is_some() || shared.queue.holds(&id) {
         return Err(Error::Conflict(format!(
             "session {id} is {}: a job works on it; delete it once it is done or failed",
@@ -65,18 +65,18 @@ async fn delete(shared: &Arc<App>, id: &str, playback_stopped: bool) -> Result<(
     // leaves nothing to delete: a 404, as for any unknown id.
     if !shared
         .db
-        .delete_session(&id, super::delete_sweep::claim(shared))?
+        .delete_session(&id, crate::jobs::delete_sweep::claim(shared))?
     {
         return Err(Error::NotFound(format!("no session {id:?}")));
     }
     shared.live.remove(&id);
     shared.forget_session_lock(&id);
-    crate::report::scene::forget(shared, &id);
+    crate::report::scene::forget(&*shared.blobs, &id);
     log::info!("session {id} deleted; its bytes go next");
     if let Some(pause) = shared.config.delete_pause {
         tokio::time::sleep(pause).await;
     }
-    if let Err(e) = super::delete_sweep::finish(shared, &id) {
+    if let Err(e) = crate::jobs::delete_sweep::finish(shared, &id) {
         log::warn!("session {id}: its bytes are left for the delete sweep: {e}");
     }
     Ok(())

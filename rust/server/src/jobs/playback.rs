@@ -8,14 +8,13 @@ use std::time::{Duration, Instant};
 
 use crate::Error;
 use crate::app_state::{App, RunningJob};
-use crate::config::PlaybackKind;
 use crate::estimate::held_trials::Purpose;
 use crate::estimate::live_sessions::LiveSession;
-use crate::ingest::trials;
+use crate::jobs::playback_run::{self as run, Outcome, publish, too_few_after_cancel};
+use crate::model::PlaybackKind;
+use crate::model::{Session, SessionState, Step};
 pub(crate) use crate::playback::queue::Begin;
 use crate::playback::queue::{Intent, Ticket};
-use crate::playback::run::{self, Outcome, publish, too_few_after_cancel};
-use crate::session::{Session, SessionState, Step};
 use crate::storage::JobEnd;
 use crate::storage::keys::SessionObject;
 
@@ -40,7 +39,7 @@ fn conclude(shared: &Arc<App>, id: &str, job: Option<i64>, outcome: Result<Outco
             if let Some(job) = job {
                 let _ = shared.db.finish_job(job, JobEnd::Done, None);
             }
-            crate::report::scene::prepare(shared.clone(), id.to_string());
+            crate::report::scene::prepare(shared.db.clone(), shared.blobs.clone(), id.to_string());
             // Its contribution to its venue's map, computed once now that it is final.
             let (shared, id) = (shared.clone(), id.to_string());
             tokio::task::spawn_blocking(move || {
@@ -102,7 +101,7 @@ pub(crate) fn spawn_workers(shared: &Arc<App>) {
     // Remote playback: a job holds a thread while its trials are out with the hosts; the
     // hosts' phones, not these jobs, bound how many trials play at once.
     let workers = if shared.remote_playback() {
-        crate::playback::reaper::spawn(shared.clone());
+        crate::jobs::reaper::spawn(shared.clone());
         shared.config.remote_sessions.max(1)
     } else {
         shared.config.playback_workers.max(1)
@@ -171,7 +170,7 @@ where
         let outcome = with_estimate_permit(&shared, async {
             let session = shared.session(&id)?;
             prepare(&shared, &session)?;
-            let live = trials::live_session(&shared, &session).await?;
+            let live = crate::jobs::live_session::live_session(&shared, &session).await?;
             publish(&shared, &live, &id, Purpose::Final).await?;
             shared.lifecycle().finish(&id)?;
             Ok(Outcome::Done)
@@ -293,7 +292,7 @@ pub(crate) fn finish_dequeued(shared: Arc<App>, id: String, why: EndEarly) -> Re
 
 /// Plays a session from the queue on a thread of its own (never one of tokio's blocking
 /// threads, which requests, file I/O and estimates need), publishing progressive estimates
-/// as trials arrive, then its final estimate. The steps are [`crate::playback::run`]'s.
+/// as trials arrive, then its final estimate. The steps are [`crate::jobs::playback_run`]'s.
 async fn play_and_estimate(shared: &Arc<App>, ticket: &Ticket) -> Result<Outcome, Error> {
     let mut run = match run::start(shared, ticket).await? {
         run::Started::Playing(run) => run,
@@ -316,7 +315,7 @@ async fn play_and_estimate(shared: &Arc<App>, ticket: &Ticket) -> Result<Outcome
 /// database, a session another live instance plays is left to it. A session that cannot be
 /// resumed, or whose row cannot be read, fails alone: the server always starts. Then the
 /// playback workers start (with `--database` the server starts the instance's loops next,
-/// `playback::instances::spawn`).
+/// `jobs::instances::spawn`).
 pub(crate) fn recover(shared: &Arc<App>) -> Result<(), Error> {
     shared
         .db
@@ -384,7 +383,7 @@ fn recover_one(shared: &Arc<App>, session: Session) -> Result<(), Error> {
             // Trials arrived after the last published estimate: catch up.
             let shared = shared.clone();
             tokio::spawn(async move {
-                match trials::live_session(&shared, &session).await {
+                match crate::jobs::live_session::live_session(&shared, &session).await {
                     Ok(live) => spawn_progressive(shared.clone(), live, id),
                     Err(e) => log::warn!("session {id}: cannot rebuild its trials: {e}"),
                 }

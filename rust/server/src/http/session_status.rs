@@ -1,14 +1,14 @@
 //! The status document of a session (`GET /v1/sessions/{id}`, and each entry of the list):
 //! its state, progress and ETA (d·⌈T/D⌉ from the playback plan), trials and settings, and
 //! its place in the playback queue while it waits (the same from every instance of a
-//! cluster: `playback::progress_view`).
+//! cluster: `jobs::progress_view`).
 
 use serde_json::json;
 
 use crate::Error;
 use crate::app_state::App;
-use crate::playback::progress_view::{self, ProgressView};
-use crate::session::{Session, SessionState};
+use crate::jobs::progress_view::{self, ProgressView};
+use crate::model::{Session, SessionState};
 use crate::venue::alignment::alignment_json;
 
 /// Progress (0 … 1) and seconds left, when known; `view` is where the session stands in its

@@ -11,7 +11,7 @@ use std::time::{Duration, Instant};
 
 use crate::Error;
 use crate::app_state::App;
-use crate::playback::jobs::{self, EndEarly, Stopped, finish_dequeued};
+use crate::jobs::playback::{self as jobs, EndEarly, Stopped, finish_dequeued};
 use crate::playback::queue::Intent;
 use crate::storage::StopRequest;
 

@@ -5,9 +5,9 @@ use std::sync::Arc;
 
 use crate::Error;
 use crate::app_state::App;
-use crate::config::PlaybackKind;
-use crate::playback::jobs::{self, Begin};
-use crate::session::{Session, SessionState, Step};
+use crate::jobs::playback::{self as jobs, Begin};
+use crate::model::PlaybackKind;
+use crate::model::{Session, SessionState, Step};
 use crate::storage::keys::SessionObject;
 use crate::storage::staged::TempFile;
 

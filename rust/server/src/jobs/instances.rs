@@ -22,7 +22,7 @@ use std::time::Duration;
 
 use crate::Error;
 use crate::app_state::App;
-use crate::playback::jobs::resume_or_fail;
+use crate::jobs::playback::resume_or_fail;
 
 /// The shortest pause between two heartbeats or two scans (for tests' short timeouts).
 const FLOOR: Duration = Duration::from_millis(100);
@@ -78,8 +78,8 @@ pub(crate) fn spawn(shared: Arc<App>) {
             }
         }
     });
-    crate::playback::progress_view::spawn(shared.clone());
-    crate::playback::stop_requests::spawn(shared);
+    crate::jobs::progress_view::spawn(shared.clone());
+    crate::jobs::stop_requests::spawn(shared);
 }
 
 /// Whether this instance's own heartbeat has been regular for a whole timeout: only then

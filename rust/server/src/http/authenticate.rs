@@ -76,7 +76,7 @@ pub(crate) const WORKER_ROUTES: &str = "/v1/worker/";
 fn worker_stays_in_its_routes(caller: &Caller, path: &str) -> Result<(), Error> {
     match caller {
         Caller::Token {
-            role: crate::auth::Role::Worker,
+            role: crate::model::Role::Worker,
             name,
             ..
         } if !path.starts_with(WORKER_ROUTES) => Err(Error::Forbidden(format!(
@@ -191,7 +191,7 @@ mod tests {
         let worker = Caller::Token {
             id: 1,
             name: "host-1".into(),
-            role: crate::auth::Role::Worker,
+            role: crate::model::Role::Worker,
         };
         assert!(worker_stays_in_its_routes(&worker, "/v1/worker/hosts").is_ok());
         for path in [
@@ -208,7 +208,7 @@ mod tests {
         let app = Caller::Token {
             id: 2,
             name: "phone".into(),
-            role: crate::auth::Role::App,
+            role: crate::model::Role::App,
         };
         assert!(worker_stays_in_its_routes(&app, "/v1/sessions").is_ok());
     }

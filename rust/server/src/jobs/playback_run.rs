@@ -17,9 +17,9 @@ use crate::estimate::held_trials::Purpose;
 use crate::estimate::live_sessions::LiveSession;
 use crate::estimate::publishing::{self, Published};
 use crate::ingest::trials::{self, Arrival};
+use crate::model::Session;
 use crate::playback::queue::{Begin, Intent, JobControl, Ticket};
 use crate::playback::{PlaybackJob, TrialOutput, indices_to_play};
-use crate::session::Session;
 use crate::storage::keys::SessionObject;
 use crate::storage::workers::TrialFailure;
 
@@ -55,7 +55,10 @@ pub(crate) async fn publish(
 ) -> Result<Option<Published>, Error> {
     let (shared, id) = (shared.clone(), id.to_string());
     live.publish(purpose, move |published| {
-        crate::estimate::results_files::write(&shared, &id, published)
+        let lock = shared.session_lock(&id);
+        let _held = lock.blocking_lock();
+        shared.session(&id)?;
+        crate::estimate::results_files::write(&*shared.blobs, &shared.lifecycle(), &id, published)
     })
     .await
 }
@@ -133,7 +136,7 @@ pub(crate) async fn start<'a>(
     if ticket.begin == Begin::Start {
         shared.lifecycle().start_playing(id)?;
     }
-    let live = trials::live_session(shared, &session).await?;
+    let live = crate::jobs::live_session::live_session(shared, &session).await?;
     let (tx, rx) = mpsc::unbounded_channel::<TrialOutput>();
     let job = PlaybackJob {
         session: id.to_string(),
@@ -233,7 +236,14 @@ impl Run<'_> {
                     retried,
                 };
                 let stored = trials::parse_trial(bytes, "trial").and_then(|parsed| {
-                    trials::store_trial(self.shared, &self.live, self.id, arrival, bytes, parsed)
+                    trials::store_trial(
+                        self.shared.stores(),
+                        &self.live,
+                        self.id,
+                        arrival,
+                        bytes,
+                        parsed,
+                    )
                 });
                 match (&stored, pauses.next()) {
                     (Err(e @ Error::Database(_)), Some(pause)) if !self.shared.stopping() => {
