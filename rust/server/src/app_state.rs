@@ -5,8 +5,8 @@ use std::collections::HashMap;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 
-use crate::Error;
 use crate::config::ServerConfig;
+use crate::error::Error;
 use crate::estimate::live_sessions::LiveSessions;
 use crate::model::PlaybackKind;
 use crate::model::{NewSession, Session};

@@ -60,7 +60,7 @@ impl AdbConfig {
     /// Checks the names that go into `adb shell` command lines (which the phone's
     /// shell parses): a Java package name, an activity class name, an absolute
     /// folder of plain path characters.
-    pub fn check(&self) -> Result<(), crate::Error> {
+    pub fn check(&self) -> Result<(), crate::error::Error> {
         let java_name = |s: &str| {
             !s.is_empty()
                 && s.split('.').all(|part| {
@@ -71,14 +71,14 @@ impl AdbConfig {
                 })
         };
         if !java_name(&self.package) || !self.package.contains('.') {
-            return Err(crate::Error::Config(format!(
+            return Err(crate::error::Error::Config(format!(
                 "adb package {:?} is not an Android package name (like {})",
                 self.package,
                 Self::DEFAULT_PACKAGE
             )));
         }
         if !java_name(self.activity.strip_prefix('.').unwrap_or(&self.activity)) {
-            return Err(crate::Error::Config(format!(
+            return Err(crate::error::Error::Config(format!(
                 "adb activity {:?} is not an activity class name (like {} or \
                  com.unity3d.player.UnityPlayerActivity)",
                 self.activity,
@@ -88,7 +88,7 @@ impl AdbConfig {
         let dir = self.remote_dir();
         let plain = |c: char| c.is_ascii_alphanumeric() || "/._-".contains(c);
         if !dir.starts_with('/') || dir.len() < 2 || !dir.chars().all(plain) || dir.contains("..") {
-            return Err(crate::Error::Config(format!(
+            return Err(crate::error::Error::Config(format!(
                 "adb remote dir {dir:?} is not an absolute folder of letters, digits and /._- \
                  (like /sdcard/Android/data/{}/files)",
                 self.package
@@ -250,11 +250,11 @@ pub const DELETE_SWEEP_RANGE: std::ops::RangeInclusive<Duration> =
 
 impl ServerConfig {
     /// Refuses a `delete_sweep` outside [`DELETE_SWEEP_RANGE`], naming it.
-    pub fn check_delete_sweep(&self) -> Result<(), crate::Error> {
+    pub fn check_delete_sweep(&self) -> Result<(), crate::error::Error> {
         if DELETE_SWEEP_RANGE.contains(&self.delete_sweep) {
             Ok(())
         } else {
-            Err(crate::Error::Config(format!(
+            Err(crate::error::Error::Config(format!(
                 "delete sweep every {:?}: must be from 0.1 s to 20 s",
                 self.delete_sweep
             )))

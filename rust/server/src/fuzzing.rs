@@ -5,8 +5,8 @@
 
 use axum::http::{HeaderMap, HeaderValue};
 
-use crate::Error;
 use crate::config::ServerConfig;
+use crate::error::Error;
 use crate::error::short;
 use crate::http::handlers::sessions::QUOTE_LIMIT;
 use crate::model::PlaybackKind;

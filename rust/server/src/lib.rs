@@ -124,14 +124,8 @@ pub use http::server::{Server, ServerHandle};
 pub use migrate::{MigrateOptions, Summary as MigrateSummary, TableCount, migrate};
 pub use model::{PlaybackKind, Role, TokenInfo};
 
-/// Whether this build has the cluster backends (Postgres metadata, S3-compatible blobs:
-/// `--database`, `--store`, `sitar migrate`): the `cluster` feature.
-pub const CLUSTER: bool = cfg!(feature = "cluster");
-
-/// What a cluster flag or `sitar migrate` says in a build without the cluster backends.
-pub const NO_CLUSTER: &str = "this build has no cluster backends (Postgres, S3-compatible store); \
-     build one with `cargo build --release -p sitar-cli --features cluster`";
 pub use playback::adb::{AdbPlayback, contract as adb_contract, mp4_duration_s};
 pub use playback::{
     DeviceInfo, Playback, PlaybackJob, PlaybackPlan, SimPlayback, TrialOutput, UploadPlayback,
 };
+pub use storage::open::{CLUSTER, NO_CLUSTER};

@@ -4,8 +4,8 @@
 
 use std::path::Path;
 
-use crate::Error;
 use crate::auth::secret;
+use crate::error::Error;
 use crate::model::Role;
 use crate::storage::TokenStore;
 use crate::storage::instance;
@@ -15,7 +15,7 @@ pub use crate::storage::instance::ADMIN_TOKEN_FILE;
 /// The name of the first admin token in `sitar token list`.
 const ADMIN_TOKEN_NAME: &str = "admin";
 
-/// A token registered at start ([`crate::ServerConfig::preset_tokens`]): its hash replaces
+/// A token registered at start ([`crate::config::ServerConfig::preset_tokens`]): its hash replaces
 /// whatever a token of that name had.
 #[derive(Clone, PartialEq, Eq)]
 pub struct PresetToken {

@@ -5,7 +5,7 @@
 use axum::extract::FromRequestParts;
 use axum::http::request::Parts;
 
-use crate::Error;
+use crate::error::Error;
 use crate::model::{Caller, Role};
 
 impl<S: Send + Sync> FromRequestParts<S> for Caller {

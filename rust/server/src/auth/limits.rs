@@ -6,7 +6,7 @@
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 
-use crate::Error;
+use crate::error::Error;
 use crate::model::UsageFull;
 use crate::storage::{MetadataStore, UsageStore, now_ms};
 

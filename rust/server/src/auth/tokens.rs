@@ -5,8 +5,8 @@
 
 use std::path::Path;
 
-use crate::Error;
 use crate::auth::secret;
+use crate::error::Error;
 use crate::model::{Role, TokenInfo};
 use crate::storage::open::open_metadata;
 

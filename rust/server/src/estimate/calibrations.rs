@@ -9,7 +9,7 @@ use std::sync::Arc;
 
 use sitar_estimator::Calibration;
 
-use crate::Error;
+use crate::error::Error;
 
 /// The most calibrations one server keeps (each is a few hundred bytes of model; the bound
 /// keeps the error message that lists them, and the start, short).

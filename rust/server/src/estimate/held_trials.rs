@@ -22,7 +22,7 @@ use std::borrow::Cow;
 
 use sitar_estimator::{Calibration, Estimate, IncrementalEstimate, Trajectory};
 
-use crate::Error;
+use crate::error::Error;
 use crate::model::estimate_settings::EstimateSettings;
 
 /// Bytes one parsed trial holds in memory.

@@ -7,8 +7,8 @@
 //! incremental state (every window's pair values, sums and cursors; the pairwise index and
 //! relative poses) comes on top, as `IncrementalEstimate::memory_bytes` reports it: about
 //! 155 MB more for 100 × 2 820 poses with 10-frame windows (it grows with the square of the
-//! trial count). [`ServerConfig::live_session_bytes`](crate::ServerConfig::live_session_bytes)
-//! bounds one session (default 256 MiB), [`ServerConfig::live_total_bytes`](crate::ServerConfig::live_total_bytes)
+//! trial count). [`ServerConfig::live_session_bytes`](crate::config::ServerConfig::live_session_bytes)
+//! bounds one session (default 256 MiB), [`ServerConfig::live_total_bytes`](crate::config::ServerConfig::live_total_bytes)
 //! all of them together (default 1 GiB), trials and state alike. A trial that would pass
 //! either is refused before anything of it is stored; state growth is counted after each
 //! push (one push adds one trial's pairs), and when it passes a bound the state is dropped
@@ -27,7 +27,7 @@ use std::sync::{Arc, Mutex};
 use sitar_core::Thresholds;
 use sitar_estimator::Trajectory;
 
-use crate::Error;
+use crate::error::Error;
 use crate::estimate::calibrations::SessionCalibration;
 use crate::estimate::held_trials::{Held, HeldTrials, Purpose, StateBudget, trial_bytes};
 use crate::estimate::publishing::Published;

@@ -2,7 +2,7 @@
 //! when an estimate is published, read by the results routes, the report and the legacy
 //! route.
 
-use crate::Error;
+use crate::error::Error;
 use crate::estimate::publishing::Published;
 use crate::model::Session;
 use crate::session::Lifecycle;

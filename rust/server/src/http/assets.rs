@@ -8,7 +8,7 @@ use axum::extract::Path;
 use axum::http::header;
 use axum::response::{IntoResponse, Response};
 
-use crate::Error;
+use crate::error::Error;
 
 const JS: &str = "text/javascript; charset=utf-8";
 

@@ -9,9 +9,9 @@ use axum::http::{HeaderValue, Method, StatusCode, header};
 use axum::middleware::Next;
 use axum::response::{IntoResponse, Response};
 
-use crate::Error;
 use crate::app_state::App;
 use crate::auth::secret::{self, COOKIE_NAME};
+use crate::error::Error;
 use crate::model::Caller;
 
 /// The caller's name, put on the response for the request log.

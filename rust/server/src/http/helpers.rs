@@ -9,8 +9,8 @@ use axum::http::request::Parts;
 use axum::http::{HeaderMap, StatusCode, header};
 use axum::response::{IntoResponse, Response};
 
-use crate::Error;
 use crate::app_state::App;
+use crate::error::Error;
 use crate::model::Caller;
 use crate::model::Session;
 use crate::model::{Venue, is_venue_id};

@@ -48,7 +48,7 @@ pub(crate) async fn json_rejections(
     Response::from_parts(parts, Body::from(error_body(code(status), &message)))
 }
 
-/// The machine-readable code of a status, as [`crate::Error`] names its own.
+/// The machine-readable code of a status, as [`crate::error::Error`] names its own.
 fn code(status: StatusCode) -> &'static str {
     match status {
         StatusCode::BAD_REQUEST => "bad_request",

@@ -6,7 +6,7 @@
 
 use serde_json::value::RawValue;
 
-use crate::Error;
+use crate::error::Error;
 
 /// Elements in one page at most, and by default (a 10 000-window page of `results.json` is
 /// about 1.5 MB).

@@ -16,9 +16,9 @@ use axum::response::{IntoResponse, Response};
 use http_body::{Frame, SizeHint};
 use tokio::time::{Instant, Sleep};
 
-use crate::Error;
 use crate::app_state::App;
 use crate::config::ServerConfig;
+use crate::error::Error;
 use crate::http::helpers::declared_length;
 use crate::ingest::evidence::{MAX_TABLE_BYTES, MAX_THUMBNAIL_BYTES};
 use crate::ingest::phone_log::{MAX_ANCHORS_BYTES, MAX_TRAJECTORY_BYTES};

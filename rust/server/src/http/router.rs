@@ -9,8 +9,8 @@ use axum::http::StatusCode;
 use axum::response::Response;
 use axum::routing::{get, post, put};
 
-use crate::Error;
 use crate::app_state::App;
+use crate::error::Error;
 use crate::http::authenticate::{self, CallerName};
 use crate::http::handlers::{
     devices, evidence, health, legacy, pages, phone_log, recording, results, scene, sessions,

@@ -6,8 +6,9 @@ use std::time::Duration;
 
 use crate::app_state::App;
 use crate::config::ServerConfig;
+use crate::error::Error;
 use crate::jobs::{delete_sweep, deletion};
-use crate::{Error, auth, http::router, http::tls, jobs::playback as jobs};
+use crate::{auth, http::router, http::tls, jobs::playback as jobs};
 
 /// The backend: storage opened, ready to serve.
 pub struct Server {

@@ -5,8 +5,8 @@
 
 use serde_json::json;
 
-use crate::Error;
 use crate::app_state::App;
+use crate::error::Error;
 use crate::jobs::progress_view::{self, ProgressView};
 use crate::model::{Session, SessionState};
 use crate::venue::alignment::alignment_json;

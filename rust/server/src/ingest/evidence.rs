@@ -16,7 +16,7 @@ use std::collections::HashMap;
 use serde::{Deserialize, Serialize};
 use sitar_core::{Causes, EVIDENCE_HEADER, ImageProperties};
 
-use crate::Error;
+use crate::error::Error;
 use crate::storage::BlobStore;
 use crate::storage::keys::SessionObject;
 

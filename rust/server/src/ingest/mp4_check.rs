@@ -13,7 +13,7 @@
 use std::io::{Read, Seek, SeekFrom};
 use std::path::Path;
 
-use crate::Error;
+use crate::error::Error;
 use crate::model::PlaybackKind;
 
 /// Top-level boxes looked at before giving up (a recording has fewer than ten), so a

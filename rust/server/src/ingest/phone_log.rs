@@ -7,7 +7,7 @@
 
 use sitar_core::{ErrorClass, InvalidDepth};
 
-use crate::Error;
+use crate::error::Error;
 use crate::ingest::evidence::{Cells, Span, indexed_rows};
 
 /// Body limit of `PUT …/trajectory.txt`: a 2-hour walk logs 6 poses a second, ~100 bytes

@@ -4,7 +4,7 @@
 
 use sitar_estimator::Trajectory;
 
-use crate::Error;
+use crate::error::Error;
 use crate::estimate::live_sessions::LiveSession;
 use crate::storage::keys::SessionObject;
 use crate::storage::{BlobStore, StoreRefs};

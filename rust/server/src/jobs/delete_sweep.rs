@@ -8,8 +8,8 @@
 use std::sync::Arc;
 use std::time::Duration;
 
-use crate::Error;
 use crate::app_state::App;
+use crate::error::Error;
 use crate::storage::Claim;
 
 /// Unfinished deletes one sweep claims at most; more wait for the next period.

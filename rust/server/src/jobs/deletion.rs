@@ -8,8 +8,8 @@
 use std::sync::Arc;
 use std::time::Duration;
 
-use crate::Error;
 use crate::app_state::App;
+use crate::error::Error;
 
 /// How long a delete waits for a request that is writing into the session.
 const WRITER_WAIT: Duration = Duration::from_secs(5);

@@ -20,8 +20,8 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicI64, Ordering};
 use std::time::Duration;
 
-use crate::Error;
 use crate::app_state::App;
+use crate::error::Error;
 use crate::jobs::playback::resume_or_fail;
 
 /// The shortest pause between two heartbeats or two scans (for tests' short timeouts).

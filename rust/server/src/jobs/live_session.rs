@@ -4,8 +4,8 @@
 
 use std::sync::Arc;
 
-use crate::Error;
 use crate::app_state::App;
+use crate::error::Error;
 use crate::estimate::live_sessions::LiveSession;
 use crate::ingest::trials::{parse_trial, read_trial};
 use crate::model::Session;

@@ -6,8 +6,8 @@
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use crate::Error;
 use crate::app_state::{App, RunningJob};
+use crate::error::Error;
 use crate::estimate::held_trials::Purpose;
 use crate::estimate::live_sessions::LiveSession;
 use crate::jobs::playback_run::{self as run, Outcome, publish, too_few_after_cancel};

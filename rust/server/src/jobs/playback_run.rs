@@ -11,8 +11,8 @@ use std::time::Duration;
 use sitar_core::ErrorClass;
 use tokio::sync::{mpsc, oneshot};
 
-use crate::Error;
 use crate::app_state::{App, RunningJob};
+use crate::error::Error;
 use crate::estimate::held_trials::Purpose;
 use crate::estimate::live_sessions::LiveSession;
 use crate::estimate::publishing::{self, Published};

@@ -20,8 +20,8 @@ use std::time::Duration;
 
 use serde::{Deserialize, Serialize};
 
-use crate::Error;
 use crate::app_state::{App, RunningJob};
+use crate::error::Error;
 
 /// How often a clustered instance looks for changed views to publish.
 pub(crate) const EVERY: Duration = Duration::from_secs(1);

@@ -30,7 +30,7 @@ pub(crate) fn spawn(shared: Arc<App>) {
     });
 }
 
-fn reap(shared: &App) -> Result<(), crate::Error> {
+fn reap(shared: &App) -> Result<(), crate::error::Error> {
     let expired = shared.workers.expire(now_ms())?;
     for lease in &expired {
         let host = shared

@@ -3,8 +3,8 @@
 
 use std::sync::Arc;
 
-use crate::Error;
 use crate::app_state::App;
+use crate::error::Error;
 use crate::jobs::playback::{self as jobs, Begin};
 use crate::model::PlaybackKind;
 use crate::model::{Session, SessionState, Step};

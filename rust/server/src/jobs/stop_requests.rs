@@ -9,8 +9,8 @@ use std::sync::Arc;
 use std::sync::atomic::Ordering;
 use std::time::{Duration, Instant};
 
-use crate::Error;
 use crate::app_state::App;
+use crate::error::Error;
 use crate::jobs::playback::{self as jobs, EndEarly, Stopped, finish_dequeued};
 use crate::playback::queue::Intent;
 use crate::storage::StopRequest;

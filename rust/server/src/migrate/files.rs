@@ -3,7 +3,7 @@
 //! (a run that was interrupted), is stored and hashed again. One the bucket holds
 //! differently after the session's rows were copied is a difference, never overwritten.
 
-use crate::Error;
+use crate::error::Error;
 use crate::storage::BlobStore;
 use crate::storage::installation::{Installation, sha256_in};
 

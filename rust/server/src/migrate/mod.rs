@@ -23,7 +23,7 @@ mod summary;
 use std::collections::{HashMap, HashSet};
 use std::path::PathBuf;
 
-use crate::Error;
+use crate::error::Error;
 use crate::storage::installation::Installation;
 use crate::storage::postgres::PgStore;
 use crate::storage::postgres::copy::Insert;

@@ -4,7 +4,7 @@
 
 use std::collections::HashMap;
 
-use crate::Error;
+use crate::error::Error;
 use crate::storage::installation::Installation;
 use crate::storage::postgres::PgStore;
 use crate::storage::rows::{Column, TableSpec, Value};

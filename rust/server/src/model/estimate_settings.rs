@@ -4,7 +4,7 @@
 use sitar_core::Thresholds;
 use sitar_estimator::{EstimateOptions, PoseRelation, Setting};
 
-use crate::Error;
+use crate::error::Error;
 use crate::error::short;
 
 /// Window length when a session names none: the phone's 10-frame sub-trajectories.
@@ -126,7 +126,7 @@ mod tests {
 
     #[test]
     fn requests_override_the_defaults_and_bad_values_name_their_key() {
-        let config = crate::ServerConfig::new("unused");
+        let config = crate::config::ServerConfig::new("unused");
         let defaults =
             EstimateSettings::from_request(&config.default_setting, None, None, None).unwrap();
         assert_eq!(defaults.setting, Setting::TrimMean(30));

@@ -50,11 +50,11 @@ impl Session {
     }
 
     /// `Ok` when `step` is allowed now, else the 409 that names the state.
-    pub fn require(&self, step: Step) -> Result<(), crate::Error> {
+    pub fn require(&self, step: Step) -> Result<(), crate::error::Error> {
         if self.allows(step) {
             Ok(())
         } else {
-            Err(crate::Error::Transition {
+            Err(crate::error::Error::Transition {
                 session: self.id.clone(),
                 state: self.state.as_str(),
                 action: step.describe(),

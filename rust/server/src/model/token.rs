@@ -1,6 +1,6 @@
 //! A token as the stores keep and list it: its record and the rule for its name.
 
-use crate::Error;
+use crate::error::Error;
 use crate::model::role::Role;
 
 /// A token as `sitar token list` shows it: never the token itself.

@@ -11,11 +11,13 @@ const MAX_TOKEN_LEN: usize = 128;
 
 /// A new random token: the prefix and 256 bits from the system's secure generator, as 64
 /// lower-case hex digits (URL-safe, no encoding needed in a query string or cookie).
-pub fn new_token() -> Result<String, crate::Error> {
+pub fn new_token() -> Result<String, crate::error::Error> {
     let mut bytes = [0u8; 32];
     ring::rand::SystemRandom::new()
         .fill(&mut bytes)
-        .map_err(|_| crate::Error::Internal("the system's random generator failed".into()))?;
+        .map_err(|_| {
+            crate::error::Error::Internal("the system's random generator failed".into())
+        })?;
     let mut token = String::with_capacity(TOKEN_PREFIX.len() + 64);
     token.push_str(TOKEN_PREFIX);
     for b in bytes {

@@ -7,8 +7,8 @@ use std::process::{Command, Stdio};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
-use crate::Error;
 use crate::config::AdbConfig;
+use crate::error::Error;
 use crate::playback::{DeviceInfo, Playback, PlaybackJob, PlaybackPlan, TrialOutput};
 
 /// The contract between the backend and a playback app, written out in

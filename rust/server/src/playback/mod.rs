@@ -15,8 +15,8 @@ use std::time::{Duration, Instant};
 
 use serde::Serialize;
 
-use crate::Error;
 use crate::config::SimConfig;
+use crate::error::Error;
 
 /// How long a backend expects playback to take: one trial lasts
 /// `trial_seconds` and `devices` run side by side, so T trials take

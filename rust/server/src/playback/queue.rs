@@ -7,7 +7,7 @@ use std::collections::{HashMap, VecDeque};
 use std::sync::atomic::{AtomicBool, AtomicU8, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard};
 
-use crate::Error;
+use crate::error::Error;
 
 /// Whose session it is: a token id, or `None` for sessions made without a token.
 pub(crate) type Owner = Option<i64>;

@@ -12,7 +12,7 @@ use std::path::Path;
 use std::sync::Arc;
 use std::time::Duration;
 
-use crate::Error;
+use crate::error::Error;
 use crate::model::PlaybackKind;
 use crate::playback::{DeviceInfo, Playback, PlaybackJob, PlaybackPlan, TrialOutput};
 use crate::storage::MetadataStore;

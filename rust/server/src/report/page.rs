@@ -16,8 +16,8 @@ use serde::Deserialize;
 use serde_json::json;
 use sitar_core::{Convention, ErrorClass, Session as Phone, Thresholds};
 
-use crate::Error;
 use crate::config::ServerConfig;
+use crate::error::Error;
 use crate::model::Session;
 use crate::report::charts::{self, HIGH, LOW, MEDIUM, UNKNOWN};
 use crate::report::index_ranges::index_ranges;

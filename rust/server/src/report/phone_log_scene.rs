@@ -9,7 +9,7 @@
 
 use sitar_core::{Pose, Session, SessionConfig};
 
-use crate::Error;
+use crate::error::Error;
 use crate::ingest::phone_log::SUBTRAJECTORIES_HEADER;
 use crate::model::Session as Row;
 

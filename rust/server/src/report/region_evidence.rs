@@ -5,7 +5,7 @@
 
 use std::collections::HashSet;
 
-use crate::Error;
+use crate::error::Error;
 use crate::ingest::evidence::{EvidenceFiles, EvidenceRow};
 use crate::report::regions::{CauseLine, Region, RegionEvidence, SubRow};
 use crate::storage::BlobStore;

@@ -19,7 +19,7 @@ use serde_json::json;
 use sitar_core::{DisplayRotation, Session, SessionConfig};
 
 use super::flat_depth::flat_depth_sample;
-use crate::Error;
+use crate::error::Error;
 use crate::estimate::results_files::{self, Form};
 use crate::ingest::evidence::{EvidenceFiles, EvidenceRow};
 use crate::ingest::mp4_check;

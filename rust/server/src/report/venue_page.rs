@@ -16,7 +16,7 @@ use serde_json::{Value, json};
 use sitar_core::ErrorClass;
 use sitar_core::venue::{CellKind, Contribution, VenueMap, VenueSession};
 
-use crate::Error;
+use crate::error::Error;
 use crate::ingest::evidence::{EvidenceFiles, EvidenceRow};
 use crate::model::Caller;
 use crate::model::Session;

@@ -2,7 +2,7 @@
 //! [`Step::next`] inside the transaction that writes it, so two requests racing for one step
 //! cannot both take it. A refused step is [`Error::Transition`], a 409 naming the state.
 
-use crate::Error;
+use crate::error::Error;
 use crate::model::{SessionState, Step};
 use crate::storage::{SessionStore, StepRecord};
 

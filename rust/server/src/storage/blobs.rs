@@ -17,7 +17,7 @@ use std::pin::Pin;
 use axum::body::Bytes;
 use futures_util::{Stream, StreamExt};
 
-use crate::Error;
+use crate::error::Error;
 use crate::storage::keys::SessionObject;
 use crate::storage::quota::Reservation;
 use crate::storage::staged::{Appended, TempFile};

@@ -6,7 +6,7 @@
 
 use std::io::Read as _;
 
-use crate::Error;
+use crate::error::Error;
 use crate::model::PlaybackKind;
 use crate::model::estimate_settings::EstimateSettings;
 use crate::model::{Caller, Role, UsageFull};

@@ -5,7 +5,7 @@
 //! (`jobs::delete_sweep`) claims the record and finishes: removing bytes that are already
 //! gone is success, so two instances finishing one delete never fail each other.
 
-use crate::Error;
+use crate::error::Error;
 
 /// Who works on an unfinished delete, and until when (ms since the Unix epoch): once that
 /// has passed, any instance may take the work over.

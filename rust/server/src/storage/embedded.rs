@@ -5,7 +5,7 @@
 use std::path::Path;
 use std::sync::Arc;
 
-use crate::Error;
+use crate::error::Error;
 use crate::storage::metadata::MetadataStore;
 use crate::storage::sqlite::SqliteStore;
 use crate::storage::workers::WorkerStore;

@@ -11,7 +11,7 @@ use axum::body::Bytes;
 use futures_util::{Stream, StreamExt};
 use tokio::io::AsyncWriteExt;
 
-use crate::Error;
+use crate::error::Error;
 use crate::storage::blobs::{BlobStore, BodyStream, ObjectReader, Upload};
 use crate::storage::keys::SessionObject;
 use crate::storage::quota::{DiskQuota, Reservation};

@@ -7,7 +7,7 @@
 use std::io::Read;
 use std::path::{Path, PathBuf};
 
-use crate::Error;
+use crate::error::Error;
 use crate::storage::blobs::BlobStore;
 use crate::storage::embedded::DATABASE_FILE;
 pub(crate) use crate::storage::files::is_server_id;

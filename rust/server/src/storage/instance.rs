@@ -7,7 +7,7 @@
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
-use crate::Error;
+use crate::error::Error;
 
 /// The file in the data directory that holds the admin token made on first start.
 pub const ADMIN_TOKEN_FILE: &str = "admin.token";

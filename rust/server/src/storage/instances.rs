@@ -4,7 +4,7 @@
 //! cutoff the caller gives (`now − --instance-timeout-s`); a session whose player is not
 //! alive is adopted by exactly one other instance (a conditional update).
 
-use crate::Error;
+use crate::error::Error;
 
 /// What a client asked of a session's playback through another instance, weakest first.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]

@@ -9,7 +9,7 @@
 //! server holds an `Arc<dyn MetadataStore>`. A module imports the concern traits it uses, so
 //! its imports say which rows it touches.
 
-use crate::Error;
+use crate::error::Error;
 use crate::model::{Caller, Role, TokenInfo, UsageFull};
 use crate::model::{NewSession, Session, SessionState, Step};
 use crate::model::{NewVenue, Venue};

@@ -11,7 +11,7 @@ use std::path::Path;
 use std::sync::Arc;
 use std::time::Duration;
 
-use crate::Error;
+use crate::error::Error;
 use crate::storage::blobs::BlobStore;
 use crate::storage::files::Files;
 use crate::storage::metadata::MetadataStore;
@@ -20,6 +20,14 @@ use crate::storage::postgres::{PgStore, is_postgres_url};
 #[cfg(feature = "cluster")]
 use crate::storage::s3::S3Blobs;
 use crate::storage::workers::WorkerStore;
+
+/// Whether this build has the cluster backends (Postgres metadata, S3-compatible blobs:
+/// `--database`, `--store`, `sitar migrate`): the `cluster` feature.
+pub const CLUSTER: bool = cfg!(feature = "cluster");
+
+/// What a cluster flag or `sitar migrate` says in a build without the cluster backends.
+pub const NO_CLUSTER: &str = "this build has no cluster backends (Postgres, S3-compatible store); \
+     build one with `cargo build --release -p sitar-cli --features cluster`";
 
 /// The metadata store: Postgres at `database` when given, else the data directory's SQLite.
 pub(crate) fn open_metadata(
@@ -40,7 +48,7 @@ pub(crate) fn open_metadata(
 /// The error of a cluster flag in a build without the cluster backends.
 #[cfg(not(feature = "cluster"))]
 fn no_cluster(flag: &str) -> Error {
-    Error::Config(format!("{flag}: {}", crate::NO_CLUSTER))
+    Error::Config(format!("{flag}: {}", NO_CLUSTER))
 }
 
 /// The error of a `--database` that is not a Postgres URL.

@@ -9,7 +9,7 @@ use std::sync::Mutex;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
-use crate::Error;
+use crate::error::Error;
 
 /// A walk of the data directory is reused this long (one walk stats every file).
 const WALK_TTL: Duration = Duration::from_secs(5);

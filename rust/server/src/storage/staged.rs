@@ -3,7 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::Error;
+use crate::error::Error;
 
 /// What [`crate::storage::BlobStore::append_to`] made of a body.
 #[derive(Debug)]

@@ -12,7 +12,7 @@ use std::sync::Arc;
 use axum::body::{Body, Bytes};
 use tokio::sync::mpsc;
 
-use crate::Error;
+use crate::error::Error;
 use crate::storage::blobs::BlobStore;
 use crate::storage::keys::SessionObject;
 

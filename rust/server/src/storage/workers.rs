@@ -13,7 +13,7 @@
 //!
 //! Every time is ms since the Unix epoch and is passed in, so the suite controls the clock.
 
-use crate::Error;
+use crate::error::Error;
 
 /// Attempts a trial gets (a phone failing it, a lease expiring, a trial that cannot be
 /// parsed) before it is given up.

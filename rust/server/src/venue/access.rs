@@ -1,7 +1,7 @@
 //! Who sees a venue: the token that made it (its owner), the tokens it granted membership,
 //! and admins. Everyone else is told it does not exist (404, never 403).
 
-use crate::Error;
+use crate::error::Error;
 use crate::model::Caller;
 use crate::model::Venue;
 use crate::storage::VenueStore;

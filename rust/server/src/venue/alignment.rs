@@ -4,7 +4,7 @@
 
 use serde_json::{Value, json};
 
-use crate::Error;
+use crate::error::Error;
 use crate::model::Session;
 use crate::storage::keys::SessionObject;
 use crate::storage::{BlobStore, VenueStore};

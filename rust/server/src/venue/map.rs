@@ -15,7 +15,7 @@ use std::collections::HashMap;
 use sitar_core::Convention;
 use sitar_core::venue::{Contribution, SessionFiles, VenueMap, VenueSpec, build_map};
 
-use crate::Error;
+use crate::error::Error;
 use crate::model::Venue;
 use crate::model::{Session, SessionState};
 use crate::storage::keys::SessionObject;

@@ -4,8 +4,8 @@ use axum::extract::State;
 use axum::response::{IntoResponse, Response};
 use serde_json::json;
 
-use crate::Error;
 use crate::auth::Admin;
+use crate::error::Error;
 use crate::http::helpers::{AppState, blocking};
 
 /// Admin only: devices are the lab's, not an app's.

@@ -14,8 +14,8 @@ use axum::response::{IntoResponse, Response};
 use serde_json::{Value, json};
 use sitar_core::Results;
 
-use crate::Error;
 use crate::app_state::App;
+use crate::error::Error;
 use crate::estimate::results_files::{self, Form};
 use crate::http::helpers::{AppState, Found, json_value, small_body, utf8, visible_session};
 use crate::http::pagination::PageRequest;

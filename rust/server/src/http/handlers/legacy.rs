@@ -10,9 +10,9 @@ use axum::http::{HeaderMap, StatusCode, header};
 use axum::response::{IntoResponse, Response};
 use serde_json::json;
 
-use crate::Error;
 use crate::app_state::App;
 use crate::config::ServerConfig;
+use crate::error::Error;
 use crate::estimate::results_files::{self, Form};
 use crate::http::helpers::{AppState, check_declared_length, content_type, json_value};
 use crate::jobs::recordings::accept_recording;

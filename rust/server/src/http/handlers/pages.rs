@@ -8,8 +8,8 @@ use axum::extract::{RawQuery, State};
 use axum::response::Response;
 use serde_json::json;
 
-use crate::Error;
 use crate::auth::Admin;
+use crate::error::Error;
 use crate::estimate::results_files::{self, Form};
 use crate::http::helpers::{AppState, Found, rendering};
 use crate::http::session_status::status_json;

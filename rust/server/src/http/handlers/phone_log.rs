@@ -10,8 +10,8 @@ use axum::http::{HeaderMap, StatusCode};
 use axum::response::Response;
 use serde_json::json;
 
-use crate::Error;
 use crate::app_state::App;
+use crate::error::Error;
 use crate::http::helpers::{AppState, Found, json_value, small_body, utf8};
 use crate::ingest::phone_log::{
     MAX_ANCHORS_BYTES, MAX_TRAJECTORY_BYTES, check_anchors, check_trajectory,

@@ -22,8 +22,8 @@ use axum::http::{HeaderMap, HeaderValue, StatusCode, header};
 use axum::response::{IntoResponse, Response};
 use serde_json::json;
 
-use crate::Error;
 use crate::app_state::App;
+use crate::error::Error;
 use crate::http::helpers::{
     AppState, CURL_DEFAULT_CONTENT_TYPE, Found, check_declared_length, content_type,
     declared_length, idempotency_key, json_response,

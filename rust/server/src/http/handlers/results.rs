@@ -6,7 +6,7 @@ use axum::http::{StatusCode, header};
 use axum::response::{IntoResponse, Response};
 use serde_json::json;
 
-use crate::Error;
+use crate::error::Error;
 use crate::estimate::results_files::{self, Form};
 use crate::http::helpers::{AppState, Found, json_response, json_value};
 use crate::http::pagination::{PageRequest, page_of};

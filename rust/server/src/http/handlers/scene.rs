@@ -4,7 +4,7 @@ use axum::extract::State;
 use axum::http::header;
 use axum::response::Response;
 
-use crate::Error;
+use crate::error::Error;
 use crate::http::helpers::{AppState, Found, attachment, blocking, rendering};
 use crate::http::stored_zip::{self, StoredZip};
 use crate::report::scene;

@@ -8,7 +8,7 @@ use serde::Deserialize;
 use serde_json::json;
 use sitar_core::Convention;
 
-use crate::Error;
+use crate::error::Error;
 use crate::error::short;
 use crate::http::helpers::{
     AppState, Found, check_declared_length, content_type, idempotency_key, json_value,
@@ -220,7 +220,7 @@ pub(crate) async fn create(
 /// fitted for the session's setting, window and pose relation (else a 400 with the
 /// calibration's own message naming both).
 fn check_calibration(
-    config: &crate::ServerConfig,
+    config: &crate::config::ServerConfig,
     name: &str,
     settings: &EstimateSettings,
 ) -> Result<(), Error> {
@@ -247,7 +247,7 @@ fn check_calibration(
 
 /// The playback kinds sessions may ask for: the server's own, `upload`, and `sim` with
 /// `allow_sim`.
-fn offered_playback(config: &crate::ServerConfig) -> Vec<PlaybackKind> {
+fn offered_playback(config: &crate::config::ServerConfig) -> Vec<PlaybackKind> {
     [PlaybackKind::Adb, PlaybackKind::Sim, PlaybackKind::Upload]
         .into_iter()
         .filter(|&kind| {

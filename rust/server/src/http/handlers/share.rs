@@ -9,9 +9,9 @@ use axum::http::{HeaderMap, StatusCode, header};
 use axum::response::Response;
 use serde_json::json;
 
-use crate::Error;
 use crate::app_state::App;
 use crate::auth::new_token;
+use crate::error::Error;
 use crate::http::helpers::{AppState, Found, json_value};
 use crate::ingest::evidence::{EvidenceFiles, MAX_SUBTRAJECTORIES};
 use crate::model::Session;

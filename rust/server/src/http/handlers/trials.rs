@@ -6,7 +6,7 @@ use axum::http::{HeaderMap, StatusCode};
 use axum::response::Response;
 use serde_json::json;
 
-use crate::Error;
+use crate::error::Error;
 use crate::http::helpers::{
     AppState, CURL_DEFAULT_CONTENT_TYPE, Found, check_declared_length, content_type,
     idempotency_key, json_value,

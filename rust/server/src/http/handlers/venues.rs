@@ -11,8 +11,8 @@ use axum::response::{IntoResponse, Response};
 use serde::Deserialize;
 use serde_json::{Value, json};
 
-use crate::Error;
 use crate::app_state::App;
+use crate::error::Error;
 use crate::error::short;
 use crate::http::helpers::{
     AppState, blocking, check_declared_length, content_type, json_value, visible_venue,

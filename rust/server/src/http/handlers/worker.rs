@@ -12,8 +12,8 @@ use axum::response::{IntoResponse, Response};
 use serde::Deserialize;
 use serde_json::json;
 
-use crate::Error;
 use crate::auth::WorkerCaller;
+use crate::error::Error;
 use crate::http::helpers::{AppState, blocking, check_declared_length, json_value};
 use crate::ingest::trials::parse_trial;
 use crate::model::PlaybackKind;

@@ -7,8 +7,8 @@ use std::sync::Arc;
 use rustls::pki_types::pem::PemObject;
 use rustls::pki_types::{CertificateDer, PrivateKeyDer};
 
-use crate::Error;
 use crate::config::TlsConfig;
+use crate::error::Error;
 use crate::storage::instance;
 
 /// The TLS side of a server: the rustls configuration and the certificate's fingerprint.

@@ -7,7 +7,7 @@
 use postgres::types::ToSql;
 
 use super::PgStore;
-use crate::Error;
+use crate::error::Error;
 use crate::storage::rows::{Column, Kind, Table, Value};
 
 /// One table's rows to insert: its name, the columns given, the rows.

@@ -3,7 +3,7 @@
 //! delete twice, and none waits for another.
 
 use super::PgStore;
-use crate::Error;
+use crate::error::Error;
 use crate::storage::deletes::{Claim, DeleteStore};
 
 impl DeleteStore for PgStore {

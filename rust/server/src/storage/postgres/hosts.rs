@@ -4,7 +4,7 @@
 //! registering the same worker at once agree on its id.
 
 use super::{PgStore, u32_column};
-use crate::Error;
+use crate::error::Error;
 use crate::storage::workers::{
     FAILURES_OUT_OF_SERVICE, HostRow, HostStore, PhoneRow, PhoneState, random_id,
 };

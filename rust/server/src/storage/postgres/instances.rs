@@ -4,7 +4,7 @@
 //! row the first wrote, and finds a live player (Postgres' read-committed update rule).
 
 use super::PgStore;
-use crate::Error;
+use crate::error::Error;
 use crate::storage::instances::{IN_FLIGHT, InstanceStore, StopRequest, stronger_stop_request};
 
 /// `played_by` names no instance alive since `alive` (a bound parameter such as `$3`).

@@ -1,7 +1,7 @@
 //! The `jobs` and `devices` tables in Postgres.
 
 use super::PgStore;
-use crate::Error;
+use crate::error::Error;
 use crate::storage::metadata::{DeviceRow, DeviceStore, JobEnd, JobStore};
 use crate::storage::now_ms;
 

@@ -7,7 +7,7 @@
 use postgres::Transaction;
 use sitar_core::Convention;
 
-use crate::Error;
+use crate::error::Error;
 
 /// A stored convention name; a value no version writes is `None`.
 pub(super) fn parse_convention(name: &str) -> Option<Convention> {

@@ -10,7 +10,7 @@
 //!   not `MAX + 1`, which two instances could both read.
 
 use super::{PgStore, u32_column};
-use crate::Error;
+use crate::error::Error;
 use crate::storage::workers::{
     CommittedTrial, Expired, Lease, LeaseCounts, LeaseStore, MAX_ATTEMPTS, MAX_FAILURES_KEPT,
     MAX_TAKEN_PER_CALL, Requeued, TrialFailure, random_id,

@@ -5,7 +5,7 @@
 
 use postgres::Client;
 
-use crate::Error;
+use crate::error::Error;
 use crate::storage::now_ms;
 
 /// Every migration, in order: (version, name, SQL). Never edit one that shipped; add the next.

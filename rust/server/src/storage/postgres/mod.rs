@@ -13,7 +13,7 @@ use std::str::FromStr;
 
 use tokio_postgres_rustls::MakeRustlsConnect;
 
-use crate::Error;
+use crate::error::Error;
 
 pub(crate) mod copy;
 mod deletes;

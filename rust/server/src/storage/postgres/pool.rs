@@ -28,7 +28,7 @@ use std::time::{Duration, Instant};
 use postgres::Client;
 use tokio_postgres_rustls::MakeRustlsConnect;
 
-use crate::Error;
+use crate::error::Error;
 
 /// How long a caller waits for a free connection before its request fails.
 pub(super) const CHECKOUT_WAIT: Duration = Duration::from_secs(30);

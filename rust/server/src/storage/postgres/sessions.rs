@@ -5,7 +5,7 @@ use postgres::Row;
 use postgres::types::ToSql;
 
 use super::{PgStore, u32_column};
-use crate::Error;
+use crate::error::Error;
 use crate::model::PlaybackKind;
 use crate::model::estimate_settings::{self, EstimateSettings};
 use crate::model::{NewSession, Session, SessionState, Step};

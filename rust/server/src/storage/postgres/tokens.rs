@@ -3,7 +3,7 @@
 //! to any instance).
 
 use super::PgStore;
-use crate::Error;
+use crate::error::Error;
 use crate::model::token_secret::{self as secret, digest};
 use crate::model::{Caller, Role, TokenInfo, check_token_name};
 use crate::storage::metadata::TokenStore;

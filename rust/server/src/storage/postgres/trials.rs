@@ -4,7 +4,7 @@
 //! queue instead of taking the same index.
 
 use super::{PgStore, u32_column};
-use crate::Error;
+use crate::error::Error;
 use crate::storage::metadata::TrialStore;
 use crate::storage::now_ms;
 

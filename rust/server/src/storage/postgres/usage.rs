@@ -3,7 +3,7 @@
 //! then record" one step across instances.
 
 use super::PgStore;
-use crate::Error;
+use crate::error::Error;
 use crate::model::{DAY_HOURS, HOUR_MS, UsageFull};
 use crate::storage::metadata::UsageStore;
 

@@ -19,7 +19,7 @@ use std::time::Instant;
 use object_store::ObjectStoreExt;
 
 use super::client::{Bucket, s3_error};
-use crate::Error;
+use crate::error::Error;
 use crate::storage::keys::SessionObject;
 
 /// Bytes of fetched objects kept at most (the largest object fetched is kept even when it is

@@ -11,7 +11,7 @@ use object_store::aws::AmazonS3;
 use object_store::path::Path as Key;
 use object_store::{ObjectStoreExt, PutPayload};
 
-use crate::Error;
+use crate::error::Error;
 
 /// Threads of the client's runtime.
 const THREADS: usize = 2;

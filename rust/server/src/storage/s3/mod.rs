@@ -26,7 +26,7 @@ use std::sync::{Arc, Mutex};
 
 use object_store::path::Path as Key;
 
-use crate::Error;
+use crate::error::Error;
 use crate::storage::blobs::{BlobStore, BodyStream, ObjectReader, Upload};
 use crate::storage::files::Files;
 use crate::storage::keys::SessionObject;

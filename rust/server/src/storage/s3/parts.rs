@@ -7,7 +7,7 @@
 use object_store::path::Path as Key;
 
 use super::client::Bucket;
-use crate::Error;
+use crate::error::Error;
 
 /// The folder of session `id`'s parts, relative to the prefix.
 pub(crate) fn folder(id: &str) -> String {

@@ -18,7 +18,7 @@ use object_store::{MultipartUpload, ObjectStoreExt, PutPayload};
 use tokio::sync::mpsc;
 
 use super::client::{PART_BYTES, PARTS_IN_FLIGHT, s3_error};
-use crate::Error;
+use crate::error::Error;
 use crate::storage::blobs::BodyStream;
 
 /// Body chunks waiting for the uploader at most.

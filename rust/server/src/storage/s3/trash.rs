@@ -6,7 +6,7 @@
 use object_store::path::Path as Key;
 
 use super::client::{Bucket, delete, list};
-use crate::Error;
+use crate::error::Error;
 
 /// Trash this old is an interrupted delete's: removed at start.
 pub(crate) const ORPHAN_AFTER: std::time::Duration = std::time::Duration::from_secs(3600);

@@ -5,7 +5,7 @@
 use rusqlite::{Transaction, params};
 
 use super::{CachedSql, SqliteStore};
-use crate::Error;
+use crate::error::Error;
 use crate::storage::deletes::{Claim, DeleteStore};
 use crate::storage::now_ms;
 

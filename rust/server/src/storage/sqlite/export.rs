@@ -11,7 +11,7 @@ use std::path::Path;
 use rusqlite::types::ValueRef;
 use rusqlite::{Connection, ErrorCode, OpenFlags};
 
-use crate::Error;
+use crate::error::Error;
 use crate::storage::rows::{Table, Value};
 
 /// The embedded database of a data directory, locked against every other process.

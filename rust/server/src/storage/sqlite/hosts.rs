@@ -3,7 +3,7 @@
 use rusqlite::{OptionalExtension, params};
 
 use super::{CachedSql, SqliteStore};
-use crate::Error;
+use crate::error::Error;
 use crate::storage::workers::{
     FAILURES_OUT_OF_SERVICE, HostRow, HostStore, PhoneRow, PhoneState, random_id,
 };

@@ -4,7 +4,7 @@
 use rusqlite::{OptionalExtension, params};
 
 use super::{CachedSql, SqliteStore};
-use crate::Error;
+use crate::error::Error;
 use crate::storage::instances::{IN_FLIGHT, InstanceStore, StopRequest, stronger_stop_request};
 
 /// `played_by` names no instance alive since `?ALIVE` (a parameter the statement binds).

@@ -3,7 +3,7 @@
 use rusqlite::params;
 
 use super::{CachedSql, SqliteStore};
-use crate::Error;
+use crate::error::Error;
 use crate::storage::metadata::{DeviceRow, DeviceStore, JobEnd, JobStore};
 use crate::storage::now_ms;
 

@@ -8,7 +8,7 @@ use rusqlite::{OptionalExtension, Transaction, params};
 use sitar_core::Convention;
 
 use super::CachedSql;
-use crate::Error;
+use crate::error::Error;
 
 /// A stored convention name; a value no version writes is `None`.
 pub(super) fn parse_convention(name: &str) -> Option<Convention> {

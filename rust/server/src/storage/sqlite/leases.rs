@@ -7,7 +7,7 @@
 use rusqlite::{OptionalExtension, Transaction, params};
 
 use super::{CachedSql, SqliteStore};
-use crate::Error;
+use crate::error::Error;
 use crate::storage::workers::{
     CommittedTrial, Expired, Lease, LeaseCounts, LeaseStore, MAX_ATTEMPTS, MAX_FAILURES_KEPT,
     MAX_TAKEN_PER_CALL, Requeued, TrialFailure, random_id,

@@ -10,7 +10,7 @@ use std::sync::Mutex;
 
 use rusqlite::{Connection, Params, Row};
 
-use crate::Error;
+use crate::error::Error;
 
 mod component_schema;
 mod deletes;

@@ -6,7 +6,7 @@ use rusqlite::types::Type;
 use rusqlite::{OptionalExtension, params};
 
 use super::{CachedSql, SqliteStore};
-use crate::Error;
+use crate::error::Error;
 use crate::model::PlaybackKind;
 use crate::model::estimate_settings::{self, EstimateSettings};
 use crate::model::{NewSession, Session, SessionState, Step};

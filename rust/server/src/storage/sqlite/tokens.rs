@@ -5,7 +5,7 @@
 use rusqlite::params;
 
 use super::{CachedSql, SqliteStore};
-use crate::Error;
+use crate::error::Error;
 use crate::model::token_secret::{self as secret, digest};
 use crate::model::{Caller, Role, TokenInfo, check_token_name};
 use crate::storage::metadata::TokenStore;

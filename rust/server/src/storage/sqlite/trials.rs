@@ -3,7 +3,7 @@
 use rusqlite::{OptionalExtension, params};
 
 use super::{CachedSql, SqliteStore};
-use crate::Error;
+use crate::error::Error;
 use crate::storage::metadata::TrialStore;
 use crate::storage::now_ms;
 

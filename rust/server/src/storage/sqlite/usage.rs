@@ -6,7 +6,7 @@
 use rusqlite::{OptionalExtension, params};
 
 use super::{CachedSql, SqliteStore};
-use crate::Error;
+use crate::error::Error;
 use crate::model::{DAY_HOURS, HOUR_MS, UsageFull};
 use crate::storage::metadata::UsageStore;
 

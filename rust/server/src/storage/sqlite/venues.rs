@@ -4,7 +4,7 @@
 use rusqlite::{OptionalExtension, params};
 
 use super::{CachedSql, SqliteStore};
-use crate::Error;
+use crate::error::Error;
 use crate::model::Session;
 use crate::model::{NewVenue, Venue};
 use crate::storage::metadata::{KeptContribution, VenueStore};
