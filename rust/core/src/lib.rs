@@ -111,7 +111,7 @@
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
 
-// Modules lowest first: each uses only modules listed above it (`tests/layout.rs` checks that
+// Modules lowest first: each uses only modules listed above it (the workspace's `tests/tests/layout.rs` checks that
 // no import cycle exists among them).
 // error                 — the crate's one error type
 // relation              — what the results measure (pose relation) and in which unit

@@ -73,9 +73,9 @@
 #![deny(missing_docs)]
 
 // Folders by concern, lowest first: a module imports only modules above it in this list
-// (its own submodules aside). `tests/layout.rs` checks that, that no import cycle exists
-// among the files, that only `storage` speaks SQL or touches the data directory, and that
-// this list names every module declared here:
+// (its own submodules aside). The workspace's `tests/tests/server_layout.rs` checks that,
+// that this list names exactly the modules declared here, that only `storage` speaks SQL or
+// touches the data directory; `tests/tests/layout.rs` that no import cycle exists.
 // error      — the one error enum
 // model      — vocabulary: sessions, states, steps, estimate settings, venues, callers, roles, tokens, usage
 // storage    — where bytes are kept: metadata store, blob store (traits); imports model alone

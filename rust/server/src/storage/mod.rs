@@ -12,7 +12,7 @@
 //! instances on one database and bucket, are `postgres` and `s3` ([`open`] picks), built with the
 //! `cluster` feature only (as is all of `sitar migrate`). For `sitar migrate`: an embedded installation read under SQLite's exclusive lock
 //! (`installation`) and rows as plain values (`rows`), written into Postgres as they are.
-//! Only this folder speaks SQL or touches the data directory (`tests/layout.rs` checks both).
+//! Only this folder speaks SQL or touches the data directory (the workspace's `tests/tests/server_layout.rs` checks both).
 
 pub(crate) mod blobs;
 pub(crate) mod blocking;

@@ -1,213 +1,49 @@
-//! The server's layout, checked from its source: no import cycle among its modules, handlers
-//! that use the HTTP helpers and never each other, and one writer of a session's state.
-//!
-//! The module graph comes from the `crate::…` paths in every file under `src/` (comments and
-//! `#[cfg(test)]` sections left out); items re-exported at the crate root (`crate::Error`)
-//! count as their defining module.
+//! The server's layout, checked from its source (`layout_graph` reads the imports): the
+//! modules follow lib.rs's layer list, handlers use the HTTP helpers and never each other,
+//! only the stores speak SQL or touch the data directory, and one writer of a session's
+//! state.
+
+mod layout_graph;
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
-/// Source files under `src/`, by module path (`session::lifecycle`, `handlers::trials`, …),
-/// with their code: comment lines and everything from `#[cfg(test)]` on removed.
+use layout_graph::layer_list;
+
+/// The server's `src/`.
+fn src() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../rust/server/src")
+}
+
+/// The server's files by module path (`""` for lib.rs), their code without comments or tests.
 fn sources() -> BTreeMap<String, String> {
-    fn walk(dir: &Path, out: &mut Vec<PathBuf>) {
-        for entry in std::fs::read_dir(dir).unwrap() {
-            let path = entry.unwrap().path();
-            if path.is_dir() {
-                walk(&path, out);
-            } else if path.extension().is_some_and(|e| e == "rs") {
-                out.push(path);
-            }
-        }
-    }
-    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
-    let mut files = Vec::new();
-    walk(&src, &mut files);
-    files
-        .into_iter()
-        .map(|path| {
-            let relative = path.strip_prefix(&src).unwrap().with_extension("");
-            let mut parts: Vec<String> = relative
-                .components()
-                .map(|c| c.as_os_str().to_string_lossy().into_owned())
-                .collect();
-            if parts.last().is_some_and(|p| p == "mod") {
-                parts.pop();
-            }
-            let text = std::fs::read_to_string(&path).unwrap();
-            let code = text.split("#[cfg(test)]").next().unwrap_or("");
-            let code: String = code
-                .lines()
-                .filter(|l| !l.trim_start().starts_with("//"))
-                .map(|l| format!("{l}\n"))
-                .collect();
-            (parts.join("::"), code)
-        })
-        .collect()
+    layout_graph::sources(&src())
 }
 
-/// Every `crate::a::b…` path in `code`, with `use crate::{a, b::c}` groups expanded, as
-/// segment lists.
-fn crate_paths(code: &str) -> Vec<Vec<String>> {
-    /// The leading `a::b::c` of `text`.
-    fn segments(text: &str) -> Vec<String> {
-        let end = text
-            .find(|c: char| !(c.is_alphanumeric() || c == '_' || c == ':'))
-            .unwrap_or(text.len());
-        text[..end]
-            .split("::")
-            .filter(|s| !s.is_empty())
-            .map(str::to_string)
-            .collect()
-    }
-    /// The items of a `{…}` group (`text` starts after the `{`), split at its own commas.
-    fn group_items(text: &str) -> Vec<&str> {
-        let (mut depth, mut start, mut items) = (0usize, 0, Vec::new());
-        for (i, c) in text.char_indices() {
-            match c {
-                '{' => depth += 1,
-                '}' if depth == 0 => {
-                    items.push(&text[start..i]);
-                    break;
-                }
-                '}' => depth -= 1,
-                ',' if depth == 0 => {
-                    items.push(&text[start..i]);
-                    start = i + 1;
-                }
-                _ => {}
-            }
-        }
-        items
-    }
-    let mut out = Vec::new();
-    let mut rest = code;
-    while let Some(at) = rest.find("crate::") {
-        let before = rest[..at].chars().last();
-        rest = &rest[at + "crate::".len()..];
-        if before.is_some_and(|c| c.is_alphanumeric() || c == '_') {
-            continue; // another crate's path, e.g. `sitar_crate::`
-        }
-        match rest.strip_prefix('{') {
-            Some(group) => out.extend(
-                group_items(group)
-                    .into_iter()
-                    .map(|item| segments(item.trim()))
-                    .filter(|s| !s.is_empty()),
-            ),
-            None => out.push(segments(rest)),
-        }
-    }
-    out
-}
-
-/// The module a path points into: the longest module path it starts with, or (for an item
-/// re-exported at the crate root) the module the root takes it from.
-fn target(
-    path: &[String],
-    modules: &BTreeSet<String>,
-    root_items: &BTreeMap<String, String>,
-) -> Option<String> {
-    (1..=path.len())
-        .rev()
-        .map(|n| path[..n].join("::"))
-        .find(|m| modules.contains(m))
-        .or_else(|| path.first().and_then(|item| root_items.get(item).cloned()))
-}
-
-/// `pub use module::{A, B};` at the crate root: item → module.
-fn root_items(lib: &str) -> BTreeMap<String, String> {
-    let mut items = BTreeMap::new();
-    for statement in lib.split(';') {
-        let Some(rest) = statement.trim().strip_prefix("pub use ") else {
-            continue;
-        };
-        let (module, names) = rest.split_once("::").unwrap_or((rest, ""));
-        for name in names.trim_matches(|c| c == '{' || c == '}').split(',') {
-            let name = name.trim();
-            if !name.is_empty() {
-                items.insert(name.to_string(), module.trim().to_string());
-            }
-        }
-    }
-    items
-}
-
-/// Module → the modules it uses (itself and the crate root left out).
+/// Module → the modules it uses.
 fn graph() -> BTreeMap<String, BTreeSet<String>> {
-    let sources = sources();
-    let modules: BTreeSet<String> = sources.keys().filter(|m| *m != "lib").cloned().collect();
-    let roots = root_items(&sources["lib"]);
-    modules
-        .iter()
-        .map(|module| {
-            let uses = crate_paths(&sources[module])
-                .iter()
-                .filter_map(|path| target(path, &modules, &roots))
-                .filter(|m| m != module && !module.starts_with(&format!("{m}::")))
-                .collect();
-            (module.clone(), uses)
-        })
-        .collect()
+    layout_graph::graph(&sources())
 }
 
 #[test]
-fn the_parser_reads_paths_groups_and_root_items() {
-    let paths = crate_paths(
-        "use crate::Error;\nuse crate::session::{Lifecycle, NewSession};\n\
-         use crate::{deletion, jobs::{self, Begin}};\nlet x = crate::db::now_ms();",
-    );
-    let joined: Vec<String> = paths.iter().map(|p| p.join("::")).collect();
-    assert_eq!(
-        joined,
-        ["Error", "session", "deletion", "jobs", "db::now_ms"],
-        "{paths:?}"
-    );
-    let roots = root_items("pub use error::Error;\npub use config::{AdbConfig, ServerConfig};");
-    assert_eq!(roots["Error"], "error");
-    assert_eq!(roots["ServerConfig"], "config");
-}
-
-#[test]
-fn no_import_cycle_among_the_modules() {
+fn handlers_use_the_helpers_and_never_each_other() {
     let graph = graph();
     assert!(graph.len() > 20, "{:?}", graph.keys());
-    // Depth-first search; a module met again while on the stack closes a cycle.
-    fn visit<'a>(
-        module: &'a str,
-        graph: &'a BTreeMap<String, BTreeSet<String>>,
-        stack: &mut Vec<&'a str>,
-        done: &mut BTreeSet<&'a str>,
-    ) {
-        if done.contains(module) {
-            return;
-        }
-        if let Some(at) = stack.iter().position(|m| *m == module) {
-            panic!("import cycle: {} → {module}", stack[at..].join(" → "));
-        }
-        stack.push(module);
-        for next in graph.get(module).into_iter().flatten() {
-            visit(next, graph, stack, done);
-        }
-        stack.pop();
-        done.insert(module);
-    }
-    let mut done = BTreeSet::new();
-    for module in graph.keys() {
-        visit(module, &graph, &mut Vec::new(), &mut done);
-    }
     // The seams later work builds on: the helpers sit below every handler, and the router
     // is the only user of the handlers (besides `fuzzing`, the fuzz targets' hidden window on
-    // the handlers' parsers, at the top beside the router).
+    // the handlers' parsers, at the top beside the router). A share link is another door to
+    // the answers of the resources it names (report, scene, results, evidence images), so
+    // `share` alone answers with other handlers' answers.
+    const SHARE: &str = "http::handlers::share";
     for (module, uses) in &graph {
-        let handler = module.starts_with("http::handlers::");
+        let handler = module.starts_with("http::handlers::") && module != SHARE;
         for used in uses {
             if used.starts_with("http::handlers") {
                 assert!(
                     module == "http::router"
                         || module == "http"
                         || module == "fuzzing"
+                        || module == SHARE
                         || (module == "http::handlers" && handler),
                     "{module} uses {used}: only the router takes handlers"
                 );
@@ -325,20 +161,9 @@ fn only_the_storage_folder_speaks_sql() {
     assert!(sources["storage::sqlite::sessions"].contains("INSERT INTO sessions"));
 }
 
-/// The layer list of lib.rs's comment (`// name — what`), lowest first.
-fn layer_list(lib: &str) -> Vec<String> {
-    lib.lines()
-        .filter_map(|l| l.trim_start().strip_prefix("// "))
-        .filter_map(|l| l.split_once(" — "))
-        .map(|(name, _)| name.trim().to_string())
-        .filter(|name| name.chars().all(|c| c.is_ascii_lowercase() || c == '_'))
-        .collect()
-}
-
 #[test]
 fn the_layer_comment_is_true() {
-    let lib =
-        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("src/lib.rs")).unwrap();
+    let lib = std::fs::read_to_string(src().join("lib.rs")).unwrap();
     let layers = layer_list(&lib);
     let declared: BTreeSet<&str> = lib
         .lines()
@@ -409,7 +234,7 @@ fn only_the_storage_folder_touches_the_data_directory() {
     let sources = sources();
     let mut found = BTreeSet::new();
     for (module, code) in &sources {
-        if module.starts_with("storage") || module == "lib" {
+        if module.starts_with("storage") || module.is_empty() {
             continue;
         }
         for call in ["std::fs", "tokio::fs", "File::open", "File::create"] {
