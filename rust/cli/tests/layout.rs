@@ -1,11 +1,15 @@
 //! The CLI's layout, checked from its source: `src/` follows `sitar --help`'s groups (each
-//! command of `GROUPS` in lib.rs lives in its group's folder), and no import cycle among the
-//! files (a module's path is its file's path under `src/`, `mod.rs` being its folder; a
-//! file's uses are the `crate::…` and `super::…` paths in its code, `use crate::{a, b::{c,
-//! d}}` groups included, tests and comment lines left out), the figure model a leaf.
+//! command of `GROUPS` in lib.rs lives in its group's folder), no file is over 600 lines, and
+//! no import cycle among the files (a module's path is its file's path under `src/`, `mod.rs`
+//! being its folder; a file's uses are the `crate::…` and `super::…` paths in its code,
+//! `use crate::{a, b::{c, d}}` groups included, tests and comment lines left out), the figure
+//! model a leaf.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
+
+/// The longest a source file may be.
+const MAX_LINES: usize = 600;
 
 /// The folder of each group of `sitar --help` (by the start of its title in lib.rs's
 /// `GROUPS`).
@@ -260,6 +264,24 @@ fn no_import_cycle_among_the_modules() {
     assert!(uses("backend::worker::slot", "backend::worker"));
     assert!(!any_uses("figures::plot", "figures::canvas"));
     assert!(!uses("figures::canvas", "figures::error_figures"));
+}
+
+#[test]
+fn no_file_is_over_the_limit() {
+    let files = rust_files(&src());
+    assert!(files.len() > 40, "{files:?}");
+    let long: Vec<(String, usize)> = files
+        .iter()
+        .map(|f| {
+            let lines = std::fs::read_to_string(f).unwrap().lines().count();
+            (f.strip_prefix(src()).unwrap().display().to_string(), lines)
+        })
+        .filter(|(_, lines)| *lines > MAX_LINES)
+        .collect();
+    assert!(
+        long.is_empty(),
+        "files over {MAX_LINES} lines (split them by concept): {long:?}"
+    );
 }
 
 /// lib.rs's `GROUPS`: each group's title and its commands.

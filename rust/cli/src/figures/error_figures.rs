@@ -1,5 +1,5 @@
 //! The figures of `ape`, `rpe`, `traj` and `res`, as evo draws them: what goes on them is
-//! decided here; the model is `figure.rs`, the drawing `plot.rs` and `panels.rs`, the file
+//! decided here; the model is `figure.rs`, the drawing `plot/` and `panels.rs`, the file
 //! formats `canvas.rs`.
 
 use anyhow::Result;

@@ -179,3 +179,22 @@ pub enum DistributionKind {
     /// A violin per result: the mirrored kernel density with the box inside.
     Violin,
 }
+
+#[cfg(test)]
+mod tests {
+    use clap::ValueEnum;
+
+    use super::*;
+
+    #[test]
+    fn plot_modes_pick_evo_axes() {
+        assert_eq!(PlotMode::default(), PlotMode::Xz);
+        assert_eq!(PlotMode::Xz.axes(), Some([0, 2]));
+        assert_eq!(PlotMode::Zy.axes(), Some([2, 1]));
+        assert_eq!(PlotMode::Xyz.axes(), None);
+        assert_eq!(
+            PlotMode::from_str("yx", false).map(PlotMode::axes),
+            Ok(Some([1, 0]))
+        );
+    }
+}

@@ -103,8 +103,8 @@ where
         ys = 0.0..if top > 0.0 { top * 1.25 } else { 1.0 };
     }
     // Absolute Unix seconds: ticks relative to an offset named in the label, as evo's.
-    let offset = crate::figures::plot::axis_offset(&xs);
-    let x_decimals = crate::figures::plot::decimals(xs.end - xs.start);
+    let offset = crate::figures::plot::axes::axis_offset(&xs);
+    let x_decimals = crate::figures::plot::axes::decimals(xs.end - xs.start);
     let x_desc = if offset == 0.0 {
         x_label.to_owned()
     } else {
@@ -118,7 +118,7 @@ where
     chart
         .configure_mesh()
         .max_light_lines(1)
-        .x_label_formatter(&|x| crate::figures::plot::tick(x - offset, x_decimals))
+        .x_label_formatter(&|x| crate::figures::plot::axes::tick(x - offset, x_decimals))
         .x_desc(x_desc)
         .y_desc(y_label)
         .label_style(("sans-serif", 12))
@@ -145,7 +145,7 @@ where
             )?;
         }
     }
-    crate::figures::plot::legend(&mut chart, SeriesLabelPosition::UpperRight)?;
+    crate::figures::plot::paths::legend(&mut chart, SeriesLabelPosition::UpperRight)?;
     Ok(())
 }
 
@@ -157,7 +157,7 @@ fn trajectories_panel<DB: DrawingBackend>(
 where
     DB::ErrorType: 'static,
 {
-    crate::figures::plot::paths(area, mode, paths)
+    crate::figures::plot::paths::paths(area, mode, paths)
 }
 
 fn bars_panel<DB: DrawingBackend>(
@@ -212,7 +212,7 @@ where
             .label(name.as_str())
             .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 20, y + 5)], colour.filled()));
     }
-    crate::figures::plot::legend(&mut chart, SeriesLabelPosition::LowerRight)?;
+    crate::figures::plot::paths::legend(&mut chart, SeriesLabelPosition::LowerRight)?;
     Ok(())
 }
 
@@ -257,12 +257,12 @@ where
             .x_label_area_size(40)
             .y_label_area_size(60)
             .build_cartesian_2d(xs.clone(), 0.0..(top * 1.05).max(1e-12))?;
-        let x_decimals = crate::figures::plot::decimals(xs.end - xs.start);
+        let x_decimals = crate::figures::plot::axes::decimals(xs.end - xs.start);
         chart
             .configure_mesh()
             .max_light_lines(1)
             .x_labels(5)
-            .x_label_formatter(&|x| crate::figures::plot::tick(*x, x_decimals))
+            .x_label_formatter(&|x| crate::figures::plot::axes::tick(*x, x_decimals))
             .x_desc(label)
             .y_desc("Density")
             .label_style(("sans-serif", 12))
@@ -326,12 +326,12 @@ where
         .x_label_area_size(40)
         .y_label_area_size(70)
         .build_cartesian_2d(-0.5..n as f64 - 0.5, ys.clone())?;
-    let y_decimals = crate::figures::plot::decimals(ys.end - ys.start);
+    let y_decimals = crate::figures::plot::axes::decimals(ys.end - ys.start);
     chart
         .configure_mesh()
         .disable_x_mesh()
         .x_labels(0)
-        .y_label_formatter(&|y| crate::figures::plot::tick(*y, y_decimals))
+        .y_label_formatter(&|y| crate::figures::plot::axes::tick(*y, y_decimals))
         .y_desc(label)
         .x_desc("estimate")
         .label_style(("sans-serif", 12))
