@@ -17,6 +17,7 @@ use sitar_estimator::{
 use crate::beyond_evo::bench_layout::{Cell, discover};
 use crate::beyond_evo::bench_results::{Bench, CellResult, Lengths, RunResult};
 use crate::beyond_evo::bench_table::{TableFormat, render};
+use crate::beyond_evo::shared_args::{LengthArgs, LengthWords};
 
 /// One table of algorithms × sequences over a results tree.
 ///
@@ -42,23 +43,8 @@ pub struct Args {
     /// Write to this file instead of stdout.
     #[arg(short = 'o', long, value_name = "FILE")]
     output: Option<PathBuf>,
-    /// Sub-trajectory lengths in metres, comma-separated, for every sequence.
-    #[arg(
-        long,
-        value_delimiter = ',',
-        value_name = "METRES",
-        conflicts_with = "lengths_percent"
-    )]
-    lengths: Option<Vec<f64>>,
-    /// Sub-trajectory lengths as percentages of each ground truth's path (rpg's default
-    /// 10,20,30,40,50), truncated to centimetres as rpg does.
-    #[arg(
-        long = "lengths_percent",
-        alias = "lengths-percent",
-        value_delimiter = ',',
-        value_name = "PERCENT"
-    )]
-    lengths_percent: Option<Vec<f64>>,
+    #[command(flatten)]
+    sub_trajectories: LengthArgs<BenchWords>,
     /// The alignment of a folder without an eval_cfg.yaml: posyaw, se3, sim3 or none
     /// (rpg's default: sim3).
     #[arg(long = "align_type", alias = "align-type", default_value = "sim3", value_parser = parse_align_type)]
@@ -78,6 +64,17 @@ pub struct Args {
     html: Option<PathBuf>,
 }
 
+/// `sitar bench`'s help for the lengths it shares with `sitar relative`.
+#[derive(Debug)]
+pub struct BenchWords;
+
+impl LengthWords for BenchWords {
+    const LENGTHS: &'static str = "Sub-trajectory lengths in metres, comma-separated, for every \
+        sequence";
+    const LENGTHS_PERCENT: &'static str = "Sub-trajectory lengths as percentages of each ground \
+        truth's path (rpg's default 10,20,30,40,50), truncated to centimetres as rpg does";
+}
+
 fn parse_align_type(s: &str) -> Result<RpgAlignType, String> {
     s.parse().map_err(|e: sitar_estimator::Error| e.to_string())
 }
@@ -89,7 +86,10 @@ pub fn run(args: Args) -> Result<()> {
             args.align_num_frames
         );
     }
-    let lengths = match (&args.lengths, &args.lengths_percent) {
+    let lengths = match (
+        &args.sub_trajectories.lengths,
+        &args.sub_trajectories.lengths_percent,
+    ) {
         (Some(m), _) => Lengths::Metres(m.clone()),
         (None, Some(p)) => Lengths::Percent(p.clone()),
         (None, None) => Lengths::Percent(RPG_DEFAULT_PERCENTS.to_vec()),

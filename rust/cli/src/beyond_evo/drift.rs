@@ -2,8 +2,6 @@
 //! error in deg/m over segments of ground-truth path length), computed by
 //! `sitar_estimator::drift`; this module parses, pairs, aligns, prints and plots.
 
-use std::path::PathBuf;
-
 use anyhow::Result;
 use serde_json::Value;
 use sitar_estimator::{
@@ -12,6 +10,7 @@ use sitar_estimator::{
 use sitar_evo::DriftSettings;
 use sitar_evo::drift::{DriftOutcome as Outcome, compute_drift, drift_runs_json, lengths_text};
 
+use crate::beyond_evo::shared_args::{AlignmentArgs, AlignmentWords, ReportArgs, ReportWords};
 use crate::figures::canvas::Page;
 use crate::figures::figure::{DistributionKind, Drawing, PALETTE, Series};
 use crate::io::console::{Console, SEP, UsabilityArgs};
@@ -51,47 +50,45 @@ pub struct Options {
     /// within ± S (the devkit's 2, 4, …, 24 m/s).
     #[arg(long = "speed_step", alias = "speed-step", default_value_t = KITTI_SPEED_STEP_M_S, value_name = "S")]
     speed_step: f64,
-    /// Alignment with Umeyama's method (no scale); a rigid alignment leaves every segment's
-    /// error as it is.
-    #[arg(short = 'a', long)]
-    align: bool,
-    /// Correct scale with Umeyama's method (alone: scale only; with -a: Sim(3)).
-    #[arg(short = 's', long = "correct_scale", alias = "correct-scale")]
-    correct_scale: bool,
-    /// The number of poses to use for Umeyama alignment, counted from the start (-1: all).
-    #[arg(long = "n_to_align", default_value_t = -1, allow_negative_numbers = true)]
-    n_to_align: i64,
-    /// SiTAR extra, with -a: 4-DoF alignment (translation and yaw about the gravity axis),
-    /// as ape's --yaw_only. Cannot be combined with -s.
-    #[arg(long = "yaw_only", alias = "yaw-only", requires = "align")]
-    yaw_only: bool,
+    #[command(flatten)]
+    alignment: AlignmentArgs<DriftWords>,
     /// The gravity axis for --yaw_only: z or y (gravity along -y).
     #[arg(long = "yaw_axis", alias = "yaw-axis", value_enum, default_value_t = AxisArg::Z)]
     yaw_axis: AxisArg,
-    /// Show the plots (errors against length and against speed); without a display sitar
-    /// says so and shows nothing.
-    #[arg(short = 'p', long)]
-    plot: bool,
-    /// Path to save the plots: PNG, SVG or PDF by the extension (FILE_length.png and
-    /// FILE_speed.png, with several runs also FILE_t_err_box_plot.png and
-    /// FILE_r_err_box_plot.png; one PDF with every page).
-    #[arg(long = "save_plot", value_name = "FILE")]
-    save_plot: Option<PathBuf>,
-    /// Print CSV (one row per segment; per run with several) or JSON instead of the tables.
-    #[arg(long, value_enum)]
-    format: Option<OutputFormat>,
-    /// Write the --format output to this file instead of stdout.
-    #[arg(short = 'o', long, requires = "format")]
-    output: Option<PathBuf>,
-    /// SiTAR extra: also write one self-contained HTML page (tables, both plots inline, the
-    /// JSON document); it fetches nothing when opened.
-    #[arg(long, value_name = "FILE")]
-    html: Option<PathBuf>,
+    #[command(flatten)]
+    report: ReportArgs<DriftWords>,
     #[command(flatten)]
     usability: UsabilityArgs,
 }
 
 format_subcommands!(Format, Options);
+
+/// `sitar drift`'s help for the options it shares with `sitar relative`.
+#[derive(Debug)]
+pub struct DriftWords;
+
+impl AlignmentWords for DriftWords {
+    const ALIGN: &'static str = "Alignment with Umeyama's method (no scale); a rigid alignment \
+        leaves every segment's error as it is";
+    const CORRECT_SCALE: &'static str =
+        "Correct scale with Umeyama's method (alone: scale only; with -a: Sim(3))";
+    const N_TO_ALIGN: &'static str =
+        "The number of poses to use for Umeyama alignment, counted from the start (-1: all)";
+    const YAW_ONLY: &'static str = "SiTAR extra, with -a: 4-DoF alignment (translation and yaw \
+        about the gravity axis), as ape's --yaw_only. Cannot be combined with -s";
+}
+
+impl ReportWords for DriftWords {
+    const PLOT: &'static str = "Show the plots (errors against length and against speed); \
+        without a display sitar says so and shows nothing";
+    const SAVE_PLOT: &'static str = "Path to save the plots: PNG, SVG or PDF by the extension \
+        (FILE_length.png and FILE_speed.png, with several runs also FILE_t_err_box_plot.png and \
+        FILE_r_err_box_plot.png; one PDF with every page)";
+    const FORMAT: &'static str =
+        "Print CSV (one row per segment; per run with several) or JSON instead of the tables";
+    const HTML: &'static str = "SiTAR extra: also write one self-contained HTML page (tables, \
+        both plots inline, the JSON document); it fetches nothing when opened";
+}
 
 pub fn run(args: Args) -> Result<()> {
     let (source, options) = args.source.split();
@@ -103,10 +100,10 @@ pub fn run(args: Args) -> Result<()> {
             .unwrap_or_else(|| KITTI_LENGTHS_M.to_vec()),
         step: options.step,
         speed_step: options.speed_step,
-        align: options.align,
-        correct_scale: options.correct_scale,
-        n_to_align: options.n_to_align,
-        yaw_only: options.yaw_only,
+        align: options.alignment.align,
+        correct_scale: options.alignment.correct_scale,
+        n_to_align: options.alignment.n_to_align,
+        yaw_only: options.alignment.yaw_only,
         yaw_axis: options.yaw_axis.axis(),
     };
     let settings = drift.options()?;
@@ -233,12 +230,12 @@ fn finish_one(
     options: &Options,
     console: &Console,
 ) -> Result<()> {
-    match options.format {
+    match options.report.format {
         Some(OutputFormat::Json) => emit(
-            options.output.as_deref(),
+            options.report.output.as_deref(),
             &(outcome.json(title, settings).to_string() + "\n"),
         )?,
-        Some(OutputFormat::Csv) => emit(options.output.as_deref(), &segments_csv(outcome))?,
+        Some(OutputFormat::Csv) => emit(options.report.output.as_deref(), &segments_csv(outcome))?,
         None => {
             console.debug(SEP)?;
             console.info(&format!(
@@ -256,8 +253,8 @@ fn finish_one(
     ];
     crate::results::runs::plots(
         &pages,
-        options.plot,
-        options.save_plot.as_deref(),
+        options.report.plot,
+        options.report.save_plot.as_deref(),
         None,
         console,
     )?;
@@ -271,7 +268,7 @@ fn html_page(
     pages: &[(&str, Page<'_>)],
     console: &Console,
 ) -> Result<()> {
-    let Some(path) = &options.html else {
+    let Some(path) = &options.report.html else {
         return Ok(());
     };
     crate::figures::html::write(path, document, pages)?;
@@ -291,10 +288,10 @@ fn finish_runs(
         "t_err_percent" => outcomes[k].drift.t_err_percent,
         _ => outcomes[k].drift.r_err_deg_per_m,
     };
-    match options.format {
+    match options.report.format {
         Some(OutputFormat::Json) => {
             let doc = drift_runs_json(outcomes, title, settings);
-            emit(options.output.as_deref(), &(doc.to_string() + "\n"))?;
+            emit(options.report.output.as_deref(), &(doc.to_string() + "\n"))?;
         }
         Some(OutputFormat::Csv) => {
             let mut text = format!("trial,estimate,segments,{}\n", NAMES.join(","));
@@ -318,7 +315,7 @@ fn finish_runs(
                     .collect();
                 text += &format!(",{}\n", cells.join(","));
             }
-            emit(options.output.as_deref(), &text)?;
+            emit(options.report.output.as_deref(), &text)?;
         }
         None => {
             console.debug(SEP)?;
@@ -379,8 +376,8 @@ fn finish_runs(
     ];
     crate::results::runs::plots(
         &pages,
-        options.plot,
-        options.save_plot.as_deref(),
+        options.report.plot,
+        options.report.save_plot.as_deref(),
         None,
         console,
     )?;

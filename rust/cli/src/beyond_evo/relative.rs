@@ -2,8 +2,6 @@
 //! computed by `sitar_estimator::relative_errors`; this module parses, pairs, aligns, prints
 //! and plots, as `drift` does.
 
-use std::path::PathBuf;
-
 use anyhow::{Result, anyhow, bail};
 use serde_json::{Value, json};
 use sitar_estimator::{
@@ -11,6 +9,9 @@ use sitar_estimator::{
     lengths_from_percents, relative_errors,
 };
 
+use crate::beyond_evo::shared_args::{
+    AlignmentArgs, AlignmentWords, LengthArgs, LengthWords, ReportArgs, ReportWords,
+};
 use crate::figures::canvas::Page;
 use crate::figures::figure::{DistributionKind, Drawing};
 use crate::io::console::{Console, SEP, UsabilityArgs};
@@ -40,55 +41,49 @@ pub struct Args {
 /// `sitar relative`'s options.
 #[derive(clap::Args, Debug)]
 pub struct Options {
-    /// Sub-trajectory lengths in metres, comma-separated.
-    #[arg(
-        long,
-        value_delimiter = ',',
-        value_name = "METRES",
-        conflicts_with = "lengths_percent"
-    )]
-    lengths: Option<Vec<f64>>,
-    /// Sub-trajectory lengths as percentages of the reference's path [default: 10,20,30,40,50].
-    #[arg(
-        long = "lengths_percent",
-        alias = "lengths-percent",
-        value_delimiter = ',',
-        value_name = "PERCENT"
-    )]
-    lengths_percent: Option<Vec<f64>>,
-    /// Alignment with Umeyama's method (a rigid alignment leaves every error as it is).
-    #[arg(short = 'a', long)]
-    align: bool,
-    /// Correct scale with Umeyama's method: the estimate's relative translations are scaled.
-    #[arg(short = 's', long = "correct_scale", alias = "correct-scale")]
-    correct_scale: bool,
-    /// The number of poses to use for the alignment, counted from the start (-1: all).
-    #[arg(long = "n_to_align", default_value_t = -1, allow_negative_numbers = true)]
-    n_to_align: i64,
-    /// With -a: 4-DoF alignment (rpg's posyaw). Cannot be combined with -s.
-    #[arg(long = "yaw_only", alias = "yaw-only", requires = "align")]
-    yaw_only: bool,
-    /// Show the box plots (one box per length); without a display sitar says so.
-    #[arg(short = 'p', long)]
-    plot: bool,
-    /// Save the box plots: PNG, SVG or PDF by the extension (FILE_trans_percent.png, …).
-    #[arg(long = "save_plot", value_name = "FILE")]
-    save_plot: Option<PathBuf>,
-    /// Print CSV (one row per sub-trajectory) or JSON instead of the tables.
-    #[arg(long, value_enum)]
-    format: Option<OutputFormat>,
-    /// Write the --format output to this file instead of stdout.
-    #[arg(short = 'o', long, requires = "format")]
-    output: Option<PathBuf>,
-    /// Also write one self-contained HTML page (tables, every box plot inline, the JSON
-    /// document); it fetches nothing when opened.
-    #[arg(long, value_name = "FILE")]
-    html: Option<PathBuf>,
+    #[command(flatten)]
+    sub_trajectories: LengthArgs<RelativeWords>,
+    #[command(flatten)]
+    alignment: AlignmentArgs<RelativeWords>,
+    #[command(flatten)]
+    report: ReportArgs<RelativeWords>,
     #[command(flatten)]
     usability: UsabilityArgs,
 }
 
 format_subcommands!(Format, Options);
+
+/// `sitar relative`'s help for the options it shares with `sitar drift` and `sitar bench`.
+#[derive(Debug)]
+pub struct RelativeWords;
+
+impl LengthWords for RelativeWords {
+    const LENGTHS: &'static str = "Sub-trajectory lengths in metres, comma-separated";
+    const LENGTHS_PERCENT: &'static str = "Sub-trajectory lengths as percentages of the \
+        reference's path [default: 10,20,30,40,50]";
+}
+
+impl AlignmentWords for RelativeWords {
+    const ALIGN: &'static str =
+        "Alignment with Umeyama's method (a rigid alignment leaves every error as it is)";
+    const CORRECT_SCALE: &'static str =
+        "Correct scale with Umeyama's method: the estimate's relative translations are scaled";
+    const N_TO_ALIGN: &'static str =
+        "The number of poses to use for the alignment, counted from the start (-1: all)";
+    const YAW_ONLY: &'static str =
+        "With -a: 4-DoF alignment (rpg's posyaw). Cannot be combined with -s";
+}
+
+impl ReportWords for RelativeWords {
+    const PLOT: &'static str =
+        "Show the box plots (one box per length); without a display sitar says so";
+    const SAVE_PLOT: &'static str =
+        "Save the box plots: PNG, SVG or PDF by the extension (FILE_trans_percent.png, …)";
+    const FORMAT: &'static str =
+        "Print CSV (one row per sub-trajectory) or JSON instead of the tables";
+    const HTML: &'static str = "Also write one self-contained HTML page (tables, every box plot \
+        inline, the JSON document); it fetches nothing when opened";
+}
 
 /// The metrics, as the JSON and CSV name them, and their labels.
 const METRICS: [(&str, &str); 6] = [
@@ -133,7 +128,7 @@ impl Outcome {
 pub fn run(args: Args) -> Result<()> {
     let (source, options) = args.source.split();
     let console = Console::new(&options.usability)?;
-    if options.yaw_only && options.correct_scale {
+    if options.alignment.yaw_only && options.alignment.correct_scale {
         bail!("--yaw_only cannot be combined with -s (posyaw has no scale)");
     }
     let runs = source::load(&source, &console)?;
@@ -151,7 +146,10 @@ fn compute(loaded: Loaded, options: &Options, console: &Console) -> Result<Outco
         sync,
     } = loaded;
     let (ref_name, est_name) = (reference.name, estimate.name);
-    let lengths = match (&options.lengths, &options.lengths_percent) {
+    let lengths = match (
+        &options.sub_trajectories.lengths,
+        &options.sub_trajectories.lengths_percent,
+    ) {
         (Some(m), _) => m.clone(),
         (None, p) => lengths_from_percents(
             cumulative_path_length(&reference.trajectory),
@@ -175,10 +173,10 @@ fn compute(loaded: Loaded, options: &Options, console: &Console) -> Result<Outco
         );
     }
     let algorithm = AlgorithmOptions {
-        align: options.align,
-        correct_scale: options.correct_scale,
-        n_to_align: options.n_to_align,
-        yaw_only: options.yaw_only,
+        align: options.alignment.align,
+        correct_scale: options.alignment.correct_scale,
+        n_to_align: options.alignment.n_to_align,
+        yaw_only: options.alignment.yaw_only,
         ..AlgorithmOptions::default()
     };
     // rpg uses the estimate as read and only the alignment's scale (see the estimator).
@@ -266,9 +264,9 @@ fn emit_outcomes(outcomes: &[Outcome], options: &Options, console: &Console) -> 
             "across_trials": across_trials(&names, value, n),
         }),
     };
-    match (options.format, n) {
+    match (options.report.format, n) {
         (Some(OutputFormat::Json), _) => emit(
-            options.output.as_deref(),
+            options.report.output.as_deref(),
             &(full_document().to_string() + "\n"),
         )?,
         (Some(OutputFormat::Csv), _) => {
@@ -289,7 +287,7 @@ fn emit_outcomes(outcomes: &[Outcome], options: &Options, console: &Console) -> 
                     }
                 }
             }
-            emit(options.output.as_deref(), &text)?;
+            emit(options.report.output.as_deref(), &text)?;
         }
         (None, _) => {
             console.debug(SEP)?;
@@ -343,12 +341,12 @@ fn emit_outcomes(outcomes: &[Outcome], options: &Options, console: &Console) -> 
         .collect();
     crate::results::runs::plots(
         &pages,
-        options.plot,
-        options.save_plot.as_deref(),
+        options.report.plot,
+        options.report.save_plot.as_deref(),
         None,
         console,
     )?;
-    if let Some(path) = &options.html {
+    if let Some(path) = &options.report.html {
         crate::figures::html::write(path, &full_document(), &pages)?;
     }
     Ok(())
