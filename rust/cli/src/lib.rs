@@ -10,7 +10,8 @@
 //! - `getting_started/`: demo (and the venue it builds), simulate;
 //! - `backend/`: serve, token, worker, migrate, and the log they share;
 //! - `evo/`: ape, rpe, traj, res;
-//! - `beyond_evo/`: drift, relative, bench (its results tree, table and plots);
+//! - `beyond_evo/`: drift, relative, bench (its results tree, table and plots), and the
+//!   options they declare alike;
 //! - `analysis/`: estimate, evaluate, calibrate, scene, and the sequences they read;
 //! - `tools/`: completions, man.
 //!
@@ -20,7 +21,8 @@
 //! - `io/`: trajectories and input files in, output formats out, evo's console;
 //! - `command_line/`: the command line before clap parses it, and its usage hints.
 //!
-//! `tests/layout.rs` keeps it so: each command in its group's folder, no import cycle.
+//! `tests/layout.rs` keeps it so: each command in its group's folder, no file over 600 lines,
+//! no import cycle among the files.
 #![forbid(unsafe_code)]
 
 mod analysis;

@@ -1,4 +1,4 @@
-//! `sitar evaluate --report csv|json`: the scores as CSV rows or one JSON document.
+//! `sitar evaluate --format csv|json`: the scores as CSV rows or one JSON document.
 
 use std::fmt::Write as _;
 

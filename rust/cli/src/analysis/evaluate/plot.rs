@@ -1,5 +1,5 @@
-//! `sitar evaluate --plot`: accuracy and F1 against the trial count per setting (the paper's
-//! Figure 5), as SVG.
+//! `sitar evaluate`'s figure (`--plot`): accuracy and F1 against the trial count per
+//! setting (the paper's Figure 5), as SVG.
 
 use std::path::Path;
 
