@@ -4,56 +4,49 @@
 //! One module per subcommand, each with `Args` (clap) and `run(Args) -> anyhow::Result<()>`;
 //! adding a subcommand is one enum variant and one match arm. The binary (`main.rs`) and the
 //! Python package's `sitar` command both call [`main_with`].
+//!
+//! `src/` follows `sitar --help`'s groups (`GROUPS` below): a folder per group, holding its
+//! commands and the helpers only they use.
+//! - `getting_started/`: demo (and the venue it builds), simulate;
+//! - `backend/`: serve, token, worker, migrate, and the log they share;
+//! - `evo/`: ape, rpe, traj, res;
+//! - `beyond_evo/`: drift, relative, bench (its results tree, table and plots), and the
+//!   options they declare alike;
+//! - `analysis/`: estimate, evaluate, calibrate, scene, and the sequences they read;
+//! - `tools/`: completions, man.
+//!
+//! Shared by several groups:
+//! - `figures/`: the figure model, its drawing and its files (PNG, SVG, PDF, HTML pages);
+//! - `results/`: a metric's output options, its output, repeated runs, evo's result archive;
+//! - `io/`: trajectories and input files in, output formats out, evo's console;
+//! - `command_line/`: the command line before clap parses it, and its usage hints.
+//!
+//! `tests/layout.rs` keeps it so: each command in its group's folder, no file over 600 lines,
+//! no import cycle among the files.
 #![forbid(unsafe_code)]
 
-mod ape;
-mod archive;
-mod bag;
-mod bench;
-mod bench_layout;
-mod bench_plot;
-mod bench_results;
-mod bench_table;
-mod calibrate;
-mod canvas;
-mod compare;
-mod config;
-mod console;
-mod demo;
-mod demo_venue;
-mod distribution;
-mod drift;
-mod estimate;
-mod evaluate;
-mod figure;
+mod analysis;
+mod backend;
+mod beyond_evo;
+mod command_line;
+mod evo;
 mod figures;
-mod hints;
-mod html;
-mod input;
-mod logging;
-mod metric_args;
-mod migrate;
-mod output;
-mod panels;
-mod pdf;
-mod plot;
-mod relative;
-mod res;
-mod rpe;
-mod runs;
-mod scene;
-mod sequences;
-mod serve;
-mod shell;
-mod simulate;
-mod source;
-mod token;
-mod traj;
-mod worker;
+mod getting_started;
+mod io;
+mod results;
+mod tools;
 
 use std::process::ExitCode;
 
 use clap::{FromArgMatches, Parser, Subcommand};
+
+use analysis::{calibrate, estimate, evaluate, scene};
+use backend::{migrate, serve, token, worker};
+use beyond_evo::{bench, drift, relative};
+use command_line::{config, hints};
+use evo::{ape, res, rpe, traj};
+use getting_started::{demo, simulate};
+use tools::{completions, man};
 
 /// SiTAR: situated trajectory analysis for AR — pose error without ground truth.
 ///
@@ -75,8 +68,8 @@ enum Command {
     Drift(drift::Args),
     Relative(relative::Args),
     Bench(bench::Args),
-    Completions(shell::CompletionsArgs),
-    Man(shell::ManArgs),
+    Completions(completions::CompletionsArgs),
+    Man(man::ManArgs),
     Estimate(estimate::Args),
     Evaluate(evaluate::Args),
     Calibrate(calibrate::Args),
@@ -154,7 +147,7 @@ fn cli() -> clap::Command {
 /// Runs `sitar` on a command line (`argv[0]` first), as the binary does: parses, runs the
 /// command, prints errors; returns the exit code (clap's `--help`/usage errors exit here).
 pub fn main_with(args: Vec<std::ffi::OsString>) -> ExitCode {
-    canvas::register_font();
+    figures::canvas::register_font();
     let argv = match config::expand(args, &cli()) {
         Ok(argv) => argv,
         Err(error) => {
@@ -176,8 +169,8 @@ pub fn main_with(args: Vec<std::ffi::OsString>) -> ExitCode {
         Command::Drift(args) => drift::run(args),
         Command::Relative(args) => relative::run(args),
         Command::Bench(args) => bench::run(args),
-        Command::Completions(args) => shell::completions(args, &mut cli()),
-        Command::Man(args) => shell::man(args, cli()),
+        Command::Completions(args) => completions::completions(args, &mut cli()),
+        Command::Man(args) => man::man(args, cli()),
         Command::Estimate(args) => estimate::run(args),
         Command::Evaluate(args) => evaluate::run(args),
         Command::Calibrate(args) => calibrate::run(args),
@@ -192,7 +185,7 @@ pub fn main_with(args: Vec<std::ffi::OsString>) -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         // `sitar … | head`: the reader has gone, which is no error of ours.
-        Err(error) if output::is_broken_pipe(&error) => ExitCode::SUCCESS,
+        Err(error) if io::output::is_broken_pipe(&error) => ExitCode::SUCCESS,
         Err(error) => {
             eprintln!("sitar: error: {}", one_line(&error));
             ExitCode::FAILURE

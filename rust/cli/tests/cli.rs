@@ -455,7 +455,7 @@ fn attribute<'a>(element: &'a str, name: &str) -> &'a str {
     &tag[start..start + tag[start..].find('"').unwrap()]
 }
 
-/// The error line's colour and the grey trajectory's, as `plot.rs` draws them.
+/// The error line's colour and the grey trajectory's, as `src/figures/plot/style.rs` sets them.
 const ERROR_LINE: &str = "#1F77B4";
 const TRAJECTORY_LINE: &str = "#A0A0A0";
 /// Viridis' ends: the smallest and the largest error.

@@ -1,0 +1,12 @@
+//! Figures, shared by the commands that draw: the model (`figure`), its drawing (`plot`,
+//! `panels`, `distribution`), the file formats (`canvas` for PNG/SVG/PDF with `pdf`, `html` for
+//! --html pages), and evo's metric figures (`error_figures`).
+
+pub mod canvas;
+pub mod distribution;
+pub mod error_figures;
+pub mod figure;
+pub mod html;
+pub mod panels;
+pub mod pdf;
+pub mod plot;

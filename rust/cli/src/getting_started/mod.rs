@@ -1,0 +1,5 @@
+//! Getting started: `sitar demo` (with the venue it builds) and `sitar simulate`.
+
+pub mod demo;
+pub mod demo_venue;
+pub mod simulate;
