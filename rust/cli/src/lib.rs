@@ -17,12 +17,14 @@
 //!
 //! Shared by several groups:
 //! - `figures/`: the figure model, its drawing and its files (PNG, SVG, PDF, HTML pages);
-//! - `results/`: a metric's output options, its output, repeated runs, evo's result archive;
+//! - `results/`: a metric's output options, its output, repeated runs, evo's result archive
+//!   and evo's metric figures drawn from it;
 //! - `io/`: trajectories and input files in, output formats out, evo's console;
 //! - `command_line/`: the command line before clap parses it, and its usage hints.
 //!
-//! `tests/layout.rs` keeps it so: each command in its group's folder, no file over 600 lines,
-//! no import cycle among the files.
+//! The workspace's `tests/tests/cli_layout.rs` keeps it so (each command in its group's
+//! folder, no file over 600 lines, the figures below what draws them), and
+//! `tests/tests/layout.rs` finds no import cycle among its files or its folders.
 #![forbid(unsafe_code)]
 
 mod analysis;

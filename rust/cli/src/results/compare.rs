@@ -15,7 +15,7 @@ use crate::results::metric_args::OutputArgs;
 pub fn finish(outcome: &Outcome, output: &OutputArgs, console: &Console) -> Result<()> {
     // SiTAR's single-file `--plot FILE` is written first: an unwritable file fails the
     // command before anything is printed. evo's plots follow the table, as in evo.
-    crate::figures::error_figures::single_file(outcome, output, console)?;
+    crate::results::error_figures::single_file(outcome, output, console)?;
     match output.format {
         Some(format) => {
             let text = match format {
@@ -29,9 +29,9 @@ pub fn finish(outcome: &Outcome, output: &OutputArgs, console: &Console) -> Resu
             console.info(&outcome.pretty())?;
         }
     }
-    crate::figures::error_figures::collection(outcome, output, console)?;
+    crate::results::error_figures::collection(outcome, output, console)?;
     if let Some(path) = &output.html {
-        let figure = crate::figures::error_figures::error_figure(outcome, output)?;
+        let figure = crate::results::error_figures::error_figure(outcome, output)?;
         let pages = [
             ("raw", crate::figures::canvas::Page::Raw(&figure)),
             (
