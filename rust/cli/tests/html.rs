@@ -2,26 +2,12 @@
 //! figure inline and the very JSON document `--format json` prints, and asks for nothing
 //! when opened.
 
+mod support;
+
 use std::path::Path;
-use std::process::Command;
 
 use serde_json::Value;
-
-fn sitar(dir: &Path, args: &[&str]) -> String {
-    let out = Command::new(env!("CARGO_BIN_EXE_sitar"))
-        .args(args)
-        .current_dir(dir)
-        .env_remove("DISPLAY")
-        .env_remove("WAYLAND_DISPLAY")
-        .output()
-        .expect("run sitar");
-    assert!(
-        out.status.success(),
-        "sitar {args:?} failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8(out.stdout).unwrap()
-}
+use support::run::{fails_in, ok_in};
 
 /// A 20 m walk on a helix (TUM, seconds) and two estimates that drift from it differently.
 fn files(dir: &Path) {
@@ -86,11 +72,11 @@ fn self_contained(html: &str) -> usize {
 fn ape_of_one_run_gives_its_table_both_figures_and_its_json() {
     let dir = tempfile::tempdir().unwrap();
     files(dir.path());
-    let json = sitar(
+    let json = ok_in(
         dir.path(),
         &["ape", "tum", "gt.txt", "run1.txt", "-a", "--format", "json"],
     );
-    sitar(
+    ok_in(
         dir.path(),
         &[
             "ape", "tum", "gt.txt", "run1.txt", "-a", "--html", "ape.html",
@@ -124,8 +110,8 @@ fn repeated_runs_give_the_runs_table_and_the_box_plot() {
         "--delta_unit",
         "m",
     ];
-    let json = sitar(dir.path(), &[&args[..], &["--format", "json"]].concat());
-    sitar(dir.path(), &[&args[..], &["--html", "rpe.html"]].concat());
+    let json = ok_in(dir.path(), &[&args[..], &["--format", "json"]].concat());
+    ok_in(dir.path(), &[&args[..], &["--html", "rpe.html"]].concat());
     let html = std::fs::read_to_string(dir.path().join("rpe.html")).unwrap();
     assert_eq!(self_contained(&html), 1, "the box plot over runs");
     assert_eq!(
@@ -150,8 +136,8 @@ fn drift_pages_hold_the_per_length_table_and_every_plot() {
         "--step",
         "5",
     ];
-    let json = sitar(dir.path(), &[&one[..], &["--format", "json"]].concat());
-    sitar(dir.path(), &[&one[..], &["--html", "drift.html"]].concat());
+    let json = ok_in(dir.path(), &[&one[..], &["--format", "json"]].concat());
+    ok_in(dir.path(), &[&one[..], &["--html", "drift.html"]].concat());
     let html = std::fs::read_to_string(dir.path().join("drift.html")).unwrap();
     assert_eq!(
         self_contained(&html),
@@ -173,7 +159,7 @@ fn drift_pages_hold_the_per_length_table_and_every_plot() {
         "--lengths",
         "2,4",
     ];
-    sitar(dir.path(), &[&runs[..], &["--html", "runs.html"]].concat());
+    ok_in(dir.path(), &[&runs[..], &["--html", "runs.html"]].concat());
     let html = std::fs::read_to_string(dir.path().join("runs.html")).unwrap();
     assert_eq!(self_contained(&html), 4, "two curves and two box plots");
 }
@@ -182,20 +168,17 @@ fn drift_pages_hold_the_per_length_table_and_every_plot() {
 fn an_unwritable_page_is_an_error_that_names_it() {
     let dir = tempfile::tempdir().unwrap();
     files(dir.path());
-    let out = Command::new(env!("CARGO_BIN_EXE_sitar"))
-        .args([
+    let stderr = fails_in(
+        dir.path(),
+        &[
             "ape",
             "tum",
             "gt.txt",
             "run0.txt",
             "--html",
             "missing/ape.html",
-        ])
-        .current_dir(dir.path())
-        .output()
-        .unwrap();
-    assert!(!out.status.success());
-    let stderr = String::from_utf8_lossy(&out.stderr);
+        ],
+    );
     assert!(stderr.contains("missing/ape.html"), "{stderr}");
 }
 
@@ -212,8 +195,8 @@ fn relative_and_bench_pages_hold_their_tables_and_box_plots() {
         "--lengths",
         "2,4",
     ];
-    let json = sitar(dir.path(), &[&rel[..], &["--format", "json"]].concat());
-    sitar(
+    let json = ok_in(dir.path(), &[&rel[..], &["--format", "json"]].concat());
+    ok_in(
         dir.path(),
         &[&rel[..], &["--html", "relative.html"]].concat(),
     );
@@ -241,11 +224,11 @@ fn relative_and_bench_pages_hold_their_tables_and_box_plots() {
     }
     std::fs::create_dir_all(tree.join("gt")).unwrap();
     std::fs::copy(dir.path().join("gt.txt"), tree.join("gt/helix.txt")).unwrap();
-    let json = sitar(
+    let json = ok_in(
         dir.path(),
         &["bench", "tree", "--lengths", "2,4", "--format", "json"],
     );
-    sitar(
+    ok_in(
         dir.path(),
         &["bench", "tree", "--lengths", "2,4", "--html", "bench.html"],
     );

@@ -4,34 +4,15 @@
 //! `../shared/data/real-runs`), the text, CSV and JSON outputs, the per-run archives that
 //! `sitar res` reads, the plots; and that one estimate keeps evo's output.
 
+mod support;
+
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
 use serde_json::Value;
+use support::run::{ok_in, sitar_in};
 
 /// Relative tolerance against numpy and evo.
 const TOLERANCE: f64 = 1e-9;
-
-fn sitar_in(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_sitar"))
-        .args(args)
-        .current_dir(dir)
-        .env_remove("DISPLAY")
-        .env_remove("WAYLAND_DISPLAY")
-        .output()
-        .expect("run sitar")
-}
-
-/// Runs sitar in `dir`, asserts success, returns stdout.
-fn ok_in(dir: &Path, args: &[&str]) -> String {
-    let out = sitar_in(dir, args);
-    assert!(
-        out.status.success(),
-        "sitar {args:?} failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8(out.stdout).unwrap()
-}
 
 /// The real runs' sequence folder, or `None` (the test says SKIPPED) when it is missing.
 fn real_sequence(test: &str) -> Option<PathBuf> {
@@ -78,8 +59,7 @@ fn strings(v: &Value) -> Vec<String> {
 }
 
 fn json_of(dir: &Path, args: &[String]) -> Value {
-    let args: Vec<&str> = args.iter().map(String::as_str).collect();
-    serde_json::from_str(&ok_in(dir, &args)).unwrap()
+    serde_json::from_str(&ok_in(dir, args)).unwrap()
 }
 
 #[test]
@@ -308,10 +288,7 @@ fn runs_save_one_archive_each_that_res_reads_and_a_box_plot() {
         ]
         .map(String::from),
     );
-    let stdout = ok_in(
-        out.path(),
-        &args.iter().map(String::as_str).collect::<Vec<_>>(),
-    );
+    let stdout = ok_in(out.path(), &args);
     assert!(
         stdout.contains("Plot saved to ape_box_plot.svg"),
         "{stdout}"
@@ -460,10 +437,7 @@ fn drift_over_runs_prints_and_plots_each_run() {
         "--save_plot".to_owned(),
         "d.svg".to_owned(),
     ];
-    let text = ok_in(
-        out.path(),
-        &args.iter().map(String::as_str).collect::<Vec<_>>(),
-    );
+    let text = ok_in(out.path(), &args);
     assert!(text.contains("2 runs against"), "{text}");
     assert!(text.contains("\nacross trials"), "{text}");
     assert!(text.contains("\nt_err_percent "), "{text}");
