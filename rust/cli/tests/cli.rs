@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use sitar_estimator::{EstimateOptions, RpeOptions, Setting, estimate, read_tum, rpe};
-use support::run::{fails, ok, sitar};
+use support::run::{ok, sitar};
 
 /// `sitar ARGS` fails with exit code 1, nothing on stdout and one line `sitar: error: …` on
 /// stderr: that line.
@@ -946,7 +946,7 @@ fn cluster_flags_say_how_to_get_a_cluster_build() {
         &["token", "list", "--database", database],
     ];
     for args in runs {
-        let stderr = fails(args);
+        let stderr = support::run::fails(args);
         assert!(
             stderr.contains("cargo build --release -p sitar-cli --features cluster"),
             "{args:?}: {stderr}"
