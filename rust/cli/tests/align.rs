@@ -3,37 +3,17 @@
 //! (along_track, cross_track, vertical, yaw_deg, roll_pitch_deg), on a real EuRoC run
 //! (`../shared/data/real-runs/euroc-vio/MH_04`; SKIPPED when missing).
 
+mod support;
+
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
 use serde_json::Value;
-
-fn sitar(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_sitar"))
-        .args(args)
-        .env_remove("DISPLAY")
-        .env_remove("WAYLAND_DISPLAY")
-        .output()
-        .expect("run sitar")
-}
-
-fn ok(args: &[&str]) -> (String, String) {
-    let out = sitar(args);
-    assert!(
-        out.status.success(),
-        "sitar {args:?} failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    (
-        String::from_utf8(out.stdout).unwrap(),
-        String::from_utf8(out.stderr).unwrap(),
-    )
-}
+use support::run::{fails, ok, ok_both};
 
 fn json(args: &[&str]) -> Value {
     let mut all = args.to_vec();
     all.extend(["--format", "json"]);
-    serde_json::from_str(&ok(&all).0).unwrap()
+    serde_json::from_str(&ok(&all)).unwrap()
 }
 
 fn rmse(doc: &Value) -> f64 {
@@ -131,19 +111,13 @@ fn yaw_only_alignment() {
         "1,2,4",
     ]);
     // With -s: refused, by name.
-    let out = sitar(&["ape", "tum", &gt, &est, "-a", "-s", "--yaw_only"]);
-    assert!(!out.status.success());
-    let stderr = String::from_utf8_lossy(&out.stderr);
+    let stderr = fails(&["ape", "tum", &gt, &est, "-a", "-s", "--yaw_only"]);
     assert!(
         stderr.contains("--yaw_only") && stderr.contains("--correct_scale"),
         "{stderr}"
     );
     // Without -a: refused by the parser.
-    assert!(
-        !sitar(&["ape", "tum", &gt, &est, "--yaw_only"])
-            .status
-            .success()
-    );
+    fails(&["ape", "tum", &gt, &est, "--yaw_only"]);
 }
 
 /// `source` (TUM) with `shift` seconds added to every stamp, every `every`-th pose, in a file
@@ -207,7 +181,7 @@ fn estimate_t_offset_recovers_a_known_shift() {
         "{found} vs {own}"
     );
     // The line on stderr.
-    let (_, stderr) = ok(&["ape", "tum", &gt, &late, "-a", "--estimate_t_offset"]);
+    let (_, stderr) = ok_both(&["ape", "tum", &gt, &late, "-a", "--estimate_t_offset"]);
     let line = stderr
         .lines()
         .find_map(|l| l.strip_prefix("estimated t_offset: "))
@@ -241,7 +215,7 @@ fn pairing_is_reported() {
     assert_eq!(paired + dropped, n);
     assert_eq!(paired, doc["associated_poses"].as_u64().unwrap());
     // Cutting the reference short drops estimate poses, and says why.
-    let (_, stderr) = ok(&[
+    let (_, stderr) = ok_both(&[
         "ape",
         "tum",
         &gt,
@@ -257,7 +231,7 @@ fn pairing_is_reported() {
         .unwrap_or_else(|| panic!("no pairing line in {stderr}"));
     assert!(line.contains(&format!(" of {n} estimate poses")), "{line}");
     // Without the flag, nothing is added to evo's output.
-    let (stdout, stderr) = ok(&["ape", "tum", &gt, &est, "-a"]);
+    let (stdout, stderr) = ok_both(&["ape", "tum", &gt, &est, "-a"]);
     assert!(!stdout.contains("paired ") && !stderr.contains("paired "));
 }
 
@@ -327,15 +301,11 @@ fn direction_relations_add_up_to_the_translation_error() {
         }
     }
     // The table keeps evo's layout, with the relation in the title.
-    let (stdout, _) = ok(&["ape", "tum", &gt, &est, "-a", "-r", "cross_track"]);
+    let stdout = ok(&["ape", "tum", &gt, &est, "-a", "-r", "cross_track"]);
     assert!(
         stdout.starts_with("APE w.r.t. cross-track translation (m)\n"),
         "{stdout}"
     );
     // rpe does not take them.
-    assert!(
-        !sitar(&["rpe", "tum", &gt, &est, "-r", "yaw_deg"])
-            .status
-            .success()
-    );
+    fails(&["rpe", "tum", &gt, &est, "-r", "yaw_deg"]);
 }

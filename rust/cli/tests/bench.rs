@@ -3,30 +3,15 @@
 //! against the estimator's numpy golden (`scripts/golden/make_relative_golden.py`), the two
 //! layouts against each other, the four formats, and clear errors.
 
+mod support;
+
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
 use serde_json::Value;
+use support::run::{fails, ok};
 
 /// Relative tolerance against numpy.
 const TOLERANCE: f64 = 1e-9;
-
-fn sitar(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_sitar"))
-        .args(args)
-        .output()
-        .expect("run sitar")
-}
-
-fn ok(args: &[&str]) -> String {
-    let out = sitar(args);
-    assert!(
-        out.status.success(),
-        "sitar {args:?} failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8(out.stdout).unwrap()
-}
 
 fn real() -> Option<PathBuf> {
     let dir =
@@ -242,12 +227,7 @@ fn plain_tree_equals_rpg_layout_and_formats_agree() {
 fn bad_trees_are_clear_errors() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path();
-    let err = |args: &[&str]| {
-        let out = sitar(args);
-        assert!(!out.status.success());
-        String::from_utf8(out.stderr).unwrap()
-    };
-    let e = err(&["bench", dir.to_str().unwrap()]);
+    let e = fails(&["bench", dir.to_str().unwrap()]);
     assert!(e.contains("no results found"), "{e}");
     let folder = dir.join("p/alg/p_alg_seq");
     std::fs::create_dir_all(&folder).unwrap();
@@ -256,7 +236,7 @@ fn bad_trees_are_clear_errors() {
         "0 0 0 0 0 0 0 1\n1 1 0 0 0 0 0 1\n",
     )
     .unwrap();
-    let e = err(&["bench", dir.to_str().unwrap()]);
+    let e = fails(&["bench", dir.to_str().unwrap()]);
     assert!(e.contains("no stamped_traj_estimate"), "{e}");
     std::fs::write(
         folder.join("stamped_traj_estimate0.txt"),
@@ -268,11 +248,11 @@ fn bad_trees_are_clear_errors() {
         "align_type: posyaw\nalign_num_frames: all\n",
     )
     .unwrap();
-    let e = err(&["bench", dir.to_str().unwrap()]);
+    let e = fails(&["bench", dir.to_str().unwrap()]);
     assert!(e.contains("eval_cfg.yaml:2: align_num_frames"), "{e}");
     let plain = tempfile::tempdir().unwrap();
     std::fs::create_dir_all(plain.path().join("gt")).unwrap();
     std::fs::create_dir_all(plain.path().join("alg/seq")).unwrap();
-    let e = err(&["bench", plain.path().to_str().unwrap()]);
+    let e = fails(&["bench", plain.path().to_str().unwrap()]);
     assert!(e.contains("no ground truth for sequence seq"), "{e}");
 }

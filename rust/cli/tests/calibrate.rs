@@ -1,8 +1,11 @@
 //! `sitar calibrate` on the real repeated SLAM runs (`../shared/data/real-runs/euroc-vio`),
 //! and the calibration applied by `sitar estimate` and scored by `sitar evaluate`.
 
+mod support;
+
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+
+use support::run::{fails, ok};
 
 fn real_runs() -> Option<PathBuf> {
     let dir =
@@ -13,23 +16,6 @@ fn real_runs() -> Option<PathBuf> {
         println!("SKIPPED calibrate tests: {} is missing", dir.display());
         None
     }
-}
-
-fn sitar(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_sitar"))
-        .args(args)
-        .output()
-        .expect("run sitar")
-}
-
-fn ok(args: &[&str]) -> String {
-    let out = sitar(args);
-    assert!(
-        out.status.success(),
-        "sitar {args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8(out.stdout).unwrap()
 }
 
 fn temp_dir(name: &str) -> PathBuf {
@@ -144,9 +130,7 @@ fn calibrate_real_runs_then_estimate_and_evaluate_with_it() {
     }
 
     // A calibration for another setting or window is refused, naming both.
-    let refused = sitar(&[args.as_slice(), &["--setting", "median", "-d", "20"]].concat());
-    assert!(!refused.status.success());
-    let message = String::from_utf8_lossy(&refused.stderr);
+    let message = fails(&[args.as_slice(), &["--setting", "median", "-d", "20"]].concat());
     assert!(
         message.contains("fitted for setting trim_mean_30, 10 window frames")
             && message.contains("the estimate is setting median, 20 window frames"),
@@ -209,13 +193,12 @@ fn evaluate_takes_runs_with_a_split() {
     // The starting point on this sequence: informative, not exact.
     let rank = three["agreement"][0]["spearman"][0].as_f64().unwrap();
     assert!(rank > 0.3, "{rank}");
-    let out = sitar(&[
+    let stderr = fails(&[
         "evaluate",
         seq.to_str().unwrap(),
         "--split",
         "9",
         "--no_plot",
     ]);
-    assert!(!out.status.success());
-    assert!(String::from_utf8_lossy(&out.stderr).contains("--split 9"));
+    assert!(stderr.contains("--split 9"));
 }

@@ -1,30 +1,16 @@
 //! Runs the built `sitar` binary on files made by `sitar simulate` and on evo goldens.
 
+mod support;
+
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Command;
 
 use sitar_estimator::{EstimateOptions, RpeOptions, Setting, estimate, read_tum, rpe};
+use support::run::{ok, sitar};
 
-fn sitar(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_sitar"))
-        .args(args)
-        .output()
-        .expect("run sitar")
-}
-
-/// Runs sitar, asserts success, returns stdout.
-fn ok(args: &[&str]) -> String {
-    let out = sitar(args);
-    assert!(
-        out.status.success(),
-        "sitar {args:?} failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8(out.stdout).unwrap()
-}
-
-/// Runs sitar, asserts failure with exit code 1 and a one-line message; returns it.
-fn fails(args: &[&str]) -> String {
+/// `sitar ARGS` fails with exit code 1, nothing on stdout and one line `sitar: error: …` on
+/// stderr: that line.
+fn one_line_error(args: &[&str]) -> String {
     let out = sitar(args);
     assert_eq!(out.status.code(), Some(1), "sitar {args:?} should fail");
     assert!(out.stdout.is_empty());
@@ -269,21 +255,21 @@ fn bad_input_gives_one_clear_line() {
     let gt = dir.path().join("ground_truth.txt");
     let bad = dir.path().join("bad.txt");
     std::fs::write(&bad, "# comment\n1 0 0 0 0 0 0 1\n2 0 0 zero 0 0 0 1\n").unwrap();
-    let err = fails(&["rpe", p(&gt), p(&bad)]);
+    let err = one_line_error(&["rpe", p(&gt), p(&bad)]);
     assert!(err.contains(&format!("{}:3:", bad.display())), "{err}");
-    let err = fails(&["estimate", p(&gt), p(&bad)]);
+    let err = one_line_error(&["estimate", p(&gt), p(&bad)]);
     assert!(err.contains("bad.txt:3:"), "{err}");
     let missing = dir.path().join("missing.txt");
-    let err = fails(&["ape", p(&gt), p(&missing)]);
+    let err = one_line_error(&["ape", p(&gt), p(&missing)]);
     assert!(err.contains("missing.txt"), "{err}");
-    let err = fails(&["estimate", p(&gt)]);
+    let err = one_line_error(&["estimate", p(&gt)]);
     assert!(err.contains("at least 2 trials"), "{err}");
     // Stamps that never match.
     let far = dir.path().join("far.txt");
     std::fs::write(&far, "5 0 0 0 0 0 0 1\n6 1 0 0 0 0 0 1\n").unwrap();
-    let err = fails(&["rpe", p(&gt), p(&far)]);
+    let err = one_line_error(&["rpe", p(&gt), p(&far)]);
     assert!(err.contains("no matching timestamps"), "{err}");
-    let err = fails(&[
+    let err = one_line_error(&[
         "simulate",
         "--out",
         p(&dir.path().join("x")),
@@ -372,7 +358,10 @@ fn evaluate_reports_every_setting_and_draws_the_plot() {
 
     let mut args = vec!["evaluate", "--trial-counts", "7", "--no-plot"];
     args.extend(common);
-    assert!(fails(&args).contains("--trial_counts: 7 is not between 2 and the 6 trials of set B"));
+    assert!(
+        one_line_error(&args)
+            .contains("--trial_counts: 7 is not between 2 and the 6 trials of set B")
+    );
 }
 
 #[test]
@@ -657,7 +646,7 @@ fn plot_errors_are_clear() {
     ] {
         let mut args = args.clone();
         args.extend(["--plot", p(&unwritable)]);
-        let err = fails(&args);
+        let err = one_line_error(&args);
         assert!(
             err.contains(&format!("{}: cannot write the plot", unwritable.display())),
             "{err}"
@@ -957,9 +946,7 @@ fn cluster_flags_say_how_to_get_a_cluster_build() {
         &["token", "list", "--database", database],
     ];
     for args in runs {
-        let out = sitar(args);
-        let stderr = String::from_utf8_lossy(&out.stderr);
-        assert!(!out.status.success(), "{args:?}: {stderr}");
+        let stderr = support::run::fails(args);
         assert!(
             stderr.contains("cargo build --release -p sitar-cli --features cluster"),
             "{args:?}: {stderr}"

@@ -11,7 +11,7 @@ use std::path::Path;
 use std::process::Command;
 use std::time::{Duration, Instant};
 
-use support::process::Serving;
+use support::process::{Serving, admin_token};
 use support::sessions::sim_session;
 
 /// The sweep period the tests give: a crash's leftovers go within three of them.
@@ -19,13 +19,6 @@ const SWEEP_S: &str = "1";
 
 /// What the deleting instance logs once the rows are gone (then it pauses).
 const ROWS_GONE: &str = "deleted; its bytes go next";
-
-fn admin_token(data: &Path) -> String {
-    std::fs::read_to_string(data.join("admin.token"))
-        .unwrap()
-        .trim()
-        .to_string()
-}
 
 /// `METHOD url/path` with the bearer `token` through curl: the HTTP status (`000` when the
 /// connection broke).
@@ -130,7 +123,7 @@ fn an_embedded_delete_cut_off_by_a_crash_is_finished_after_the_restart() {
 #[cfg(feature = "cluster")]
 mod cluster {
     use super::*;
-    use support::cluster::{fresh_database, services};
+    use support::cluster::Cluster;
 
     /// The keys of the objects under `prefix` of `store` (`s3://BUCKET/PREFIX`), listed with
     /// curl's SigV4 signing from the `AWS_*` variables the services set.
@@ -180,38 +173,24 @@ mod cluster {
 
     #[test]
     fn a_live_instance_finishes_the_delete_of_one_killed_mid_delete() {
-        let Some((database, store)) = services("cluster_deletes") else {
+        let Some(cluster) = Cluster::fresh("cluster_deletes") else {
             return;
         };
-        let Some(database) = fresh_database("cluster_deletes", &database) else {
-            return;
-        };
-        let store = format!("{store}/cluster-deletes-{}", std::process::id());
+        let (database, store) = (&cluster.database, &cluster.store);
         let dir = tempfile::tempdir().unwrap();
-        let cluster = ["--database", database.as_str(), "--store", store.as_str()];
-        let with = |extra: &[&'static str]| {
-            let mut args: Vec<&str> = cluster.to_vec();
-            args.extend_from_slice(extra);
-            args
-        };
+        let sweep = ["--delete-sweep-s", SWEEP_S];
         let a_data = dir.path().join("instance-a");
-        let mut a = Serving::sim(
+        let mut a = cluster.serve(
             &a_data,
-            &with(&["--delete-sweep-s", SWEEP_S, "--delete-pause-s", "600"]),
+            &[&sweep[..], &["--delete-pause-s", "600"]].concat(),
         );
         let admin = admin_token(&a_data);
-        let b = Serving::sim(
-            &dir.path().join("instance-b"),
-            &with(&["--delete-sweep-s", SWEEP_S]),
-        );
+        let b = cluster.serve(&dir.path().join("instance-b"), &sweep);
         // A third instance sweeps too: the two take the delete over once between them.
-        let mut c = Serving::sim(
-            &dir.path().join("instance-c"),
-            &with(&["--delete-sweep-s", SWEEP_S]),
-        );
+        let mut c = cluster.serve(&dir.path().join("instance-c"), &sweep);
         let id = played_session(&a, &admin, dir.path());
         let folder = format!("sessions/{id}/");
-        let before = objects(&store, &folder);
+        let before = objects(store, &folder);
         assert!(
             before.iter().any(|k| k.ends_with("/recording"))
                 && before.iter().any(|k| k.ends_with("/results.csv"))
@@ -220,27 +199,27 @@ mod cluster {
         );
 
         // Another app token can neither read nor delete it: 404, and nothing goes.
-        let other = support::process::create_token(&["--database", &database], "app", "other");
+        let other = support::process::create_token(&["--database", database], "app", "other");
         let path = format!("/v1/sessions/{id}");
         assert_eq!(request("DELETE", &b.url, &path, &other), "404");
         assert_eq!(request("GET", &b.url, &path, &other), "404");
-        assert_eq!(objects(&store, &folder), before);
+        assert_eq!(objects(store, &folder), before);
 
         kill_mid_delete(&mut a, &admin, &id);
         // Cut off: the session is gone for every instance, its objects are not.
         assert_eq!(request("GET", &b.url, &path, &admin), "404");
-        assert_eq!(objects(&store, &folder), before, "the kill was mid-delete");
-        assert_eq!(unfinished(&database), "1");
+        assert_eq!(objects(store, &folder), before, "the kill was mid-delete");
+        assert_eq!(unfinished(database), "1");
 
         // B's or C's sweep takes it over once A's claim (two periods) lapses.
         let took = within(Duration::from_secs(60), || {
-            objects(&store, &folder).is_empty()
+            objects(store, &folder).is_empty()
         })
-        .unwrap_or_else(|| panic!("left after a minute: {:?}", objects(&store, &folder)));
+        .unwrap_or_else(|| panic!("left after a minute: {:?}", objects(store, &folder)));
         println!(
             "cluster: a live instance removed the killed delete's objects {took:?} after the kill"
         );
-        assert!(within(Duration::from_secs(10), || unfinished(&database) == "0").is_some());
+        assert!(within(Duration::from_secs(10), || unfinished(database) == "0").is_some());
         let mut b = b;
         let finished = format!("session {id}: the bytes its interrupted delete left are removed");
         std::thread::sleep(Duration::from_secs(3));
@@ -252,8 +231,8 @@ mod cluster {
 
         // Deleted means gone: repeated on either instance (A started again), a 404.
         assert_eq!(request("DELETE", &b.url, &path, &admin), "404");
-        let a = Serving::sim(&a_data, &with(&["--delete-sweep-s", SWEEP_S]));
+        let a = cluster.serve(&a_data, &sweep);
         assert_eq!(request("DELETE", &a.url, &path, &admin), "404");
-        assert!(objects(&store, &folder).is_empty());
+        assert!(objects(store, &folder).is_empty());
     }
 }

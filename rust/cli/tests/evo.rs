@@ -4,10 +4,13 @@
 //! archives' info, stats and arrays (1e-9), the saved files, evo's warnings; and, when evo is
 //! installed, evo's own `evo_res` reading sitar's archives.
 
+mod support;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use serde_json::Value;
+use support::run::{fails_in, ok_both_in, ok_in, sitar_in};
 
 fn golden() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/golden/evo")
@@ -247,24 +250,6 @@ fn check_saved(name: &str, dir: &Path, saved: &serde_json::Map<String, Value>) {
     }
 }
 
-fn sitar(args: &[String], dir: &Path) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_sitar"))
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("run sitar")
-}
-
-/// Runs sitar in `dir`, asserting that it succeeds (or, `succeed` false, fails); its stdout
-/// and stderr.
-fn sitar_expect(dir: &Path, args: &[&str], succeed: bool) -> (String, String) {
-    let args: Vec<String> = args.iter().map(|a| a.to_string()).collect();
-    let out = sitar(&args, dir);
-    let stderr = String::from_utf8(out.stderr).unwrap();
-    assert_eq!(out.status.success(), succeed, "{args:?}: {stderr}");
-    (String::from_utf8(out.stdout).unwrap(), stderr)
-}
-
 #[test]
 fn sitar_prints_saves_and_warns_as_evo_does() {
     let cases = cases();
@@ -341,7 +326,7 @@ fn csv_json_and_the_older_form_associate_as_evo() {
         ),
     ];
     for (golden_case, args, format) in runs {
-        let (text, _) = sitar_expect(dir.path(), &args, true);
+        let text = ok_in(dir.path(), &args);
         let got: Vec<f64> = if format == "csv" {
             text.lines()
                 .skip(1)
@@ -370,7 +355,7 @@ fn csv_json_and_the_older_form_associate_as_evo() {
 #[test]
 fn hints_name_the_right_spelling_and_format() {
     let dir = workdir(&golden_real().join("data"));
-    let run = |args: &[&str]| sitar_expect(dir.path(), args, false).1;
+    let run = |args: &[&str]| fails_in(dir.path(), args);
     let (gt, est) = ("fr2_desk_groundtruth.txt", "fr2_desk_ORB.txt");
     let usage = run(&["rpe", "tum", gt, est, "--all-pair"]);
     assert!(usage.contains("'--all_pairs'"), "{usage}");
@@ -403,7 +388,7 @@ fn hints_name_the_right_spelling_and_format() {
 #[test]
 fn figures_carry_evo_labels() {
     let dir = workdir(&golden_real().join("data"));
-    let run = |args: &[&str]| sitar_expect(dir.path(), args, true).1;
+    let run = |args: &[&str]| ok_both_in(dir.path(), args).1;
     let texts = |file: &str| -> Vec<String> {
         let svg = std::fs::read_to_string(dir.path().join(file)).unwrap();
         svg.split("<text")
@@ -518,8 +503,7 @@ fn ros2_bags_as_evo_reads_them() {
         if archived {
             args.extend(["--save_results".into(), format!("{name}.zip")]);
         }
-        let args: Vec<&str> = args.iter().map(String::as_str).collect();
-        let (stdout, stderr) = sitar_expect(dir.path(), &args, true);
+        let (stdout, stderr) = ok_both_in(dir.path(), &args);
         let (want, warnings) = evo_lines(case["stdout"].as_str().unwrap());
         assert_text(name, &stdout, &want, 1e-6);
         for w in warnings {
@@ -548,19 +532,17 @@ fn ros2_bags_as_evo_reads_them() {
         }
     }
     // What evo does not read is named with its topic and type.
-    let (_, stderr) = sitar_expect(
+    let stderr = fails_in(
         dir.path(),
         &["ape", "bag2", "fr1_mcap", "/ground_truth", "/cmd_vel"],
-        false,
     );
     assert!(
         stderr.contains("/cmd_vel") && stderr.contains("geometry_msgs/msg/Twist"),
         "{stderr}"
     );
-    let (_, stderr) = sitar_expect(
+    let stderr = fails_in(
         dir.path(),
         &["rpe", "bag2", "fr1_db3", "/ground_truth", "/none"],
-        false,
     );
     assert!(stderr.contains("no messages for topic '/none'"), "{stderr}");
 }
@@ -615,8 +597,7 @@ fn ros1_compressed_and_tf_bags_as_evo_reads_them() {
         if archived {
             args.extend(["--save_results".into(), format!("{name}.zip")]);
         }
-        let args: Vec<&str> = args.iter().map(String::as_str).collect();
-        let (stdout, stderr) = sitar_expect(dir.path(), &args, true);
+        let (stdout, stderr) = ok_both_in(dir.path(), &args);
         let (want, warnings) = evo_lines(case["stdout"].as_str().unwrap());
         if !tf_case {
             assert_text(name, &stdout, &want, 1e-6);
@@ -664,10 +645,9 @@ fn ros1_compressed_and_tf_bags_as_evo_reads_them() {
     // The tf lookup, pose by pose, against the reference (ROS 1 and ROS 2 bags alike).
     let reference = expected["tf_reference"].as_array().unwrap();
     for bag in [["bag", "fr1_ros1.bag"], ["bag2", "fr1_tf"]] {
-        sitar_expect(
+        ok_in(
             dir.path(),
             &["traj", bag[0], bag[1], "/tf:map.base", "--save_as_tum"],
-            true,
         );
         let text = std::fs::read_to_string(dir.path().join("tf_map.base.tum")).unwrap();
         let rows: Vec<Vec<f64>> = text
@@ -720,7 +700,7 @@ fn ros1_compressed_and_tf_bags_as_evo_reads_them() {
             "fr1_ros1.bag",
         ),
     ] {
-        let (_, stderr) = sitar_expect(dir.path(), &args, false);
+        let stderr = fails_in(dir.path(), &args);
         assert!(stderr.contains(message), "{args:?}: {stderr}");
     }
 }
@@ -735,7 +715,7 @@ fn saved_bags_read_back_in_sitar_and_evo() {
     let out = tempfile::tempdir().unwrap();
     let source = dir.path().join("fr1_mcap_zstd");
     let source = source.to_str().unwrap();
-    sitar_expect(
+    ok_in(
         out.path(),
         &[
             "traj",
@@ -748,7 +728,6 @@ fn saved_bags_read_back_in_sitar_and_evo() {
             "--save_as_bag2",
             "--save_as_tum",
         ],
-        true,
     );
     let mut bag1 = None;
     let mut bag2 = None;
@@ -793,7 +772,7 @@ fn saved_bags_read_back_in_sitar_and_evo() {
     for (kind, bag) in [("bag", &bag1), ("bag2", &bag2)] {
         let back = tempfile::tempdir().unwrap();
         let path = out.path().join(bag);
-        sitar_expect(
+        ok_in(
             back.path(),
             &[
                 "traj",
@@ -802,7 +781,6 @@ fn saved_bags_read_back_in_sitar_and_evo() {
                 "--all_topics",
                 "--save_as_tum",
             ],
-            true,
         );
         same(kind, &tum(&back.path().join("odom.tum")), &odom);
         same(kind, &tum(&back.path().join("ground_truth.tum")), &truth);
@@ -855,7 +833,7 @@ fn run_case(case: &Value, source: &Path) -> tempfile::TempDir {
         if case.get("archive").is_some() {
             args.extend(["--save_results".into(), "result.zip".into()]);
         }
-        let out = sitar(&args, dir.path());
+        let out = sitar_in(dir.path(), &args);
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert!(
             out.status.success(),
@@ -943,8 +921,7 @@ fn bag_formats_and_viewers_are_refused_clearly() {
             ".png, .svg or .pdf",
         ),
     ] {
-        let args: Vec<String> = args.iter().map(|s| (*s).to_owned()).collect();
-        let out = sitar(&args, dir.path());
+        let out = sitar_in(dir.path(), &args);
         assert_eq!(out.status.code(), Some(1), "{args:?}");
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert!(
@@ -958,15 +935,7 @@ fn bag_formats_and_viewers_are_refused_clearly() {
         "1 0 0 0 0 0 0 1\n2 0\x000 0 0 0 0 1\n",
     )
     .unwrap();
-    let out = sitar(
-        &[
-            "ape".into(),
-            "tum".into(),
-            "nul.txt".into(),
-            "est_a.txt".into(),
-        ],
-        dir.path(),
-    );
+    let out = sitar_in(dir.path(), &["ape", "tum", "nul.txt", "est_a.txt"]);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(
         stderr.contains("nul.txt:2:4: control character U+0000"),

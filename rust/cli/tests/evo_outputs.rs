@@ -3,32 +3,16 @@
 //! (`--silent`, `--no_warnings`, `--logfile`, `-c`), completions and man pages, a closed
 //! pipe, and `--time_unit` of `sitar estimate`.
 
+mod support;
+
 use std::io::Read;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
+use std::process::{Command, Stdio};
+
+use support::run::{ok_both_in, ok_in, sitar_in};
 
 fn data() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/golden/evo/data")
-}
-
-fn sitar_in(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_sitar"))
-        .args(args)
-        .current_dir(dir)
-        .env_remove("DISPLAY")
-        .env_remove("WAYLAND_DISPLAY")
-        .output()
-        .expect("run sitar")
-}
-
-fn ok_in(dir: &Path, args: &[&str]) -> Output {
-    let out = sitar_in(dir, args);
-    assert!(
-        out.status.success(),
-        "sitar {args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    out
 }
 
 /// A fresh directory with the golden input files.
@@ -102,7 +86,7 @@ fn pdf_check(path: &Path, pages: usize) -> String {
 fn save_plot_writes_png_svg_and_pdf_by_extension() {
     let dir = workdir();
     let d = dir.path();
-    let out = ok_in(
+    let stdout = ok_in(
         d,
         &[
             "ape",
@@ -114,7 +98,6 @@ fn save_plot_writes_png_svg_and_pdf_by_extension() {
             "ape.png",
         ],
     );
-    let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(
         stdout.contains("Plot saved to ape_raw.png")
             && stdout.contains("Plot saved to ape_map.png"),
@@ -163,7 +146,7 @@ fn save_plot_writes_png_svg_and_pdf_by_extension() {
             "json",
         ],
     );
-    let json: serde_json::Value = serde_json::from_slice(&json.stdout).unwrap();
+    let json: serde_json::Value = serde_json::from_str(&json).unwrap();
     let errors: Vec<f64> = json["errors"]
         .as_array()
         .unwrap()
@@ -272,8 +255,8 @@ fn traj_and_res_plots() {
             "--silent",
         ],
     );
-    let out = ok_in(d, &["res", "a.zip", "b.zip", "--save_plot", "res.png"]);
-    assert!(String::from_utf8_lossy(&out.stdout).contains("Plot saved to res_stats.png"));
+    let stdout = ok_in(d, &["res", "a.zip", "b.zip", "--save_plot", "res.png"]);
+    assert!(stdout.contains("Plot saved to res_stats.png"));
     for name in ["res_raw.png", "res_stats.png"] {
         assert!(png_summary(&d.join(name)).1 > 20, "{name}");
     }
@@ -282,18 +265,17 @@ fn traj_and_res_plots() {
 #[test]
 fn show_without_a_display_says_so() {
     let dir = workdir();
-    let out = ok_in(
+    let (stdout, stderr) = ok_both_in(
         dir.path(),
         &["ape", "tum", "gt.txt", "est_a.txt", "-a", "-p"],
     );
-    let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(
         stderr.contains("no display") && stderr.contains("--save_plot"),
         "{stderr}"
     );
-    assert!(String::from_utf8_lossy(&out.stdout).contains("APE w.r.t. translation part (m)"));
-    let out = ok_in(dir.path(), &["traj", "tum", "est_a.txt", "-p"]);
-    assert!(String::from_utf8_lossy(&out.stderr).contains("no display"));
+    assert!(stdout.contains("APE w.r.t. translation part (m)"));
+    let (_, stderr) = ok_both_in(dir.path(), &["traj", "tum", "est_a.txt", "-p"]);
+    assert!(stderr.contains("no display"));
 }
 
 #[test]
@@ -301,7 +283,7 @@ fn console_options_config_and_logfile() {
     let dir = workdir();
     let d = dir.path();
     // --silent prints nothing but still writes the archive.
-    let out = ok_in(
+    let stdout = ok_in(
         d,
         &[
             "ape",
@@ -314,11 +296,11 @@ fn console_options_config_and_logfile() {
             "s.zip",
         ],
     );
-    assert!(out.stdout.is_empty() && d.join("s.zip").exists());
+    assert!(stdout.is_empty() && d.join("s.zip").exists());
     // evo's warnings go to stderr; --no_warnings silences them.
-    let out = ok_in(d, &["ape", "tum", "gt_unsorted.txt", "est_b.txt", "-a"]);
-    assert!(String::from_utf8_lossy(&out.stderr).contains("[WARNING] Timestamps aren't sorted"));
-    let out = ok_in(
+    let (_, stderr) = ok_both_in(d, &["ape", "tum", "gt_unsorted.txt", "est_b.txt", "-a"]);
+    assert!(stderr.contains("[WARNING] Timestamps aren't sorted"));
+    let (_, stderr) = ok_both_in(
         d,
         &[
             "ape",
@@ -329,13 +311,8 @@ fn console_options_config_and_logfile() {
             "--no_warnings",
         ],
     );
-    assert!(
-        out.stderr.is_empty(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let out = ok_in(d, &["ape", "tum", "gt_repeated.txt", "est_b.txt", "-a"]);
-    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.is_empty(), "{stderr}");
+    let (_, stderr) = ok_both_in(d, &["ape", "tum", "gt_repeated.txt", "est_b.txt", "-a"]);
     assert!(
         stderr.contains("gt_repeated.txt: 1 repeated timestamp(s), the first on line 62"),
         "{stderr}"
@@ -345,7 +322,7 @@ fn console_options_config_and_logfile() {
         "{stderr}"
     );
     // -v adds evo's debug lines; --logfile gets them all.
-    let out = ok_in(
+    let stdout = ok_in(
         d,
         &[
             "rpe",
@@ -357,7 +334,6 @@ fn console_options_config_and_logfile() {
             "log.txt",
         ],
     );
-    let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(stdout.contains("Loaded 150 stamps and poses from: gt.txt"));
     assert!(stdout.contains("Found 136 of max. 136 possible matching timestamps between..."));
     let log = std::fs::read_to_string(d.join("log.txt")).unwrap();
@@ -371,7 +347,7 @@ fn console_options_config_and_logfile() {
         r#"{"align": true, "pose_relation": "angle_deg", "correct_scale": false, "plot_mode_default": "xy"}"#,
     )
     .unwrap();
-    let with_config = ok_in(
+    let (with_config, warned) = ok_both_in(
         d,
         &[
             "ape",
@@ -388,25 +364,20 @@ fn console_options_config_and_logfile() {
         d,
         &["ape", "tum", "gt.txt", "est_a.txt", "-a", "-r", "angle_deg"],
     );
-    assert_eq!(with_config.stdout, direct.stdout);
-    assert!(
-        String::from_utf8_lossy(&with_config.stderr)
-            .contains("'plot_mode_default' is not an option")
-    );
+    assert_eq!(with_config, direct);
+    assert!(warned.contains("'plot_mode_default' is not an option"));
 }
 
 #[test]
 fn completions_and_man_pages_come_from_the_flags() {
     let dir = tempfile::tempdir().unwrap();
     for shell in ["bash", "zsh", "fish"] {
-        let out = ok_in(dir.path(), &["completions", shell]);
-        let text = String::from_utf8_lossy(&out.stdout);
+        let text = ok_in(dir.path(), &["completions", shell]);
         for word in ["sitar", "traj", "save_results", "pose_relation"] {
             assert!(text.contains(word), "{shell}: {word}");
         }
     }
-    let out = ok_in(dir.path(), &["man"]);
-    let page = String::from_utf8_lossy(&out.stdout);
+    let page = ok_in(dir.path(), &["man"]);
     assert!(
         page.starts_with(".ie") || page.contains(".TH sitar"),
         "{}",
@@ -472,8 +443,7 @@ fn estimate_reads_small_integer_nanoseconds_with_time_unit() {
         let files: Vec<String> = (0..3).map(|k| format!("{prefix}_{k}.txt")).collect();
         args.extend(files.iter().map(String::as_str));
         args.extend(extra);
-        let out = ok_in(dir.path(), &args);
-        let text = String::from_utf8(out.stdout).unwrap();
+        let text = ok_in(dir.path(), &args);
         text.lines()
             .skip(1)
             .map(|l| l.split(',').nth(1).unwrap().to_owned())
@@ -487,5 +457,5 @@ fn estimate_reads_small_integer_nanoseconds_with_time_unit() {
         dir.path(),
         &["estimate", "small_0.txt", "small_1.txt", "small_2.txt"],
     );
-    assert!(String::from_utf8_lossy(&small_as_seconds.stdout).contains("33333333.000000000,"));
+    assert!(small_as_seconds.contains("33333333.000000000,"));
 }

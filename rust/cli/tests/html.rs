@@ -1,27 +1,15 @@
-//! `--html FILE` of `sitar ape`, `rpe` and `drift`: one page that holds the tables, every
-//! figure inline and the very JSON document `--format json` prints, and asks for nothing
-//! when opened.
+//! `--html FILE` of `sitar ape`, `rpe`, `drift`, `relative` and `bench`: one page that holds the
+//! tables, every figure inline and the very JSON document `--format json` prints, and asks for
+//! nothing when opened.
 
+mod support;
+
+use std::collections::HashMap;
+use std::ops::RangeInclusive;
 use std::path::Path;
-use std::process::Command;
 
 use serde_json::Value;
-
-fn sitar(dir: &Path, args: &[&str]) -> String {
-    let out = Command::new(env!("CARGO_BIN_EXE_sitar"))
-        .args(args)
-        .current_dir(dir)
-        .env_remove("DISPLAY")
-        .env_remove("WAYLAND_DISPLAY")
-        .output()
-        .expect("run sitar");
-    assert!(
-        out.status.success(),
-        "sitar {args:?} failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8(out.stdout).unwrap()
-}
+use support::run::{fails_in, ok_in};
 
 /// A 20 m walk on a helix (TUM, seconds) and two estimates that drift from it differently.
 fn files(dir: &Path) {
@@ -60,11 +48,11 @@ fn page_document(html: &str) -> Value {
     serde_json::from_str(&text).expect("the page's JSON parses")
 }
 
-/// Asserts the page is self-contained and returns its figures' count.
-fn self_contained(html: &str) -> usize {
-    assert!(html.starts_with("<!DOCTYPE html>"));
-    assert!(html.contains("Content-Security-Policy"));
-    assert!(html.contains("default-src 'none'"));
+/// Asserts page `name` is self-contained and returns its figures' count.
+fn self_contained(name: &str, html: &str) -> usize {
+    assert!(html.starts_with("<!DOCTYPE html>"), "{name}");
+    assert!(html.contains("Content-Security-Policy"), "{name}");
+    assert!(html.contains("default-src 'none'"), "{name}");
     for fetch in [
         "src=\"http",
         "src=\"/",
@@ -75,157 +63,16 @@ fn self_contained(html: &str) -> usize {
     ] {
         assert!(
             !html.contains(fetch),
-            "the page would fetch something: {fetch}"
+            "{name}: the page would fetch something: {fetch}"
         );
     }
     html.matches("<img src=\"data:image/svg+xml;base64,")
         .count()
 }
 
-#[test]
-fn ape_of_one_run_gives_its_table_both_figures_and_its_json() {
-    let dir = tempfile::tempdir().unwrap();
-    files(dir.path());
-    let json = sitar(
-        dir.path(),
-        &["ape", "tum", "gt.txt", "run1.txt", "-a", "--format", "json"],
-    );
-    sitar(
-        dir.path(),
-        &[
-            "ape", "tum", "gt.txt", "run1.txt", "-a", "--html", "ape.html",
-        ],
-    );
-    let html = std::fs::read_to_string(dir.path().join("ape.html")).unwrap();
-    assert_eq!(self_contained(&html), 2, "raw and map figures");
-    let expected: Value = serde_json::from_str(&json).unwrap();
-    assert_eq!(page_document(&html), expected);
-    let rmse = expected["statistics"]["rmse"].as_f64().unwrap();
-    assert!(
-        html.contains(&format!("<td class=\"num\">{rmse:.6}</td>")),
-        "the RMSE is in a table"
-    );
-    assert!(html.contains("<td>pairing.paired</td>"));
-}
-
-#[test]
-fn repeated_runs_give_the_runs_table_and_the_box_plot() {
-    let dir = tempfile::tempdir().unwrap();
-    files(dir.path());
-    let args = [
-        "rpe",
-        "tum",
-        "gt.txt",
-        "run0.txt",
-        "run1.txt",
-        "-a",
-        "--delta",
-        "1",
-        "--delta_unit",
-        "m",
-    ];
-    let json = sitar(dir.path(), &[&args[..], &["--format", "json"]].concat());
-    sitar(dir.path(), &[&args[..], &["--html", "rpe.html"]].concat());
-    let html = std::fs::read_to_string(dir.path().join("rpe.html")).unwrap();
-    assert_eq!(self_contained(&html), 1, "the box plot over runs");
-    assert_eq!(
-        page_document(&html),
-        serde_json::from_str::<Value>(&json).unwrap()
-    );
-    assert!(html.contains("<h2>trials</h2>"));
-    assert!(html.contains("<h2>across runs</h2>"));
-}
-
-#[test]
-fn drift_pages_hold_the_per_length_table_and_every_plot() {
-    let dir = tempfile::tempdir().unwrap();
-    files(dir.path());
-    let one = [
-        "drift",
-        "tum",
-        "gt.txt",
-        "run1.txt",
-        "--lengths",
-        "2,4",
-        "--step",
-        "5",
-    ];
-    let json = sitar(dir.path(), &[&one[..], &["--format", "json"]].concat());
-    sitar(dir.path(), &[&one[..], &["--html", "drift.html"]].concat());
-    let html = std::fs::read_to_string(dir.path().join("drift.html")).unwrap();
-    assert_eq!(
-        self_contained(&html),
-        2,
-        "error against length and against speed"
-    );
-    assert_eq!(
-        page_document(&html),
-        serde_json::from_str::<Value>(&json).unwrap()
-    );
-    assert!(html.contains("<h2>by length</h2>"));
-
-    let runs = [
-        "drift",
-        "tum",
-        "gt.txt",
-        "run0.txt",
-        "run1.txt",
-        "--lengths",
-        "2,4",
-    ];
-    sitar(dir.path(), &[&runs[..], &["--html", "runs.html"]].concat());
-    let html = std::fs::read_to_string(dir.path().join("runs.html")).unwrap();
-    assert_eq!(self_contained(&html), 4, "two curves and two box plots");
-}
-
-#[test]
-fn an_unwritable_page_is_an_error_that_names_it() {
-    let dir = tempfile::tempdir().unwrap();
-    files(dir.path());
-    let out = Command::new(env!("CARGO_BIN_EXE_sitar"))
-        .args([
-            "ape",
-            "tum",
-            "gt.txt",
-            "run0.txt",
-            "--html",
-            "missing/ape.html",
-        ])
-        .current_dir(dir.path())
-        .output()
-        .unwrap();
-    assert!(!out.status.success());
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(stderr.contains("missing/ape.html"), "{stderr}");
-}
-
-#[test]
-fn relative_and_bench_pages_hold_their_tables_and_box_plots() {
-    let dir = tempfile::tempdir().unwrap();
-    files(dir.path());
-    let rel = [
-        "relative",
-        "tum",
-        "gt.txt",
-        "run0.txt",
-        "run1.txt",
-        "--lengths",
-        "2,4",
-    ];
-    let json = sitar(dir.path(), &[&rel[..], &["--format", "json"]].concat());
-    sitar(
-        dir.path(),
-        &[&rel[..], &["--html", "relative.html"]].concat(),
-    );
-    let html = std::fs::read_to_string(dir.path().join("relative.html")).unwrap();
-    assert!(self_contained(&html) >= 2, "a box plot per error");
-    assert_eq!(
-        page_document(&html),
-        serde_json::from_str::<Value>(&json).unwrap()
-    );
-
-    // A plain tree: ALG/SEQ/runN.txt beside gt/SEQ.txt.
-    let tree = dir.path().join("tree");
+/// A plain tree in `dir/tree` for `sitar bench`: ALG/SEQ/runN.txt beside gt/SEQ.txt.
+fn bench_tree(dir: &Path) {
+    let tree = dir.join("tree");
     for (alg, runs) in [
         ("vio", ["run0.txt", "run1.txt"]),
         ("slam", ["run1.txt", "run0.txt"]),
@@ -233,41 +80,137 @@ fn relative_and_bench_pages_hold_their_tables_and_box_plots() {
         std::fs::create_dir_all(tree.join(alg).join("helix")).unwrap();
         for (k, run) in runs.iter().enumerate() {
             std::fs::copy(
-                dir.path().join(run),
+                dir.join(run),
                 tree.join(alg).join("helix").join(format!("run{k}.txt")),
             )
             .unwrap();
         }
     }
     std::fs::create_dir_all(tree.join("gt")).unwrap();
-    std::fs::copy(dir.path().join("gt.txt"), tree.join("gt/helix.txt")).unwrap();
-    let json = sitar(
-        dir.path(),
-        &["bench", "tree", "--lengths", "2,4", "--format", "json"],
-    );
-    sitar(
-        dir.path(),
-        &["bench", "tree", "--lengths", "2,4", "--html", "bench.html"],
-    );
-    let html = std::fs::read_to_string(dir.path().join("bench.html")).unwrap();
-    assert_eq!(
-        self_contained(&html),
-        3,
-        "APE RMSE, then the sequence's translation and yaw"
-    );
-    let expected: Value = serde_json::from_str(&json).unwrap();
-    assert_eq!(page_document(&html), expected);
+    std::fs::copy(dir.join("gt.txt"), tree.join("gt/helix.txt")).unwrap();
+}
+
+/// A page: `sitar ARGS --html NAME.html`, beside `sitar ARGS --format json`.
+struct Page {
+    name: &'static str,
+    /// Its command line after `sitar`, split at spaces.
+    args: &'static str,
+    /// How many figures it inlines, and what they are.
+    figures: RangeInclusive<usize>,
+    of: &'static str,
+    /// Text it holds: its title, headings and columns.
+    holds: &'static [&'static str],
+}
+
+const PAGES: &[Page] = &[
+    Page {
+        name: "ape",
+        args: "ape tum gt.txt run1.txt -a",
+        figures: 2..=2,
+        of: "raw and map figures",
+        holds: &["<td>pairing.paired</td>"],
+    },
+    Page {
+        name: "rpe",
+        args: "rpe tum gt.txt run0.txt run1.txt -a --delta 1 --delta_unit m",
+        figures: 1..=1,
+        of: "the box plot over runs",
+        holds: &["<h2>trials</h2>", "<h2>across runs</h2>"],
+    },
+    Page {
+        name: "drift",
+        args: "drift tum gt.txt run1.txt --lengths 2,4 --step 5",
+        figures: 2..=2,
+        of: "error against length and against speed",
+        holds: &["<h2>by length</h2>"],
+    },
+    Page {
+        name: "drift_runs",
+        args: "drift tum gt.txt run0.txt run1.txt --lengths 2,4",
+        figures: 4..=4,
+        of: "two curves and two box plots",
+        holds: &[],
+    },
+    Page {
+        name: "relative",
+        args: "relative tum gt.txt run0.txt run1.txt --lengths 2,4",
+        figures: 2..=usize::MAX,
+        of: "a box plot per error",
+        holds: &[],
+    },
+    Page {
+        name: "bench",
+        args: "bench tree --lengths 2,4",
+        figures: 3..=3,
+        of: "APE RMSE, then the sequence's translation and yaw",
+        holds: &[
+            "<h1>sitar bench</h1>",
+            "<h2>results</h2>",
+            "<th>ape_rmse.mean</th>",
+        ],
+    },
+];
+
+/// Each page holds its tables, its figures inline and the very document `--format json`
+/// prints; the numbers in its tables are the document's.
+#[test]
+fn pages_hold_their_tables_figures_and_json() {
+    let dir = tempfile::tempdir().unwrap();
+    files(dir.path());
+    bench_tree(dir.path());
+    let mut pages = HashMap::new();
+    for page in PAGES {
+        let name = page.name;
+        let file = format!("{name}.html");
+        let args: Vec<&str> = page.args.split(' ').collect();
+        let json = ok_in(dir.path(), &[&args[..], &["--format", "json"]].concat());
+        ok_in(dir.path(), &[&args[..], &["--html", &file]].concat());
+        let html = std::fs::read_to_string(dir.path().join(&file)).unwrap();
+        let figures = self_contained(name, &html);
+        assert!(
+            page.figures.contains(&figures),
+            "{name}: {figures} figures, not {:?}: {}",
+            page.figures,
+            page.of
+        );
+        let expected: Value = serde_json::from_str(&json).unwrap();
+        assert_eq!(page_document(&html), expected, "{name}: the page's JSON");
+        for text in page.holds {
+            assert!(html.contains(text), "{name}: no {text}");
+        }
+        pages.insert(name, (expected, html));
+    }
+
+    let (ape, html) = &pages["ape"];
+    let rmse = ape["statistics"]["rmse"].as_f64().unwrap();
     assert!(
-        html.contains("<h1>sitar bench</h1>"),
-        "titled by its metric"
+        html.contains(&format!("<td class=\"num\">{rmse:.6}</td>")),
+        "ape: the RMSE is in a table"
     );
-    assert!(html.contains("<h2>results</h2>"));
-    assert!(html.contains("<th>ape_rmse.mean</th>"));
-    for row in expected["results"].as_array().unwrap() {
+    let (bench, html) = &pages["bench"];
+    for row in bench["results"].as_array().unwrap() {
         let mean = row["ape_rmse"]["mean"].as_f64().unwrap();
         assert!(
             html.contains(&format!("<td class=\"num\">{mean:.6}</td>")),
-            "{mean}"
+            "bench: {mean}"
         );
     }
+}
+
+#[test]
+fn an_unwritable_page_is_an_error_that_names_it() {
+    let dir = tempfile::tempdir().unwrap();
+    files(dir.path());
+    let stderr = fails_in(
+        dir.path(),
+        &[
+            "ape",
+            "tum",
+            "gt.txt",
+            "run0.txt",
+            "--html",
+            "missing/ape.html",
+        ],
+    );
+    assert!(stderr.contains("missing/ape.html"), "{stderr}");
 }

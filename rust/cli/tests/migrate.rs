@@ -20,6 +20,7 @@ use sitar_client::{JobOptions, JobState, NewSession, SessionFrame, UploadJob};
 
 use support::cluster::{fresh_database, services};
 use support::process::{Proc, Serving};
+use support::run::sitar;
 
 /// Requests to an instance beyond its client.
 trait Requests {
@@ -60,13 +61,6 @@ fn psql(url: &str, sql: &str) -> String {
         String::from_utf8_lossy(&out.stderr)
     );
     String::from_utf8_lossy(&out.stdout).trim().to_string()
-}
-
-fn sitar(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_sitar"))
-        .args(args)
-        .output()
-        .expect("run sitar")
 }
 
 fn text(out: &Output) -> String {

@@ -4,34 +4,15 @@
 //! `../shared/data/real-runs`), the text, CSV and JSON outputs, the per-run archives that
 //! `sitar res` reads, the plots; and that one estimate keeps evo's output.
 
+mod support;
+
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
 use serde_json::Value;
+use support::run::{ok_in, sitar_in};
 
 /// Relative tolerance against numpy and evo.
 const TOLERANCE: f64 = 1e-9;
-
-fn sitar_in(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_sitar"))
-        .args(args)
-        .current_dir(dir)
-        .env_remove("DISPLAY")
-        .env_remove("WAYLAND_DISPLAY")
-        .output()
-        .expect("run sitar")
-}
-
-/// Runs sitar in `dir`, asserts success, returns stdout.
-fn ok_in(dir: &Path, args: &[&str]) -> String {
-    let out = sitar_in(dir, args);
-    assert!(
-        out.status.success(),
-        "sitar {args:?} failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8(out.stdout).unwrap()
-}
 
 /// The real runs' sequence folder, or `None` (the test says SKIPPED) when it is missing.
 fn real_sequence(test: &str) -> Option<PathBuf> {
@@ -77,9 +58,46 @@ fn strings(v: &Value) -> Vec<String> {
         .collect()
 }
 
+/// Asserts drift document `got` equals numpy's `want`, `what` in every message: its segments,
+/// where its speeds come from (`speed_from`), both errors and both binnings.
+fn assert_drift(what: &str, got: &Value, want: &Value, speed_from: &str) {
+    assert_eq!(got["segments"], want["segments"], "{what}");
+    assert_eq!(got["speed_from"], speed_from, "{what}");
+    for key in ["t_err_percent", "r_err_deg_per_m"] {
+        assert_close(&format!("{what} {key}"), &got[key], &want[key]);
+    }
+    for (bins, centre) in [("by_length", "length_m"), ("by_speed", "speed_m_s")] {
+        let (g, w) = (
+            got[bins].as_array().unwrap(),
+            want[bins].as_array().unwrap(),
+        );
+        assert_eq!(g.len(), w.len(), "{what} {bins}");
+        for (a, b) in g.iter().zip(w) {
+            assert_eq!(a[centre], b[centre], "{what} {bins}");
+            assert_eq!(a["segments"], b["segments"], "{what} {bins}");
+            for key in ["t_err_percent", "r_err_deg_per_m"] {
+                assert_close(&format!("{what} {bins} {key}"), &a[key], &b[key]);
+            }
+        }
+    }
+}
+
+/// Asserts the summaries over runs of `got` (`across_trials`) equal those of golden `want`,
+/// `metric` in every message.
+fn assert_across_trials(metric: &str, got: &Value, want: &Value) {
+    for (stat, summary) in want["across_trials"].as_object().unwrap() {
+        for name in ["mean", "median", "min", "max", "std"] {
+            assert_close(
+                &format!("{metric} {stat} {name}"),
+                &got["across_trials"][stat][name],
+                &summary[name],
+            );
+        }
+    }
+}
+
 fn json_of(dir: &Path, args: &[String]) -> Value {
-    let args: Vec<&str> = args.iter().map(String::as_str).collect();
-    serde_json::from_str(&ok_in(dir, &args)).unwrap()
+    serde_json::from_str(&ok_in(dir, args)).unwrap()
 }
 
 #[test]
@@ -121,17 +139,8 @@ fn ape_over_five_real_runs_equals_evo_and_numpy() {
         );
         assert_eq!(&single, trial, "run {k}");
     }
-    let across = want["across_trials"].as_object().unwrap();
-    assert_eq!(across.len(), 7);
-    for (stat, summary) in across {
-        for name in ["mean", "median", "min", "max", "std"] {
-            assert_close(
-                &format!("{stat} {name}"),
-                &got["across_trials"][stat][name],
-                &summary[name],
-            );
-        }
-    }
+    assert_eq!(want["across_trials"].as_object().unwrap().len(), 7);
+    assert_across_trials("ape", &got, want);
 }
 
 #[test]
@@ -149,42 +158,9 @@ fn drift_over_five_real_runs_equals_numpy() {
         .zip(want["trials"].as_array().unwrap())
         .enumerate()
     {
-        assert_eq!(trial["segments"], numpy["segments"], "run {k}");
-        assert_eq!(trial["speed_from"], "stamps");
-        for key in ["t_err_percent", "r_err_deg_per_m"] {
-            assert_close(&format!("run {k} {key}"), &trial[key], &numpy[key]);
-        }
-        for (bins, centre) in [("by_length", "length_m"), ("by_speed", "speed_m_s")] {
-            let (g, w) = (
-                trial[bins].as_array().unwrap(),
-                numpy[bins].as_array().unwrap(),
-            );
-            assert_eq!(g.len(), w.len(), "run {k} {bins}");
-            for (a, b) in g.iter().zip(w) {
-                assert_eq!(a[centre], b[centre]);
-                assert_eq!(a["segments"], b["segments"]);
-                assert_close(
-                    &format!("run {k} {bins}"),
-                    &a["t_err_percent"],
-                    &b["t_err_percent"],
-                );
-                assert_close(
-                    &format!("run {k} {bins}"),
-                    &a["r_err_deg_per_m"],
-                    &b["r_err_deg_per_m"],
-                );
-            }
-        }
+        assert_drift(&format!("run {k}"), trial, numpy, "stamps");
     }
-    for (stat, summary) in want["across_trials"].as_object().unwrap() {
-        for name in ["mean", "median", "min", "max", "std"] {
-            assert_close(
-                &format!("{stat} {name}"),
-                &got["across_trials"][stat][name],
-                &summary[name],
-            );
-        }
-    }
+    assert_across_trials("drift", &got, want);
 }
 
 #[test]
@@ -308,10 +284,7 @@ fn runs_save_one_archive_each_that_res_reads_and_a_box_plot() {
         ]
         .map(String::from),
     );
-    let stdout = ok_in(
-        out.path(),
-        &args.iter().map(String::as_str).collect::<Vec<_>>(),
-    );
+    let stdout = ok_in(out.path(), &args);
     assert!(
         stdout.contains("Plot saved to ape_box_plot.svg"),
         "{stdout}"
@@ -364,24 +337,7 @@ fn drift_on_the_synthetic_kitti_pair_equals_numpy_and_plots() {
         &["drift", "kitti", gt, est, "--format", "json"],
     ))
     .unwrap();
-    assert_eq!(got["segments"], want["segments"]);
-    assert_eq!(got["speed_from"], "frames");
-    for key in ["t_err_percent", "r_err_deg_per_m"] {
-        assert_close(key, &got[key], &want[key]);
-    }
-    for (bins, centre) in [("by_length", "length_m"), ("by_speed", "speed_m_s")] {
-        let (g, w) = (
-            got[bins].as_array().unwrap(),
-            want[bins].as_array().unwrap(),
-        );
-        assert_eq!(g.len(), w.len());
-        for (a, b) in g.iter().zip(w) {
-            assert_eq!(a[centre], b[centre]);
-            assert_eq!(a["segments"], b["segments"]);
-            assert_close(bins, &a["t_err_percent"], &b["t_err_percent"]);
-            assert_close(bins, &a["r_err_deg_per_m"], &b["r_err_deg_per_m"]);
-        }
-    }
+    assert_drift("kitti", &got, want, "frames");
     // The table: a row per length and the overall line.
     let text = ok_in(out.path(), &["drift", "kitti", gt, est]);
     let lines: Vec<&str> = text.lines().collect();
@@ -460,10 +416,7 @@ fn drift_over_runs_prints_and_plots_each_run() {
         "--save_plot".to_owned(),
         "d.svg".to_owned(),
     ];
-    let text = ok_in(
-        out.path(),
-        &args.iter().map(String::as_str).collect::<Vec<_>>(),
-    );
+    let text = ok_in(out.path(), &args);
     assert!(text.contains("2 runs against"), "{text}");
     assert!(text.contains("\nacross trials"), "{text}");
     assert!(text.contains("\nt_err_percent "), "{text}");

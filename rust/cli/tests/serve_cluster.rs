@@ -12,8 +12,9 @@ use std::path::Path;
 use std::process::Command;
 use std::time::Duration;
 
-use support::cluster::{fresh_database, services};
-use support::process::{Serving, upload_offset};
+use support::cluster::Cluster;
+use support::process::{Serving, admin_token, create_token, upload_offset};
+use support::run::fails;
 use support::sessions::sim_session;
 
 /// Runs a sim session of `trials` trials on `recording`; its status, CSV and JSON results.
@@ -36,13 +37,6 @@ fn run_session(
     (id, status, csv, json)
 }
 
-fn admin_token(data: &Path) -> String {
-    std::fs::read_to_string(data.join("admin.token"))
-        .unwrap()
-        .trim()
-        .to_string()
-}
-
 /// Every regular file under `dir`.
 fn files_under(dir: &Path) -> Vec<std::path::PathBuf> {
     let mut out = Vec::new();
@@ -62,13 +56,9 @@ fn files_under(dir: &Path) -> Vec<std::path::PathBuf> {
 
 #[test]
 fn a_cluster_instance_plays_a_session_as_the_embedded_one_does() {
-    let Some((database, store)) = services("serve_cluster") else {
+    let Some(cluster) = Cluster::fresh("serve_cluster") else {
         return;
     };
-    let Some(database) = fresh_database("serve_cluster", &database) else {
-        return;
-    };
-    let store = format!("{store}/serve-cluster-{}", std::process::id());
     let dir = tempfile::tempdir().unwrap();
     let recording = dir.path().join("walk.rec");
     let rec = sitar_sim::Recording::demo(6.0, 30.0, 11).unwrap();
@@ -84,22 +74,11 @@ fn a_cluster_instance_plays_a_session_as_the_embedded_one_does() {
 
     // The cluster instance: the first on an empty database writes the admin token.
     let a_data = dir.path().join("instance-a");
-    let cluster = ["--database", database.as_str(), "--store", store.as_str()];
-    let mut a = Serving::sim(&a_data, &cluster);
+    let mut a = cluster.serve(&a_data, &[]);
     a.wait_for("metadata in Postgres", Duration::from_secs(60));
     let admin = admin_token(&a_data);
     // `sitar token create --database` makes a token the running instance accepts.
-    let out = Command::new(env!("CARGO_BIN_EXE_sitar"))
-        .args(["token", "create", "--role", "app", "--name", "lab-phone"])
-        .args(["--database", &database])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let app = String::from_utf8(out.stdout).unwrap().trim().to_string();
+    let app = create_token(&["--database", &cluster.database], "app", "lab-phone");
     let (id, status, cluster_csv, cluster_json) = run_session(&a.client(&app), &recording, 5);
     assert_eq!(status.state, sitar_client::SessionState::Done, "{status:?}");
     assert_eq!(status.results_trials, 5, "{status:?}");
@@ -120,7 +99,7 @@ fn a_cluster_instance_plays_a_session_as_the_embedded_one_does() {
     // A second instance on the same database and store: no admin token of its own, and it
     // answers for the session the first one played.
     let b_data = dir.path().join("instance-b");
-    let b = Serving::sim(&b_data, &cluster);
+    let b = cluster.serve(&b_data, &[]);
     assert!(!b_data.join("admin.token").exists());
     let from_b = b.client(&admin);
     assert_eq!(from_b.results_csv(&id).unwrap(), csv);
@@ -202,14 +181,9 @@ fn head_offset(url: &str, token: &str, id: &str) -> usize {
 
 #[test]
 fn an_instance_killed_during_an_upload_leaves_nothing_partial() {
-    let Some((database, store)) = services("cluster_crash") else {
+    let Some(cluster) = Cluster::fresh("cluster_crash") else {
         return;
     };
-    let Some(database) = fresh_database("cluster_crash", &database) else {
-        return;
-    };
-    let store = format!("{store}/cluster-crash-{}", std::process::id());
-    let cluster = ["--database", database.as_str(), "--store", store.as_str()];
     let dir = tempfile::tempdir().unwrap();
     let recording = dir.path().join("walk.rec");
     // 60 s: about 280 KB, far more than curl sends in one go.
@@ -217,7 +191,7 @@ fn an_instance_killed_during_an_upload_leaves_nothing_partial() {
     std::fs::write(&recording, rec.to_bytes()).unwrap();
     let size = std::fs::metadata(&recording).unwrap().len();
     let data = dir.path().join("instance");
-    let mut a = Serving::sim(&data, &cluster);
+    let mut a = cluster.serve(&data, &[]);
     let admin = admin_token(&data);
     let id = a
         .client(&admin)
@@ -251,7 +225,7 @@ fn an_instance_killed_during_an_upload_leaves_nothing_partial() {
     let _ = upload.wait();
     // Started again on the same folder: the staged bytes are gone, nothing of the request
     // is in the bucket, and the session still waits for its recording.
-    let b = Serving::sim(&data, &cluster);
+    let b = cluster.serve(&data, &[]);
     assert!(
         files_under(&data.join("tmp")).is_empty(),
         "{:?}",
@@ -281,26 +255,25 @@ fn an_instance_killed_during_an_upload_leaves_nothing_partial() {
 #[test]
 fn a_store_that_does_not_answer_is_named_at_start() {
     let dir = tempfile::tempdir().unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_sitar"))
-        .args(["serve", "--addr", "127.0.0.1:0", "--data"])
-        .arg(dir.path())
-        .args(["--database", "postgres://sitar:hunter2@127.0.0.1:9/nowhere"])
-        .output()
-        .unwrap();
-    assert!(!out.status.success());
-    let err = String::from_utf8_lossy(&out.stderr);
+    let serve = [
+        "serve",
+        "--addr",
+        "127.0.0.1:0",
+        "--data",
+        dir.path().to_str().unwrap(),
+    ];
+    let err = fails(
+        &[
+            &serve[..],
+            &["--database", "postgres://sitar:hunter2@127.0.0.1:9/nowhere"],
+        ]
+        .concat(),
+    );
     assert!(err.contains("127.0.0.1:9"), "{err}");
     assert!(
         !err.contains("hunter2"),
         "the password is never shown: {err}"
     );
-    let out = Command::new(env!("CARGO_BIN_EXE_sitar"))
-        .args(["serve", "--addr", "127.0.0.1:0", "--data"])
-        .arg(dir.path())
-        .args(["--store", "ftp://bucket/x"])
-        .output()
-        .unwrap();
-    assert!(!out.status.success());
-    let err = String::from_utf8_lossy(&out.stderr);
+    let err = fails(&[&serve[..], &["--store", "ftp://bucket/x"]].concat());
     assert!(err.contains("s3://BUCKET/PREFIX"), "{err}");
 }

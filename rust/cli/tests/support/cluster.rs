@@ -1,8 +1,39 @@
 //! The cluster services the real-process tests need (`scripts/cluster-services start`): the
-//! database and bucket they name, and a fresh database per test.
+//! database and bucket they name, a fresh database per test, and `sitar serve` instances on
+//! them.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
+
+use super::process::Serving;
+
+/// A fresh database and a bucket prefix of its own for one test: what its instances share.
+pub struct Cluster {
+    pub database: String,
+    pub store: String,
+}
+
+impl Cluster {
+    /// Test `test`'s fresh database and bucket prefix (`…/TEST-PID`, `_` as `-`), or `None`
+    /// after printing SKIPPED.
+    pub fn fresh(test: &str) -> Option<Cluster> {
+        let (url, store) = services(test)?;
+        let database = fresh_database(test, &url)?;
+        let prefix = test.replace('_', "-");
+        Some(Cluster {
+            database,
+            store: format!("{store}/{prefix}-{}", std::process::id()),
+        })
+    }
+
+    /// An instance on this cluster: `sitar serve` with sim playback ([`Serving::sim`]) in
+    /// folder `data`, `--database DATABASE --store STORE` and `extra` arguments.
+    pub fn serve(&self, data: &Path, extra: &[&str]) -> Serving {
+        let mut args = vec!["--database", &self.database, "--store", &self.store];
+        args.extend_from_slice(extra);
+        Serving::sim(data, &args)
+    }
+}
 
 /// The test services' URLs, or `None` after printing SKIPPED.
 pub fn services(test: &str) -> Option<(String, String)> {

@@ -183,6 +183,15 @@ impl std::ops::DerefMut for Serving {
     }
 }
 
+/// The admin token `sitar serve` wrote in its data folder `data` (the first instance on a
+/// database writes it).
+pub fn admin_token(data: &Path) -> String {
+    std::fs::read_to_string(data.join("admin.token"))
+        .unwrap()
+        .trim()
+        .to_string()
+}
+
 /// `sitar token create --role ROLE --name NAME PLACE…` (`--data DIR` or `--database URL`):
 /// the token it printed.
 pub fn create_token(place: &[&str], role: &str, name: &str) -> String {
