@@ -9,8 +9,7 @@ use crate::config::ServerConfig;
 use crate::error::Error;
 use crate::error::short;
 use crate::http::handlers::sessions::QUOTE_LIMIT;
-use crate::model::PlaybackKind;
-use crate::model::estimate_settings::EstimateSettings;
+use crate::model::{PlaybackKind, estimate_settings::EstimateSettings};
 
 pub use crate::auth::secret::{
     COOKIE_NAME, bearer, cookie, has_param, plausible, query_param, without_param,

@@ -11,9 +11,7 @@ use axum::response::{IntoResponse, Response};
 
 use crate::app_state::App;
 use crate::error::Error;
-use crate::model::Caller;
-use crate::model::Session;
-use crate::model::{Venue, is_venue_id};
+use crate::model::{Caller, Session, Venue, is_venue_id};
 use crate::storage::body_stream;
 use crate::venue::Standing;
 

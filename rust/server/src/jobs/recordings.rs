@@ -6,8 +6,7 @@ use std::sync::Arc;
 use crate::app_state::App;
 use crate::error::Error;
 use crate::jobs::playback::{self as jobs, Begin};
-use crate::model::PlaybackKind;
-use crate::model::{Session, SessionState, Step};
+use crate::model::{PlaybackKind, Session, SessionState, Step};
 use crate::storage::keys::SessionObject;
 use crate::storage::staged::TempFile;
 

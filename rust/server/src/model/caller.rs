@@ -1,7 +1,6 @@
 //! Who is asking: a token's caller (or the open server's), and what it may see.
 
-use crate::model::role::Role;
-use crate::model::session::Session;
+use crate::model::{role::Role, session::Session};
 
 /// The authenticated caller of a request.
 #[derive(Debug, Clone, PartialEq, Eq)]

@@ -2,9 +2,11 @@
 
 use sitar_core::Convention;
 
-use crate::model::PlaybackKind;
-use crate::model::estimate_settings::EstimateSettings;
-use crate::model::session_state::{SessionState, Step};
+use crate::model::{
+    PlaybackKind,
+    estimate_settings::EstimateSettings,
+    session_state::{SessionState, Step},
+};
 
 /// One session, every column typed.
 #[derive(Debug, Clone, PartialEq)]

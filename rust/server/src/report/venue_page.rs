@@ -18,9 +18,7 @@ use sitar_core::venue::{CellKind, Contribution, VenueMap, VenueSession};
 
 use crate::error::Error;
 use crate::ingest::evidence::{EvidenceFiles, EvidenceRow};
-use crate::model::Caller;
-use crate::model::Session;
-use crate::model::Venue;
+use crate::model::{Caller, Session, Venue};
 use crate::report::templates;
 use crate::storage::{BlobStore, MetadataStore};
 

@@ -7,10 +7,10 @@
 use std::io::Read as _;
 
 use crate::error::Error;
-use crate::model::PlaybackKind;
-use crate::model::estimate_settings::EstimateSettings;
-use crate::model::{Caller, Role, UsageFull};
-use crate::model::{NewSession, SessionState, Step};
+use crate::model::{
+    Caller, NewSession, PlaybackKind, Role, SessionState, Step, UsageFull,
+    estimate_settings::EstimateSettings,
+};
 use crate::storage::blobs::{BlobStore, body_stream};
 use crate::storage::deletes::Claim;
 use crate::storage::keys::SessionObject;

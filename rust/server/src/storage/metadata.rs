@@ -10,9 +10,9 @@
 //! its imports say which rows it touches.
 
 use crate::error::Error;
-use crate::model::{Caller, Role, TokenInfo, UsageFull};
-use crate::model::{NewSession, Session, SessionState, Step};
-use crate::model::{NewVenue, Venue};
+use crate::model::{
+    Caller, NewSession, NewVenue, Role, Session, SessionState, Step, TokenInfo, UsageFull, Venue,
+};
 use crate::storage::deletes::{Claim, DeleteStore};
 use crate::storage::instances::InstanceStore;
 

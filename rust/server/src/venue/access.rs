@@ -2,8 +2,7 @@
 //! and admins. Everyone else is told it does not exist (404, never 403).
 
 use crate::error::Error;
-use crate::model::Caller;
-use crate::model::Venue;
+use crate::model::{Caller, Venue};
 use crate::storage::VenueStore;
 
 /// How a caller stands to a venue it may see.

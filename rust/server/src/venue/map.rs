@@ -16,8 +16,7 @@ use sitar_core::Convention;
 use sitar_core::venue::{Contribution, SessionFiles, VenueMap, VenueSpec, build_map};
 
 use crate::error::Error;
-use crate::model::Venue;
-use crate::model::{Session, SessionState};
+use crate::model::{Session, SessionState, Venue};
 use crate::storage::keys::SessionObject;
 use crate::storage::metadata::KeptContribution;
 use crate::storage::{BlobStore, MetadataStore};

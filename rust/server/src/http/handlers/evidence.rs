@@ -24,8 +24,7 @@ use crate::ingest::evidence::{
     parse_evidence,
 };
 use crate::ingest::phone_log::parse_subtrajectories;
-use crate::model::Caller;
-use crate::model::Session;
+use crate::model::{Caller, Session};
 use crate::storage::keys::SessionObject;
 
 /// Runs `store` under the session's lock, after checking the session still exists (it may

@@ -29,8 +29,7 @@ use crate::http::helpers::{
     declared_length, idempotency_key, json_response,
 };
 use crate::jobs::recordings::accept_recording;
-use crate::model::PlaybackKind;
-use crate::model::{Session, SessionState, Step};
+use crate::model::{PlaybackKind, Session, SessionState, Step};
 use crate::storage::body_stream;
 use crate::storage::keys::SessionObject;
 

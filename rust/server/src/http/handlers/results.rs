@@ -11,8 +11,7 @@ use crate::estimate::results_files::{self, Form};
 use crate::http::helpers::{AppState, Found, json_response, json_value};
 use crate::http::pagination::{PageRequest, page_of};
 use crate::jobs::{playback as jobs, stop_requests};
-use crate::model::PlaybackKind;
-use crate::model::SessionState;
+use crate::model::{PlaybackKind, SessionState};
 use crate::storage::StopRequest;
 
 /// `POST /v1/sessions/{id}/estimate`: `upload` sessions estimate now; sim and adb sessions

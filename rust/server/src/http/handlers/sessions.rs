@@ -19,10 +19,9 @@ use crate::http::session_status::status_json;
 use crate::jobs::deletion;
 use crate::jobs::playback::{self as jobs, EndEarly, Stopped};
 use crate::jobs::stop_requests;
-use crate::model::Caller;
-use crate::model::PlaybackKind;
-use crate::model::estimate_settings::EstimateSettings;
-use crate::model::{NewSession, SessionState};
+use crate::model::{
+    Caller, NewSession, PlaybackKind, SessionState, estimate_settings::EstimateSettings,
+};
 use crate::playback::queue::Intent;
 use crate::storage::body_stream;
 

@@ -13,8 +13,7 @@ use crate::http::helpers::{
 };
 use crate::ingest::trials::{self, Arrival};
 use crate::jobs::playback as jobs;
-use crate::model::PlaybackKind;
-use crate::model::Step;
+use crate::model::{PlaybackKind, Step};
 use crate::storage::body_stream;
 
 /// Takes one TUM text as the raw body: parsed from the bytes received, stored once, kept in

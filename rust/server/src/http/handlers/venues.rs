@@ -18,9 +18,9 @@ use crate::http::helpers::{
     AppState, blocking, check_declared_length, content_type, json_value, visible_venue,
 };
 use crate::http::pagination::list_limit;
-use crate::model::Caller;
-use crate::model::check_token_name;
-use crate::model::{CELL_M_RANGE, DEFAULT_CELL_M, MAX_NAME_CHARS, NewVenue, Venue};
+use crate::model::{
+    CELL_M_RANGE, Caller, DEFAULT_CELL_M, MAX_NAME_CHARS, NewVenue, Venue, check_token_name,
+};
 use crate::storage::body_stream;
 use crate::venue::Standing;
 

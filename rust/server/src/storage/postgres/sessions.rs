@@ -6,9 +6,10 @@ use postgres::types::ToSql;
 
 use super::{PgStore, u32_column};
 use crate::error::Error;
-use crate::model::PlaybackKind;
-use crate::model::estimate_settings::{self, EstimateSettings};
-use crate::model::{NewSession, Session, SessionState, Step};
+use crate::model::{
+    NewSession, PlaybackKind, Session, SessionState, Step,
+    estimate_settings::{self, EstimateSettings},
+};
 use crate::storage::deletes::Claim;
 use crate::storage::metadata::{Rows, SessionStore, StepRecord, Unreadable};
 use crate::storage::now_ms;

@@ -4,8 +4,10 @@
 
 use super::PgStore;
 use crate::error::Error;
-use crate::model::token_secret::{self as secret, digest};
-use crate::model::{Caller, Role, TokenInfo, check_token_name};
+use crate::model::{
+    Caller, Role, TokenInfo, check_token_name,
+    token_secret::{self as secret, digest},
+};
 use crate::storage::metadata::TokenStore;
 use crate::storage::now_ms;
 

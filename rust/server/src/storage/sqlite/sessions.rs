@@ -7,9 +7,10 @@ use rusqlite::{OptionalExtension, params};
 
 use super::{CachedSql, SqliteStore};
 use crate::error::Error;
-use crate::model::PlaybackKind;
-use crate::model::estimate_settings::{self, EstimateSettings};
-use crate::model::{NewSession, Session, SessionState, Step};
+use crate::model::{
+    NewSession, PlaybackKind, Session, SessionState, Step,
+    estimate_settings::{self, EstimateSettings},
+};
 use crate::storage::deletes::Claim;
 use crate::storage::metadata::{Rows, SessionStore, StepRecord, Unreadable};
 use crate::storage::now_ms;

@@ -6,8 +6,10 @@ use rusqlite::params;
 
 use super::{CachedSql, SqliteStore};
 use crate::error::Error;
-use crate::model::token_secret::{self as secret, digest};
-use crate::model::{Caller, Role, TokenInfo, check_token_name};
+use crate::model::{
+    Caller, Role, TokenInfo, check_token_name,
+    token_secret::{self as secret, digest},
+};
 use crate::storage::metadata::TokenStore;
 use crate::storage::now_ms;
 

@@ -5,8 +5,7 @@ use rusqlite::{OptionalExtension, params};
 
 use super::{CachedSql, SqliteStore};
 use crate::error::Error;
-use crate::model::Session;
-use crate::model::{NewVenue, Venue};
+use crate::model::{NewVenue, Session, Venue};
 use crate::storage::metadata::{KeptContribution, VenueStore};
 use crate::storage::now_ms;
 
