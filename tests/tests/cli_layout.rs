@@ -28,24 +28,6 @@ fn src() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../rust/cli/src")
 }
 
-/// Every `.rs` file under `dir`, sorted.
-fn rust_files(dir: &Path) -> Vec<PathBuf> {
-    let mut files = Vec::new();
-    let mut entries: Vec<PathBuf> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .collect();
-    entries.sort();
-    for path in entries {
-        if path.is_dir() {
-            files.extend(rust_files(&path));
-        } else if path.extension().is_some_and(|e| e == "rs") {
-            files.push(path);
-        }
-    }
-    files
-}
-
 #[test]
 fn the_figures_sit_below_what_draws_them() {
     let graph: BTreeMap<String, BTreeSet<String>> =
@@ -84,7 +66,7 @@ fn the_figures_sit_below_what_draws_them() {
 
 #[test]
 fn no_file_is_over_the_limit() {
-    let files = rust_files(&src());
+    let files = layout_graph::rust_files(&src());
     assert!(files.len() > 40, "{files:?}");
     let long: Vec<(String, usize)> = files
         .iter()

@@ -2,20 +2,13 @@
 //! modules of any crate under `rust/` (dependencies run one way inside a crate, as they do
 //! between crates).
 //!
-//! A module's uses are the `crate::…`, `super::…` and `self::…` paths in its file (`use`
-//! groups `{a, b::c}` expanded; comment lines and everything from `#[cfg(test)]` on left
-//! out); a path points into the longest module it names, and an item re-exported at the crate
-//! root (`crate::Error`) counts as its defining module. A module's own ancestors (whose `mod`
-//! lines declare it) are not counted as its uses.
-//!
 //! Folders too: drawn as its top-level folders (and root files), each crate's graph has no
-//! cycle, and the server's layer comment in `lib.rs` lists its folders in an order every
-//! import follows (a folder uses only folders listed before it).
+//! cycle. The server's layer order is `server_layout.rs`'s check, the CLI's folders
+//! `cli_layout.rs`'s; all three read the imports through `layout_graph`.
 
 mod layout_graph;
 
 use std::collections::BTreeSet;
-use std::path::Path;
 
 use layout_graph::{crates, cycles, folder_graph, graph, module_paths, root_items, sources};
 
@@ -100,25 +93,4 @@ fn no_crate_has_an_import_cycle_between_folders() {
         "import cycles between folders:\n{}",
         found.join("\n")
     );
-}
-
-#[test]
-fn the_server_stores_sit_on_the_vocabulary_alone() {
-    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("../rust/server/src");
-    let folders = folder_graph(&graph(&sources(&src)));
-    let only = |folder: &str, allowed: &[&str]| {
-        let extra: Vec<&String> = folders[folder]
-            .iter()
-            .filter(|f| !allowed.contains(&f.as_str()))
-            .collect();
-        assert!(extra.is_empty(), "{folder} imports {extra:?}, above it");
-    };
-    // The vocabulary at the bottom, the stores on it; the lifecycle, access control and
-    // venue logic above both.
-    only("model", &["error"]);
-    only("storage", &["model", "error"]);
-    for logic in ["session", "auth", "venue"] {
-        assert!(folders[logic].contains("storage") || folders[logic].contains("model"));
-        assert!(!folders["storage"].contains(logic));
-    }
 }

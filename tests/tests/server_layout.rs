@@ -180,6 +180,9 @@ fn the_layer_comment_is_true() {
         declared, listed,
         "lib.rs's layer comment must list exactly the modules it declares"
     );
+    // The vocabulary at the bottom and the stores on it alone; the lifecycle, access control
+    // and venue logic (and all else) above both.
+    assert_eq!(layers[..3], ["error", "model", "storage"], "{layers:?}");
     // Every import between top-level modules points down the list.
     let rank = |module: &str| {
         let top = module.split("::").next().unwrap_or(module);
