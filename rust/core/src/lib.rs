@@ -121,6 +121,7 @@
 // subtrajectory_columns — the columns of `subtrajectories.csv`, for persist and venue
 // image                 — the camera's luminance plane and what is measured on it
 // results               — error-estimation results: parsing, lookup, classes
+// calibration           — calibration files, the walk's own motion, the estimate from one walk
 // config                — the session configuration
 // depth                 — from an ARCore depth image to a surface point and normal
 // tum                   — TUM trajectory text with integer-nanosecond stamps
@@ -133,8 +134,10 @@
 // playback              — the playback device's per-frame TUM log
 // venue                 — anchors, alignment, the venue map, contributions and the map builder
 // session               — the on-device session: cadence, depth, results, markers, venue
+// session_walk          — the estimate from one walk: a calibration colours the walk at stop
 // evidence_table        — the session folder's `evidence.csv` and `thumbnails/`
 // persist               — the session folder: `Session::save` and `Session::load`
+pub mod calibration;
 mod classes;
 mod config;
 mod convention;
@@ -153,6 +156,7 @@ mod relation;
 mod render;
 mod results;
 mod session;
+mod session_walk;
 mod subtrajectory_columns;
 mod thumbnail;
 mod tum;
@@ -183,6 +187,7 @@ pub use results::{ErrorInterval, ResultWindow, Results};
 pub use session::{
     DepthStatus, FrameFlags, MidpointInput, Session, SessionState, SubTrajectory, Summary,
 };
+pub use session_walk::ON_DEVICE_CALIBRATION;
 pub use thumbnail::{THUMBNAIL_QUALITY, downsample_rotated, encode_jpeg, thumbnail_size};
 pub use tum::{parse_tum_ns, to_tum};
 pub use venue::{Alignment, AnchorObservation, Tracking, VenueMap};

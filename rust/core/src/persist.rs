@@ -56,6 +56,8 @@ impl Session {
     /// |---|---|
     /// | `config.json` | the [`SessionConfig`] JSON (every key) |
     /// | `trajectory.txt` | TUM `t x y z qx qy qz qw`, `t` integer ns: start, midpoints, endpoints |
+    /// | `walk.txt` | the same format: the start pose and every frame's pose (the walk itself) |
+    /// | `calibration.json` | the calibration given with [`Session::set_calibration`], if any |
     /// | `subtrajectories.csv` | one row per sub-trajectory, columns below |
     /// | `results.json` | the results in their JSON form (only once results were loaded) |
     /// | `evidence.csv`, `thumbnails/<k>.jpg` | what the camera saw at each midpoint (format: [`crate::EVIDENCE_HEADER`]) |
@@ -74,6 +76,17 @@ impl Session {
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
         write_file(&dir.join("config.json"), &self.config.to_json())?;
         write_file(&dir.join("trajectory.txt"), &self.trajectory_tum())?;
+        write_file(&dir.join("walk.txt"), &self.walk_tum())?;
+        let calibration_path = dir.join("calibration.json");
+        match &self.calibration {
+            Some(c) => write_file(&calibration_path, &c.to_json())?,
+            None => {
+                if calibration_path.exists() {
+                    std::fs::remove_file(&calibration_path)
+                        .map_err(|e| Error::io(&calibration_path, e))?;
+                }
+            }
+        }
         let file = SessionFile {
             version: 1,
             state: self.state,
@@ -247,6 +260,36 @@ impl Session {
             session.check_results(r)?;
         }
         session.results = results;
+        // A folder saved before walks were kept has none: the session works without.
+        let walk_path = dir.join("walk.txt");
+        if walk_path.exists() {
+            let walk = crate::tum::parse_tum_ns(&read_file(&walk_path)?, "walk.txt")?;
+            let frames = if session.start.is_some() {
+                1 + file.frames as usize
+            } else {
+                0
+            };
+            if walk.len() != frames {
+                return Err(Error::parse(
+                    "walk.txt",
+                    0,
+                    "poses",
+                    format!(
+                        "{} poses for the start and {} frames of session.json",
+                        walk.len(),
+                        file.frames
+                    ),
+                ));
+            }
+            session.walk = walk;
+        }
+        let calibration_path = dir.join("calibration.json");
+        if calibration_path.exists() {
+            session.calibration = Some(crate::calibration::Calibration::from_json(
+                &read_file(&calibration_path)?,
+                "calibration.json",
+            )?);
+        }
         let anchors_path = dir.join("anchors.csv");
         if anchors_path.exists() {
             session.anchors =
@@ -586,13 +629,23 @@ mod tests {
                 other => panic!("{state} {frames}: {other:?}"),
             }
         }
-        // 47 and 49 frames both log 10 poses (every fifth frame): consistent, loads, records on.
+        // 47 and 49 frames both log 10 poses (every fifth frame): consistent, loads, records on
+        // (walk.txt, one pose per frame, would say otherwise: a folder without it loads).
+        let walk = dir.path().join("walk.txt");
+        let walk_text = std::fs::read_to_string(&walk).unwrap();
+        std::fs::remove_file(&walk).unwrap();
         std::fs::write(
             &file,
             text.replacen("\"frames\": 47,", "\"frames\": 49,", 1),
         )
         .unwrap();
         assert!(Session::load(dir.path()).is_ok());
+        std::fs::write(&walk, &walk_text).unwrap();
+        let err = Session::load(dir.path()).unwrap_err().to_string();
+        assert!(
+            err.contains("walk.txt") && err.contains("49 frames"),
+            "{err}"
+        );
         std::fs::write(&file, text).unwrap();
         let mut back = Session::load(dir.path()).unwrap();
         let t = 1_700_000_000_000_000_000 + 48 * 33_333_334;

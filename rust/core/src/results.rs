@@ -59,6 +59,89 @@ pub struct Results {
     /// The name of the calibration applied (`"calibration"`), when the results are
     /// calibrated; `None` for uncalibrated results and legacy CSV.
     pub calibration: Option<String>,
+    /// Which error the windows estimate (`"target"`): `live` (the error of one run, the
+    /// user's own walk) or `expected` (the mean error at each place); `None` when the
+    /// results do not say (uncalibrated results, legacy CSV).
+    pub target: Option<String>,
+    /// Where they come from (`"source"`): `walk` (the walk alone, estimated on the phone or
+    /// at upload) or `replays`.
+    pub source: Option<String>,
+    /// How many runs they come from (`"runs"`: the walk and its replays).
+    pub runs: Option<u32>,
+    /// Whether the calibration's runs predict the error at all (`"informative"`); `false`
+    /// means the colours are a guess.
+    pub informative: Option<bool>,
+}
+
+/// What results say of where they come from: `target`, `source`, `runs`, `informative`,
+/// each optional.
+struct Provenance {
+    target: Option<String>,
+    source: Option<String>,
+    runs: Option<u32>,
+    informative: Option<bool>,
+}
+
+impl Provenance {
+    fn parse(obj: &serde_json::Map<String, Value>) -> Result<Self, Error> {
+        const SRC: &str = "results.json";
+        let word = |key: &'static str, allowed: [&str; 2]| -> Result<Option<String>, Error> {
+            match obj.get(key) {
+                None | Some(Value::Null) => Ok(None),
+                Some(Value::String(s)) if allowed.contains(&s.as_str()) => Ok(Some(s.clone())),
+                Some(other) => Err(Error::parse(
+                    SRC,
+                    0,
+                    key,
+                    format!(
+                        "expected \"{}\" or \"{}\", found {other}",
+                        allowed[0], allowed[1]
+                    ),
+                )),
+            }
+        };
+        let runs = match obj.get("runs") {
+            None | Some(Value::Null) => None,
+            Some(v) => Some(
+                v.as_u64()
+                    .and_then(|n| u32::try_from(n).ok())
+                    .filter(|&n| n > 0)
+                    .ok_or_else(|| {
+                        Error::parse(
+                            SRC,
+                            0,
+                            "runs",
+                            format!("expected a count of runs, found {v}"),
+                        )
+                    })?,
+            ),
+        };
+        let informative = match obj.get("informative") {
+            None | Some(Value::Null) => None,
+            Some(Value::Bool(b)) => Some(*b),
+            Some(other) => {
+                return Err(Error::parse(
+                    SRC,
+                    0,
+                    "informative",
+                    format!("expected true or false, found {other}"),
+                ));
+            }
+        };
+        Ok(Self {
+            target: word("target", ["live", "expected"])?,
+            source: word("source", ["walk", "replays"])?,
+            runs,
+            informative,
+        })
+    }
+
+    fn set(self, results: &mut Results) {
+        results.target = self.target;
+        results.source = self.source;
+        results.runs = self.runs;
+        results.informative = self.informative;
+    }
 }
 
 /// Parses a decimal-seconds token exactly into nanoseconds (no f64 rounding of large stamps).
@@ -313,6 +396,7 @@ impl Results {
                 ));
             }
         };
+        let provenance = Provenance::parse(obj)?;
         let relation = relation_and_unit(obj)?;
         let error_key = relation.unit().error_key();
         let [raw_key, lower_key, upper_key] = relation.unit().interval_keys();
@@ -437,6 +521,7 @@ impl Results {
         }
         let mut results = Self::sorted(windows, setting, trials, window_frames, relation);
         results.calibration = calibration;
+        provenance.set(&mut results);
         Ok(results)
     }
 
@@ -456,6 +541,10 @@ impl Results {
             window_frames,
             relation,
             calibration: None,
+            target: None,
+            source: None,
+            runs: None,
+            informative: None,
         }
     }
 
@@ -500,8 +589,22 @@ impl Results {
             "unit": self.unit().name(),
             "windows": windows,
         });
-        if let (Some(name), Value::Object(o)) = (&self.calibration, &mut doc) {
-            o.insert("calibration".into(), name.as_str().into());
+        if let Value::Object(o) = &mut doc {
+            if let Some(name) = &self.calibration {
+                o.insert("calibration".into(), name.as_str().into());
+            }
+            if let Some(target) = &self.target {
+                o.insert("target".into(), target.as_str().into());
+            }
+            if let Some(source) = &self.source {
+                o.insert("source".into(), source.as_str().into());
+            }
+            if let Some(runs) = self.runs {
+                o.insert("runs".into(), runs.into());
+            }
+            if let Some(informative) = self.informative {
+                o.insert("informative".into(), informative.into());
+            }
         }
         serde_json::to_string_pretty(&doc).unwrap_or_default()
     }

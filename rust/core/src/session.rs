@@ -160,6 +160,11 @@ pub struct Session {
     /// The venue loaded with [`Session::load_venue`], its alignment and its cells in the
     /// world frame.
     pub(crate) venue: Option<LoadedVenue>,
+    /// The walk itself: the start pose and every frame's pose (index = frame number), for
+    /// the estimate from one walk.
+    pub(crate) walk: Vec<(i64, Pose)>,
+    /// The calibration given with [`Session::set_calibration`].
+    pub(crate) calibration: Option<crate::calibration::Calibration>,
 }
 
 /// A venue map and this session's place in it.
@@ -233,6 +238,8 @@ impl Session {
             markers: Vec::new(),
             anchors: Vec::new(),
             venue: None,
+            walk: Vec::with_capacity(RESERVE_FRAMES + 1),
+            calibration: None,
         }
     }
 
@@ -262,6 +269,7 @@ impl Session {
         let pose = pose.validated("pose")?;
         self.state = SessionState::Recording;
         self.start = Some((t_ns, pose));
+        self.walk.push((t_ns, pose));
         self.last_t_ns = t_ns;
         self.last_position = pose.position;
         self.sub_start_ns = t_ns;
@@ -303,6 +311,7 @@ impl Session {
         };
         let length_m = self.path_to(pose.position)?;
         self.frame_intervals_ns.push(interval);
+        self.walk.push((t_ns, pose));
         self.length_m = length_m;
         self.last_position = pose.position;
         self.last_t_ns = t_ns;
@@ -545,6 +554,11 @@ impl Session {
         self.stop = Some((t_ns, pose));
         self.state = SessionState::Stopped;
         self.tolerance_ns = Some(self.compute_tolerance_ns());
+        if self.results.is_none() {
+            // With a calibration, the walk colours itself now, offline; a walk too short for
+            // one window simply has no results yet.
+            let _ = self.estimate_from_walk();
+        }
         self.refresh_markers();
         Ok(self.make_summary())
     }

@@ -1,13 +1,16 @@
-//! Fitting a [`Calibration`] on sequences with ground truth, and scoring it on sequences it
+//! Fitting a [`Calibration`] on sequences with ground truth: one model per target and run
+//! count, each with its features chosen by leave-one-sequence-out, and scored on sequences it
 //! was not fitted on.
 
 use nalgebra::{DMatrix, DVector};
-
-use crate::calibration::{
-    AgreementScores, CALIBRATION_FEATURES, CALIBRATION_FORMAT, CALIBRATION_VERSION,
-    CalibrationModel, CalibrationScores, FEATURE_OFFSETS, FittedOn, FittedSequence, HeldOutScores,
-    IntervalModel, WindowFeatures, design_row, smooth, unit_of, window_features,
+use rayon::prelude::*;
+use sitar_core::calibration::{
+    AgreementScores, CALIBRATION_FORMAT, CALIBRATION_VERSION, CalibrationModel, CandidateScores,
+    Feature, FittedOn, FittedSequence, HeldOutScores, INFORMATIVE_SPEARMAN, IntervalModel,
+    ModelScores, RunCount, Target, WindowFeatures, design_row, smooth_features,
 };
+
+use crate::calibration::{expected_features, live_windows, unit_of};
 use crate::sync::seconds_to_ns;
 use crate::{
     Calibration, Error, EstimateOptions, PairwiseValues, Thresholds, Trajectory,
@@ -18,28 +21,111 @@ use crate::{
 pub const DEFAULT_SPREAD_MATCH: f64 = 0.45;
 /// The default number of neighbouring windows on each side averaged into a window's features.
 pub const DEFAULT_SMOOTHING_WINDOWS: usize = 3;
+/// Candidates whose mean held-out Spearman's ρ is within this of the best are "within noise":
+/// the one with the fewest features among them is kept.
+pub const SELECTION_NOISE: f64 = 0.01;
 /// True errors below this are taken as this in the logarithm (0.01 mm).
 const MIN_TRUTH: f64 = 1e-5;
 
-/// One sequence ready for fitting: per window with a true error, its smoothed features.
+/// The motion feature sets a model may use, simplest first.
+const MOTION_SETS: [&[Feature]; 4] = [
+    &[Feature::PathM, Feature::RotationDeg],
+    &[Feature::PathM, Feature::RotationDeg, Feature::DisplacementM],
+    &[Feature::PathM, Feature::RotationDeg, Feature::JitterMps2],
+    &[
+        Feature::PathM,
+        Feature::RotationDeg,
+        Feature::DisplacementM,
+        Feature::JitterMps2,
+    ],
+];
+
+/// The candidate feature sets of a model for `runs`: the motion sets, and with several runs
+/// the spread alone and the spread with each motion set.
+pub fn candidate_features(runs: RunCount) -> Vec<Vec<Feature>> {
+    let motion = MOTION_SETS.iter().map(|m| m.to_vec());
+    match runs {
+        RunCount::One => motion.collect(),
+        RunCount::Several => std::iter::once(vec![Feature::Spread])
+            .chain(motion.clone())
+            .chain(motion.map(|m| std::iter::once(Feature::Spread).chain(m).collect()))
+            .collect(),
+    }
+}
+
+/// Windows with a true error: what the runs show for each (smoothed) and the truth.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct WindowSet {
+    /// The true error per window.
+    pub truth: Vec<f64>,
+    /// The uncalibrated estimate (the spread) of the same windows; NaN where there is none.
+    pub raw: Vec<f64>,
+    /// The smoothed features of the same windows.
+    pub features: Vec<WindowFeatures>,
+}
+
+impl WindowSet {
+    fn len(&self) -> usize {
+        self.truth.len()
+    }
+
+    fn extend(&mut self, other: &WindowSet) {
+        self.truth.extend_from_slice(&other.truth);
+        self.raw.extend_from_slice(&other.raw);
+        self.features.extend_from_slice(&other.features);
+    }
+}
+
+/// One sequence ready for fitting.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CalibrationSequence {
     /// Its name.
     pub name: String,
     /// Runs in set A and set B.
     pub sets: (usize, usize),
-    /// The true error per window (mean RPE of set A against the ground truth).
-    pub truth: Vec<f64>,
-    /// The uncalibrated estimate of the same windows.
-    pub raw: Vec<f64>,
-    /// The smoothed features of the same windows.
-    pub features: Vec<WindowFeatures>,
+    /// The expected error: per window of set B's pairwise estimate, the mean error of set A
+    /// against the ground truth; the spread and the median motion of set B.
+    pub expected: WindowSet,
+    /// Each run of set B in turn as the live run: its own error, its own motion, and the
+    /// spread between it and the others of set B (its replays).
+    pub live: Vec<WindowSet>,
+}
+
+/// Pairs each window start with the truth of the nearest key within `tolerance`.
+fn matched(
+    starts: impl Iterator<Item = i64>,
+    truth: &[(i64, f64)],
+    tolerance: i64,
+) -> Vec<Option<f64>> {
+    let keys: Vec<i64> = truth.iter().map(|&(k, _)| k).collect();
+    starts
+        .map(|s| crate::evaluate::nearest(&keys, s, tolerance).map(|i| truth[i].1))
+        .collect()
+}
+
+/// The windows of `raw` and `features` (smoothed over all of them) that have a truth.
+fn window_set(
+    truth: &[Option<f64>],
+    raw: &[f64],
+    features: &[WindowFeatures],
+    h: usize,
+) -> WindowSet {
+    let smoothed = smooth_features(features, h);
+    let mut out = WindowSet::default();
+    for ((t, r), f) in truth.iter().zip(raw).zip(smoothed) {
+        if let Some(t) = t {
+            out.truth.push(*t);
+            out.raw.push(*r);
+            out.features.push(f);
+        }
+    }
+    out
 }
 
 impl CalibrationSequence {
-    /// The windows of one sequence: the true error from `set_a`, the estimate (with
-    /// `opts.setting`) and the motion from `set_b`, features smoothed over
-    /// `smoothing_windows` neighbours before the windows without a true error are left out.
+    /// The windows of one sequence (module docs), features smoothed over `smoothing_windows`
+    /// neighbours before the windows without a true error are left out. Set B needs at least
+    /// two runs.
     pub fn new(
         name: &str,
         ground_truth: &Trajectory,
@@ -48,31 +134,62 @@ impl CalibrationSequence {
         opts: &EstimateOptions,
         smoothing_windows: usize,
     ) -> Result<Self, Error> {
+        let tolerance = seconds_to_ns(opts.t_max_diff_s);
         let truth = ground_truth_errors(ground_truth, set_a, opts)?;
         let estimate = PairwiseValues::compute(set_b, opts)?.estimate(opts.setting);
-        let features = smooth(&window_features(&estimate, set_b), smoothing_windows);
-        let keys: Vec<i64> = truth.iter().map(|&(k, _)| k).collect();
-        let tolerance = seconds_to_ns(opts.t_max_diff_s);
-        let mut out = Self {
-            name: name.to_owned(),
-            sets: (set_a.len(), set_b.len()),
-            truth: Vec::new(),
-            raw: Vec::new(),
-            features: Vec::new(),
-        };
-        for (window, f) in estimate.windows.iter().zip(features) {
-            if let Some(i) = crate::evaluate::nearest(&keys, window.start, tolerance) {
-                out.truth.push(truth[i].1);
-                out.raw.push(window.error_m);
-                out.features.push(f);
-            }
-        }
-        if out.truth.is_empty() {
+        let raw: Vec<f64> = estimate.windows.iter().map(|w| w.error_m).collect();
+        let expected = window_set(
+            &matched(estimate.windows.iter().map(|w| w.start), &truth, tolerance),
+            &raw,
+            &expected_features(&estimate, set_b),
+            smoothing_windows,
+        );
+        if expected.truth.is_empty() {
             return Err(Error::NoPairs(format!(
                 "{name}: no estimate window matches a ground-truth window"
             )));
         }
-        Ok(out)
+        let live = (0..set_b.len())
+            .into_par_iter()
+            .map(|r| {
+                let replays: Vec<Trajectory> = set_b
+                    .iter()
+                    .enumerate()
+                    .filter(|&(j, _)| j != r)
+                    .map(|(_, t)| t.clone())
+                    .collect();
+                let own = ground_truth_errors(ground_truth, std::slice::from_ref(&set_b[r]), opts)?;
+                let windows = live_windows(&set_b[r], &replays, opts)?;
+                let raw: Vec<f64> = windows.windows.iter().map(|w| w.error_m).collect();
+                Ok(window_set(
+                    &matched(windows.windows.iter().map(|w| w.start), &own, tolerance),
+                    &raw,
+                    &windows.features,
+                    smoothing_windows,
+                ))
+            })
+            .collect::<Result<Vec<_>, Error>>()?;
+        Ok(Self {
+            name: name.to_owned(),
+            sets: (set_a.len(), set_b.len()),
+            expected,
+            live,
+        })
+    }
+
+    /// The windows a model of `target` learns from: the expected windows, or every live
+    /// run's windows one after the other.
+    pub fn windows(&self, target: Target) -> WindowSet {
+        match target {
+            Target::Expected => self.expected.clone(),
+            Target::Live => {
+                let mut all = WindowSet::default();
+                for run in &self.live {
+                    all.extend(run);
+                }
+                all
+            }
+        }
     }
 }
 
@@ -104,37 +221,63 @@ impl Default for FitOptions {
     }
 }
 
-/// Fits a calibration on `sequences` (at least one) and, with two or more, scores it by
-/// leaving each sequence out in turn.
+/// The models a calibration holds, in file order.
+pub const MODELS: [(Target, RunCount); 3] = [
+    (Target::Live, RunCount::One),
+    (Target::Live, RunCount::Several),
+    (Target::Expected, RunCount::Several),
+];
+
+/// Fits a calibration on `sequences` (at least one): for each model of [`MODELS`], every
+/// candidate feature set ([`candidate_features`]) is scored by leaving each sequence out in
+/// turn (with two or more sequences), and the one with the fewest features whose mean
+/// held-out Spearman's ρ is within [`SELECTION_NOISE`] of the best is kept; with one
+/// sequence the richest candidate is kept and judged in sample.
 ///
-/// The model is the least-squares fit of ln(truth) on the features of every window of every
-/// sequence, then stretched ([`CalibrationModel`]). The interval is *cross-conformal by
+/// A model is the least-squares fit of ln(truth) on the log features of every window of
+/// every sequence, then stretched ([`CalibrationModel`]). Its interval is *cross-conformal by
 /// sequence*: each sequence's log residuals come from a model fitted on the other sequences,
-/// so they include how much sequences differ, and the interval's bounds are the
-/// (1 ∓ coverage)/2 quantiles of all of them (numpy's linear interpolation). Windows of a
-/// sequence are not exchangeable (neighbours overlap), sequences are, roughly: that is why
-/// the split is by sequence. With one sequence the residuals are in-sample (method
-/// `in_sample`: its coverage on new sequences is not known).
+/// so they include how much sequences differ, and the bounds are the (1 ∓ coverage)/2
+/// quantiles of all of them (numpy's linear interpolation). Windows of a sequence are not
+/// exchangeable (neighbours overlap), sequences are, roughly: that is why the split is by
+/// sequence. With one sequence the residuals are in-sample (method `in_sample`).
 pub fn fit_calibration(
     sequences: &[CalibrationSequence],
     opts: &FitOptions,
 ) -> Result<Calibration, Error> {
     check_options(sequences, opts)?;
-    let mut calibration = fit_without_scores(sequences, opts)?;
-    calibration.fitted_on.sequences = sequences
-        .iter()
-        .map(|s| FittedSequence {
-            name: s.name.clone(),
-            runs: s.sets.0 + s.sets.1,
-            set_a: s.sets.0,
-            set_b: s.sets.1,
-            windows: s.truth.len(),
-        })
-        .collect();
-    if sequences.len() >= 2 {
-        calibration.scores = Some(leave_one_sequence_out(sequences, opts)?);
+    let models = MODELS
+        .par_iter()
+        .map(|&(target, runs)| fit_chosen_model(sequences, target, runs, opts))
+        .collect::<Result<Vec<_>, Error>>()?;
+    Ok(Calibration {
+        format: CALIBRATION_FORMAT.into(),
+        version: CALIBRATION_VERSION,
+        fitted_on: fitted_on(sequences, opts),
+        informative: models.iter().all(|m| m.informative),
+        models,
+    })
+}
+
+fn fitted_on(sequences: &[CalibrationSequence], opts: &FitOptions) -> FittedOn {
+    FittedOn {
+        sequences: sequences
+            .iter()
+            .map(|s| FittedSequence {
+                name: s.name.clone(),
+                runs: s.sets.0 + s.sets.1,
+                set_a: s.sets.0,
+                set_b: s.sets.1,
+                windows: s.expected.len(),
+            })
+            .collect(),
+        setting: opts.estimate.setting.to_string(),
+        window_frames: opts.estimate.delta,
+        pose_relation: opts.estimate.pose_relation.to_string(),
+        unit: unit_of(opts.estimate.pose_relation).into(),
+        coverage: opts.coverage,
+        t_max_diff_s: opts.estimate.t_max_diff_s,
     }
-    Ok(calibration)
 }
 
 fn check_options(sequences: &[CalibrationSequence], opts: &FitOptions) -> Result<(), Error> {
@@ -156,20 +299,24 @@ fn check_options(sequences: &[CalibrationSequence], opts: &FitOptions) -> Result
         )));
     }
     for s in sequences {
-        if s.truth.len() != s.features.len() || s.raw.len() != s.features.len() {
-            return Err(Error::InvalidArgument(format!(
-                "{}: {} true errors and {} estimates for {} windows",
-                s.name,
-                s.truth.len(),
-                s.raw.len(),
-                s.features.len()
-            )));
-        }
-        if let Some(i) = s.truth.iter().position(|t| !t.is_finite()) {
-            return Err(Error::InvalidArgument(format!(
-                "{}: the true error of window {i} is not finite",
-                s.name
-            )));
+        for (what, set) in
+            std::iter::once(("expected", &s.expected)).chain(s.live.iter().map(|l| ("live", l)))
+        {
+            if set.truth.len() != set.features.len() || set.raw.len() != set.features.len() {
+                return Err(Error::InvalidArgument(format!(
+                    "{} ({what}): {} true errors and {} estimates for {} windows",
+                    s.name,
+                    set.truth.len(),
+                    set.raw.len(),
+                    set.features.len()
+                )));
+            }
+            if let Some(i) = set.truth.iter().position(|t| !t.is_finite()) {
+                return Err(Error::InvalidArgument(format!(
+                    "{} ({what}): the true error of window {i} is not finite",
+                    s.name
+                )));
+            }
         }
     }
     Ok(())
@@ -180,29 +327,136 @@ fn log_truth(t: f64) -> f64 {
     t.max(MIN_TRUTH).ln()
 }
 
-/// The stretched least-squares model on the windows of `sequences`.
-fn fit_model(
-    sequences: &[&CalibrationSequence],
+/// The model of `target` and `runs`, its features chosen among the candidates.
+fn fit_chosen_model(
+    sequences: &[CalibrationSequence],
+    target: Target,
+    runs: RunCount,
     opts: &FitOptions,
 ) -> Result<CalibrationModel, Error> {
-    let rows: Vec<([f64; 4], f64)> = sequences
+    let sets: Vec<(String, WindowSet)> = sequences
         .iter()
-        .flat_map(|s| {
-            s.features
-                .iter()
-                .zip(&s.truth)
-                .map(|(f, &t)| (design_row(f, &FEATURE_OFFSETS), log_truth(t)))
-        })
-        .filter(|(x, _)| x.iter().all(|v| v.is_finite()))
+        .map(|s| (s.name.clone(), s.windows(target)))
         .collect();
-    if rows.len() < 8 {
+    let candidates = candidate_features(runs);
+    if sets.len() < 2 {
+        let features = candidates.last().cloned().unwrap_or_default();
+        let mut model = fit_without_scores(&sets, &features, target, runs, opts)?;
+        let mut scores = held_out_scores(&model, &sets[0].1, opts.thresholds)?;
+        if runs == RunCount::One {
+            scores.raw = None;
+        }
+        model.informative = !(scores.calibrated.spearman < INFORMATIVE_SPEARMAN);
+        model.scores = Some(ModelScores {
+            method: "in_sample".into(),
+            truth: truth_name(target).into(),
+            thresholds: [opts.thresholds.medium, opts.thresholds.high],
+            raw: scores.raw,
+            calibrated: scores.calibrated,
+            sequences: vec![HeldOutScores {
+                name: sets[0].0.clone(),
+                ..scores
+            }],
+            candidates: Vec::new(),
+        });
+        return Ok(model);
+    }
+    let scored = candidates
+        .par_iter()
+        .map(|features| leave_one_sequence_out(&sets, features, target, runs, opts))
+        .collect::<Result<Vec<_>, Error>>()?;
+    let chosen = choose(
+        &scored
+            .iter()
+            .map(|s| (s.0.len(), s.1.calibrated.spearman))
+            .collect::<Vec<_>>(),
+    );
+    let mut model = fit_without_scores(&sets, &scored[chosen].0, target, runs, opts)?;
+    let (_, mut scores) = scored[chosen].clone();
+    model.informative = !(scores.calibrated.spearman < INFORMATIVE_SPEARMAN);
+    scores.candidates = scored
+        .iter()
+        .enumerate()
+        .map(|(i, (features, s))| CandidateScores {
+            features: features.clone(),
+            scores: s.calibrated,
+            chosen: i == chosen,
+        })
+        .collect();
+    model.scores = Some(scores);
+    Ok(model)
+}
+
+/// `own` for a live run's error, `expected` otherwise.
+fn truth_name(target: Target) -> &'static str {
+    match target {
+        Target::Live => "own",
+        Target::Expected => "expected",
+    }
+}
+
+/// The index of the candidate kept among `(features, mean ρ)`: the fewest features among those
+/// within [`SELECTION_NOISE`] of the best ρ, the higher ρ on a tie. NaN scores never win.
+pub fn choose(candidates: &[(usize, f64)]) -> usize {
+    let best = candidates
+        .iter()
+        .map(|c| c.1)
+        .filter(|r| r.is_finite())
+        .fold(f64::NEG_INFINITY, f64::max);
+    (0..candidates.len())
+        .filter(|&i| !best.is_finite() || candidates[i].1 >= best - SELECTION_NOISE)
+        .min_by(|&a, &b| {
+            let (fa, ra) = candidates[a];
+            let (fb, rb) = candidates[b];
+            fa.cmp(&fb).then(rb.total_cmp(&ra))
+        })
+        .unwrap_or(0)
+}
+
+/// Rows of ln features and ln truth over `sets`, non-finite rows left out.
+fn rows<'a>(
+    sets: impl Iterator<Item = &'a WindowSet>,
+    features: &[Feature],
+) -> (Vec<Vec<f64>>, Vec<f64>) {
+    let offsets: Vec<f64> = features.iter().map(|f| f.offset()).collect();
+    let (mut x, mut y) = (Vec::new(), Vec::new());
+    for set in sets {
+        for (f, &t) in set.features.iter().zip(&set.truth) {
+            let row = design_row(features, &offsets, f);
+            if row.iter().all(|v| v.is_finite()) && !features_missing(features, f) {
+                x.push(row);
+                y.push(log_truth(t));
+            }
+        }
+    }
+    (x, y)
+}
+
+/// Whether a feature the model reads is NaN (no spread from one run).
+fn features_missing(features: &[Feature], f: &WindowFeatures) -> bool {
+    features.iter().any(|&feature| f.get(feature).is_nan())
+}
+
+/// The stretched least-squares model of `features` on `sets` (its interval left empty).
+fn fit_model<'a>(
+    sets: impl Iterator<Item = &'a WindowSet>,
+    features: &[Feature],
+    target: Target,
+    runs: RunCount,
+    opts: &FitOptions,
+) -> Result<CalibrationModel, Error> {
+    let (rows, y) = rows(sets, features);
+    let p = features.len() + 1;
+    if rows.len() < 2 * p + 4 {
         return Err(Error::InvalidArgument(format!(
-            "{} windows with finite features: a calibration needs at least 8",
-            rows.len()
+            "{} windows with finite features: a model of {} features needs at least {}",
+            rows.len(),
+            features.len(),
+            2 * p + 4
         )));
     }
-    let x = DMatrix::from_fn(rows.len(), 4, |r, c| rows[r].0[c]);
-    let y = DVector::from_iterator(rows.len(), rows.iter().map(|r| r.1));
+    let x = DMatrix::from_fn(rows.len(), p, |r, c| rows[r][c]);
+    let y = DVector::from_vec(y);
     let w = x
         .clone()
         .svd(true, true)
@@ -222,24 +476,115 @@ fn fit_model(
         ));
     }
     Ok(CalibrationModel {
+        target,
+        runs,
         kind: "log_linear".into(),
-        features: CALIBRATION_FEATURES.iter().map(|s| s.to_string()).collect(),
-        offsets: FEATURE_OFFSETS.to_vec(),
+        features: features.to_vec(),
+        offsets: features.iter().map(|f| f.offset()).collect(),
         smoothing_windows: opts.smoothing_windows,
         coefficients: w.iter().copied().collect(),
         spread_match: opts.spread_match,
         center,
         stretch: (truth_spread / fitted_spread).powf(opts.spread_match),
+        interval: IntervalModel {
+            method: String::new(),
+            log_lower: 0.0,
+            log_upper: 0.0,
+            residuals: 0,
+        },
+        informative: true,
+        scores: None,
     })
 }
 
-fn log_residuals(model: &CalibrationModel, s: &CalibrationSequence) -> Vec<f64> {
-    s.features
+fn log_residuals(model: &CalibrationModel, set: &WindowSet) -> Vec<f64> {
+    set.features
         .iter()
-        .zip(&s.truth)
+        .zip(&set.truth)
+        .filter(|(f, _)| !features_missing(&model.features, f))
         .map(|(f, &t)| log_truth(t) - model.log_value(f))
         .filter(|r| r.is_finite())
         .collect()
+}
+
+/// The model on all of `sets` with its cross-conformal interval (in sample with one set).
+fn fit_without_scores(
+    sets: &[(String, WindowSet)],
+    features: &[Feature],
+    target: Target,
+    runs: RunCount,
+    opts: &FitOptions,
+) -> Result<CalibrationModel, Error> {
+    let mut model = fit_model(sets.iter().map(|s| &s.1), features, target, runs, opts)?;
+    let mut residuals = Vec::new();
+    if sets.len() >= 2 {
+        for (i, held) in sets.iter().enumerate() {
+            let others = sets
+                .iter()
+                .enumerate()
+                .filter(|&(j, _)| j != i)
+                .map(|(_, s)| &s.1);
+            residuals.extend(log_residuals(
+                &fit_model(others, features, target, runs, opts)?,
+                &held.1,
+            ));
+        }
+    } else {
+        residuals = log_residuals(&model, &sets[0].1);
+    }
+    let count = residuals.len();
+    model.interval = IntervalModel {
+        method: if sets.len() >= 2 {
+            "cross_conformal_by_sequence"
+        } else {
+            "in_sample"
+        }
+        .into(),
+        log_lower: quantile(&mut residuals, (1.0 - opts.coverage) / 2.0),
+        log_upper: quantile(&mut residuals, (1.0 + opts.coverage) / 2.0),
+        residuals: count,
+    };
+    Ok(model)
+}
+
+/// How `model` and the raw spread score on `set`.
+fn held_out_scores(
+    model: &CalibrationModel,
+    set: &WindowSet,
+    thresholds: Thresholds,
+) -> Result<HeldOutScores, Error> {
+    let (mut truth, mut value, mut lower, mut upper) = (vec![], vec![], vec![], vec![]);
+    for (f, &t) in set.features.iter().zip(&set.truth) {
+        if features_missing(&model.features, f) {
+            continue;
+        }
+        let p = model.predict(f);
+        truth.push(t);
+        value.push(p.value);
+        lower.push(p.lower);
+        upper.push(p.upper);
+    }
+    let with_raw: (Vec<f64>, Vec<f64>) = set
+        .truth
+        .iter()
+        .zip(&set.raw)
+        .filter(|(_, r)| r.is_finite())
+        .map(|(t, r)| (*t, *r))
+        .unzip();
+    Ok(HeldOutScores {
+        name: String::new(),
+        raw: if with_raw.0.is_empty() {
+            None
+        } else {
+            Some(agreement_scores(
+                &with_raw.0,
+                &with_raw.1,
+                None,
+                thresholds,
+            )?)
+        },
+        calibrated: agreement_scores(&truth, &value, Some((&lower, &upper)), thresholds)?,
+    })
 }
 
 /// The share of the truly high windows (`truth ≥ thresholds.high`) whose `values` are low
@@ -283,7 +628,7 @@ pub fn agreement_scores(
 }
 
 /// The mean of each score over sequences.
-fn mean_scores(all: &[AgreementScores]) -> AgreementScores {
+pub fn mean_scores(all: &[AgreementScores]) -> AgreementScores {
     let mean = |f: &dyn Fn(&AgreementScores) -> f64| {
         let values: Vec<f64> = all.iter().map(f).filter(|v| v.is_finite()).collect();
         crate::mean(&values)
@@ -305,103 +650,84 @@ fn mean_scores(all: &[AgreementScores]) -> AgreementScores {
     }
 }
 
-/// Each sequence scored raw and calibrated by a calibration fitted on the others.
-pub fn leave_one_sequence_out(
-    sequences: &[CalibrationSequence],
+/// Each set scored by the model of `features` fitted (interval included) on the others.
+fn leave_one_sequence_out(
+    sets: &[(String, WindowSet)],
+    features: &[Feature],
+    target: Target,
+    runs: RunCount,
     opts: &FitOptions,
-) -> Result<CalibrationScores, Error> {
-    if sequences.len() < 2 {
-        return Err(Error::InvalidArgument(
-            "leaving one sequence out needs at least 2 sequences".into(),
-        ));
-    }
+) -> Result<(Vec<Feature>, ModelScores), Error> {
     let mut held_out = Vec::new();
-    for (i, held) in sequences.iter().enumerate() {
-        let others: Vec<CalibrationSequence> = sequences
+    for (i, (name, held)) in sets.iter().enumerate() {
+        let others: Vec<(String, WindowSet)> = sets
             .iter()
             .enumerate()
             .filter(|&(j, _)| j != i)
             .map(|(_, s)| s.clone())
             .collect();
-        // The held-out model is fitted exactly as the final one, its interval included
-        // (cross-conformal over the others when there are two or more of them).
-        let calibration = fit_without_scores(&others, opts)?;
-        let predicted: Vec<(f64, f64, f64)> = held
-            .features
-            .iter()
-            .map(|f| calibration.predict(f))
-            .collect();
-        let value: Vec<f64> = predicted.iter().map(|p| p.0).collect();
-        let lower: Vec<f64> = predicted.iter().map(|p| p.1).collect();
-        let upper: Vec<f64> = predicted.iter().map(|p| p.2).collect();
+        let model = fit_without_scores(&others, features, target, runs, opts)?;
         held_out.push(HeldOutScores {
-            name: held.name.clone(),
-            raw: agreement_scores(&held.truth, &held.raw, None, opts.thresholds)?,
-            calibrated: agreement_scores(
-                &held.truth,
-                &value,
-                Some((&lower, &upper)),
-                opts.thresholds,
-            )?,
+            name: name.clone(),
+            ..held_out_scores(&model, held, opts.thresholds)?
         });
     }
-    let raw: Vec<AgreementScores> = held_out.iter().map(|h| h.raw).collect();
+    if runs == RunCount::One {
+        // One run has no spread to compare with.
+        held_out.iter_mut().for_each(|h| h.raw = None);
+    }
+    let raw: Vec<AgreementScores> = held_out.iter().filter_map(|h| h.raw).collect();
     let calibrated: Vec<AgreementScores> = held_out.iter().map(|h| h.calibrated).collect();
-    Ok(CalibrationScores {
-        method: "leave_one_sequence_out".into(),
-        thresholds: [opts.thresholds.medium, opts.thresholds.high],
-        sequences: held_out,
-        raw: mean_scores(&raw),
-        calibrated: mean_scores(&calibrated),
-    })
+    Ok((
+        features.to_vec(),
+        ModelScores {
+            method: "leave_one_sequence_out".into(),
+            truth: truth_name(target).into(),
+            thresholds: [opts.thresholds.medium, opts.thresholds.high],
+            raw: (!raw.is_empty() && raw.len() == held_out.len()).then(|| mean_scores(&raw)),
+            calibrated: mean_scores(&calibrated),
+            sequences: held_out,
+            candidates: Vec::new(),
+        },
+    ))
 }
 
-/// [`fit_calibration`] without its own leave-one-out scores (the inner fits of the scoring).
-fn fit_without_scores(
+/// The model of `target` and `runs` with the given `features` on all of `sequences`, its
+/// interval cross-conformal by sequence (in sample with one), without scores: what
+/// [`fit_calibration`] keeps once it has chosen the features.
+pub fn fit_features(
     sequences: &[CalibrationSequence],
+    features: &[Feature],
+    target: Target,
+    runs: RunCount,
     opts: &FitOptions,
-) -> Result<Calibration, Error> {
-    let all: Vec<&CalibrationSequence> = sequences.iter().collect();
-    let model = fit_model(&all, opts)?;
-    let mut residuals = Vec::new();
-    if sequences.len() >= 2 {
-        for (i, held) in sequences.iter().enumerate() {
-            let others: Vec<&CalibrationSequence> = all
-                .iter()
-                .enumerate()
-                .filter(|&(j, _)| j != i)
-                .map(|(_, s)| *s)
-                .collect();
-            residuals.extend(log_residuals(&fit_model(&others, opts)?, held));
-        }
-    } else {
-        residuals = log_residuals(&model, &sequences[0]);
+) -> Result<CalibrationModel, Error> {
+    check_options(sequences, opts)?;
+    let sets: Vec<(String, WindowSet)> = sequences
+        .iter()
+        .map(|s| (s.name.clone(), s.windows(target)))
+        .collect();
+    fit_without_scores(&sets, features, target, runs, opts)
+}
+
+/// The leave-one-sequence-out scores of one model of `target` and `runs` with `features`
+/// (what [`fit_calibration`] computes for every candidate).
+pub fn score_features(
+    sequences: &[CalibrationSequence],
+    features: &[Feature],
+    target: Target,
+    runs: RunCount,
+    opts: &FitOptions,
+) -> Result<ModelScores, Error> {
+    check_options(sequences, opts)?;
+    let sets: Vec<(String, WindowSet)> = sequences
+        .iter()
+        .map(|s| (s.name.clone(), s.windows(target)))
+        .collect();
+    if sets.len() < 2 {
+        return Err(Error::InvalidArgument(
+            "leaving one sequence out needs at least 2 sequences".into(),
+        ));
     }
-    let count = residuals.len();
-    Ok(Calibration {
-        format: CALIBRATION_FORMAT.into(),
-        version: CALIBRATION_VERSION,
-        fitted_on: FittedOn {
-            sequences: Vec::new(),
-            setting: opts.estimate.setting.to_string(),
-            window_frames: opts.estimate.delta,
-            pose_relation: opts.estimate.pose_relation.to_string(),
-            unit: unit_of(opts.estimate.pose_relation).into(),
-            coverage: opts.coverage,
-            t_max_diff_s: opts.estimate.t_max_diff_s,
-        },
-        model,
-        interval: IntervalModel {
-            method: if sequences.len() >= 2 {
-                "cross_conformal_by_sequence"
-            } else {
-                "in_sample"
-            }
-            .into(),
-            log_lower: quantile(&mut residuals, (1.0 - opts.coverage) / 2.0),
-            log_upper: quantile(&mut residuals, (1.0 + opts.coverage) / 2.0),
-            residuals: count,
-        },
-        scores: None,
-    })
+    Ok(leave_one_sequence_out(&sets, features, target, runs, opts)?.1)
 }

@@ -93,6 +93,11 @@ pub struct Estimate {
     pub windows: Vec<WindowEstimate>,
     /// The name of the calibration applied (JSON `calibration`), if any.
     pub calibration: Option<String>,
+    /// What the calibration estimated (JSON `target` and `informative`), if applied.
+    pub calibrated_as: Option<crate::CalibratedAs>,
+    /// Where the estimate comes from (JSON `source`: `walk` or `replays`), where the caller
+    /// says (the backend does).
+    pub source: Option<&'static str>,
 }
 
 impl Estimate {
@@ -118,6 +123,10 @@ impl Estimate {
     /// `angle_rad` (`error_rad`/`spread_rad`), `unit-less` for `full` (`error`/`spread`), as
     /// evo names them. `class` comes from `thresholds`, which are in that unit; it is given for
     /// `trans_part` and `angle_deg` windows (the two the phone colours) and omitted otherwise.
+    /// A calibrated estimate names its calibration (`calibration`), the error it estimates
+    /// (`target`: `live` or `expected`), whether the calibration's runs predict the error at
+    /// all (`informative`) and the number of runs (`runs`); `source` (`walk` or `replays`)
+    /// where the caller set it.
     pub fn to_json(&self, thresholds: Thresholds) -> String {
         let (error_key, spread_key, unit) = match self.pose_relation {
             PoseRelation::TranslationPart => ("error_m", "spread_m", "m"),
@@ -158,6 +167,14 @@ impl Estimate {
             unit: &'static str,
             #[serde(skip_serializing_if = "Option::is_none")]
             calibration: Option<&'a str>,
+            #[serde(skip_serializing_if = "Option::is_none")]
+            target: Option<&'static str>,
+            #[serde(skip_serializing_if = "Option::is_none")]
+            informative: Option<bool>,
+            #[serde(skip_serializing_if = "Option::is_none")]
+            source: Option<&'static str>,
+            #[serde(skip_serializing_if = "Option::is_none")]
+            runs: Option<usize>,
             windows: Vec<WindowJson<'a>>,
         }
         let document = Document {
@@ -172,6 +189,10 @@ impl Estimate {
             window_frames: self.delta,
             unit,
             calibration: self.calibration.as_deref(),
+            target: self.calibrated_as.map(|c| c.target.name()),
+            informative: self.calibrated_as.map(|c| c.informative),
+            source: self.source,
+            runs: (self.calibrated_as.is_some() || self.source.is_some()).then_some(self.trials),
             windows,
         };
         serde_json::to_string(&document).expect("plain data serializes")
@@ -308,6 +329,8 @@ impl PairwiseValues {
             delta: self.delta,
             windows: per_block.into_iter().flatten().collect(),
             calibration: None,
+            calibrated_as: None,
+            source: None,
         }
     }
 
@@ -387,6 +410,8 @@ mod tests {
                 window(2000, f64::NAN, 1, f64::NAN),
             ],
             calibration: None,
+            calibrated_as: None,
+            source: None,
         };
         assert_eq!(
             e.to_json(Thresholds::new(0.1, 0.2)),

@@ -8,6 +8,7 @@
 
 use rayon::prelude::*;
 
+use crate::calibration::ApplyCalibration;
 use crate::sync::{associate_named, seconds_to_ns};
 use crate::{
     Calibration, Error, EstimateOptions, PairwiseValues, RpeOptions, Setting, Thresholds,
@@ -117,7 +118,15 @@ pub fn ground_truth_errors(
             "need at least one trial for the ground-truth error".into(),
         ));
     }
-    ground_truth.validate()?;
+    // Published ground truth may repeat a stamp (TUM fr2_xyz does 8 times): association keeps
+    // both poses, as evo does. Going back in time is still refused.
+    ground_truth.validate_poses()?;
+    if let Some(i) = ground_truth.stamps.windows(2).position(|w| w[1] < w[0]) {
+        return Err(Error::InvalidTrajectory(format!(
+            "ground truth: stamp {} is below stamp {i}",
+            i + 1
+        )));
+    }
     for (i, trial) in trials.iter().enumerate() {
         trial
             .validate()
@@ -273,7 +282,7 @@ pub fn calibrated_matched_windows(
     calibration: &Calibration,
 ) -> Result<(usize, Vec<MatchedWindows>), Error> {
     for &setting in &opts.settings {
-        calibration.check(setting, opts.estimate.delta, opts.estimate.pose_relation)?;
+        calibration.check_estimate(setting, opts.estimate.delta, opts.estimate.pose_relation)?;
     }
     matched_windows_with(ground_truth, trials_a, trials_b, opts, Some(calibration))
 }
@@ -335,6 +344,92 @@ fn matched_windows_with(
         )));
     }
     Ok((truth.len(), out))
+}
+
+/// The matched windows against **each run's own error** (`sitar evaluate --truth own`): for
+/// every trial count `k` of `opts` (1 ..= |B|; 1 only with a calibration), every run `r` of
+/// the first `k` runs of set B in turn is the live run, with the other `k − 1` as its
+/// replays; its windows (keyed by its stamps) are estimated by `calibration` (alone when
+/// `k = 1`) or, without one, by the spread between it and its replays, and matched to its own
+/// RPE against the ground truth. The runs' windows are pooled per (k, setting). Returns the
+/// number of ground-truth windows of the first run with the matched windows.
+pub fn own_error_matched_windows(
+    ground_truth: &Trajectory,
+    trials_b: &[Trajectory],
+    opts: &EvaluationOptions,
+    calibration: Option<&Calibration>,
+) -> Result<(usize, Vec<MatchedWindows>), Error> {
+    let tolerance = seconds_to_ns(opts.estimate.t_max_diff_s);
+    let own: Vec<Vec<(i64, f64)>> = trials_b
+        .par_iter()
+        .map(|run| ground_truth_errors(ground_truth, std::slice::from_ref(run), &opts.estimate))
+        .collect::<Result<_, _>>()?;
+    let minimum = if calibration.is_some() { 1 } else { 2 };
+    let mut out = Vec::new();
+    for &count in &opts.trial_counts {
+        if count < minimum || count > trials_b.len() {
+            continue;
+        }
+        for &setting in &opts.settings {
+            let estimate_opts = EstimateOptions {
+                setting,
+                ..opts.estimate
+            };
+            let per_run = (0..count)
+                .into_par_iter()
+                .map(|r| {
+                    let replays: Vec<Trajectory> = (0..count)
+                        .filter(|&j| j != r)
+                        .map(|j| trials_b[j].clone())
+                        .collect();
+                    let estimate = match calibration {
+                        Some(c) => {
+                            crate::estimate_live(c, &trials_b[r], &replays, &estimate_opts, "")?
+                        }
+                        None => crate::live_spread(&trials_b[r], &replays, &estimate_opts)?,
+                    };
+                    Ok((r, estimate))
+                })
+                .collect::<Result<Vec<_>, Error>>()?;
+            let mut matched = MatchedWindows {
+                setting,
+                trials: count,
+                starts: Vec::new(),
+                truth: Vec::new(),
+                estimate: Vec::new(),
+                lower: Vec::new(),
+                upper: Vec::new(),
+            };
+            for (r, estimate) in per_run {
+                let keys: Vec<i64> = own[r].iter().map(|&(k, _)| k).collect();
+                for window in &estimate.windows {
+                    if let Some(index) = nearest(&keys, window.start, tolerance) {
+                        matched.starts.push(own[r][index].0);
+                        matched.truth.push(own[r][index].1);
+                        matched.estimate.push(window.error_m);
+                        if let Some(interval) = window.interval {
+                            matched.lower.push(interval.lower_m);
+                            matched.upper.push(interval.upper_m);
+                        }
+                    }
+                }
+            }
+            if matched.estimate.is_empty() {
+                return Err(Error::NoPairs(
+                    "no window of a live run matches a window of its own error".into(),
+                ));
+            }
+            out.push(matched);
+        }
+    }
+    if out.is_empty() {
+        return Err(Error::InvalidArgument(format!(
+            "no trial count in {:?} is between {minimum} and the {} runs of set B",
+            opts.trial_counts,
+            trials_b.len()
+        )));
+    }
+    Ok((own.first().map_or(0, Vec::len), out))
 }
 
 /// Runs the paper's evaluation protocol on one sequence ([`matched_windows`], then

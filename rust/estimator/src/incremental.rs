@@ -356,6 +356,8 @@ impl IncrementalEstimate {
             delta: self.options.delta,
             windows,
             calibration: None,
+            calibrated_as: None,
+            source: None,
         })
     }
 

@@ -220,13 +220,13 @@ pub use align::{Alignment, GravityAxis, Similarity, align, align_first, position
 pub use bag_writer::{PoseTopic, mcap_bag, ros1_bag, rosbag2_metadata};
 pub use bootstrap::{MeanInterval, bootstrap_mean};
 pub use calibration::{
-    AgreementScores, CALIBRATION_FEATURES, CALIBRATION_FORMAT, CALIBRATION_VERSION, Calibration,
-    CalibrationModel, CalibrationScores, FEATURE_OFFSETS, FittedOn, FittedSequence, HeldOutScores,
-    IntervalModel, WindowFeatures, smooth, window_features,
+    ApplyCalibration, CalibratedAs, LiveWindows, estimate_live, expected_features, live_spread,
+    live_windows, motion_at,
 };
 pub use calibration_fit::{
-    CalibrationSequence, DEFAULT_SMOOTHING_WINDOWS, DEFAULT_SPREAD_MATCH, FitOptions,
-    agreement_scores, fit_calibration, high_called_low, leave_one_sequence_out,
+    CalibrationSequence, DEFAULT_SMOOTHING_WINDOWS, DEFAULT_SPREAD_MATCH, FitOptions, MODELS,
+    SELECTION_NOISE, WindowSet, agreement_scores, candidate_features, choose, fit_calibration,
+    fit_features, high_called_low, mean_scores, score_features,
 };
 pub use direction::{
     DirectionComponents, DirectionRelation, ape_by_direction, direction_components, headings,
@@ -243,7 +243,7 @@ pub use estimate::{
 pub use evaluate::{
     ClassificationScores, Evaluation, EvaluationOptions, EvaluationRow, MatchedWindows,
     PAPER_CLASSIFIERS, calibrated_matched_windows, classification_scores, evaluate,
-    ground_truth_errors, matched_windows,
+    ground_truth_errors, matched_windows, own_error_matched_windows,
 };
 pub use formats::{
     NANOSECOND_STAMP_THRESHOLD, ReadOptions, ReadReport, StampOrder, TimeUnitRule, parse_euroc_csv,
@@ -270,6 +270,13 @@ pub use rosbag::{
 pub use rpg_align::{
     RPG_MAX_DIFF_NS, RpgAlignType, RpgAlignment, absolute_translation_errors, rpg_align,
     rpg_associate,
+};
+/// The calibration file and its models, shared with the phone and the backend.
+pub use sitar_core::calibration::{
+    AgreementScores, CALIBRATION_FORMAT, CALIBRATION_VERSION, Calibration, CalibrationModel,
+    CandidateScores, Feature, FittedOn, FittedSequence, HeldOutScores, INFORMATIVE_SPEARMAN,
+    IntervalModel, ModelScores, Prediction, RunCount, Target, WindowFeatures, WindowMotion,
+    smooth_features,
 };
 /// The class rule and its defaults, shared with the phone and the backend.
 pub use sitar_core::{DEFAULT_SETTING, ErrorClass, Thresholds};

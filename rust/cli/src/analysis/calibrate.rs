@@ -7,8 +7,9 @@ use std::path::PathBuf;
 use anyhow::{Context, Result, bail};
 use rayon::prelude::*;
 use sitar_estimator::{
-    AgreementScores, CalibrationSequence, DEFAULT_SMOOTHING_WINDOWS, DEFAULT_SPREAD_MATCH,
-    EstimateOptions, FitOptions, PoseRelation, Setting, Thresholds, fit_calibration,
+    AgreementScores, CalibrationModel, CalibrationSequence, DEFAULT_SMOOTHING_WINDOWS,
+    DEFAULT_SPREAD_MATCH, EstimateOptions, Feature, FitOptions, INFORMATIVE_SPEARMAN, PoseRelation,
+    RunCount, SELECTION_NOISE, Setting, Target, Thresholds, fit_calibration,
 };
 
 use crate::analysis::sequences::{SequenceInput, sequence_inputs};
@@ -17,14 +18,20 @@ use crate::io::output::emit;
 
 /// Fits a calibration of the estimate on sequences with ground truth.
 ///
-/// Per window, a model from what the runs alone give (the estimate's statistic and the
-/// window's path length and rotation, each averaged with its neighbouring windows) to the
-/// window's true error (the mean RPE of set A against the ground truth, as `sitar evaluate`
-/// defines it), and an interval [lower, upper] that holds the true error in --coverage of
-/// the windows of a sequence it was not fitted on (cross-conformal by sequence). Prints the
-/// leave-one-sequence-out scores of the raw and the calibrated estimate; writes the
-/// calibration as versioned JSON for `sitar estimate --calibration`, `sitar evaluate
-/// --calibration` and `sitar serve --calibration NAME=FILE`.
+/// Per window, models from what the runs alone show (each run's own motion: path length,
+/// rotation, straight-line displacement, jitter; with two or more runs how much they
+/// disagree), each averaged with its neighbouring windows, to the window's true error, with
+/// an interval [lower, upper] that holds it in --coverage of the windows of a sequence the
+/// model was not fitted on (cross-conformal by sequence). Three models: the error of a live
+/// run from that run alone, the same with replays (each run of set B in turn is the live run,
+/// its own error the truth, the others its replays), and the expected error from several
+/// runs (the mean RPE of set A against the ground truth, as `sitar evaluate` defines it).
+/// Each model's features are chosen by leaving each sequence out in turn: every candidate's
+/// scores are printed, and the one with the fewest features within 0.01 of the best
+/// Spearman's ρ is kept. Where the runs do not predict the error (held-out ρ below 0.3) a
+/// line starting `warning:` says so. Writes the calibration as versioned JSON for `sitar
+/// estimate --calibration`, `sitar evaluate --calibration`, `sitar serve --calibration
+/// NAME=FILE` and the phone (`sitar_session_set_calibration`).
 ///
 /// A calibration belongs to one SLAM system on one device: fit it on runs of the system and
 /// device whose estimates it will calibrate.
@@ -129,43 +136,148 @@ pub fn run(args: Args) -> Result<()> {
     let mut out = String::new();
     let _ = writeln!(
         out,
-        "calibration of {} {} (window {} frames) on {} sequence(s), {} windows; interval {:.0} %: ×{:.2} … ×{:.2} of the value ({})",
+        "calibration of {} {} (window {} frames) on {} sequence(s), {} windows of the expected error",
         calibration.fitted_on.setting,
         calibration.fitted_on.pose_relation,
         calibration.fitted_on.window_frames,
         sequences.len(),
-        sequences.iter().map(|s| s.truth.len()).sum::<usize>(),
-        100.0 * args.coverage,
-        calibration.interval.log_lower.exp(),
-        calibration.interval.log_upper.exp(),
-        calibration.interval.method,
+        sequences
+            .iter()
+            .map(|s| s.expected.truth.len())
+            .sum::<usize>(),
     );
-    match &calibration.scores {
-        Some(scores) => {
-            let _ = writeln!(
-                out,
-                "leave one sequence out (classes at {} & {} {}):",
-                fmt_boundary(args.medium_m, args.pose_relation),
-                fmt_boundary(args.high_m, args.pose_relation),
-                unit_name(args.pose_relation)
-            );
-            out.push_str(&score_table(
-                scores
-                    .sequences
-                    .iter()
-                    .map(|s| (s.name.as_str(), &s.raw, &s.calibrated))
-                    .chain([("mean", &scores.raw, &scores.calibrated)]),
-            ));
-        }
-        None => {
-            let _ = writeln!(
-                out,
-                "one sequence: no held-out scores, and the interval's coverage on other sequences is not known"
-            );
-        }
+    let classes = format!(
+        "classes at {} & {} {}",
+        fmt_boundary(args.medium_m, args.pose_relation),
+        fmt_boundary(args.high_m, args.pose_relation),
+        unit_name(args.pose_relation)
+    );
+    for model in &calibration.models {
+        out.push_str(&model_report(model, args.coverage, &classes));
+    }
+    if sequences.len() < 2 {
+        let _ = writeln!(
+            out,
+            "one sequence: features not chosen, scores in sample, and the interval's coverage on other sequences is not known"
+        );
+    }
+    for model in calibration.models.iter().filter(|m| !m.informative) {
+        let rho = model
+            .scores
+            .as_ref()
+            .map_or(f64::NAN, |s| s.calibrated.spearman);
+        let _ = writeln!(
+            out,
+            "warning: the {} error from {} run(s) cannot be told from the runs (Spearman's ρ {rho:.2} held out, below {INFORMATIVE_SPEARMAN}): every run makes much the same error where it errs, so its colours are a guess; the calibration says \"informative\": false and every estimate made with it says so",
+            model.target.name(),
+            model.runs.name(),
+        );
     }
     let _ = writeln!(out, "wrote {}", args.output.display());
     emit(None, &out)
+}
+
+/// One model: its features, interval, the candidates' held-out scores and its own per
+/// sequence.
+fn model_report(model: &CalibrationModel, coverage: f64, classes: &str) -> String {
+    let mut out = String::new();
+    let what = match (model.target, model.runs) {
+        (Target::Live, RunCount::One) => "the error of a live run, from that run alone",
+        (Target::Live, _) => "the error of a live run, with replays",
+        (Target::Expected, _) => "the expected error, from several runs",
+    };
+    let _ = writeln!(
+        out,
+        "\n{what}: {} (interval {:.0} %: ×{:.2} … ×{:.2} of the value, {})",
+        feature_names(&model.features),
+        100.0 * coverage,
+        model.interval.log_lower.exp(),
+        model.interval.log_upper.exp(),
+        model.interval.method,
+    );
+    let Some(scores) = &model.scores else {
+        return out;
+    };
+    let truth = if scores.truth == "own" {
+        "each run of set B in turn as the live run, against its own error"
+    } else {
+        "against the mean error of set A"
+    };
+    if !scores.candidates.is_empty() {
+        let _ = writeln!(
+            out,
+            "  candidates, leave one sequence out ({truth}; {classes}; kept: the fewest features within {SELECTION_NOISE} of the best ρ):"
+        );
+        let _ = writeln!(
+            out,
+            "    {:<58} {:>8} {:>8} {:>8} {:>9} {:>8}",
+            "features", "Spearman", "macro F1", "accuracy", "est/truth", "coverage"
+        );
+        for c in &scores.candidates {
+            let s = &c.scores;
+            let _ = writeln!(
+                out,
+                "  {} {:<58} {:>8.3} {:>8.3} {:>8.3} {:>9.3} {:>7.1}%",
+                if c.chosen { "*" } else { " " },
+                feature_names(&c.features),
+                s.spearman,
+                s.macro_f1,
+                s.accuracy,
+                s.median_ratio,
+                100.0 * s.coverage.unwrap_or(f64::NAN)
+            );
+        }
+    }
+    let _ = writeln!(
+        out,
+        "  kept, per sequence ({}):",
+        scores.method.replace('_', " ")
+    );
+    let none = AgreementScores {
+        accuracy: f64::NAN,
+        macro_f1: f64::NAN,
+        spearman: f64::NAN,
+        median_ratio: f64::NAN,
+        high_called_low: f64::NAN,
+        coverage: None,
+        high_upper_low: None,
+    };
+    let table = score_table(
+        scores
+            .sequences
+            .iter()
+            .map(|s| {
+                (
+                    s.name.as_str(),
+                    s.raw.as_ref().unwrap_or(&none),
+                    &s.calibrated,
+                )
+            })
+            .chain([(
+                "mean",
+                scores.raw.as_ref().unwrap_or(&none),
+                &scores.calibrated,
+            )]),
+    );
+    for line in table.lines() {
+        let _ = writeln!(out, "  {line}");
+    }
+    out
+}
+
+/// `ln_path_m + ln_rotation_deg` as `path + rotation`.
+fn feature_names(features: &[Feature]) -> String {
+    features
+        .iter()
+        .map(|f| match f {
+            Feature::Spread => "spread",
+            Feature::PathM => "path",
+            Feature::RotationDeg => "rotation",
+            Feature::DisplacementM => "displacement",
+            Feature::JitterMps2 => "jitter",
+        })
+        .collect::<Vec<_>>()
+        .join(" + ")
 }
 
 /// One sequence read and turned into calibration windows.

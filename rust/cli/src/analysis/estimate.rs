@@ -4,8 +4,8 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use sitar_estimator::{
-    Calibration, Estimate, EstimateOptions, PoseRelation, Setting, Thresholds, Trajectory,
-    estimate, matching_time_indices, seconds_to_ns,
+    ApplyCalibration, Calibration, Estimate, EstimateOptions, PoseRelation, Setting, Thresholds,
+    Trajectory, estimate, estimate_live, live_spread, matching_time_indices, seconds_to_ns,
 };
 
 use crate::figures::figure::{ErrorFigure, Sample};
@@ -21,15 +21,25 @@ use crate::results::compare::{file_name, unit};
 /// a robust statistic per window. Writes the legacy CSV `start,error` (start in the trials'
 /// time unit, error in metres) or JSON with the pair count, spread and class of each window;
 /// --plot also draws the estimate over time and on the first trial's path as SVG.
+///
+/// With a calibration (`sitar calibrate`) the error is the calibrated one, with an interval,
+/// and the JSON says which error it is (`"target"`). Several trials give the error expected
+/// at each place (`"target": "expected"`). One trial alone gives that run's own error from
+/// its own motion (`"target": "live"`, `"runs": 1`); --live RUN gives the error of RUN with
+/// the trials as its replays (its own motion and how much they disagree with it).
 #[derive(clap::Args, Debug)]
 #[command(
     after_help = "Examples:\n  sitar estimate trials/trajectory_*.txt\n  sitar estimate trials/ --setting median --format json -o results.json\n  sitar estimate trials/ --plot estimate.svg --plot-mode xz"
 )]
 pub struct Args {
-    /// Trial trajectory files, at least 2, taken in the order given; a directory stands for
-    /// its *.txt files in natural order.
-    #[arg(required = true, value_name = "TRIAL")]
+    /// Trial trajectory files, at least 2 (1 with a calibration), taken in the order given; a
+    /// directory stands for its *.txt files in natural order. With --live: its replays.
+    #[arg(required_unless_present = "live", value_name = "TRIAL")]
     trials: Vec<PathBuf>,
+    /// Estimate the error of this run (the live one: the user's own walk), with the trials as
+    /// its replays: windows keyed by its stamps, the spread between it and each replay.
+    #[arg(long, value_name = "RUN")]
+    live: Option<PathBuf>,
     /// Statistic per window: mean, median, trim_mean_10|20|30|40 or mean_inliers.
     #[arg(long, default_value = sitar_core::DEFAULT_SETTING, value_parser = parse_setting)]
     setting: Setting,
@@ -105,16 +115,20 @@ pub fn run(args: Args) -> Result<()> {
     let calibration = match &args.calibration {
         Some(path) => {
             let calibration = Calibration::read(path)?;
+            // The setting matters only with two or more runs: checked where it is applied.
             calibration
-                .check(args.setting, args.delta, args.pose_relation)
+                .check(None, args.delta, &args.pose_relation.to_string())
                 .with_context(|| format!("{}", path.display()))?;
             Some((calibration, calibration_name(path)))
         }
         None => None,
     };
     let files = input::expand_trials(&args.trials)?;
-    if files.len() < 2 {
-        bail!("the estimate needs at least 2 trials, got {}", files.len());
+    let runs = files.len() + usize::from(args.live.is_some());
+    if runs < 2 && calibration.is_none() {
+        bail!(
+            "one run: the estimate measures how runs differ, and one run has no spread to measure; give at least 2 trials, or a calibration (--calibration, made by `sitar calibrate`) to estimate the error of one run from its own motion"
+        );
     }
     let bar = progress_bar(files.len() as u64, "reading trials");
     let trials = input::read_all_with(&files, args.input_format, args.time_unit.rule(), &bar)?;
@@ -125,12 +139,38 @@ pub fn run(args: Args) -> Result<()> {
         t_max_diff_s: args.t_max_diff,
         pose_relation: args.pose_relation,
     };
-    let mut result = estimate(&trials, &options).context("estimating")?;
-    if let Some((calibration, name)) = &calibration {
-        calibration.apply(&mut result, &trials, name)?;
-    }
+    // The live run: given with --live, or the one run given.
+    let live = match &args.live {
+        Some(path) => Some((
+            path.clone(),
+            input::read_with(path, args.input_format, args.time_unit.rule())?,
+        )),
+        None if trials.len() == 1 => Some((files[0].clone(), trials[0].clone())),
+        None => None,
+    };
+    let replays: &[Trajectory] = if args.live.is_some() { &trials } else { &[] };
+    let (result, first_file, first) = match (&live, &calibration) {
+        (Some((path, run)), Some((calibration, name))) => (
+            estimate_live(calibration, run, replays, &options, name)
+                .with_context(|| format!("estimating the error of {}", path.display()))?,
+            path.as_path(),
+            run,
+        ),
+        (Some((path, run)), None) => (
+            live_spread(run, replays, &options).context("--live needs at least one TRIAL")?,
+            path.as_path(),
+            run,
+        ),
+        (None, calibration) => {
+            let mut result = estimate(&trials, &options).context("estimating")?;
+            if let Some((calibration, name)) = calibration {
+                calibration.apply(&mut result, &trials, name)?;
+            }
+            (result, files[0].as_path(), &trials[0])
+        }
+    };
     if let Some(path) = &args.plot.plot {
-        let figure = error_figure(&args, &files[0], &trials[0], &result);
+        let figure = error_figure(&args, first_file, first, &result);
         crate::figures::canvas::write_error_figure(path, args.plot.plot_mode, &figure)?;
     }
     let text = match args.format {

@@ -7,7 +7,8 @@ use clap::ValueEnum;
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 use sitar_estimator::{
-    ReadOptions, TimeUnitRule, Trajectory, read_euroc_csv, read_kitti, read_tum_with,
+    ReadOptions, ReadReport, TimeUnitRule, Trajectory, read_euroc_csv_with, read_kitti,
+    read_tum_with,
 };
 
 /// Trajectory file format (evo's format subcommands).
@@ -22,8 +23,11 @@ pub enum Format {
     Kitti,
 }
 
-/// Reads one trajectory by SiTAR's rules (TUM stamps by [`TimeUnitRule::Auto`]); errors
-/// name the file (and line and column for bad content).
+/// Reads one trajectory as `sitar ape` does (TUM stamps by [`TimeUnitRule::Auto`]):
+/// quaternions normalised, a repeated stamp kept with a warning (published ground truth
+/// repeats some, and evo keeps both poses); a stamp below the previous one is refused, since
+/// windows and association follow time. Errors name the file (and line and column for bad
+/// content).
 pub fn read(path: &Path, format: Format) -> Result<Trajectory> {
     read_with(path, format, TimeUnitRule::Auto)
 }
@@ -32,15 +36,29 @@ pub fn read(path: &Path, format: Format) -> Result<Trajectory> {
 pub fn read_with(path: &Path, format: Format, time_unit: TimeUnitRule) -> Result<Trajectory> {
     let options = ReadOptions {
         time_unit,
-        ..ReadOptions::SITAR
+        ..ReadOptions::EVO
     };
-    let trajectory = match format {
-        Format::Tum => read_tum_with(path, &options).map(|(t, _)| t),
-        Format::Euroc => read_euroc_csv(path),
-        Format::Kitti => read_kitti(path),
+    let (trajectory, report) = match format {
+        Format::Tum => read_tum_with(path, &options),
+        Format::Euroc => read_euroc_csv_with(path, &options),
+        Format::Kitti => read_kitti(path).map(|t| (t, ReadReport::default())),
     }?;
     if trajectory.is_empty() {
         bail!("{}: no poses", path.display());
+    }
+    if let Some(line) = report.first_decreasing_line {
+        bail!(
+            "{}: line {line}: the timestamp is below the previous one ({} such); windows follow time, so the poses must be in time order",
+            path.display(),
+            report.decreasing_stamps
+        );
+    }
+    if let Some(line) = report.first_repeated_line {
+        eprintln!(
+            "warning: {}: {} repeated timestamp(s), the first on line {line}; both poses are kept, as evo keeps them",
+            path.display(),
+            report.repeated_stamps
+        );
     }
     Ok(trajectory)
 }

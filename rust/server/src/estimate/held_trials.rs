@@ -18,6 +18,7 @@
 //! phones), the trials are copied into playback order for the calibration's look, and the
 //! copy freed at once.
 
+use sitar_estimator::ApplyCalibration as _;
 use std::borrow::Cow;
 
 use sitar_estimator::{Calibration, Estimate, IncrementalEstimate, Trajectory};

@@ -25,6 +25,10 @@ use crate::io::input::Format;
 ///
 /// With --calibration FILE (made by `sitar calibrate`) the calibrated estimate is scored, with
 /// the share of windows whose interval holds the true error (coverage).
+///
+/// --truth own scores against each run's own error instead: every run of the first k of
+/// set B in turn is the live run (the user's own walk), estimated alone (k = 1, with a
+/// calibration) or with the others as its replays, against its own RPE to the ground truth.
 #[derive(clap::Args, Debug)]
 #[command(
     after_help = "Examples:\n  sitar simulate --out eval --sequences 8 --trials 100 --seconds 30 --tracker ransac\n  sitar evaluate eval --trial_counts 5,10,20,30,100 --calibrate --sweep\n  sitar evaluate --ground_truth sim/ground_truth.txt --trials_a sim/trials --trials_b sim/trials-b"
@@ -110,6 +114,19 @@ pub struct Args {
     /// are the ones evaluated.
     #[arg(long, value_name = "FILE", conflicts_with_all = ["window_frames", "calibrate"])]
     pub(super) calibration: Option<PathBuf>,
+    /// The truth scored against: expected (the mean error of set A) or own (each live run's
+    /// own error).
+    #[arg(long, value_enum, default_value_t = Truth::Expected)]
+    pub(super) truth: Truth,
+}
+
+/// What the estimate is scored against.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub(super) enum Truth {
+    /// The mean error of set A at each window (the paper's protocol).
+    Expected,
+    /// Each run's own error, the run estimated as the live one.
+    Own,
 }
 
 /// Report format.

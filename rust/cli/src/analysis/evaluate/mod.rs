@@ -16,14 +16,14 @@ pub use args::Args;
 use anyhow::{Context, Result, bail};
 use sitar_estimator::{
     Calibration, EstimateOptions, EvaluationOptions, PAPER_CLASSIFIERS, Setting,
-    calibrated_matched_windows, matched_windows,
+    calibrated_matched_windows, matched_windows, own_error_matched_windows,
 };
 
 use crate::analysis::sequences::{self, SequenceInput};
 use crate::io::input::{self, progress_bar};
 use crate::io::output::emit;
 
-use crate::analysis::evaluate::args::Report;
+use crate::analysis::evaluate::args::{Report, Truth};
 use crate::analysis::evaluate::plot::{PlotRow, plot};
 use crate::analysis::evaluate::statistics::Computed;
 use crate::analysis::evaluate::windows::Evaluated;
@@ -92,7 +92,12 @@ pub fn run(args: Args) -> Result<()> {
                 files_b.len()
             );
         }
-        let these = trial_counts(&args, files_b.len())?;
+        let fewest = if args.truth == Truth::Own && calibration.is_some() {
+            1
+        } else {
+            2
+        };
+        let these = trial_counts(&args, files_b.len(), fewest)?;
         match &counts {
             Some(c) if *c != these => bail!(
                 "{}: {} trials in set B give other trial counts than the first sequence's; give --trial_counts",
@@ -125,9 +130,12 @@ pub fn run(args: Args) -> Result<()> {
                     ..EstimateOptions::default()
                 },
             };
-            let matched = match &calibration {
-                Some(c) => calibrated_matched_windows(&gt, &trials_a, &trials_b, &opts, c),
-                None => matched_windows(&gt, &trials_a, &trials_b, &opts),
+            let matched = match (args.truth, &calibration) {
+                (Truth::Own, c) => own_error_matched_windows(&gt, &trials_b, &opts, c.as_ref()),
+                (Truth::Expected, Some(c)) => {
+                    calibrated_matched_windows(&gt, &trials_a, &trials_b, &opts, c)
+                }
+                (Truth::Expected, None) => matched_windows(&gt, &trials_a, &trials_b, &opts),
             };
             by_window.push(matched.with_context(context)?);
         }
@@ -167,11 +175,13 @@ pub fn run(args: Args) -> Result<()> {
     Ok(())
 }
 
-fn trial_counts(args: &Args, available: usize) -> Result<Vec<usize>> {
+fn trial_counts(args: &Args, available: usize, fewest: usize) -> Result<Vec<usize>> {
     Ok(match &args.trial_counts {
         Some(counts) => {
-            if let Some(&bad) = counts.iter().find(|&&k| k < 2 || k > available) {
-                bail!("--trial_counts: {bad} is not between 2 and the {available} trials of set B");
+            if let Some(&bad) = counts.iter().find(|&&k| k < fewest || k > available) {
+                bail!(
+                    "--trial_counts: {bad} is not between {fewest} and the {available} trials of set B"
+                );
             }
             counts.clone()
         }

@@ -7,6 +7,7 @@ use axum::response::{IntoResponse, Response};
 use serde::Deserialize;
 use serde_json::json;
 use sitar_core::Convention;
+use sitar_estimator::ApplyCalibration as _;
 
 use crate::error::Error;
 use crate::error::short;
@@ -236,7 +237,7 @@ fn check_calibration(
         )));
     };
     calibration
-        .check(
+        .check_estimate(
             settings.setting,
             settings.window_frames as usize,
             settings.pose_relation,
