@@ -314,6 +314,7 @@ impl Drop for LiveSession {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use sitar_estimator::ApplyCalibration as _;
     use sitar_estimator::{PoseRelation, Setting, TimeUnit};
 
     fn trial(seed: u64) -> Trajectory {
