@@ -348,7 +348,7 @@ fn matched_windows_with(
 
 /// The matched windows against **each run's own error** (`sitar evaluate --truth own`): for
 /// every trial count `k` of `opts` (1 ..= |B|; 1 only with a calibration), every run `r` of
-/// the first `k` runs of set B in turn is the live run, with the other `k − 1` as its
+/// set B in turn is the live run, with the `k − 1` runs after it (cyclically) as its
 /// replays; its windows (keyed by its stamps) are estimated by `calibration` (alone when
 /// `k = 1`) or, without one, by the spread between it and its replays, and matched to its own
 /// RPE against the ground truth. The runs' windows are pooled per (k, setting). Returns the
@@ -375,12 +375,11 @@ pub fn own_error_matched_windows(
                 setting,
                 ..opts.estimate
             };
-            let per_run = (0..count)
+            let per_run = (0..trials_b.len())
                 .into_par_iter()
                 .map(|r| {
-                    let replays: Vec<Trajectory> = (0..count)
-                        .filter(|&j| j != r)
-                        .map(|j| trials_b[j].clone())
+                    let replays: Vec<Trajectory> = (1..count)
+                        .map(|j| trials_b[(r + j) % trials_b.len()].clone())
                         .collect();
                     let estimate = match calibration {
                         Some(c) => {

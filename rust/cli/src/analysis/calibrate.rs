@@ -168,9 +168,8 @@ pub fn run(args: Args) -> Result<()> {
             .map_or(f64::NAN, |s| s.calibrated.spearman);
         let _ = writeln!(
             out,
-            "warning: the {} error from {} run(s) cannot be told from the runs (Spearman's ρ {rho:.2} held out, below {INFORMATIVE_SPEARMAN}): every run makes much the same error where it errs, so its colours are a guess; the calibration says \"informative\": false and every estimate made with it says so",
-            model.target.name(),
-            model.runs.name(),
+            "warning: {} cannot be told from the runs (Spearman's ρ {rho:.2} on held-out sequences, below {INFORMATIVE_SPEARMAN}): the runs make much the same error where they err, so colours from this model are a guess; the calibration says \"informative\": false and every estimate made with it says so",
+            model_name(model),
         );
     }
     let _ = writeln!(out, "wrote {}", args.output.display());
@@ -181,11 +180,7 @@ pub fn run(args: Args) -> Result<()> {
 /// sequence.
 fn model_report(model: &CalibrationModel, coverage: f64, classes: &str) -> String {
     let mut out = String::new();
-    let what = match (model.target, model.runs) {
-        (Target::Live, RunCount::One) => "the error of a live run, from that run alone",
-        (Target::Live, _) => "the error of a live run, with replays",
-        (Target::Expected, _) => "the expected error, from several runs",
-    };
+    let what = model_name(model);
     let _ = writeln!(
         out,
         "\n{what}: {} (interval {:.0} %: ×{:.2} … ×{:.2} of the value, {})",
@@ -265,6 +260,15 @@ fn model_report(model: &CalibrationModel, coverage: f64, classes: &str) -> Strin
     out
 }
 
+/// What a model estimates from what, in words.
+fn model_name(model: &CalibrationModel) -> &'static str {
+    match (model.target, model.runs) {
+        (Target::Live, RunCount::One) => "the error of a live run, from that run alone",
+        (Target::Live, _) => "the error of a live run, with replays",
+        (Target::Expected, _) => "the expected error, from several runs",
+    }
+}
+
 /// `ln_path_m + ln_rotation_deg` as `path + rotation`.
 fn feature_names(features: &[Feature]) -> String {
     features
@@ -342,7 +346,14 @@ pub fn score_table<'a>(
         "  {:<12} {:>17} {:>17} {:>17} {:>17} {:>17} {:>9} {:>9}",
         "", "raw → cal", "raw → cal", "raw → cal", "raw → cal", "raw → cal", "high→low", ""
     );
-    let pair = |a: f64, b: f64| format!("{a:>7.3} → {b:<7.3}");
+    // No raw value (one run has no spread): a dash.
+    let pair = |a: f64, b: f64| {
+        if a.is_nan() {
+            format!("{:>7} → {b:<7.3}", "–")
+        } else {
+            format!("{a:>7.3} → {b:<7.3}")
+        }
+    };
     for (name, raw, cal) in rows {
         let chars = name.chars().count();
         let short: String = name.chars().skip(chars.saturating_sub(12)).collect();

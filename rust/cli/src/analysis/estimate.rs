@@ -111,20 +111,25 @@ pub fn run(args: Args) -> Result<()> {
             args.high_m
         );
     }
-    // Read and checked before the trials, so a wrong file fails at once.
+    let files = input::expand_trials(&args.trials)?;
+    let runs = files.len() + usize::from(args.live.is_some());
+    // Read and checked before the trials, so a wrong file fails at once (the setting matters
+    // only with two or more runs).
     let calibration = match &args.calibration {
         Some(path) => {
             let calibration = Calibration::read(path)?;
-            // The setting matters only with two or more runs: checked where it is applied.
+            let setting = args.setting.to_string();
             calibration
-                .check(None, args.delta, &args.pose_relation.to_string())
+                .check(
+                    (runs > 1).then_some(setting.as_str()),
+                    args.delta,
+                    &args.pose_relation.to_string(),
+                )
                 .with_context(|| format!("{}", path.display()))?;
             Some((calibration, calibration_name(path)))
         }
         None => None,
     };
-    let files = input::expand_trials(&args.trials)?;
-    let runs = files.len() + usize::from(args.live.is_some());
     if runs < 2 && calibration.is_none() {
         bail!(
             "one run: the estimate measures how runs differ, and one run has no spread to measure; give at least 2 trials, or a calibration (--calibration, made by `sitar calibrate`) to estimate the error of one run from its own motion"

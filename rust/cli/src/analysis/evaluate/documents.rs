@@ -155,6 +155,7 @@ impl Computed {
         if let Some(name) = &self.calibration_name {
             doc["calibrated_by"] = serde_json::json!(name);
         }
+        doc["truth"] = serde_json::json!(if self.own_truth { "own" } else { "expected" });
         if let Some((train, rows)) = &self.calibration {
             doc["calibration"] = serde_json::json!({
                 "train_sequences": train,

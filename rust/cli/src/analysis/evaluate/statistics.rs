@@ -79,6 +79,8 @@ pub(super) struct Computed {
     pub(super) confidence: f64,
     /// The calibration scored (`--calibration`), by its file name.
     pub(super) calibration_name: Option<String>,
+    /// `--truth own`: each live run against its own error.
+    pub(super) own_truth: bool,
 }
 
 impl Computed {
@@ -221,6 +223,7 @@ impl Computed {
             calibration,
             sweeps,
             confidence: args.confidence,
+            own_truth: args.truth == crate::analysis::evaluate::args::Truth::Own,
             calibration_name: args
                 .calibration
                 .as_deref()

@@ -10,9 +10,14 @@ use crate::analysis::evaluate::windows::Evaluated;
 impl Computed {
     pub(super) fn table(&self, evaluated: &[Evaluated]) -> String {
         let mut out = String::new();
+        let protocol = if self.own_truth {
+            "true error: each run of set B's own, the run estimated as the live one with k − 1 others as its replays"
+        } else {
+            "true error: mean over set A, estimate: first k of set B"
+        };
         let _ = writeln!(
             out,
-            "{} sequence(s); true error: mean over set A, estimate: first k of set B; mean over sequences [{:.0} % bootstrap interval]",
+            "{} sequence(s); {protocol}; mean over sequences [{:.0} % bootstrap interval]",
             evaluated.len(),
             100.0 * self.confidence
         );
