@@ -25,6 +25,20 @@
 //! The workspace's `tests/tests/cli_layout.rs` keeps it so (each command in its group's
 //! folder, no file over 600 lines, the figures below what draws them), and
 //! `tests/tests/layout.rs` finds no import cycle among its files or its folders.
+//!
+//! Every command's `--help` is in the user guide's reference (`docs/src/reference/cli/`),
+//! generated from these definitions by `rust/cli/tests/docs_reference.rs`; how to use the
+//! commands: the guide's "For SLAM researchers" and "Running the backend" parts.
+//!
+//! ```
+//! use std::process::ExitCode;
+//!
+//! // What `sitar --version` and the Python package's `sitar` command run.
+//! let code = sitar_cli::main_with(vec!["sitar".into(), "--version".into()]);
+//! assert_eq!(code, ExitCode::SUCCESS);
+//! let code = sitar_cli::main_with(vec!["sitar".into(), "no-such-command".into()]);
+//! assert_ne!(code, ExitCode::SUCCESS);
+//! ```
 #![forbid(unsafe_code)]
 
 mod analysis;

@@ -162,7 +162,7 @@
 //!   [`IncrementalEstimate::memory_bytes`] reports all of it (capacities).
 //! * *Measured* (`cargo bench -p sitar-estimator --bench incremental`, 100 trials × 2820
 //!   poses, every third dropping frames, push + estimate after each trial from the 2nd on):
-//!   see the crate README for the figures; the incremental path costs about 4× one one-shot
+//!   the figures are in the user guide (`docs/src/measurements/estimator.md`); the incremental path costs about 4× one one-shot
 //!   estimate in CPU (the one-shot never stores its 14 M values: it computes them block by
 //!   block in cache), against 33× for recomputing everything after each trial.
 //!
@@ -185,7 +185,8 @@
 //! on (cross-conformal by sequence). [`Calibration::apply`] turns an [`Estimate`] into the
 //! calibrated one: `error_m` calibrated, [`WindowInterval`] with the raw value and the
 //! bounds, JSON keys `raw_m`, `lower_m`, `upper_m` and `calibration`. The model, the
-//! choices and the figures on real EuRoC runs: the crate README.
+//! choices and the figures on real runs: the user guide (`docs/src/science/calibration.md`,
+//! `docs/src/science/real-runs.md`).
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
 

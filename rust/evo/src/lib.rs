@@ -11,22 +11,32 @@
 //! debug lines, warnings) go to a [`Messages`] sink: [`Quiet`] drops them. Every failure is
 //! an [`Error`] naming the option, file or line; nothing here panics on bad input.
 //!
-//! ```no_run
-//! use std::path::Path;
+//! ```
 //! use sitar_evo::{AlgorithmOptions, FileFormat, Metric, Quiet, SyncOptions};
 //! use sitar_estimator::PoseRelation;
 //!
-//! let algorithm = AlgorithmOptions { align: true, ..AlgorithmOptions::default() };
+//! // A reference and a run 2 cm off in x (TUM: stamp x y z qx qy qz qw).
+//! let dir = std::env::temp_dir().join(format!("sitar-evo-doc-{}", std::process::id()));
+//! std::fs::create_dir_all(&dir).unwrap();
+//! let tum = |dx: f64| -> String {
+//!     (0..20).map(|i| format!("{i}.0 {} {} 0 0 0 0 1\n", 0.1 * i as f64 + dx, 0.05 * (i * i) as f64)).collect()
+//! };
+//! std::fs::write(dir.join("ground_truth.txt"), tum(0.0)).unwrap();
+//! std::fs::write(dir.join("run0.txt"), tum(0.02)).unwrap();
+//!
 //! let outcomes = sitar_evo::compute_files(
 //!     Metric::Ape(PoseRelation::TranslationPart.into()),
 //!     FileFormat::Tum,
-//!     Path::new("ground_truth.txt"),
-//!     &[Path::new("run0.txt")],
+//!     &dir.join("ground_truth.txt"),
+//!     &[dir.join("run0.txt").as_path()],
 //!     &SyncOptions::default(),
-//!     &algorithm,
+//!     &AlgorithmOptions::default(), // no alignment: the 2 cm stay
 //!     &Quiet,
 //! )?;
-//! println!("{}", sitar_evo::metric_document(&outcomes));
+//! assert!((outcomes[0].stats.rmse - 0.02).abs() < 1e-9);
+//! let json = sitar_evo::metric_document(&outcomes); // what `sitar ape --format json` prints
+//! assert!(json.to_string().contains("rmse"));
+//! # std::fs::remove_dir_all(&dir).ok();
 //! # Ok::<(), sitar_evo::Error>(())
 //! ```
 
