@@ -341,3 +341,43 @@ fn ids_are_mdbooks() {
     );
     assert_eq!(heading_id("[The C ABI](x.md)"), "the-c-abi");
 }
+
+/// Every Markdown file of the repository (build output and installed packages aside).
+fn markdown_files(root: &Path) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    let mut stack = vec![root.to_path_buf()];
+    while let Some(dir) = stack.pop() {
+        for entry in std::fs::read_dir(&dir).unwrap() {
+            let path = entry.unwrap().path();
+            let name = path.file_name().unwrap().to_string_lossy().into_owned();
+            if path.is_dir() {
+                let skip = name.starts_with('.')
+                    || name == "target"
+                    || name == "node_modules"
+                    || (name == "book" && path.parent() == Some(&root.join("docs")));
+                if !skip {
+                    stack.push(path);
+                }
+            } else if name.ends_with(".md") {
+                out.push(path);
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn no_markdown_file_is_over_600_lines_and_the_readme_over_150() {
+    let root = repo();
+    let files = markdown_files(&root);
+    assert!(files.len() > 50, "found only {} Markdown files", files.len());
+    let lines = |p: &Path| std::fs::read_to_string(p).unwrap().lines().count();
+    let long: Vec<String> = files
+        .iter()
+        .filter(|p| lines(p) > 600)
+        .map(|p| format!("{} ({} lines)", p.display(), lines(p)))
+        .collect();
+    assert!(long.is_empty(), "Markdown files over 600 lines: {long:?}");
+    let readme = lines(&root.join("README.md"));
+    assert!(readme <= 150, "README.md has {readme} lines (at most 150)");
+}
