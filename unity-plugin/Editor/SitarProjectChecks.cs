@@ -45,10 +45,10 @@ namespace Sitar.Editor
 #if UNITY_EDITOR_LINUX
             if (!File.Exists(Path.GetFullPath(LinuxLibrary)))
             {
-                Debug.LogWarning("SiTAR: " + LinuxLibrary + " is missing, so Play Mode cannot load libsitar. Run scripts/build-unity-plugins in the SiTAR repository (docs/use-from-unity.md, step 1).");
+                Debug.LogWarning("SiTAR: " + LinuxLibrary + " is missing, so Play Mode cannot load libsitar. Run scripts/build-unity-plugins in the SiTAR repository (docs/src/ar/unity.md, step 1).");
             }
 #elif UNITY_EDITOR_WIN || UNITY_EDITOR_OSX
-            Debug.Log("SiTAR: Play Mode needs libsitar for this desktop, which the package has only for Linux x86_64; test on the phone, or build sitar-ffi for this OS into Plugins/ (docs/use-from-unity.md).");
+            Debug.Log("SiTAR: Play Mode needs libsitar for this desktop, which the package has only for Linux x86_64; test on the phone, or build sitar-ffi for this OS into Plugins/ (docs/src/ar/unity.md).");
 #endif
         }
     }

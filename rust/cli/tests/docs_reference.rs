@@ -34,14 +34,14 @@ fn help(args: &[&str]) -> String {
     String::from_utf8(out.stdout).unwrap()
 }
 
-/// The subcommands a help text lists: the indented names under `Commands:` or under the
-/// top level's group titles, `help` left out.
+/// The subcommands a help text lists: the indented names under `Commands:`, `help` left
+/// out (the top level's groups: [`groups`]).
 fn subcommands(help: &str) -> Vec<(String, String)> {
     let mut out = Vec::new();
     let mut in_list = false;
     for line in help.lines() {
         if !line.starts_with(' ') && line.ends_with(':') && !line.starts_with("Usage") {
-            in_list = line != "Options:" && line != "Arguments:" && line != "Examples:";
+            in_list = line == "Commands:";
             continue;
         }
         if line.is_empty() {
@@ -152,8 +152,31 @@ fn doc_above(lines: &[&str], at: usize) -> String {
     docs.join(" ").trim().to_owned()
 }
 
+/// A doc comment as guide Markdown: rustdoc's intra-doc links (`[`X`](crate::…)`,
+/// `[`X`]`) become plain code, and `|` is escaped for a table cell.
 fn cell(text: &str) -> String {
-    text.replace('|', "\\|").replace('\n', " ")
+    let mut out = String::new();
+    let mut rest = text;
+    while let Some(open) = rest.find("[`") {
+        out.push_str(&rest[..open]);
+        let after = &rest[open + 1..];
+        let Some(close) = after.find("`]") else {
+            out.push('[');
+            rest = after;
+            continue;
+        };
+        let code = &after[..close + 1];
+        let tail = &after[close + 2..];
+        out.push_str(code);
+        rest = match tail.strip_prefix('(') {
+            Some(t) if t.find(')').is_some_and(|e| !t[..e].contains('/')) => {
+                &t[t.find(')').unwrap() + 1..]
+            }
+            _ => tail,
+        };
+    }
+    out.push_str(rest);
+    out.replace('|', "\\|").replace('\n', " ")
 }
 
 /// The text of the balanced `( … )` that starts at `open`.
@@ -277,9 +300,20 @@ fn body_limit(limits: &str, verb: &str, path: &str) -> String {
     let expr: String = if let Some(b) = rest.strip_prefix('{') {
         b[..b.find('}').unwrap_or(b.len())].to_owned()
     } else {
-        rest[..rest.find("\n        (").unwrap_or(rest.len())].to_owned()
+        let end = ["\n        (", "\n        _ =>"]
+            .iter()
+            .filter_map(|m| rest.find(m))
+            .min()
+            .unwrap_or(rest.len());
+        rest[..end].to_owned()
     };
-    let expr = expr.split_whitespace().collect::<Vec<_>>().join(" ");
+    let expr = expr
+        .split_whitespace()
+        .collect::<Vec<_>>()
+        .join(" ")
+        .replace("( ", "(")
+        .replace(" .", ".")
+        .replace(", )", ")");
     format!("`{}`", expr.trim_end_matches(','))
 }
 
@@ -340,7 +374,8 @@ fn c_comment_above(lines: &[&str], at: usize) -> String {
     out.join(" ").trim().to_owned()
 }
 
-fn c_abi_page() -> String {
+/// The C ABI's page (status codes, functions) and its types' page.
+fn c_abi_pages() -> (String, String) {
     let header = read("rust/ffi/include/sitar.h");
     let lines: Vec<&str> = header.lines().collect();
     let intro: String = header
@@ -368,7 +403,10 @@ fn c_abi_page() -> String {
             ));
         }
     }
-    page.push_str("\n## Types\n\n");
+    page.push_str("\nThe structs the functions take and fill: [C ABI types](c-abi-types.md).\n\n");
+    let mut types = format!(
+        "{HEADER}# C ABI types\n\nThe structs of `rust/ffi/include/sitar.h` ([C ABI](c-abi.md)).\n\n"
+    );
     let mut i = 0;
     while i < lines.len() {
         if lines[i].starts_with("typedef struct") {
@@ -387,11 +425,11 @@ fn c_abi_page() -> String {
                 j += 1;
             }
             let name = lines[j].trim_start_matches('}').trim().trim_end_matches(';');
-            page.push_str(&format!("### `{name}`\n\n{doc}\n\n"));
+            types.push_str(&format!("### `{name}`\n\n{doc}\n\n"));
             for f in fields {
-                page.push_str(&format!("- {f}\n"));
+                types.push_str(&format!("- {f}\n"));
             }
-            page.push('\n');
+            types.push('\n');
             i = j;
         }
         i += 1;
@@ -420,7 +458,7 @@ fn c_abi_page() -> String {
         }
         i += 1;
     }
-    page
+    (page, types)
 }
 
 fn generate() -> (BTreeMap<String, String>, Vec<String>) {
@@ -428,7 +466,9 @@ fn generate() -> (BTreeMap<String, String>, Vec<String>) {
     let summary = cli_pages(&mut pages);
     pages.insert("reference/http.md".into(), http_page());
     pages.insert("reference/config.md".into(), config_page());
-    pages.insert("reference/c-abi.md".into(), c_abi_page());
+    let (abi, types) = c_abi_pages();
+    pages.insert("reference/c-abi.md".into(), abi);
+    pages.insert("reference/c-abi-types.md".into(), types);
     (pages, summary)
 }
 
