@@ -1,8 +1,9 @@
 //! Every relative link in the README, the user guide (`docs/`) and the crate READMEs
 //! resolves, offline: the file exists and, for a `#anchor` into Markdown, the page has a
 //! heading with that id (mdBook's ids: lower-case, spaces to `-`, punctuation dropped,
-//! repeats numbered). Every page under `docs/src` is in `SUMMARY.md`, and every
-//! `{{#include}}` names a file that exists.
+//! repeats numbered), and a link in the guide stays inside it (`docs/src`, what the built
+//! book holds). Every page under `docs/src` is in `SUMMARY.md`, and every `{{#include}}`
+//! names a file that exists.
 
 use std::collections::{BTreeSet, HashMap};
 use std::path::{Component, Path, PathBuf};
@@ -237,6 +238,16 @@ fn broken_links(root: &Path) -> Vec<String> {
                 } else {
                     normalize(&file.parent().unwrap().join(path))
                 };
+                // The book holds docs/src only: a link out of it is dead in the built
+                // guide (name a repository file as `code` instead).
+                if file.starts_with("docs/src") && !resolved.starts_with("docs/src") {
+                    broken.push(format!(
+                        "{}:{n}: {target}: leaves the guide ({})",
+                        file.display(),
+                        resolved.display()
+                    ));
+                    continue;
+                }
                 if !root.join(&resolved).exists() {
                     broken.push(format!(
                         "{}:{n}: {target}: {} does not exist",
@@ -319,14 +330,20 @@ fn the_checker_finds_a_broken_link_and_a_missing_anchor() {
     )
     .unwrap();
     std::fs::write(
+        root.join("docs/src/c.md"),
+        "# C\n\n[back](a.md#same) [out](../../README.md)\n",
+    )
+    .unwrap();
+    std::fs::write(
         root.join("docs/src/a.md"),
         "# The page: A\n\n## Same\n\n## Same\n\n```\n# not a heading\n```\n",
     )
     .unwrap();
     let broken = broken_links(root);
-    assert_eq!(broken.len(), 2, "{broken:?}");
+    assert_eq!(broken.len(), 3, "{broken:?}");
     assert!(broken[0].contains("docs/src/b.md does not exist"), "{broken:?}");
     assert!(broken[1].contains("no heading #nowhere"), "{broken:?}");
+    assert!(broken[2].contains("c.md:3: ../../README.md: leaves the guide"), "{broken:?}");
 }
 
 #[test]
