@@ -341,9 +341,15 @@ fn the_checker_finds_a_broken_link_and_a_missing_anchor() {
     .unwrap();
     let broken = broken_links(root);
     assert_eq!(broken.len(), 3, "{broken:?}");
-    assert!(broken[0].contains("docs/src/b.md does not exist"), "{broken:?}");
+    assert!(
+        broken[0].contains("docs/src/b.md does not exist"),
+        "{broken:?}"
+    );
     assert!(broken[1].contains("no heading #nowhere"), "{broken:?}");
-    assert!(broken[2].contains("c.md:3: ../../README.md: leaves the guide"), "{broken:?}");
+    assert!(
+        broken[2].contains("c.md:3: ../../README.md: leaves the guide"),
+        "{broken:?}"
+    );
 }
 
 #[test]
@@ -387,7 +393,11 @@ fn markdown_files(root: &Path) -> Vec<PathBuf> {
 fn no_markdown_file_is_over_600_lines_and_the_readme_over_150() {
     let root = repo();
     let files = markdown_files(&root);
-    assert!(files.len() > 50, "found only {} Markdown files", files.len());
+    assert!(
+        files.len() > 50,
+        "found only {} Markdown files",
+        files.len()
+    );
     let lines = |p: &Path| std::fs::read_to_string(p).unwrap().lines().count();
     let long: Vec<String> = files
         .iter()

@@ -52,7 +52,9 @@ fn subcommands(help: &str) -> Vec<(String, String)> {
             && !line.starts_with("   ")
             && let Some(name) = line.split_whitespace().next()
             && name != "help"
-            && name.chars().all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '-')
+            && name
+                .chars()
+                .all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '-')
         {
             let about = line.trim_start()[name.len()..].trim().to_owned();
             out.push((name.to_owned(), about));
@@ -253,7 +255,11 @@ fn http_page() -> String {
             break;
         }
         let t = l.trim();
-        if l.starts_with("    ") && !l.starts_with("     ") && !t.starts_with("///") && !t.starts_with("#[") {
+        if l.starts_with("    ")
+            && !l.starts_with("     ")
+            && !t.starts_with("///")
+            && !t.starts_with("#[")
+        {
             let name: String = t.chars().take_while(|c| c.is_alphanumeric()).collect();
             if !name.is_empty() {
                 page.push_str(&format!("| `{name}` | {} |\n", cell(&doc_above(&lines, i))));
@@ -424,7 +430,10 @@ fn c_abi_pages() -> (String, String) {
                 }
                 j += 1;
             }
-            let name = lines[j].trim_start_matches('}').trim().trim_end_matches(';');
+            let name = lines[j]
+                .trim_start_matches('}')
+                .trim()
+                .trim_end_matches(';');
             types.push_str(&format!("### `{name}`\n\n{doc}\n\n"));
             for f in fields {
                 types.push_str(&format!("- {f}\n"));
@@ -482,7 +491,10 @@ fn with_summary(summary_md: &str, entries: &[String]) -> String {
         }
         skipping = false;
         out.push(line.to_owned());
-        if line.trim_start().starts_with("- [Commands](reference/cli.md)") {
+        if line
+            .trim_start()
+            .starts_with("- [Commands](reference/cli.md)")
+        {
             out.extend(entries.iter().cloned());
             skipping = true;
         }
@@ -512,7 +524,10 @@ fn the_reference_pages_are_what_the_code_gives() {
         }
     }
     // A generated page the code no longer makes (a removed command).
-    for entry in std::fs::read_dir(src.join("reference/cli")).into_iter().flatten() {
+    for entry in std::fs::read_dir(src.join("reference/cli"))
+        .into_iter()
+        .flatten()
+    {
         let rel = format!(
             "reference/cli/{}",
             entry.unwrap().file_name().to_string_lossy()
@@ -541,9 +556,16 @@ fn the_generators_see_what_they_document() {
             "no page for {cmd}"
         );
     }
-    assert!(summary.iter().any(|l| l.contains("reference/cli/rpe-euroc.md")));
+    assert!(
+        summary
+            .iter()
+            .any(|l| l.contains("reference/cli/rpe-euroc.md"))
+    );
     let serve = &pages["reference/cli/serve.md"];
-    assert!(serve.contains("--max-connections"), "serve's flags are missing");
+    assert!(
+        serve.contains("--max-connections"),
+        "serve's flags are missing"
+    );
     // Routes with their handler docs and limits; errors with their codes.
     let http = &pages["reference/http.md"];
     assert!(http.contains("| `PUT` | `/v1/sessions/{id}/recording` |"));
