@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 
 use glam::{DQuat, DVec3};
-use pyo3::exceptions::PyValueError;
+use pyo3::exceptions::{PyFileNotFoundError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use sitar_estimator::{
@@ -32,9 +32,16 @@ fn floats(bytes: &[u8]) -> Vec<f64> {
 }
 
 impl Run {
-    fn trajectory(&self) -> Result<Trajectory, String> {
+    fn trajectory(&self) -> PyResult<Trajectory> {
         match self {
-            Run::Path(path) => sitar_estimator::read_tum(path).map_err(|e| e.to_string()),
+            Run::Path(path) => sitar_estimator::read_tum(path).map_err(|e| match &e {
+                sitar_estimator::Error::Io { source, .. }
+                    if source.kind() == std::io::ErrorKind::NotFound =>
+                {
+                    PyFileNotFoundError::new_err(e.to_string())
+                }
+                _ => SitarError::new_err(e.to_string()),
+            }),
             Run::Arrays(name, stamps, xyz, wxyz) => {
                 let stamps: Vec<i64> = floats(stamps).into_iter().map(seconds_to_ns).collect();
                 let positions = floats(xyz).chunks_exact(3).map(DVec3::from_slice).collect();
@@ -43,7 +50,7 @@ impl Run {
                     .map(|q| DQuat::from_xyzw(q[1], q[2], q[3], q[0]))
                     .collect();
                 Trajectory::from_poses(stamps, positions, orientations, TimeUnit::Seconds)
-                    .map_err(|e| format!("{name}: {e}"))
+                    .map_err(|e| SitarError::new_err(format!("{name}: {e}")))
             }
         }
     }
@@ -91,17 +98,16 @@ pub fn estimate<'py>(
                 .iter()
                 .map(Run::trajectory)
                 .collect::<Result<Vec<_>, _>>()?;
-            let mut estimate =
-                sitar_estimator::estimate(&trials, &options).map_err(|e| e.to_string())?;
+            let fail = |e: sitar_estimator::Error| SitarError::new_err(e.to_string());
+            let mut estimate = sitar_estimator::estimate(&trials, &options).map_err(fail)?;
             if let Some(path) = &calibration {
-                let fitted = Calibration::read(path).map_err(|e| e.to_string())?;
+                let fitted = Calibration::read(path).map_err(fail)?;
                 fitted
                     .apply(&mut estimate, &trials, &path.display().to_string())
-                    .map_err(|e| format!("{}: {e}", path.display()))?;
+                    .map_err(|e| SitarError::new_err(format!("{}: {e}", path.display())))?;
             }
-            Ok::<_, String>((estimate, trials[0].time_unit))
-        })
-        .map_err(SitarError::new_err)?;
+            Ok::<_, PyErr>((estimate, trials[0].time_unit))
+        })?;
     let thresholds = Thresholds { medium, high };
     let w = &estimate.windows;
     let out = PyDict::new(py);
