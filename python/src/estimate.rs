@@ -92,22 +92,21 @@ pub fn estimate<'py>(
         t_max_diff_s: t_max_diff,
         pose_relation,
     };
-    let (estimate, unit) = py
-        .allow_threads(|| {
-            let trials = runs
-                .iter()
-                .map(Run::trajectory)
-                .collect::<Result<Vec<_>, _>>()?;
-            let fail = |e: sitar_estimator::Error| SitarError::new_err(e.to_string());
-            let mut estimate = sitar_estimator::estimate(&trials, &options).map_err(fail)?;
-            if let Some(path) = &calibration {
-                let fitted = Calibration::read(path).map_err(fail)?;
-                fitted
-                    .apply(&mut estimate, &trials, &path.display().to_string())
-                    .map_err(|e| SitarError::new_err(format!("{}: {e}", path.display())))?;
-            }
-            Ok::<_, PyErr>((estimate, trials[0].time_unit))
-        })?;
+    let (estimate, unit) = py.allow_threads(|| {
+        let trials = runs
+            .iter()
+            .map(Run::trajectory)
+            .collect::<Result<Vec<_>, _>>()?;
+        let fail = |e: sitar_estimator::Error| SitarError::new_err(e.to_string());
+        let mut estimate = sitar_estimator::estimate(&trials, &options).map_err(fail)?;
+        if let Some(path) = &calibration {
+            let fitted = Calibration::read(path).map_err(fail)?;
+            fitted
+                .apply(&mut estimate, &trials, &path.display().to_string())
+                .map_err(|e| SitarError::new_err(format!("{}: {e}", path.display())))?;
+        }
+        Ok::<_, PyErr>((estimate, trials[0].time_unit))
+    })?;
     let thresholds = Thresholds { medium, high };
     let w = &estimate.windows;
     let out = PyDict::new(py);

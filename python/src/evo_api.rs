@@ -16,7 +16,8 @@ use crate::SitarError;
 /// starting with `comment` are skipped, every other line is split at each `delimiter`, every
 /// field is a Python float. The first row decides the width (exactly `columns`, or at least
 /// `columns` when `at_least`); every row must have it. Errors name the source, line and
-/// column (1-based) and end with `rule`, evo's message for the format.
+/// column (1-based) of the first bad row and end with `rule`, evo's message for the format.
+/// Rows are parsed in parallel blocks (rayon); an error is then looked for in order.
 fn parse_matrix(
     text: &str,
     source: &str,
@@ -25,59 +26,76 @@ fn parse_matrix(
     at_least: bool,
     rule: &str,
 ) -> Result<(Vec<f64>, usize, usize), String> {
+    use rayon::prelude::*;
+
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-    let mut values = Vec::with_capacity(text.len() / 10);
-    let mut width = 0;
-    let mut rows = 0;
-    let lines = text.split('\n');
-    let count = text.split('\n').count();
-    for (number, line) in lines.enumerate() {
-        // The newline ending the last line starts no row (as Python's line iteration).
-        if number + 1 == count && line.is_empty() {
-            break;
-        }
-        let line = line.strip_suffix('\r').unwrap_or(line);
-        if line.starts_with('#') {
-            continue;
-        }
-        let start = values.len();
-        let mut column = 1;
-        for field in line.split(delimiter) {
-            let value = python_float(field).ok_or_else(|| {
-                format!(
-                    "{source}:{}:{column}: '{field}' is not a number; {rule}",
-                    number + 1
-                )
-            })?;
-            values.push(value);
-            column += field.chars().count() + 1;
-        }
-        let fields = values.len() - start;
-        if rows == 0 {
-            let fits = if at_least {
-                fields >= columns
-            } else {
-                fields == columns
-            };
-            if !fits {
+    // The newline ending the last line starts no row (as Python's line iteration).
+    let body = text.strip_suffix('\n').unwrap_or(text);
+    let rows: Vec<(usize, &str)> = body
+        .split('\n')
+        .enumerate()
+        .filter(|(_, line)| !line.starts_with('#'))
+        .map(|(number, line)| (number + 1, line.strip_suffix('\r').unwrap_or(line)))
+        .collect();
+    let Some(&(first_line, first)) = rows.first().filter(|_| !body.is_empty()) else {
+        return Err(format!("{source}: no rows; {rule}"));
+    };
+    let mut values = Vec::new();
+    parse_row(first, first_line, source, delimiter, rule, &mut values)?;
+    let width = values.len();
+    let fits = if at_least {
+        width >= columns
+    } else {
+        width == columns
+    };
+    if !fits {
+        return Err(format!(
+            "{source}:{first_line}: {width} entries in the first row; {rule}"
+        ));
+    }
+    let block = |chunk: &[(usize, &str)]| -> Result<Vec<f64>, String> {
+        let mut out = Vec::with_capacity(chunk.len() * width);
+        for &(number, line) in chunk {
+            let before = out.len();
+            parse_row(line, number, source, delimiter, rule, &mut out)?;
+            let fields = out.len() - before;
+            if fields != width {
                 return Err(format!(
-                    "{source}:{}: {fields} entries in the first row; {rule}",
-                    number + 1
+                    "{source}:{number}: {fields} entries where the first row has {width}; {rule}"
                 ));
             }
-            width = fields;
-        } else if fields != width {
-            return Err(format!(
-                "{source}:{}: {fields} entries where the first row has {width}; {rule}",
-                number + 1
-            ));
         }
-        rows += 1;
+        Ok(out)
+    };
+    let parsed: Vec<Result<Vec<f64>, String>> = rows[1..].par_chunks(2048).map(block).collect();
+    values.reserve(rows.len() * width);
+    for part in parsed {
+        values.extend(part?); // the blocks are in order: the first error is the first bad row
     }
-    if rows == 0 {
-        return Err(format!("{source}: no rows; {rule}"));
+    Ok((values, rows.len(), width))
+}
+
+/// The fields of one row onto `out`; an error names the line and column of a bad field.
+fn parse_row(
+    line: &str,
+    number: usize,
+    source: &str,
+    delimiter: char,
+    rule: &str,
+    out: &mut Vec<f64>,
+) -> Result<(), String> {
+    let mut offset = 0;
+    for field in line.split(delimiter) {
+        let Some(value) = python_float(field) else {
+            let column = line[..offset].chars().count() + 1;
+            return Err(format!(
+                "{source}:{number}:{column}: '{field}' is not a number; {rule}"
+            ));
+        };
+        out.push(value);
+        offset += field.len() + delimiter.len_utf8();
     }
-    Ok((values, rows, width))
+    Ok(())
 }
 
 /// A field as Python's `float()` reads it (surrounding whitespace, `nan`, `inf`, `1_000`).
