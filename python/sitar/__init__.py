@@ -1,5 +1,9 @@
 """SiTAR's evo-compatible metrics in Python.
 
+``sitar.evo`` is evo's Python API (file_interface, trajectory, sync, metrics, plot) on
+the Rust library: change ``evo`` to ``sitar.evo`` in a script's imports.
+``sitar.estimate(trajectories, ...)`` is SiTAR's estimate of repeated runs (numpy arrays).
+
 ``sitar.ape(fmt, ref, est, **options)``, ``sitar.rpe(...)`` and ``sitar.drift(...)`` take
 evo's option names (``align=True``, ``correct_scale``, ``n_to_align``, ``pose_relation``,
 ``delta``, ``delta_unit``, ``all_pairs``, ``t_max_diff``, ``t_offset``, ...) and return the

@@ -3,7 +3,6 @@
 (static x-y-z), for stacks of poses at once."""
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from sitar.evo import EvoException
 from sitar.evo._missing import missing
@@ -56,12 +55,16 @@ def is_se3(p: np.ndarray) -> bool:
 
 
 def so3_exp(rotation_vector: np.ndarray) -> np.ndarray:
-    """The rotation matrix of an axis-angle vector."""
+    """The rotation matrix of an axis-angle vector (scipy)."""
+    from scipy.spatial.transform import Rotation
+
     return Rotation.from_rotvec(rotation_vector).as_matrix()
 
 
 def so3_log(r: np.ndarray, return_skew: bool = False) -> np.ndarray:
-    """The axis-angle vector of a rotation matrix (or its skew matrix)."""
+    """The axis-angle vector of a rotation matrix (or its skew matrix; scipy)."""
+    from scipy.spatial.transform import Rotation
+
     vector = Rotation.from_matrix(r).as_rotvec()
     if return_skew:
         x, y, z = vector

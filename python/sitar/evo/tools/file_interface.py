@@ -133,8 +133,8 @@ def read_bag_trajectory(reader, topic: str, cache_tf_tree: bool = False) -> Pose
     """evo reads a pose topic from a ``rosbags`` reader; sitar.evo does not (yet)."""
     raise NotImplementedError(
         "evo.tools.file_interface.read_bag_trajectory is not mirrored by sitar.evo; nearest "
-        "sitar equivalent: `sitar traj bag BAG TOPIC --save_as_tum`, then "
-        "read_tum_trajectory_file"
+        "sitar equivalent: `sitar traj bag BAG TOPIC --save_as_tum` (ROS 2: `sitar traj "
+        "bag2`), then read_tum_trajectory_file"
     )
 
 
