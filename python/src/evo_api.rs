@@ -166,7 +166,7 @@ pub fn parse_matrix_text(
 
 /// float64 values from native-endian bytes, checking the count is a multiple of `width`.
 fn floats(bytes: &[u8], width: usize, what: &str) -> PyResult<Vec<f64>> {
-    if bytes.len() % (8 * width) != 0 {
+    if !bytes.len().is_multiple_of(8 * width) {
         return Err(PyValueError::new_err(format!(
             "{what}: {} bytes are not rows of {width} float64",
             bytes.len()
