@@ -290,6 +290,78 @@ pub fn rpe_errors(
     ))
 }
 
+/// The messages of `topic` in a ROS 1 bag (`.bag`) or a ROS 2 MCAP bag (an `.mcap` file or
+/// a bag directory holding one), as evo's `read_bag_trajectory` reads them: stamps (header,
+/// `sec + nanosec·1e-9`), positions, quaternions (w x y z) as float64 bytes, and the first
+/// message's `frame_id`. ROS 2 `.db3` bags need SQLite: the sitar command reads them.
+#[allow(clippy::type_complexity)]
+#[pyfunction]
+pub fn read_bag_topic(
+    py: Python<'_>,
+    path: PathBuf,
+    topic: &str,
+) -> PyResult<(Py<PyBytes>, Py<PyBytes>, Py<PyBytes>, String)> {
+    let (stamps, xyz, wxyz, frame_id) = py
+        .allow_threads(|| -> Result<_, String> {
+            let shown = path.display().to_string();
+            let wanted = |t: &str| t == topic;
+            let file = if path.is_dir() {
+                let mut found: Vec<PathBuf> = std::fs::read_dir(&path)
+                    .map_err(|e| format!("{shown}: {e}"))?
+                    .filter_map(|e| e.ok().map(|e| e.path()))
+                    .filter(|p| p.extension().is_some_and(|x| x == "mcap" || x == "db3"))
+                    .collect();
+                found.sort();
+                found
+                    .into_iter()
+                    .next()
+                    .ok_or_else(|| format!("{shown}: a bag directory without an .mcap file"))?
+            } else {
+                path.clone()
+            };
+            let name = file.to_string_lossy().into_owned();
+            let topics = if name.ends_with(".bag") {
+                sitar_estimator::read_ros1_bag_topics(&file, &wanted).map_err(|e| e.to_string())?
+            } else if name.ends_with(".mcap") {
+                let bytes = std::fs::read(&file).map_err(|e| format!("{name}: {e}"))?;
+                sitar_estimator::read_mcap_topics(&bytes, &wanted)
+                    .map_err(|e| format!("{name}: {e}"))?
+            } else {
+                return Err(format!(
+                    "{name}: sitar.evo reads ROS 1 .bag files and ROS 2 .mcap bags; for .db3 \
+                     bags use `sitar traj bag2 {shown} {topic} --save_as_tum`"
+                ));
+            };
+            let messages = topics
+                .get(topic)
+                .ok_or_else(|| format!("no messages for topic '{topic}' in bag"))?;
+            // The checks and their errors (type, no messages, bad values), then the poses as
+            // written: evo keeps the quaternions' norms, the trajectory normalises them.
+            let bag =
+                sitar_estimator::topic_trajectory(topic, messages).map_err(|e| e.to_string())?;
+            let kind = sitar_estimator::PoseMessage::from_type_name(&messages.type_name)
+                .expect("topic_trajectory accepted the type");
+            let unit = bag.trajectory.time_unit;
+            let (mut stamps, mut xyz, mut wxyz) = (Vec::new(), Vec::new(), Vec::new());
+            for data in &messages.messages {
+                let pose = sitar_estimator::decode_pose_as(kind, messages.encoding, data)
+                    .map_err(|e| format!("topic {topic}: {e}"))?;
+                stamps.push(unit.seconds(pose.stamp_ns));
+                xyz.extend(pose.position.to_array());
+                let q = pose.orientation;
+                wxyz.extend([q.w, q.x, q.y, q.z]);
+            }
+            Ok((stamps, xyz, wxyz, bag.frame_id))
+        })
+        .map_err(SitarError::new_err)?;
+    Ok((
+        PyBytes::new(py, &bytes_of(&stamps)).unbind(),
+        PyBytes::new(py, &bytes_of(&xyz)).unbind(),
+        PyBytes::new(py, &bytes_of(&wxyz)).unbind(),
+        frame_id,
+    ))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

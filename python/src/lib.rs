@@ -145,6 +145,7 @@ fn _sitar(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(evo_api::read_matrix, m)?)?;
     m.add_function(wrap_pyfunction!(evo_api::parse_matrix_text, m)?)?;
     m.add_function(wrap_pyfunction!(evo_api::ape_errors, m)?)?;
+    m.add_function(wrap_pyfunction!(evo_api::read_bag_topic, m)?)?;
     m.add_function(wrap_pyfunction!(evo_api::rpe_errors, m)?)?;
     m.add_function(wrap_pyfunction!(estimate::estimate, m)?)?;
     m.add("SitarError", m.py().get_type::<SitarError>())?;

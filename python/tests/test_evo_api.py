@@ -4,6 +4,7 @@ same in-place and copy semantics, and errors of evo's types."""
 
 import copy
 import io
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -386,5 +387,43 @@ def test_what_is_not_mirrored_says_so(module, name, nearest):
     assert nearest in str(error.value)
     with pytest.raises(AttributeError):
         getattr(mod, "no_such_function_anywhere")
-    with pytest.raises(NotImplementedError, match="sitar traj"):
+    with pytest.raises(file_interface.FileInterfaceException, match="rosbags"):
         file_interface.read_bag_trajectory(None, "/pose")
+
+
+BAGS = Path(__file__).resolve().parents[2] / "rust" / "cli" / "tests" / "golden" / "evo_bag_formats"
+
+
+@pytest.mark.parametrize("bag", ["fr1_ros1.bag", "fr1_lz4.bag", "fr1_mcap_lz4", "fr1_mcap_zstd"])
+def test_bags_read_as_evo_reads_them(bag):
+    rosbags = pytest.importorskip("rosbags.rosbag1", reason="SKIPPED: no rosbags (evo's)")
+    from rosbags.rosbag2 import Reader as Rosbag2Reader
+
+    reader_type = rosbags.Reader if bag.endswith(".bag") else Rosbag2Reader
+    with reader_type(BAGS / bag) as reader:
+        topics = list(reader.topics)
+        assert topics, f"{bag} has topics"
+        compared = 0
+        for topic in topics:
+            try:
+                theirs = evo_fi.read_bag_trajectory(reader, topic)
+            except evo_fi.FileInterfaceException as error:
+                with pytest.raises(file_interface.FileInterfaceException):
+                    file_interface.read_bag_trajectory(reader, topic)
+                assert "unsupported message type" in str(error)
+                continue
+            for source in (reader, BAGS / bag):
+                ours = file_interface.read_bag_trajectory(source, topic)
+                same_trajectory(ours, theirs, f"{bag} {topic}")
+                assert ours.meta == theirs.meta and ours.name == theirs.name == topic
+            compared += 1
+        assert compared >= 2
+    with pytest.raises(file_interface.FileInterfaceException, match="no messages for topic"):
+        file_interface.read_bag_trajectory(BAGS / bag, "/no_such_topic")
+
+
+def test_db3_bags_and_tf_ids_name_the_sitar_command():
+    with pytest.raises(NotImplementedError, match="sitar traj bag2"):
+        file_interface.read_bag_trajectory(BAGS / "fr1_db3_message" / "fr1_db3_message.db3", "/odom")
+    with pytest.raises(NotImplementedError, match="sitar traj bag"):
+        file_interface.read_bag_trajectory(BAGS / "fr1_ros1.bag", "/tf:map.base_link")

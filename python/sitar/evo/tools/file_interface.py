@@ -129,12 +129,39 @@ def read_euroc_csv_trajectory(file_path: PathStrHandle) -> PoseTrajectory3D:
     return PoseTrajectory3D(mat[:, 1:4], mat[:, 4:8], stamps, name=name_from_file(file_path))
 
 
-def read_bag_trajectory(reader, topic: str, cache_tf_tree: bool = False) -> PoseTrajectory3D:
-    """evo reads a pose topic from a ``rosbags`` reader; sitar.evo does not (yet)."""
-    raise NotImplementedError(
-        "evo.tools.file_interface.read_bag_trajectory is not mirrored by sitar.evo; nearest "
-        "sitar equivalent: `sitar traj bag BAG TOPIC --save_as_tum` (ROS 2: `sitar traj "
-        "bag2`), then read_tum_trajectory_file"
+def read_bag_trajectory(reader, topic: str, cache_tf_tree: bool = False,
+                        cache_hash_source=None) -> PoseTrajectory3D:
+    """A pose topic of a bag as a PoseTrajectory3D (header stamps, ``meta["frame_id"]``,
+    ``name`` the topic), as evo's. ``reader``: an opened ``rosbags`` reader (rosbag1 or
+    rosbag2; its ``path`` is read, in Rust) or a bag path: ROS 1 ``.bag``, ROS 2 ``.mcap``
+    or a bag directory holding one. TF ids (``/tf:a.b``) and ``.db3`` bags raise
+    NotImplementedError naming ``sitar traj bag|bag2``."""
+    path = reader if isinstance(reader, (str, Path)) else getattr(reader, "path", None)
+    if path is None:
+        raise FileInterfaceException(
+            "reader must be a rosbags.rosbag1 or rosbags.rosbag2 Reader, or a bag path"
+        )
+    if ":" in topic:
+        raise NotImplementedError(
+            f"evo's read_bag_trajectory of a TF id ({topic}) is not mirrored by sitar.evo; "
+            "nearest sitar equivalent: `sitar traj bag|bag2 BAG '/tf:parent.child' --save_as_tum`"
+        )
+    if str(path).endswith(".db3"):
+        raise NotImplementedError(
+            "evo's read_bag_trajectory of a ROS 2 .db3 bag is not mirrored by sitar.evo (no "
+            f"SQLite in the extension); nearest sitar equivalent: `sitar traj bag2 {path} "
+            f"{topic} --save_as_tum`"
+        )
+    try:
+        stamps, xyz, wxyz, frame_id = _sitar.read_bag_topic(os.fspath(path), topic)
+    except ValueError as error:
+        raise FileInterfaceException(str(error)) from None
+    return PoseTrajectory3D(
+        np.frombuffer(xyz, dtype=np.float64).reshape(-1, 3).copy(),
+        np.frombuffer(wxyz, dtype=np.float64).reshape(-1, 4).copy(),
+        np.frombuffer(stamps, dtype=np.float64).copy(),
+        meta={"frame_id": frame_id},
+        name=topic,
     )
 
 
