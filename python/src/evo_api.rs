@@ -67,7 +67,13 @@ fn parse_matrix(
         }
         Ok(out)
     };
-    let parsed: Vec<Result<Vec<f64>, String>> = rows[1..].par_chunks(2048).map(block).collect();
+    // Small files in one block: threads cost more than they give there.
+    let rest = &rows[1..];
+    let parsed: Vec<Result<Vec<f64>, String>> = if rest.len() < 16_384 {
+        vec![block(rest)]
+    } else {
+        rest.par_chunks(4096).map(block).collect()
+    };
     values.reserve(rows.len() * width);
     for part in parsed {
         values.extend(part?); // the blocks are in order: the first error is the first bad row

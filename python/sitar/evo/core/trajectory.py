@@ -163,6 +163,12 @@ class PosePath3D:
         """Applies the 4×4 ``t`` to every pose: ``t·P`` (default), ``P·t`` (``right_mul``),
         or with ``propagate`` each relative motion ``P_i⁻¹·P_{i+1}`` right-multiplied by
         ``t`` and chained from the first pose."""
+        t = np.asarray(t, dtype=np.float64)
+        if not right_mul and self._poses is None and lie.is_se3(t):
+            # A rigid transformation of positions and quaternions, without the n 4×4
+            # matrices: q' = q_t·q (w ≥ 0, as evo's matrix-to-quaternion), p' = R_t·p + t.
+            self._transform_rigid(t)
+            return
         poses = self._stacked()
         if right_mul and not propagate:
             new = poses @ t
@@ -175,6 +181,33 @@ class PosePath3D:
         else:
             new = np.asarray(t) @ poses
         self._set_poses(new)
+
+    def _transform_rigid(self, t: np.ndarray) -> None:
+        q_t = lie.quaternions_from_matrices(t[np.newaxis])[0]
+        q = self.orientations_quat_wxyz.astype(np.float64)
+        norms = np.linalg.norm(q, axis=1)
+        q = q / np.where(norms > 0.0, norms, 1.0)[:, None]
+        w0, x0, y0, z0 = q_t
+        w, x, y, z = q.T
+        product = np.stack(
+            [
+                w0 * w - x0 * x - y0 * y - z0 * z,
+                w0 * x + x0 * w + y0 * z - z0 * y,
+                w0 * y - x0 * z + y0 * w + z0 * x,
+                w0 * z + x0 * y - y0 * x + z0 * w,
+            ],
+            axis=1,
+        )
+        product[product[:, 0] < 0.0] *= -1.0
+        # Where w is ~0 the sign of q is rounding noise: take evo's route there (the matrix
+        # t·P and its eigenvector), so that the quaternions equal evo's, sign included.
+        unsure = np.abs(product[:, 0]) < 1e-6
+        if np.any(unsure):
+            poses = lie.poses_from(self.positions_xyz[unsure], q[unsure])
+            product[unsure] = lie.quaternions_from_matrices(t @ poses)
+        xyz = self.positions_xyz @ t[:3, :3].T + t[:3, 3]
+        self._xyz, self._quat, self._poses = xyz, product, None
+        self._derived = {}
 
     def scale(self, s: float) -> None:
         """Scales every translation by ``s``."""
