@@ -260,6 +260,7 @@ mod tests {
     use super::*;
 
     #[test]
+    #[cfg(feature = "full")]
     fn the_help_lists_every_command_once_in_its_group() {
         let mut command = cli();
         command.build();

@@ -79,7 +79,14 @@ fn the_wheel_installs_without_rust_and_its_pytest_suite_passes() {
         let install = run(
             "pip install maturin",
             Command::new(build_bin.join("python"))
-                .args(["-m", "pip", "install", "-q", "--disable-pip-version-check", MATURIN])
+                .args([
+                    "-m",
+                    "pip",
+                    "install",
+                    "-q",
+                    "--disable-pip-version-check",
+                    MATURIN,
+                ])
                 .env("PATH", &build_path),
         );
         if let Err(why) = install {
