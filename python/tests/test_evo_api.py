@@ -427,3 +427,56 @@ def test_db3_bags_and_tf_ids_name_the_sitar_command():
         file_interface.read_bag_trajectory(BAGS / "fr1_db3_message" / "fr1_db3_message.db3", "/odom")
     with pytest.raises(NotImplementedError, match="sitar traj bag"):
         file_interface.read_bag_trajectory(BAGS / "fr1_ros1.bag", "/tf:map.base_link")
+
+
+def results_equal(ours, theirs, what):
+    assert ours.info == theirs.info, what
+    assert ours.stats.keys() == theirs.stats.keys()
+    for k in theirs.stats:
+        close(ours.stats[k], theirs.stats[k], f"{what} stats {k}")
+    assert ours.np_arrays.keys() == theirs.np_arrays.keys(), what
+    for k in theirs.np_arrays:
+        close(ours.np_arrays[k], theirs.np_arrays[k], f"{what} {k}")
+    assert ours.trajectories.keys() == theirs.trajectories.keys()
+    for k in theirs.trajectories:
+        same_trajectory(ours.trajectories[k], theirs.trajectories[k], f"{what} trajectory {k}")
+
+
+def test_main_ape_and_main_rpe_results_equal_evo_s(pairs):
+    from evo import main_ape as evo_main_ape, main_rpe as evo_main_rpe
+    from sitar.evo import main_ape, main_rpe
+
+    for name, reader, ref, est in pairs:
+        for kwargs in ({"align": True}, {"align": True, "correct_scale": True},
+                       {"correct_scale": True}, {"align_origin": True}, {"n_to_align": 30, "align": True},
+                       {"project_to_plane": "xy"}):
+            (r, e), (er, ee) = associated(name, reader, ref, est)
+            ours_kw, theirs_kw = dict(kwargs), dict(kwargs)
+            if "project_to_plane" in kwargs:
+                ours_kw["project_to_plane"] = trajectory.Plane.XY
+                theirs_kw["project_to_plane"] = evo_trajectory.Plane.XY
+            ours = main_ape.ape(r, e, metrics.PoseRelation.translation_part, **ours_kw)
+            theirs = evo_main_ape.ape(er, ee, evo_metrics.PoseRelation.translation_part, **theirs_kw)
+            results_equal(ours, theirs, f"{name} main_ape {kwargs}")
+            (r, e), (er, ee) = associated(name, reader, ref, est)
+            ours = main_rpe.rpe(r, e, metrics.PoseRelation.rotation_angle_deg, delta=2,
+                                delta_unit=metrics.Unit.frames, support_loop=True, **ours_kw)
+            theirs = evo_main_rpe.rpe(er, ee, evo_metrics.PoseRelation.rotation_angle_deg, delta=2,
+                                      delta_unit=evo_metrics.Unit.frames, support_loop=True,
+                                      **theirs_kw)
+            results_equal(ours, theirs, f"{name} main_rpe {kwargs}")
+    with pytest.raises(ValueError, match="simultaneously"):
+        main_ape.ape(r, e, metrics.PoseRelation.translation_part, align=True, align_origin=True)
+
+
+def test_settings_and_logging_as_evo_s(synthetic):
+    from sitar.evo.tools import log, settings
+
+    assert settings.SETTINGS.plot_show_legend is True
+    with pytest.raises(settings.SettingsException):
+        settings.SETTINGS.no_such_setting
+    log.configure_logging(verbose=True)
+    import logging
+
+    assert logging.getLogger("sitar.evo").level == logging.INFO
+    log.configure_logging(silent=True)

@@ -2,10 +2,11 @@
 optional dependency: ``pip install matplotlib``).
 
 The figures hold what evo's hold (the same line data, axes, labels, legend, colour bar
-ticks) with evo's default settings: colour map ``jet``, legend shown, equal aspect for
-trajectories, Euler angles ``sxyz``, statistics colours of seaborn's ``deep6`` palette.
-Unlike evo, importing this module changes no matplotlib settings (evo sets its backend, a
-seaborn style and rcParams from ``~/.evo/settings.json``), and that file is not read.
+ticks) with evo's settings (``sitar.evo.tools.settings.SETTINGS``, evo's defaults: colour
+map ``jet``, legend shown, equal aspect for trajectories, Euler angles ``sxyz``; statistics
+in the colours of seaborn's ``deep6`` palette). Unlike evo, importing this module changes no
+matplotlib settings (evo sets its backend, a seaborn style and rcParams from
+``~/.evo/settings.json``), and that file is not read.
 """
 
 import itertools
@@ -30,15 +31,10 @@ from sitar.evo import EvoException
 from sitar.evo._missing import missing
 from sitar.evo.core import trajectory
 from sitar.evo.core.units import LENGTH_UNITS, METER_SCALE_FACTORS, Unit
+from sitar.evo.tools.settings import SETTINGS
 
 ListOrArray = typing.Union[typing.Sequence[float], np.ndarray]
 
-# evo's defaults (its settings template).
-_CMAP = "jet"
-_SHOW_LEGEND = True
-_XYZ_REALISTIC = True
-_EULER_SEQUENCE = "sxyz"
-_ZOOM_3D = 0.9
 # seaborn's "deep6" palette, evo's default for statistics lines.
 _DEEP6 = [
     (0.298039, 0.447059, 0.690196),
@@ -94,7 +90,7 @@ def prepare_axis(fig, plot_mode: PlotMode = PlotMode.xy, subplot_arg: int = 111,
         raise PlotException(f"{length_unit} is not a length unit")
     if plot_mode == PlotMode.xyz:
         ax = fig.add_subplot(subplot_arg, projection="3d")
-        ax.set_box_aspect(None, zoom=_ZOOM_3D)
+        ax.set_box_aspect(None, zoom=SETTINGS.plot_3d_zoom)
     else:
         ax = fig.add_subplot(subplot_arg)
     unit = length_unit.value
@@ -104,6 +100,12 @@ def prepare_axis(fig, plot_mode: PlotMode = PlotMode.xy, subplot_arg: int = 111,
     ax.set_ylabel(f"${second}$ ({unit})")
     if plot_mode == PlotMode.xyz:
         ax.set_zlabel(f"$z$ ({unit})")
+    if SETTINGS.plot_invert_xaxis:
+        plt.gca().invert_xaxis()
+    if SETTINGS.plot_invert_yaxis:
+        plt.gca().invert_yaxis()
+    if not SETTINGS.plot_show_axis:
+        ax.set_axis_off()
     if length_unit is not Unit.meters:
         formatter = _length_formatter(length_unit)
         ax.xaxis.set_major_formatter(formatter)
@@ -143,9 +145,9 @@ def traj(ax, plot_mode: PlotMode, traj: trajectory.PosePath3D, style: str = "-",
     ids = [i for i in plot_mode_to_idx(plot_mode) if i is not None]
     columns = [traj.positions_xyz[:, i] for i in ids]
     ax.plot(*columns, style, color=color, label=label, alpha=alpha)
-    if _XYZ_REALISTIC:
+    if SETTINGS.plot_xyz_realistic:
         set_aspect_equal(ax)
-    if label and _SHOW_LEGEND:
+    if label and SETTINGS.plot_show_legend:
         ax.legend(frameon=True)
     if plot_start_end_markers:
         add_start_end_markers(ax, plot_mode, traj, start_color=color, end_color=color,
@@ -175,7 +177,7 @@ def traj_colormap(ax, traj: trajectory.PosePath3D, array: ListOrArray, plot_mode
     """The path coloured by ``array`` (one value per pose, ``jet`` from ``min_map`` to
     ``max_map``) with a colour bar of three ticks."""
     norm = mpl.colors.Normalize(vmin=min_map, vmax=max_map, clip=True)
-    mapper = cm.ScalarMappable(norm=norm, cmap=_CMAP)
+    mapper = cm.ScalarMappable(norm=norm, cmap=SETTINGS.plot_trajectory_cmap)
     mapper.set_array(array)
     colors = [mapper.to_rgba(a) for a in array]
     ax.add_collection(colored_line_collection(traj.positions_xyz, colors, plot_mode))
@@ -184,7 +186,7 @@ def traj_colormap(ax, traj: trajectory.PosePath3D, array: ListOrArray, plot_mode
         low, high = np.amin(traj.positions_xyz[:, 2]), np.amax(traj.positions_xyz[:, 2])
         if low != high:
             ax.set_zlim(low, high)
-    if _XYZ_REALISTIC:
+    if SETTINGS.plot_xyz_realistic:
         set_aspect_equal(ax)
     if fig is None:
         fig = plt.gcf()
@@ -193,7 +195,7 @@ def traj_colormap(ax, traj: trajectory.PosePath3D, array: ListOrArray, plot_mode
     bar.ax.set_yticklabels([f"{min_map:0.3f}", f"{middle:0.3f}", f"{max_map:0.3f}"])
     if title:
         ax.set_title(title)
-    if _SHOW_LEGEND and ax.get_legend_handles_labels()[1]:
+    if SETTINGS.plot_show_legend and ax.get_legend_handles_labels()[1]:
         ax.legend(frameon=True)
     if plot_start_end_markers:
         add_start_end_markers(ax, plot_mode, traj, start_color=colors[0], end_color=colors[-1])
@@ -225,7 +227,7 @@ def traj_xyz(axarr, traj: trajectory.PosePath3D, style: str = "-", color="black"
         axarr[i].plot(x, traj.positions_xyz[:, i], style, color=color, label=label, alpha=alpha)
         axarr[i].set_ylabel(f"${name}$ ({length_unit.value})")
     axarr[2].set_xlabel(xlabel)
-    if label and _SHOW_LEGEND:
+    if label and SETTINGS.plot_show_legend:
         axarr[0].legend(frameon=True)
 
 
@@ -234,13 +236,13 @@ def traj_rpy(axarr, traj: trajectory.PosePath3D, style: str = "-", color="black"
              start_timestamp: typing.Optional[float] = None) -> None:
     """Roll, pitch and yaw (degrees, Euler sxyz) over time (or index) in three axes."""
     _three(axarr)
-    angles = traj.get_orientations_euler(_EULER_SEQUENCE)
+    angles = traj.get_orientations_euler(SETTINGS.euler_angle_sequence)
     x, xlabel = _time_axis(traj, len(angles), start_timestamp)
     for i, name in enumerate(("roll", "pitch", "yaw")):
         axarr[i].plot(x, np.rad2deg(angles[:, i]), style, color=color, label=label, alpha=alpha)
         axarr[i].set_ylabel(f"${name}$ (deg)")
     axarr[2].set_xlabel(xlabel)
-    if label and _SHOW_LEGEND:
+    if label and SETTINGS.plot_show_legend:
         axarr[0].legend(frameon=True)
 
 
@@ -272,7 +274,7 @@ def error_array(ax, err_array: ListOrArray, x_array: typing.Optional[ListOrArray
     plt.ylabel(ylabel if ylabel else name)
     plt.xlabel(xlabel)
     plt.title(title)
-    if _SHOW_LEGEND:
+    if SETTINGS.plot_show_legend:
         plt.legend(frameon=True)
 
 
