@@ -41,7 +41,7 @@ impl Drop for Section {
 
 #[cfg(target_os = "android")]
 mod atrace {
-    use std::ffi::{CString, c_char, c_int, c_void};
+    use std::ffi::{c_char, c_int, c_void, CString};
     use std::sync::OnceLock;
 
     type BeginSection = unsafe extern "C" fn(*const c_char);
