@@ -99,6 +99,8 @@ fn library_results(
     let mut estimate = sitar_estimator::estimate(trials, &EstimateOptions::default()).unwrap();
     if let Some((calibration, name)) = calibration {
         calibration.apply(&mut estimate, trials, name).unwrap();
+        // The backend says where calibrated results come from: these sessions have no walk.
+        estimate.source = Some("replays");
     }
     (
         estimate.to_json(Thresholds::DEFAULT_M),

@@ -10,6 +10,7 @@ use crate::app_state::{App, RunningJob};
 use crate::error::Error;
 use crate::estimate::held_trials::Purpose;
 use crate::estimate::live_sessions::LiveSession;
+use crate::estimate::publishing::Published;
 use crate::jobs::playback_run::{self as run, Outcome, publish, too_few_after_cancel};
 use crate::model::{PlaybackKind, Session, SessionState, Step};
 pub(crate) use crate::playback::queue::Begin;
@@ -178,6 +179,19 @@ where
         .unwrap_or(Ok(Outcome::Interrupted));
         conclude(&shared, &id, job, outcome);
     });
+}
+
+/// Publishes at once what the session holds (the phone's walk just arrived: its estimate
+/// alone, or with the trials held as its replays), within an estimate worker's permit;
+/// `Ok(None)` when there is nothing new or the server stops.
+pub(crate) async fn publish_now(
+    shared: &Arc<App>,
+    live: &Arc<LiveSession>,
+    id: &str,
+) -> Result<Option<Published>, Error> {
+    with_estimate_permit(shared, publish(shared, live, id, Purpose::Progressive))
+        .await
+        .unwrap_or(Ok(None))
 }
 
 /// After a trial of an `upload` session: publishes progressive estimates in the background
