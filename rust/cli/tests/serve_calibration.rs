@@ -13,8 +13,8 @@ use std::time::Duration;
 
 use serde_json::{Value, json};
 use sitar_estimator::{
-    Calibration, CalibrationSequence, DEFAULT_SMOOTHING_WINDOWS, EstimateOptions, FitOptions,
-    Thresholds, Trajectory, fit_calibration,
+    ApplyCalibration as _, Calibration, CalibrationSequence, DEFAULT_SMOOTHING_WINDOWS,
+    EstimateOptions, FitOptions, Thresholds, Trajectory, fit_calibration,
 };
 use support::process::{Serving, create_token};
 

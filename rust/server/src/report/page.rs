@@ -62,7 +62,7 @@ impl ResultsDoc {
 
     /// Where results of the walk come from, as the page says it: `from the walk alone`, `from
     /// the walk and 3 replays`.
-    fn from_walk(&self) -> Option<String> {
+    fn walk_source(&self) -> Option<String> {
         self.walk_replays().map(|replays| match replays {
             0 => "from the walk alone".to_string(),
             1 => "from the walk and 1 replay".to_string(),
@@ -805,7 +805,7 @@ pub(crate) fn render(input: &ReportInput<'_>) -> Result<String, Error> {
         "interval": c.interval,
     })));
     context["calibration_missing"] = json!(calibration_missing(row, &a));
-    context["from_walk"] = json!(a.doc.from_walk());
+    context["from_walk"] = json!(a.doc.walk_source());
     context["runs"] = json!(a.doc.runs.unwrap_or(a.doc.trials));
     context["not_informative"] = json!(a.doc.informative == Some(false));
     templates::render("report.html", &context)
