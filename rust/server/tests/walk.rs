@@ -120,15 +120,15 @@ fn run(seed: u64) -> String {
 }
 
 struct World {
-    _dir: tempfile::TempDir,
+    dir: tempfile::TempDir,
     server: ServerHandle,
     owner: String,
     stranger: String,
 }
 
-fn start() -> World {
-    let dir = tempfile::tempdir().unwrap();
-    let mut config = ServerConfig::new(dir.path());
+/// The server on `data` with the calibrations `lab` and `guess`.
+fn spawn(data: &std::path::Path) -> ServerHandle {
+    let mut config = ServerConfig::new(data);
     config.max_trajectory_bytes = MAX_RUN_BYTES;
     config
         .calibrations
@@ -138,13 +138,18 @@ fn start() -> World {
         .calibrations
         .insert("guess", calibration(false))
         .unwrap();
-    let server = Server::spawn(config, "127.0.0.1:0".parse().unwrap()).unwrap();
+    Server::spawn(config, "127.0.0.1:0".parse().unwrap()).unwrap()
+}
+
+fn start() -> World {
+    let dir = tempfile::tempdir().unwrap();
+    let server = spawn(dir.path());
     let token = |name| sitar_server::create_token(dir.path(), Role::App, name).unwrap();
     World {
         owner: token("owner"),
         stranger: token("stranger"),
         server,
-        _dir: dir,
+        dir,
     }
 }
 
@@ -454,6 +459,37 @@ fn without_a_calibration_the_walk_is_kept_and_results_come_from_the_replays() {
     assert_eq!(
         (&results["source"], &results["runs"], &results["target"]),
         (&json!("replays"), &json!(2), &json!("expected")),
+        "{results}"
+    );
+}
+
+#[test]
+fn after_a_restart_the_stored_walk_is_the_live_run_again() {
+    let w = start();
+    let id = w.session(Some("lab"));
+    assert_eq!(w.put_walk(&w.owner, &id, &run(0)).status, 200);
+    w.add_trial(&id, 1);
+    w.wait_runs(&id, 2);
+    let World {
+        dir,
+        server,
+        owner,
+        stranger,
+    } = w;
+    server.stop();
+    let w = World {
+        server: spawn(dir.path()),
+        dir,
+        owner,
+        stranger,
+    };
+    // Read again with the trials: the next estimate has it as the live run.
+    w.add_trial(&id, 2);
+    w.wait_runs(&id, 3);
+    let results = w.results(&id);
+    assert_eq!(
+        (&results["source"], &results["runs"], &results["target"]),
+        (&json!("replays"), &json!(3), &json!("live")),
         "{results}"
     );
 }

@@ -376,6 +376,14 @@ pub(crate) fn resume_or_fail(shared: &Arc<App>, session: Session) {
     }
 }
 
+/// The runs a session's results would count from what is stored: its trials, and the walk
+/// when it has one and a calibration (results count the walk it is estimated from).
+fn runs_stored(shared: &App, session: &Session) -> Result<u32, Error> {
+    let walk =
+        session.calibration.is_some() && shared.blobs.exists(&session.id, SessionObject::Walk);
+    Ok(shared.db.trial_count(&session.id)? + u32::from(walk))
+}
+
 /// Resumes one session in flight after a restart.
 fn recover_one(shared: &Arc<App>, session: Session) -> Result<(), Error> {
     let id = session.id.clone();
@@ -391,7 +399,7 @@ fn recover_one(shared: &Arc<App>, session: Session) -> Result<(), Error> {
             shared.lifecycle().resume(&id)?;
             spawn_estimate(shared.clone(), id);
         } else if shared.config.progressive_uploads
-            && session.results_trials < shared.db.trial_count(&id)?
+            && session.results_trials < runs_stored(shared, &session)?
         {
             // Trials arrived after the last published estimate: catch up.
             let shared = shared.clone();
