@@ -14,7 +14,7 @@ use sitar_core::calibration::{
     CALIBRATION_FORMAT, Calibration, CalibrationModel, Feature, FittedOn, IntervalModel, RunCount,
     Target,
 };
-use sitar_server::{Role, Server, ServerConfig, ServerHandle};
+use sitar_server::{PlaybackKind, Role, Server, ServerConfig, ServerHandle};
 
 mod support;
 use support::http::{Answer, call};
@@ -492,6 +492,95 @@ fn after_a_restart_the_stored_walk_is_the_live_run_again() {
         (&json!("replays"), &json!(3), &json!("live")),
         "{results}"
     );
+}
+
+/// A sim session whose calibration reads the walk's motion alone, with replays too: the
+/// replays change no class, and adaptive stopping ends playback at its minimum, the walk
+/// still the live run.
+#[test]
+fn adaptive_stopping_stops_once_the_replays_change_no_class_of_the_walk() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut config = ServerConfig::new(dir.path());
+    config.playback = PlaybackKind::Sim;
+    config.sim.speed = 50.0;
+    config.sim.devices = 1;
+    let mut motion = calibration(true);
+    motion.models[1] = model(
+        Target::Live,
+        RunCount::Several,
+        &[Feature::PathM],
+        0.5f64.ln(),
+    );
+    config.calibrations.insert("motion", motion).unwrap();
+    let server = Server::spawn(config, "127.0.0.1:0".parse().unwrap()).unwrap();
+    let owner = sitar_server::create_token(dir.path(), Role::App, "owner").unwrap();
+    let recording = sitar_sim::Recording::demo(4.0, 30.0, 3).unwrap();
+    let phone = recording
+        .phone_session(
+            sitar_core::SessionConfig::from_json(r#"{"convention":"arcore","images":false}"#)
+                .unwrap(),
+            sitar_core::DisplayRotation::Deg90,
+        )
+        .unwrap();
+    let send = |method: &str, path: &str, content_type: &str, body: &[u8]| {
+        call(&server, &owner, method, path, Some(content_type), body)
+    };
+    let body = json!({"trials": 20, "playback": "sim", "calibration": "motion",
+                      "adaptive_min_trials": 3, "adaptive_k": 2});
+    let a = send(
+        "POST",
+        "/v1/sessions",
+        "application/json",
+        body.to_string().as_bytes(),
+    );
+    assert_eq!(a.status, 201, "{}", a.body);
+    let id = a.json()["id"].as_str().unwrap().to_owned();
+    let a = send(
+        "PUT",
+        &format!("/v1/sessions/{id}/walk.txt"),
+        "text/plain",
+        phone.walk_tum().as_bytes(),
+    );
+    assert_eq!(a.json()["source"], json!("walk"), "{}", a.body);
+    let a = send(
+        "PUT",
+        &format!("/v1/sessions/{id}/recording"),
+        "application/octet-stream",
+        &recording.to_bytes(),
+    );
+    assert_eq!(a.status, 202, "{}", a.body);
+    let deadline = Instant::now() + Duration::from_secs(120);
+    let status = loop {
+        let status = send("GET", &format!("/v1/sessions/{id}"), "text/plain", b"").json();
+        if status["state"] == "done" || status["state"] == "failed" {
+            break status;
+        }
+        assert!(Instant::now() < deadline, "{status}");
+        std::thread::sleep(Duration::from_millis(50));
+    };
+    assert_eq!(status["state"], "done", "{status}");
+    let done = status["trials_done"].as_u64().unwrap();
+    assert!(
+        status["stop_reason"]
+            .as_str()
+            .unwrap_or_default()
+            .starts_with("adaptive stop"),
+        "{status}"
+    );
+    assert!((3..20).contains(&done), "{status}");
+    let results = send(
+        "GET",
+        &format!("/v1/sessions/{id}/results.json"),
+        "text/plain",
+        b"",
+    )
+    .json();
+    assert_eq!(
+        (&results["source"], &results["target"], &results["runs"]),
+        (&json!("replays"), &json!("live"), &json!(done + 1)),
+        "{results}"
+    );
+    server.stop();
 }
 
 #[test]
