@@ -4,10 +4,8 @@
 //! tests (`tests/tests/bindings_*.rs` write it where the host tests read it).
 #![allow(dead_code)] // each test uses some of it
 
-use sitar_core::calibration::{
-    CALIBRATION_FORMAT, Calibration, CalibrationModel, Feature, FittedOn, IntervalModel, RunCount,
-    Target,
-};
+// One glob: the 2021 (sitar-ffi) and 2024 (sitar-tests) styles sort a list differently.
+use sitar_core::calibration::*;
 
 /// The calibration for windows of `window_frames` frames; `informative` as the file says.
 pub fn walk_calibration(window_frames: usize, informative: bool) -> Calibration {
