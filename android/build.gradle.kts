@@ -88,14 +88,16 @@ val cargoNdk by tasks.registering(Exec::class) {
     group = "build"
     workingDir = projectDir
     // Up to date (skipped) while neither the Rust sources of sitar-ffi and its crates nor the
-    // lock file changed and the libraries are in place.
+    // lock file nor the Android link flags (.cargo/config.toml: 16 KB pages) changed and the
+    // libraries are in place.
     inputs.files(
         fileTree(workspace.resolve("rust")) {
             include("ffi/**", "core/**", "client/**")
             exclude("**/target/**")
         }
     ).withPropertyName("rustSources")
-    inputs.files(workspace.resolve("Cargo.toml"), workspace.resolve("Cargo.lock")).withPropertyName("cargoManifests")
+    inputs.files(workspace.resolve("Cargo.toml"), workspace.resolve("Cargo.lock"), workspace.resolve(".cargo/config.toml"))
+        .withPropertyName("cargoManifests")
     outputs.dir("src/main/jniLibs").withPropertyName("jniLibs")
     commandLine(
         "cargo", "ndk",
@@ -105,7 +107,7 @@ val cargoNdk by tasks.registering(Exec::class) {
     )
     doFirst {
         val ndk = findNdk()
-            ?: throw GradleException("cargoNdk: no Android NDK found; set ANDROID_NDK_HOME to the NDK folder (e.g. \$ANDROID_HOME/ndk/26.3.11579264)")
+            ?: throw GradleException("cargoNdk: no Android NDK found; set ANDROID_NDK_HOME to the NDK folder (r27 or later, e.g. \$ANDROID_HOME/ndk/27.2.12479018)")
         environment("ANDROID_NDK_HOME", ndk.path)
     }
 }

@@ -1,5 +1,9 @@
 """SiTAR's evo-compatible metrics in Python.
 
+``sitar.evo`` is evo's Python API (file_interface, trajectory, sync, metrics, plot) on
+the Rust library: change ``evo`` to ``sitar.evo`` in a script's imports.
+``sitar.estimate(trajectories, ...)`` is SiTAR's estimate of repeated runs (numpy arrays).
+
 ``sitar.ape(fmt, ref, est, **options)``, ``sitar.rpe(...)`` and ``sitar.drift(...)`` take
 evo's option names (``align=True``, ``correct_scale``, ``n_to_align``, ``pose_relation``,
 ``delta``, ``delta_unit``, ``all_pairs``, ``t_max_diff``, ``t_offset``, ...) and return the
@@ -21,7 +25,7 @@ import numpy as np
 from sitar._sitar import SitarError
 from sitar import _sitar
 
-__all__ = ["ape", "rpe", "drift", "SitarError", "SitarWarning"]
+__all__ = ["ape", "rpe", "drift", "estimate", "calibrate", "SitarError", "SitarWarning"]
 
 PathLike = Union[str, "os.PathLike[str]"]
 
@@ -115,3 +119,71 @@ def drift(fmt: str, ref: PathLike, est: Any, **options: Any) -> Dict[str, Any]:
     ``align``, ``correct_scale``, ``n_to_align``, ``yaw_only``, ``yaw_axis`` and the sync
     options."""
     return _run(_sitar.drift, fmt, ref, est, options)
+
+
+def _run_input(run: Any, index: int) -> Any:
+    """A run as the extension takes it: a path, or (name, stamps, xyz, wxyz) as bytes."""
+    if isinstance(run, (str, os.PathLike)):
+        return os.fspath(run)
+    stamps = getattr(run, "timestamps", None)
+    if stamps is None or not hasattr(run, "positions_xyz"):
+        raise TypeError(
+            f"trajectories[{index}]: expected a path or a PoseTrajectory3D (with timestamps), "
+            f"got {type(run).__name__}"
+        )
+    name = getattr(run, "name", None) or f"trajectories[{index}]"
+    as_bytes = lambda a: np.ascontiguousarray(a, dtype=np.float64).tobytes()
+    return (name, as_bytes(stamps), as_bytes(run.positions_xyz), as_bytes(run.orientations_quat_wxyz))
+
+
+def estimate(
+    trajectories: Sequence[Any],
+    calibration: Union[PathLike, None] = None,
+    setting: str = "trim_mean_30",
+    delta: int = 10,
+    t_max_diff: float = 0.01,
+    pose_relation: str = "trans_part",
+    thresholds: Sequence[float] = (0.05, 0.10),
+) -> Dict[str, Any]:
+    """SiTAR's estimate of repeated runs without ground truth, as ``sitar estimate``: for
+    every pair of runs an all-pairs RPE over ``delta`` frames, and per window (keyed by the
+    reference run's start stamp) the ``setting`` statistic of the pair values (``mean``,
+    ``median``, ``trim_mean_10|20|30|40``, ``mean_inliers``).
+
+    ``trajectories``: two or more runs, each a TUM path (integer stamps: nanoseconds) or a
+    ``sitar.evo`` / evo ``PoseTrajectory3D`` (stamps in seconds). ``calibration``: a file
+    from ``sitar calibrate``; then ``error`` is the calibrated error, ``raw`` the spread and
+    ``[lower, upper]`` the interval. ``thresholds``: (medium, high) of ``class``.
+
+    Returns numpy arrays, one entry per window: ``start`` and ``end`` (stamps, seconds),
+    ``error``, ``raw``, ``lower``, ``upper`` (NaN without a calibration), ``spread``,
+    ``pairs``, ``class`` ("low", "medium", "high"); and ``setting``, ``trials``,
+    ``calibration`` (its path, or None).
+    """
+    runs = [_run_input(run, i) for i, run in enumerate(trajectories)]
+    medium, high = (float(v) for v in thresholds)
+    out = _sitar.estimate(
+        runs,
+        None if calibration is None else os.fspath(calibration),
+        setting,
+        int(delta),
+        float(t_max_diff),
+        _name(pose_relation, _EVO_RELATIONS),
+        medium,
+        high,
+    )
+    for key in ("start", "end", "error", "raw", "lower", "upper", "spread"):
+        out[key] = np.array(out[key], dtype=np.float64)
+    out["pairs"] = np.array(out["pairs"], dtype=np.int64)
+    out["class"] = np.array(out["class"], dtype=str)
+    return out
+
+
+def calibrate(*args: Any, **kwargs: Any) -> Any:
+    """Fitting a calibration needs runs with ground truth per sequence; it is the
+    command ``sitar calibrate`` (not in the wheel's command, which has no analysis)."""
+    raise NotImplementedError(
+        "sitar.calibrate is not in the Python package yet: fit with the whole CLI, "
+        "`sitar calibrate` (cargo build --release -p sitar-cli), then pass the file to "
+        "sitar.estimate(..., calibration=PATH)"
+    )

@@ -2,6 +2,8 @@
 //! on the sitar-evo library (options by evo's names, the JSON document back as text, which
 //! `sitar/__init__.py` turns into the dict), and `main`, the `sitar` command itself.
 
+mod estimate;
+mod evo_api;
 mod options;
 
 use std::path::{Path, PathBuf};
@@ -134,21 +136,18 @@ fn drift(
     Ok((document.to_string(), messages.take()))
 }
 
-/// The `sitar` command: runs it on `argv` (`argv[0]` first) and returns its exit status.
-#[pyfunction]
-fn main(py: Python<'_>, argv: Vec<String>) -> i32 {
-    let args = argv.into_iter().map(Into::into).collect();
-    let code = py.allow_threads(|| sitar_cli::main_with(args));
-    i32::from(code != std::process::ExitCode::SUCCESS)
-}
-
 /// The extension module.
 #[pymodule]
 fn _sitar(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(ape, m)?)?;
     m.add_function(wrap_pyfunction!(rpe, m)?)?;
     m.add_function(wrap_pyfunction!(drift, m)?)?;
-    m.add_function(wrap_pyfunction!(main, m)?)?;
+    m.add_function(wrap_pyfunction!(evo_api::read_matrix, m)?)?;
+    m.add_function(wrap_pyfunction!(evo_api::parse_matrix_text, m)?)?;
+    m.add_function(wrap_pyfunction!(evo_api::ape_errors, m)?)?;
+    m.add_function(wrap_pyfunction!(evo_api::read_bag_topic, m)?)?;
+    m.add_function(wrap_pyfunction!(evo_api::rpe_errors, m)?)?;
+    m.add_function(wrap_pyfunction!(estimate::estimate, m)?)?;
     m.add("SitarError", m.py().get_type::<SitarError>())?;
     Ok(())
 }

@@ -58,3 +58,36 @@ def cli():
         return json.loads(out.stdout)
 
     return run
+
+
+REAL = REPO.parent / "shared" / "data" / "real-runs"
+
+
+@pytest.fixture(scope="session")
+def real_runs(tmp_path_factory):
+    """(name, reader, ref, est) of the real runs with ground truth: EuRoC MH_04 and TUM
+    fr1_desk (TUM files), and KITTI 00 written as KITTI pose files (its TUM runs associated
+    with evo and written with evo's writer). Empty when the data is absent (the tests then
+    run on the synthetic files only)."""
+    out = []
+    for name, seq in (("MH_04", REAL / "euroc-vio" / "MH_04"),
+                      ("fr1_desk", REAL / "tum-orbslam2-rgbd" / "fr1_desk")):
+        if (seq / "ground_truth.txt").is_file() and (seq / "runs" / "run0.txt").is_file():
+            out.append((name, "read_tum_trajectory_file", seq / "ground_truth.txt",
+                        seq / "runs" / "run0.txt"))
+    kitti = REAL / "kitti-orbslam2-stereo" / "00"
+    if (kitti / "ground_truth.txt").is_file() and (kitti / "runs" / "run0.txt").is_file():
+        from evo.core import sync
+        from evo.tools import file_interface
+
+        folder = tmp_path_factory.mktemp("kitti")
+        ref, est = sync.associate_trajectories(
+            file_interface.read_tum_trajectory_file(str(kitti / "ground_truth.txt")),
+            file_interface.read_tum_trajectory_file(str(kitti / "runs" / "run0.txt")),
+        )
+        file_interface.write_kitti_poses_file(str(folder / "gt.kitti"), ref)
+        file_interface.write_kitti_poses_file(str(folder / "run0.kitti"), est)
+        out.append(("KITTI 00", "read_kitti_poses_file", folder / "gt.kitti", folder / "run0.kitti"))
+    if not out:
+        print(f"SKIPPED the real runs: missing ({REAL})")
+    return out

@@ -1939,7 +1939,13 @@ fn capture_phone_logs(
                     ),
                 ),
                 ("PUT", _)
-                    if ["trajectory.txt", "subtrajectories.csv", "anchors.csv"].contains(&file) =>
+                    if [
+                        "trajectory.txt",
+                        "subtrajectories.csv",
+                        "anchors.csv",
+                        "walk.txt",
+                    ]
+                    .contains(&file) =>
                 {
                     ("200 OK", r#"{"stored":true}"#.to_owned())
                 }
@@ -1993,7 +1999,7 @@ fn record_in_venue(h: H) {
 /// The upload job of a session in a venue: the session request names the venue and the
 /// ARCore convention, then the phone's log goes whole, file by file, from the session folder
 /// it saved beside the recording — `trajectory.txt`, `subtrajectories.csv`, `anchors.csv` with
-/// every observation — before the recording.
+/// every observation, `walk.txt` with every frame's pose — before the recording.
 #[test]
 fn an_upload_sends_the_phones_log_and_venue_before_the_recording() {
     let a = api();
@@ -2017,16 +2023,17 @@ fn an_upload_sends_the_phones_log_and_venue_before_the_recording() {
         .map(|s| format!("{} {}", s.method, s.path))
         .collect();
     assert_eq!(
-        routes[..4],
+        routes[..5],
         [
             "POST /v1/sessions",
             "PUT /v1/sessions/s1/trajectory.txt",
             "PUT /v1/sessions/s1/subtrajectories.csv",
             "PUT /v1/sessions/s1/anchors.csv",
+            "PUT /v1/sessions/s1/walk.txt",
         ]
     );
     assert!(
-        routes[4..].iter().all(|r| r.ends_with("/recording")),
+        routes[5..].iter().all(|r| r.ends_with("/recording")),
         "{routes:?}"
     );
     let body: serde_json::Value = serde_json::from_slice(&seen[0].body).unwrap();
@@ -2037,10 +2044,12 @@ fn an_upload_sends_the_phones_log_and_venue_before_the_recording() {
     );
     // Each file as the session folder holds it, whole.
     let folder = dir.path().join("walk.mp4.session");
-    for (s, name) in seen[1..4]
-        .iter()
-        .zip(["trajectory.txt", "subtrajectories.csv", "anchors.csv"])
-    {
+    for (s, name) in seen[1..5].iter().zip([
+        "trajectory.txt",
+        "subtrajectories.csv",
+        "anchors.csv",
+        "walk.txt",
+    ]) {
         assert_eq!(s.body, std::fs::read(folder.join(name)).unwrap(), "{name}");
     }
     // The start, two midpoints and two endpoints: integer nanoseconds.
@@ -2061,6 +2070,9 @@ fn an_upload_sends_the_phones_log_and_venue_before_the_recording() {
         })
         .collect();
     assert_eq!(tracking, ["full", "limited", "full"]);
+    // The walk: the start and all 20 frames.
+    let walk = String::from_utf8(seen[4].body.clone()).unwrap();
+    assert_eq!(walk.lines().count(), 21, "{walk}");
     assert_eq!((a.upload_free)(job), OK);
 
     // A file the backend refuses fails the job, naming it with the server's message; the

@@ -8,7 +8,7 @@ mod bindings_support;
 
 use std::process::Command;
 
-use bindings_support::{library_dir, mono_or_skip, run, workspace_root};
+use bindings_support::{library_dir, mono_or_skip, run, workspace_root, write_walk_calibrations};
 
 #[test]
 fn csharp_wrapper_runs_a_session_and_maps_every_error() {
@@ -32,6 +32,7 @@ fn csharp_wrapper_runs_a_session_and_maps_every_error() {
     );
     let work = dir.path().join("work");
     std::fs::create_dir(&work).unwrap();
+    write_walk_calibrations(&work);
     let stdout = run(
         Command::new(mono)
             .env("LD_LIBRARY_PATH", library_dir())

@@ -10,7 +10,7 @@ mod host_support;
 
 use std::process::Command;
 
-use bindings_support::{library_dir, run, skip, which, workspace_root};
+use bindings_support::{library_dir, run, skip, which, workspace_root, write_walk_calibrations};
 use host_support::{files_with_suffix, uses_android};
 
 #[test]
@@ -44,6 +44,7 @@ fn kotlin_wrapper_runs_a_session_and_maps_every_error() {
     );
     let work = dir.path().join("work");
     std::fs::create_dir(&work).unwrap();
+    write_walk_calibrations(&work);
     let stdout = run(
         Command::new(java)
             .arg(format!("-Djava.library.path={}", library_dir().display()))

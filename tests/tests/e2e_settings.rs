@@ -119,6 +119,7 @@ fn a_sim_session_plays_and_stops_adaptively_on_its_own_windows() {
     let options = SessionOptions {
         adaptive_min_trials: Some(4),
         adaptive_k: Some(3),
+        ..SessionOptions::default()
     };
     let new = NewSession {
         trials: 30,

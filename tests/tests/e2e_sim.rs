@@ -183,6 +183,7 @@ fn adaptive_stopping_finishes_early_and_says_why() {
     let options = SessionOptions {
         adaptive_min_trials: Some(4),
         adaptive_k: Some(3),
+        ..SessionOptions::default()
     };
     let id = client
         .create_session_with(&sim_session(40), &options)

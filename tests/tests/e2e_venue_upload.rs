@@ -103,7 +103,7 @@ fn the_upload_job_puts_a_phone_session_into_its_venue() {
     }
     let progress = job.progress();
     assert_eq!(progress.state, JobState::Done, "{:?}", progress.error);
-    assert_eq!(progress.logs_sent, 3, "all three files taken");
+    assert_eq!(progress.logs_sent, 4, "all four files taken");
     let id = job.server_id().unwrap();
 
     // The backend knows the venue and aligns the session from the anchors.csv it was sent:

@@ -139,6 +139,30 @@ namespace Sitar
         internal static extern int sitar_session_results_calibration(ulong h, byte* buf, System.UIntPtr cap, System.UIntPtr* out_len);
 
         /// <summary>
+        ///  Takes a calibration (the JSON file `sitar calibrate` writes, version 2 with a model for
+        ///  one run) so the walk is coloured the moment it stops, offline: every sub-trajectory
+        ///  gets the calibrated error and interval of the walk alone, and the markers their places
+        ///  (results `"source": "walk"`, `"runs": 1`). Given after `stop`, it colours at once
+        ///  unless the backend's results are loaded; the backend's results replace the walk's when
+        ///  they arrive. Malformed JSON is `SITAR_ERR_PARSE`; a calibration fitted for another
+        ///  window (`subtrajectory_frames`) or `pose_relation`, or without a model for one run,
+        ///  `SITAR_ERR_INVALID_ARGUMENT`, naming what differs; a refused one changes nothing.
+        /// </summary>
+        [DllImport(__DllName, EntryPoint = "sitar_session_set_calibration", CallingConvention = CallingConvention.Cdecl, ExactSpelling = true)]
+        internal static extern int sitar_session_set_calibration(ulong h, byte* json);
+
+        /// <summary>
+        ///  Where the loaded results come from. `*out_source`: 1 the walk itself (estimated on the
+        ///  phone, or by the backend at upload), 2 replays; `*out_target`: 1 the error of the live
+        ///  run (the user's own walk), 2 the expected error at each place; `*out_runs`: the runs
+        ///  they come from; `*out_informative`: 1 the calibration's runs predict the error, 0 they
+        ///  do not (say so: the colours are a guess). 0 (-1 for `*out_informative`) where the
+        ///  results do not say (legacy CSV) or none are loaded.
+        /// </summary>
+        [DllImport(__DllName, EntryPoint = "sitar_session_results_provenance", CallingConvention = CallingConvention.Cdecl, ExactSpelling = true)]
+        internal static extern int sitar_session_results_provenance(ulong h, int* out_source, int* out_target, uint* out_runs, int* out_informative);
+
+        /// <summary>
         ///  The markers (array-output convention; needs results loaded).
         /// </summary>
         [DllImport(__DllName, EntryPoint = "sitar_session_markers", CallingConvention = CallingConvention.Cdecl, ExactSpelling = true)]

@@ -160,6 +160,47 @@ namespace Sitar
         public double? RawM;
     }
 
+    /// <summary>Where results come from ("source").</summary>
+    public enum ResultSource
+    {
+        /// <summary>No results, or results that do not say (legacy CSV).</summary>
+        Unknown = 0,
+        /// <summary>The walk itself, from a calibration: on the phone at Stop, or by the backend at upload.</summary>
+        Walk = 1,
+        /// <summary>Replays of the recording on playback devices.</summary>
+        Replays = 2,
+    }
+
+    /// <summary>Which error results estimate ("target").</summary>
+    public enum ResultTarget
+    {
+        /// <summary>Not said (uncalibrated results, legacy CSV) or no results.</summary>
+        Unknown = 0,
+        /// <summary>The error of the live run: the user's own walk.</summary>
+        Live = 1,
+        /// <summary>The error expected at each place (the mean over runs).</summary>
+        Expected = 2,
+    }
+
+    /// <summary>
+    /// Where the loaded results come from: Source, Target, the number of Runs (the walk and its
+    /// replays; null when not said) and whether the calibration's runs predict the error at all
+    /// (Informative; null when not said).
+    /// </summary>
+    public struct Provenance
+    {
+        public ResultSource Source;
+        public ResultTarget Target;
+        public uint? Runs;
+        public bool? Informative;
+
+        /// <summary>
+        /// The calibration says its runs do not predict this system's error: show the colours
+        /// with "this system's error cannot be told from its runs: colours are a guess".
+        /// </summary>
+        public bool IsGuess { get { return Informative == false; } }
+    }
+
     /// <summary>The result of one sub-trajectory: error (in the results' unit; null when no result window is near) and class.</summary>
     public struct SubtrajectoryResult
     {
@@ -546,6 +587,39 @@ namespace Sitar
             ulong id = Id;
             string name = Native.Text((b, c, l) => NativeMethods.sitar_session_results_calibration(id, b, c, l));
             return name.Length == 0 ? null : name;
+        }
+
+        /// <summary>
+        /// Takes a calibration (the JSON file sitar calibrate writes, e.g. a bundled TextAsset's
+        /// text) so the walk is coloured the moment it stops, offline: every sub-trajectory gets
+        /// the calibrated error and interval of the walk alone, the markers their places. Given
+        /// after Stop it colours at once, unless the backend's results are loaded; the backend's
+        /// results replace the walk's when they arrive (ResultsProvenance says which). Malformed
+        /// JSON is Parse; a calibration for another window (subtrajectory_frames) or
+        /// pose_relation, or without a model for one run, InvalidArgument, naming what differs.
+        /// A refused calibration changes nothing.
+        /// </summary>
+        public void SetCalibration(string json)
+        {
+            fixed (byte* t = Native.Utf8(json))
+            {
+                Native.Check(NativeMethods.sitar_session_set_calibration(Id, t));
+            }
+        }
+
+        /// <summary>Where the loaded results come from: the walk or replays, how many runs, and whether the colours are a guess.</summary>
+        public Provenance ResultsProvenance()
+        {
+            int source, target, informative;
+            uint runs;
+            Native.Check(NativeMethods.sitar_session_results_provenance(Id, &source, &target, &runs, &informative));
+            return new Provenance
+            {
+                Source = (ResultSource)source,
+                Target = (ResultTarget)target,
+                Runs = runs == 0 ? (uint?)null : runs,
+                Informative = informative < 0 ? (bool?)null : informative == 1,
+            };
         }
 
         public ErrorClass SubtrajectoryClass(uint k)

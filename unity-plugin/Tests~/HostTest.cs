@@ -406,6 +406,103 @@ static class HostTest
         }
     }
 
+    // The estimate from one walk: the calibrations are written into the temp dir by
+    // tests/tests/bindings_csharp.rs (rust/ffi/tests/support/walk_calibration.rs): error =
+    // 0.05 m × (path + 1 mm) / 0.1 m over a 10-frame window, interval ×0.5 … ×2.
+    const long WalkFrames = 40;
+
+    /// <summary>x at frame i: 5 mm a frame for 20 frames, 3 cm for 10, 6 cm for 10 (then still).</summary>
+    static double WalkX(long i)
+    {
+        long j = Math.Min(i, WalkFrames);
+        return Math.Min(j, 20) * 0.005 + Math.Max(Math.Min(j, 30) - 20, 0) * 0.03 + Math.Max(j - 30, 0) * 0.06;
+    }
+
+    static Pose WalkPose(long i)
+    {
+        return new Pose(WalkX(i), 1.5, 0, 0, 0, 0, 1);
+    }
+
+    /// <summary>What the calibration gives the window of 10 frames from frame start.</summary>
+    static double WalkError(long start)
+    {
+        return 0.05 * (WalkX(start + 10) - WalkX(start) + 0.001) / 0.1;
+    }
+
+    /// <summary>Records the walk (a wall 2 m ahead at every midpoint) and stops.</summary>
+    static void Walk(SitarSession s)
+    {
+        var depth = Enumerable.Repeat((ushort)2000, 16 * 16).ToArray();
+        s.Start(0, WalkPose(0));
+        for (long i = 1; i <= WalkFrames; i++)
+        {
+            if ((s.Frame(i * FrameNs, WalkPose(i)) & SitarSession.Midpoint) != 0) s.Depth(depth, 16, 16, 32, new Intrinsics(15, 15, 8, 8), 0);
+        }
+        Summary sum = s.Stop((WalkFrames + 1) * FrameNs, WalkPose(WalkFrames));
+        Check(sum.Subtrajectories == 4 && sum.DepthSamples == 4, "walk summary");
+    }
+
+    static ErrorClass[] Classes(SitarSession s)
+    {
+        return s.Results().Select(r => r.ErrorClass).ToArray();
+    }
+
+    static void WalkEstimate(string tmp)
+    {
+        string calibration = File.ReadAllText(Path.Combine(tmp, "calibration-walk.json"));
+        ErrorClass low = ErrorClass.Low, high = ErrorClass.High;
+        var none = new Provenance();
+
+        // Set before the walk: coloured at stop, offline, with the calibration's numbers.
+        var s = new SitarSession();
+        Check(s.ResultsProvenance().Equals(none), "no results yet");
+        s.SetCalibration(calibration);
+        Walk(s);
+        Check(Classes(s).SequenceEqual(new[] { low, low, high, high }), "walk classes");
+        foreach (SubtrajectoryResult r in s.Results()) Near(r.ErrorM.Value, WalkError(10L * r.Subtrajectory), "walk error of sub " + r.Subtrajectory, 1e-12);
+        Provenance fromWalk = s.ResultsProvenance();
+        Check(fromWalk.Source == ResultSource.Walk && fromWalk.Target == ResultTarget.Live && fromWalk.Runs == 1 && fromWalk.Informative == true && !fromWalk.IsGuess, "from the walk");
+        Check(s.ResultsCalibration() == "on_device", "calibration " + s.ResultsCalibration());
+        ErrorBounds? bounds = s.BoundsAt(20 * FrameNs);
+        Check(bounds.HasValue, "the walk's windows have intervals");
+        Near(bounds.Value.UpperM, 2 * WalkError(20), "upper bound", 1e-12);
+        Marker[] markers = s.Markers();
+        // In time order: sub 2 is the first high place; sub 3 and the low ones lie within 0.5 m of it.
+        Check(markers.Length == 1 && markers[0].Subtrajectory == 2 && markers[0].ErrorClass == high, "walk markers");
+        // The backend's results replace the walk's.
+        s.LoadResults("start,error\n0,0.2\n" + (10 * FrameNs) + ",0.01\n" + (20 * FrameNs) + ",0.01\n" + (30 * FrameNs) + ",0.01\n");
+        Check(Classes(s).SequenceEqual(new[] { high, low, low, low }), "backend classes");
+        Check(s.ResultsProvenance().Equals(none) && s.ResultsCalibration() == null, "legacy CSV says nothing of its source");
+        // A calibration given now keeps them.
+        s.SetCalibration(calibration);
+        Check(Classes(s).SequenceEqual(new[] { high, low, low, low }), "backend results kept");
+        s.Dispose();
+        ExpectSitar(SitarErrorCode.InvalidHandle, "handle 0", () => s.SetCalibration(calibration));
+        ExpectSitar(SitarErrorCode.InvalidHandle, "handle 0", () => s.ResultsProvenance());
+
+        // Set after the stop: coloured at once; a calibration whose runs do not predict the error says so.
+        using (var later = new SitarSession())
+        {
+            Walk(later);
+            Check(Classes(later).All(c => c == ErrorClass.Unknown), "uncoloured without a calibration");
+            later.SetCalibration(File.ReadAllText(Path.Combine(tmp, "calibration-guess.json")));
+            Check(Classes(later).SequenceEqual(new[] { low, low, high, high }), "coloured at once");
+            Provenance guess = later.ResultsProvenance();
+            Check(guess.Source == ResultSource.Walk && guess.Informative == false && guess.IsGuess, "a guess");
+        }
+
+        // Refused calibrations name what is wrong and change nothing.
+        using (var refused = new SitarSession())
+        {
+            ExpectSitar(SitarErrorCode.Parse, "not a calibration file", () => refused.SetCalibration("{"));
+            ExpectSitar(SitarErrorCode.Null, "json", () => refused.SetCalibration(null));
+            ExpectSitar(SitarErrorCode.InvalidArgument, "20 window frames", () => refused.SetCalibration(File.ReadAllText(Path.Combine(tmp, "calibration-window20.json"))));
+            ExpectSitar(SitarErrorCode.InvalidArgument, "no model for the live error from 1 run", () => refused.SetCalibration(File.ReadAllText(Path.Combine(tmp, "calibration-expected-only.json"))));
+            Walk(refused);
+            Check(Classes(refused).All(c => c == ErrorClass.Unknown) && refused.ResultsProvenance().Equals(none), "nothing taken");
+        }
+    }
+
     static int Main(string[] args)
     {
         Check(SitarSession.Version == args[0], "version " + SitarSession.Version);
@@ -416,6 +513,7 @@ static class HostTest
         WindowSettings(args[1]);
         CalibratedResults();
         Venue();
+        WalkEstimate(args[1]);
         Console.WriteLine("PASSED " + checks + " checks");
         return 0;
     }

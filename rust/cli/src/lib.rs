@@ -40,13 +40,18 @@
 //! assert_ne!(code, ExitCode::SUCCESS);
 //! ```
 #![forbid(unsafe_code)]
+// Without `full` (the wheel's command) some helpers of the left-out commands go unused.
+#![cfg_attr(not(feature = "full"), allow(dead_code))]
 
+#[cfg(feature = "full")]
 mod analysis;
+#[cfg(feature = "full")]
 mod backend;
 mod beyond_evo;
 mod command_line;
 mod evo;
 mod figures;
+#[cfg(feature = "full")]
 mod getting_started;
 mod io;
 mod results;
@@ -56,11 +61,14 @@ use std::process::ExitCode;
 
 use clap::{FromArgMatches, Parser, Subcommand};
 
+#[cfg(feature = "full")]
 use analysis::{calibrate, estimate, evaluate, scene};
+#[cfg(feature = "full")]
 use backend::{migrate, serve, token, worker};
 use beyond_evo::{bench, drift, relative};
 use command_line::{config, hints};
 use evo::{ape, res, rpe, traj};
+#[cfg(feature = "full")]
 use getting_started::{demo, simulate};
 use tools::{completions, man};
 
@@ -86,20 +94,31 @@ enum Command {
     Bench(bench::Args),
     Completions(completions::CompletionsArgs),
     Man(man::ManArgs),
+    #[cfg(feature = "full")]
     Estimate(estimate::Args),
+    #[cfg(feature = "full")]
     Evaluate(evaluate::Args),
+    #[cfg(feature = "full")]
     Calibrate(calibrate::Args),
+    #[cfg(feature = "full")]
     Simulate(simulate::Args),
+    #[cfg(feature = "full")]
     Serve(serve::Args),
+    #[cfg(feature = "full")]
     Token(token::Args),
+    #[cfg(feature = "full")]
     Worker(worker::Args),
+    #[cfg(feature = "full")]
     Migrate(migrate::Args),
+    #[cfg(feature = "full")]
     Demo(demo::Args),
+    #[cfg(feature = "full")]
     Scene(scene::Args),
 }
 
 /// The commands of `sitar --help`, by what a person comes for (a test checks that every
 /// command is in exactly one group).
+#[cfg(feature = "full")]
 const GROUPS: &[(&str, &[&str])] = &[
     ("Getting started", &["demo", "simulate"]),
     (
@@ -117,6 +136,20 @@ const GROUPS: &[(&str, &[&str])] = &[
     (
         "SiTAR analysis",
         &["estimate", "evaluate", "calibrate", "scene"],
+    ),
+    ("Tools", &["completions", "man", "help"]),
+];
+
+/// The commands without the `full` feature (the Python wheel's `sitar`).
+#[cfg(not(feature = "full"))]
+const GROUPS: &[(&str, &[&str])] = &[
+    (
+        "evo-compatible (evo's command lines)",
+        &["ape", "rpe", "traj", "res"],
+    ),
+    (
+        "Beyond evo (ground-truth metrics evo lacks)",
+        &["drift", "relative", "bench"],
     ),
     ("Tools", &["completions", "man", "help"]),
 ];
@@ -187,15 +220,25 @@ pub fn main_with(args: Vec<std::ffi::OsString>) -> ExitCode {
         Command::Bench(args) => bench::run(args),
         Command::Completions(args) => completions::completions(args, &mut cli()),
         Command::Man(args) => man::man(args, cli()),
+        #[cfg(feature = "full")]
         Command::Estimate(args) => estimate::run(args),
+        #[cfg(feature = "full")]
         Command::Evaluate(args) => evaluate::run(args),
+        #[cfg(feature = "full")]
         Command::Calibrate(args) => calibrate::run(args),
+        #[cfg(feature = "full")]
         Command::Simulate(args) => simulate::run(args),
+        #[cfg(feature = "full")]
         Command::Serve(args) => serve::run(args),
+        #[cfg(feature = "full")]
         Command::Token(args) => token::run(args),
+        #[cfg(feature = "full")]
         Command::Worker(args) => worker::run(args),
+        #[cfg(feature = "full")]
         Command::Migrate(args) => migrate::run(args),
+        #[cfg(feature = "full")]
         Command::Demo(args) => demo::run(args),
+        #[cfg(feature = "full")]
         Command::Scene(args) => scene::run(args),
     };
     match result {
@@ -231,6 +274,7 @@ mod tests {
     use super::*;
 
     #[test]
+    #[cfg(feature = "full")]
     fn the_help_lists_every_command_once_in_its_group() {
         let mut command = cli();
         command.build();

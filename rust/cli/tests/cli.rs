@@ -828,6 +828,28 @@ fn the_demo_sends_the_camera_evidence_and_its_report_shows_it() {
         .and_then(|l| l.split_whitespace().next())
         .and_then(|n| n.parse().ok())
         .unwrap_or_else(|| panic!("no evidence line in:\n{out}"));
+    // The estimate from one walk: coloured on the phone at once, first results from the
+    // walk at upload, refined by the replays, with how many sub-trajectories changed class.
+    let line = |prefix: &str| {
+        out.lines()
+            .find_map(|l| l.strip_prefix(prefix))
+            .unwrap_or_else(|| panic!("no {prefix:?} line in:\n{out}"))
+            .to_owned()
+    };
+    assert!(
+        line("instant     ").contains("from the walk alone in"),
+        "{out}"
+    );
+    assert!(
+        line("backend     ").starts_with("first results at upload, from the walk alone"),
+        "{out}"
+    );
+    let refined = line("refined     ");
+    assert!(
+        refined.starts_with("from the walk and 4 replays (backend):")
+            && refined.contains("sub-trajectories changed class"),
+        "{out}"
+    );
     let evidence = std::fs::read_to_string(data.join("demo-phone-session/evidence.csv")).unwrap();
     let with_image = evidence
         .lines()

@@ -1,23 +1,28 @@
-//! The Python package (`python/`): builds it in a fresh venv as a user would (`pip install
-//! maturin==1.8.0`, then `pip install ./python`) and runs its pytest suite, which checks
-//! `sitar.ape/rpe/drift` against this build's `sitar --format json`, against evo's Python
-//! API, and the installed `sitar` command. SKIPPED (with the reason) when python3, its venv
-//! module or the package registry is missing.
+//! The Python package (`python/`) as researchers install it: `python/build-wheel` makes the
+//! wheel (`maturin build --release`: the small extension and the `sitar` command without the
+//! backend), a fresh venv with no cargo or rustc on its PATH installs it (≤ 10 s, offline:
+//! numpy, pytest and evo come from the system's site-packages), and the pytest suite runs
+//! against that install: `sitar.evo` against evo's Python API, `sitar.ape/rpe/drift` against
+//! this build's `sitar --format json`, `sitar.estimate`, the installed `sitar` command.
+//! SKIPPED (with the reason) when python3, its venv module or maturin is missing.
 //!
-//! The wheel is built with cargo's dev profile into this workspace's target directory
-//! (`MATURIN_PEP517_ARGS`), so the crates the CLI's tests built are reused: the release
-//! build a user's `pip install` makes would add minutes to the suite.
+//! The wheel builds into TARGET/wheel (its own release build: the first run compiles the
+//! extension and the command, about 8 min of CPU on 2 cores; `.ci/run` builds it before the
+//! tests, so here it only repacks).
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
+use std::time::{Duration, Instant};
 
 /// The maturin CI installs (pinned; python/pyproject.toml requires the same).
 const MATURIN: &str = "maturin==1.8.0";
+/// The bound on installing the wheel.
+const INSTALL_BOUND: Duration = Duration::from_secs(10);
 
-fn run(what: &str, command: &mut Command) -> Result<(), String> {
+fn run(what: &str, command: &mut Command) -> Result<String, String> {
     let out = command.output().map_err(|e| format!("{what}: {e}"))?;
     if out.status.success() {
-        return Ok(());
+        return Ok(String::from_utf8_lossy(&out.stdout).into_owned());
     }
     Err(format!(
         "{what} failed ({}):\n{}\n{}",
@@ -31,66 +36,118 @@ fn target_dir(repo: &Path) -> PathBuf {
     std::env::var_os("CARGO_TARGET_DIR").map_or_else(|| repo.join("target"), PathBuf::from)
 }
 
-#[test]
-fn the_python_package_builds_and_its_pytest_suite_passes() {
-    let repo = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
-    let repo = repo.canonicalize().unwrap();
-    let temp = tempfile::tempdir().unwrap();
-    let venv = temp.path().join("venv");
-    // numpy, pytest and evo from the system's site-packages when present (CI installs evo).
-    if let Err(why) = run(
+/// A venv with the system's site-packages (numpy, pytest, evo), or None with the reason.
+fn venv(at: &Path) -> Result<PathBuf, String> {
+    run(
         "python3 -m venv",
         Command::new("python3")
             .args(["-m", "venv", "--system-site-packages"])
-            .arg(&venv),
-    ) {
-        eprintln!("SKIPPED the Python package: no python3 with venv ({why})");
-        return;
-    }
-    let bin = venv.join("bin");
-    let path = std::env::join_paths(std::iter::once(bin.clone()).chain(std::env::split_paths(
-        &std::env::var_os("PATH").unwrap_or_default(),
-    )))
-    .unwrap();
-    let python = bin.join("python");
-    let pip = |args: &[&str]| {
-        let mut command = Command::new(&python);
-        command
-            .args(["-m", "pip", "install", "-q", "--disable-pip-version-check"])
-            .args(args)
-            .env("PATH", &path);
-        command
+            .arg(at),
+    )?;
+    Ok(at.join("bin"))
+}
+
+/// PATH with `first` in front, and without the directories that hold cargo or rustc.
+fn path_without_rust(first: &Path) -> std::ffi::OsString {
+    let original = std::env::var_os("PATH").unwrap_or_default();
+    let kept = std::env::split_paths(&original)
+        .filter(|dir| !dir.join("cargo").exists() && !dir.join("rustc").exists());
+    std::env::join_paths(std::iter::once(first.to_owned()).chain(kept)).unwrap()
+}
+
+#[test]
+fn the_wheel_installs_without_rust_and_its_pytest_suite_passes() {
+    let repo = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let repo = repo.canonicalize().unwrap();
+    let temp = tempfile::tempdir().unwrap();
+    let build_bin = match venv(&temp.path().join("build")) {
+        Ok(bin) => bin,
+        Err(why) => {
+            eprintln!("SKIPPED the Python package: no python3 with venv ({why})");
+            return;
+        }
     };
-    if let Err(why) = run("pip install maturin", &mut pip(&[MATURIN])) {
-        eprintln!("SKIPPED the Python package: maturin did not install ({why})");
-        return;
-    }
-    let has_pytest = Command::new(&python)
-        .args(["-c", "import pytest"])
+    let build_path = std::env::join_paths(std::iter::once(build_bin.clone()).chain(
+        std::env::split_paths(&std::env::var_os("PATH").unwrap_or_default()),
+    ))
+    .unwrap();
+    let has_maturin = Command::new(build_bin.join("python"))
+        .args(["-m", "maturin", "--version"])
         .output()
         .is_ok_and(|o| o.status.success());
-    if !has_pytest {
-        run("pip install pytest", &mut pip(&["pytest"])).unwrap();
+    if !has_maturin {
+        let install = run(
+            "pip install maturin",
+            Command::new(build_bin.join("python"))
+                .args([
+                    "-m",
+                    "pip",
+                    "install",
+                    "-q",
+                    "--disable-pip-version-check",
+                    MATURIN,
+                ])
+                .env("PATH", &build_path),
+        );
+        if let Err(why) = install {
+            eprintln!("SKIPPED the Python package: maturin did not install ({why})");
+            return;
+        }
     }
-    let started = std::time::Instant::now();
-    run(
-        "pip install ./python",
-        pip(&["--no-build-isolation", "./python"])
+
+    let started = Instant::now();
+    let built = run(
+        "python/build-wheel",
+        Command::new(repo.join("python/build-wheel"))
             .current_dir(&repo)
-            .env("CARGO_TARGET_DIR", target_dir(&repo))
-            .env("MATURIN_PEP517_ARGS", "--profile dev"),
+            .env("PATH", &build_path)
+            .env("CARGO_TARGET_DIR", target_dir(&repo)),
     )
     .unwrap();
-    eprintln!("pip install ./python: {:.0?}", started.elapsed());
-    let started = std::time::Instant::now();
+    eprintln!("{} ({:.0?})", built.trim(), started.elapsed());
+    let wheels = target_dir(&repo).join("wheels");
+    let wheel = std::fs::read_dir(&wheels)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .find(|p| p.extension().is_some_and(|e| e == "whl"))
+        .expect("python/build-wheel leaves one wheel in TARGET/wheels");
+    let name = wheel.file_name().unwrap().to_string_lossy().into_owned();
+    assert!(
+        name.contains("-cp39-abi3-") && name.contains("manylinux_2_"),
+        "one abi3 wheel for CPython ≥ 3.9 with a manylinux tag, got {name}"
+    );
+
+    // The user's side: a fresh venv, no Rust toolchain on PATH, no package index.
+    let bin = venv(&temp.path().join("user")).unwrap();
+    let path = path_without_rust(&bin);
+    let started = Instant::now();
+    run(
+        "pip install WHEEL",
+        Command::new(bin.join("python"))
+            .args(["-m", "pip", "install", "-q", "--disable-pip-version-check"])
+            .arg("--no-index")
+            .arg(&wheel)
+            .env("PATH", &path),
+    )
+    .unwrap();
+    let install = started.elapsed();
+    eprintln!("pip install {name} without cargo or rustc on PATH: {install:.1?}");
+    assert!(
+        install <= INSTALL_BOUND,
+        "installing the wheel took {install:.1?}, more than {INSTALL_BOUND:?}"
+    );
+
+    let started = Instant::now();
     run(
         "pytest python/tests",
-        Command::new(&python)
+        Command::new(bin.join("python"))
             .args(["-m", "pytest", "-q", "-rs", "-p", "no:cacheprovider"])
             .arg(repo.join("python/tests"))
             .current_dir(temp.path())
             .env("PATH", &path)
-            .env("SITAR_BIN", env!("CARGO_BIN_EXE_sitar")),
+            .env("SITAR_BIN", env!("CARGO_BIN_EXE_sitar"))
+            .env("SITAR_EXPECT_WHEEL", "1")
+            .env("MPLBACKEND", "Agg"),
     )
     .unwrap();
     eprintln!("pytest python/tests: {:.0?}", started.elapsed());

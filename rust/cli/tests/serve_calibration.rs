@@ -13,8 +13,8 @@ use std::time::Duration;
 
 use serde_json::{Value, json};
 use sitar_estimator::{
-    ApplyCalibration, Calibration, CalibrationSequence, DEFAULT_SMOOTHING_WINDOWS, EstimateOptions,
-    FitOptions, Thresholds, Trajectory, fit_calibration,
+    ApplyCalibration as _, Calibration, CalibrationSequence, DEFAULT_SMOOTHING_WINDOWS,
+    EstimateOptions, FitOptions, Thresholds, Trajectory, fit_calibration,
 };
 use support::process::{Serving, create_token};
 
@@ -99,6 +99,8 @@ fn library_results(
     let mut estimate = sitar_estimator::estimate(trials, &EstimateOptions::default()).unwrap();
     if let Some((calibration, name)) = calibration {
         calibration.apply(&mut estimate, trials, name).unwrap();
+        // The backend says where calibrated results come from: these sessions have no walk.
+        estimate.source = Some("replays");
     }
     (
         estimate.to_json(Thresholds::DEFAULT_M),

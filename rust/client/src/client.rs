@@ -209,6 +209,9 @@ impl Client {
         if let Some(k) = options.adaptive_k {
             body["adaptive_k"] = k.into();
         }
+        if let Some(name) = &options.calibration {
+            body["calibration"] = name.as_str().into();
+        }
         let key = idempotency_key();
         let text = self.request(
             "POST",

@@ -18,7 +18,7 @@
 //! then final) to a sink; the app polls [`JobProgress`] snapshots and may cancel. The native
 //! library bridges it one-to-one (`sitar_upload_*`). With the phone's session folder the job
 //! also sends the phone's own log ([`Client::upload_phone_logs`]: `trajectory.txt`,
-//! `subtrajectories.csv`, `anchors.csv`) before the recording, and its camera evidence after;
+//! `subtrajectories.csv`, `anchors.csv`, `walk.txt`) before the recording, and its camera evidence after;
 //! [`SessionFrame`] puts the session's convention and venue into the session request.
 //!
 //! ```

@@ -1,6 +1,8 @@
 //! The phone's own log of a session: the session folder's `trajectory.txt`,
 //! `subtrajectories.csv` and `anchors.csv` (sitar-core's formats), which the backend uses to put
-//! the session into a venue's frame and to draw it from what the phone saw.
+//! the session into a venue's frame and to draw it from what the phone saw, and `walk.txt`
+//! (every frame's pose), from which a backend with the session's calibration publishes first
+//! results before any replay, and which it keeps as the live run of every later estimate.
 
 use std::path::Path;
 
@@ -9,10 +11,11 @@ use crate::{Client, Error, check_session_id};
 
 /// The files of a phone session folder that make up its log, in the order they are sent, with
 /// their content types: `PUT /v1/sessions/{id}/<name>` each.
-pub const PHONE_LOG_FILES: [(&str, &str); 3] = [
+pub const PHONE_LOG_FILES: [(&str, &str); 4] = [
     ("trajectory.txt", "text/plain; charset=utf-8"),
     ("subtrajectories.csv", "text/csv"),
     ("anchors.csv", "text/csv"),
+    ("walk.txt", "text/plain; charset=utf-8"),
 ];
 
 /// What [`Client::upload_phone_logs`] did with each file of [`PHONE_LOG_FILES`].
@@ -95,9 +98,10 @@ mod tests {
             .with_retries(2, Duration::from_millis(10))
     }
 
-    /// A session folder as sitar-core writes it (the three log files, contents abridged).
+    /// A session folder as sitar-core writes it (the four log files, contents abridged).
     fn folder(dir: &Path) {
         std::fs::write(dir.join("trajectory.txt"), "0 0 0 0 0 0 0 1\n").unwrap();
+        std::fs::write(dir.join("walk.txt"), "0 0 0 0 0 0 0 1\n5 0 0 0 0 0 0 1\n").unwrap();
         std::fs::write(dir.join("subtrajectories.csv"), "index,start_ns\n0,0\n").unwrap();
         std::fs::write(
             dir.join("anchors.csv"),
@@ -114,11 +118,17 @@ mod tests {
             Reply::Answer(204, ""),
             Reply::Answer(200, r#"{"subtrajectories":1}"#),
             Reply::Answer(204, ""),
+            Reply::Answer(200, r#"{"poses":2,"runs":1,"source":"walk"}"#),
         ]);
         let sent = fast(&base).upload_phone_logs("s1", dir.path()).unwrap();
         assert_eq!(
             sent.sent,
-            ["trajectory.txt", "subtrajectories.csv", "anchors.csv"]
+            [
+                "trajectory.txt",
+                "subtrajectories.csv",
+                "anchors.csv",
+                "walk.txt"
+            ]
         );
         assert!(sent.unsupported.is_empty() && sent.missing.is_empty());
         let seen = seen.lock().unwrap();
@@ -128,7 +138,7 @@ mod tests {
             assert_eq!(s.header("content-type"), Some(content_type));
             assert_eq!(s.body, std::fs::read(dir.path().join(name)).unwrap());
         }
-        assert_eq!(seen.len(), 3);
+        assert_eq!(seen.len(), 4);
     }
 
     #[test]
@@ -142,13 +152,20 @@ mod tests {
                 r#"{"error":{"code":"not_found","message":"no such route"}}"#,
             ),
             Reply::Answer(405, "{}"),
+            Reply::Answer(
+                404,
+                r#"{"error":{"code":"not_found","message":"no such route"}}"#,
+            ),
         ]);
         let sent = fast(&base).upload_phone_logs("s1", dir.path()).unwrap();
         assert!(sent.sent.is_empty());
-        assert_eq!(sent.unsupported, ["trajectory.txt", "subtrajectories.csv"]);
+        assert_eq!(
+            sent.unsupported,
+            ["trajectory.txt", "subtrajectories.csv", "walk.txt"]
+        );
         assert_eq!(sent.missing, ["anchors.csv"]);
         // Not retried: one request per file.
-        assert_eq!(seen.lock().unwrap().len(), 2);
+        assert_eq!(seen.lock().unwrap().len(), 3);
     }
 
     #[test]
@@ -202,7 +219,7 @@ mod tests {
             Err(Error::InvalidArgument(_))
         ));
         let sent = client.upload_phone_logs("s1", dir.path()).unwrap();
-        assert_eq!(sent.missing.len(), 3);
+        assert_eq!(sent.missing.len(), 4);
         assert!(sent.sent.is_empty());
     }
 }

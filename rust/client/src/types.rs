@@ -18,8 +18,8 @@ pub struct NewSession {
     pub pose_relation: Option<String>,
 }
 
-/// Optional per-session extras beyond [`NewSession`] (adaptive stopping); `None` takes the
-/// server's default.
+/// Optional per-session extras beyond [`NewSession`] (adaptive stopping, calibration);
+/// `None` takes the server's default.
 /// Build one with `..SessionOptions::default()` so later options need no change.
 #[derive(Debug, Clone, PartialEq, Eq, Default, Serialize, Deserialize)]
 pub struct SessionOptions {
@@ -29,6 +29,11 @@ pub struct SessionOptions {
     pub adaptive_min_trials: Option<u32>,
     /// Window of finished trials over which classes must be stable (server default 3).
     pub adaptive_k: Option<u32>,
+    /// The calibration the server applies to every estimate of the session (one it was
+    /// started with: `sitar serve --calibration NAME=FILE`); with one that has a model for
+    /// one run, the phone's `walk.txt` gives first results before any replay.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub calibration: Option<String>,
 }
 
 /// Which world frame a session's poses are in: the phone's coordinate convention and the

@@ -4,7 +4,7 @@
 use std::hint::black_box;
 use std::time::{Duration, Instant};
 
-use criterion::{Criterion, criterion_group, criterion_main};
+use criterion::{BatchSize, Criterion, criterion_group, criterion_main};
 use glam::{DQuat, DVec3};
 use sitar_core::{
     Convention, DepthImage, DisplayRotation, ImageProperties, Intrinsics, LumaImage,
@@ -282,9 +282,129 @@ fn bench_venue(c: &mut Criterion) {
     }
 }
 
+/// A one-run calibration as `sitar calibrate` fits them: all four motion features, smoothed
+/// over two neighbouring windows each side.
+fn walk_calibration() -> String {
+    use sitar_core::calibration::{
+        CALIBRATION_FORMAT, Calibration, CalibrationModel, Feature, FittedOn, IntervalModel,
+        RunCount, Target,
+    };
+    let features = vec![
+        Feature::PathM,
+        Feature::RotationDeg,
+        Feature::DisplacementM,
+        Feature::JitterMps2,
+    ];
+    Calibration {
+        format: CALIBRATION_FORMAT.into(),
+        version: 2,
+        fitted_on: FittedOn {
+            sequences: Vec::new(),
+            setting: "trim_mean_30".into(),
+            window_frames: 10,
+            pose_relation: "trans_part".into(),
+            unit: "m".into(),
+            coverage: 0.8,
+            t_max_diff_s: 0.01,
+        },
+        informative: true,
+        models: vec![CalibrationModel {
+            target: Target::Live,
+            runs: RunCount::One,
+            kind: "log_linear".into(),
+            offsets: features.iter().map(|f| f.offset()).collect(),
+            features,
+            smoothing_windows: 2,
+            coefficients: vec![0.3f64.ln(), 0.6, 0.2, -0.1, 0.1],
+            spread_match: 0.0,
+            center: 0.0,
+            stretch: 1.0,
+            interval: IntervalModel {
+                method: "leave_one_sequence_out".into(),
+                log_lower: 0.5f64.ln(),
+                log_upper: 2.0f64.ln(),
+                residuals: 1000,
+            },
+            informative: true,
+            scores: None,
+        }],
+    }
+    .to_json()
+}
+
+/// The estimate from one walk: `stop` on a 10-minute walk at 30 fps (18 000 frames, a depth
+/// sample at every midpoint) with a calibration — every window's calibrated error and
+/// interval, then the markers — against `stop` without one (issue 41: ≤ 50 ms).
+fn bench_walk(c: &mut Criterion) {
+    const FRAMES: i64 = 18_000;
+    let k = Intrinsics {
+        fx: 211.0,
+        fy: 211.0,
+        cx: 127.5,
+        cy: 95.5,
+    };
+    let wall = vec![2000u16; 256 * 192];
+    let image = DepthImage::new(&wall, 256, 192, 512).unwrap();
+    let record = |calibration: Option<&str>| {
+        let mut session = Session::new(SessionConfig::default());
+        if let Some(json) = calibration {
+            session.set_calibration(json).unwrap();
+        }
+        session.start(0, pose_at(0)).unwrap();
+        for i in 1..=FRAMES {
+            if session
+                .frame(i * 33_333_333, pose_at(i))
+                .unwrap()
+                .is_midpoint()
+            {
+                session.depth(&image, &k, DisplayRotation::Deg0).unwrap();
+            }
+        }
+        session
+    };
+    let stop_pose = pose_at(FRAMES + 1);
+    let stop_ns = (FRAMES + 1) * 33_333_333;
+    let calibrated = record(Some(&walk_calibration()));
+    let mut check = calibrated.clone();
+    check.stop(stop_ns, stop_pose).unwrap();
+    let results = check.results().expect("coloured at stop");
+    assert_eq!(results.windows.len(), FRAMES as usize + 1 - 10);
+    // About 7 cm everywhere: the markers are placed too (at most 3).
+    assert_eq!(check.markers().unwrap().len(), 3);
+    c.bench_function("walk/stop_10min_with_calibration", |b| {
+        b.iter_batched(
+            || calibrated.clone(),
+            |mut s| black_box(s.stop(stop_ns, stop_pose).unwrap()),
+            BatchSize::LargeInput,
+        )
+    });
+    // The same as thread CPU time: on a shared machine the wall clock also counts the time
+    // other processes hold the core.
+    c.bench_function("walk/stop_10min_with_calibration_cpu_time", |b| {
+        b.iter_custom(|iters| {
+            let mut total = Duration::ZERO;
+            for _ in 0..iters {
+                let mut s = calibrated.clone();
+                let start = thread_cpu();
+                black_box(s.stop(stop_ns, stop_pose).unwrap());
+                total += thread_cpu() - start;
+            }
+            total
+        })
+    });
+    let plain = record(None);
+    c.bench_function("walk/stop_10min_without_calibration", |b| {
+        b.iter_batched(
+            || plain.clone(),
+            |mut s| black_box(s.stop(stop_ns, stop_pose).unwrap()),
+            BatchSize::LargeInput,
+        )
+    });
+}
+
 criterion_group! {
     name = benches;
     config = Criterion::default().warm_up_time(Duration::from_millis(500)).measurement_time(Duration::from_secs(2)).sample_size(30);
-    targets = bench_frame, bench_depth, bench_markers, bench_image, bench_venue
+    targets = bench_frame, bench_depth, bench_markers, bench_image, bench_venue, bench_walk
 }
 criterion_main!(benches);

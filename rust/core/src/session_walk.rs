@@ -2,7 +2,7 @@
 //! walk the moment it stops, from the walk's own motion, offline; results from the backend
 //! replace it when they arrive.
 
-use crate::calibration::Calibration;
+use crate::calibration::{Calibration, SOURCE_WALK};
 use crate::{Error, Results, Session, SessionState};
 
 /// The name results estimated on the phone give their calibration (`"calibration"`).
@@ -11,9 +11,10 @@ pub const ON_DEVICE_CALIBRATION: &str = "on_device";
 impl Session {
     /// Takes a calibration (the JSON file `sitar calibrate` writes, version 1 or 2). It must
     /// be fitted for this session's window (`subtrajectory_frames`) and pose relation, and
-    /// have a model for one run (version 2). A stopped session without results is coloured
-    /// from its walk at once; otherwise at [`Session::stop`]. Replaces an earlier calibration;
-    /// a refused one changes nothing.
+    /// have a model for one run (version 2). A stopped session without results, or with
+    /// results from its walk, is coloured from its walk at once; otherwise at
+    /// [`Session::stop`]. Results loaded from the backend are kept. Replaces an earlier
+    /// calibration; a refused one changes nothing.
     pub fn set_calibration(&mut self, json: &str) -> Result<(), Error> {
         let calibration = Calibration::from_json(json, "calibration")?;
         calibration.check(
@@ -27,7 +28,9 @@ impl Session {
             && self
                 .results
                 .as_ref()
-                .is_none_or(|r| r.source.as_deref() != Some("replays"))
+                // Loaded results that do not say where they come from (legacy CSV) are
+                // the backend's too: only the walk's own estimate is redone.
+                .is_none_or(|r| r.source.as_deref() == Some(SOURCE_WALK))
         {
             self.estimate_from_walk()?;
             self.refresh_markers();

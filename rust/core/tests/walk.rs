@@ -92,6 +92,10 @@ fn the_walk_is_coloured_when_it_stops() {
         .unwrap();
     assert_eq!(session.subtrajectory_class(2), ErrorClass::Low);
     assert_eq!(session.results().unwrap().source, None);
+    // A calibration given after them keeps them: only the walk's own estimate is redone.
+    session.set_calibration(&calibration(10).to_json()).unwrap();
+    assert_eq!(session.subtrajectory_class(2), ErrorClass::Low);
+    assert_eq!(session.results().unwrap().calibration, None);
 }
 
 #[test]

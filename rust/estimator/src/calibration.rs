@@ -19,23 +19,13 @@ use sitar_core::calibration::{
 };
 
 use crate::{
-    Error, Estimate, EstimateOptions, PoseRelation, Setting, Trajectory, WindowEstimate,
-    WindowInterval, estimate,
+    CalibratedAs, Error, Estimate, EstimateOptions, PoseRelation, Setting, Trajectory,
+    WindowEstimate, WindowInterval, estimate,
 };
 
 /// The largest number of runs whose motion is looked at per window (they replay one
 /// recording: their motion differs by the error alone), which bounds the cost of applying.
 const MOTION_TRIALS: usize = 15;
-
-/// How an estimate was calibrated: the target its model estimates and whether that model's
-/// runs predict the error at all (JSON `target`, `informative`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct CalibratedAs {
-    /// The error estimated.
-    pub target: Target,
-    /// `false`: the calibration's runs did not predict the error; the values are a guess.
-    pub informative: bool,
-}
 
 /// The unit of an estimate's values for a pose relation, as [`Estimate::to_json`] names it.
 pub(crate) fn unit_of(relation: PoseRelation) -> &'static str {

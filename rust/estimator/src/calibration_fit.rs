@@ -6,8 +6,8 @@ use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 use sitar_core::calibration::{
     AgreementScores, CALIBRATION_FORMAT, CALIBRATION_VERSION, CalibrationModel, CandidateScores,
-    Feature, FittedOn, FittedSequence, HeldOutScores, INFORMATIVE_SPEARMAN, IntervalModel,
-    ModelScores, RunCount, Target, WindowFeatures, design_row, smooth_features,
+    Feature, FittedOn, FittedSequence, HeldOutScores, IntervalModel, ModelScores, RunCount, Target,
+    WindowFeatures, design_row, is_informative, smooth_features,
 };
 
 use crate::calibration::{expected_features, live_windows, unit_of};
@@ -346,7 +346,7 @@ fn fit_chosen_model(
         if runs == RunCount::One {
             scores.raw = None;
         }
-        model.informative = !(scores.calibrated.spearman < INFORMATIVE_SPEARMAN);
+        model.informative = is_informative(scores.calibrated.spearman);
         model.scores = Some(ModelScores {
             method: "in_sample".into(),
             truth: truth_name(target).into(),
@@ -373,7 +373,7 @@ fn fit_chosen_model(
     );
     let mut model = fit_without_scores(&sets, &scored[chosen].0, target, runs, opts)?;
     let (_, mut scores) = scored[chosen].clone();
-    model.informative = !(scores.calibrated.spearman < INFORMATIVE_SPEARMAN);
+    model.informative = is_informative(scores.calibrated.spearman);
     scores.candidates = scored
         .iter()
         .enumerate()

@@ -12,7 +12,7 @@
 use rayon::prelude::*;
 
 use crate::pairwise::{BLOCK, PairIndex, PairOptions, Scratch};
-use crate::{Error, PoseRelation, Setting, Thresholds, TimeUnit, Trajectory, statistics};
+use crate::{Error, PoseRelation, Setting, Target, Thresholds, TimeUnit, Trajectory, statistics};
 
 /// Options of [`estimate`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -76,6 +76,16 @@ pub struct WindowInterval {
     pub upper_m: f64,
 }
 
+/// How an estimate was calibrated: the target its model estimates and whether that model's
+/// runs predict the error at all (JSON `target`, `informative`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct CalibratedAs {
+    /// The error estimated.
+    pub target: Target,
+    /// `false`: the calibration's runs did not predict the error; the values are a guess.
+    pub informative: bool,
+}
+
 /// The result of [`estimate`]: windows sorted by start.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Estimate {
@@ -94,7 +104,7 @@ pub struct Estimate {
     /// The name of the calibration applied (JSON `calibration`), if any.
     pub calibration: Option<String>,
     /// What the calibration estimated (JSON `target` and `informative`), if applied.
-    pub calibrated_as: Option<crate::CalibratedAs>,
+    pub calibrated_as: Option<CalibratedAs>,
     /// Where the estimate comes from (JSON `source`: `walk` or `replays`), where the caller
     /// says (the backend does).
     pub source: Option<&'static str>,

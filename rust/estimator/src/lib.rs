@@ -221,8 +221,8 @@ pub use align::{Alignment, GravityAxis, Similarity, align, align_first, position
 pub use bag_writer::{PoseTopic, mcap_bag, ros1_bag, rosbag2_metadata};
 pub use bootstrap::{MeanInterval, bootstrap_mean};
 pub use calibration::{
-    ApplyCalibration, CalibratedAs, LiveWindows, estimate_live, expected_features, live_spread,
-    live_windows, motion_at,
+    ApplyCalibration, LiveWindows, estimate_live, expected_features, live_spread, live_windows,
+    motion_at,
 };
 pub use calibration_fit::{
     CalibrationSequence, DEFAULT_SMOOTHING_WINDOWS, DEFAULT_SPREAD_MATCH, FitOptions, MODELS,
@@ -239,7 +239,8 @@ pub use drift::{
 };
 pub use error::Error;
 pub use estimate::{
-    Estimate, EstimateOptions, PairwiseValues, WindowEstimate, WindowInterval, estimate,
+    CalibratedAs, Estimate, EstimateOptions, PairwiseValues, WindowEstimate, WindowInterval,
+    estimate,
 };
 pub use evaluate::{
     ClassificationScores, Evaluation, EvaluationOptions, EvaluationRow, MatchedWindows,

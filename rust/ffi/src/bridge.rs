@@ -11,6 +11,7 @@ use sitar_core::{
 };
 
 use sitar_client::UploadJob;
+use sitar_core::calibration::{Target, SOURCE_REPLAYS, SOURCE_WALK};
 
 pub(crate) use crate::android_tls::platform_tls_init;
 use crate::error::{lock, Error};
@@ -69,6 +70,24 @@ pub struct SitarBoundsAt {
     /// The window's uncalibrated estimate in the results' unit; NaN when absent (no window,
     /// uncalibrated results, or `null` in the results).
     pub raw_m: f64,
+}
+
+/// Where the loaded results come from (`"source"`, `"target"`, `"runs"`, `"informative"`),
+/// as codes: 0 is always "not said" (no results loaded, or results that do not say, such as
+/// legacy CSV).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct SitarProvenance {
+    /// 0 not said, 1 the walk itself (estimated on the phone at stop, or by the backend at
+    /// upload), 2 replays.
+    pub source: i32,
+    /// 0 not said, 1 the error of the live run (the user's own walk), 2 the expected error
+    /// at each place.
+    pub target: i32,
+    /// Runs the results come from (the walk and its replays); 0 not said.
+    pub runs: u32,
+    /// 1 the calibration's runs predict the error, 0 they do not (the colours are a guess),
+    /// -1 not said.
+    pub informative: i32,
 }
 
 /// A depth image borrowed from the caller: 16-bit millimetres, any row stride.
@@ -350,6 +369,41 @@ pub fn session_results_calibration(h: SitarHandle) -> Result<String, Error> {
         Ok(s.results()
             .and_then(|r| r.calibration.clone())
             .unwrap_or_default())
+    })
+}
+
+/// Takes a calibration (the JSON file `sitar calibrate` writes) for the estimate from the
+/// walk: at `stop` (or at once, when already stopped without the backend's results) the
+/// sub-trajectories get the calibrated error of the walk alone, offline.
+pub fn session_set_calibration(h: SitarHandle, json: &str) -> Result<(), Error> {
+    let _trace = crate::trace::section("sitar set calibration");
+    with_session(h, |s| Ok(s.set_calibration(json)?))
+}
+
+/// Where the loaded results come from; every field "not said" without results.
+pub fn session_results_provenance(h: SitarHandle) -> Result<SitarProvenance, Error> {
+    with_session(h, |s| {
+        let Some(r) = s.results() else {
+            return Ok(SitarProvenance {
+                informative: -1,
+                ..SitarProvenance::default()
+            });
+        };
+        let code = |value: Option<&str>, one: &str, two: &str| match value {
+            Some(v) if v == one => 1,
+            Some(v) if v == two => 2,
+            _ => 0,
+        };
+        Ok(SitarProvenance {
+            source: code(r.source.as_deref(), SOURCE_WALK, SOURCE_REPLAYS),
+            target: code(
+                r.target.as_deref(),
+                Target::Live.name(),
+                Target::Expected.name(),
+            ),
+            runs: r.runs.unwrap_or(0),
+            informative: r.informative.map_or(-1, i32::from),
+        })
     })
 }
 

@@ -20,7 +20,7 @@
 
 use std::ffi::{c_char, CStr};
 
-use crate::bridge::{DepthView, PlanEnds, SitarBoundsAt, SitarErrorAt};
+use crate::bridge::{DepthView, PlanEnds, SitarBoundsAt, SitarErrorAt, SitarProvenance};
 use crate::error::Error;
 use crate::guard::with_last_error;
 use crate::types::SitarPose;
@@ -203,6 +203,16 @@ impl WriteOuts<(&mut i32, &mut f64, &mut f64, &mut f64)> for SitarBoundsAt {
     }
 }
 
+impl WriteOuts<(&mut i32, &mut i32, &mut u32, &mut i32)> for SitarProvenance {
+    fn write_outs(
+        self,
+        (source, target, runs, informative): (&mut i32, &mut i32, &mut u32, &mut i32),
+    ) {
+        (*source, *target, *runs, *informative) =
+            (self.source, self.target, self.runs, self.informative);
+    }
+}
+
 /// `*out_mask` bit 1: the start was written; bit 2: the stop was.
 impl WriteOuts<(&mut SitarPose, &mut SitarPose, &mut u32)> for PlanEnds {
     fn write_outs(self, (start, stop, mask): (&mut SitarPose, &mut SitarPose, &mut u32)) {
@@ -339,6 +349,15 @@ mod tests {
         .write_outs((&mut present, &mut lower, &mut upper, &mut raw));
         assert_eq!((present, lower, upper), (1, 0.01, 0.3));
         assert!(raw.is_nan());
+        let (mut source, mut target, mut runs, mut informative) = (9, 9, 9, 9);
+        SitarProvenance {
+            source: 1,
+            target: 2,
+            runs: 5,
+            informative: -1,
+        }
+        .write_outs((&mut source, &mut target, &mut runs, &mut informative));
+        assert_eq!((source, target, runs, informative), (1, 2, 5, -1));
         let marker = SitarPose {
             px: -7.0,
             ..SitarPose::default()

@@ -13,7 +13,7 @@ use jni::objects::{JByteArray, JByteBuffer, JClass, JObject, JShortArray, JStrin
 use jni::sys::{jdouble, jint, jlong};
 use jni::EnvUnowned;
 
-use crate::bridge::{PlanEnds, RenderPlanC, SitarBoundsAt, SitarErrorAt};
+use crate::bridge::{PlanEnds, RenderPlanC, SitarBoundsAt, SitarErrorAt, SitarProvenance};
 use crate::registry::SitarHandle;
 use crate::types::{
     SitarEvidence, SitarFrustum, SitarGuide, SitarIntrinsics, SitarJobProgress, SitarJoint,
@@ -117,6 +117,27 @@ crate::exports_macro::exports! {
     /// "" when they are not calibrated or none are loaded).
     fn session_results_calibration(h: SitarHandle) -> String
         => c sitar_session_results_calibration(text) jni sessionResultsCalibration;
+
+    /// Takes a calibration (the JSON file `sitar calibrate` writes, version 2 with a model for
+    /// one run) so the walk is coloured the moment it stops, offline: every sub-trajectory
+    /// gets the calibrated error and interval of the walk alone, and the markers their places
+    /// (results `"source": "walk"`, `"runs": 1`). Given after `stop`, it colours at once
+    /// unless the backend's results are loaded; the backend's results replace the walk's when
+    /// they arrive. Malformed JSON is `SITAR_ERR_PARSE`; a calibration fitted for another
+    /// window (`subtrajectory_frames`) or `pose_relation`, or without a model for one run,
+    /// `SITAR_ERR_INVALID_ARGUMENT`, naming what differs; a refused one changes nothing.
+    fn session_set_calibration(h: SitarHandle, json: &str)
+        => c sitar_session_set_calibration() jni sessionSetCalibration;
+
+    /// Where the loaded results come from. `*out_source`: 1 the walk itself (estimated on the
+    /// phone, or by the backend at upload), 2 replays; `*out_target`: 1 the error of the live
+    /// run (the user's own walk), 2 the expected error at each place; `*out_runs`: the runs
+    /// they come from; `*out_informative`: 1 the calibration's runs predict the error, 0 they
+    /// do not (say so: the colours are a guess). 0 (-1 for `*out_informative`) where the
+    /// results do not say (legacy CSV) or none are loaded.
+    fn session_results_provenance(h: SitarHandle) -> SitarProvenance
+        => c sitar_session_results_provenance(out_source: i32, out_target: i32, out_runs: u32,
+            out_informative: i32) jni sessionResultsProvenance;
 
     /// The markers (array-output convention; needs results loaded).
     fn session_markers(h: SitarHandle) -> Vec<SitarMarker>

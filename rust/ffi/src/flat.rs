@@ -6,7 +6,7 @@
 use jni::objects::JDoubleArray;
 use jni::Env;
 
-use crate::bridge::{PlanEnds, RenderPlanC, SitarBoundsAt, SitarErrorAt};
+use crate::bridge::{PlanEnds, RenderPlanC, SitarBoundsAt, SitarErrorAt, SitarProvenance};
 use crate::descriptors::FlatLayout;
 use crate::error::Error;
 use crate::jni_api::{doubles, IntoJava};
@@ -115,6 +115,7 @@ flat_layouts! {
     }
     SitarErrorAt as ErrorAt { error_class, error_m }
     SitarBoundsAt as BoundsAt { present, lower_m, upper_m, raw_m }
+    SitarProvenance as Provenance { source, target, runs, informative }
     SitarMarker as Marker {
         px, py, pz, qx, qy, qz, qw, nx, ny, nz, error_class, subtrajectory, error_m,
     }
@@ -212,6 +213,7 @@ mod tests {
                 "Summary" => SitarSummary::WIDTH,
                 "ErrorAt" => SitarErrorAt::WIDTH,
                 "BoundsAt" => SitarBoundsAt::WIDTH,
+                "Provenance" => SitarProvenance::WIDTH,
                 "Marker" => SitarMarker::WIDTH,
                 "SubtrajectoryResult" => SitarSubtrajectoryResult::WIDTH,
                 "Segment" => SitarSegment::WIDTH,

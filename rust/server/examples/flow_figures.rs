@@ -33,6 +33,7 @@ fn run(client: &Client, recording: &std::path::Path, trials: u32, adaptive: Opti
             &SessionOptions {
                 adaptive_min_trials: adaptive,
                 adaptive_k: Some(3),
+                ..SessionOptions::default()
             },
         )
         .unwrap();

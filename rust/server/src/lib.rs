@@ -26,7 +26,10 @@
 //! publishes a progressive estimate over them, bitwise equal to a one-shot
 //! estimate, to which the new trial adds only its pairs (the live session keeps
 //! a `sitar_estimator::IncrementalEstimate`); with adaptive stopping a session ends early once no window's
-//! class changed over the last k trials.
+//! class changed over the last k trials. A session with a calibration that has a model for
+//! one run starts from the phone's walk (`PUT …/walk.txt`): its estimate alone is published
+//! at once, before any replay (`"source": "walk"`), and every later one has the walk as the
+//! live run and the trials as its replays (`"source": "replays"`, `"runs"` counting the walk).
 //!
 //! For the people who run it: `GET /` is an HTML overview of the newest
 //! sessions (with links to their reports) and the playback devices,

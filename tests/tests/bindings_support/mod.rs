@@ -6,6 +6,29 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::OnceLock;
 
+#[path = "../../../rust/ffi/tests/support/walk_calibration.rs"]
+pub mod walk_calibration;
+
+/// Writes the calibrations the Kotlin and C# host tests read into `dir`: the one-run
+/// calibration of `walk_calibration` (`calibration-walk.json`), the same saying its runs do
+/// not predict the error (`calibration-guess.json`), one for 20-frame windows
+/// (`calibration-window20.json`) and one without a model for one run
+/// (`calibration-expected-only.json`).
+pub fn write_walk_calibrations(dir: &Path) {
+    use walk_calibration::{expected_only_calibration, walk_calibration};
+    for (name, calibration) in [
+        ("calibration-walk.json", walk_calibration(10, true)),
+        ("calibration-guess.json", walk_calibration(10, false)),
+        ("calibration-window20.json", walk_calibration(20, true)),
+        (
+            "calibration-expected-only.json",
+            expected_only_calibration(),
+        ),
+    ] {
+        std::fs::write(dir.join(name), calibration.to_json()).unwrap();
+    }
+}
+
 /// The workspace root.
 pub fn workspace_root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))

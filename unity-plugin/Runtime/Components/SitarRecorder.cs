@@ -45,6 +45,12 @@ namespace Sitar.Unity
         public string setting = "trim_mean_30";
         public string playback = "adb";
 
+        [Header("Estimate from the walk")]
+        [Tooltip("Optional: the calibration file `sitar calibrate` wrote for this app's SLAM system and device (import it as a .json TextAsset). With it the walk is coloured the moment it stops, offline; the backend's results replace that when they arrive.")]
+        public TextAsset calibration;
+        [Tooltip("Optional: says where the colours come from (your walk, or replays) and when they are a guess.")]
+        public Text resultsSource;
+
         [Header("Prefabs (as in the original DrawTrajectory)")]
         public GameObject startPrefab;
         public GameObject stopPrefab;
@@ -140,6 +146,18 @@ namespace Sitar.Unity
             if (upload != null) { upload.Dispose(); upload = null; }
             if (session != null) session.Dispose();
             session = new SitarSession(new SitarJson().Add("convention", "unity").Add("server_url", serverUrl).ToString());
+            if (calibration != null)
+            {
+                try
+                {
+                    session.SetCalibration(calibration.text);
+                }
+                catch (SitarException e)
+                {
+                    // Recording goes on: the walk waits for the backend's colours instead.
+                    Debug.LogError("SiTAR: the bundled calibration was refused: " + e.Message);
+                }
+            }
 #if UNITY_ANDROID
             if (arSession.subsystem is ARCoreSessionSubsystem sub)
             {
@@ -378,6 +396,7 @@ namespace Sitar.Unity
             spawned.Clear();
             markerObjects.Clear();
             if (unreliableWarning != null) unreliableWarning.SetActive(false);
+            if (resultsSource != null) resultsSource.text = "";
         }
 
         static Vector3 V(double x, double y, double z)
@@ -442,6 +461,7 @@ namespace Sitar.Unity
             }
             if (trajectoryRegions != null) trajectoryRegions.text = markers.Length.ToString();
             if (unreliableWarning != null) unreliableWarning.SetActive(session.ResultsUnreliable());
+            if (resultsSource != null) resultsSource.text = Describe(session.ResultsProvenance());
             if (style == VisualizationStyle.TrajectoryOnly) return;
             foreach (Marker m in markers)
             {
@@ -457,6 +477,19 @@ namespace Sitar.Unity
                 }
                 markerObjects.Add(g); // null without a prefab: the index still follows Markers()
             }
+        }
+
+        /// <summary>Where the colours come from, for <see cref="resultsSource"/>.</summary>
+        static string Describe(Provenance p)
+        {
+            string from;
+            switch (p.Source)
+            {
+                case ResultSource.Walk: from = "From your walk"; break;
+                case ResultSource.Replays: from = p.Runs.HasValue ? "From replays (" + p.Runs.Value + " runs)" : "From replays"; break;
+                default: from = "From the server"; break;
+            }
+            return p.IsGuess ? from + ". This system's error cannot be told from its runs: colours are a guess." : from;
         }
 
         /// <summary>Switches style (e.g. from a UI dropdown) and redraws.</summary>

@@ -4,16 +4,22 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result, bail};
-use sitar_client::{Client, NewSession, SessionOptions, SessionState};
+use sitar_client::{Client, NewSession, SessionFrame, SessionOptions, SessionState};
 use sitar_core::{DisplayRotation, ErrorClass, Session as PhoneSession, SessionConfig};
+use sitar_estimator::Calibration;
 use sitar_server::{PlaybackKind, PresetToken, Role, Server, ServerConfig};
 use sitar_sim::Recording;
 
+use crate::getting_started::demo_walk;
+
 /// Runs the whole system in one process: a simulated user walks a room with a blank wall and
-/// a glass pane, the phone logic (sitar-core) records the walk with depth, the recording goes
-/// to an in-process server (sim playback) through the HTTP client, the results come back and
-/// markers are placed; prints what was found and writes the report page (one file that opens
-/// from disk).
+/// a glass pane, the phone logic (sitar-core) records the walk with depth and, with a
+/// calibration fitted for the simulated SLAM, colours it the moment it stops; the phone's log
+/// (its walk among it) and the recording go to an in-process server (sim playback) through
+/// the HTTP client, which publishes first results from the walk and refines them with the
+/// replays; the results come back and markers are placed; prints what was found (how many
+/// sub-trajectories the replays changed the class of) and writes the report page (one file
+/// that opens from disk).
 #[derive(clap::Args, Debug)]
 #[command(
     after_help = "Examples:\n  sitar demo\n  sitar demo --serve   # then open the printed address\n  sitar demo --venue   # three users, one venue map"
@@ -68,9 +74,20 @@ const DEMO_DIR: &str = "sitar-demo";
 /// The demo's simulated playback phones (also `sitar serve --sim-devices`'s default).
 pub const DEMO_DEVICES: u32 = 2;
 
-/// The in-process backend: sim playback on `data`, the demo's own admin token.
-fn server_config(args: &Args, data: &Path, token: &str) -> ServerConfig {
+/// The in-process backend: sim playback on `data`, the demo's own admin token, the demo's
+/// calibration.
+fn server_config(
+    args: &Args,
+    data: &Path,
+    token: &str,
+    calibration: Option<&Calibration>,
+) -> Result<ServerConfig> {
     let mut config = ServerConfig::new(data);
+    if let Some(calibration) = calibration {
+        config
+            .calibrations
+            .insert(demo_walk::CALIBRATION_NAME, calibration.clone())?;
+    }
     config.playback = PlaybackKind::Sim;
     config.sim.speed = args.speed;
     config.sim.devices = args.devices;
@@ -81,7 +98,7 @@ fn server_config(args: &Args, data: &Path, token: &str) -> ServerConfig {
         role: Role::Admin,
         token: token.to_owned(),
     }];
-    config
+    Ok(config)
 }
 
 /// Step 1: the user walks the room; the phone logic records poses and depth like on a phone.
@@ -129,9 +146,26 @@ fn upload(
     };
     let options = SessionOptions {
         adaptive_min_trials: args.adaptive,
+        calibration: Some(demo_walk::CALIBRATION_NAME.into()),
         ..SessionOptions::default()
     };
-    let id = client.create_session_with(&request, &options)?;
+    let frame = SessionFrame {
+        convention: Some("arcore".into()),
+        ..SessionFrame::default()
+    };
+    let id = client.create_session_in(&request, &options, &frame)?;
+    // The phone's log before the recording, as the phone sends it: with the walk, the
+    // backend publishes first results at once.
+    let phone_dir = data.join("demo-phone-session");
+    session
+        .save(&phone_dir)
+        .with_context(|| format!("cannot save the phone session to {}", phone_dir.display()))?;
+    client.upload_phone_logs(&id, &phone_dir)?;
+    let first = client.results_json(&id)?;
+    println!(
+        "backend     first results at upload, from {}, before any replay",
+        demo_walk::source_of(&first)
+    );
     let mut uploaded = 0;
     client.upload_recording(&id, &rec_path, &mut |sent, _| uploaded = sent)?;
     println!(
@@ -140,10 +174,6 @@ fn upload(
     );
     // The camera evidence (thumbnails, image properties, likely causes): the report's
     // regions show it.
-    let phone_dir = data.join("demo-phone-session");
-    session
-        .save(&phone_dir)
-        .with_context(|| format!("cannot save the phone session to {}", phone_dir.display()))?;
     if let Some(thumbnails) = client.upload_evidence(&id, &phone_dir)? {
         println!("evidence    {thumbnails} camera thumbnails and their image properties sent");
     }
@@ -179,10 +209,11 @@ fn wait(client: &Client, id: &str) -> Result<()> {
                 last_results = s.results_trials;
                 let t = started.elapsed().as_secs_f64();
                 first_results_s.get_or_insert(t);
-                let line = format!(
-                    "results     after {t:.1} s: estimate from {} trials",
-                    s.results_trials
-                );
+                let from = client
+                    .results_json(id)
+                    .map(|json| demo_walk::source_of(&json))
+                    .unwrap_or_else(|_| format!("{} runs", s.results_trials));
+                let line = format!("results     after {t:.1} s: from {from}");
                 if bar.is_hidden() {
                     println!("{line}")
                 } else {
@@ -212,16 +243,25 @@ fn wait(client: &Client, id: &str) -> Result<()> {
     Ok(())
 }
 
-/// Step 4: results back on the phone: markers placed, and checked against the room's truly
-/// hard surfaces.
+/// Step 4: results back on the phone, replacing its instant colours (how many changed
+/// class), markers placed, and checked against the room's truly hard surfaces.
 fn markers(
     client: &Client,
     id: &str,
     recording: &Recording,
     session: &mut PhoneSession,
+    instant: &[ErrorClass],
 ) -> Result<()> {
-    let csv = client.results_csv(id)?;
-    session.load_results(&csv)?;
+    let json = client.results_json(id)?;
+    session.load_results(&json)?;
+    let refined = demo_walk::classes(session);
+    println!(
+        "refined     from {} (backend): {}; {} of {} sub-trajectories changed class",
+        demo_walk::source_of(&json),
+        demo_walk::counts(&refined),
+        demo_walk::changed(instant, &refined),
+        refined.len()
+    );
     let markers = session.markers()?;
     println!(
         "regions     {}{}",
@@ -325,8 +365,15 @@ pub fn run(args: Args) -> Result<()> {
     std::fs::create_dir_all(&data).with_context(|| format!("cannot create {}", data.display()))?;
     // The demo's own token, fresh each run (a new hash under the same name).
     let token = sitar_server::new_token()?;
+    // The calibration for the simulated SLAM: the phone's and the backend's (the venue demo
+    // goes without).
+    let fitted = match args.venue {
+        true => None,
+        false => Some(demo_walk::fit(args.seed)?),
+    };
     // The backend, in-process on a free loopback port.
-    let server = Server::spawn(server_config(&args, &data, &token), "127.0.0.1:0".parse()?)
+    let config = server_config(&args, &data, &token, fitted.as_ref().map(|(c, _)| c))?;
+    let server = Server::spawn(config, "127.0.0.1:0".parse()?)
         .context("cannot start the in-process server")?;
     println!(
         "server      {} (sim playback, {} phones at {}×, data {})",
@@ -349,32 +396,48 @@ pub fn run(args: Args) -> Result<()> {
         server.stop();
         return result;
     }
+    let (calibration, took) = fitted.context("no calibration")?;
+    println!(
+        "calibration {} for the simulated SLAM: fitted on {} other simulated walks with ground truth in {:.1} s",
+        demo_walk::CALIBRATION_NAME,
+        calibration.fitted_on.sequences.len(),
+        took.as_secs_f64()
+    );
     let (recording, mut session) = walk(&args)?;
+    let instant = demo_walk::colour_walk(&mut session, &calibration)?;
     let client = Client::new(&server.url())?.with_server_token(&token)?;
     let id = upload(&client, &args, &data, &recording, &session)?;
     wait(&client, &id)?;
-    markers(&client, &id, &recording, &mut session)?;
+    markers(&client, &id, &recording, &mut session, &instant)?;
     let report = write_report(&server.url(), &token, &id, &data)?;
     println!("report      {} (opens from disk)", report.display());
     println!("total       {:.1} s", started.elapsed().as_secs_f64());
     let url = server.url();
     server.stop();
     if args.serve {
-        serve(&args, &data, &token, &url, &id)?;
+        serve(&args, &data, &token, &url, &id, &calibration)?;
     }
     Ok(())
 }
 
 /// `--serve`: the backend again on the same address, until Ctrl-C, with the served report's
 /// URL (its token included: the page keeps it in a cookie).
-fn serve(args: &Args, data: &Path, token: &str, url: &str, id: &str) -> Result<()> {
+fn serve(
+    args: &Args,
+    data: &Path,
+    token: &str,
+    url: &str,
+    id: &str,
+    calibration: &Calibration,
+) -> Result<()> {
     let addr: std::net::SocketAddr = url
         .trim_start_matches("http://")
         .parse()
         .with_context(|| format!("the demo's server address {url}"))?;
     println!("served      {url}/v1/sessions/{id}/report?token={token}");
     println!("            (the backend keeps running with the demo's data: Ctrl-C stops it)");
-    Server::run(server_config(args, data, token), addr).context("the demo's server stopped")
+    Server::run(server_config(args, data, token, Some(calibration))?, addr)
+        .context("the demo's server stopped")
 }
 
 #[cfg(test)]
@@ -406,6 +469,7 @@ mod tests {
             .find(|n| n.starts_with("report-s") && n.ends_with(".html"))
             .unwrap_or_else(|| panic!("{names:?}"));
         assert!(names.iter().any(|n| n == "sitar.db"));
+        demo_walk::tests::assert_started_from_the_walk(dir.path(), report, 3);
         // The page stands alone: its script, style and scene inline, nothing to fetch.
         let html = std::fs::read_to_string(dir.path().join(report)).unwrap();
         assert!(html.contains("<script type=\"module\">"));

@@ -2,4 +2,5 @@
 
 pub mod demo;
 pub mod demo_venue;
+pub mod demo_walk;
 pub mod simulate;

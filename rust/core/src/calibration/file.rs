@@ -7,7 +7,8 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
-use super::model::{CalibrationModel, Feature, IntervalModel, RunCount, Target};
+use super::features::Feature;
+use super::model::{CalibrationModel, IntervalModel, RunCount, Target};
 use super::scores::{AgreementScores, HeldOutScores, ModelScores};
 use crate::Error;
 
@@ -18,6 +19,12 @@ pub const CALIBRATION_VERSION: u32 = 2;
 /// Below this leave-one-sequence-out Spearman's ρ the runs are taken not to predict the
 /// error: colours from such a model are a guess, and every consumer says so.
 pub const INFORMATIVE_SPEARMAN: f64 = 0.3;
+/// Whether a held-out Spearman's ρ says the runs predict the error: at least
+/// [`INFORMATIVE_SPEARMAN`]; a ρ that could not be measured (NaN) is not held against them.
+pub fn is_informative(spearman: f64) -> bool {
+    spearman.is_nan() || spearman >= INFORMATIVE_SPEARMAN
+}
+
 /// The settings (statistics) a calibration may name.
 const SETTINGS: [&str; 7] = [
     "mean",
@@ -150,7 +157,7 @@ impl From<CalibrationV1> for Calibration {
         });
         let informative = scores
             .as_ref()
-            .is_none_or(|s| !(s.calibrated.spearman < INFORMATIVE_SPEARMAN));
+            .is_none_or(|s| is_informative(s.calibrated.spearman));
         Self {
             format: v1.format,
             version: v1.version,

@@ -15,19 +15,20 @@
 //! [`INFORMATIVE_SPEARMAN`] is not): where they do not, the colours are a guess and every
 //! consumer says so.
 
+mod features;
 mod file;
 mod model;
 mod motion;
 mod scores;
 mod walk;
 
+pub use features::{Feature, WindowFeatures, smooth_features};
 pub use file::{
     CALIBRATION_FORMAT, CALIBRATION_VERSION, Calibration, FittedOn, FittedSequence,
-    INFORMATIVE_SPEARMAN,
+    INFORMATIVE_SPEARMAN, is_informative,
 };
 pub use model::{
-    CalibrationModel, Feature, IntervalModel, Prediction, RunCount, Target, WindowFeatures,
-    design_row, ln_feature, smooth_features,
+    CalibrationModel, IntervalModel, Prediction, RunCount, Target, design_row, ln_feature,
 };
 pub use motion::{WindowMotion, rotation_angle, run_motion, smooth_columns, window_motion};
 pub use scores::{AgreementScores, CandidateScores, HeldOutScores, ModelScores};

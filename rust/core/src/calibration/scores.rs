@@ -3,7 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::model::Feature;
+use super::features::Feature;
 
 /// How an estimate agrees with the truth on a set of windows. A score that does not exist
 /// (no truly high window, a constant estimate) is NaN, `null` in the file.

@@ -3,8 +3,9 @@
 
 use glam::{DQuat, DVec3};
 
+use super::features::{WindowFeatures, smooth_features};
 use super::file::Calibration;
-use super::model::{Target, WindowFeatures, smooth_features};
+use super::model::Target;
 use super::motion::run_motion;
 use crate::{Error, ErrorInterval, PoseRelation, ResultWindow, Results};
 

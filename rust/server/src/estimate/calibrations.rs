@@ -217,6 +217,60 @@ pub(crate) mod tests {
         .to_string()
     }
 
+    /// A version-2 calibration for `setting`, `window_frames` and `relation` with every
+    /// model: one run's error is half its path over the window; with replays (or several
+    /// runs), twice their spread; intervals ×0.5 … ×2; `informative` as given.
+    pub(crate) fn calibration_v2(
+        setting: &str,
+        window_frames: usize,
+        relation: &str,
+        informative: bool,
+    ) -> Calibration {
+        use sitar_core::calibration::{
+            CALIBRATION_FORMAT, CalibrationModel, Feature, FittedOn, IntervalModel, RunCount,
+            Target,
+        };
+        let model = |target, runs, feature: Feature, factor: f64| CalibrationModel {
+            target,
+            runs,
+            kind: "log_linear".into(),
+            features: vec![feature],
+            offsets: vec![feature.offset()],
+            smoothing_windows: 0,
+            coefficients: vec![factor.ln(), 1.0],
+            spread_match: 0.0,
+            center: 0.0,
+            stretch: 1.0,
+            interval: IntervalModel {
+                method: "in_sample".into(),
+                log_lower: 0.5f64.ln(),
+                log_upper: 2.0f64.ln(),
+                residuals: 100,
+            },
+            informative,
+            scores: None,
+        };
+        Calibration {
+            format: CALIBRATION_FORMAT.into(),
+            version: 2,
+            fitted_on: FittedOn {
+                sequences: Vec::new(),
+                setting: setting.into(),
+                window_frames,
+                pose_relation: relation.into(),
+                unit: if relation == "angle_deg" { "deg" } else { "m" }.into(),
+                coverage: 0.8,
+                t_max_diff_s: 0.01,
+            },
+            informative,
+            models: vec![
+                model(Target::Live, RunCount::One, Feature::PathM, 0.5),
+                model(Target::Live, RunCount::Several, Feature::Spread, 2.0),
+                model(Target::Expected, RunCount::Several, Feature::Spread, 2.0),
+            ],
+        }
+    }
+
     #[test]
     fn arguments_and_names_are_checked() {
         let (name, file) = Calibrations::parse_argument("pixel7_arcore=cal/p7.json").unwrap();

@@ -17,6 +17,15 @@
 //! holds its trials in the order they arrived; when that is not playback order (parallel
 //! phones), the trials are copied into playback order for the calibration's look, and the
 //! copy freed at once.
+//!
+//! **From the walk.** With the phone's walk (the live session holds it when the session's
+//! calibration has a model for one run), the estimate is the error of the walk as the live
+//! run: from its own motion alone before any trial (`"source": "walk"`), then with every held
+//! trial as its replays (`"source": "replays"`, `"runs"` = 1 + trials), as
+//! `sitar_estimator::estimate_live` gives it. It needs only the RPE between the walk and each
+//! replay, not every pair: the incremental state is given up (its memory freed). Replays that
+//! share no window with the walk (their stamps do not associate) fall back to the expected
+//! error from the replays alone, logged.
 
 use sitar_estimator::ApplyCalibration as _;
 use std::borrow::Cow;
@@ -128,14 +137,79 @@ impl HeldTrials {
     /// `calibration` (and its name) when given, and the first of the trials (the reference
     /// whose frames the phone colours). Growth of the state is counted in `budget`; when it
     /// is refused the state is dropped and this estimate is one-shot.
-    pub fn estimate(
-        &mut self,
+    ///
+    /// With `walk` and a calibration: the walk's own error, alone or with the held trials as
+    /// its replays, and the walk as the reference (module docs).
+    pub fn estimate<'a>(
+        &'a mut self,
         settings: &EstimateSettings,
         purpose: Purpose,
         budget: &dyn StateBudget,
         calibration: Option<(&Calibration, &str)>,
-    ) -> Result<(Estimate, &Trajectory), Error> {
+        walk: Option<&'a Trajectory>,
+    ) -> Result<(Estimate, &'a Trajectory), Error> {
+        if let (Some(walk), Some((calibration, name))) = (walk, calibration) {
+            // The walk's estimate pairs it with each replay: no state to keep.
+            self.give_up_state();
+            self.bring_in(purpose);
+            self.settle(budget);
+            let replays: &[Trajectory] = match &self.estimator {
+                Estimator::OneShot(trials) => trials,
+                Estimator::Incremental(_) => unreachable!("given up above"),
+            };
+            let live = sitar_estimator::estimate_live(
+                calibration,
+                walk,
+                replays,
+                &settings.options(),
+                name,
+            );
+            match live {
+                Ok(mut estimate) => {
+                    estimate.source = Some(if replays.is_empty() {
+                        sitar_core::calibration::SOURCE_WALK
+                    } else {
+                        sitar_core::calibration::SOURCE_REPLAYS
+                    });
+                    return Ok((estimate, walk));
+                }
+                Err(e) if replays.len() >= 2 => {
+                    log::warn!(
+                        "the walk as the live run of {} replays: {e}; the expected error from \
+                         the replays alone instead",
+                        replays.len()
+                    );
+                }
+                Err(e) => {
+                    return Err(Error::Estimate(format!(
+                        "the walk with calibration {name}: {e}"
+                    )));
+                }
+            }
+        }
         self.bring_in(purpose);
+        self.settle(budget);
+        let (estimate, first) = match &self.estimator {
+            Estimator::Incremental(state) => (state.estimate(), state.first_in_order()),
+            Estimator::OneShot(trials) => (
+                sitar_estimator::estimate(trials, &settings.options()),
+                trials.first(),
+            ),
+        };
+        let mut estimate = estimate.map_err(|e| Error::Estimate(e.to_string()))?;
+        let first = first.ok_or_else(|| Error::Estimate("no trials".into()))?;
+        if let Some((calibration, name)) = calibration {
+            calibration
+                .apply(&mut estimate, &self.in_playback_order(), name)
+                .map_err(|e| Error::Estimate(format!("calibration {name}: {e}")))?;
+            estimate.source = Some(sitar_core::calibration::SOURCE_REPLAYS);
+        }
+        Ok((estimate, first))
+    }
+
+    /// Counts the state's growth in `budget` (dropping the state when refused) and releases
+    /// what it shrank by.
+    fn settle(&mut self, budget: &dyn StateBudget) {
         let mut now = self.state_bytes();
         if now > self.counted {
             match budget.grow(now - self.counted) {
@@ -151,21 +225,6 @@ impl HeldTrials {
             budget.shrink(self.counted - now);
             self.counted = now;
         }
-        let (estimate, first) = match &self.estimator {
-            Estimator::Incremental(state) => (state.estimate(), state.first_in_order()),
-            Estimator::OneShot(trials) => (
-                sitar_estimator::estimate(trials, &settings.options()),
-                trials.first(),
-            ),
-        };
-        let mut estimate = estimate.map_err(|e| Error::Estimate(e.to_string()))?;
-        let first = first.ok_or_else(|| Error::Estimate("no trials".into()))?;
-        if let Some((calibration, name)) = calibration {
-            calibration
-                .apply(&mut estimate, &self.in_playback_order(), name)
-                .map_err(|e| Error::Estimate(format!("calibration {name}: {e}")))?;
-        }
-        Ok((estimate, first))
     }
 
     /// The estimator's trials in playback order: its own when they are (one-shot, or pushed

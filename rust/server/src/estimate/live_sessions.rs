@@ -19,9 +19,14 @@
 //!
 //! **Estimates.** One estimate of a session runs at a time ([`LiveSession::publish`]); trials
 //! that arrive meanwhile wait in an inbox and join the next one together, in playback order.
+//!
+//! **The walk.** A session whose calibration has a model for one run holds the phone's walk
+//! (`walk.txt`, [`LiveSession::set_walk`]) as its live run: counted in the bounds like a
+//! trial (it is one: every frame of the recording), counted as one of the results' runs, and
+//! enough for results on its own (`held_trials.rs`). Other sessions do not hold it.
 
 use std::collections::HashMap;
-use std::sync::atomic::{AtomicBool, AtomicU32, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU64, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 
 use sitar_core::Thresholds;
@@ -94,6 +99,9 @@ impl LiveSessions {
             bytes: AtomicUsize::new(0),
             budget: self.budget.clone(),
             published: AtomicU32::new(published),
+            walk: Mutex::new(None),
+            published_walk: AtomicU64::new(0),
+            walk_restored: AtomicBool::new(false),
             closed: AtomicBool::new(false),
             worker: AtomicBool::new(false),
         });
@@ -133,12 +141,57 @@ pub(crate) struct LiveSession {
     /// Bytes of this session's trials (inbox and held) and estimator state.
     bytes: AtomicUsize,
     budget: Arc<Budget>,
-    /// Trials of the latest published estimate.
+    /// Runs of the latest published estimate (its trials, and the walk when it had one).
     published: AtomicU32,
+    /// The phone's walk, when this session uses it, with its version (0: the one stored
+    /// before a restart; each [`LiveSession::set_walk`] counts up) and its bytes (counted).
+    walk: Mutex<Option<HeldWalk>>,
+    /// The walk version of the latest published estimate.
+    published_walk: AtomicU64,
+    /// Whether the stored walk was looked for (once, when the session is made).
+    walk_restored: AtomicBool,
     /// Set when the session no longer needs estimates.
     closed: AtomicBool,
     /// A background worker publishes progressive estimates (`upload` sessions).
     worker: AtomicBool,
+}
+
+/// The walk a live session holds.
+#[derive(Clone)]
+struct HeldWalk {
+    version: u64,
+    run: Arc<Trajectory>,
+    bytes: usize,
+}
+
+/// Why a session does not use the phone's walk, if it does not: it needs a calibration with a
+/// model for one run, and a walk of at least one window.
+pub(crate) fn walk_unused(
+    calibration: &SessionCalibration,
+    window_frames: usize,
+    walk: &Trajectory,
+) -> Option<String> {
+    match calibration {
+        SessionCalibration::None => {
+            Some("the session has no calibration: its results come from the replays".into())
+        }
+        SessionCalibration::Missing(name) => Some(format!(
+            "calibration {name} is not on this server: the results come from the replays"
+        )),
+        SessionCalibration::Apply { name, calibration } => {
+            if let Err(e) = calibration.model(sitar_core::calibration::Target::Live, 1) {
+                Some(format!("calibration {name}: {e}"))
+            } else if walk.len() <= window_frames {
+                Some(format!(
+                    "the walk has {} poses: a window needs {}",
+                    walk.len(),
+                    window_frames + 1
+                ))
+            } else {
+                None
+            }
+        }
+    }
 }
 
 /// Memory counted for a trial that is about to be stored; given back unless the trial is
@@ -214,9 +267,80 @@ impl LiveSession {
             .is_empty()
     }
 
-    /// Trials of the latest published estimate.
+    /// Runs of the latest published estimate.
     pub fn published(&self) -> u32 {
         self.published.load(Ordering::SeqCst)
+    }
+
+    /// Why this session would not use `walk` as its live run (`None`: it would).
+    pub fn walk_unused(&self, walk: &Trajectory) -> Option<String> {
+        walk_unused(
+            &self.calibration,
+            self.settings.window_frames as usize,
+            walk,
+        )
+    }
+
+    /// Holds `walk` as the session's live run from the next estimate on, replacing an earlier
+    /// one (its bytes given back); `reservation` counts its bytes (see [`Self::reserve`]).
+    /// The caller has checked [`Self::walk_unused`].
+    pub fn set_walk(&self, walk: Trajectory, reservation: Reservation<'_>) {
+        self.walk_restored.store(true, Ordering::SeqCst);
+        let bytes = reservation.bytes;
+        std::mem::forget(reservation);
+        let mut slot = self.walk.lock().unwrap_or_else(|e| e.into_inner());
+        let version = slot.as_ref().map_or(0, |w| w.version) + 1;
+        if let Some(old) = slot.replace(HeldWalk {
+            version,
+            run: Arc::new(walk),
+            bytes,
+        }) {
+            self.release(old.bytes);
+        }
+    }
+
+    /// Once, for a session made from its stored files: holds the walk `load` reads (if any,
+    /// and if the session uses it) as the one its published results already have. A walk
+    /// over the bounds is left out (logged).
+    pub fn restore_walk(&self, load: impl FnOnce() -> Result<Option<Trajectory>, Error>) {
+        if self.walk_restored.swap(true, Ordering::SeqCst) {
+            return;
+        }
+        let walk = match load() {
+            Ok(Some(walk)) if self.walk_unused(&walk).is_none() => walk,
+            Ok(_) => return,
+            Err(e) => {
+                log::warn!("session {}: its stored walk is not used: {e}", self.id);
+                return;
+            }
+        };
+        match self.reserve(trial_bytes(&walk)) {
+            Ok(reservation) => {
+                let bytes = reservation.bytes;
+                std::mem::forget(reservation);
+                let mut slot = self.walk.lock().unwrap_or_else(|e| e.into_inner());
+                if slot.is_none() {
+                    *slot = Some(HeldWalk {
+                        version: 0,
+                        run: Arc::new(walk),
+                        bytes,
+                    });
+                } else {
+                    self.release(bytes);
+                }
+            }
+            Err(e) => log::warn!("session {}: its stored walk is not used: {e}", self.id),
+        }
+    }
+
+    /// The walk held, if any.
+    fn held_walk(&self) -> Option<HeldWalk> {
+        self.walk.lock().unwrap_or_else(|e| e.into_inner()).clone()
+    }
+
+    /// Whether the session holds a walk.
+    pub fn has_walk(&self) -> bool {
+        self.held_walk().is_some()
     }
 
     /// Whether an estimate runs or is about to (a delete waits for it to end).
@@ -236,10 +360,11 @@ impl LiveSession {
         self.has_new() && !self.closed.load(Ordering::SeqCst) && self.claim_worker()
     }
 
-    /// Estimates over every trial held, once no other estimate of this session runs, and
-    /// hands the results to `write` (which publishes them) before the next estimate may
-    /// start. `None` when there is nothing new to publish (fewer than 2 trials, none since
-    /// the last published estimate, or the session closed).
+    /// Estimates over every trial held (and the walk, when held), once no other estimate of
+    /// this session runs, and hands the results to `write` (which publishes them) before the
+    /// next estimate may start. `None` when there is nothing new to publish (fewer than 2
+    /// trials and no walk, no trial nor walk since the last published estimate, or the
+    /// session closed).
     ///
     /// This is the one function that calls the estimator: new trials join the session's
     /// incremental state (only their pairs are computed), or a one-shot estimate when there
@@ -258,16 +383,33 @@ impl LiveSession {
             let arrived =
                 std::mem::take(&mut *live.inbox.lock().unwrap_or_else(|e| e.into_inner()));
             held.take(arrived);
-            let count = held.count() as u32;
-            if count < 2 || count == live.published() {
+            let walk = live.held_walk();
+            let version = walk.as_ref().map_or(0, |w| w.version);
+            let count = (held.count() + usize::from(walk.is_some())) as u32;
+            let least = if walk.is_some() { 1 } else { 2 };
+            if count < least
+                || (count == live.published()
+                    && version == live.published_walk.load(Ordering::SeqCst))
+            {
                 return Ok(None);
             }
-            let (estimate, reference) = held.estimate(
+            let trials = held.count();
+            let estimated = held.estimate(
                 &live.settings,
                 purpose,
                 live.as_ref(),
                 live.calibration.applied(),
-            )?;
+                walk.as_ref().map(|w| w.run.as_ref()),
+            );
+            let (estimate, reference) = match estimated {
+                // The walk with one replay that does not pair with it: nothing to publish
+                // until a second replay gives the expected error (`held_trials.rs`).
+                Err(e) if walk.is_some() && trials == 1 => {
+                    log::warn!("session {}: {e}; waiting for a second trial", live.id);
+                    return Ok(None);
+                }
+                other => other?,
+            };
             let mut published = Published::new(
                 &estimate,
                 reference,
@@ -277,6 +419,7 @@ impl LiveSession {
             published.json = live.calibration.mark(std::mem::take(&mut published.json));
             write(&published)?;
             live.published.store(count, Ordering::SeqCst);
+            live.published_walk.store(version, Ordering::SeqCst);
             drop(held);
             Ok(Some(published))
         })
@@ -314,8 +457,7 @@ impl Drop for LiveSession {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use sitar_estimator::ApplyCalibration as _;
-    use sitar_estimator::{PoseRelation, Setting, TimeUnit};
+    use sitar_estimator::{ApplyCalibration as _, PoseRelation, Setting, TimeUnit};
 
     fn trial(seed: u64) -> Trajectory {
         let n = 40;
@@ -435,6 +577,7 @@ mod tests {
             let trials: Vec<Trajectory> = plays.iter().map(|&p| trial(p)).collect();
             let mut estimate = sitar_estimator::estimate(&trials, &settings().options()).unwrap();
             calibration.apply(&mut estimate, &trials, "lab").unwrap();
+            estimate.source = Some("replays");
             estimate.to_json(Thresholds::DEFAULT_DEG)
         };
         let sessions = LiveSessions::new(1 << 24, 1 << 24);
@@ -496,6 +639,190 @@ mod tests {
             published.json,
             format!(r#"{{"calibration_missing":"gone",{}"#, &plain[1..])
         );
+    }
+
+    /// A session with the version-2 test calibration `lab` (see `calibration_v2`).
+    fn calibrated(sessions: &LiveSessions, id: &str, published: u32) -> Arc<LiveSession> {
+        use crate::estimate::calibrations::tests::calibration_v2;
+        let applied = SessionCalibration::Apply {
+            name: "lab".into(),
+            calibration: Arc::new(calibration_v2("median", 5, "angle_deg", true)),
+        };
+        sessions
+            .get_or_insert(
+                id,
+                settings(),
+                applied,
+                Thresholds::DEFAULT_DEG,
+                published,
+                || Ok(Vec::new()),
+            )
+            .unwrap()
+    }
+
+    /// What the library gives for the walk `trial(0)` as the live run of `replays`, as the
+    /// server publishes it.
+    fn from_walk(replays: &[u64]) -> String {
+        use crate::estimate::calibrations::tests::calibration_v2;
+        let calibration = calibration_v2("median", 5, "angle_deg", true);
+        let replays: Vec<Trajectory> = replays.iter().map(|&p| trial(p)).collect();
+        let mut estimate = sitar_estimator::estimate_live(
+            &calibration,
+            &trial(0),
+            &replays,
+            &settings().options(),
+            "lab",
+        )
+        .unwrap();
+        estimate.source = Some(if replays.is_empty() {
+            "walk"
+        } else {
+            "replays"
+        });
+        estimate.to_json(Thresholds::DEFAULT_DEG)
+    }
+
+    fn set_walk(live: &LiveSession, walk: Trajectory) {
+        assert_eq!(live.walk_unused(&walk), None);
+        let reservation = live.reserve(trial_bytes(&walk)).unwrap();
+        live.set_walk(walk, reservation);
+    }
+
+    #[tokio::test]
+    async fn the_walk_is_the_live_run_alone_then_with_the_trials_as_its_replays() {
+        let sessions = LiveSessions::new(1 << 24, 1 << 24);
+        let live = calibrated(&sessions, "a", 0);
+        let walk = trial(0);
+        set_walk(&live, walk.clone());
+        assert!(live.has_walk());
+        assert_eq!(
+            sessions.held_bytes(),
+            trial_bytes(&walk),
+            "counted as a trial"
+        );
+        // Alone: one run, its own motion.
+        let first = progressive(&live).await.unwrap();
+        assert_eq!(first.json, from_walk(&[]));
+        assert_eq!((first.trials, first.source), (1, Some("walk")));
+        for key in [
+            r#""source":"walk""#,
+            r#""runs":1"#,
+            r#""target":"live""#,
+            r#""informative":true"#,
+        ] {
+            assert!(first.json.contains(key), "{key}: {}", first.json);
+        }
+        // The sub-trajectories are the walk's: every 5th frame of it.
+        let starts: Vec<i64> = first.classes.keys().copied().collect();
+        assert_eq!(
+            starts,
+            walk.stamps
+                .iter()
+                .step_by(5)
+                .take(7)
+                .copied()
+                .collect::<Vec<_>>()
+        );
+        assert!(progressive(&live).await.is_none(), "nothing new");
+        // Trials, out of playback order: the walk's replays, in playback order.
+        add(&live, 2, 0);
+        add(&live, 1, 1);
+        let refined = progressive(&live).await.unwrap();
+        assert_eq!(refined.json, from_walk(&[1, 2]));
+        assert_eq!((refined.trials, refined.source), (3, Some("replays")));
+        assert!(!live.incremental().await, "no pairwise state with a walk");
+        assert_eq!(sessions.held_bytes(), 3 * trial_bytes(&walk));
+        // The walk sent again: published again, its bytes replaced, not added.
+        set_walk(&live, walk.clone());
+        assert_eq!(sessions.held_bytes(), 3 * trial_bytes(&walk));
+        assert_eq!(progressive(&live).await.unwrap().json, from_walk(&[1, 2]));
+        add(&live, 3, 2);
+        let last = live
+            .publish(Purpose::Final, |_| Ok(()))
+            .await
+            .unwrap()
+            .unwrap();
+        assert_eq!(last.json, from_walk(&[1, 2, 3]));
+        sessions.remove("a");
+        drop(live);
+        assert_eq!(sessions.held_bytes(), 0);
+    }
+
+    #[tokio::test]
+    async fn a_restarted_session_holds_its_stored_walk_as_published() {
+        let sessions = LiveSessions::new(1 << 24, 1 << 24);
+        // Published before the restart: the walk and two trials.
+        let live = calibrated(&sessions, "a", 3);
+        add_in_order(&live, 1..3);
+        live.restore_walk(|| Ok(Some(trial(0))));
+        assert!(live.has_walk());
+        assert!(progressive(&live).await.is_none(), "already published");
+        add(&live, 3, 3);
+        assert_eq!(
+            progressive(&live).await.unwrap().json,
+            from_walk(&[1, 2, 3])
+        );
+        // Looked for once: a later restore changes nothing.
+        live.restore_walk(|| Err(Error::Internal("read again".into())));
+        assert_eq!(sessions.held_bytes(), 4 * trial_bytes(&trial(0)));
+    }
+
+    #[tokio::test]
+    async fn replays_that_share_no_window_with_the_walk_give_the_expected_error() {
+        let sessions = LiveSessions::new(1 << 24, 1 << 24);
+        let live = calibrated(&sessions, "a", 0);
+        set_walk(&live, trial(0));
+        let late = |seed| {
+            let mut t = trial(seed);
+            t.stamps.iter_mut().for_each(|s| *s += 3_600_000_000_000);
+            t
+        };
+        let r = live.reserve(trial_bytes(&trial(1))).unwrap();
+        live.add(0, 0, late(1), r);
+        assert!(
+            progressive(&live).await.is_none(),
+            "one replay that does not pair with the walk: nothing yet, not a failure"
+        );
+        let r = live.reserve(trial_bytes(&trial(2))).unwrap();
+        live.add(1, 1, late(2), r);
+        let published = progressive(&live).await.unwrap();
+        assert!(
+            published.json.contains(r#""target":"expected""#),
+            "{}",
+            published.json
+        );
+        assert_eq!(published.source, Some("replays"));
+    }
+
+    #[test]
+    fn only_a_calibration_with_a_model_for_one_run_uses_the_walk() {
+        use crate::estimate::calibrations::tests::calibration as v1;
+        let walk = trial(0);
+        let why = walk_unused(&SessionCalibration::None, 5, &walk).unwrap();
+        assert!(why.contains("no calibration"), "{why}");
+        let why = walk_unused(&SessionCalibration::Missing("gone".into()), 5, &walk).unwrap();
+        assert!(why.contains("gone"), "{why}");
+        let old = SessionCalibration::Apply {
+            name: "old".into(),
+            calibration: Arc::new(
+                sitar_estimator::Calibration::from_json(&v1("median", 5, "angle_deg"), "t")
+                    .unwrap(),
+            ),
+        };
+        let why = walk_unused(&old, 5, &walk).unwrap();
+        assert!(
+            why.contains("calibration old") && why.contains("1 run"),
+            "{why}"
+        );
+        let sessions = LiveSessions::new(1 << 24, 1 << 24);
+        let live = calibrated(&sessions, "a", 0);
+        assert_eq!(live.walk_unused(&walk), None);
+        let mut short = walk.clone();
+        short.stamps.truncate(5);
+        short.positions.truncate(5);
+        short.orientations.truncate(5);
+        let why = live.walk_unused(&short).unwrap();
+        assert!(why.contains("5 poses") && why.contains('6'), "{why}");
     }
 
     #[tokio::test]

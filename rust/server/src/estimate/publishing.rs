@@ -9,6 +9,7 @@ use sitar_estimator::{Estimate, Trajectory};
 /// One estimate, ready to publish.
 #[derive(Debug, Clone)]
 pub(crate) struct Published {
+    /// Runs of the estimate: its trials, and the walk when it is the live run.
     pub trials: u32,
     pub csv: String,
     pub json: String,
@@ -19,6 +20,8 @@ pub(crate) struct Published {
     /// error (those the JSON writes as numbers), 0 when there are none: the history line.
     pub mean_error: f64,
     pub max_error: f64,
+    /// Where the estimate comes from (`walk` or `replays`), when it says.
+    pub source: Option<&'static str>,
 }
 
 impl Published {
@@ -52,6 +55,7 @@ impl Published {
         Published {
             mean_error: errors().sum::<f64>() / errors().count().max(1) as f64,
             max_error: errors().fold(0.0, f64::max),
+            source: estimate.source,
             trials: estimate.trials as u32,
             csv: estimate.to_legacy_csv(),
             json: estimate.to_json(thresholds),

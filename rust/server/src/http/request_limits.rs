@@ -68,6 +68,8 @@ pub(crate) fn body_limit(config: &ServerConfig, method: &Method, pattern: &str) 
             upload(MAX_TRAJECTORY_BYTES, "trajectory.txt")
         }
         ("PUT", "/v1/sessions/{id}/anchors.csv") => upload(MAX_ANCHORS_BYTES, "anchors.csv"),
+        // Every frame of the walk: as long as a trial (a replay of the same recording).
+        ("PUT", "/v1/sessions/{id}/walk.txt") => upload(config.max_trajectory_bytes, "walk.txt"),
         ("PUT", "/v1/sessions/{id}/subtrajectories/{k}/image.jpg") => {
             upload(MAX_THUMBNAIL_BYTES, "image.jpg")
         }

@@ -53,6 +53,7 @@ pub(crate) fn router(shared: Arc<App>) -> Router {
             put(phone_log::put_trajectory),
         )
         .route("/v1/sessions/{id}/anchors.csv", put(phone_log::put_anchors))
+        .route("/v1/sessions/{id}/walk.txt", put(phone_log::put_walk))
         .route("/v1/sessions/{id}/subtrajectories", get(evidence::list))
         .route(
             "/v1/sessions/{id}/subtrajectories/{k}/image.jpg",

@@ -1,9 +1,10 @@
 //! The phone's own log, uploaded beside its evidence (issue 24): `trajectory.txt` (start,
-//! midpoints, endpoints; TUM, integer ns), `anchors.csv` (its observations of image anchors)
-//! and `subtrajectories.csv` (sitar-core's whole table). Each is checked whole on arrival,
-//! and a bad cell is a 422 naming the file, line and column; the checked text is stored as
-//! sent (`SessionObject::{PhoneTrajectory, Anchors, Subtrajectories}`), since sitar-core
-//! reads these formats and the venue map reads them with it.
+//! midpoints, endpoints; TUM, integer ns), `walk.txt` (the start pose and every frame's pose,
+//! the same format: the walk itself, issue 41), `anchors.csv` (its observations of image
+//! anchors) and `subtrajectories.csv` (sitar-core's whole table). Each is checked whole on
+//! arrival, and a bad cell is a 422 naming the file, line and column; the checked text is
+//! stored as sent (`SessionObject::{PhoneTrajectory, Walk, Anchors, Subtrajectories}`), since
+//! sitar-core reads these formats and the venue map reads them with it.
 
 use sitar_core::{ErrorClass, InvalidDepth};
 
@@ -47,8 +48,22 @@ fn invalid(e: sitar_core::Error) -> Error {
 /// Checks the phone's `trajectory.txt`: TUM rows with integer-nanosecond stamps that rise
 /// strictly, at least one. The number of poses.
 pub(crate) fn check_trajectory(text: &str) -> Result<usize, Error> {
-    const SRC: &str = "trajectory.txt";
-    let poses = sitar_core::parse_tum_ns(text, SRC).map_err(invalid)?;
+    check_tum_ns(text, "trajectory.txt")
+}
+
+/// Checks the phone's `walk.txt` as [`check_trajectory`] does its file (TUM, integer
+/// nanoseconds rising strictly, at least one pose), and reads it as a run for the estimator,
+/// each position within the trials' bounds (`ingest::trials::MAX_POSITION_M`).
+pub(crate) fn parse_walk(text: &str) -> Result<sitar_estimator::Trajectory, Error> {
+    const SRC: &str = "walk.txt";
+    check_tum_ns(text, SRC)?;
+    crate::ingest::trials::parse_run(text.as_bytes(), SRC, 1)
+}
+
+/// TUM rows with integer-nanosecond stamps that rise strictly, at least one; errors name
+/// `src`, the line and the column. The number of poses.
+fn check_tum_ns(text: &str, src: &str) -> Result<usize, Error> {
+    let poses = sitar_core::parse_tum_ns(text, src).map_err(invalid)?;
     let lines = text
         .lines()
         .enumerate()
@@ -57,12 +72,12 @@ pub(crate) fn check_trajectory(text: &str) -> Result<usize, Error> {
     for (((t0, _), (t1, _)), line) in poses.iter().zip(poses.iter().skip(1)).zip(lines.skip(1)) {
         if t1 <= t0 {
             return Err(Error::InvalidContent(format!(
-                "{SRC} line {line}, column `timestamp`: {t1} does not come after {t0}"
+                "{src} line {line}, column `timestamp`: {t1} does not come after {t0}"
             )));
         }
     }
     if poses.is_empty() {
-        return Err(Error::InvalidContent(format!("{SRC}: no poses")));
+        return Err(Error::InvalidContent(format!("{src}: no poses")));
     }
     Ok(poses.len())
 }

@@ -12,13 +12,19 @@ use crate::storage::{BlobStore, StoreRefs};
 /// Parses one trial's TUM text from the bytes received; the error names `source`, the line
 /// and the column.
 pub(crate) fn parse_trial(bytes: &[u8], source: &str) -> Result<Trajectory, Error> {
+    parse_run(bytes, source, 2)
+}
+
+/// Parses a run's TUM text as [`parse_trial`] does, with at least `min_poses` poses (a
+/// trial needs 2; the phone's walk may be its start pose alone).
+pub(crate) fn parse_run(bytes: &[u8], source: &str, min_poses: usize) -> Result<Trajectory, Error> {
     let text = std::str::from_utf8(bytes)
         .map_err(|e| Error::InvalidContent(format!("trajectory is not UTF-8 text: {e}")))?;
     let mut trial = sitar_estimator::parse_tum(text, source)
         .map_err(|e| Error::InvalidContent(e.to_string()))?;
-    if trial.len() < 2 {
+    if trial.len() < min_poses {
         return Err(Error::InvalidContent(format!(
-            "{source}: a trial needs at least 2 poses, found {}",
+            "{source}: a trial needs at least {min_poses} poses, found {}",
             trial.len()
         )));
     }

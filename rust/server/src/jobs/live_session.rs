@@ -1,14 +1,16 @@
 //! A session's trials in memory (`estimate::live_sessions`): there already, or rebuilt from
-//! its stored trial files after a restart, with the server's thresholds and the session's
-//! calibration.
+//! its stored trial files (and the phone's walk, when the session uses it) after a restart,
+//! with the server's thresholds and the session's calibration.
 
 use std::sync::Arc;
 
 use crate::app_state::App;
 use crate::error::Error;
 use crate::estimate::live_sessions::LiveSession;
+use crate::ingest::phone_log::parse_walk;
 use crate::ingest::trials::{parse_trial, read_trial};
 use crate::model::Session;
+use crate::storage::keys::SessionObject;
 
 /// The live session of `session`: in memory already, or rebuilt from its trial files (after
 /// a restart). Reading the files runs off the async runtime.
@@ -36,7 +38,7 @@ pub(crate) async fn live_session(
                 session.id
             );
         }
-        shared.live.get_or_insert(
+        let live = shared.live.get_or_insert(
             &session.id,
             session.settings,
             calibration,
@@ -54,7 +56,18 @@ pub(crate) async fn live_session(
                     })
                     .collect()
             },
-        )
+        )?;
+        live.restore_walk(
+            || match shared.blobs.get(&session.id, SessionObject::Walk)? {
+                Some(bytes) => {
+                    let text = String::from_utf8(bytes)
+                        .map_err(|e| Error::Internal(format!("walk.txt: {e}")))?;
+                    parse_walk(&text).map(Some)
+                }
+                None => Ok(None),
+            },
+        );
+        Ok(live)
     })
     .await
     .map_err(|e| Error::Internal(format!("rebuilding session {id}: {e}")))?

@@ -10,6 +10,7 @@ use crate::app_state::{App, RunningJob};
 use crate::error::Error;
 use crate::estimate::held_trials::Purpose;
 use crate::estimate::live_sessions::LiveSession;
+use crate::estimate::publishing::Published;
 use crate::jobs::playback_run::{self as run, Outcome, publish, too_few_after_cancel};
 use crate::model::{PlaybackKind, Session, SessionState, Step};
 pub(crate) use crate::playback::queue::Begin;
@@ -178,6 +179,19 @@ where
         .unwrap_or(Ok(Outcome::Interrupted));
         conclude(&shared, &id, job, outcome);
     });
+}
+
+/// Publishes at once what the session holds (the phone's walk just arrived: its estimate
+/// alone, or with the trials held as its replays), within an estimate worker's permit;
+/// `Ok(None)` when there is nothing new or the server stops.
+pub(crate) async fn publish_now(
+    shared: &Arc<App>,
+    live: &Arc<LiveSession>,
+    id: &str,
+) -> Result<Option<Published>, Error> {
+    with_estimate_permit(shared, publish(shared, live, id, Purpose::Progressive))
+        .await
+        .unwrap_or(Ok(None))
 }
 
 /// After a trial of an `upload` session: publishes progressive estimates in the background
@@ -362,6 +376,14 @@ pub(crate) fn resume_or_fail(shared: &Arc<App>, session: Session) {
     }
 }
 
+/// The runs a session's results would count from what is stored: its trials, and the walk
+/// when it has one and a calibration (results count the walk it is estimated from).
+fn runs_stored(shared: &App, session: &Session) -> Result<u32, Error> {
+    let walk =
+        session.calibration.is_some() && shared.blobs.exists(&session.id, SessionObject::Walk);
+    Ok(shared.db.trial_count(&session.id)? + u32::from(walk))
+}
+
 /// Resumes one session in flight after a restart.
 fn recover_one(shared: &Arc<App>, session: Session) -> Result<(), Error> {
     let id = session.id.clone();
@@ -377,7 +399,7 @@ fn recover_one(shared: &Arc<App>, session: Session) -> Result<(), Error> {
             shared.lifecycle().resume(&id)?;
             spawn_estimate(shared.clone(), id);
         } else if shared.config.progressive_uploads
-            && session.results_trials < shared.db.trial_count(&id)?
+            && session.results_trials < runs_stored(shared, &session)?
         {
             // Trials arrived after the last published estimate: catch up.
             let shared = shared.clone();

@@ -288,11 +288,13 @@ impl Run<'_> {
         Ok(())
     }
 
-    /// From the 2nd trial on, a progressive estimate; with adaptive stopping, playback stops
-    /// once no window changed class over the last k trials.
+    /// From the 2nd trial on (the 1st, with the phone's walk as the live run), a progressive
+    /// estimate; with adaptive stopping, playback stops once no window changed class over the
+    /// last k trials.
     pub(crate) async fn publish_progressive(&mut self) -> Result<(), Error> {
         let count = self.shared.db.trial_count(self.id)?;
-        if count < 2 || self.stop_reason.is_some() {
+        let least = if self.live.has_walk() { 1 } else { 2 };
+        if count < least || self.stop_reason.is_some() {
             return Ok(());
         }
         let Some(p) = publish(self.shared, &self.live, self.id, Purpose::Progressive).await? else {

@@ -74,7 +74,8 @@ pub(crate) enum Step {
     Resume,
     /// The final estimate starts (sim, adb: when playback ends; `upload`: on request).
     StartEstimating,
-    /// A (progressive or final) estimate is published.
+    /// A (progressive or final) estimate is published; before playback, the estimate from
+    /// the phone's walk alone.
     Publish,
     /// Playback stops before its last trial, with a reason.
     Stop,
@@ -120,8 +121,9 @@ impl Step {
             (Step::Resume, Estimating) if upload => Some(Estimating),
             (Step::StartEstimating, Playing) if !upload => Some(Estimating),
             (Step::StartEstimating, Created | Uploaded) if upload => Some(Estimating),
-            (Step::Publish, Created | Uploaded) if upload => Some(state),
-            (Step::Publish, Playing | Estimating) => Some(state),
+            // Before playback, too: the first results from the phone's walk (with a
+            // calibration), an `upload` session's progressive estimates.
+            (Step::Publish, Created | Uploaded | Playing | Estimating) => Some(state),
             (Step::Stop, Playing | Estimating) if !upload => Some(state),
             (Step::Finish, Estimating) => Some(Done),
             (Step::Fail, Created | Uploaded | Playing | Estimating) => Some(Failed),
@@ -161,7 +163,10 @@ mod tests {
             let done = path(
                 playback,
                 &[
+                    // The walk's results, before the recording and before playback.
+                    (Step::Publish, Created),
                     (Step::AcceptRecording, Uploaded),
+                    (Step::Publish, Uploaded),
                     (Step::StartPlaying, Playing),
                     (Step::Publish, Playing),
                     (Step::Stop, Playing),

@@ -36,6 +36,39 @@ struct ResultsDoc {
     /// The calibration the errors are calibrated with (none: the spread, as in the paper).
     #[serde(default)]
     calibration: Option<String>,
+    /// The error estimated: `live` (the walk's own) or `expected`.
+    #[serde(default)]
+    target: Option<String>,
+    /// Where the results come from: `walk` (alone) or `replays`.
+    #[serde(default)]
+    source: Option<String>,
+    /// The runs behind them (the walk counts as one).
+    #[serde(default)]
+    runs: Option<u32>,
+    /// `false`: the calibration's runs do not predict the error; the colours are a guess.
+    #[serde(default)]
+    informative: Option<bool>,
+}
+
+impl ResultsDoc {
+    /// The replays behind results of the walk as the live run (0 for the walk alone); `None`
+    /// for results from the replays alone.
+    fn walk_replays(&self) -> Option<u32> {
+        (self.target.as_deref() == Some("live")).then(|| match self.source.as_deref() {
+            Some("walk") => 0,
+            _ => self.runs.unwrap_or(self.trials).saturating_sub(1),
+        })
+    }
+
+    /// Where results of the walk come from, as the page says it: `from the walk alone`, `from
+    /// the walk and 3 replays`.
+    fn walk_source(&self) -> Option<String> {
+        self.walk_replays().map(|replays| match replays {
+            0 => "from the walk alone".to_string(),
+            1 => "from the walk and 1 replay".to_string(),
+            n => format!("from the walk and {n} replays"),
+        })
+    }
 }
 
 /// A calibrated results document's windows, for their intervals (read only when the
@@ -632,7 +665,8 @@ fn partial(row: &Session, doc: &ResultsDoc) -> Option<serde_json::Value> {
     let finished = matches!(row.state, SessionState::Done | SessionState::Failed);
     (!finished).then(|| {
         json!({
-            "trials": doc.trials,
+            "trials": doc.walk_replays().unwrap_or(doc.trials),
+            "walk": doc.walk_replays().is_some(),
             "total": row.trials_total,
             "state": row.state.as_str(),
         })
@@ -702,7 +736,13 @@ pub(crate) fn render(input: &ReportInput<'_>) -> Result<String, Error> {
         title: format!("{} (calibration {})", c.interval, c.name),
     });
     let count = |c: ErrorClass| a.subs.iter().filter(|s| s.class == c).count();
-    let trials = a.doc.trials;
+    // Results of the walk: the replays are the trials, each paired with the walk.
+    let walk_replays = a.doc.walk_replays();
+    let trials = walk_replays.unwrap_or(a.doc.trials);
+    let pairs = match walk_replays {
+        Some(replays) => replays,
+        None => trials * trials.saturating_sub(1) / 2,
+    };
     let standalone = match &input.standalone {
         Some(alone) => Some(inline_parts(alone)?),
         None => None,
@@ -737,7 +777,7 @@ pub(crate) fn render(input: &ReportInput<'_>) -> Result<String, Error> {
         "windows": a.doc.windows.len(),
         "window_frames": row.settings.window_frames,
         "trials": trials,
-        "pairs": trials * trials.saturating_sub(1) / 2,
+        "pairs": pairs,
         "partial": partial(row, &a.doc),
         "refresh_s": REFRESH_S,
         "standalone": standalone,
@@ -765,6 +805,9 @@ pub(crate) fn render(input: &ReportInput<'_>) -> Result<String, Error> {
         "interval": c.interval,
     })));
     context["calibration_missing"] = json!(calibration_missing(row, &a));
+    context["from_walk"] = json!(a.doc.walk_source());
+    context["runs"] = json!(a.doc.runs.unwrap_or(a.doc.trials));
+    context["not_informative"] = json!(a.doc.informative == Some(false));
     templates::render("report.html", &context)
 }
 

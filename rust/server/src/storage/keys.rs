@@ -35,6 +35,9 @@ pub(crate) enum SessionObject {
     PhoneTrajectory,
     /// The phone's anchor observations (`anchors.csv`), checked whole on arrival.
     Anchors,
+    /// The phone's walk (`walk.txt`: the start pose and every frame's pose; TUM, integer
+    /// ns), checked whole on arrival: the live run its estimates start from.
+    Walk,
     /// The phone's whole sub-trajectory table (`subtrajectories.csv` in sitar-core's header),
     /// checked whole on arrival.
     Subtrajectories,
@@ -63,6 +66,7 @@ impl SessionObject {
             "spans.json" => SessionObject::Spans,
             "phone_log/trajectory.txt" => SessionObject::PhoneTrajectory,
             "phone_log/anchors.csv" => SessionObject::Anchors,
+            "phone_log/walk.txt" => SessionObject::Walk,
             "phone_log/subtrajectories.csv" => SessionObject::Subtrajectories,
             other => {
                 if let Some(name) = other.strip_prefix("trials/trial_") {
@@ -94,6 +98,7 @@ impl SessionObject {
             SessionObject::Thumbnail(k) => format!("thumbnails/{k}.jpg"),
             SessionObject::PhoneTrajectory => "phone_log/trajectory.txt".into(),
             SessionObject::Anchors => "phone_log/anchors.csv".into(),
+            SessionObject::Walk => "phone_log/walk.txt".into(),
             SessionObject::Subtrajectories => "phone_log/subtrajectories.csv".into(),
         }
     }
@@ -122,6 +127,7 @@ mod tests {
             SessionObject::Thumbnail(12),
             SessionObject::PhoneTrajectory,
             SessionObject::Anchors,
+            SessionObject::Walk,
             SessionObject::Subtrajectories,
         ];
         for object in objects {

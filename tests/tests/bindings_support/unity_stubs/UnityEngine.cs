@@ -120,6 +120,7 @@ namespace UnityEngine
     {
         public static void Log(object message) { throw null; }
         public static void LogWarning(object message) { throw null; }
+        public static void LogError(object message) { throw null; }
     }
 
     public class Application

@@ -17,7 +17,8 @@ use crate::model::{PlaybackKind, Step};
 use crate::storage::body_stream;
 
 /// Takes one TUM text as the raw body: parsed from the bytes received, stored once, kept in
-/// memory; from the 2nd trial on a progressive estimate follows in the background.
+/// memory; from the 2nd trial on (the 1st, with the phone's walk) a progressive estimate
+/// follows in the background.
 pub(crate) async fn post(
     State(shared): AppState,
     Found(session): Found,
@@ -71,7 +72,7 @@ pub(crate) async fn post(
     };
     let (index, created) =
         trials::store_trial(shared.stores(), &live, &id, arrival, &bytes, trial)?;
-    if created && shared.db.trial_count(&id)? >= 2 {
+    if created && (live.has_walk() || shared.db.trial_count(&id)? >= 2) {
         jobs::spawn_progressive(shared.clone(), live, id);
     }
     // A replayed request (same Idempotency-Key) gets the answer of the first one.

@@ -359,6 +359,89 @@ private fun venue() {
     s.close()
 }
 
+// The estimate from one walk: the calibrations are written into the temp dir by
+// tests/tests/bindings_kotlin.rs (rust/ffi/tests/support/walk_calibration.rs): error =
+// 0.05 m × (path + 1 mm) / 0.1 m over a 10-frame window, interval ×0.5 … ×2.
+private const val WALK_FRAMES = 40L
+
+/** x at frame [i]: 5 mm a frame for 20 frames, 3 cm for 10, 6 cm for 10 (then still). */
+private fun walkX(i: Long): Double {
+    val j = minOf(i, WALK_FRAMES)
+    return minOf(j, 20L) * 0.005 + maxOf(minOf(j, 30L) - 20L, 0L) * 0.03 + maxOf(j - 30L, 0L) * 0.06
+}
+
+private fun walkPose(i: Long) = Pose(walkX(i), 1.5, 0.0, 0.0, 0.0, 0.0, 1.0)
+
+/** What the calibration gives the window of 10 frames from frame [start]. */
+private fun walkError(start: Long) = 0.05 * (walkX(start + 10) - walkX(start) + 0.001) / 0.1
+
+/** Records the walk (a wall 2 m ahead at every midpoint) and stops. */
+private fun walk(s: SitarSession) {
+    val depth = ShortArray(16 * 16) { 2000 }
+    s.start(0, walkPose(0))
+    for (i in 1L..WALK_FRAMES) {
+        if ((s.frame(i * FRAME_NS, walkPose(i)) and SitarSession.MIDPOINT) != 0) s.depth(depth, 16, 16, 32, Intrinsics(15.0, 15.0, 8.0, 8.0), 0)
+    }
+    val summary = s.stop((WALK_FRAMES + 1) * FRAME_NS, walkPose(WALK_FRAMES))
+    check(summary.subtrajectories == 4 && summary.depthSamples == 4, "walk $summary")
+}
+
+private fun walkEstimate(tmp: File) {
+    val calibration = File(tmp, "calibration-walk.json").readText()
+    val low = ErrorClass.LOW
+    val high = ErrorClass.HIGH
+    val none = Provenance(ResultSource.UNKNOWN, ResultTarget.UNKNOWN, null, null)
+
+    // Set before the walk: coloured at stop, offline, with the calibration's numbers.
+    val s = SitarSession()
+    check(s.resultsProvenance() == none, "no results yet: ${s.resultsProvenance()}")
+    s.setCalibration(calibration)
+    walk(s)
+    val results = s.results()
+    check(results.map { it.errorClass } == listOf(low, low, high, high), "walk classes $results")
+    for (r in results) near(r.errorM!!, walkError(10L * r.subtrajectory), "walk error of sub ${r.subtrajectory}", 1e-12)
+    val fromWalk = s.resultsProvenance()
+    check(fromWalk == Provenance(ResultSource.WALK, ResultTarget.LIVE, 1, true) && !fromWalk.isGuess, "from the walk: $fromWalk")
+    check(s.resultsCalibration() == "on_device", "calibration ${s.resultsCalibration()}")
+    val bounds = s.boundsAt(20 * FRAME_NS)
+    check(bounds != null, "the walk's windows have intervals")
+    near(bounds!!.upperM, 2 * walkError(20), "upper bound", 1e-12)
+    val markers = s.markers()
+    // In time order: sub 2 is the first high place; sub 3 and the low ones lie within 0.5 m of it.
+    check(markers.size == 1 && markers[0].subtrajectory == 2 && markers[0].errorClass == high, "walk markers $markers")
+    // The backend's results replace the walk's.
+    s.loadResults("start,error\n0,0.2\n${10 * FRAME_NS},0.01\n${20 * FRAME_NS},0.01\n${30 * FRAME_NS},0.01\n")
+    check(s.results().map { it.errorClass } == listOf(high, low, low, low), "backend classes ${s.results()}")
+    check(s.resultsProvenance() == none && s.resultsCalibration() == null, "legacy CSV says nothing of its source")
+    // A calibration given now keeps them.
+    s.setCalibration(calibration)
+    check(s.results().map { it.errorClass } == listOf(high, low, low, low), "backend results kept")
+    s.close()
+    expectSitar(SitarStatus.INVALID_HANDLE, "handle 0") { s.setCalibration(calibration) }
+    expectSitar(SitarStatus.INVALID_HANDLE, "handle 0") { s.resultsProvenance() }
+
+    // Set after the stop: coloured at once; a calibration whose runs do not predict the error says so.
+    val later = SitarSession()
+    walk(later)
+    check(later.results().all { it.errorClass == ErrorClass.UNKNOWN }, "uncoloured without a calibration")
+    later.setCalibration(File(tmp, "calibration-guess.json").readText())
+    check(later.results().map { it.errorClass } == listOf(low, low, high, high), "coloured at once")
+    val guess = later.resultsProvenance()
+    check(guess.source == ResultSource.WALK && guess.informative == false && guess.isGuess, "a guess: $guess")
+    later.close()
+
+    // Refused calibrations name what is wrong and change nothing.
+    val refused = SitarSession()
+    expectSitar(SitarStatus.PARSE, "not a calibration file") { refused.setCalibration("{") }
+    expectSitar(SitarStatus.INVALID_ARGUMENT, "20 window frames") { refused.setCalibration(File(tmp, "calibration-window20.json").readText()) }
+    expectSitar(SitarStatus.INVALID_ARGUMENT, "no model for the live error from 1 run") {
+        refused.setCalibration(File(tmp, "calibration-expected-only.json").readText())
+    }
+    walk(refused)
+    check(refused.results().all { it.errorClass == ErrorClass.UNKNOWN } && refused.resultsProvenance() == none, "nothing taken")
+    refused.close()
+}
+
 fun main(args: Array<String>) {
     val tmp = File(args[1])
     check(SitarSession.version() == args[0], "version ${SitarSession.version()}")
@@ -380,5 +463,6 @@ fun main(args: Array<String>) {
     windowSettings(tmp)
     calibratedResults()
     venue()
+    walkEstimate(tmp)
     println("PASSED $checks checks")
 }

@@ -46,6 +46,16 @@ internal object BoundsAtLayout {
     const val SIZE = 4
 }
 
+/** Offsets into the flat `DoubleArray` of a `SitarProvenance` (`rust/ffi/src/flat.rs`). */
+internal object ProvenanceLayout {
+    const val SOURCE = 0
+    const val TARGET = 1
+    const val RUNS = 2
+    const val INFORMATIVE = 3
+    /** Doubles per item. */
+    const val SIZE = 4
+}
+
 /** Offsets into the flat `DoubleArray` of a `SitarMarker` (`rust/ffi/src/flat.rs`). */
 internal object MarkerLayout {
     const val PX = 0

@@ -32,6 +32,8 @@ internal object Native {
     @JvmStatic external fun sessionErrorAt(h: Long, tNs: Long): DoubleArray
     @JvmStatic external fun sessionBoundsAt(h: Long, tNs: Long): DoubleArray
     @JvmStatic external fun sessionResultsCalibration(h: Long): String
+    @JvmStatic external fun sessionSetCalibration(h: Long, json: String)
+    @JvmStatic external fun sessionResultsProvenance(h: Long): DoubleArray
     @JvmStatic external fun sessionMarkers(h: Long): DoubleArray
     @JvmStatic external fun sessionResultsUnreliable(h: Long): Boolean
     @JvmStatic external fun sessionSubtrajectoryClass(h: Long, k: Int): Int

@@ -88,6 +88,24 @@ class SitarSession private constructor(handle: Long) : AutoCloseable {
     /** The name of the calibration of the loaded results; null when they are not calibrated. */
     fun resultsCalibration(): String? = Native.sessionResultsCalibration(handle).ifEmpty { null }
 
+    /**
+     * Takes a calibration (the JSON file `sitar calibrate` writes, e.g. bundled in the app's
+     * assets) so the walk is coloured the moment it [stop]s, offline: every sub-trajectory gets
+     * the calibrated error and interval of the walk alone, the markers their places. Given
+     * after [stop] it colours at once, unless the backend's results are loaded; the backend's
+     * results replace the walk's when they arrive ([resultsProvenance] says which). Malformed
+     * JSON is [SitarStatus.PARSE]; a calibration for another window (`subtrajectory_frames`) or
+     * `pose_relation`, or without a model for one run, [SitarStatus.INVALID_ARGUMENT], naming
+     * what differs. A refused calibration changes nothing.
+     */
+    fun setCalibration(json: String) = Native.sessionSetCalibration(handle, json)
+
+    /**
+     * Where the loaded results come from: the walk itself or replays, how many runs, and
+     * whether the colours are a guess ([Provenance.isGuess]).
+     */
+    fun resultsProvenance(): Provenance = Provenance.of(Native.sessionResultsProvenance(handle))
+
     /** The class of sub-trajectory [k]. */
     fun subtrajectoryClass(k: Int): ErrorClass = ErrorClass.of(Native.sessionSubtrajectoryClass(handle, k))
 

@@ -72,6 +72,58 @@ data class ErrorBounds(val lowerM: Double, val upperM: Double, val rawM: Double?
     }
 }
 
+/** Where results come from (`"source"`). */
+enum class ResultSource(val code: Int) {
+    /** No results, or results that do not say (legacy CSV). */
+    UNKNOWN(0),
+    /** The walk itself, from a calibration: on the phone at stop, or by the backend at upload. */
+    WALK(1),
+    /** Replays of the recording on playback devices. */
+    REPLAYS(2);
+
+    companion object {
+        @JvmStatic fun of(code: Int): ResultSource = values().firstOrNull { it.code == code } ?: UNKNOWN
+    }
+}
+
+/** Which error results estimate (`"target"`). */
+enum class ResultTarget(val code: Int) {
+    /** Not said (uncalibrated results, legacy CSV) or no results. */
+    UNKNOWN(0),
+    /** The error of the live run: the user's own walk. */
+    LIVE(1),
+    /** The error expected at each place (the mean over runs). */
+    EXPECTED(2);
+
+    companion object {
+        @JvmStatic fun of(code: Int): ResultTarget = values().firstOrNull { it.code == code } ?: UNKNOWN
+    }
+}
+
+/**
+ * Where the loaded results come from: [source], [target], the number of [runs] (the walk and
+ * its replays; null when not said) and whether the calibration's runs predict the error at
+ * all ([informative]; null when not said).
+ */
+data class Provenance(val source: ResultSource, val target: ResultTarget, val runs: Int?, val informative: Boolean?) {
+    /**
+     * The calibration says its runs do not predict this system's error: show the colours with
+     * "this system's error cannot be told from its runs: colours are a guess".
+     */
+    val isGuess: Boolean get() = informative == false
+
+    internal companion object {
+        fun of(v: DoubleArray): Provenance {
+            val runs = v[ProvenanceLayout.RUNS].toInt()
+            val informative = v[ProvenanceLayout.INFORMATIVE].toInt()
+            return Provenance(
+                ResultSource.of(v[ProvenanceLayout.SOURCE].toInt()), ResultTarget.of(v[ProvenanceLayout.TARGET].toInt()),
+                if (runs == 0) null else runs, if (informative < 0) null else informative == 1
+            )
+        }
+    }
+}
+
 /**
  * A marker: position, warning-sign rotation (local +Y along the normal), surface normal; the
  * error is in the results' unit (metres, or degrees for `angle_deg`).

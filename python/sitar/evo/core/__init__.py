@@ -1,0 +1,1 @@
+"""evo.core's mirror: trajectory, sync, metrics, geometry, units, result, lie_algebra."""

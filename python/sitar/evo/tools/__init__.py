@@ -1,0 +1,1 @@
+"""evo.tools' mirror: file_interface and plot."""

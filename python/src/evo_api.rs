@@ -1,0 +1,398 @@
+//! The fast parts of `sitar.evo` (evo's Python API): reading evo's text formats into one
+//! float64 matrix, and APE/RPE error arrays of two associated pose sequences. Arrays cross as
+//! raw float64 bytes (numpy's `tobytes`/`frombuffer`): no numpy crate, no copies per pose.
+
+use std::path::PathBuf;
+
+use glam::{DQuat, DVec3};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::PyBytes;
+use sitar_estimator::{DeltaUnit, PoseRelation, RpeOptions, TimeUnit, Trajectory};
+
+use crate::SitarError;
+
+/// A text matrix as evo's `csv_read_matrix` + `np.array(...).astype(float)` reads it: lines
+/// starting with `comment` are skipped, every other line is split at each `delimiter`, every
+/// field is a Python float. The first row decides the width (exactly `columns`, or at least
+/// `columns` when `at_least`); every row must have it. Errors name the source, line and
+/// column (1-based) of the first bad row and end with `rule`, evo's message for the format.
+/// Rows are parsed in parallel blocks (rayon); an error is then looked for in order.
+fn parse_matrix(
+    text: &str,
+    source: &str,
+    delimiter: char,
+    columns: usize,
+    at_least: bool,
+    rule: &str,
+) -> Result<(Vec<f64>, usize, usize), String> {
+    use rayon::prelude::*;
+
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    // The newline ending the last line starts no row (as Python's line iteration).
+    let body = text.strip_suffix('\n').unwrap_or(text);
+    let rows: Vec<(usize, &str)> = body
+        .split('\n')
+        .enumerate()
+        .filter(|(_, line)| !line.starts_with('#'))
+        .map(|(number, line)| (number + 1, line.strip_suffix('\r').unwrap_or(line)))
+        .collect();
+    let Some(&(first_line, first)) = rows.first().filter(|_| !body.is_empty()) else {
+        return Err(format!("{source}: no rows; {rule}"));
+    };
+    let mut values = Vec::new();
+    parse_row(first, first_line, source, delimiter, rule, &mut values)?;
+    let width = values.len();
+    let fits = if at_least {
+        width >= columns
+    } else {
+        width == columns
+    };
+    if !fits {
+        return Err(format!(
+            "{source}:{first_line}: {width} entries in the first row; {rule}"
+        ));
+    }
+    let block = |chunk: &[(usize, &str)]| -> Result<Vec<f64>, String> {
+        let mut out = Vec::with_capacity(chunk.len() * width);
+        for &(number, line) in chunk {
+            let before = out.len();
+            parse_row(line, number, source, delimiter, rule, &mut out)?;
+            let fields = out.len() - before;
+            if fields != width {
+                return Err(format!(
+                    "{source}:{number}: {fields} entries where the first row has {width}; {rule}"
+                ));
+            }
+        }
+        Ok(out)
+    };
+    // Small files in one block: threads cost more than they give there.
+    let rest = &rows[1..];
+    let parsed: Vec<Result<Vec<f64>, String>> = if rest.len() < 16_384 {
+        vec![block(rest)]
+    } else {
+        rest.par_chunks(4096).map(block).collect()
+    };
+    values.reserve(rows.len() * width);
+    for part in parsed {
+        values.extend(part?); // the blocks are in order: the first error is the first bad row
+    }
+    Ok((values, rows.len(), width))
+}
+
+/// The fields of one row onto `out`; an error names the line and column of a bad field.
+fn parse_row(
+    line: &str,
+    number: usize,
+    source: &str,
+    delimiter: char,
+    rule: &str,
+    out: &mut Vec<f64>,
+) -> Result<(), String> {
+    let mut offset = 0;
+    for field in line.split(delimiter) {
+        let Some(value) = python_float(field) else {
+            let column = line[..offset].chars().count() + 1;
+            return Err(format!(
+                "{source}:{number}:{column}: '{field}' is not a number; {rule}"
+            ));
+        };
+        out.push(value);
+        offset += field.len() + delimiter.len_utf8();
+    }
+    Ok(())
+}
+
+/// A field as Python's `float()` reads it (surrounding whitespace, `nan`, `inf`, `1_000`).
+fn python_float(field: &str) -> Option<f64> {
+    let field = field.trim();
+    if let Ok(v) = field.parse::<f64>() {
+        return Some(v);
+    }
+    // Underscores between digits (PEP 515); anything else Rust refused is no float either.
+    let bytes = field.as_bytes();
+    let ok = field.contains('_')
+        && bytes.iter().enumerate().all(|(i, &b)| {
+            b != b'_'
+                || (i > 0
+                    && i + 1 < bytes.len()
+                    && bytes[i - 1].is_ascii_digit()
+                    && bytes[i + 1].is_ascii_digit())
+        });
+    if ok {
+        field.replace('_', "").parse().ok()
+    } else {
+        None
+    }
+}
+
+fn bytes_of(values: &[f64]) -> Vec<u8> {
+    values.iter().flat_map(|v| v.to_ne_bytes()).collect()
+}
+
+/// A matrix file (evo's rules, see `parse_matrix`): the float64 bytes, rows and columns.
+/// The file is read as UTF-8 (a BOM skipped); reading errors become OSError.
+#[pyfunction]
+#[pyo3(signature = (path, delimiter, columns, at_least, rule))]
+pub fn read_matrix(
+    py: Python<'_>,
+    path: PathBuf,
+    delimiter: char,
+    columns: usize,
+    at_least: bool,
+    rule: &str,
+) -> PyResult<(Py<PyBytes>, usize, usize)> {
+    let source = path.display().to_string();
+    let (values, rows, width) = py.allow_threads(|| {
+        let text = std::fs::read_to_string(&path)
+            .map_err(|e| PyErr::from(std::io::Error::new(e.kind(), format!("{source}: {e}"))))?;
+        parse_matrix(&text, &source, delimiter, columns, at_least, rule)
+            .map_err(SitarError::new_err)
+    })?;
+    Ok((PyBytes::new(py, &bytes_of(&values)).unbind(), rows, width))
+}
+
+/// As `read_matrix`, on text already read (a file handle's content); `source` names it.
+#[pyfunction]
+#[pyo3(signature = (text, source, delimiter, columns, at_least, rule))]
+pub fn parse_matrix_text(
+    py: Python<'_>,
+    text: &str,
+    source: &str,
+    delimiter: char,
+    columns: usize,
+    at_least: bool,
+    rule: &str,
+) -> PyResult<(Py<PyBytes>, usize, usize)> {
+    let (values, rows, width) = parse_matrix(text, source, delimiter, columns, at_least, rule)
+        .map_err(SitarError::new_err)?;
+    Ok((PyBytes::new(py, &bytes_of(&values)).unbind(), rows, width))
+}
+
+/// float64 values from native-endian bytes, checking the count is a multiple of `width`.
+fn floats(bytes: &[u8], width: usize, what: &str) -> PyResult<Vec<f64>> {
+    if !bytes.len().is_multiple_of(8 * width) {
+        return Err(PyValueError::new_err(format!(
+            "{what}: {} bytes are not rows of {width} float64",
+            bytes.len()
+        )));
+    }
+    Ok(bytes
+        .chunks_exact(8)
+        .map(|c| f64::from_ne_bytes(c.try_into().expect("8 bytes")))
+        .collect())
+}
+
+/// A pose sequence from positions (n×3) and quaternions (n×4, w x y z; normalised here, as
+/// evo's `quaternion_matrix` does when it builds `poses_se3`). Stamps are indices: the
+/// metrics pair poses by index.
+fn poses(xyz: &[u8], wxyz: &[u8], what: &str) -> PyResult<Trajectory> {
+    let p = floats(xyz, 3, what)?;
+    let q = floats(wxyz, 4, what)?;
+    if p.len() / 3 != q.len() / 4 {
+        return Err(PyValueError::new_err(format!(
+            "{what}: {} positions but {} orientations",
+            p.len() / 3,
+            q.len() / 4
+        )));
+    }
+    let positions = p.chunks_exact(3).map(DVec3::from_slice).collect();
+    let orientations = q
+        .chunks_exact(4)
+        .map(|q| {
+            let quat = DQuat::from_xyzw(q[1], q[2], q[3], q[0]);
+            let norm = quat.length();
+            if norm > 0.0 { quat / norm } else { quat }
+        })
+        .collect();
+    Ok(Trajectory {
+        stamps: (0..p.len() as i64 / 3).collect(),
+        positions,
+        orientations,
+        time_unit: TimeUnit::Seconds,
+    })
+}
+
+fn relation(name: &str) -> PyResult<PoseRelation> {
+    name.parse()
+        .map_err(|e: sitar_estimator::Error| PyValueError::new_err(e.to_string()))
+}
+
+fn estimator_error(e: sitar_estimator::Error) -> PyErr {
+    SitarError::new_err(e.to_string())
+}
+
+/// evo's `APE.process_data` error array: `relation` (`trans_part`, `rot_part`, `full`,
+/// `angle_deg`, `angle_rad`, `point_distance`) of `E_i = P_i⁻¹·Q_i` for every pose.
+#[pyfunction]
+pub fn ape_errors(
+    py: Python<'_>,
+    ref_xyz: &[u8],
+    ref_wxyz: &[u8],
+    est_xyz: &[u8],
+    est_wxyz: &[u8],
+    pose_relation: &str,
+) -> PyResult<Py<PyBytes>> {
+    let relation = relation(pose_relation)?;
+    let reference = poses(ref_xyz, ref_wxyz, "reference")?;
+    let estimate = poses(est_xyz, est_wxyz, "estimate")?;
+    let errors = py
+        .allow_threads(|| sitar_estimator::ape(&reference, &estimate, relation))
+        .map_err(estimator_error)?;
+    Ok(PyBytes::new(py, &bytes_of(&errors.errors)).unbind())
+}
+
+/// evo's `RPE.process_data`: the error array and the index pairs `(i, j)` (int64, flat) of
+/// `delta` in `delta_unit` (`f`, `m`, `d`, `r`), chosen on the estimate or the reference.
+#[allow(clippy::too_many_arguments)]
+#[pyfunction]
+pub fn rpe_errors(
+    py: Python<'_>,
+    ref_xyz: &[u8],
+    ref_wxyz: &[u8],
+    est_xyz: &[u8],
+    est_wxyz: &[u8],
+    pose_relation: &str,
+    delta: f64,
+    delta_unit: &str,
+    rel_delta_tol: f64,
+    all_pairs: bool,
+    pairs_from_reference: bool,
+) -> PyResult<(Py<PyBytes>, Py<PyBytes>)> {
+    let delta_unit = match delta_unit {
+        "f" => DeltaUnit::Frames,
+        "m" => DeltaUnit::Meters,
+        "d" => DeltaUnit::Degrees,
+        "r" => DeltaUnit::Radians,
+        other => {
+            return Err(PyValueError::new_err(format!(
+                "unsupported delta unit: {other}"
+            )));
+        }
+    };
+    let options = RpeOptions {
+        pose_relation: relation(pose_relation)?,
+        delta,
+        delta_unit,
+        all_pairs,
+        rel_delta_tol,
+        pairs_from_reference,
+    };
+    let reference = poses(ref_xyz, ref_wxyz, "reference")?;
+    let estimate = poses(est_xyz, est_wxyz, "estimate")?;
+    let errors = py
+        .allow_threads(|| sitar_estimator::rpe(&reference, &estimate, &options))
+        .map_err(estimator_error)?;
+    let pairs: Vec<u8> = errors
+        .pairs
+        .iter()
+        .flat_map(|&(i, j)| [i as i64, j as i64])
+        .flat_map(i64::to_ne_bytes)
+        .collect();
+    Ok((
+        PyBytes::new(py, &bytes_of(&errors.errors)).unbind(),
+        PyBytes::new(py, &pairs).unbind(),
+    ))
+}
+
+/// The messages of `topic` in a ROS 1 bag (`.bag`) or a ROS 2 MCAP bag (an `.mcap` file or
+/// a bag directory holding one), as evo's `read_bag_trajectory` reads them: stamps (header,
+/// `sec + nanosec·1e-9`), positions, quaternions (w x y z) as float64 bytes, and the first
+/// message's `frame_id`. ROS 2 `.db3` bags need SQLite: the sitar command reads them.
+#[allow(clippy::type_complexity)]
+#[pyfunction]
+pub fn read_bag_topic(
+    py: Python<'_>,
+    path: PathBuf,
+    topic: &str,
+) -> PyResult<(Py<PyBytes>, Py<PyBytes>, Py<PyBytes>, String)> {
+    let (stamps, xyz, wxyz, frame_id) = py
+        .allow_threads(|| -> Result<_, String> {
+            let shown = path.display().to_string();
+            let wanted = |t: &str| t == topic;
+            let file = if path.is_dir() {
+                let mut found: Vec<PathBuf> = std::fs::read_dir(&path)
+                    .map_err(|e| format!("{shown}: {e}"))?
+                    .filter_map(|e| e.ok().map(|e| e.path()))
+                    .filter(|p| p.extension().is_some_and(|x| x == "mcap" || x == "db3"))
+                    .collect();
+                found.sort();
+                found
+                    .into_iter()
+                    .next()
+                    .ok_or_else(|| format!("{shown}: a bag directory without an .mcap file"))?
+            } else {
+                path.clone()
+            };
+            let name = file.to_string_lossy().into_owned();
+            let topics = if name.ends_with(".bag") {
+                sitar_estimator::read_ros1_bag_topics(&file, &wanted).map_err(|e| e.to_string())?
+            } else if name.ends_with(".mcap") {
+                let bytes = std::fs::read(&file).map_err(|e| format!("{name}: {e}"))?;
+                sitar_estimator::read_mcap_topics(&bytes, &wanted)
+                    .map_err(|e| format!("{name}: {e}"))?
+            } else {
+                return Err(format!(
+                    "{name}: sitar.evo reads ROS 1 .bag files and ROS 2 .mcap bags; for .db3 \
+                     bags use `sitar traj bag2 {shown} {topic} --save_as_tum`"
+                ));
+            };
+            let messages = topics
+                .get(topic)
+                .ok_or_else(|| format!("no messages for topic '{topic}' in bag"))?;
+            // The checks and their errors (type, no messages, bad values), then the poses as
+            // written: evo keeps the quaternions' norms, the trajectory normalises them.
+            let bag =
+                sitar_estimator::topic_trajectory(topic, messages).map_err(|e| e.to_string())?;
+            let kind = sitar_estimator::PoseMessage::from_type_name(&messages.type_name)
+                .expect("topic_trajectory accepted the type");
+            let unit = bag.trajectory.time_unit;
+            let (mut stamps, mut xyz, mut wxyz) = (Vec::new(), Vec::new(), Vec::new());
+            for data in &messages.messages {
+                let pose = sitar_estimator::decode_pose_as(kind, messages.encoding, data)
+                    .map_err(|e| format!("topic {topic}: {e}"))?;
+                stamps.push(unit.seconds(pose.stamp_ns));
+                xyz.extend(pose.position.to_array());
+                let q = pose.orientation;
+                wxyz.extend([q.w, q.x, q.y, q.z]);
+            }
+            Ok((stamps, xyz, wxyz, bag.frame_id))
+        })
+        .map_err(SitarError::new_err)?;
+    Ok((
+        PyBytes::new(py, &bytes_of(&stamps)).unbind(),
+        PyBytes::new(py, &bytes_of(&xyz)).unbind(),
+        PyBytes::new(py, &bytes_of(&wxyz)).unbind(),
+        frame_id,
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const RULE: &str = "TUM rule";
+
+    #[test]
+    fn matrices_read_as_evo_reads_them() {
+        let (v, rows, cols) = parse_matrix("# c\n1 2\n3 4.5\n", "f", ' ', 2, false, RULE).unwrap();
+        assert_eq!((v, rows, cols), (vec![1.0, 2.0, 3.0, 4.5], 2, 2));
+        let (v, ..) = parse_matrix("\u{feff}1,2,3\r\n", "f", ',', 2, true, RULE).unwrap();
+        assert_eq!(v, [1.0, 2.0, 3.0]);
+        assert_eq!(python_float(" 1_000.5 "), Some(1000.5));
+        assert_eq!(python_float("1__0"), None);
+    }
+
+    #[test]
+    fn bad_matrices_name_the_line_and_column() {
+        let e = parse_matrix("1 2\n3 x\n", "f.txt", ' ', 2, false, RULE).unwrap_err();
+        assert!(e.starts_with("f.txt:2:3: 'x'"), "{e}");
+        let e = parse_matrix("1 2 \n", "f.txt", ' ', 2, false, RULE).unwrap_err();
+        assert!(e.contains("f.txt:1:"), "{e}");
+        let e = parse_matrix("1 2\n1 2 3\n", "f.txt", ' ', 2, false, RULE).unwrap_err();
+        assert!(e.contains("f.txt:2: 3 entries"), "{e}");
+        let e = parse_matrix("# only\n", "f.txt", ' ', 2, false, RULE).unwrap_err();
+        assert!(e.contains("no rows") && e.ends_with(RULE), "{e}");
+    }
+}
