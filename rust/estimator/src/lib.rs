@@ -182,7 +182,7 @@
 //! `sitar calibrate`) maps a window's statistic, path length and rotation (each a moving
 //! mean over neighbouring windows) to its true error with a log-linear model, and gives an
 //! interval that holds the true error with a stated coverage on sequences it was not fitted
-//! on (cross-conformal by sequence). [`Calibration::apply`] turns an [`Estimate`] into the
+//! on (cross-conformal by sequence). [`ApplyCalibration::apply`] turns an [`Estimate`] into the
 //! calibrated one: `error_m` calibrated, [`WindowInterval`] with the raw value and the
 //! bounds, JSON keys `raw_m`, `lower_m`, `upper_m` and `calibration`. The model, the
 //! choices and the figures on real runs: the user guide (`docs/src/science/calibration.md`,
