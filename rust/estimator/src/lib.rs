@@ -179,13 +179,17 @@
 //!
 //! The estimate measures how runs differ, not the error against ground truth. A
 //! [`Calibration`] (made by [`fit_calibration`] on [`CalibrationSequence`]s with ground truth,
-//! `sitar calibrate`) maps a window's statistic, path length and rotation (each a moving
-//! mean over neighbouring windows) to its true error with a log-linear model, and gives an
-//! interval that holds the true error with a stated coverage on sequences it was not fitted
-//! on (cross-conformal by sequence). [`Calibration::apply`] turns an [`Estimate`] into the
-//! calibrated one: `error_m` calibrated, [`WindowInterval`] with the raw value and the
-//! bounds, JSON keys `raw_m`, `lower_m`, `upper_m` and `calibration`. The model, the
-//! choices and the figures on real EuRoC runs: the crate README.
+//! `sitar calibrate`; the file's types are `sitar_core::calibration`'s, so the phone reads
+//! it too) maps what the runs alone show for a window — each run's own motion (path,
+//! rotation, displacement, jitter) and, from two runs, their spread, each a moving mean over
+//! neighbouring windows — to its true error with log-linear models, one per target and run
+//! count, and gives an interval that holds the true error with a stated coverage on
+//! sequences it was not fitted on (cross-conformal by sequence).
+//! [`ApplyCalibration::apply`] turns a pairwise [`Estimate`] into the expected error;
+//! [`estimate_live`] gives the error of one live run, alone or with replays: `error_m`
+//! calibrated, [`WindowInterval`] with the raw value and the bounds, JSON keys `raw_m`,
+//! `lower_m`, `upper_m`, `calibration`, `target`, `runs` and `informative`. The model, the
+//! choices and the figures on three real systems: the crate README and the top README.
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
 
