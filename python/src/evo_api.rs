@@ -82,10 +82,10 @@ fn parse_matrix(
         Ok(())
     };
     // Small files in one block: threads cost more than they give there.
-    const BLOCK: usize = 4096;
+    const BLOCK: usize = 1024;
     let rest = &rows[1..];
     let out = &mut values[width..];
-    if rest.len() < 4 * BLOCK {
+    if rest.len() < 16 * BLOCK {
         block(rest, out)?;
     } else {
         let parsed: Vec<Result<(), String>> = rest
