@@ -2,7 +2,9 @@
 
 ``sitar.evo`` is evo's Python API (file_interface, trajectory, sync, metrics, plot) on
 the Rust library: change ``evo`` to ``sitar.evo`` in a script's imports.
-``sitar.estimate(trajectories, ...)`` is SiTAR's estimate of repeated runs (numpy arrays).
+``sitar.estimate(trajectories, ...)`` is SiTAR's estimate of a run's error without ground
+truth (numpy arrays); ``sitar.calibrate(sequences, ...)`` fits its calibration on runs with
+ground truth.
 
 ``sitar.ape(fmt, ref, est, **options)``, ``sitar.rpe(...)`` and ``sitar.drift(...)`` take
 evo's option names (``align=True``, ``correct_scale``, ``n_to_align``, ``pose_relation``,
