@@ -15,6 +15,7 @@ took the CPU from sitar.evo's scripts timed right after them in one process.
 import argparse
 import importlib
 import json
+import os
 import subprocess
 import statistics
 import sys
@@ -138,7 +139,11 @@ def main():
                               "--repeat", str(args.repeat)], check=True, capture_output=True, text=True)
         return json.loads(out.stdout)
 
+    load_before = os.getloadavg()
     evo, ours = timed("evo"), timed("sitar.evo")
+    load_after = os.getloadavg()
+    print(f"load average (1, 5, 15 min): {' '.join(f'{v:.2f}' for v in load_before)} before, "
+          f"{' '.join(f'{v:.2f}' for v in load_after)} after, on {os.cpu_count()} cores")
     print(f"imports: evo {evo['import']:.2f} s, sitar.evo {ours['import']:.2f} s (once per process, "
           f"not timed below)\n")
     print("| script | sequence (ground-truth poses) | evo (s) | sitar.evo (s) | speed-up | same rmse |")
