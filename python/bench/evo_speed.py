@@ -6,11 +6,17 @@ machine, one run. Prints a Markdown table (python/README.md quotes it).
 
 Needs evo and the sitar package installed (the wheel, or ``pip install ./python``). Each
 timing starts before reading the files and ends with the statistic in hand; the imports are
-done once before (their times are printed apart).
+done once before (their times are printed apart). Each library is timed in a process of its
+own (evo's, then sitar.evo's, one after the other), so neither runs beside the other's
+threads: numpy's OpenBLAS workers spin for a while after evo's SVDs, and on two cores they
+took the CPU from sitar.evo's scripts timed right after them in one process.
 """
 
 import argparse
 import importlib
+import json
+import os
+import subprocess
 import statistics
 import sys
 import time
@@ -96,31 +102,58 @@ def median_time(script, m, ref, est, repeat):
     return statistics.median(times), value
 
 
+def sequences_of(data):
+    return [("EuRoC MH_04", data / "euroc-vio" / "MH_04"),
+            ("KITTI 00", data / "kitti-orbslam2-stereo" / "00"),
+            ("TUM fr1_desk", data / "tum-orbslam2-rgbd" / "fr1_desk")]
+
+
+def worker(prefix, data, repeat):
+    """Times every script with one library; prints JSON: the import time and, per script
+    and sequence, the median time and the RMSE."""
+    m, imported = modules(prefix)
+    out = {"import": imported, "rows": []}
+    for title, script in SCRIPTS:
+        for name, seq in sequences_of(data):
+            ref, est = str(seq / "ground_truth.txt"), str(seq / "runs" / "run0.txt")
+            t, v = median_time(script, m, ref, est, repeat)
+            out["rows"].append([title, name, t, v])
+    print(json.dumps(out))
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=5)
     parser.add_argument("--data", type=Path, default=REPO.parent / "shared" / "data" / "real-runs")
+    parser.add_argument("--worker", help=argparse.SUPPRESS)
     args = parser.parse_args()
-    sequences = [("EuRoC MH_04", args.data / "euroc-vio" / "MH_04"),
-                 ("KITTI 00", args.data / "kitti-orbslam2-stereo" / "00"),
-                 ("TUM fr1_desk", args.data / "tum-orbslam2-rgbd" / "fr1_desk")]
+    if args.worker:
+        return worker(args.worker, args.data, args.repeat)
+    sequences = sequences_of(args.data)
     missing = [str(s) for _, s in sequences if not (s / "ground_truth.txt").is_file()]
     if missing:
         sys.exit(f"missing real runs: {', '.join(missing)}")
-    sitar_m, sitar_import = modules("sitar.evo")
-    evo_m, evo_import = modules("evo")
-    print(f"imports: evo {evo_import:.2f} s, sitar.evo {sitar_import:.2f} s (once, not timed below)\n")
+
+    def timed(prefix):
+        out = subprocess.run([sys.executable, __file__, "--worker", prefix, "--data", str(args.data),
+                              "--repeat", str(args.repeat)], check=True, capture_output=True, text=True)
+        return json.loads(out.stdout)
+
+    load_before = os.getloadavg()
+    evo, ours = timed("evo"), timed("sitar.evo")
+    load_after = os.getloadavg()
+    print(f"load average (1, 5, 15 min): {' '.join(f'{v:.2f}' for v in load_before)} before, "
+          f"{' '.join(f'{v:.2f}' for v in load_after)} after, on {os.cpu_count()} cores")
+    print(f"imports: evo {evo['import']:.2f} s, sitar.evo {ours['import']:.2f} s (once per process, "
+          f"not timed below)\n")
     print("| script | sequence (ground-truth poses) | evo (s) | sitar.evo (s) | speed-up | same rmse |")
     print("|---|---|---:|---:|---:|---|")
-    for title, script in SCRIPTS:
-        for name, seq in sequences:
-            ref, est = str(seq / "ground_truth.txt"), str(seq / "runs" / "run0.txt")
-            poses = sum(1 for l in open(ref) if not l.startswith("#"))
-            t_evo, v_evo = median_time(script, evo_m, ref, est, args.repeat)
-            t_sitar, v_sitar = median_time(script, sitar_m, ref, est, args.repeat)
-            same = "yes" if abs(v_evo - v_sitar) <= 1e-9 else f"NO ({v_evo} vs {v_sitar})"
-            print(f"| {title} | {name} ({poses}) | {t_evo:.3f} | {t_sitar:.4f} | "
-                  f"{t_evo / t_sitar:.0f}× | {same} |", flush=True)
+    poses = {name: sum(1 for l in open(seq / "ground_truth.txt") if not l.startswith("#"))
+             for name, seq in sequences}
+    for (title, name, t_evo, v_evo), (_, _, t_sitar, v_sitar) in zip(evo["rows"], ours["rows"]):
+        same = "yes" if abs(v_evo - v_sitar) <= 1e-9 else f"NO ({v_evo} vs {v_sitar})"
+        print(f"| {title} | {name} ({poses[name]}) | {t_evo:.3f} | {t_sitar:.4f} | "
+              f"{t_evo / t_sitar:.0f}× | {same} |", flush=True)
 
 
 if __name__ == "__main__":

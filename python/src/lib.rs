@@ -2,6 +2,7 @@
 //! on the sitar-evo library (options by evo's names, the JSON document back as text, which
 //! `sitar/__init__.py` turns into the dict), and `main`, the `sitar` command itself.
 
+mod calibrate;
 mod estimate;
 mod evo_api;
 mod options;
@@ -148,6 +149,7 @@ fn _sitar(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(evo_api::read_bag_topic, m)?)?;
     m.add_function(wrap_pyfunction!(evo_api::rpe_errors, m)?)?;
     m.add_function(wrap_pyfunction!(estimate::estimate, m)?)?;
+    m.add_function(wrap_pyfunction!(calibrate::calibrate, m)?)?;
     m.add("SitarError", m.py().get_type::<SitarError>())?;
     Ok(())
 }

@@ -106,6 +106,56 @@ def test_bad_files_raise_evo_s_exception_naming_the_line(tmp_path, content):
         assert f"{path}:2" in str(error.value)
 
 
+# Fields as Python's float() reads them: plain decimals (the fast path), 20+ digits, signs,
+# exponents, inf/nan, underscores, surrounding tabs; and fields it refuses.
+FIELDS = ["1403638158.1950969696", "1.403638128940097094e+09", "-0.011300000", "+1.5", ".5",
+          "-.5", "5.", "1e5", "1E-5", "1.e3", "0.1000000000000000055511151231257827",
+          "9007199254740993", "1e400", "-1e-400", "2.2250738585072011e-308", "inf", "-Infinity",
+          "nan", "1_000.5", "\t2.5", "00012"]
+BAD_FIELDS = ["1e", "1.5e+", "1..2", ".", "-", "+-1", "0x10", "1d5", "_1", "1_", "infinit",
+              "1,5", "e5"]
+
+
+def test_fields_read_as_python_float(tmp_path):
+    row = [1.0] * 8
+    for field in FIELDS:
+        for column in (0, 3, 7):
+            text = " ".join(field if i == column else "1" for i in range(8))
+            path = tmp_path / "f.txt"
+            path.write_text(f"1 2 3 4 5 6 7 8\n{text}\n")
+            mat = file_interface._matrix(str(path), " ", 8, False, "rule")
+            expected = float(field)
+            got = mat[1, column]
+            assert (np.isnan(got) and np.isnan(expected)) or got == expected, (field, got)
+            assert np.array_equal(mat[1, [i for i in range(8) if i != column]], row[:7])
+    for field in BAD_FIELDS:
+        with pytest.raises(ValueError):
+            float(field)
+        path = tmp_path / "bad.txt"
+        path.write_text(f"1 2 3 4 5 6 7 8\n1 2 {field} 4 5 6 7 8\n")
+        with pytest.raises(file_interface.FileInterfaceException, match=f"{path}:2:5: "):
+            file_interface.read_tum_trajectory_file(str(path))
+
+
+def test_associate_copies_and_leaves_its_inputs_alone(pairs):
+    # The last TUM pair: a real run when the data is there.
+    name, reader, ref, est = [p for p in pairs if p[1] == "read_tum_trajectory_file"][-1]
+    a = file_interface.read_tum_trajectory_file(str(ref))
+    b = file_interface.read_tum_trajectory_file(str(est))
+    a.meta["note"] = ["kept"]
+    before = (a.positions_xyz.copy(), a.timestamps.copy(), b.positions_xyz.copy())
+    r, e = sync.associate_trajectories(a, b)
+    assert np.array_equal(a.positions_xyz, before[0]) and np.array_equal(a.timestamps, before[1])
+    assert np.array_equal(b.positions_xyz, before[2])
+    assert r.meta == a.meta and r.meta is not a.meta and r.meta["note"] is not a.meta["note"]
+    r.positions_xyz[0, 0] += 1.0  # the copy's arrays are its own
+    assert np.array_equal(a.positions_xyz, before[0])
+    er, ee = evo_sync.associate_trajectories(evo_fi.read_tum_trajectory_file(str(ref)),
+                                             evo_fi.read_tum_trajectory_file(str(est)))
+    assert np.array_equal(r.timestamps, er.timestamps) and np.array_equal(e.timestamps, ee.timestamps)
+    assert np.array_equal(e.positions_xyz, ee.positions_xyz)
+
+
 def test_a_missing_file_is_evo_s_error(tmp_path):
     missing = str(tmp_path / "nope.txt")
     with pytest.raises(file_interface.FileInterfaceException) as ours:

@@ -59,8 +59,8 @@ pub struct WindowEstimate {
     pub pairs: usize,
     /// Population standard deviation of the pair values (how much the trials disagree).
     pub spread_m: f64,
-    /// Set by [`crate::ApplyCalibration::apply`]: the uncalibrated value and the interval;
-    /// `error_m` is then the calibrated value.
+    /// Set by [`crate::ApplyCalibration::apply`] and [`crate::estimate_live`]: the
+    /// uncalibrated value and the interval; `error_m` is then the calibrated value.
     pub interval: Option<WindowInterval>,
 }
 

@@ -259,6 +259,37 @@ pub struct MatchedWindows {
     pub upper: Vec<f64>,
 }
 
+impl MatchedWindows {
+    fn empty(setting: Setting, trials: usize) -> Self {
+        Self {
+            setting,
+            trials,
+            starts: Vec::new(),
+            truth: Vec::new(),
+            estimate: Vec::new(),
+            lower: Vec::new(),
+            upper: Vec::new(),
+        }
+    }
+
+    /// Adds every window of `estimate` whose start is within `tolerance` of a key of `truth`
+    /// (sorted `(start, error)`), with the truth of the nearest.
+    fn add(&mut self, estimate: &crate::Estimate, truth: &[(i64, f64)], tolerance: i64) {
+        let keys: Vec<i64> = truth.iter().map(|&(k, _)| k).collect();
+        for window in &estimate.windows {
+            if let Some(index) = nearest(&keys, window.start, tolerance) {
+                self.starts.push(truth[index].0);
+                self.truth.push(truth[index].1);
+                self.estimate.push(window.error_m);
+                if let Some(interval) = window.interval {
+                    self.lower.push(interval.lower_m);
+                    self.upper.push(interval.upper_m);
+                }
+            }
+        }
+    }
+}
+
 /// The protocol's matched windows for every trial count and setting of `opts` (counts
 /// outside 2..=|B| are skipped). Estimate windows are matched to the ground-truth window with
 /// the nearest start stamp within `t_max_diff_s`; unmatched windows are left out.
@@ -295,7 +326,6 @@ fn matched_windows_with(
     calibration: Option<&Calibration>,
 ) -> Result<(usize, Vec<MatchedWindows>), Error> {
     let truth = ground_truth_errors(ground_truth, trials_a, &opts.estimate)?;
-    let truth_keys: Vec<i64> = truth.iter().map(|&(k, _)| k).collect();
     let tolerance = seconds_to_ns(opts.estimate.t_max_diff_s);
     let mut out = Vec::new();
     for &count in &opts.trial_counts {
@@ -308,26 +338,8 @@ fn matched_windows_with(
             if let Some(calibration) = calibration {
                 calibration.apply(&mut estimate, &trials_b[..count], "")?;
             }
-            let mut matched = MatchedWindows {
-                setting,
-                trials: count,
-                starts: Vec::new(),
-                truth: Vec::new(),
-                estimate: Vec::new(),
-                lower: Vec::new(),
-                upper: Vec::new(),
-            };
-            for window in &estimate.windows {
-                if let Some(index) = nearest(&truth_keys, window.start, tolerance) {
-                    matched.starts.push(truth[index].0);
-                    matched.truth.push(truth[index].1);
-                    matched.estimate.push(window.error_m);
-                    if let Some(interval) = window.interval {
-                        matched.lower.push(interval.lower_m);
-                        matched.upper.push(interval.upper_m);
-                    }
-                }
-            }
+            let mut matched = MatchedWindows::empty(setting, count);
+            matched.add(&estimate, &truth, tolerance);
             if matched.estimate.is_empty() {
                 return Err(Error::NoPairs(
                     "no estimate window matches a ground-truth window".into(),
@@ -390,28 +402,9 @@ pub fn own_error_matched_windows(
                     Ok((r, estimate))
                 })
                 .collect::<Result<Vec<_>, Error>>()?;
-            let mut matched = MatchedWindows {
-                setting,
-                trials: count,
-                starts: Vec::new(),
-                truth: Vec::new(),
-                estimate: Vec::new(),
-                lower: Vec::new(),
-                upper: Vec::new(),
-            };
+            let mut matched = MatchedWindows::empty(setting, count);
             for (r, estimate) in per_run {
-                let keys: Vec<i64> = own[r].iter().map(|&(k, _)| k).collect();
-                for window in &estimate.windows {
-                    if let Some(index) = nearest(&keys, window.start, tolerance) {
-                        matched.starts.push(own[r][index].0);
-                        matched.truth.push(own[r][index].1);
-                        matched.estimate.push(window.error_m);
-                        if let Some(interval) = window.interval {
-                            matched.lower.push(interval.lower_m);
-                            matched.upper.push(interval.upper_m);
-                        }
-                    }
-                }
+                matched.add(&estimate, &own[r], tolerance);
             }
             if matched.estimate.is_empty() {
                 return Err(Error::NoPairs(

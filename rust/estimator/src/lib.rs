@@ -162,7 +162,7 @@
 //!   [`IncrementalEstimate::memory_bytes`] reports all of it (capacities).
 //! * *Measured* (`cargo bench -p sitar-estimator --bench incremental`, 100 trials × 2820
 //!   poses, every third dropping frames, push + estimate after each trial from the 2nd on):
-//!   the figures are in the user guide (`docs/src/measurements/estimator.md`); the incremental path costs about 4× one one-shot
+//!   see the crate README for the figures; the incremental path costs about 4× one one-shot
 //!   estimate in CPU (the one-shot never stores its 14 M values: it computes them block by
 //!   block in cache), against 33× for recomputing everything after each trial.
 //!
@@ -179,14 +179,18 @@
 //!
 //! The estimate measures how runs differ, not the error against ground truth. A
 //! [`Calibration`] (made by [`fit_calibration`] on [`CalibrationSequence`]s with ground truth,
-//! `sitar calibrate`) maps a window's statistic, path length and rotation (each a moving
-//! mean over neighbouring windows) to its true error with a log-linear model, and gives an
-//! interval that holds the true error with a stated coverage on sequences it was not fitted
-//! on (cross-conformal by sequence). [`ApplyCalibration::apply`] turns an [`Estimate`] into the
-//! calibrated one: `error_m` calibrated, [`WindowInterval`] with the raw value and the
-//! bounds, JSON keys `raw_m`, `lower_m`, `upper_m` and `calibration`. The model, the
-//! choices and the figures on real runs: the user guide (`docs/src/science/calibration.md`,
-//! `docs/src/science/real-runs.md`).
+//! `sitar calibrate`; the file's types are `sitar_core::calibration`'s, so the phone reads
+//! it too) maps what the runs alone show for a window — each run's own motion (path,
+//! rotation, displacement, jitter) and, from two runs, their spread, each a moving mean over
+//! neighbouring windows — to its true error with log-linear models, one per target and run
+//! count, and gives an interval that holds the true error with a stated coverage on
+//! sequences it was not fitted on (cross-conformal by sequence).
+//! [`ApplyCalibration::apply`] turns a pairwise [`Estimate`] into the expected error;
+//! [`estimate_live`] gives the error of one live run, alone or with replays: `error_m`
+//! calibrated, [`WindowInterval`] with the raw value and the bounds, JSON keys `raw_m`,
+//! `lower_m`, `upper_m`, `calibration`, `target`, `runs` and `informative`. The model, the
+//! choices and the figures on three real systems: the user guide
+//! (`docs/src/science/calibration.md`, `docs/src/science/real-runs.md`).
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
 

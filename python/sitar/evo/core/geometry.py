@@ -21,12 +21,15 @@ def umeyama_alignment(x: np.ndarray, y: np.ndarray, with_scale: bool = False) ->
     if x.shape != y.shape:
         raise GeometryException("data matrices must have the same shape")
     m, n = x.shape
+    # einsum, not np.linalg.norm or a matrix product: those call numpy's BLAS, which starts
+    # its threads for 3×n operands, and they spin on after it, taking the cores from what
+    # follows (KITTI 00's APE script: 3.0 ms with one BLAS thread, 8.0 ms with two).
     mean_x = x.mean(axis=1)
     mean_y = y.mean(axis=1)
     centred_x = x - mean_x[:, np.newaxis]
     centred_y = y - mean_y[:, np.newaxis]
-    variance_x = np.linalg.norm(centred_x) ** 2 / n
-    covariance = centred_y @ centred_x.T / n
+    variance_x = np.einsum("ij,ij->", centred_x, centred_x) / n
+    covariance = np.einsum("ij,kj->ik", centred_y, centred_x) / n
     u, d, vt = np.linalg.svd(covariance)
     if np.count_nonzero(d > np.finfo(d.dtype).eps) < m - 1:
         raise GeometryException("Degenerate covariance rank, Umeyama alignment is not possible")

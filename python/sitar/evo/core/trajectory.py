@@ -205,7 +205,8 @@ class PosePath3D:
         if np.any(unsure):
             poses = lie.poses_from(self.positions_xyz[unsure], q[unsure])
             product[unsure] = lie.quaternions_from_matrices(t @ poses)
-        xyz = self.positions_xyz @ t[:3, :3].T + t[:3, 3]
+        # einsum: no BLAS threads for an n×3 by 3×3 product (see geometry.umeyama_alignment).
+        xyz = np.einsum("ij,kj->ik", self.positions_xyz, t[:3, :3]) + t[:3, 3]
         self._xyz, self._quat, self._poses = xyz, product, None
         self._derived = {}
 

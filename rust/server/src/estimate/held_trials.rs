@@ -13,7 +13,7 @@
 //!
 //! A calibrated session's estimate is calibrated here, over the same trials in playback
 //! order (the calibration looks at the motion of the first trials that have each window):
-//! exactly what `Calibration::apply` gives on the one-shot estimate. The incremental state
+//! exactly what `ApplyCalibration::apply` gives on the one-shot estimate. The incremental state
 //! holds its trials in the order they arrived; when that is not playback order (parallel
 //! phones), the trials are copied into playback order for the calibration's look, and the
 //! copy freed at once.
