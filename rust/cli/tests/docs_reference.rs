@@ -470,11 +470,80 @@ fn c_abi_pages() -> (String, String) {
     (page, types)
 }
 
+/// Every `.rs` file under `dir`, sorted.
+fn rust_files(dir: &Path) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for entry in std::fs::read_dir(&d).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                stack.push(path);
+            } else if path.extension().is_some_and(|e| e == "rs") {
+                out.push(path);
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+/// The CSV tables' headers, from the `pub const …_HEADER: &str` of the crates' sources.
+fn csv_page() -> String {
+    let mut page = format!(
+        "{HEADER}# CSV headers\n\nThe header line of every CSV table the crates write and \
+         check (each `pub const …_HEADER` with a comma in it), with its documentation. \
+         Other formats: [File formats](formats.md).\n\n"
+    );
+    let root = repo();
+    let mut found = 0;
+    for crate_dir in [
+        "core",
+        "estimator",
+        "scene",
+        "client",
+        "server",
+        "evo",
+        "cli",
+        "sim",
+    ] {
+        for file in rust_files(&root.join("rust").join(crate_dir).join("src")) {
+            let text = std::fs::read_to_string(&file).unwrap();
+            let lines: Vec<&str> = text.lines().collect();
+            for (i, l) in lines.iter().enumerate() {
+                let Some(rest) = l.strip_prefix("pub const ") else {
+                    continue;
+                };
+                let Some((name, value)) = rest.split_once(": &str = \"") else {
+                    continue;
+                };
+                let value = value.trim_end_matches("\";");
+                if !name.ends_with("_HEADER") || !value.contains(',') {
+                    continue;
+                }
+                found += 1;
+                let rel = file.strip_prefix(&root).unwrap().display().to_string();
+                page.push_str(&format!(
+                    "## `{name}`\n\n`{rel}`: {}\n\n```text\n{value}\n```\n\n| # | column |\n|---|---|\n",
+                    cell(&doc_above(&lines, i))
+                ));
+                for (k, column) in value.split(',').enumerate() {
+                    page.push_str(&format!("| {k} | `{column}` |\n"));
+                }
+                page.push('\n');
+            }
+        }
+    }
+    assert!(found >= 2, "found {found} CSV headers");
+    page
+}
+
 fn generate() -> (BTreeMap<String, String>, Vec<String>) {
     let mut pages = BTreeMap::new();
     let summary = cli_pages(&mut pages);
     pages.insert("reference/http.md".into(), http_page());
     pages.insert("reference/config.md".into(), config_page());
+    pages.insert("reference/csv.md".into(), csv_page());
     let (abi, types) = c_abi_pages();
     pages.insert("reference/c-abi.md".into(), abi);
     pages.insert("reference/c-abi-types.md".into(), types);
@@ -582,6 +651,8 @@ fn the_generators_see_what_they_document() {
     );
     let abi = &pages["reference/c-abi.md"];
     assert!(abi.contains("### `sitar_session_frame`") && abi.contains("SITAR_ERR_PANIC"));
+    let csv = &pages["reference/csv.md"];
+    assert!(csv.contains("## `EVIDENCE_HEADER`") && csv.contains("| 0 | `t_ns` |"));
     let config = &pages["reference/config.md"];
     assert!(config.contains("| `subtrajectory_frames` |") && config.contains("| `classify_by` |"));
 }
