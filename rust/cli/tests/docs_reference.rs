@@ -1,7 +1,8 @@
 //! The guide's reference pages (docs/src/reference/) are generated from the code: every
 //! command's `--help` (clap), the HTTP routes (the router's table, each handler's doc, the
-//! body limits, the error codes), the C ABI (`rust/ffi/include/sitar.h`) and the
-//! configuration keys (`SessionConfig`, `ServerConfig`). This test fails when a committed
+//! body limits, the error codes), the C ABI (`rust/ffi/include/sitar.h`), the
+//! configuration keys (`SessionConfig`, `ServerConfig`), the CSV headers and the JSON files'
+//! keys (the calibration file, results, estimates). This test fails when a committed
 //! page differs from what the code gives; `SITAR_REGENERATE=1 cargo test -p sitar-cli --test
 //! docs_reference` rewrites them (and the commands' entries of docs/src/SUMMARY.md).
 
@@ -538,12 +539,58 @@ fn csv_page() -> String {
     page
 }
 
+/// The JSON files' keys, from the structs that read and write them.
+fn json_page() -> String {
+    let core = "rust/core/src/calibration";
+    format!(
+        "{HEADER}# JSON files\n\nThe keys of the JSON documents the crates read and write, \
+         from the structs that (de)serialize them. Other formats: [File formats](formats.md), \
+         [CSV headers](csv.md).\n\n\
+         ## The calibration file (`sitar calibrate -o FILE`, version 2)\n\n\
+         Read by `sitar estimate|evaluate --calibration`, `sitar serve --calibration NAME=FILE` \
+         and the phone (`sitar_session_set_calibration`); version 1 is read as its one model. \
+         Unknown keys are refused, naming them.\n\n### `Calibration`\n\n{}\n\
+         ### `fitted_on`\n\n{}\n### `fitted_on.sequences[]`\n\n{}\n\
+         ### `models[]`\n\n{}\n### `models[].interval`\n\n{}\n\
+         ### `models[].scores`\n\n{}\n### `models[].scores.sequences[]`\n\n{}\n\
+         ### `models[].scores.candidates[]`\n\n{}\n### Scores (`raw`, `calibrated`, …)\n\n{}\n\
+         ## Results as the phone reads them (`results.json`)\n\n\
+         The keys `Results::parse_json` takes (`rust/core/src/results.rs`); windows carry \
+         `start`, `end`, the error under the key of its unit (`error_m` or `error_deg`), `pairs`, \
+         and in calibrated results `raw_…`, `lower_…`, `upper_…`.\n\n{}\n\
+         ## An estimate (`sitar estimate --format json`, the backend's `results.json`)\n\n{}\n",
+        struct_fields(&format!("{core}/file.rs"), "Calibration"),
+        struct_fields(&format!("{core}/file.rs"), "FittedOn"),
+        struct_fields(&format!("{core}/file.rs"), "FittedSequence"),
+        struct_fields(&format!("{core}/model.rs"), "CalibrationModel"),
+        struct_fields(&format!("{core}/model.rs"), "IntervalModel"),
+        struct_fields(&format!("{core}/scores.rs"), "ModelScores"),
+        struct_fields(&format!("{core}/scores.rs"), "HeldOutScores"),
+        struct_fields(&format!("{core}/scores.rs"), "CandidateScores"),
+        struct_fields(&format!("{core}/scores.rs"), "AgreementScores"),
+        struct_fields("rust/core/src/results.rs", "Results"),
+        estimate_json_doc(),
+    )
+}
+
+/// The documentation of `Estimate::to_json`, which names every key it writes.
+fn estimate_json_doc() -> String {
+    let text = read("rust/estimator/src/estimate.rs");
+    let lines: Vec<&str> = text.lines().collect();
+    let at = lines
+        .iter()
+        .position(|l| l.trim_start().starts_with("pub fn to_json("))
+        .expect("rust/estimator/src/estimate.rs: no to_json");
+    doc_above(&lines, at)
+}
+
 fn generate() -> (BTreeMap<String, String>, Vec<String>) {
     let mut pages = BTreeMap::new();
     let summary = cli_pages(&mut pages);
     pages.insert("reference/http.md".into(), http_page());
     pages.insert("reference/config.md".into(), config_page());
     pages.insert("reference/csv.md".into(), csv_page());
+    pages.insert("reference/json.md".into(), json_page());
     let (abi, types) = c_abi_pages();
     pages.insert("reference/c-abi.md".into(), abi);
     pages.insert("reference/c-abi-types.md".into(), types);
