@@ -15,7 +15,7 @@ import numpy as np
 
 from sitar.evo import EvoException
 from sitar.evo._missing import missing
-from sitar.evo.core import geometry
+from sitar.evo.core import _association, geometry
 from sitar.evo.core import lie_algebra as lie
 from sitar.evo.core.sync_method import SyncMethod
 
@@ -455,9 +455,9 @@ class PoseTrajectory3D(PosePath3D):
         offset_2: float = 0.0,
     ) -> typing.Tuple["PoseTrajectory3D", "PoseTrajectory3D"]:
         """``sync.associate_trajectories(self, other, ...)``."""
-        from sitar.evo.core import sync
-
-        return sync.associate_trajectories(
+        if not isinstance(other, PoseTrajectory3D):
+            raise _association.SyncException("trajectories must be PoseTrajectory3D objects")
+        return _association.associate(
             self, other, sync_method=sync_method, max_diff=max_diff, offset_2=offset_2
         )
 
