@@ -73,6 +73,32 @@ pub struct Results {
     pub informative: Option<bool>,
 }
 
+/// The optional count under `key` of a results document: absent or `null` is `None`,
+/// otherwise an integer from `min` up that fits in `u32` (`expected` says what in the error).
+fn optional_count(
+    obj: &serde_json::Map<String, Value>,
+    key: &'static str,
+    min: u32,
+    expected: &str,
+) -> Result<Option<u32>, Error> {
+    match obj.get(key) {
+        None | Some(Value::Null) => Ok(None),
+        Some(v) => v
+            .as_u64()
+            .and_then(|n| u32::try_from(n).ok())
+            .filter(|&n| n >= min)
+            .map(Some)
+            .ok_or_else(|| {
+                Error::parse(
+                    "results.json",
+                    0,
+                    key,
+                    format!("expected {expected}, found {v}"),
+                )
+            }),
+    }
+}
+
 /// What results say of where they come from: `target`, `source`, `runs`, `informative`,
 /// each optional.
 struct Provenance {
@@ -100,22 +126,7 @@ impl Provenance {
                 )),
             }
         };
-        let runs = match obj.get("runs") {
-            None | Some(Value::Null) => None,
-            Some(v) => Some(
-                v.as_u64()
-                    .and_then(|n| u32::try_from(n).ok())
-                    .filter(|&n| n > 0)
-                    .ok_or_else(|| {
-                        Error::parse(
-                            SRC,
-                            0,
-                            "runs",
-                            format!("expected a count of runs, found {v}"),
-                        )
-                    })?,
-            ),
-        };
+        let runs = optional_count(obj, "runs", 1, "a count of runs")?;
         let informative = match obj.get("informative") {
             None | Some(Value::Null) => None,
             Some(Value::Bool(b)) => Some(*b),
@@ -361,29 +372,8 @@ impl Results {
                 ));
             }
         };
-        let trials =
-            match obj.get("trials") {
-                None | Some(Value::Null) => None,
-                Some(v) => Some(v.as_u64().and_then(|t| u32::try_from(t).ok()).ok_or_else(
-                    || Error::parse(SRC, 0, "trials", format!("expected a count, found {v}")),
-                )?),
-            };
-        let window_frames = match obj.get("window_frames") {
-            None | Some(Value::Null) => None,
-            Some(v) => Some(
-                v.as_u64()
-                    .and_then(|n| u32::try_from(n).ok())
-                    .filter(|&n| n > 0)
-                    .ok_or_else(|| {
-                        Error::parse(
-                            SRC,
-                            0,
-                            "window_frames",
-                            format!("expected a positive frame count, found {v}"),
-                        )
-                    })?,
-            ),
-        };
+        let trials = optional_count(obj, "trials", 0, "a count")?;
+        let window_frames = optional_count(obj, "window_frames", 1, "a positive frame count")?;
         let calibration = match obj.get("calibration") {
             None | Some(Value::Null) => None,
             Some(Value::String(s)) => Some(s.clone()),
