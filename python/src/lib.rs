@@ -5,6 +5,8 @@
 mod calibrate;
 mod estimate;
 mod evo_api;
+mod matrix;
+mod matrix_rows;
 mod options;
 
 use std::path::{Path, PathBuf};
@@ -143,8 +145,11 @@ fn _sitar(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(ape, m)?)?;
     m.add_function(wrap_pyfunction!(rpe, m)?)?;
     m.add_function(wrap_pyfunction!(drift, m)?)?;
-    m.add_function(wrap_pyfunction!(evo_api::read_matrix, m)?)?;
-    m.add_function(wrap_pyfunction!(evo_api::parse_matrix_text, m)?)?;
+    m.add_function(wrap_pyfunction!(matrix::read_matrix, m)?)?;
+    m.add_function(wrap_pyfunction!(matrix::parse_matrix_text, m)?)?;
+    m.add_function(wrap_pyfunction!(matrix_rows::read_matrix_rows, m)?)?;
+    m.add_function(wrap_pyfunction!(matrix_rows::matrix_rows_of_text, m)?)?;
+    m.add_class::<matrix_rows::MatrixRows>()?;
     m.add_function(wrap_pyfunction!(evo_api::ape_errors, m)?)?;
     m.add_function(wrap_pyfunction!(evo_api::read_bag_topic, m)?)?;
     m.add_function(wrap_pyfunction!(evo_api::rpe_errors, m)?)?;
