@@ -133,8 +133,10 @@ def test_fields_read_as_python_float(tmp_path):
             float(field)
         path = tmp_path / "bad.txt"
         path.write_text(f"1 2 3 4 5 6 7 8\n1 2 {field} 4 5 6 7 8\n")
+        # Reported on reading, or (number characters only, as "1..2") when the poses are
+        # first used: see test_poses_are_parsed_when_first_used.
         with pytest.raises(file_interface.FileInterfaceException, match=f"{path}:2:5: "):
-            file_interface.read_tum_trajectory_file(str(path))
+            file_interface.read_tum_trajectory_file(str(path)).positions_xyz
 
 
 def test_associate_copies_and_leaves_its_inputs_alone(pairs):

@@ -65,16 +65,27 @@ def _matching(
     return np.nonzero(keep)[0], best[keep]
 
 
-# The attributes of a PoseTrajectory3D built from positions and quaternions (as the readers
-# make them): such a one is reduced without deep-copying the poses it drops.
-_PLAIN = {"_xyz", "_quat", "_poses", "_derived", "meta", "name", "_projected", "timestamps"}
+# The attributes of a PoseTrajectory3D built from positions and quaternions, or from a
+# file's rows (as the readers make them, see tools/_rows.py): such a one is reduced without
+# deep-copying the poses it drops.
+_PLAIN = {"_poses", "_derived", "meta", "name", "_projected", "timestamps"}
+_POSES = {"_xyz", "_quat", "_rows"}
+
+
+def _plain(traj) -> bool:
+    held = set(vars(traj))
+    return (
+        getattr(traj, "_poses", 0) is None
+        and held - _POSES == _PLAIN
+        and ("_rows" in held or {"_xyz", "_quat"} <= held)
+    )
 
 
 def _reduced_copy(traj, ids: np.ndarray):
-    """``copy.deepcopy(traj)`` reduced to ``ids``: for a plain trajectory of arrays, the
-    kept rows copied by indexing (new arrays) and ``meta`` deep-copied; anything else as
-    evo does it."""
-    if getattr(traj, "_poses", 0) is None and set(vars(traj)) == _PLAIN:
+    """``copy.deepcopy(traj)`` reduced to ``ids``: for a plain trajectory of arrays or
+    rows, the kept rows copied by indexing (new arrays) and ``meta`` deep-copied; anything
+    else as evo does it."""
+    if _plain(traj):
         out = copy.copy(traj)
         out.meta = copy.deepcopy(traj.meta)
         out.reduce_to_ids(ids)

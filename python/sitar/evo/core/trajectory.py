@@ -64,6 +64,48 @@ class PosePath3D:
         self.name = name
         self._projected = False
 
+    @classmethod
+    def _from_rows(cls, rows, name: typing.Optional[str] = None, **attributes):
+        """A path whose positions and quaternions are a file's rows, parsed when first
+        used (see ``tools/_rows.py``); ``attributes`` set as given (``timestamps``)."""
+        path = cls.__new__(cls)
+        path.__dict__.update(
+            _rows=rows, _poses=None, _derived={}, meta={}, name=name, _projected=False
+        )
+        path.__dict__.update(attributes)
+        return path
+
+    def __getattr__(self, name: str):
+        # Only for attributes not set: the positions and quaternions of a path still held
+        # as a file's rows, parsed now (both at once, for the rows kept).
+        rows = self.__dict__.get("_rows") if name in ("_xyz", "_quat") else None
+        if rows is None:
+            raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+        xyz, quat = rows.values()
+        self.__dict__.setdefault("_xyz", xyz)
+        self.__dict__.setdefault("_quat", quat)
+        del self.__dict__["_rows"]
+        return self.__dict__[name]
+
+    def __copy__(self):
+        out = object.__new__(type(self))
+        out.__dict__.update(self.__dict__)
+        return out
+
+    def __deepcopy__(self, memo: dict):
+        out = object.__new__(type(self))
+        memo[id(self)] = out
+        for key, value in self.__dict__.items():
+            # A file's rows are never changed (narrowing makes new ones): shared.
+            out.__dict__[key] = value if key == "_rows" else copy.deepcopy(value, memo)
+        return out
+
+    def __getstate__(self) -> dict:
+        # Pickled with its values: a file's rows are parsed first.
+        if "_rows" in self.__dict__:
+            self._xyz
+        return self.__dict__
+
     # --- representations -----------------------------------------------------------------
 
     def _stacked(self) -> np.ndarray:
@@ -73,6 +115,7 @@ class PosePath3D:
         return lie.poses_from(self._xyz, self._quat)
 
     def _set_poses(self, stacked: np.ndarray) -> None:
+        self.__dict__.pop("_rows", None)
         self._poses = list(stacked)
         self._xyz = None
         self._quat = None
@@ -110,9 +153,11 @@ class PosePath3D:
     def num_poses(self) -> int:
         if self._poses is not None:
             return len(self._poses)
-        if self._xyz is not None:
-            return self._xyz.shape[0]
-        return 0
+        xyz = self.__dict__.get("_xyz")
+        if xyz is not None:
+            return xyz.shape[0]
+        rows = self.__dict__.get("_rows")
+        return 0 if rows is None else len(rows)
 
     @property
     def distances(self) -> np.ndarray:
@@ -281,9 +326,12 @@ class PosePath3D:
 
     def reduce_to_ids(self, ids: typing.Union[typing.Sequence[int], np.ndarray]) -> None:
         """Keeps the poses at ``ids`` (indices or a boolean mask, as numpy indexing)."""
-        if self._xyz is not None:
+        held = self.__dict__
+        if "_rows" in held:
+            self._rows = self._rows.reduced(ids)
+        if held.get("_xyz") is not None:
             self._xyz = self._xyz[ids]
-        if self._quat is not None:
+        if held.get("_quat") is not None:
             self._quat = self._quat[ids]
         if self._poses is not None:
             self._poses = [self._poses[i] for i in ids]

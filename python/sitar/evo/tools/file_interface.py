@@ -4,7 +4,9 @@ Rust), and trajectories from ROS bags.
 Files are read by evo's rules: ``#`` lines skipped, fields split at each delimiter, every
 field a float; values are kept as written (quaternions too; evo normalises them only when
 it builds ``poses_se3``). Errors are FileInterfaceException with evo's message, prefixed by
-the file, line and column of the first bad field.
+the file, line and column of the first bad field. TUM and EuRoC poses are parsed when first
+used, for the rows still kept then (``_rows.py``); their stamps and every row's shape are
+checked on reading, as evo checks them.
 """
 
 import io
@@ -18,6 +20,7 @@ import numpy as np
 from sitar import _sitar
 from sitar.evo import EvoException
 from sitar.evo._missing import missing
+from sitar.evo.tools._rows import FileRows
 from sitar.evo.core.trajectory import PosePath3D, PoseTrajectory3D
 
 logger = logging.getLogger(__name__)
@@ -52,31 +55,57 @@ def name_from_file(file_path: PathStrHandle) -> typing.Optional[str]:
     return str(file_path)
 
 
-def _matrix(file_path: PathStrHandle, delimiter: str, columns: int, at_least: bool, rule: str):
+def _source(file_path: PathStrHandle, from_text, from_path):
+    """``from_text(text, source)`` on a handle's content, or ``from_path(path)``; errors as
+    FileInterfaceException."""
     if hasattr(file_path, "read"):
         text = file_path.read()
         if isinstance(text, bytes):
             text = text.decode("utf-8")
-        source = name_from_file(file_path) or "<stream>"
-        call = lambda: _sitar.parse_matrix_text(text, source, delimiter, columns, at_least, rule)
+        call = lambda: from_text(text, name_from_file(file_path) or "<stream>")
     elif isinstance(file_path, (str, Path)):
         if not os.path.isfile(file_path):
             raise FileInterfaceException("csv file " + str(file_path) + " does not exist")
-        call = lambda: _sitar.read_matrix(os.fspath(file_path), delimiter, columns, at_least, rule)
+        call = lambda: from_path(os.fspath(file_path))
     else:
         raise FileInterfaceException(f"not a path or file handle: {file_path!r}")
     try:
-        data, rows, cols = call()
+        return call()
     except ValueError as error:
         raise FileInterfaceException(str(error)) from None
+
+
+def _matrix(file_path: PathStrHandle, delimiter: str, columns: int, at_least: bool, rule: str):
+    """Every field of a matrix file, parsed now: an n×columns float64 array."""
+    data, rows, cols = _source(
+        file_path,
+        lambda text, source: _sitar.parse_matrix_text(
+            text, source, delimiter, columns, at_least, rule
+        ),
+        lambda path: _sitar.read_matrix(path, delimiter, columns, at_least, rule),
+    )
     return np.frombuffer(data, dtype=np.float64).reshape(rows, cols)
+
+
+def _rows(file_path: PathStrHandle, delimiter: str, columns: int, at_least: bool, rule: str,
+          xyz: typing.Sequence[int], quat: typing.Sequence[int]):
+    """A matrix file's stamps (the first column, parsed now) and its poses as FileRows
+    (parsed when first used)."""
+    matrix, stamps = _source(
+        file_path,
+        lambda text, source: _sitar.matrix_rows_of_text(
+            text, source, delimiter, columns, at_least, rule
+        ),
+        lambda path: _sitar.read_matrix_rows(path, delimiter, columns, at_least, rule),
+    )
+    rows = FileRows(matrix, xyz, quat, FileInterfaceException)
+    return np.frombuffer(stamps, dtype=np.float64), rows
 
 
 def read_tum_trajectory_file(file_path: PathStrHandle) -> PoseTrajectory3D:
     """A TUM file (``timestamp tx ty tz qx qy qz qw``) as a PoseTrajectory3D."""
-    mat = _matrix(file_path, " ", 8, False, _TUM_RULE)
-    quat = mat[:, [7, 4, 5, 6]]  # w first
-    return PoseTrajectory3D(mat[:, 1:4], quat, mat[:, 0], name=name_from_file(file_path))
+    stamps, rows = _rows(file_path, " ", 8, False, _TUM_RULE, [1, 2, 3], [7, 4, 5, 6])
+    return PoseTrajectory3D._from_rows(rows, name_from_file(file_path), timestamps=stamps)
 
 
 def write_tum_trajectory_file(
@@ -124,9 +153,9 @@ def write_kitti_poses_file(
 def read_euroc_csv_trajectory(file_path: PathStrHandle) -> PoseTrajectory3D:
     """A EuRoC ground-truth CSV (``ns, px, py, pz, qw, qx, qy, qz, ...``) as a
     PoseTrajectory3D, stamps ``float(ns) / 1e9``."""
-    mat = _matrix(file_path, ",", 8, True, _EUROC_RULE)
-    stamps = np.divide(mat[:, 0], 1e9)
-    return PoseTrajectory3D(mat[:, 1:4], mat[:, 4:8], stamps, name=name_from_file(file_path))
+    stamps, rows = _rows(file_path, ",", 8, True, _EUROC_RULE, [1, 2, 3], [4, 5, 6, 7])
+    stamps = np.divide(stamps, 1e9)
+    return PoseTrajectory3D._from_rows(rows, name_from_file(file_path), timestamps=stamps)
 
 
 def read_bag_trajectory(reader, topic: str, cache_tf_tree: bool = False,
