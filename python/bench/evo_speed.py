@@ -6,7 +6,9 @@ machine, one run. Prints a Markdown table (python/README.md quotes it).
 
 Needs evo and the sitar package installed (the wheel, or ``pip install ./python``). Each
 timing starts before reading the files and ends with the statistic in hand; the imports are
-done once before (their times are printed apart). Each library is timed in a process of its
+done once before (their times are printed apart), and each script runs once untimed
+before its 5 timed runs, with either library (a process's first run also starts thread pools
+and imports what the libraries import lazily). Each library is timed in a process of its
 own (evo's, then sitar.evo's, one after the other), so neither runs beside the other's
 threads: numpy's OpenBLAS workers spin for a while after evo's SVDs, and on two cores they
 took the CPU from sitar.evo's scripts timed right after them in one process.
@@ -95,6 +97,7 @@ def median_time(script, m, ref, est, repeat):
     if script is None:  # the metric alone, on trajectories read before
         key = rpe_meters_all_pairs_metric_only(m, ref, est)
         script = lambda m, ref, est: _metric_only(m, key)  # noqa: E731
+    script(m, ref, est)  # untimed: one-time costs of a process (thread pools, lazy imports)
     for _ in range(repeat):
         started = time.perf_counter()
         value = script(m, ref, est)
