@@ -158,3 +158,22 @@ def test_what_evo_refuses_on_reading_is_refused_on_reading(tmp_path, row, messag
         evo_fi.read_tum_trajectory_file(str(path))
     with pytest.raises(file_interface.FileInterfaceException, match=f"{path}{message}"):
         file_interface.read_tum_trajectory_file(str(path))
+
+
+def test_fields_read_as_python_float_when_parsed_late(tmp_path):
+    from test_evo_api import BAD_FIELDS, FIELDS
+
+    path = tmp_path / "f.txt"
+    for field in FIELDS:
+        expected = float(field)
+        for column in (0, 2, 7):
+            row = " ".join(field if i == column else "1" for i in range(8))
+            path.write_text(f"0.5 2 3 4 5 6 7 8\n{row}\n")
+            traj = file_interface.read_tum_trajectory_file(str(path))
+            got = {0: traj.timestamps, 2: traj.positions_xyz[:, 1],
+                   7: traj.orientations_quat_wxyz[:, 0]}[column][1]
+            assert (np.isnan(got) and np.isnan(expected)) or got == expected, (field, got)
+    for field in BAD_FIELDS:
+        path.write_text(f"0.5 2 3 4 5 6 7 8\n1 2 {field} 4 5 6 7 8\n")
+        with pytest.raises(file_interface.FileInterfaceException, match=f"{path}:2:5: "):
+            file_interface.read_tum_trajectory_file(str(path)).orientations_quat_wxyz
