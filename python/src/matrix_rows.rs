@@ -288,13 +288,14 @@ impl MatrixRows {
         let line = &text[row.start as usize..row.end as usize];
         let (delimiters, plain) = scan(line, self.delimiter);
         let edges = line.first() == Some(&self.delimiter) || line.last() == Some(&self.delimiter);
-        if plain && !edges && delimiters + 1 == self.width {
-            if let Ok((first, used)) = fast_float2::parse_partial::<f64, _>(line)
-                && used > 0
-                && line.get(used).is_none_or(|&b| b == self.delimiter)
-            {
-                return Ok(Checked::Plain(first));
-            }
+        if plain
+            && !edges
+            && delimiters + 1 == self.width
+            && let Ok((first, used)) = fast_float2::parse_partial::<f64, _>(line)
+            && used > 0
+            && line.get(used).is_none_or(|&b| b == self.delimiter)
+        {
+            return Ok(Checked::Plain(first));
         }
         let mut values = Vec::with_capacity(self.width);
         parse_row(
