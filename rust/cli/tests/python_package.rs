@@ -152,3 +152,21 @@ fn the_wheel_installs_without_rust_and_its_pytest_suite_passes() {
     .unwrap();
     eprintln!("pytest python/tests: {:.0?}", started.elapsed());
 }
+
+/// The extension's own Rust unit tests (its matrix readers), in the wheel's target directory
+/// (the release build of its dependencies is shared with python/build-wheel's).
+#[test]
+fn the_extension_s_rust_unit_tests_pass() {
+    let repo = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let started = Instant::now();
+    let out = run(
+        "cargo test (python/Cargo.toml)",
+        Command::new(env!("CARGO"))
+            .args(["test", "--release", "--locked", "--lib", "--manifest-path"])
+            .arg(repo.join("python/Cargo.toml"))
+            .env("CARGO_TARGET_DIR", target_dir(&repo).join("wheel")),
+    )
+    .unwrap();
+    assert!(out.contains("test result: ok"), "{out}");
+    eprintln!("the extension's unit tests: {:.0?}", started.elapsed());
+}
