@@ -3,6 +3,7 @@ same script, its imports changed), on the shared real runs: the median of 5 of e
 machine, one run. Prints a Markdown table (python/README.md quotes it).
 
     python3 python/bench/evo_speed.py [--repeat 5] [--data ../shared/data/real-runs]
+    python3 python/bench/evo_speed.py --steps --repeat 15   # sitar.evo's RPE script by step
 
 Needs evo and the sitar package installed (the wheel, or ``pip install ./python``). Each
 timing starts before reading the files and ends with the statistic in hand; the imports are
@@ -124,14 +125,53 @@ def worker(prefix, data, repeat):
     print(json.dumps(out))
 
 
+STEPS = ["read ground truth", "read run", "associate", "parse kept poses", "process_data",
+         "statistic", "whole"]
+
+
+def steps(data, repeat):
+    """``sitar.evo``'s RPE 1 m all-pairs script timed step by step (median of ``repeat``
+    after one untimed run), as a Markdown table; the poses are parsed when first used, here
+    timed apart before ``process_data``."""
+    fi, sync, metrics = modules("sitar.evo")[0]
+    print("| sequence | " + " | ".join(STEPS) + " |")
+    print("|---|" + "---:|" * len(STEPS))
+    for name, seq in sequences_of(data):
+        ref, est = str(seq / "ground_truth.txt"), str(seq / "runs" / "run0.txt")
+        times = []
+        for _ in range(repeat + 1):
+            t = [time.perf_counter()]
+            r = fi.read_tum_trajectory_file(ref)
+            t.append(time.perf_counter())
+            e = fi.read_tum_trajectory_file(est)
+            t.append(time.perf_counter())
+            r, e = sync.associate_trajectories(r, e, max_diff=0.01)
+            t.append(time.perf_counter())
+            r.positions_xyz, e.positions_xyz  # the poses are parsed when first used
+            t.append(time.perf_counter())
+            metric = metrics.RPE(metrics.PoseRelation.translation_part, 1.0, metrics.Unit.meters,
+                                 all_pairs=True)
+            metric.process_data((r, e))
+            t.append(time.perf_counter())
+            metric.get_statistic(metrics.StatisticsType.rmse)
+            t.append(time.perf_counter())
+            times.append([b - a for a, b in zip(t, t[1:])] + [t[-1] - t[0]])
+        medians = [statistics.median(column) for column in zip(*times[1:])]
+        print(f"| {name} | " + " | ".join(f"{m * 1e3:.2f} ms" for m in medians) + " |")
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=5)
     parser.add_argument("--data", type=Path, default=REPO.parent / "shared" / "data" / "real-runs")
+    parser.add_argument("--steps", action="store_true",
+                        help="time sitar.evo's RPE 1 m all-pairs script step by step instead")
     parser.add_argument("--worker", help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.worker:
         return worker(args.worker, args.data, args.repeat)
+    if args.steps:
+        return steps(args.data, args.repeat)
     sequences = sequences_of(args.data)
     missing = [str(s) for _, s in sequences if not (s / "ground_truth.txt").is_file()]
     if missing:
