@@ -205,7 +205,8 @@ pub(crate) fn py_bytes<'py>(py: Python<'py>, values: &[f64]) -> PyResult<Bound<'
 }
 
 /// A matrix file (evo's rules, see `parse_matrix`): the float64 bytes, rows and columns.
-/// The file is read as UTF-8 (a BOM skipped); reading errors become OSError.
+/// The file is read as UTF-8 (a BOM skipped): other bytes are a SitarError naming the line;
+/// reading errors become OSError.
 #[pyfunction]
 #[pyo3(signature = (path, delimiter, columns, at_least, rule))]
 pub fn read_matrix(
@@ -218,8 +219,13 @@ pub fn read_matrix(
 ) -> PyResult<(Py<PyBytes>, usize, usize)> {
     let source = path.display().to_string();
     let (values, rows, width) = py.allow_threads(|| {
-        let text = std::fs::read_to_string(&path)
+        let bytes = std::fs::read(&path)
             .map_err(|e| PyErr::from(std::io::Error::new(e.kind(), format!("{source}: {e}"))))?;
+        let text = String::from_utf8(bytes).map_err(|e| {
+            let valid = &e.as_bytes()[..e.utf8_error().valid_up_to()];
+            let line = 1 + valid.iter().filter(|&&b| b == b'\n').count();
+            SitarError::new_err(format!("{source}:{line}: not UTF-8 text"))
+        })?;
         parse_matrix(&text, &source, delimiter, columns, at_least, rule)
             .map_err(SitarError::new_err)
     })?;

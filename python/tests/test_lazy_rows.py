@@ -177,3 +177,16 @@ def test_fields_read_as_python_float_when_parsed_late(tmp_path):
         path.write_text(f"0.5 2 3 4 5 6 7 8\n1 2 {field} 4 5 6 7 8\n")
         with pytest.raises(file_interface.FileInterfaceException, match=f"{path}:2:5: "):
             file_interface.read_tum_trajectory_file(str(path)).orientations_quat_wxyz
+
+
+@pytest.mark.parametrize(
+    "reader, good",
+    [("read_tum_trajectory_file", "0 1 2 3 0 0 0 1"),
+     ("read_euroc_csv_trajectory", "0,1,2,3,1,0,0,0"),
+     ("read_kitti_poses_file", "1 0 0 0 0 1 0 0 0 0 1 0")],
+)
+def test_a_file_that_is_not_utf8_names_the_line(tmp_path, reader, good):
+    path = tmp_path / "latin1.txt"
+    path.write_bytes(f"# header\n{good}\n# caf\xe9\n{good}\n".encode("latin-1"))
+    with pytest.raises(file_interface.FileInterfaceException, match=f"{path}:3: not UTF-8"):
+        getattr(file_interface, reader)(str(path))
