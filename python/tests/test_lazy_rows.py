@@ -190,3 +190,19 @@ def test_a_file_that_is_not_utf8_names_the_line(tmp_path, reader, good):
     path.write_bytes(f"# header\n{good}\n# caf\xe9\n{good}\n".encode("latin-1"))
     with pytest.raises(file_interface.FileInterfaceException, match=f"{path}:3: not UTF-8"):
         getattr(file_interface, reader)(str(path))
+
+
+def test_threads_parsing_one_trajectory_at_once_agree(tmp_path):
+    # Large enough that the parse (outside the GIL) of one thread overlaps the others'.
+    from concurrent.futures import ThreadPoolExecutor
+
+    path = tmp_path / "large.txt"
+    path.write_text("".join(f"{i / 100} {i}.25 -{i}e-3 3 0 0 0.6 0.8\n" for i in range(40000)))
+    expected = evo_fi.read_tum_trajectory_file(str(path))
+    for _ in range(10):
+        traj = file_interface.read_tum_trajectory_file(str(path))
+        with ThreadPoolExecutor(4) as pool:
+            results = list(pool.map(lambda _: traj.orientations_quat_wxyz, range(4)))
+        for quat in results:
+            assert np.array_equal(quat, expected.orientations_quat_wxyz)
+        same(traj, expected)

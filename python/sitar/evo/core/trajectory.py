@@ -82,9 +82,10 @@ class PosePath3D:
         if rows is None:
             raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
         xyz, quat = rows.values()
+        # setdefault and pop: two threads may both have parsed (values() lets the GIL go).
         self.__dict__.setdefault("_xyz", xyz)
         self.__dict__.setdefault("_quat", quat)
-        del self.__dict__["_rows"]
+        self.__dict__.pop("_rows", None)
         return self.__dict__[name]
 
     def __copy__(self):
