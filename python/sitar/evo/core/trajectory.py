@@ -102,9 +102,9 @@ class PosePath3D:
         return out
 
     def __getstate__(self) -> dict:
-        # Pickled with its values: a file's rows are parsed first.
+        # Pickled with its values: a file's rows are parsed first (into _xyz and _quat).
         if "_rows" in self.__dict__:
-            self._xyz
+            self.__getattr__("_xyz")
         return self.__dict__
 
     # --- representations -----------------------------------------------------------------
