@@ -5,7 +5,7 @@
 use std::path::PathBuf;
 
 use pyo3::prelude::*;
-use pyo3::types::PyBytes;
+use pyo3::types::{PyByteArray, PyBytes};
 
 use crate::SitarError;
 
@@ -37,26 +37,10 @@ pub(crate) fn parse_matrix(
     let Some(&(first_line, first)) = rows.first().filter(|_| !body.is_empty()) else {
         return Err(format!("{source}: no rows; {rule}"));
     };
-    let mut first_values = Vec::new();
-    parse_row(
-        first,
-        first_line,
-        source,
-        delimiter,
-        rule,
-        &mut first_values,
+    let first_values = first_row(
+        first, first_line, source, delimiter, columns, at_least, rule,
     )?;
     let width = first_values.len();
-    let fits = if at_least {
-        width >= columns
-    } else {
-        width == columns
-    };
-    if !fits {
-        return Err(format!(
-            "{source}:{first_line}: {width} entries in the first row; {rule}"
-        ));
-    }
     // Every row's values straight into its place: one allocation, no copies of blocks.
     let mut values = vec![0.0; rows.len() * width];
     values[..width].copy_from_slice(&first_values);
@@ -105,29 +89,30 @@ pub(crate) fn fast_row(line: &[u8], delimiter: char, out: &mut [f64]) -> bool {
     let Ok(delimiter) = u8::try_from(delimiter) else {
         return false;
     };
-    if !delimiter.is_ascii() {
-        return false;
-    }
+    delimiter.is_ascii() && fast_fields(line, delimiter, out) == Some(line.len())
+}
+
+/// The first `out.len()` fields of `line` read as [`fast_row`] reads a row, each followed
+/// by `delimiter` or the line's end: the bytes they take (the last one's delimiter not
+/// counted), or None where a field is not a plain decimal as a whole.
+pub(crate) fn fast_fields(line: &[u8], delimiter: u8, out: &mut [f64]) -> Option<usize> {
     let mut at = 0;
-    let last = out.len().saturating_sub(1);
     for (i, place) in out.iter_mut().enumerate() {
-        let rest = &line[at.min(line.len())..];
-        if !plain_start(rest) {
-            return false;
+        if i > 0 {
+            at += 1; // the delimiter after the field before
         }
-        let Ok((value, used)) = fast_float2::parse_partial::<f64, _>(rest) else {
-            return false;
-        };
+        let rest = line.get(at..)?;
+        if !plain_start(rest) {
+            return None;
+        }
+        let (value, used) = fast_float2::parse_partial::<f64, _>(rest).ok()?;
+        if rest.get(used).is_some_and(|&b| b != delimiter) {
+            return None;
+        }
         *place = value;
         at += used;
-        if i < last {
-            if line.get(at) != Some(&delimiter) {
-                return false;
-            }
-            at += 1;
-        }
     }
-    at == line.len()
+    Some(at)
 }
 
 /// Whether a field starts as a plain decimal does: a digit or a point, after an optional sign.
@@ -136,6 +121,33 @@ pub(crate) fn plain_start(field: &[u8]) -> bool {
         [b'+' | b'-', b, ..] | [b, ..] => b.is_ascii_digit() || *b == b'.',
         [] => false,
     }
+}
+
+/// The first row's values: every field a number, and `columns` of them (at least, when
+/// `at_least`); the first row decides the width of the rest.
+pub(crate) fn first_row(
+    line: &str,
+    number: usize,
+    source: &str,
+    delimiter: char,
+    columns: usize,
+    at_least: bool,
+    rule: &str,
+) -> Result<Vec<f64>, String> {
+    let mut values = Vec::new();
+    parse_row(line, number, source, delimiter, rule, &mut values)?;
+    let width = values.len();
+    let fits = if at_least {
+        width >= columns
+    } else {
+        width == columns
+    };
+    if !fits {
+        return Err(format!(
+            "{source}:{number}: {width} entries in the first row; {rule}"
+        ));
+    }
+    Ok(values)
 }
 
 /// The fields of one row onto `out`; an error names the line and column of a bad field.
@@ -196,12 +208,23 @@ pub(crate) fn python_float(field: &str) -> Option<f64> {
 /// float64 values as a Python bytes object (numpy's `frombuffer` reads it), written in
 /// place: one copy.
 pub(crate) fn py_bytes<'py>(py: Python<'py>, values: &[f64]) -> PyResult<Bound<'py, PyBytes>> {
-    PyBytes::new_with(py, 8 * values.len(), |out| {
-        for (place, value) in out.chunks_exact_mut(8).zip(values) {
-            place.copy_from_slice(&value.to_ne_bytes());
-        }
-        Ok(())
-    })
+    PyBytes::new_with(py, 8 * values.len(), |out| write_floats(out, values))
+}
+
+/// float64 values as a Python bytearray: as [`py_bytes`], but numpy's `frombuffer` gives a
+/// writable array (a trajectory's own stamps).
+pub(crate) fn py_bytearray<'py>(
+    py: Python<'py>,
+    values: &[f64],
+) -> PyResult<Bound<'py, PyByteArray>> {
+    PyByteArray::new_with(py, 8 * values.len(), |out| write_floats(out, values))
+}
+
+fn write_floats(out: &mut [u8], values: &[f64]) -> PyResult<()> {
+    for (place, value) in out.chunks_exact_mut(8).zip(values) {
+        place.copy_from_slice(&value.to_ne_bytes());
+    }
+    Ok(())
 }
 
 /// A matrix file (evo's rules, see `parse_matrix`): the float64 bytes, rows and columns.

@@ -23,7 +23,7 @@ use pyo3::types::PyByteArray;
 use rayon::prelude::*;
 
 use crate::SitarError;
-use crate::matrix::{parse_row, python_float};
+use crate::matrix::{fast_fields, first_row, parse_row, py_bytearray, python_float};
 
 /// Bytes per piece of the parallel passes over a text; a smaller text is one piece (threads
 /// cost more than they give there).
@@ -203,27 +203,16 @@ impl MatrixRows {
         let Some((start, stop, line)) = first else {
             return Err(format!("{source}: no rows; {rule}"));
         };
-        let mut values = Vec::new();
-        parse_row(
+        let values = first_row(
             self.row_text(text, start, stop, line)?,
             line,
             source,
             char::from(self.delimiter),
+            columns,
+            at_least,
             rule,
-            &mut values,
         )?;
-        let width = values.len();
-        let fits = if at_least {
-            width >= columns
-        } else {
-            width == columns
-        };
-        if !fits {
-            return Err(format!(
-                "{source}:{line}: {width} entries in the first row; {rule}"
-            ));
-        }
-        Ok(width)
+        Ok(values.len())
     }
 
     /// One piece's rows, each checked, with its stamp.
@@ -290,14 +279,11 @@ impl MatrixRows {
         let line = &text[row.start as usize..row.end as usize];
         let (delimiters, plain) = scan(line, self.delimiter);
         let edges = line.first() == Some(&self.delimiter) || line.last() == Some(&self.delimiter);
-        if plain
-            && !edges
-            && delimiters + 1 == self.width
-            && let Ok((first, used)) = fast_float2::parse_partial::<f64, _>(line)
-            && used > 0
-            && line.get(used).is_none_or(|&b| b == self.delimiter)
-        {
-            return Ok(Checked::Plain(first));
+        if plain && !edges && delimiters + 1 == self.width {
+            let mut first = [0.0];
+            if fast_fields(line, self.delimiter, &mut first).is_some() {
+                return Ok(Checked::Plain(first[0]));
+            }
         }
         let mut values = Vec::with_capacity(self.width);
         parse_row(
@@ -346,20 +332,10 @@ impl MatrixRows {
         // column asked for, each a number followed by the delimiter (or the row's end).
         let line = &self.text[row.start as usize..row.end as usize];
         let last = columns.iter().max().map_or(0, |&c| c + 1);
-        fields.clear();
-        let mut at = 0;
-        for _ in 0..last {
-            let rest = &line[at.min(line.len())..];
-            match fast_float2::parse_partial::<f64, _>(rest) {
-                Ok((value, used))
-                    if used > 0 && rest.get(used).is_none_or(|&b| b == self.delimiter) =>
-                {
-                    fields.push(value);
-                    at += used + 1;
-                }
-                // Not a number as a whole: evo's message (Python's rules may still read it).
-                _ => return self.row_values_slowly(row, columns, out),
-            }
+        fields.resize(last, 0.0);
+        if fast_fields(line, self.delimiter, fields).is_none() {
+            // Not a number as a whole: evo's message (Python's rules may still read it).
+            return self.row_values_slowly(row, columns, out);
         }
         for (place, &column) in out.iter_mut().zip(columns) {
             *place = fields[column];
@@ -478,7 +454,7 @@ impl MatrixRows {
         let values = py
             .allow_threads(|| self.values_of(ids.as_deref(), &columns))
             .map_err(SitarError::new_err)?;
-        float_bytearray(py, &values)
+        py_bytearray(py, &values)
     }
 
     /// The rows are never changed: a copy is this object.
@@ -509,16 +485,6 @@ fn row_ids(bytes: &[u8], rows: usize) -> PyResult<Vec<usize>> {
                 .ok_or_else(|| PyValueError::new_err(format!("row {id} of {rows} rows")))
         })
         .collect()
-}
-
-/// float64 values as a Python bytearray (writable under numpy's `frombuffer`), one copy.
-fn float_bytearray<'py>(py: Python<'py>, values: &[f64]) -> PyResult<Bound<'py, PyByteArray>> {
-    PyByteArray::new_with(py, 8 * values.len(), |out| {
-        for (place, value) in out.chunks_exact_mut(8).zip(values) {
-            place.copy_from_slice(&value.to_ne_bytes());
-        }
-        Ok(())
-    })
 }
 
 /// The delimiters in `line` and whether every byte is a delimiter or a number's character
@@ -563,7 +529,7 @@ pub fn read_matrix_rows<'py>(
         MatrixRows::read(text, &source, delimiter, columns, at_least, rule)
             .map_err(SitarError::new_err)
     })?;
-    Ok((rows, float_bytearray(py, &stamps)?))
+    Ok((rows, py_bytearray(py, &stamps)?))
 }
 
 /// As `read_matrix_rows`, on text already read (a file handle's content); `source` names it.
@@ -587,7 +553,7 @@ pub fn matrix_rows_of_text<'py>(
         rule,
     )
     .map_err(SitarError::new_err)?;
-    Ok((rows, float_bytearray(py, &stamps)?))
+    Ok((rows, py_bytearray(py, &stamps)?))
 }
 
 #[cfg(test)]
